@@ -1,0 +1,32 @@
+# EHC-MM entry points. Every target installs its Debian packages first (idempotent).
+#   make demo   - the main job: headless simulated run (see README)
+#   make test   - every gtest + rostest, closing line "N passed, N failed"
+#   make bench  - benchmarks, one JSON object per line
+SHELL := /bin/bash
+.SHELLFLAGS := -eo pipefail -c
+export PATH := /usr/bin:/bin:/usr/sbin:/sbin:$(PATH)
+
+JOBS ?= 2
+CATKIN := catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCMAKE_BUILD_TYPE=Release -j$(JOBS)
+
+.PHONY: all deps build demo test bench clean
+
+all: build
+
+deps:
+	@src/ehc_bringup/scripts/install_deps.sh
+
+build: deps
+	$(CATKIN)
+
+demo: build
+	src/ehc_bringup/scripts/demo.sh
+
+test: deps
+	JOBS=$(JOBS) test/run_tests.sh
+
+bench: build
+	src/ehc_bringup/scripts/bench.sh
+
+clean:
+	rm -rf build devel install

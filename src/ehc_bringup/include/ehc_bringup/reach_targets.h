@@ -1,0 +1,31 @@
+#pragma once
+// Targets for Exp-1 (random reaching): a seeded generator and a CSV reader/writer.
+// A target is a TCP pose in the world (odom) frame; its z axis is the approach direction.
+
+#include <Eigen/Geometry>
+
+#include <string>
+#include <vector>
+
+namespace ehc_bringup {
+
+struct ReachTargetGenerator {
+  double min_distance = 1.5;  ///< m, horizontal distance from the previous target (or start)
+  double max_distance = 4.0;
+  double min_height = 0.3;    ///< m above the floor
+  double max_height = 1.0;
+  double max_tilt_deg = 90.0;  ///< approach axis tilted U[0, max] from straight down
+  void validate() const;       ///< throws "[ReachTargetGenerator] ..."
+
+  /// `count` targets; each is U[min, max] m horizontally from the previous one (the first
+  /// from `start_xy`) at a uniform bearing, so the sequence does not depend on the controller.
+  std::vector<Eigen::Isometry3d> generate(int count, unsigned seed,
+                                          const Eigen::Vector2d& start_xy = Eigen::Vector2d::Zero()) const;
+};
+
+/// Reads rows `x y z qx qy qz qw` (space or comma separated; '#' starts a comment).
+/// Throws "[ReachTargets] <file>:<line>: ..." on malformed rows or non-unit quaternions.
+std::vector<Eigen::Isometry3d> readReachTargetsCsv(const std::string& path);
+void writeReachTargetsCsv(const std::string& path, const std::vector<Eigen::Isometry3d>& targets);
+
+}  // namespace ehc_bringup

@@ -1,0 +1,57 @@
+#include "ehc_bringup/reach_targets.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+
+using namespace ehc_bringup;
+
+TEST(ReachTargets, GeneratorFollowsTheProtocolAndIsSeeded) {
+  const ReachTargetGenerator g;
+  const auto a = g.generate(500, 11), b = g.generate(500, 11), c = g.generate(500, 12);
+  ASSERT_EQ(a.size(), 500u);
+  Eigen::Vector2d prev = Eigen::Vector2d::Zero();
+  double max_tilt = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_TRUE(a[i].isApprox(b[i]));
+    const Eigen::Vector2d xy = a[i].translation().head<2>();
+    const double d = (xy - prev).norm();
+    EXPECT_GE(d, 1.5 - 1e-9);
+    EXPECT_LE(d, 4.0 + 1e-9);
+    EXPECT_GE(a[i].translation().z(), 0.3);
+    EXPECT_LE(a[i].translation().z(), 1.0);
+    // Approach axis (z) between straight down and horizontal.
+    const double tilt = std::acos(std::clamp(-a[i].linear().col(2).z(), -1.0, 1.0));
+    EXPECT_LE(tilt, M_PI / 2 + 1e-9);
+    max_tilt = std::max(max_tilt, tilt);
+    EXPECT_NEAR(a[i].linear().determinant(), 1.0, 1e-12);
+    prev = xy;
+  }
+  EXPECT_GT(max_tilt, 80.0 * M_PI / 180.0);  // the whole tilt range is used
+  EXPECT_FALSE(a[0].isApprox(c[0]));
+}
+
+TEST(ReachTargets, CsvRoundTrip) {
+  const auto t = ReachTargetGenerator{}.generate(20, 3);
+  writeReachTargetsCsv("/tmp/ehc_targets.csv", t);
+  const auto r = readReachTargetsCsv("/tmp/ehc_targets.csv");
+  ASSERT_EQ(r.size(), t.size());
+  for (std::size_t i = 0; i < t.size(); ++i) EXPECT_TRUE(r[i].isApprox(t[i], 1e-8));
+}
+
+TEST(ReachTargets, MalformedCsvNamesTheLine) {
+  std::ofstream("/tmp/ehc_bad_targets.csv") << "x y z qx qy qz qw\n1 2 0.5 0 0 0 1\n1 2 0.5 0 0 1\n";
+  try {
+    readReachTargetsCsv("/tmp/ehc_bad_targets.csv");
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("ehc_bad_targets.csv:3: expected 7 values"), std::string::npos)
+        << e.what();
+  }
+  std::ofstream("/tmp/ehc_bad_targets.csv") << "1 2 0.5 0 0 0 2\n";
+  EXPECT_THROW(readReachTargetsCsv("/tmp/ehc_bad_targets.csv"), std::invalid_argument);
+  std::ofstream("/tmp/ehc_bad_targets.csv") << "1 2 nan 0 0 0 1\n";
+  EXPECT_THROW(readReachTargetsCsv("/tmp/ehc_bad_targets.csv"), std::invalid_argument);
+  EXPECT_THROW(readReachTargetsCsv("/nonexistent.csv"), std::invalid_argument);
+}

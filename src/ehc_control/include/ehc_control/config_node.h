@@ -1,0 +1,90 @@
+#pragma once
+// ConfigNode: a read-only view of a YAML document that names the file and the field in every
+// error, so that a bad configuration fails at start-up with a message a user can act on.
+// ROS-free (yaml-cpp only); used by every package's parameter loaders.
+
+#include <Eigen/Core>
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <yaml-cpp/yaml.h>
+
+namespace ehc_control {
+
+class ConfigNode {
+ public:
+  /// Parses `path`. `owner` is the class name used as the error prefix, e.g. "RobotConfig".
+  static ConfigNode loadFile(const std::string& path, const std::string& owner);
+  /// Parses YAML text (tests, embedded defaults). `origin` stands in for the file name.
+  static ConfigNode loadString(const std::string& text, const std::string& origin,
+                               const std::string& owner);
+
+  ConfigNode(YAML::Node node, std::string file, std::string field, std::string owner);
+
+  bool has(const std::string& key) const;
+  /// Required mapping child; throws if missing or not a mapping.
+  ConfigNode child(const std::string& key) const;
+  /// Optional child: returns an empty node (every get() then yields its default).
+  ConfigNode childOrEmpty(const std::string& key) const;
+
+  /// Optional scalar with default. Numbers must be finite.
+  template <class T>
+  T get(const std::string& key, const T& fallback) const {
+    if (!has(key)) return fallback;
+    return require<T>(key);
+  }
+  /// Required scalar. Numbers must be finite.
+  template <class T>
+  T require(const std::string& key) const {
+    const YAML::Node n = value(key);
+    T out;
+    try {
+      out = n.as<T>();
+    } catch (const YAML::Exception&) {
+      fail(key, "has the wrong type (value: '" + dump(n) + "')");
+    }
+    checkFinite(key, out);
+    return out;
+  }
+  /// Optional numeric list; `expected_size` < 0 accepts any length.
+  Eigen::VectorXd getVector(const std::string& key, const Eigen::VectorXd& fallback,
+                            int expected_size = -1) const;
+  Eigen::VectorXd requireVector(const std::string& key, int expected_size = -1) const;
+  std::vector<std::string> getStrings(const std::string& key,
+                                      const std::vector<std::string>& fallback) const;
+
+  /// Throws std::invalid_argument "[Owner] file: field 'a.b.key' <what>".
+  [[noreturn]] void fail(const std::string& key, const std::string& what) const;
+  std::string fieldName(const std::string& key) const;
+  /// Resolves a path relative to the folder of the file this node came from.
+  std::string resolvePath(const std::string& relative) const;
+
+  const std::string& file() const { return file_; }
+  const std::string& owner() const { return owner_; }
+  const YAML::Node& yaml() const { return node_; }
+
+ private:
+  YAML::Node value(const std::string& key) const;
+  static std::string dump(const YAML::Node& n);
+  template <class T>
+  void checkFinite(const std::string& key, const T& v) const {
+    if constexpr (std::is_floating_point<T>::value) {
+      if (!std::isfinite(v)) fail(key, "must be a finite number");
+    }
+  }
+
+  YAML::Node node_;
+  std::string file_;
+  std::string field_;
+  std::string owner_;
+};
+
+/// Helpers for validation rules shared by every parameter struct.
+void requireRange(const std::string& owner, const std::string& field, double value, double lo,
+                  double hi);
+void requirePositive(const std::string& owner, const std::string& field, double value);
+
+}  // namespace ehc_control

@@ -1,0 +1,81 @@
+#pragma once
+// WholeBodyModel: kinematics of a mobile base (virtual joints) carrying a serial arm parsed
+// from a URDF with KDL. World frame = odom. State = base pose (x, y, yaw) in the world plus
+// arm joint positions. Velocity vector = [base twist (base frame) ; arm joint rates]:
+//   holonomic:    [v_x, v_y, w_z, qd_1 .. qd_n]
+//   differential: [v_x, w_z, qd_1 .. qd_n]
+// ROS-free: urdfdom + kdl_parser + KDL + Eigen. Not thread-safe (solvers keep scratch state).
+
+#include "ehc_control/robot_config.h"
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace ehc_control {
+
+using Matrix6Xd = Eigen::Matrix<double, 6, Eigen::Dynamic>;
+
+class WholeBodyModel {
+ public:
+  /// Reads cfg.urdf_path. Throws std::invalid_argument "[WholeBodyModel] ..." on a bad URDF,
+  /// arm joints that do not form the chain base -> tcp, or limits wider than the URDF's.
+  explicit WholeBodyModel(const RobotConfig& cfg);
+  /// Same, with the URDF given as XML text.
+  WholeBodyModel(const RobotConfig& cfg, const std::string& urdf_xml);
+  ~WholeBodyModel();
+  WholeBodyModel(WholeBodyModel&&) noexcept;
+  WholeBodyModel& operator=(WholeBodyModel&&) noexcept;
+
+  const RobotConfig& config() const { return cfg_; }
+  BaseType baseType() const { return cfg_.base_type; }
+  int nBase() const { return cfg_.nBase(); }
+  int nArm() const { return cfg_.nArm(); }
+  int nDof() const { return cfg_.nBase() + cfg_.nArm(); }
+  /// Names of the velocity vector entries: base_vx, [base_vy,] base_wz, then the arm joints.
+  std::vector<std::string> dofNames() const;
+  /// Every link reachable from the base link (URDF root).
+  std::vector<std::string> linkNames() const;
+  bool hasLink(const std::string& link) const;
+  const std::string& urdfXml() const { return urdf_xml_; }
+
+  /// World pose of the base frame for base pose (x, y, yaw).
+  static Eigen::Isometry3d baseTransform(const Eigen::Vector3d& base_pose);
+
+  /// Pose of `link` in the base frame.
+  Eigen::Isometry3d linkPoseInBase(const Eigen::VectorXd& q, const std::string& link) const;
+  /// Pose of `link` in the world frame.
+  Eigen::Isometry3d fk(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q,
+                       const std::string& link) const;
+  /// 6 x nArm geometric Jacobian of `link`'s origin, rows [v; w] in the base frame.
+  Matrix6Xd armJacobian(const Eigen::VectorXd& q, const std::string& link) const;
+  /// 6 x nDof whole-body Jacobian of `link`'s origin, rows [v; w] in the world frame,
+  /// columns [base..., arm...]. Optionally returns the link pose computed on the way.
+  Matrix6Xd jacobian(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q,
+                     const std::string& link, Eigen::Isometry3d* pose = nullptr) const;
+
+  /// Yoshikawa manipulability sqrt(det(J J^T)) of the arm at the TCP (J^T J if nArm < 6).
+  double manipulability(const Eigen::VectorXd& q) const;
+  /// Gradient d m / d q (size nArm): the manipulability Jacobian J_m. Analytic (kinematic
+  /// Hessian). Zero at an exact singularity (m == 0).
+  Eigen::VectorXd manipulabilityGradient(const Eigen::VectorXd& q, double* m = nullptr) const;
+
+  /// Throws unless q has nArm finite entries / base pose is finite.
+  void checkArm(const Eigen::VectorXd& q) const;
+  static void checkBase(const Eigen::Vector3d& base_pose);
+  /// Clamps q into the configured joint limits.
+  Eigen::VectorXd clampToLimits(const Eigen::VectorXd& q) const;
+
+ private:
+  struct Impl;
+  void build();
+
+  RobotConfig cfg_;
+  std::string urdf_xml_;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace ehc_control

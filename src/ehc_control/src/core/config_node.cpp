@@ -1,0 +1,142 @@
+#include "ehc_control/config_node.h"
+
+#include <sstream>
+
+namespace ehc_control {
+
+namespace {
+std::string folderOf(const std::string& path) {
+  const auto slash = path.find_last_of('/');
+  return slash == std::string::npos ? std::string(".") : path.substr(0, slash);
+}
+}  // namespace
+
+ConfigNode ConfigNode::loadFile(const std::string& path, const std::string& owner) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    throw std::invalid_argument("[" + owner + "] cannot read config file '" + path + "'");
+  } catch (const YAML::Exception& e) {
+    throw std::invalid_argument("[" + owner + "] " + path + ": YAML syntax error: " + e.what());
+  }
+  if (!root.IsMap())
+    throw std::invalid_argument("[" + owner + "] " + path + ": top level must be a mapping");
+  return ConfigNode(root, path, "", owner);
+}
+
+ConfigNode ConfigNode::loadString(const std::string& text, const std::string& origin,
+                                  const std::string& owner) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw std::invalid_argument("[" + owner + "] " + origin + ": YAML syntax error: " + e.what());
+  }
+  if (!root.IsMap())
+    throw std::invalid_argument("[" + owner + "] " + origin + ": top level must be a mapping");
+  return ConfigNode(root, origin, "", owner);
+}
+
+ConfigNode::ConfigNode(YAML::Node node, std::string file, std::string field, std::string owner)
+    : node_(std::move(node)), file_(std::move(file)), field_(std::move(field)),
+      owner_(std::move(owner)) {}
+
+bool ConfigNode::has(const std::string& key) const {
+  return node_.IsMap() && node_[key] && !node_[key].IsNull();
+}
+
+YAML::Node ConfigNode::value(const std::string& key) const {
+  if (!has(key)) fail(key, "is missing");
+  return node_[key];
+}
+
+ConfigNode ConfigNode::child(const std::string& key) const {
+  const YAML::Node n = value(key);
+  if (!n.IsMap()) fail(key, "must be a mapping");
+  return ConfigNode(n, file_, fieldName(key), owner_);
+}
+
+ConfigNode ConfigNode::childOrEmpty(const std::string& key) const {
+  if (!has(key)) return ConfigNode(YAML::Node(YAML::NodeType::Map), file_, fieldName(key), owner_);
+  return child(key);
+}
+
+Eigen::VectorXd ConfigNode::getVector(const std::string& key, const Eigen::VectorXd& fallback,
+                                      int expected_size) const {
+  if (!has(key)) return fallback;
+  return requireVector(key, expected_size);
+}
+
+Eigen::VectorXd ConfigNode::requireVector(const std::string& key, int expected_size) const {
+  const YAML::Node n = value(key);
+  if (!n.IsSequence()) fail(key, "must be a list of numbers");
+  if (expected_size >= 0 && static_cast<int>(n.size()) != expected_size)
+    fail(key, "must have " + std::to_string(expected_size) + " elements (has " +
+                  std::to_string(n.size()) + ")");
+  Eigen::VectorXd v(n.size());
+  for (std::size_t i = 0; i < n.size(); ++i) {
+    try {
+      v[static_cast<int>(i)] = n[i].as<double>();
+    } catch (const YAML::Exception&) {
+      fail(key, "element " + std::to_string(i) + " is not a number ('" + dump(n[i]) + "')");
+    }
+    if (!std::isfinite(v[static_cast<int>(i)]))
+      fail(key, "element " + std::to_string(i) + " must be finite");
+  }
+  return v;
+}
+
+std::vector<std::string> ConfigNode::getStrings(const std::string& key,
+                                                const std::vector<std::string>& fallback) const {
+  if (!has(key)) return fallback;
+  const YAML::Node n = value(key);
+  if (!n.IsSequence()) fail(key, "must be a list of strings");
+  std::vector<std::string> out;
+  for (const auto& e : n) {
+    if (!e.IsScalar()) fail(key, "must be a list of strings");
+    out.push_back(e.as<std::string>());
+  }
+  return out;
+}
+
+void ConfigNode::fail(const std::string& key, const std::string& what) const {
+  throw std::invalid_argument("[" + owner_ + "] " + file_ + ": field '" + fieldName(key) + "' " +
+                              what);
+}
+
+std::string ConfigNode::fieldName(const std::string& key) const {
+  if (key.empty()) return field_;
+  return field_.empty() ? key : field_ + "." + key;
+}
+
+std::string ConfigNode::resolvePath(const std::string& relative) const {
+  if (relative.empty() || relative[0] == '/') return relative;
+  return folderOf(file_) + "/" + relative;
+}
+
+std::string ConfigNode::dump(const YAML::Node& n) {
+  std::ostringstream os;
+  os << n;
+  return os.str();
+}
+
+void requireRange(const std::string& owner, const std::string& field, double value, double lo,
+                  double hi) {
+  if (!std::isfinite(value) || value < lo || value > hi) {
+    std::ostringstream os;
+    os << "[" << owner << "] parameter '" << field << "' = " << value << " is outside [" << lo
+       << ", " << hi << "]";
+    throw std::invalid_argument(os.str());
+  }
+}
+
+void requirePositive(const std::string& owner, const std::string& field, double value) {
+  if (!std::isfinite(value) || value <= 0.0) {
+    std::ostringstream os;
+    os << "[" << owner << "] parameter '" << field << "' = " << value << " must be > 0";
+    throw std::invalid_argument(os.str());
+  }
+}
+
+}  // namespace ehc_control

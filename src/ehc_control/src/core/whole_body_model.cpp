@@ -1,0 +1,293 @@
+#include "ehc_control/whole_body_model.h"
+
+#include <kdl/chain.hpp>
+#include <kdl/chainfksolverpos_recursive.hpp>
+#include <kdl/chainjnttojacsolver.hpp>
+#include <kdl/tree.hpp>
+#include <kdl_parser/kdl_parser.hpp>
+#include <urdf_parser/urdf_parser.h>
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+
+namespace ehc_control {
+
+namespace {
+[[noreturn]] void fail(const std::string& what) {
+  throw std::invalid_argument("[WholeBodyModel] " + what);
+}
+
+std::string readFile(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) fail("cannot read URDF file '" + path + "'");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+Eigen::Isometry3d toEigen(const KDL::Frame& f) {
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  for (int r = 0; r < 3; ++r) {
+    t.translation()[r] = f.p[r];
+    for (int c = 0; c < 3; ++c) t.linear()(r, c) = f.M(r, c);
+  }
+  return t;
+}
+}  // namespace
+
+/// One kinematic chain from the base link to a link, with its joints mapped to arm indices.
+struct LinkChain {
+  KDL::Chain chain;
+  std::vector<int> arm_index;  ///< per movable chain joint: arm joint index, -1 = held at 0
+  std::unique_ptr<KDL::ChainFkSolverPos_recursive> fk;
+  std::unique_ptr<KDL::ChainJntToJacSolver> jac;
+  mutable KDL::JntArray q;
+  mutable KDL::Jacobian J;
+};
+
+struct WholeBodyModel::Impl {
+  std::map<std::string, std::unique_ptr<LinkChain>> links;
+  std::vector<bool> arm_revolute;
+  const LinkChain* tcp = nullptr;
+
+  const LinkChain& chain(const std::string& link) const {
+    const auto it = links.find(link);
+    if (it == links.end()) fail("unknown link '" + link + "'");
+    return *it->second;
+  }
+  void load(const LinkChain& lc, const Eigen::VectorXd& q) const {
+    for (std::size_t i = 0; i < lc.arm_index.size(); ++i)
+      lc.q(static_cast<unsigned>(i)) = lc.arm_index[i] >= 0 ? q[lc.arm_index[i]] : 0.0;
+  }
+};
+
+WholeBodyModel::WholeBodyModel(const RobotConfig& cfg) : WholeBodyModel(cfg, readFile(cfg.urdf_path)) {}
+
+WholeBodyModel::WholeBodyModel(const RobotConfig& cfg, const std::string& urdf_xml)
+    : cfg_(cfg), urdf_xml_(urdf_xml), impl_(std::make_unique<Impl>()) {
+  try {
+    cfg_.validate();
+  } catch (const std::invalid_argument& e) {
+    fail(std::string("invalid robot config: ") + e.what());
+  }
+  build();
+}
+
+WholeBodyModel::~WholeBodyModel() = default;
+WholeBodyModel::WholeBodyModel(WholeBodyModel&&) noexcept = default;
+WholeBodyModel& WholeBodyModel::operator=(WholeBodyModel&&) noexcept = default;
+
+void WholeBodyModel::build() {
+  const urdf::ModelInterfaceSharedPtr model = urdf::parseURDF(urdf_xml_);
+  if (!model) fail("URDF of '" + cfg_.urdf_path + "' could not be parsed (see the message above)");
+
+  for (const FrameOverride& o : cfg_.calibration) {
+    const auto it = model->joints_.find(o.joint);
+    if (it == model->joints_.end()) fail("calibration joint '" + o.joint + "' is not in the URDF");
+    if (it->second->type != urdf::Joint::FIXED)
+      fail("calibration joint '" + o.joint + "' must be a fixed joint");
+    urdf::Pose& p = it->second->parent_to_joint_origin_transform;
+    p.position = urdf::Vector3(o.xyz.x(), o.xyz.y(), o.xyz.z());
+    p.rotation.setFromRPY(o.rpy.x(), o.rpy.y(), o.rpy.z());
+  }
+
+  const std::string root = model->getRoot() ? model->getRoot()->name : "";
+  if (root != cfg_.base_frame)
+    fail("URDF root link is '" + root + "' but robot.frames.base is '" + cfg_.base_frame + "'");
+
+  KDL::Tree tree;
+  if (!kdl_parser::treeFromUrdfModel(*model, tree)) fail("kdl_parser could not build a KDL tree");
+
+  // Arm joints: exist, are revolute/prismatic, limits inside the URDF's.
+  std::map<std::string, int> arm_idx;
+  impl_->arm_revolute.assign(static_cast<std::size_t>(nArm()), true);
+  for (int i = 0; i < nArm(); ++i) {
+    const std::string& name = cfg_.arm_joints[static_cast<std::size_t>(i)];
+    const auto it = model->joints_.find(name);
+    if (it == model->joints_.end()) fail("arm joint '" + name + "' is not in the URDF");
+    const urdf::Joint& j = *it->second;
+    if (j.type == urdf::Joint::PRISMATIC)
+      impl_->arm_revolute[static_cast<std::size_t>(i)] = false;
+    else if (j.type != urdf::Joint::REVOLUTE && j.type != urdf::Joint::CONTINUOUS)
+      fail("arm joint '" + name + "' must be revolute, continuous or prismatic");
+    if (j.type != urdf::Joint::CONTINUOUS && j.limits) {
+      const double eps = 1e-9;
+      if (cfg_.arm_lower[i] < j.limits->lower - eps || cfg_.arm_upper[i] > j.limits->upper + eps)
+        fail("limits of joint '" + name + "' in robot.yaml are wider than the URDF's");
+      if (j.limits->velocity > 0 && cfg_.arm_velocity[i] > j.limits->velocity + eps)
+        fail("velocity limit of joint '" + name + "' in robot.yaml exceeds the URDF's");
+    }
+    arm_idx[name] = i;
+  }
+
+  for (const auto& seg : tree.getSegments()) {
+    const std::string& link = seg.first;
+    auto lc = std::make_unique<LinkChain>();
+    if (link != root && !tree.getChain(root, link, lc->chain)) continue;
+    for (const auto& s : lc->chain.segments) {
+      if (s.getJoint().getType() == KDL::Joint::None) continue;
+      const auto it = arm_idx.find(s.getJoint().getName());
+      lc->arm_index.push_back(it == arm_idx.end() ? -1 : it->second);
+    }
+    lc->fk = std::make_unique<KDL::ChainFkSolverPos_recursive>(lc->chain);
+    lc->jac = std::make_unique<KDL::ChainJntToJacSolver>(lc->chain);
+    lc->q.resize(lc->chain.getNrOfJoints());
+    lc->J.resize(lc->chain.getNrOfJoints());
+    impl_->links[link] = std::move(lc);
+  }
+
+  for (const std::string& f : {cfg_.arm_base_frame, cfg_.tcp_frame, cfg_.camera_frame})
+    if (!impl_->links.count(f)) fail("frame '" + f + "' from robot.yaml is not a link of the URDF");
+
+  // The TCP chain must contain exactly the arm joints, in the configured order.
+  const LinkChain& tcp = *impl_->links.at(cfg_.tcp_frame);
+  std::vector<int> expected;
+  for (int i = 0; i < nArm(); ++i) expected.push_back(i);
+  if (tcp.arm_index != expected) {
+    std::string chain_joints;
+    for (const auto& s : tcp.chain.segments)
+      if (s.getJoint().getType() != KDL::Joint::None) chain_joints += s.getJoint().getName() + " ";
+    fail("robot.arm.joints must be the movable joints from '" + cfg_.base_frame + "' to '" +
+         cfg_.tcp_frame + "' in order; the URDF chain has: " + chain_joints);
+  }
+  impl_->tcp = &tcp;
+}
+
+std::vector<std::string> WholeBodyModel::dofNames() const {
+  std::vector<std::string> n{"base_vx"};
+  if (baseType() == BaseType::Holonomic) n.push_back("base_vy");
+  n.push_back("base_wz");
+  n.insert(n.end(), cfg_.arm_joints.begin(), cfg_.arm_joints.end());
+  return n;
+}
+
+std::vector<std::string> WholeBodyModel::linkNames() const {
+  std::vector<std::string> out;
+  for (const auto& l : impl_->links) out.push_back(l.first);
+  return out;
+}
+
+bool WholeBodyModel::hasLink(const std::string& link) const { return impl_->links.count(link) > 0; }
+
+Eigen::Isometry3d WholeBodyModel::baseTransform(const Eigen::Vector3d& b) {
+  checkBase(b);
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.translation() << b.x(), b.y(), 0.0;
+  t.linear() = Eigen::AngleAxisd(b.z(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  return t;
+}
+
+void WholeBodyModel::checkArm(const Eigen::VectorXd& q) const {
+  if (q.size() != nArm())
+    fail("expected " + std::to_string(nArm()) + " arm joint positions, got " +
+         std::to_string(q.size()));
+  if (!q.allFinite()) fail("arm joint positions contain NaN or Inf");
+}
+
+void WholeBodyModel::checkBase(const Eigen::Vector3d& b) {
+  if (!b.allFinite()) fail("base pose (x, y, yaw) contains NaN or Inf");
+}
+
+Eigen::VectorXd WholeBodyModel::clampToLimits(const Eigen::VectorXd& q) const {
+  checkArm(q);
+  return q.cwiseMax(cfg_.arm_lower).cwiseMin(cfg_.arm_upper);
+}
+
+Eigen::Isometry3d WholeBodyModel::linkPoseInBase(const Eigen::VectorXd& q,
+                                                 const std::string& link) const {
+  checkArm(q);
+  const LinkChain& lc = impl_->chain(link);
+  impl_->load(lc, q);
+  KDL::Frame f;
+  if (lc.fk->JntToCart(lc.q, f) < 0) fail("KDL forward kinematics failed for link '" + link + "'");
+  return toEigen(f);
+}
+
+Eigen::Isometry3d WholeBodyModel::fk(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q,
+                                     const std::string& link) const {
+  return baseTransform(base_pose) * linkPoseInBase(q, link);
+}
+
+Matrix6Xd WholeBodyModel::armJacobian(const Eigen::VectorXd& q, const std::string& link) const {
+  checkArm(q);
+  const LinkChain& lc = impl_->chain(link);
+  impl_->load(lc, q);
+  if (lc.jac->JntToJac(lc.q, lc.J) < 0) fail("KDL Jacobian failed for link '" + link + "'");
+  Matrix6Xd J = Matrix6Xd::Zero(6, nArm());
+  for (std::size_t c = 0; c < lc.arm_index.size(); ++c)
+    if (lc.arm_index[c] >= 0) J.col(lc.arm_index[c]) = lc.J.data.col(static_cast<int>(c));
+  return J;
+}
+
+Matrix6Xd WholeBodyModel::jacobian(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q,
+                                   const std::string& link, Eigen::Isometry3d* pose) const {
+  const Eigen::Isometry3d Twb = baseTransform(base_pose);
+  const Eigen::Isometry3d Tbl = linkPoseInBase(q, link);
+  const Matrix6Xd Ja = armJacobian(q, link);
+  const Eigen::Matrix3d R = Twb.linear();
+  const Eigen::Vector3d r = R * Tbl.translation();  // base origin -> link origin, world
+  const int nb = nBase();
+  Matrix6Xd J = Matrix6Xd::Zero(6, nDof());
+  // Base twist columns (base frame velocities mapped to the link origin, world frame).
+  J.block<3, 1>(0, 0) = R.col(0);  // v_x
+  int wz = 1;
+  if (baseType() == BaseType::Holonomic) {
+    J.block<3, 1>(0, 1) = R.col(1);  // v_y
+    wz = 2;
+  }
+  J.block<3, 1>(0, wz) = Eigen::Vector3d::UnitZ().cross(r);  // w_z
+  J(5, wz) = 1.0;
+  J.block(0, nb, 3, nArm()) = R * Ja.topRows<3>();
+  J.block(3, nb, 3, nArm()) = R * Ja.bottomRows<3>();
+  if (pose) *pose = Twb * Tbl;
+  return J;
+}
+
+double WholeBodyModel::manipulability(const Eigen::VectorXd& q) const {
+  const Matrix6Xd J = armJacobian(q, cfg_.tcp_frame);
+  const double d = nArm() >= 6 ? (J * J.transpose()).determinant()
+                               : (J.transpose() * J).determinant();
+  return std::sqrt(std::max(0.0, d));
+}
+
+Eigen::VectorXd WholeBodyModel::manipulabilityGradient(const Eigen::VectorXd& q, double* m_out) const {
+  const Matrix6Xd J = armJacobian(q, cfg_.tcp_frame);
+  const int n = nArm();
+  const bool wide = n >= 6;
+  const Eigen::MatrixXd A = wide ? Eigen::MatrixXd(J * J.transpose()) : Eigen::MatrixXd(J.transpose() * J);
+  const double m = std::sqrt(std::max(0.0, A.determinant()));
+  if (m_out) *m_out = m;
+  Eigen::VectorXd g = Eigen::VectorXd::Zero(n);
+  if (!(m > 1e-12)) return g;
+  const Eigen::LDLT<Eigen::MatrixXd> Ainv(A);
+  const auto& rev = impl_->arm_revolute;
+  Matrix6Xd H(6, n);
+  for (int b = 0; b < n; ++b) {
+    // H = dJ/dq_b (geometric Jacobian Hessian slice, base frame).
+    const Eigen::Vector3d zb = J.block<3, 1>(3, b);
+    for (int a = 0; a < n; ++a) {
+      Eigen::Matrix<double, 6, 1> h = Eigen::Matrix<double, 6, 1>::Zero();
+      if (b <= a) {
+        if (rev[static_cast<std::size_t>(b)]) {
+          h.head<3>() = zb.cross(J.block<3, 1>(0, a));
+          h.tail<3>() = zb.cross(J.block<3, 1>(3, a));
+        }
+      } else if (rev[static_cast<std::size_t>(a)]) {
+        h.head<3>() = J.block<3, 1>(3, a).cross(J.block<3, 1>(0, b));
+      }
+      H.col(a) = h;
+    }
+    // d m / d q_b = m * tr(A^-1 dA/2) with dA = H J^T + J H^T (wide) or H^T J + J^T H.
+    const Eigen::MatrixXd P = wide ? Eigen::MatrixXd(H * J.transpose()) : Eigen::MatrixXd(J.transpose() * H);
+    g[b] = m * Ainv.solve(P).trace();
+  }
+  return g;
+}
+
+}  // namespace ehc_control

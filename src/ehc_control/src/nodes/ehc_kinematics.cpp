@@ -1,0 +1,139 @@
+// ehc_kinematics: scripting CLI over WholeBodyModel (ROS-free, runs without a master).
+//   rosrun ehc_control ehc_kinematics --robot robot.yaml --q j1,...,jn [--base x,y,yaw]
+//                                     [--link NAME] [--summary]
+// Prints one JSON object {"joint_names", "base_type", "T", "J", "manipulability"} (T and J of
+// --link, default the TCP, world frame). --q ready uses the ready pose of robot.yaml.
+// --summary prints a human-readable kinematic summary instead. Errors: stderr, exit code 2.
+
+#include "ehc_control/whole_body_model.h"
+
+#include <cstdio>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+const char* kUsage =
+    "usage: ehc_kinematics --robot <robot.yaml> --q <j1,...,jn | ready> [--base x,y,yaw]\n"
+    "                      [--link NAME] [--summary]\n";
+
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+std::vector<double> parseList(const std::string& flag, const std::string& s) {
+  std::vector<double> out;
+  std::stringstream ss(s);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    try {
+      std::size_t used = 0;
+      out.push_back(std::stod(item, &used));
+      if (used != item.size()) throw std::invalid_argument(item);
+    } catch (const std::exception&) {
+      throw UsageError(flag + ": '" + item + "' is not a number");
+    }
+  }
+  return out;
+}
+
+void printMatrix(std::ostream& os, const Eigen::MatrixXd& m) {
+  os << "[";
+  for (int r = 0; r < m.rows(); ++r) {
+    os << (r ? "," : "") << "[";
+    for (int c = 0; c < m.cols(); ++c) os << (c ? "," : "") << m(r, c);
+    os << "]";
+  }
+  os << "]";
+}
+
+void printSummary(const ehc_control::WholeBodyModel& model, const Eigen::Vector3d& base,
+                  const Eigen::VectorXd& q) {
+  const auto& c = model.config();
+  std::cout << c.summary();
+  std::cout << "  DOF: " << model.nDof() << " (" << model.nBase() << " base + " << model.nArm()
+            << " arm):";
+  for (const auto& n : model.dofNames()) std::cout << " " << n;
+  std::cout << "\n  links: " << model.linkNames().size() << "\n";
+  std::cout << std::fixed << std::setprecision(4);
+  for (const std::string& f : {c.arm_base_frame, c.tcp_frame, c.camera_frame}) {
+    const Eigen::Isometry3d T = model.fk(base, q, f);
+    std::cout << "  " << std::setw(28) << std::left << f << " at q: position ["
+              << T.translation().transpose() << "] m, z axis [" << T.linear().col(2).transpose()
+              << "]\n";
+  }
+  const Eigen::Vector3d reach =
+      model.linkPoseInBase(q, c.tcp_frame).translation() -
+      model.linkPoseInBase(q, c.arm_base_frame).translation();
+  std::cout << "  TCP distance from the arm base: " << reach.norm() << " m\n";
+  std::cout << "  manipulability at q: " << model.manipulability(q) << "\n";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    std::string robot, q_arg, base_arg = "0,0,0", link;
+    bool summary = false;
+    for (int i = 1; i < argc; ++i) {
+      const std::string a = argv[i];
+      auto next = [&]() -> std::string {
+        if (i + 1 >= argc) throw UsageError(a + " needs a value");
+        return argv[++i];
+      };
+      if (a == "--robot") robot = next();
+      else if (a == "--q") q_arg = next();
+      else if (a == "--base") base_arg = next();
+      else if (a == "--link") link = next();
+      else if (a == "--summary") summary = true;
+      else if (a == "-h" || a == "--help") { std::cout << kUsage; return 0; }
+      else throw UsageError("unknown argument '" + a + "'");
+    }
+    if (robot.empty()) throw UsageError("--robot is required");
+    if (q_arg.empty() && !summary) throw UsageError("--q is required");
+
+    const ehc_control::RobotConfig cfg = ehc_control::loadRobotConfig(robot);
+    const ehc_control::WholeBodyModel model(cfg);
+    if (link.empty()) link = cfg.tcp_frame;
+
+    Eigen::VectorXd q = cfg.arm_ready;
+    if (!q_arg.empty() && q_arg != "ready") {
+      const std::vector<double> v = parseList("--q", q_arg);
+      if (static_cast<int>(v.size()) != model.nArm())
+        throw UsageError("--q needs " + std::to_string(model.nArm()) + " values, got " +
+                         std::to_string(v.size()));
+      q = Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<int>(v.size()));
+    }
+    const std::vector<double> b = parseList("--base", base_arg);
+    if (b.size() != 3) throw UsageError("--base needs 3 values x,y,yaw");
+    const Eigen::Vector3d base(b[0], b[1], b[2]);
+
+    if (summary) {
+      printSummary(model, base, q);
+      return 0;
+    }
+    Eigen::Isometry3d T;
+    const ehc_control::Matrix6Xd J = model.jacobian(base, q, link, &T);
+    std::ostringstream os;
+    os << std::setprecision(12) << "{\"joint_names\":[";
+    for (int i = 0; i < model.nArm(); ++i)
+      os << (i ? "," : "") << "\"" << cfg.arm_joints[static_cast<std::size_t>(i)] << "\"";
+    os << "],\"base_type\":\"" << ehc_control::toString(cfg.base_type) << "\",\"link\":\"" << link
+       << "\",\"T\":";
+    printMatrix(os, T.matrix());
+    os << ",\"J\":";
+    printMatrix(os, J);
+    os << ",\"manipulability\":" << model.manipulability(q) << "}";
+    std::cout << os.str() << std::endl;
+    return 0;
+  } catch (const UsageError& e) {
+    std::cerr << "ehc_kinematics: " << e.what() << "\n" << kUsage;
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "ehc_kinematics: " << e.what() << "\n";
+    return 2;
+  }
+}

@@ -1,0 +1,62 @@
+// ehc_kinematics CLI: JSON output for a valid call, exit code 2 + stderr for bad calls.
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <string>
+#include <sys/wait.h>
+
+namespace {
+
+struct Result {
+  int code;
+  std::string out;
+};
+
+Result run(const std::string& args) {
+  const std::string cmd = std::string(EHC_KINEMATICS_BIN) + " " + args + " 2>/tmp/ehc_kin_err.txt";
+  FILE* p = popen(cmd.c_str(), "r");
+  std::string out;
+  std::array<char, 4096> buf{};
+  while (fgets(buf.data(), buf.size(), p)) out += buf.data();
+  const int status = pclose(p);
+  return {WEXITSTATUS(status), out};
+}
+
+const std::string kRobot =
+    std::string("--robot ") + EHC_CONFIG_DIR + "/robots/realman_rm65_water2/robot.yaml";
+
+}  // namespace
+
+TEST(EhcKinematicsCli, PrintsOneJsonObject) {
+  const Result r = run(kRobot + " --q 0,0.1,1.2,0,0.8,0 --base 1,2,0.5");
+  ASSERT_EQ(r.code, 0);
+  EXPECT_EQ(r.out.front(), '{');
+  for (const char* key : {"\"joint_names\":[\"joint1\"", "\"base_type\":\"differential\"",
+                          "\"T\":[[", "\"J\":[[", "\"manipulability\":"})
+    EXPECT_NE(r.out.find(key), std::string::npos) << key << " missing in " << r.out;
+  // Last row of T is [0,0,0,1]; J has 6 rows of 8 columns.
+  EXPECT_NE(r.out.find("[0,0,0,1]]"), std::string::npos);
+  const auto jpos = r.out.find("\"J\":");
+  const std::string jtxt = r.out.substr(jpos, r.out.find("\"manipulability\"") - jpos);
+  EXPECT_EQ(std::count(jtxt.begin(), jtxt.end(), '['), 7);
+  EXPECT_EQ(std::count(jtxt.begin(), jtxt.end(), ','), 6 * 7 + 5 + 1);
+}
+
+TEST(EhcKinematicsCli, OtherLink) {
+  const Result r = run(kRobot + " --q ready --link camera_color_optical_frame");
+  ASSERT_EQ(r.code, 0);
+  EXPECT_NE(r.out.find("\"link\":\"camera_color_optical_frame\""), std::string::npos);
+}
+
+TEST(EhcKinematicsCli, ErrorsExitWithCode2) {
+  EXPECT_EQ(run(kRobot + " --q 0,0,0").code, 2);                    // wrong joint count
+  EXPECT_EQ(run(kRobot + " --q 0,0,0,0,0,x").code, 2);              // not a number
+  EXPECT_EQ(run(kRobot + " --q ready --link nowhere").code, 2);     // unknown link
+  EXPECT_EQ(run("--robot /nonexistent.yaml --q ready").code, 2);    // unreadable config
+  EXPECT_EQ(run("--q ready").code, 2);                              // missing --robot
+  EXPECT_EQ(run(kRobot + " --q ready --base 0,0").code, 2);         // bad base
+  EXPECT_EQ(run(kRobot + " --q nan,0,0,0,0,0").code, 2);            // NaN
+  EXPECT_EQ(run(kRobot + " --q ready --bogus").code, 2);            // unknown flag
+}

@@ -1,0 +1,91 @@
+// loadRobotConfig: the shipped robot.yaml loads; bad files fail with a message naming the field.
+
+#include "ehc_control/robot_config.h"
+#include "test_helpers.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <fstream>
+#include <regex>
+
+using namespace ehc_control;
+
+namespace {
+
+/// Writes the shipped robot.yaml with one textual substitution to a temp file.
+std::string variant(const std::string& from, const std::string& to) {
+  std::ifstream in(test::realmanYaml());
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto pos = text.find(from);
+  if (pos == std::string::npos) throw std::runtime_error("pattern not in robot.yaml: " + from);
+  text.replace(pos, from.size(), to);
+  // Keep the URDF reference valid from the temp folder.
+  const std::string urdf = std::string(EHC_CONFIG_DIR) + "/robots/realman_rm65_water2/robot.urdf";
+  text = std::regex_replace(text, std::regex("urdf: robot.urdf"), "urdf: " + urdf);
+  char name[] = "/tmp/ehc_robot_XXXXXX.yaml";
+  const int fd = mkstemps(name, 5);
+  if (fd < 0) throw std::runtime_error("mkstemps failed");
+  close(fd);
+  std::ofstream(name) << text;
+  return name;
+}
+
+void expectLoadError(const std::string& path, const std::string& needle) {
+  try {
+    loadRobotConfig(path);
+    FAIL() << "no exception for " << needle;
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    EXPECT_EQ(std::string(e.what()).rfind("[RobotConfig]", 0), 0u) << e.what();
+  }
+}
+
+}  // namespace
+
+TEST(RobotConfig, ShippedRealmanConfigLoads) {
+  const RobotConfig c = loadRobotConfig(test::realmanYaml());
+  EXPECT_EQ(c.name, "realman_rm65_water2");
+  EXPECT_EQ(c.base_type, BaseType::Differential);
+  EXPECT_EQ(c.nArm(), 6);
+  EXPECT_DOUBLE_EQ(c.max_linear_velocity, 0.5);
+  EXPECT_DOUBLE_EQ(c.max_angular_velocity, 1.0);
+  EXPECT_NEAR(c.arm_upper[0], 178.0 * M_PI / 180.0, 1e-15);
+  EXPECT_NEAR(c.arm_upper[4], 128.0 * M_PI / 180.0, 1e-15);
+  EXPECT_EQ(c.velocityLimits().size(), 8);
+  EXPECT_EQ(c.calibration.size(), 2u);
+  EXPECT_NE(c.summary().find("joint6"), std::string::npos);
+}
+
+TEST(RobotConfig, MissingFile) { expectLoadError("/nonexistent/robot.yaml", "cannot read config file"); }
+
+TEST(RobotConfig, BadBaseType) {
+  expectLoadError(variant("type: differential", "type: tracked"), "field 'robot.base.type'");
+}
+
+TEST(RobotConfig, WrongLimitCount) {
+  expectLoadError(variant("velocity:  [3.14, 3.14, 3.92, 3.92, 3.92, 3.92]", "velocity: [3.14]"),
+                  "field 'robot.arm.velocity' must have 6 elements");
+}
+
+TEST(RobotConfig, NonFiniteValue) {
+  expectLoadError(variant("max_linear_velocity: 0.5", "max_linear_velocity: .nan"),
+                  "field 'robot.base.max_linear_velocity' must be a finite number");
+}
+
+TEST(RobotConfig, OutOfRangeVelocity) {
+  expectLoadError(variant("max_linear_velocity: 0.5", "max_linear_velocity: -1"),
+                  "robot.base.max_linear_velocity");
+}
+
+TEST(RobotConfig, ReadyPoseOutsideLimits) {
+  expectLoadError(variant("ready:     [0.0, 0.5", "ready:     [0.0, 3.0"), "robot.arm.ready");
+}
+
+TEST(RobotConfig, MissingUrdfField) {
+  expectLoadError(variant("urdf: robot.urdf", "urdf_file: robot.urdf"), "field 'robot.urdf' is missing");
+}
+
+TEST(RobotConfig, YamlSyntaxError) {
+  expectLoadError(variant("robot:\n", "robot: [\n"), "YAML syntax error");
+}

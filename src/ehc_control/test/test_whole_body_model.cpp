@@ -1,0 +1,287 @@
+// WholeBodyModel: Jacobian vs finite differences, FK vs the RM65-B modified-DH table,
+// manipulability gradient vs finite differences, and bad inputs.
+
+#include "ehc_control/whole_body_model.h"
+#include "test_helpers.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+using namespace ehc_control;
+using ehc_control::test::randomArm;
+using ehc_control::test::randomBase;
+using ehc_control::test::realmanConfig;
+
+namespace {
+
+/// World-frame twist [v; w] of `link` from central differences of FK along one DOF.
+Eigen::Matrix<double, 6, 1> numericColumn(const WholeBodyModel& m, const Eigen::Vector3d& base,
+                                          const Eigen::VectorXd& q, const std::string& link,
+                                          int dof, double h) {
+  Eigen::Vector3d bp = base, bm = base;
+  Eigen::VectorXd qp = q, qm = q;
+  const int nb = m.nBase();
+  const bool holo = m.baseType() == BaseType::Holonomic;
+  const double c = std::cos(base.z()), s = std::sin(base.z());
+  if (dof < nb) {
+    const bool is_wz = dof == nb - 1;
+    const bool is_vy = holo && dof == 1;
+    if (is_wz) {
+      bp.z() += h;
+      bm.z() -= h;
+    } else if (is_vy) {  // move along the base y axis
+      bp.head<2>() += h * Eigen::Vector2d(-s, c);
+      bm.head<2>() -= h * Eigen::Vector2d(-s, c);
+    } else {  // v_x: move along the base x axis
+      bp.head<2>() += h * Eigen::Vector2d(c, s);
+      bm.head<2>() -= h * Eigen::Vector2d(c, s);
+    }
+  } else {
+    qp[dof - nb] += h;
+    qm[dof - nb] -= h;
+  }
+  const Eigen::Isometry3d Tp = m.fk(bp, qp, link), Tm = m.fk(bm, qm, link);
+  Eigen::Matrix<double, 6, 1> col;
+  col.head<3>() = (Tp.translation() - Tm.translation()) / (2 * h);
+  const Eigen::AngleAxisd aa(Eigen::Matrix3d(Tp.linear() * Tm.linear().transpose()));
+  col.tail<3>() = aa.axis() * aa.angle() / (2 * h);
+  return col;
+}
+
+/// Modified DH (Craig): T = RotX(alpha_{i-1}) TransX(a_{i-1}) RotZ(theta_i) TransZ(d_i).
+Eigen::Isometry3d rm65ModifiedDh(const Eigen::VectorXd& q) {
+  const double a[6] = {0, 0, 0.256, 0, 0, 0};
+  const double alpha_deg[6] = {0, 90, 0, 90, -90, 90};
+  const double d[6] = {0.2405, 0, 0, 0.210, 0, 0.144};
+  const double offset_deg[6] = {0, 90, 90, 0, 0, 0};
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  for (int i = 0; i < 6; ++i) {
+    Eigen::Isometry3d Ti = Eigen::Isometry3d::Identity();
+    Ti.rotate(Eigen::AngleAxisd(alpha_deg[i] * M_PI / 180.0, Eigen::Vector3d::UnitX()));
+    Ti.translate(Eigen::Vector3d(a[i], 0, 0));
+    Ti.rotate(Eigen::AngleAxisd(q[i] + offset_deg[i] * M_PI / 180.0, Eigen::Vector3d::UnitZ()));
+    Ti.translate(Eigen::Vector3d(0, 0, d[i]));
+    T = T * Ti;
+  }
+  return T;
+}
+
+std::string readText(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+}  // namespace
+
+class JacobianVsFiniteDifferences : public ::testing::TestWithParam<BaseType> {};
+
+TEST_P(JacobianVsFiniteDifferences, HundredRandomConfigurationsSeveralLinks) {
+  const WholeBodyModel model(realmanConfig(GetParam()));
+  std::mt19937 rng(42);
+  double worst = 0.0;
+  for (int k = 0; k < 100; ++k) {
+    const Eigen::VectorXd q = randomArm(model.config(), rng);
+    const Eigen::Vector3d base = randomBase(rng);
+    for (const std::string link : {"ee_link", "camera_color_optical_frame", "link3", "link6"}) {
+      const Matrix6Xd J = model.jacobian(base, q, link);
+      ASSERT_EQ(J.rows(), 6);
+      ASSERT_EQ(J.cols(), model.nDof());
+      for (int dof = 0; dof < model.nDof(); ++dof) {
+        const auto num = numericColumn(model, base, q, link, dof, 1e-6);
+        const double err = (J.col(dof) - num).cwiseAbs().maxCoeff();
+        worst = std::max(worst, err);
+        ASSERT_LE(err, 1e-6) << "link " << link << " dof " << model.dofNames()[dof]
+                             << " sample " << k << "\nanalytic " << J.col(dof).transpose()
+                             << "\nnumeric  " << num.transpose();
+      }
+    }
+  }
+  RecordProperty("worst_abs_error", std::to_string(worst));
+}
+
+INSTANTIATE_TEST_SUITE_P(BothBaseTypes, JacobianVsFiniteDifferences,
+                         ::testing::Values(BaseType::Holonomic, BaseType::Differential),
+                         [](const auto& info) { return toString(info.param); });
+
+TEST(WholeBodyModel, BaseColumnsMatchTheBaseType) {
+  const WholeBodyModel holo(realmanConfig(BaseType::Holonomic));
+  const WholeBodyModel diff(realmanConfig(BaseType::Differential));
+  EXPECT_EQ(holo.nDof(), 9);
+  EXPECT_EQ(diff.nDof(), 8);
+  EXPECT_EQ(holo.dofNames()[1], "base_vy");
+  EXPECT_EQ(diff.dofNames()[1], "base_wz");
+  std::mt19937 rng(1);
+  const Eigen::VectorXd q = randomArm(holo.config(), rng);
+  const Eigen::Vector3d base(1.0, -2.0, 0.7);
+  const Matrix6Xd Jh = holo.jacobian(base, q, "ee_link");
+  const Matrix6Xd Jd = diff.jacobian(base, q, "ee_link");
+  // Differential = holonomic without the v_y column.
+  EXPECT_TRUE(Jd.col(0).isApprox(Jh.col(0)));
+  EXPECT_TRUE(Jd.col(1).isApprox(Jh.col(2)));
+  EXPECT_TRUE(Jd.rightCols(6).isApprox(Jh.rightCols(6)));
+  // v_x of the base moves every point along the base heading, no rotation.
+  EXPECT_NEAR(Jh(0, 0), std::cos(0.7), 1e-12);
+  EXPECT_NEAR(Jh(1, 0), std::sin(0.7), 1e-12);
+  EXPECT_NEAR(Jh.col(0).tail<3>().norm(), 0.0, 1e-12);
+}
+
+TEST(WholeBodyModel, ForwardKinematicsMatchesModifiedDhTable) {
+  const WholeBodyModel model(realmanConfig());
+  std::mt19937 rng(7);
+  for (int k = 0; k < 200; ++k) {
+    const Eigen::VectorXd q = randomArm(model.config(), rng, 0.0);
+    const Eigen::Vector3d base = randomBase(rng);
+    const Eigen::Isometry3d Twa = model.fk(base, q, "arm_base_link");
+    const Eigen::Isometry3d Tw6 = model.fk(base, q, "link6");
+    const Eigen::Isometry3d dh = rm65ModifiedDh(q);
+    const Eigen::Isometry3d rel = Twa.inverse() * Tw6;
+    EXPECT_LE((rel.translation() - dh.translation()).norm(), 1e-6) << "sample " << k;
+    const Eigen::AngleAxisd dR(Eigen::Matrix3d(rel.linear().transpose() * dh.linear()));
+    EXPECT_LE(std::abs(dR.angle()), 1e-6) << "sample " << k;
+    // The arm base sits 0.10 m forward and 0.60 m up on the base (documented mount).
+    const Eigen::Vector3d mount = WholeBodyModel::baseTransform(base) * Eigen::Vector3d(0.10, 0, 0.60);
+    EXPECT_LE((Twa.translation() - mount).norm(), 1e-9);
+    // TCP = 0.12 m along the flange z axis.
+    const Eigen::Isometry3d Twe = model.fk(base, q, "ee_link");
+    EXPECT_LE((Twe.translation() - Tw6 * Eigen::Vector3d(0, 0, 0.12)).norm(), 1e-9);
+  }
+}
+
+TEST(WholeBodyModel, CameraLooksAlongTheApproachAxis) {
+  const WholeBodyModel model(realmanConfig());
+  const Eigen::VectorXd q = model.config().arm_ready;
+  const Eigen::Isometry3d Tc = model.fk(Eigen::Vector3d::Zero(), q, "camera_color_optical_frame");
+  const Eigen::Isometry3d Te = model.fk(Eigen::Vector3d::Zero(), q, "ee_link");
+  EXPECT_NEAR(Tc.linear().col(2).dot(Te.linear().col(2)), 1.0, 1e-9);
+  // 0.07 m off the approach axis.
+  const Eigen::Vector3d d = Te.inverse() * Tc.translation();
+  EXPECT_NEAR(std::hypot(d.x(), d.y()), 0.07, 1e-9);
+}
+
+TEST(WholeBodyModel, ManipulabilityGradientMatchesFiniteDifferences) {
+  const WholeBodyModel model(realmanConfig());
+  std::mt19937 rng(3);
+  int checked = 0;
+  for (int k = 0; k < 100; ++k) {
+    const Eigen::VectorXd q = randomArm(model.config(), rng);
+    double m = 0.0;
+    const Eigen::VectorXd g = model.manipulabilityGradient(q, &m);
+    EXPECT_NEAR(m, model.manipulability(q), 1e-12);
+    const double h = 1e-6;
+    for (int i = 0; i < model.nArm(); ++i) {
+      Eigen::VectorXd qp = q, qm = q;
+      qp[i] += h;
+      qm[i] -= h;
+      const double num = (model.manipulability(qp) - model.manipulability(qm)) / (2 * h);
+      EXPECT_NEAR(g[i], num, 1e-6 + 1e-5 * std::abs(num)) << "sample " << k << " joint " << i;
+    }
+    ++checked;
+  }
+  EXPECT_EQ(checked, 100);
+}
+
+TEST(WholeBodyModel, ManipulabilityVanishesAtTheElbowSingularity) {
+  const WholeBodyModel model(realmanConfig());
+  Eigen::VectorXd q = model.config().arm_ready;
+  q[2] = 0.0;  // RM65-B: singular at q3 = 0 (arm stretched)
+  EXPECT_LT(model.manipulability(q), 1e-9);
+  EXPECT_GT(model.manipulability(model.config().arm_ready), 1e-3);
+  EXPECT_TRUE(model.manipulabilityGradient(q).allFinite());
+}
+
+TEST(WholeBodyModel, CalibrationOverridesMoveTheTcp) {
+  RobotConfig c = realmanConfig();
+  for (auto& o : c.calibration)
+    if (o.joint == "tcp_joint") o.xyz = Eigen::Vector3d(0, 0, 0.20);
+  const WholeBodyModel model(c);
+  const Eigen::VectorXd q = c.arm_ready;
+  const Eigen::Isometry3d T6 = model.linkPoseInBase(q, "link6");
+  const Eigen::Isometry3d Te = model.linkPoseInBase(q, "ee_link");
+  EXPECT_NEAR((Te.translation() - T6 * Eigen::Vector3d(0, 0, 0.20)).norm(), 0.0, 1e-9);
+}
+
+// ------------------------------------------------------------------ bad inputs
+
+TEST(WholeBodyModelErrors, WrongJointCount) {
+  const WholeBodyModel model(realmanConfig());
+  try {
+    model.fk(Eigen::Vector3d::Zero(), Eigen::VectorXd::Zero(5), "ee_link");
+    FAIL() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("[WholeBodyModel] expected 6 arm joint positions, got 5"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW(model.jacobian(Eigen::Vector3d::Zero(), Eigen::VectorXd::Zero(7), "ee_link"),
+               std::invalid_argument);
+  EXPECT_THROW(model.manipulabilityGradient(Eigen::VectorXd::Zero(2)), std::invalid_argument);
+}
+
+TEST(WholeBodyModelErrors, NaNInputs) {
+  const WholeBodyModel model(realmanConfig());
+  Eigen::VectorXd q = model.config().arm_ready;
+  q[3] = std::nan("");
+  EXPECT_THROW(model.fk(Eigen::Vector3d::Zero(), q, "ee_link"), std::invalid_argument);
+  EXPECT_THROW(model.manipulability(q), std::invalid_argument);
+  const Eigen::Vector3d bad_base(0, std::numeric_limits<double>::infinity(), 0);
+  EXPECT_THROW(model.jacobian(bad_base, model.config().arm_ready, "ee_link"), std::invalid_argument);
+}
+
+TEST(WholeBodyModelErrors, UnknownLink) {
+  const WholeBodyModel model(realmanConfig());
+  try {
+    model.fk(Eigen::Vector3d::Zero(), model.config().arm_ready, "no_such_link");
+    FAIL() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("[WholeBodyModel] unknown link 'no_such_link'"),
+              std::string::npos);
+  }
+}
+
+TEST(WholeBodyModelErrors, UnreadableOrBrokenUrdf) {
+  RobotConfig c = realmanConfig();
+  c.urdf_path = "/nonexistent/robot.urdf";
+  try {
+    WholeBodyModel m(c);
+    FAIL() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("[WholeBodyModel] cannot read URDF file '/nonexistent/robot.urdf'"),
+              std::string::npos);
+  }
+  EXPECT_THROW(WholeBodyModel(realmanConfig(), "<robot name='x'><link name="), std::invalid_argument);
+}
+
+TEST(WholeBodyModelErrors, ConfigThatDoesNotMatchTheUrdf) {
+  const RobotConfig good = realmanConfig();
+  const std::string xml = readText(good.urdf_path);
+  {
+    RobotConfig c = good;
+    c.arm_joints[2] = "elbow";  // not in the URDF
+    EXPECT_THROW(WholeBodyModel(c, xml), std::invalid_argument);
+  }
+  {
+    RobotConfig c = good;
+    std::swap(c.arm_joints[0], c.arm_joints[1]);  // wrong order
+    EXPECT_THROW(WholeBodyModel(c, xml), std::invalid_argument);
+  }
+  {
+    RobotConfig c = good;
+    c.arm_upper[1] = 3.0;  // wider than the URDF's 130 deg
+    EXPECT_THROW(WholeBodyModel(c, xml), std::invalid_argument);
+  }
+  {
+    RobotConfig c = good;
+    c.calibration.push_back({"joint3", Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()});
+    EXPECT_THROW(WholeBodyModel(c, xml), std::invalid_argument);  // not a fixed joint
+  }
+  {
+    RobotConfig c = good;
+    c.tcp_frame = "gripper_tip";  // no such link
+    EXPECT_THROW(WholeBodyModel(c, xml), std::invalid_argument);
+  }
+}

@@ -1,0 +1,90 @@
+#include "ehc_sim/kinematic_fake_robot.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace ehc_sim {
+
+namespace {
+[[noreturn]] void fail(const std::string& what) {
+  throw std::invalid_argument("[KinematicFakeRobot] " + what);
+}
+}  // namespace
+
+void ActuationNoise::validate() const {
+  for (double s : {base_translation, base_rotation, arm})
+    if (!std::isfinite(s) || s < 0.0 || s > 1.0)
+      throw std::invalid_argument("[ActuationNoise] noise sigmas must be in [0, 1]");
+}
+
+KinematicFakeRobot::KinematicFakeRobot(const ehc_control::RobotConfig& robot,
+                                       const ActuationNoise& noise, unsigned seed)
+    : robot_(robot), noise_(noise), vmax_(robot.velocityLimits()) {
+  robot_.validate();
+  noise_.validate();
+  reset(Eigen::Vector3d::Zero(), robot_.arm_ready, seed);
+}
+
+void KinematicFakeRobot::reset(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q,
+                               unsigned seed) {
+  if (!base_pose.allFinite()) fail("reset: base pose must be finite");
+  if (q.size() != robot_.nArm() || !q.allFinite())
+    fail("reset: need " + std::to_string(robot_.nArm()) + " finite arm joint positions");
+  base_ = base_pose;
+  q_ = q.cwiseMax(robot_.arm_lower).cwiseMin(robot_.arm_upper);
+  executed_ = Eigen::VectorXd::Zero(nDof());
+  rng_.seed(seed);
+  gauss_.reset();
+  time_ = 0.0;
+  saturated_ = clamps_ = 0;
+}
+
+void KinematicFakeRobot::step(const Eigen::VectorXd& command, double dt) {
+  if (command.size() != nDof())
+    fail("command has " + std::to_string(command.size()) + " entries, expected " +
+         std::to_string(nDof()));
+  if (!command.allFinite()) fail("command contains NaN or Inf");
+  if (!(dt > 0.0) || !std::isfinite(dt)) fail("dt must be > 0");
+
+  Eigen::VectorXd v = command;
+  if ((v.array().abs() > vmax_.array()).any()) ++saturated_;
+  v = v.cwiseMax(-vmax_).cwiseMin(vmax_);
+
+  const int nb = robot_.nBase();
+  const bool holonomic = robot_.base_type == ehc_control::BaseType::Holonomic;
+  if (noise_.enabled && !command.isZero(0.0)) {
+    v[0] += noise_.base_translation * gauss_(rng_);
+    if (holonomic) v[1] += noise_.base_translation * gauss_(rng_);
+    v[nb - 1] += noise_.base_rotation * gauss_(rng_);
+    for (int i = nb; i < v.size(); ++i) v[i] += noise_.arm * gauss_(rng_);
+  }
+
+  // Base: exact SE(2) exponential of the constant body twist (v_x, v_y, w_z) over dt.
+  const double vx = v[0], vy = holonomic ? v[1] : 0.0, wz = v[nb - 1];
+  const double th = wz * dt;
+  double dx, dy;
+  if (std::abs(th) < 1e-9) {
+    dx = vx * dt - 0.5 * vy * th * dt;
+    dy = vy * dt + 0.5 * vx * th * dt;
+  } else {
+    const double s = std::sin(th) / wz, c = (1.0 - std::cos(th)) / wz;
+    dx = s * vx - c * vy;
+    dy = c * vx + s * vy;
+  }
+  const double cy = std::cos(base_.z()), sy = std::sin(base_.z());
+  base_.x() += cy * dx - sy * dy;
+  base_.y() += sy * dx + cy * dy;
+  base_.z() = std::remainder(base_.z() + th, 2.0 * M_PI);
+
+  // Arm: integrate, clamp to the joint limits, report the rate actually executed.
+  const Eigen::VectorXd q_new = q_ + v.tail(robot_.nArm()) * dt;
+  const Eigen::VectorXd q_clamped = q_new.cwiseMax(robot_.arm_lower).cwiseMin(robot_.arm_upper);
+  if (!q_clamped.isApprox(q_new, 0.0)) ++clamps_;
+  v.tail(robot_.nArm()) = (q_clamped - q_) / dt;
+  q_ = q_clamped;
+  executed_ = v;
+  time_ += dt;
+}
+
+}  // namespace ehc_sim
