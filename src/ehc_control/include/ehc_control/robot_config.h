@@ -28,6 +28,7 @@ struct RobotConfig {
   std::string name = "robot";
   std::string source_file;  ///< the robot.yaml this came from ("" if built in code)
   std::string urdf_path;    ///< absolute or relative to the working directory
+  std::string reachability_map_path;  ///< optional; "" = none (ehc mode then needs one)
 
   std::string world_frame = "odom";
   std::string base_frame = "base_link";

@@ -71,6 +71,7 @@ std::string RobotConfig::summary() const {
   std::ostringstream os;
   os << "robot '" << name << "' (" << (source_file.empty() ? "built in code" : source_file) << ")\n"
      << "  urdf: " << urdf_path << "\n"
+     << "  reachability map: " << (reachability_map_path.empty() ? "(none)" : reachability_map_path) << "\n"
      << "  frames: world=" << world_frame << " base=" << base_frame
      << " arm_base=" << arm_base_frame << " tcp=" << tcp_frame << " camera=" << camera_frame
      << "\n"
@@ -94,6 +95,8 @@ RobotConfig loadRobotConfig(const std::string& path) {
   c.source_file = path;
   c.name = r.get<std::string>("name", c.name);
   c.urdf_path = r.resolvePath(r.require<std::string>("urdf"));
+  if (r.has("reachability_map"))
+    c.reachability_map_path = r.resolvePath(r.require<std::string>("reachability_map"));
 
   const ConfigNode f = r.childOrEmpty("frames");
   c.world_frame = f.get<std::string>("world", c.world_frame);

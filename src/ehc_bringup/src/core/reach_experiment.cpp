@@ -1,0 +1,208 @@
+#include "ehc_bringup/reach_experiment.h"
+
+#include "ehc_control/bench_util.h"
+
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+#include <stdexcept>
+#include <sys/stat.h>
+
+namespace ehc_bringup {
+
+using ehc_control::EhcQpController;
+using ehc_control::Vector6d;
+
+void ReachExperimentParams::validate() const {
+  auto bad = [](const std::string& w) { throw std::invalid_argument("[ReachExperiment] " + w); };
+  if (!(control_rate >= 1.0 && control_rate <= 10000.0)) bad("control_rate must be in [1, 10000] Hz");
+  if (!(time_limit > 0.0)) bad("time_limit must be > 0");
+  if (!(distant_threshold > 0.0)) bad("distant_threshold must be > 0");
+  if (!(arrival_position > 0.0 && arrival_orientation > 0.0)) bad("arrival tolerances must be > 0");
+  noise.validate();
+  servo.validate();
+}
+
+ReachExperiment::ReachExperiment(std::shared_ptr<const ehc_control::WholeBodyModel> model,
+                                 const ehc_control::QpControllerParams& controller,
+                                 std::shared_ptr<const ehc_control::EhcWeighting> weighting,
+                                 const ReachExperimentParams& params)
+    : model_(std::move(model)), controller_(controller), weighting_(std::move(weighting)),
+      params_(params) {
+  params_.validate();
+  controller_.validate();
+}
+
+namespace {
+void accumulate(SpeedMeans& s, const Eigen::VectorXd& v, int nb) {
+  s.base_t += nb == 3 ? std::hypot(v[0], v[1]) : std::abs(v[0]);
+  s.base_r += std::abs(v[nb - 1]);
+  s.arm += v.tail(v.size() - nb).cwiseAbs().sum();
+  ++s.cycles;
+}
+SpeedMeans mean(const SpeedMeans& s) {
+  SpeedMeans m = s;
+  if (s.cycles > 0) {
+    m.base_t /= static_cast<double>(s.cycles);
+    m.base_r /= static_cast<double>(s.cycles);
+    m.arm /= static_cast<double>(s.cycles);
+  }
+  return m;
+}
+double limitMargin(const ehc_control::RobotConfig& rc, const Eigen::VectorXd& q) {
+  return std::min((q - rc.arm_lower).minCoeff(), (rc.arm_upper - q).minCoeff());
+}
+}  // namespace
+
+ReachTrial ReachExperiment::reach(ehc_sim::KinematicFakeRobot& robot, EhcQpController& ctrl,
+                                  const Eigen::Isometry3d& target, SpeedMeans& distant,
+                                  SpeedMeans& close, std::vector<double>& step_us) {
+  const auto& rc = model_->config();
+  const double dt = 1.0 / params_.control_rate;
+  const int max_steps = static_cast<int>(std::ceil(params_.time_limit * params_.control_rate));
+  ReachTrial t;
+  t.min_joint_limit_margin = limitMargin(rc, robot.armPositions());
+  ctrl.reset();
+  for (int k = 0; k <= max_steps; ++k) {
+    const Eigen::Isometry3d tcp = model_->fk(robot.basePose(), robot.armPositions(), rc.tcp_frame);
+    const Vector6d e = ehc_control::poseError(tcp, target);
+    t.final_position_error = e.head<3>().norm();
+    t.final_orientation_error = e.tail<3>().norm();
+    if (t.final_position_error < params_.arrival_position &&
+        t.final_orientation_error < params_.arrival_orientation) {
+      t.reached = true;
+      t.time_s = k * dt;
+      return t;
+    }
+    if (k == max_steps) break;
+    const auto t0 = std::chrono::steady_clock::now();
+    const Vector6d nu = ehc_control::proportionalPoseServo(tcp, target, params_.servo);
+    const ehc_control::ControllerCommand cmd = ctrl.step(robot.basePose(), robot.armPositions(), target, nu);
+    step_us.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
+    if (!cmd.ok) ++t.qp_failures;
+    if (trace_) {
+      std::ostream& o = *trace_;
+      o << ehc_control::toString(controller_.mode) << "," << trace_set_ << "," << trace_index_ << ","
+        << k * dt << "," << robot.basePose().x() << "," << robot.basePose().y() << ","
+        << robot.basePose().z();
+      for (int i = 0; i < robot.armPositions().size(); ++i) o << "," << robot.armPositions()[i];
+      o << "," << cmd.position_error << "," << cmd.orientation_error << "," << cmd.omega << ","
+        << cmd.sig << "," << cmd.base_weight << "," << cmd.qp_status;
+      for (int i = 0; i < cmd.velocity.size(); ++i) o << "," << cmd.velocity[i];
+      o << "\n";
+    }
+    accumulate(t.final_position_error > params_.distant_threshold ? distant : close, cmd.velocity,
+               model_->nBase());
+    robot.step(cmd.velocity, dt);
+    t.min_joint_limit_margin = std::min(t.min_joint_limit_margin, limitMargin(rc, robot.armPositions()));
+  }
+  t.time_s = params_.time_limit;
+  return t;
+}
+
+ReachSummary ReachExperiment::run(const std::vector<std::vector<Eigen::Isometry3d>>& sets,
+                                  unsigned seed, std::vector<ReachTrial>* trials,
+                                  const Progress& progress) {
+  const auto wall0 = std::chrono::steady_clock::now();
+  ReachSummary s;
+  s.method = ehc_control::toString(controller_.mode);
+  int total = 0;
+  for (const auto& set : sets) total += static_cast<int>(set.size());
+  SpeedMeans distant, close;
+  std::vector<double> step_us;
+  double time_sum = 0.0;
+  s.min_joint_limit_margin = 1e9;
+  EhcQpController ctrl(model_, controller_, weighting_);
+  for (std::size_t si = 0; si < sets.size(); ++si) {
+    ehc_sim::KinematicFakeRobot robot(model_->config(), params_.noise, seed + static_cast<unsigned>(si));
+    robot.reset(Eigen::Vector3d::Zero(), model_->config().arm_ready, seed + static_cast<unsigned>(si));
+    for (std::size_t ti = 0; ti < sets[si].size(); ++ti) {
+      trace_set_ = static_cast<int>(si);
+      trace_index_ = static_cast<int>(ti);
+      ReachTrial t = reach(robot, ctrl, sets[si][ti], distant, close, step_us);
+      t.method = s.method;
+      t.set = static_cast<int>(si);
+      t.index = static_cast<int>(ti);
+      ++s.targets;
+      if (t.reached) time_sum += t.time_s;
+      else ++s.failed;
+      s.qp_failures += t.qp_failures;
+      s.min_joint_limit_margin = std::min(s.min_joint_limit_margin, t.min_joint_limit_margin);
+      if (trials) trials->push_back(t);
+      if (progress) {
+        ReachSummary p = s;
+        p.mean_time_s = s.targets > s.failed ? time_sum / (s.targets - s.failed) : 0.0;
+        progress(s.targets, total, p);
+      }
+    }
+  }
+  s.mean_time_s = s.targets > s.failed ? time_sum / (s.targets - s.failed) : 0.0;
+  s.distant = mean(distant);
+  s.close = mean(close);
+  s.cycles = distant.cycles + close.cycles;
+  const ehc_control::BenchStats st = ehc_control::benchStats(step_us);
+  s.controller_median_us = st.median_us;
+  s.controller_p99_us = st.p99_us;
+  s.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  return s;
+}
+
+std::string summaryJson(const ReachSummary& s) {
+  std::ostringstream os;
+  os << std::setprecision(6) << "{\"method\":\"" << s.method << "\",\"targets\":" << s.targets
+     << ",\"failed\":" << s.failed << ",\"mean_time_s\":" << s.mean_time_s
+     << ",\"distant\":{\"base_t\":" << s.distant.base_t << ",\"base_r\":" << s.distant.base_r
+     << ",\"arm\":" << s.distant.arm << ",\"cycles\":" << s.distant.cycles << "}"
+     << ",\"close\":{\"base_t\":" << s.close.base_t << ",\"base_r\":" << s.close.base_r
+     << ",\"arm\":" << s.close.arm << ",\"cycles\":" << s.close.cycles << "}"
+     << ",\"qp_failures\":" << s.qp_failures << ",\"min_joint_limit_margin_rad\":"
+     << s.min_joint_limit_margin << ",\"controller_step_median_us\":" << s.controller_median_us
+     << ",\"controller_step_p99_us\":" << s.controller_p99_us << ",\"wall_time_s\":"
+     << s.wall_time_s << "}";
+  return os.str();
+}
+
+void writeReachResults(const std::string& dir, const std::vector<ReachSummary>& summaries,
+                       const std::vector<ReachTrial>& trials, const std::string& notes) {
+  ::mkdir(dir.c_str(), 0755);
+  auto open = [&](const std::string& name) {
+    std::ofstream f(dir + "/" + name);
+    if (!f) throw std::runtime_error("[ReachExperiment] cannot write " + dir + "/" + name);
+    return f;
+  };
+  {
+    std::ofstream f = open("summary.json");
+    if (summaries.size() == 1) {
+      f << summaryJson(summaries[0]) << "\n";
+    } else {
+      f << "[";
+      for (std::size_t i = 0; i < summaries.size(); ++i) f << (i ? ",\n " : "") << summaryJson(summaries[i]);
+      f << "]\n";
+    }
+  }
+  {
+    std::ofstream f = open("table.md");
+    f << "| Method | Time(s) | Distant(Base-T/Base-R/Arm) | Close(Base-T/Base-R/Arm) | # of Failed (/"
+      << (summaries.empty() ? 0 : summaries[0].targets) << ") |\n|---|---|---|---|---|\n"
+      << std::fixed;
+    for (const auto& s : summaries)
+      f << "| " << s.method << " | " << std::setprecision(2) << s.mean_time_s << " | "
+        << std::setprecision(3) << s.distant.base_t << "/" << s.distant.base_r << "/" << s.distant.arm
+        << " | " << s.close.base_t << "/" << s.close.base_r << "/" << s.close.arm << " | " << s.failed
+        << " |\n";
+    if (!notes.empty()) f << "\n" << notes << "\n";
+  }
+  {
+    std::ofstream f = open("trials.csv");
+    f << "method,set,index,reached,time_s,final_position_error_m,final_orientation_error_rad,qp_failures,"
+         "min_joint_limit_margin_rad\n";
+    for (const auto& t : trials)
+      f << t.method << "," << t.set << "," << t.index << "," << (t.reached ? 1 : 0) << "," << t.time_s << ","
+        << t.final_position_error << "," << t.final_orientation_error << "," << t.qp_failures << ","
+        << t.min_joint_limit_margin << "\n";
+  }
+}
+
+}  // namespace ehc_bringup

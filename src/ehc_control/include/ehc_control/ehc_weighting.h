@@ -1,0 +1,54 @@
+#pragma once
+// EhcWeighting: the EHC function of the paper (eq. 10-13). omega = |e*| / |e| where e is the
+// TCP-to-target position error and e* the largest displacement from the TCP along e that ends
+// inside the arm's high-reachability set r_td = {R > threshold} (ray march in the
+// ReachabilityMap, arm base frame). sig(omega) = 1 / (1 + exp(-k (omega - 1))):
+//   far  (omega << 1): sig -> 0, the base is cheap and leads;
+//   close (omega > 1): sig -> 1, the base is expensive and the arm works.
+
+#include "ehc_control/reachability_map.h"
+
+#include <memory>
+#include <string>
+
+namespace ehc_control {
+
+class ConfigNode;
+
+struct EhcWeightingParams {
+  double reach_threshold = 0.95;  ///< R above this defines r_td
+  double sigmoid_gain = 10.0;     ///< k of the logistic
+  double max_ray_length = 1.6;    ///< m, ray-march range (>= the arm's reach)
+  double ray_step = 0.0;          ///< m, 0 = half a voxel
+  double omega_max = 10.0;        ///< cap of omega when |e| -> 0
+  void validate() const;          ///< throws "[EhcWeighting] ..."
+};
+EhcWeightingParams loadEhcWeightingParams(const ConfigNode& node);
+
+struct EhcWeight {
+  double omega = 0.0;   ///< |e*| / |e|
+  double sig = 0.0;     ///< sig(omega) in [0, 1]
+  double e_star = 0.0;  ///< |e*|, m
+};
+
+class EhcWeighting {
+ public:
+  EhcWeighting(std::shared_ptr<const ReachabilityMap> map, const EhcWeightingParams& params);
+
+  /// TCP and target positions in the arm base frame. Non-finite input throws.
+  EhcWeight evaluate(const Eigen::Vector3d& tcp_arm, const Eigen::Vector3d& target_arm) const;
+  /// Logistic 1 / (1 + exp(-k (omega - 1))).
+  double sig(double omega) const;
+  /// Whether a point (arm base frame) belongs to r_td.
+  bool inReachSet(const Eigen::Vector3d& p_arm) const;
+
+  const EhcWeightingParams& params() const { return params_; }
+  const ReachabilityMap& map() const { return *map_; }
+
+ private:
+  std::shared_ptr<const ReachabilityMap> map_;
+  EhcWeightingParams params_;
+  double step_;
+};
+
+}  // namespace ehc_control

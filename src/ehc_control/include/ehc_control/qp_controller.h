@@ -1,0 +1,127 @@
+#pragma once
+// EhcQpController: the whole-body QP of DESIGN.md section 6 (paper eq. 6-13), solved with
+// ViSP vpQuadProg (warm-started between cycles).
+//
+//   x = [qd_base; qd_arm; delta]            (delta in R^6: slack of the end-effector task)
+//   min 1/2 x^T Q x + C^T x
+//   s.t. [J_e  I_6] x = nu_e                 (J_e: 6 x n whole-body Jacobian of the TCP, world)
+//        A_in x <= b_in                      (joint-position and obstacle velocity dampers)
+//        x- <= x <= x+                       (velocity limits, slack bound)
+//   Q = blkdiag(w_base I, w_arm I, 1/max(|e|, e_min) I_6)
+//   C = [0 .. -k_eps atan2(y_e, x_e) (w_z column); -k_m J_m; 0]
+//
+// Modes (one parameter): ehc  w_base = w_min + (w_max - w_min) sig(omega)
+//                        neo_e w_base = w_arm / |e|        (NEO: base weight 1/|e|)
+//                        neo_c w_base = constant
+//                        tsmm  base only (arm held) until the TCP is within d of the target
+//                              horizontally, then arm only (base held).
+// A failed, infeasible or non-finite solve gives a zero command and qp_status QP_FAILED; the
+// command never contains NaN/Inf and never exceeds a velocity limit. ROS-free.
+
+#include "ehc_control/ehc_weighting.h"
+#include "ehc_control/whole_body_model.h"
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace ehc_control {
+
+class ConfigNode;
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+
+enum class ControlMode { Ehc, NeoE, NeoC, Tsmm };
+std::string toString(ControlMode m);
+ControlMode controlModeFromString(const std::string& s);  ///< throws std::invalid_argument
+
+struct QpControllerParams {
+  ControlMode mode = ControlMode::Ehc;
+  double arm_weight = 0.01;            ///< w_arm (NEO's lambda)
+  double ehc_base_weight_min = 0.001;  ///< ehc: base weight at sig = 0 (far)
+  double ehc_base_weight_max = 10.0;   ///< ehc: base weight at sig = 1 (close)
+  double neo_c_base_weight = 0.01;     ///< neo_c: constant base weight
+  double min_error = 0.01;             ///< |e| floor in 1/|e| terms (slack and neo_e)
+  double slack_bound = 10.0;           ///< |delta_i| bound
+  double base_turn_gain = 0.5;         ///< k_eps: turn the base toward the TCP
+  double manipulability_gain = 1.0;    ///< k_m: weight of -J_m in C
+  double joint_influence = 0.9;        ///< rad: joint damper becomes active
+  double joint_stop = 0.1;             ///< rad: closest allowed approach to a joint limit
+  double joint_damper_gain = 1.0;      ///< xi of the joint dampers, 1/s
+  double obstacle_influence = 0.3;     ///< m: d_i
+  double obstacle_stop = 0.05;         ///< m: d_s (= S of the paper)
+  double obstacle_damper_gain = 1.0;   ///< xi of the obstacle dampers, 1/s
+  double tsmm_switch_distance = 0.2;   ///< m: tsmm switches to the arm stage here
+  double arrival_position = 0.01;      ///< m
+  double arrival_orientation = 2.0 * M_PI / 180.0;  ///< rad
+  void validate() const;               ///< throws "[QpControllerParams] ..."
+  std::string summary() const;
+};
+QpControllerParams loadQpControllerParams(const ConfigNode& node);
+
+/// One link-obstacle closest-point pair (world frame). normal: unit, obstacle -> link.
+struct ObstaclePair {
+  std::string link;
+  Eigen::Vector3d link_point = Eigen::Vector3d::Zero();
+  Eigen::Vector3d obstacle_point = Eigen::Vector3d::Zero();
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
+  double distance = 0.0;
+};
+
+struct ControllerCommand {
+  Eigen::VectorXd velocity;  ///< [base twist; arm rates]; all zero unless ok
+  Vector6d slack = Vector6d::Zero();
+  bool ok = false;
+  std::string qp_status = "NOT_RUN";  ///< OK | QP_FAILED
+  std::string phase;                  ///< TRACKING | ARRIVED | TSMM_BASE | TSMM_ARM
+  std::string failure;                ///< reason when qp_status == QP_FAILED
+  double position_error = 0.0;        ///< m
+  double orientation_error = 0.0;     ///< rad
+  double error_norm = 0.0;            ///< sum |[dp; theta u]| (NEO's e_t)
+  double omega = 0.0;
+  double sig = 0.0;
+  double base_weight = 0.0;
+  double solve_time_us = 0.0;         ///< QP build + solve
+  int obstacle_rows = 0;
+  int joint_damper_rows = 0;
+};
+
+/// Pose error of the TCP to the target: [t* - t; theta u of R* R^T], world frame.
+Vector6d poseError(const Eigen::Isometry3d& tcp, const Eigen::Isometry3d& target);
+
+class EhcQpController {
+ public:
+  /// `weighting` is required for mode ehc (and reported for the others when given).
+  EhcQpController(std::shared_ptr<const WholeBodyModel> model, const QpControllerParams& params,
+                  std::shared_ptr<const EhcWeighting> weighting);
+  ~EhcQpController();
+
+  /// One control cycle: state (base pose x, y, yaw; arm q), target TCP pose (world), desired
+  /// TCP twist nu_e (world, [v; w]) and the obstacle pairs. Never throws for bad numbers:
+  /// returns a zero command with qp_status QP_FAILED and the reason.
+  ControllerCommand step(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q,
+                         const Eigen::Isometry3d& target, const Vector6d& nu_e,
+                         const std::vector<ObstaclePair>& obstacles = {});
+
+  /// New target: clears the warm start and the TSMM stage.
+  void reset();
+  const QpControllerParams& params() const { return params_; }
+  void setMode(ControlMode m);
+  const WholeBodyModel& model() const { return *model_; }
+
+ private:
+  struct Solver;
+  ControllerCommand fail(ControllerCommand c, const std::string& why) const;
+
+  std::shared_ptr<const WholeBodyModel> model_;
+  QpControllerParams params_;
+  std::shared_ptr<const EhcWeighting> weighting_;
+  Eigen::Isometry3d base_T_arm_;
+  Eigen::VectorXd vmax_;
+  bool tsmm_arm_stage_ = false;
+  std::unique_ptr<Solver> solver_;
+};
+
+}  // namespace ehc_control

@@ -1,0 +1,352 @@
+#include "ehc_control/qp_controller.h"
+
+#include "ehc_control/config_node.h"
+
+#include <visp3/core/vpColVector.h>
+#include <visp3/core/vpException.h>
+#include <visp3/core/vpMatrix.h>
+#include <visp3/core/vpQuadProg.h>
+
+#include <chrono>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace ehc_control {
+
+namespace {
+const char* kOwner = "QpControllerParams";
+}
+
+std::string toString(ControlMode m) {
+  switch (m) {
+    case ControlMode::Ehc: return "ehc";
+    case ControlMode::NeoE: return "neo_e";
+    case ControlMode::NeoC: return "neo_c";
+    case ControlMode::Tsmm: return "tsmm";
+  }
+  return "?";
+}
+
+ControlMode controlModeFromString(const std::string& s) {
+  if (s == "ehc") return ControlMode::Ehc;
+  if (s == "neo_e") return ControlMode::NeoE;
+  if (s == "neo_c") return ControlMode::NeoC;
+  if (s == "tsmm") return ControlMode::Tsmm;
+  throw std::invalid_argument("[EhcQpController] mode must be ehc, neo_e, neo_c or tsmm (got '" + s + "')");
+}
+
+void QpControllerParams::validate() const {
+  requireRange(kOwner, "arm_weight", arm_weight, 1e-6, 1e3);
+  requireRange(kOwner, "ehc_base_weight_min", ehc_base_weight_min, 1e-6, 1e4);
+  requireRange(kOwner, "ehc_base_weight_max", ehc_base_weight_max, 1e-6, 1e4);
+  if (ehc_base_weight_max < ehc_base_weight_min)
+    throw std::invalid_argument("[QpControllerParams] ehc_base_weight_max must be >= ehc_base_weight_min");
+  requireRange(kOwner, "neo_c_base_weight", neo_c_base_weight, 1e-6, 1e4);
+  requireRange(kOwner, "min_error", min_error, 1e-6, 1.0);
+  requireRange(kOwner, "slack_bound", slack_bound, 1e-3, 1e3);
+  requireRange(kOwner, "base_turn_gain", base_turn_gain, 0.0, 100.0);
+  requireRange(kOwner, "manipulability_gain", manipulability_gain, 0.0, 100.0);
+  requireRange(kOwner, "joint_stop", joint_stop, 0.0, 1.0);
+  requireRange(kOwner, "joint_influence", joint_influence, 0.0, 3.0);
+  if (joint_influence <= joint_stop)
+    throw std::invalid_argument("[QpControllerParams] joint_influence must be > joint_stop");
+  requireRange(kOwner, "joint_damper_gain", joint_damper_gain, 1e-3, 100.0);
+  requireRange(kOwner, "obstacle_stop", obstacle_stop, 0.0, 1.0);
+  requireRange(kOwner, "obstacle_influence", obstacle_influence, 0.0, 5.0);
+  if (obstacle_influence <= obstacle_stop)
+    throw std::invalid_argument("[QpControllerParams] obstacle_influence must be > obstacle_stop");
+  requireRange(kOwner, "obstacle_damper_gain", obstacle_damper_gain, 1e-3, 100.0);
+  requireRange(kOwner, "tsmm_switch_distance", tsmm_switch_distance, 0.0, 5.0);
+  requireRange(kOwner, "arrival_position", arrival_position, 1e-5, 1.0);
+  requireRange(kOwner, "arrival_orientation", arrival_orientation, 1e-5, M_PI);
+}
+
+std::string QpControllerParams::summary() const {
+  std::ostringstream os;
+  os << "controller: mode " << toString(mode) << ", w_arm " << arm_weight << ", ehc base weight ["
+     << ehc_base_weight_min << ", " << ehc_base_weight_max << "], neo_c base weight "
+     << neo_c_base_weight << ", |e| floor " << min_error << ", slack bound " << slack_bound
+     << ", k_eps " << base_turn_gain << ", k_m " << manipulability_gain << "\n"
+     << "  joint dampers: influence " << joint_influence << " rad, stop " << joint_stop
+     << " rad, gain " << joint_damper_gain << "; obstacle dampers: d_i " << obstacle_influence
+     << " m, d_s " << obstacle_stop << " m, gain " << obstacle_damper_gain
+     << "; tsmm switch " << tsmm_switch_distance << " m; arrival " << arrival_position << " m / "
+     << arrival_orientation * 180.0 / M_PI << " deg";
+  return os.str();
+}
+
+QpControllerParams loadQpControllerParams(const ConfigNode& n) {
+  QpControllerParams p;
+  if (n.has("mode")) {
+    const std::string m = n.require<std::string>("mode");
+    try {
+      p.mode = controlModeFromString(m);
+    } catch (const std::invalid_argument&) {
+      n.fail("mode", "must be ehc, neo_e, neo_c or tsmm (got '" + m + "')");
+    }
+  }
+  p.arm_weight = n.get("arm_weight", p.arm_weight);
+  p.ehc_base_weight_min = n.get("ehc_base_weight_min", p.ehc_base_weight_min);
+  p.ehc_base_weight_max = n.get("ehc_base_weight_max", p.ehc_base_weight_max);
+  p.neo_c_base_weight = n.get("neo_c_base_weight", p.neo_c_base_weight);
+  p.min_error = n.get("min_error", p.min_error);
+  p.slack_bound = n.get("slack_bound", p.slack_bound);
+  p.base_turn_gain = n.get("base_turn_gain", p.base_turn_gain);
+  p.manipulability_gain = n.get("manipulability_gain", p.manipulability_gain);
+  p.joint_influence = n.get("joint_influence", p.joint_influence);
+  p.joint_stop = n.get("joint_stop", p.joint_stop);
+  p.joint_damper_gain = n.get("joint_damper_gain", p.joint_damper_gain);
+  p.obstacle_influence = n.get("obstacle_influence", p.obstacle_influence);
+  p.obstacle_stop = n.get("obstacle_stop", p.obstacle_stop);
+  p.obstacle_damper_gain = n.get("obstacle_damper_gain", p.obstacle_damper_gain);
+  p.tsmm_switch_distance = n.get("tsmm_switch_distance", p.tsmm_switch_distance);
+  p.arrival_position = n.get("arrival_position", p.arrival_position);
+  p.arrival_orientation = n.get("arrival_orientation_deg", p.arrival_orientation * 180.0 / M_PI) * M_PI / 180.0;
+  p.validate();
+  return p;
+}
+
+Vector6d poseError(const Eigen::Isometry3d& tcp, const Eigen::Isometry3d& target) {
+  Vector6d e;
+  e.head<3>() = target.translation() - tcp.translation();
+  const Eigen::AngleAxisd aa(Eigen::Matrix3d(target.linear() * tcp.linear().transpose()));
+  e.tail<3>() = aa.axis() * aa.angle();
+  return e;
+}
+
+/// Preallocated QP matrices and the warm-started ViSP solver.
+struct EhcQpController::Solver {
+  vpQuadProg qp;
+  vpMatrix Q, A, C;
+  vpColVector r, b, d, x;
+  unsigned last_rows = 0;
+};
+
+EhcQpController::EhcQpController(std::shared_ptr<const WholeBodyModel> model,
+                                 const QpControllerParams& params,
+                                 std::shared_ptr<const EhcWeighting> weighting)
+    : model_(std::move(model)), params_(params), weighting_(std::move(weighting)),
+      solver_(std::make_unique<Solver>()) {
+  if (!model_) throw std::invalid_argument("[EhcQpController] no whole-body model");
+  params_.validate();
+  if (params_.mode == ControlMode::Ehc && !weighting_)
+    throw std::invalid_argument("[EhcQpController] mode ehc needs a reachability map (EhcWeighting)");
+  const RobotConfig& rc = model_->config();
+  base_T_arm_ = model_->linkPoseInBase(rc.arm_ready, rc.arm_base_frame);
+  vmax_ = rc.velocityLimits();
+}
+
+EhcQpController::~EhcQpController() = default;
+
+void EhcQpController::reset() {
+  solver_->qp.resetActiveSet();
+  solver_->last_rows = 0;
+  tsmm_arm_stage_ = false;
+}
+
+void EhcQpController::setMode(ControlMode m) {
+  if (m == ControlMode::Ehc && !weighting_)
+    throw std::invalid_argument("[EhcQpController] mode ehc needs a reachability map (EhcWeighting)");
+  params_.mode = m;
+  reset();
+}
+
+ControllerCommand EhcQpController::fail(ControllerCommand c, const std::string& why) const {
+  c.velocity = Eigen::VectorXd::Zero(model_->nDof());
+  c.slack.setZero();
+  c.ok = false;
+  c.qp_status = "QP_FAILED";
+  c.failure = why;
+  return c;
+}
+
+ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q,
+                                        const Eigen::Isometry3d& target, const Vector6d& nu_e,
+                                        const std::vector<ObstaclePair>& obstacles) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const WholeBodyModel& m = *model_;
+  const RobotConfig& rc = m.config();
+  const int nb = m.nBase(), na = m.nArm(), nd = m.nDof(), nx = nd + 6;
+  ControllerCommand out;
+  out.velocity = Eigen::VectorXd::Zero(nd);
+  out.phase = "TRACKING";
+
+  if (q.size() != na) return fail(out, "arm state has " + std::to_string(q.size()) + " joints, expected " + std::to_string(na));
+  if (!q.allFinite() || !base_pose.allFinite()) return fail(out, "non-finite robot state");
+  if (!target.matrix().allFinite()) return fail(out, "non-finite target pose");
+  if (!nu_e.allFinite()) return fail(out, "non-finite desired twist");
+
+  // --- model: TCP pose, whole-body Jacobian, manipulability gradient
+  Eigen::Isometry3d T_tcp;
+  const Matrix6Xd J = m.jacobian(base_pose, q, rc.tcp_frame, &T_tcp);
+  const Eigen::VectorXd Jm = m.manipulabilityGradient(q);
+
+  // --- errors and weighting
+  const Vector6d e = poseError(T_tcp, target);
+  out.position_error = e.head<3>().norm();
+  out.orientation_error = e.tail<3>().norm();
+  out.error_norm = e.cwiseAbs().sum();
+  const double e_floor = std::max(out.error_norm, params_.min_error);
+  if (weighting_) {
+    const Eigen::Isometry3d arm_T_world = (WholeBodyModel::baseTransform(base_pose) * base_T_arm_).inverse();
+    const EhcWeight w = weighting_->evaluate(arm_T_world * T_tcp.translation(), arm_T_world * target.translation());
+    out.omega = w.omega;
+    out.sig = w.sig;
+  }
+  bool lock_base = false, lock_arm = false;
+  switch (params_.mode) {
+    case ControlMode::Ehc:
+      out.base_weight = params_.ehc_base_weight_min +
+                        (params_.ehc_base_weight_max - params_.ehc_base_weight_min) * out.sig;
+      break;
+    case ControlMode::NeoE:
+      out.base_weight = params_.arm_weight / e_floor;
+      break;
+    case ControlMode::NeoC:
+      out.base_weight = params_.neo_c_base_weight;
+      break;
+    case ControlMode::Tsmm: {
+      const double horizontal = e.head<2>().norm();
+      if (!tsmm_arm_stage_ && horizontal <= params_.tsmm_switch_distance) tsmm_arm_stage_ = true;
+      out.base_weight = params_.arm_weight;
+      lock_arm = !tsmm_arm_stage_;
+      lock_base = tsmm_arm_stage_;
+      out.phase = tsmm_arm_stage_ ? "TSMM_ARM" : "TSMM_BASE";
+      break;
+    }
+  }
+  if (out.position_error < params_.arrival_position && out.orientation_error < params_.arrival_orientation)
+    out.phase = "ARRIVED";
+
+  // --- cost: Q diagonal, C
+  Eigen::VectorXd h(nx), c = Eigen::VectorXd::Zero(nx);
+  h.head(nb).setConstant(out.base_weight);
+  h.segment(nb, na).setConstant(params_.arm_weight);
+  h.tail(6).setConstant(1.0 / e_floor);
+  const Eigen::Vector3d tcp_in_base =
+      WholeBodyModel::baseTransform(base_pose).inverse() * T_tcp.translation();
+  c[nb - 1] = -params_.base_turn_gain * std::atan2(tcp_in_base.y(), tcp_in_base.x());
+  c.segment(nb, na) = -params_.manipulability_gain * Jm;
+
+  // --- bounds
+  Eigen::VectorXd ub(nx);
+  ub.head(nd) = vmax_;
+  ub.tail(6).setConstant(params_.slack_bound);
+  if (lock_base) ub.head(nb).setZero();
+  if (lock_arm) ub.segment(nb, na).setZero();
+  Eigen::VectorXd lb = -ub;
+
+  // --- inequality rows: joint dampers (arm joints within the influence angle), obstacles
+  struct Row {
+    Eigen::VectorXd a;
+    double b;
+  };
+  std::vector<Row> rows;
+  const double pi = params_.joint_influence, ps = params_.joint_stop;
+  for (int i = 0; i < na; ++i) {
+    const double to_lower = q[i] - rc.arm_lower[i], to_upper = rc.arm_upper[i] - q[i];
+    if (to_lower < pi) {  // -qd_i <= xi (q - q_min - ps) / (pi - ps)
+      Row r{Eigen::VectorXd::Zero(nx), params_.joint_damper_gain * (to_lower - ps) / (pi - ps)};
+      r.a[nb + i] = -1.0;
+      rows.push_back(r);
+    }
+    if (to_upper < pi) {  // qd_i <= xi (q_max - q - ps) / (pi - ps)
+      Row r{Eigen::VectorXd::Zero(nx), params_.joint_damper_gain * (to_upper - ps) / (pi - ps)};
+      r.a[nb + i] = 1.0;
+      rows.push_back(r);
+    }
+  }
+  out.joint_damper_rows = static_cast<int>(rows.size());
+  const double di = params_.obstacle_influence, ds = params_.obstacle_stop;
+  for (const ObstaclePair& o : obstacles) {
+    if (!(std::isfinite(o.distance) && o.link_point.allFinite() && o.normal.allFinite()))
+      return fail(out, "non-finite obstacle pair for link '" + o.link + "'");
+    if (o.distance >= di) continue;
+    if (!m.hasLink(o.link)) return fail(out, "obstacle pair for unknown link '" + o.link + "'");
+    const double nn = o.normal.norm();
+    if (nn < 1e-9) return fail(out, "obstacle pair with a zero normal for link '" + o.link + "'");
+    const Eigen::Vector3d n = o.normal / nn;
+    Eigen::Isometry3d T_link;
+    const Matrix6Xd Jl = m.jacobian(base_pose, q, o.link, &T_link);
+    const Eigen::Vector3d rvec = o.link_point - T_link.translation();
+    // Linear velocity of the link point: v_o + w x r.
+    Eigen::MatrixXd Jp = Jl.topRows<3>();
+    for (int k = 0; k < nd; ++k) Jp.col(k) += Eigen::Vector3d(Jl.block<3, 1>(3, k)).cross(rvec);
+    // d_dot = n^T J_p qd >= -xi (d - d_s) / (d_i - d_s)
+    Row r{Eigen::VectorXd::Zero(nx), params_.obstacle_damper_gain * (o.distance - ds) / (di - ds)};
+    r.a.head(nd) = -(n.transpose() * Jp).transpose();
+    rows.push_back(r);
+    ++out.obstacle_rows;
+  }
+
+  // --- assemble for vpQuadProg: min |Qx - r|^2 with Q^T Q = H (diagonal), r = -Q^-T c
+  Solver& s = *solver_;
+  s.Q.resize(static_cast<unsigned>(nx), static_cast<unsigned>(nx), true);
+  s.r.resize(static_cast<unsigned>(nx), false);
+  for (int i = 0; i < nx; ++i) {
+    const double sq = std::sqrt(h[i]);
+    s.Q[static_cast<unsigned>(i)][static_cast<unsigned>(i)] = sq;
+    s.r[static_cast<unsigned>(i)] = -c[i] / sq;
+  }
+  s.A.resize(6, static_cast<unsigned>(nx), true);
+  s.b.resize(6, false);
+  for (int r = 0; r < 6; ++r) {
+    for (int k = 0; k < nd; ++k) s.A[static_cast<unsigned>(r)][static_cast<unsigned>(k)] = J(r, k);
+    s.A[static_cast<unsigned>(r)][static_cast<unsigned>(nd + r)] = 1.0;
+    s.b[static_cast<unsigned>(r)] = nu_e[r];
+  }
+  const unsigned n_in = static_cast<unsigned>(rows.size() + 2 * static_cast<std::size_t>(nx));
+  s.C.resize(n_in, static_cast<unsigned>(nx), true);
+  s.d.resize(n_in, false);
+  unsigned row = 0;
+  for (int i = 0; i < nx; ++i) {
+    s.C[row][static_cast<unsigned>(i)] = 1.0;
+    s.d[row++] = ub[i];
+    s.C[row][static_cast<unsigned>(i)] = -1.0;
+    s.d[row++] = -lb[i];
+  }
+  for (const Row& r : rows) {
+    for (int k = 0; k < nx; ++k) s.C[row][static_cast<unsigned>(k)] = r.a[k];
+    s.d[row++] = r.b;
+  }
+  if (n_in != s.last_rows) {  // warm start only while the constraint set keeps its shape
+    s.qp.resetActiveSet();
+    s.last_rows = n_in;
+  }
+  if (s.x.getRows() != static_cast<unsigned>(nx)) s.x.resize(static_cast<unsigned>(nx), true);
+
+  bool solved = false;
+  try {
+    solved = s.qp.solveQP(s.Q, s.r, s.A, s.b, s.C, s.d, s.x, 1e-6);
+  } catch (const vpException& ex) {
+    s.qp.resetActiveSet();
+    out.solve_time_us = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count();
+    return fail(out, std::string("vpQuadProg: ") + ex.what());
+  }
+  out.solve_time_us = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count();
+  if (!solved) {
+    s.qp.resetActiveSet();
+    return fail(out, "QP infeasible");
+  }
+  Eigen::VectorXd x(nx);
+  for (int i = 0; i < nx; ++i) x[i] = s.x[static_cast<unsigned>(i)];
+  if (!x.allFinite()) {
+    s.qp.resetActiveSet();
+    return fail(out, "QP solution is not finite");
+  }
+  // The solver meets the bounds to its tolerance; clamp so limits are never exceeded.
+  const double tol = 1e-4;
+  if (((x - ub).array() > tol).any() || ((lb - x).array() > tol).any()) {
+    s.qp.resetActiveSet();
+    return fail(out, "QP solution violates the velocity bounds");
+  }
+  x = x.cwiseMax(lb).cwiseMin(ub);
+  out.velocity = x.head(nd);
+  out.slack = x.tail<6>();
+  out.ok = true;
+  out.qp_status = "OK";
+  return out;
+}
+
+}  // namespace ehc_control

@@ -1,0 +1,60 @@
+// ehc_reachability: builds the arm reachability map offline (ROS-free tool).
+//   rosrun ehc_control ehc_reachability --robot robot.yaml --samples N --out map.bin
+//       [--seed S] [--resolution 0.05] [--direction-bins 32]
+// Progress and ETA on stderr; a summary line on stdout. Errors: stderr, exit code 2.
+
+#include "ehc_control/reachability_map.h"
+
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+#include <string>
+
+int main(int argc, char** argv) {
+  const char* usage =
+      "usage: ehc_reachability --robot <robot.yaml> --samples N --out <file> [--seed S]\n"
+      "                        [--resolution m] [--direction-bins B (default 6)]\n";
+  try {
+    std::string robot, out;
+    long samples = 0;
+    unsigned seed = 1;
+    ehc_control::ReachabilityMapParams params;
+    for (int i = 1; i < argc; ++i) {
+      const std::string a = argv[i];
+      auto next = [&]() -> std::string {
+        if (i + 1 >= argc) throw std::invalid_argument(a + " needs a value");
+        return argv[++i];
+      };
+      if (a == "--robot") robot = next();
+      else if (a == "--samples") samples = std::stol(next());
+      else if (a == "--out") out = next();
+      else if (a == "--seed") seed = static_cast<unsigned>(std::stoul(next()));
+      else if (a == "--resolution") params.resolution = std::stod(next());
+      else if (a == "--direction-bins") params.direction_bins = std::stoi(next());
+      else if (a == "-h" || a == "--help") { std::cout << usage; return 0; }
+      else throw std::invalid_argument("unknown argument '" + a + "'");
+    }
+    if (robot.empty() || out.empty() || samples <= 0)
+      throw std::invalid_argument("--robot, --samples (> 0) and --out are required");
+    const ehc_control::WholeBodyModel model(ehc_control::loadRobotConfig(robot));
+    const auto t0 = std::chrono::steady_clock::now();
+    double last_print = -1.0;
+    auto progress = [&](long done, long total) {
+      const double now = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      if (done != total && now - last_print < 2.0) return;  // throttle: every 2 s
+      last_print = now;
+      const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      const double eta = done > 0 ? el * static_cast<double>(total - done) / static_cast<double>(done) : 0.0;
+      std::fprintf(stderr, "\r[ehc_reachability] %5.1f%%  %ld/%ld samples  elapsed %.0f s  ETA %.0f s ",
+                   100.0 * static_cast<double>(done) / static_cast<double>(total), done, total, el, eta);
+      if (done == total) std::fprintf(stderr, "\n");
+    };
+    const auto map = ehc_control::ReachabilityMap::generate(model, samples, seed, params, progress);
+    map.save(out);
+    std::cout << map.summary() << "\nwritten to " << out << std::endl;
+    return 0;
+  } catch (const std::exception& e) {
+    std::cerr << "ehc_reachability: " << e.what() << "\n" << usage;
+    return 2;
+  }
+}
