@@ -15,6 +15,9 @@ struct ReachTargetGenerator {
   double min_height = 0.3;    ///< m above the floor
   double max_height = 1.0;
   double max_tilt_deg = 90.0;  ///< approach axis tilted U[0, max] from straight down
+  /// The tilt leans along the travel direction (bearing from the previous target) rotated by
+  /// U[-spread, spread]: targets are approached from the side the robot arrives from.
+  double tilt_azimuth_spread_deg = 45.0;
   void validate() const;       ///< throws "[ReachTargetGenerator] ..."
 
   /// `count` targets; each is U[min, max] m horizontally from the previous one (the first

@@ -14,6 +14,8 @@ void ReachTargetGenerator::validate() const {
   if (!(min_distance >= 0 && max_distance >= min_distance)) bad("need 0 <= min_distance <= max_distance");
   if (!(min_height >= 0 && max_height >= min_height)) bad("need 0 <= min_height <= max_height");
   if (!(max_tilt_deg >= 0 && max_tilt_deg <= 180)) bad("max_tilt_deg must be in [0, 180]");
+  if (!(tilt_azimuth_spread_deg >= 0 && tilt_azimuth_spread_deg <= 180))
+    bad("tilt_azimuth_spread_deg must be in [0, 180]");
 }
 
 std::vector<Eigen::Isometry3d> ReachTargetGenerator::generate(int count, unsigned seed,
@@ -24,16 +26,19 @@ std::vector<Eigen::Isometry3d> ReachTargetGenerator::generate(int count, unsigne
   std::uniform_real_distribution<double> angle(-M_PI, M_PI);
   std::uniform_real_distribution<double> height(min_height, max_height);
   std::uniform_real_distribution<double> tilt(0.0, max_tilt_deg * M_PI / 180.0);
+  const double spread = tilt_azimuth_spread_deg * M_PI / 180.0;
+  std::uniform_real_distribution<double> azimuth_offset(-spread, spread);
   std::vector<Eigen::Isometry3d> out;
   Eigen::Vector2d prev = start_xy;
   for (int i = 0; i < count; ++i) {
     const double d = dist(rng), bearing = angle(rng), z = height(rng);
-    const double t = tilt(rng), azimuth = angle(rng), roll = angle(rng);
+    const double t = tilt(rng), azimuth = bearing + azimuth_offset(rng), roll = angle(rng);
     const Eigen::Vector2d xy = prev + d * Eigen::Vector2d(std::cos(bearing), std::sin(bearing));
-    // Straight down = rotation of pi about x (z -> -z); then tilt about a horizontal axis
-    // perpendicular to the azimuth; roll about the approach axis.
+    // Straight down = rotation of pi about x (z -> -z); then tilt about the horizontal axis
+    // perpendicular to the azimuth, so the approach axis leans towards the azimuth; roll about
+    // the approach axis.
     const Eigen::Vector3d tilt_axis(-std::sin(azimuth), std::cos(azimuth), 0.0);
-    const Eigen::Matrix3d R = (Eigen::AngleAxisd(t, tilt_axis) *
+    const Eigen::Matrix3d R = (Eigen::AngleAxisd(-t, tilt_axis) *
                                Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()) *
                                Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitZ()))
                                   .toRotationMatrix();

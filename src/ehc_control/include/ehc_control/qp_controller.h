@@ -8,7 +8,7 @@
 //        A_in x <= b_in                      (joint-position and obstacle velocity dampers)
 //        x- <= x <= x+                       (velocity limits, slack bound)
 //   Q = blkdiag(w_base I, w_arm I, 1/max(|e|, e_min) I_6)
-//   C = [0 .. -k_eps atan2(y_e, x_e) (w_z column); -k_m J_m; 0]
+//   C = [0 .. -k_eps atan2(y_e, x_e) (w_z column); -k_m J_m + k_p (q - q_ready); 0]
 //
 // Modes (one parameter): ehc  w_base = w_min + (w_max - w_min) sig(omega)
 //                        neo_e w_base = w_arm / |e|        (NEO: base weight 1/|e|)
@@ -47,6 +47,10 @@ struct QpControllerParams {
   double slack_bound = 10.0;           ///< |delta_i| bound
   double base_turn_gain = 0.5;         ///< k_eps: turn the base toward the TCP
   double manipulability_gain = 1.0;    ///< k_m: weight of -J_m in C
+  /// Auxiliary task in C (paper: "C incorporates manipulability maximisation and auxiliary
+  /// performance tasks"): a weak pull of the arm towards its ready posture,
+  /// C_arm += k_p (q - q_ready), which keeps the joints away from their limits.
+  double posture_gain = 0.001;
   double joint_influence = 0.9;        ///< rad: joint damper becomes active
   double joint_stop = 0.1;             ///< rad: closest allowed approach to a joint limit
   double joint_damper_gain = 1.0;      ///< xi of the joint dampers, 1/s
