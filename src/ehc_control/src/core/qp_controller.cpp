@@ -236,31 +236,37 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
   Eigen::VectorXd ub(nx);
   ub.head(nd) = vmax_;
   ub.tail(6).setConstant(params_.slack_bound);
-  if (lock_base) ub.head(nb).setZero();
-  if (lock_arm) ub.segment(nb, na).setZero();
   Eigen::VectorXd lb = -ub;
+  // Held DOFs (tsmm stages) leave the problem: zero Jacobian column, no cost, no bound rows;
+  // the separable optimum is then exactly 0. (Bounds lb = ub = 0 would make two opposite rows
+  // active at once, a degenerate active set.)
+  std::vector<bool> held(static_cast<std::size_t>(nx), false);
+  for (int i = 0; i < nd; ++i) held[static_cast<std::size_t>(i)] = i < nb ? lock_base : lock_arm;
 
-  // --- inequality rows: joint dampers (arm joints within the influence angle), obstacles
+  // --- joint-position velocity dampers (arm joints within the influence angle). A damper
+  // constrains a single joint rate, so it is applied as a tightened bound (identical feasible
+  // set to an extra row; duplicate parallel rows would make the active set degenerate):
+  //   -qd_i <= xi (q - q_min - ps) / (pi - ps),   qd_i <= xi (q_max - q - ps) / (pi - ps)
+  const double pi = params_.joint_influence, ps = params_.joint_stop;
+  for (int i = 0; i < na; ++i) {
+    const double to_lower = q[i] - rc.arm_lower[i], to_upper = rc.arm_upper[i] - q[i];
+    if (to_lower < pi) {
+      lb[nb + i] = std::max(lb[nb + i], -params_.joint_damper_gain * (to_lower - ps) / (pi - ps));
+      ++out.joint_damper_rows;
+    }
+    if (to_upper < pi) {
+      ub[nb + i] = std::min(ub[nb + i], params_.joint_damper_gain * (to_upper - ps) / (pi - ps));
+      ++out.joint_damper_rows;
+    }
+    if (lb[nb + i] > ub[nb + i]) return fail(out, "joint " + rc.arm_joints[static_cast<std::size_t>(i)] + " dampers are contradictory");
+  }
+
+  // --- obstacle velocity dampers, one row per link-obstacle pair closer than d_i
   struct Row {
     Eigen::VectorXd a;
     double b;
   };
   std::vector<Row> rows;
-  const double pi = params_.joint_influence, ps = params_.joint_stop;
-  for (int i = 0; i < na; ++i) {
-    const double to_lower = q[i] - rc.arm_lower[i], to_upper = rc.arm_upper[i] - q[i];
-    if (to_lower < pi) {  // -qd_i <= xi (q - q_min - ps) / (pi - ps)
-      Row r{Eigen::VectorXd::Zero(nx), params_.joint_damper_gain * (to_lower - ps) / (pi - ps)};
-      r.a[nb + i] = -1.0;
-      rows.push_back(r);
-    }
-    if (to_upper < pi) {  // qd_i <= xi (q_max - q - ps) / (pi - ps)
-      Row r{Eigen::VectorXd::Zero(nx), params_.joint_damper_gain * (to_upper - ps) / (pi - ps)};
-      r.a[nb + i] = 1.0;
-      rows.push_back(r);
-    }
-  }
-  out.joint_damper_rows = static_cast<int>(rows.size());
   const double di = params_.obstacle_influence, ds = params_.obstacle_stop;
   for (const ObstaclePair& o : obstacles) {
     if (!(std::isfinite(o.distance) && o.link_point.allFinite() && o.normal.allFinite()))
@@ -279,8 +285,20 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
     // d_dot = n^T J_p qd >= -xi (d - d_s) / (d_i - d_s)
     Row r{Eigen::VectorXd::Zero(nx), params_.obstacle_damper_gain * (o.distance - ds) / (di - ds)};
     r.a.head(nd) = -(n.transpose() * Jp).transpose();
-    rows.push_back(r);
+    const double norm = r.a.norm();
     ++out.obstacle_rows;
+    if (norm < 1e-9) continue;  // the link point cannot move along n: nothing to constrain
+    r.a /= norm;
+    r.b /= norm;
+    // Parallel rows (e.g. two links sharing an origin) are redundant: keep the tighter one.
+    bool merged = false;
+    for (Row& e : rows)
+      if (e.a.dot(r.a) > 1.0 - 1e-6) {
+        e.b = std::min(e.b, r.b);
+        merged = true;
+        break;
+      }
+    if (!merged) rows.push_back(r);
   }
 
   // --- assemble for vpQuadProg: min |Qx - r|^2 with Q^T Q = H (diagonal), r = -Q^-T c
@@ -292,25 +310,35 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
     s.Q[static_cast<unsigned>(i)][static_cast<unsigned>(i)] = sq;
     s.r[static_cast<unsigned>(i)] = -c[i] / sq;
   }
+  for (int i = 0; i < nx; ++i)
+    if (held[static_cast<std::size_t>(i)]) s.r[static_cast<unsigned>(i)] = 0.0;
   s.A.resize(6, static_cast<unsigned>(nx), true);
   s.b.resize(6, false);
   for (int r = 0; r < 6; ++r) {
-    for (int k = 0; k < nd; ++k) s.A[static_cast<unsigned>(r)][static_cast<unsigned>(k)] = J(r, k);
+    for (int k = 0; k < nd; ++k)
+      s.A[static_cast<unsigned>(r)][static_cast<unsigned>(k)] =
+          held[static_cast<std::size_t>(k)] || (lock_arm && r >= 3) ? 0.0 : J(r, k);
     s.A[static_cast<unsigned>(r)][static_cast<unsigned>(nd + r)] = 1.0;
-    s.b[static_cast<unsigned>(r)] = nu_e[r];
+    // The tsmm base stage only brings the TCP to the target position (orientation comes with
+    // the arm stage): its orientation rows are left to the slack.
+    s.b[static_cast<unsigned>(r)] = lock_arm && r >= 3 ? 0.0 : nu_e[r];
   }
-  const unsigned n_in = static_cast<unsigned>(rows.size() + 2 * static_cast<std::size_t>(nx));
+  int n_held = 0;
+  for (bool h : held) n_held += h;
+  const unsigned n_in = static_cast<unsigned>(rows.size() + 2 * static_cast<std::size_t>(nx - n_held));
   s.C.resize(n_in, static_cast<unsigned>(nx), true);
   s.d.resize(n_in, false);
   unsigned row = 0;
   for (int i = 0; i < nx; ++i) {
+    if (held[static_cast<std::size_t>(i)]) continue;
     s.C[row][static_cast<unsigned>(i)] = 1.0;
     s.d[row++] = ub[i];
     s.C[row][static_cast<unsigned>(i)] = -1.0;
     s.d[row++] = -lb[i];
   }
   for (const Row& r : rows) {
-    for (int k = 0; k < nx; ++k) s.C[row][static_cast<unsigned>(k)] = r.a[k];
+    for (int k = 0; k < nx; ++k)
+      s.C[row][static_cast<unsigned>(k)] = held[static_cast<std::size_t>(k)] ? 0.0 : r.a[k];
     s.d[row++] = r.b;
   }
   if (n_in != s.last_rows) {  // warm start only while the constraint set keeps its shape
@@ -345,6 +373,8 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
     return fail(out, "QP solution violates the velocity bounds");
   }
   x = x.cwiseMax(lb).cwiseMin(ub);
+  for (int i = 0; i < nx; ++i)
+    if (held[static_cast<std::size_t>(i)]) x[i] = 0.0;
   out.velocity = x.head(nd);
   out.slack = x.tail<6>();
   out.ok = true;

@@ -1,0 +1,128 @@
+// ReachabilityMap + EhcWeighting: the committed map matches the robot, sig(omega) is ~1 deep in
+// the reachable set, ~0 for a target 3 m away, monotone along a ray; bad files and NaN rejected.
+
+#include "ehc_control/ehc_weighting.h"
+#include "test_helpers.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+using namespace ehc_control;
+
+namespace {
+std::shared_ptr<const ReachabilityMap> shippedMap() {
+  static auto m = std::make_shared<const ReachabilityMap>(
+      ReachabilityMap::load(test::realmanConfig().reachability_map_path));
+  return m;
+}
+}  // namespace
+
+TEST(ReachabilityMap, ShippedMapMatchesTheRobot) {
+  const auto map = shippedMap();
+  EXPECT_NO_THROW(map->checkCompatible(test::realmanConfig()));
+  EXPECT_GT(map->countAbove(0.95), 500);   // a real region, not a handful of voxels
+  EXPECT_GT(map->countAbove(0.0), 10000);
+  // Far outside the arm's reach nothing is reachable.
+  EXPECT_EQ(map->reachability(Eigen::Vector3d(2.0, 0, 0)), 0.0);
+  EXPECT_EQ(map->reachability(Eigen::Vector3d(0, 0, std::nan(""))), 0.0);
+}
+
+TEST(ReachabilityMap, GenerationIsDeterministicPerSeedAndRoundTrips) {
+  const WholeBodyModel model(test::realmanConfig());
+  ReachabilityMapParams p;
+  p.resolution = 0.1;
+  const auto a = ReachabilityMap::generate(model, 20000, 5, p);
+  const auto b = ReachabilityMap::generate(model, 20000, 5, p);
+  const auto c = ReachabilityMap::generate(model, 20000, 6, p);
+  a.save("/tmp/ehc_test_map.bin");
+  const auto r = ReachabilityMap::load("/tmp/ehc_test_map.bin");
+  int differs = 0;
+  for (double x = -0.7; x <= 0.7; x += 0.1)
+    for (double y = -0.7; y <= 0.7; y += 0.1)
+      for (double z = -0.4; z <= 1.0; z += 0.1) {
+        const Eigen::Vector3d pt(x, y, z);
+        ASSERT_EQ(a.reachability(pt), b.reachability(pt));
+        ASSERT_EQ(a.reachability(pt), r.reachability(pt));
+        differs += a.reachability(pt) != c.reachability(pt);
+      }
+  EXPECT_GT(differs, 0);
+  EXPECT_EQ(r.samples(), 20000);
+  EXPECT_EQ(r.seed(), 5u);
+}
+
+TEST(ReachabilityMap, BadFilesFailClearly) {
+  EXPECT_THROW(ReachabilityMap::load("/nonexistent.bin"), std::invalid_argument);
+  std::ofstream("/tmp/ehc_bad_map.bin") << "not a map\n";
+  EXPECT_THROW(ReachabilityMap::load("/tmp/ehc_bad_map.bin"), std::invalid_argument);
+  // Truncated voxel data.
+  std::ifstream in(test::realmanConfig().reachability_map_path, std::ios::binary);
+  std::string all((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::ofstream("/tmp/ehc_bad_map.bin", std::ios::binary) << all.substr(0, all.size() / 2);
+  try {
+    ReachabilityMap::load("/tmp/ehc_bad_map.bin");
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("truncated"), std::string::npos) << e.what();
+  }
+  RobotConfig other = test::realmanConfig();
+  other.name = "other_robot";
+  EXPECT_THROW(shippedMap()->checkCompatible(other), std::invalid_argument);
+}
+
+TEST(EhcWeighting, DeepInsideTheReachableSetTheArmLeads) {
+  const EhcWeighting w(shippedMap(), EhcWeightingParams{});
+  // Find the point of r_td with the most r_td neighbours within 15 cm: "deep inside".
+  Eigen::Vector3d best = Eigen::Vector3d::Zero();
+  int best_n = -1;
+  for (double x = -0.5; x <= 0.5; x += 0.05)
+    for (double y = -0.5; y <= 0.5; y += 0.05)
+      for (double z = -0.2; z <= 0.8; z += 0.05) {
+        const Eigen::Vector3d p(x, y, z);
+        if (!w.inReachSet(p)) continue;
+        int n = 0;
+        for (double dx = -0.15; dx <= 0.151; dx += 0.05)
+          for (double dy = -0.15; dy <= 0.151; dy += 0.05)
+            for (double dz = -0.15; dz <= 0.151; dz += 0.05) n += w.inReachSet(p + Eigen::Vector3d(dx, dy, dz));
+        if (n > best_n) best_n = n, best = p;
+      }
+  ASSERT_GT(best_n, 100);
+  const EhcWeight ew = w.evaluate(best + Eigen::Vector3d(-0.05, 0, 0), best);
+  EXPECT_GT(ew.omega, 1.5);
+  EXPECT_GT(ew.sig, 0.99);
+}
+
+TEST(EhcWeighting, FarTargetTheBaseLeads) {
+  const EhcWeighting w(shippedMap(), EhcWeightingParams{});
+  const Eigen::Vector3d tcp(0.35, 0.0, 0.4);  // TCP in front of the arm
+  const EhcWeight ew = w.evaluate(tcp, tcp + Eigen::Vector3d(3.0, 0.0, -0.2));
+  EXPECT_LT(ew.omega, 0.3);
+  EXPECT_LT(ew.sig, 0.01);
+}
+
+TEST(EhcWeighting, MonotoneInDistanceAlongARay) {
+  const EhcWeighting w(shippedMap(), EhcWeightingParams{});
+  for (const Eigen::Vector3d dir : {Eigen::Vector3d(1, 0, 0), Eigen::Vector3d(0.6, 0.8, 0),
+                                    Eigen::Vector3d(0.7, 0, -0.7).normalized()}) {
+    const Eigen::Vector3d tcp(0.1, 0.0, 0.3);
+    double prev = 2.0;
+    int strictly = 0;
+    for (double d = 0.05; d <= 3.0; d += 0.05) {
+      const double s = w.evaluate(tcp, tcp + d * dir).sig;
+      EXPECT_LE(s, prev + 1e-12) << "distance " << d;
+      strictly += s < prev - 1e-6;
+      prev = s;
+    }
+    EXPECT_GT(strictly, 3);  // it really goes down
+  }
+}
+
+TEST(EhcWeighting, RejectsNaNAndBadParams) {
+  const EhcWeighting w(shippedMap(), EhcWeightingParams{});
+  EXPECT_THROW(w.evaluate(Eigen::Vector3d(std::nan(""), 0, 0), Eigen::Vector3d::Zero()), std::invalid_argument);
+  EhcWeightingParams bad;
+  bad.reach_threshold = 1.5;
+  EXPECT_THROW(EhcWeighting(shippedMap(), bad), std::invalid_argument);
+  EXPECT_THROW(EhcWeighting(nullptr, EhcWeightingParams{}), std::invalid_argument);
+  EXPECT_NEAR(w.sig(1.0), 0.5, 1e-12);
+}

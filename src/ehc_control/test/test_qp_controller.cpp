@@ -1,0 +1,213 @@
+// EhcQpController: closed-loop convergence for every mode from several start states (noise-free
+// kinematic integration), velocity limits and finiteness, joint limits over a long random run,
+// obstacle dampers keep d >= d_s, failures give a zero command with QP_FAILED.
+
+#include "ehc_control/config_node.h"
+#include "ehc_control/pose_servo.h"
+#include "ehc_control/qp_controller.h"
+#include "test_helpers.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+using namespace ehc_control;
+
+namespace {
+
+struct Sim {
+  Eigen::Vector3d base = Eigen::Vector3d::Zero();
+  Eigen::VectorXd q;
+  void step(const WholeBodyModel& m, const Eigen::VectorXd& v, double dt) {
+    const int nb = m.nBase();
+    const double vx = v[0], vy = nb == 3 ? v[1] : 0.0, wz = v[nb - 1];
+    const double c = std::cos(base.z()), s = std::sin(base.z());
+    base.x() += (c * vx - s * vy) * dt;
+    base.y() += (s * vx + c * vy) * dt;
+    base.z() += wz * dt;
+    q += v.tail(m.nArm()) * dt;
+  }
+};
+
+std::shared_ptr<const EhcWeighting> weighting() {
+  static auto w = std::make_shared<const EhcWeighting>(
+      std::make_shared<const ReachabilityMap>(ReachabilityMap::load(test::realmanConfig().reachability_map_path)),
+      EhcWeightingParams{});
+  return w;
+}
+
+Eigen::Isometry3d pose(double x, double y, double z, const Eigen::Vector3d& approach) {
+  // z axis = approach, x axis horizontal.
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  const Eigen::Vector3d zz = approach.normalized();
+  Eigen::Vector3d xx = Eigen::Vector3d::UnitZ().cross(zz);
+  if (xx.norm() < 1e-6) xx = Eigen::Vector3d::UnitX();
+  xx.normalize();
+  T.linear().col(0) = xx;
+  T.linear().col(1) = zz.cross(xx);
+  T.linear().col(2) = zz;
+  T.translation() << x, y, z;
+  return T;
+}
+
+/// Runs the loop at 100 Hz; returns the time of arrival or -1.
+double run(EhcQpController& ctrl, Sim& sim, const Eigen::Isometry3d& target, double limit_s,
+           double* min_margin = nullptr, const std::function<std::vector<ObstaclePair>(const Sim&)>& obstacles = nullptr,
+           double* min_distance = nullptr) {
+  const WholeBodyModel& m = ctrl.model();
+  const auto& rc = m.config();
+  const Eigen::VectorXd vmax = rc.velocityLimits();
+  const PoseServoParams servo;
+  for (int k = 0; k < static_cast<int>(limit_s * 100); ++k) {
+    const Eigen::Isometry3d tcp = m.fk(sim.base, sim.q, rc.tcp_frame);
+    const Vector6d e = poseError(tcp, target);
+    if (e.head<3>().norm() < 0.01 && e.tail<3>().norm() < 2.0 * M_PI / 180.0) return k * 0.01;
+    std::vector<ObstaclePair> obs;
+    if (obstacles) obs = obstacles(sim);
+    if (min_distance)
+      for (const auto& o : obs) *min_distance = std::min(*min_distance, o.distance);
+    const ControllerCommand c = ctrl.step(sim.base, sim.q, target, proportionalPoseServo(tcp, target, servo), obs);
+    EXPECT_TRUE(c.velocity.allFinite());
+    EXPECT_TRUE((c.velocity.cwiseAbs().array() <= vmax.array() + 1e-12).all()) << c.velocity.transpose();
+    EXPECT_EQ(c.qp_status, "OK") << c.failure;
+    if (!c.ok) return -1;
+    sim.step(m, c.velocity, 0.01);
+    if (min_margin)
+      *min_margin = std::min(*min_margin, std::min((sim.q - rc.arm_lower).minCoeff(), (rc.arm_upper - sim.q).minCoeff()));
+  }
+  return -1;
+}
+
+}  // namespace
+
+class Convergence : public ::testing::TestWithParam<ControlMode> {};
+
+TEST_P(Convergence, ReachesTargetsFromSeveralStarts) {
+  auto model = std::make_shared<const WholeBodyModel>(test::realmanConfig());
+  QpControllerParams p;
+  p.mode = GetParam();
+  EhcQpController ctrl(model, p, weighting());
+  const std::vector<Eigen::Vector3d> starts = {{0, 0, 0}, {-0.5, 0.3, 0.8}, {0.2, -0.4, -1.2}};
+  const std::vector<Eigen::Isometry3d> targets = {
+      pose(2.0, 0.0, 0.8, Eigen::Vector3d(1, 0, -1)),     // ahead, 45 deg down
+      pose(1.2, 1.5, 0.75, Eigen::Vector3d(0.6, 0.8, -1)), // left, 45 deg down, table height
+      pose(-1.5, -0.5, 0.9, Eigen::Vector3d(-1, 0, 0))};  // behind, horizontal
+  for (std::size_t s = 0; s < starts.size(); ++s) {
+    Sim sim{starts[s], model->config().arm_ready};
+    ctrl.reset();
+    const double t = run(ctrl, sim, targets[s], 30.0);
+    EXPECT_GT(t, 0.0) << toString(GetParam()) << " start " << s << " did not arrive in 30 s";
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(AllModes, Convergence,
+                         ::testing::Values(ControlMode::Ehc, ControlMode::NeoE, ControlMode::NeoC, ControlMode::Tsmm),
+                         [](const auto& info) { return toString(info.param); });
+
+TEST(EhcQpController, JointDampersKeepJointsInsideLimitsOverALongRandomRun) {
+  auto model = std::make_shared<const WholeBodyModel>(test::realmanConfig());
+  EhcQpController ctrl(model, QpControllerParams{}, weighting());
+  Sim sim{Eigen::Vector3d::Zero(), model->config().arm_ready};
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  double margin = 1e9;
+  for (int i = 0; i < 15; ++i) {
+    const Eigen::Vector3d tcp = model->fk(sim.base, sim.q, "ee_link").translation();
+    const Eigen::Isometry3d target =
+        pose(tcp.x() + 1.5 * u(rng), tcp.y() + 1.5 * u(rng), 0.65 + 0.3 * u(rng), Eigen::Vector3d(u(rng), u(rng), -1.5));
+    ctrl.reset();
+    run(ctrl, sim, target, 10.0, &margin);
+  }
+  EXPECT_GT(margin, 0.0);  // never at or beyond a limit
+  RecordProperty("min_joint_limit_margin_rad", std::to_string(margin));
+}
+
+TEST(EhcQpController, ObstacleInThePathIsNeverApproachedCloserThanDs) {
+  auto model = std::make_shared<const WholeBodyModel>(test::realmanConfig());
+  QpControllerParams p;
+  EhcQpController ctrl(model, p, weighting());
+  Sim sim{Eigen::Vector3d::Zero(), model->config().arm_ready};
+  // A 10 cm sphere on the straight path of the TCP to a target 1.6 m ahead.
+  const Eigen::Vector3d centre(0.9, 0.0, 0.95);
+  const double radius = 0.10;
+  const std::vector<std::string> links = {"ee_link", "link6", "link5", "link3", "camera_link", "gripper_base_link"};
+  auto obstacles = [&](const Sim& s) {
+    std::vector<ObstaclePair> out;
+    for (const auto& l : links) {
+      const Eigen::Vector3d pl = model->fk(s.base, s.q, l).translation();
+      const Eigen::Vector3d d = pl - centre;
+      ObstaclePair o;
+      o.link = l;
+      o.link_point = pl;
+      o.normal = d.normalized();
+      o.obstacle_point = centre + radius * o.normal;
+      o.distance = d.norm() - radius;
+      out.push_back(o);
+    }
+    return out;
+  };
+  double min_d = 1e9;
+  const double t = run(ctrl, sim, pose(1.6, 0.0, 0.9, Eigen::Vector3d(1, 0, -0.3)), 30.0, nullptr, obstacles, &min_d);
+  EXPECT_GE(min_d, p.obstacle_stop - 0.005) << "closest approach " << min_d;
+  EXPECT_LT(min_d, p.obstacle_influence);  // the obstacle really was in the way
+  RecordProperty("arrival_s", std::to_string(t));
+}
+
+TEST(EhcQpController, BadInputGivesZeroCommandAndQpFailed) {
+  auto model = std::make_shared<const WholeBodyModel>(test::realmanConfig());
+  EhcQpController ctrl(model, QpControllerParams{}, weighting());
+  const Eigen::VectorXd q = model->config().arm_ready;
+  Eigen::Isometry3d target = pose(1, 0, 0.8, Eigen::Vector3d(0, 0, -1));
+  Vector6d nu = Vector6d::Constant(0.1);
+  Eigen::Isometry3d bad = target;
+  bad.translation().x() = std::nan("");
+  for (const ControllerCommand& c :
+       {ctrl.step(Eigen::Vector3d::Zero(), q, bad, nu), ctrl.step(Eigen::Vector3d::Zero(), Eigen::VectorXd::Zero(5), target, nu),
+        ctrl.step(Eigen::Vector3d(0, std::nan(""), 0), q, target, nu),
+        ctrl.step(Eigen::Vector3d::Zero(), q, target, Vector6d::Constant(std::nan("")))}) {
+    EXPECT_FALSE(c.ok);
+    EXPECT_EQ(c.qp_status, "QP_FAILED");
+    EXPECT_FALSE(c.failure.empty());
+    EXPECT_EQ(c.velocity.size(), model->nDof());
+    EXPECT_TRUE(c.velocity.isZero(0.0));
+  }
+}
+
+TEST(EhcQpController, InfeasibleConstraintsGiveZeroCommandAndQpFailed) {
+  auto model = std::make_shared<const WholeBodyModel>(test::realmanConfig());
+  EhcQpController ctrl(model, QpControllerParams{}, weighting());
+  const Eigen::VectorXd q = model->config().arm_ready;
+  const Eigen::Vector3d p = model->fk(Eigen::Vector3d::Zero(), q, "ee_link").translation();
+  // The TCP is inside two obstacles pushing it in opposite directions faster than allowed.
+  ObstaclePair a, b;
+  a.link = b.link = "ee_link";
+  a.link_point = b.link_point = p;
+  a.normal = Eigen::Vector3d::UnitX();
+  b.normal = -Eigen::Vector3d::UnitX();
+  a.distance = b.distance = -0.5;
+  const ControllerCommand c = ctrl.step(Eigen::Vector3d::Zero(), q, pose(1, 0, 0.8, Eigen::Vector3d(0, 0, -1)),
+                                        Vector6d::Zero(), {a, b});
+  EXPECT_FALSE(c.ok);
+  EXPECT_EQ(c.qp_status, "QP_FAILED");
+  EXPECT_TRUE(c.velocity.isZero(0.0));
+  EXPECT_EQ(c.obstacle_rows, 2);
+}
+
+TEST(QpControllerParams, ValidationAndLoading) {
+  QpControllerParams p;
+  p.joint_stop = 1.0;
+  p.joint_influence = 0.5;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+  const auto cfg = ConfigNode::loadString("controller: {mode: walk}", "test.yaml", "Test");
+  try {
+    loadQpControllerParams(cfg.child("controller"));
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("field 'controller.mode' must be ehc, neo_e, neo_c or tsmm"), std::string::npos)
+        << e.what();
+  }
+  const auto ok = ConfigNode::loadFile(std::string(EHC_CONFIG_DIR) + "/control/controller.yaml", "Test");
+  EXPECT_EQ(loadQpControllerParams(ok.child("controller")).mode, ControlMode::Ehc);
+  EXPECT_THROW(EhcQpController(std::make_shared<const WholeBodyModel>(test::realmanConfig()), QpControllerParams{}, nullptr),
+               std::invalid_argument);  // ehc needs a map
+}
