@@ -159,7 +159,7 @@ TEST(Water2BaseBridgeNode, ServerKilledMidRunMeansZeroMotionAndReconnect) {
   EXPECT_TRUE(waitFor([] { return g_seen->level() == diagnostic_msgs::DiagnosticStatus::OK; }, 5.0));
   EXPECT_TRUE(waitFor([] { return !g_seen->odomSince(now() - 0.2).empty(); }, 3.0));
   controller.join();
-  EXPECT_EQ(g_seen->count("connection_losses"), losses + 1);
+  EXPECT_GE(g_seen->count("connection_losses"), losses + 1);
   bool first = true;
   for (const auto& r : g_server->requests()) {
     if (!r.joy) continue;

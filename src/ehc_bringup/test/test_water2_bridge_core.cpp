@@ -230,8 +230,8 @@ TEST(Water2BaseBridge, ServerKilledMidRunStopsMotionAndReconnects) {
 
   const auto s = run.bridge.status();
   EXPECT_TRUE(s.connected);
-  EXPECT_EQ(s.connects, 2u);
-  EXPECT_EQ(s.connection_losses, 1u);
+  EXPECT_GE(s.connects, 2u);
+  EXPECT_GE(s.connection_losses, 1u);
   // The first motion request after the reconnection is a zero.
   const auto reqs = server.requests();
   bool seen = false;
