@@ -1,0 +1,97 @@
+#pragma once
+// SceneConfig: the content of a simulated world, loaded from a scene YAML under config/scenes/.
+// Floor (always present, z = 0), tables (top box + four legs), graspable objects (box or
+// cylinder with a mass, optional AprilTag 36h11 on one face) and static obstacles, plus the
+// robot's start pose. ROS-free (yaml-cpp via ehc_control::ConfigNode); every error names the
+// file and the field.
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <string>
+#include <vector>
+
+namespace ehc_sim {
+
+enum class ShapeType { Box, Cylinder };
+
+std::string toString(ShapeType s);
+
+/// Face of a box / cylinder in its own frame: "+x", "-x", "+y", "-y", "+z", "-z".
+/// Cylinders (axis z) accept "+z"/"-z" (caps) and "+x", "-x", "+y", "-y" (the side, at the
+/// point where the outward normal is that axis).
+enum class Face { PosX, NegX, PosY, NegY, PosZ, NegZ };
+
+std::string toString(Face f);
+
+/// An AprilTag (family 36h11) printed on one face of a body. `size` is the edge of the black
+/// square (AprilTag convention); the printed pattern including its white border is 10/8 of it.
+struct TagConfig {
+  bool enabled = false;
+  int id = 0;              ///< 0..586 (tag36h11)
+  double size = 0.04;      ///< m, black-square edge
+  Face face = Face::NegX;  ///< face the tag is printed on
+};
+
+/// A box (size = [x, y, z] edges) or an upright cylinder (size = [diameter, height]).
+struct BodyConfig {
+  std::string name;
+  ShapeType shape = ShapeType::Box;
+  Eigen::Vector3d size = Eigen::Vector3d(0.05, 0.05, 0.1);  ///< box: edges; cylinder: [d, h, unused]
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();       ///< m, centre, world (odom) frame
+  Eigen::Vector3d rpy = Eigen::Vector3d::Zero();            ///< rad, fixed-axis roll/pitch/yaw
+  double mass = 0.0;       ///< kg; > 0 for objects, 0 (static) for obstacles and tables
+  double friction = 0.8;
+  int shade = 150;         ///< grey level 0..255 in the simulated image
+  TagConfig tag;
+
+  Eigen::Isometry3d pose() const;
+  /// Half extents of the bounding box in the body frame.
+  Eigen::Vector3d halfExtents() const;
+};
+
+/// A table: rectangular top of `thickness` whose upper surface is at `height`, four legs.
+struct TableConfig {
+  std::string name;
+  Eigen::Vector2d size = Eigen::Vector2d(0.8, 1.2);  ///< m, top edges along its x and y
+  Eigen::Vector2d center = Eigen::Vector2d(1.9, 0.0);  ///< m, top centre (x, y), world
+  double yaw = 0.0;         ///< rad
+  double height = 0.75;     ///< m, upper surface of the top
+  double thickness = 0.04;  ///< m
+  double leg_size = 0.05;   ///< m, square legs, inset by leg_size from the corners
+  int shade = 170;
+
+  /// The top and the legs as static boxes ("<name>_top", "<name>_leg0".."3").
+  std::vector<BodyConfig> bodies() const;
+};
+
+struct SceneConfig {
+  std::string name = "scene";
+  std::string source_file;
+  Eigen::Vector3d robot_start = Eigen::Vector3d::Zero();  ///< base x, y, yaw in odom
+  int floor_shade = 110;
+  double floor_friction = 0.8;
+  std::vector<TableConfig> tables;
+  std::vector<BodyConfig> objects;    ///< graspable, dynamic (mass > 0)
+  std::vector<BodyConfig> obstacles;  ///< static
+
+  /// Cross-field checks (unique names, sizes, masses, tag fits its face...). Throws
+  /// std::invalid_argument "[SceneConfig] <file>: ...".
+  void validate() const;
+  std::string summary() const;
+  /// Index of the object called `name`, -1 if none.
+  int objectIndex(const std::string& name) const;
+};
+
+/// Loads and validates a scene YAML file (top-level key `scene`).
+SceneConfig loadSceneConfig(const std::string& path);
+/// Same from YAML text; `origin` stands in for the file name in messages.
+SceneConfig loadSceneConfigString(const std::string& text, const std::string& origin);
+
+/// Pose of the tag frame in the body frame, in the convention of ViSP's vpDetectorAprilTag
+/// poses (cMo): origin at the tag centre, x to the right and y up in the printed pattern, z out
+/// of the face (towards a viewer). On side faces the pattern is upright (its top towards the
+/// body's +z); on +z/-z faces its top points to the body's +x.
+Eigen::Isometry3d tagPoseInBody(const BodyConfig& body);
+
+}  // namespace ehc_sim

@@ -1,0 +1,95 @@
+#pragma once
+// SimConfig: parameters of the simulator (time step, actuation noise, collision checking,
+// gripper, simulated camera), loaded from a YAML file (top-level key `sim`) with one loader per
+// struct. Paths inside the file are resolved against its folder. ROS-free.
+
+#include "ehc_sim/kinematic_fake_robot.h"
+
+#include <Eigen/Core>
+
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace ehc_control {
+class ConfigNode;
+}
+
+namespace ehc_sim {
+
+/// Pinhole intrinsics of the colour stream (ROS camera_info YAML: image_width, image_height,
+/// camera_matrix.data). Distortion is ignored by the simulator (it renders an ideal pinhole).
+struct CameraIntrinsics {
+  int width = 640;
+  int height = 480;
+  double fx = 615.0, fy = 615.0, cx = 320.0, cy = 240.0;
+  std::string source_file;
+  void validate() const;  ///< throws "[CameraIntrinsics] ..."
+};
+
+/// Reads a camera_info YAML file (camera_calibration format).
+CameraIntrinsics loadCameraIntrinsics(const std::string& path);
+
+struct CollisionConfig {
+  double tolerance = 0.001;  ///< m; a contact deeper than this is a collision
+  /// Link pairs never checked against each other (adjacent links are skipped automatically).
+  std::vector<std::pair<std::string, std::string>> ignore_pairs;
+  /// Links allowed to touch the floor (the wheels of the base).
+  std::vector<std::string> floor_links = {"base_link"};
+  void validate() const;
+};
+
+struct GripperConfig {
+  double speed = 0.05;              ///< m/s per finger (URDF finger joint velocity)
+  double contact_tolerance = 0.002; ///< m; a finger this close to an object touches it
+  double lift_height = 0.10;        ///< m; a held object lifted this far = grasp success
+  bool start_open = true;
+  void validate() const;
+};
+
+struct SimulatedCameraConfig {
+  double image_rate = 15.0;   ///< Hz (sim time); 0 = never
+  double cloud_rate = 15.0;   ///< Hz (sim time); 0 = never
+  int ray_cols = 80;          ///< depth grid (sub-sampled image grid)
+  int ray_rows = 60;
+  double min_range = 0.10;    ///< m (D435 minimum depth)
+  double max_range = 6.0;     ///< m
+  double depth_noise_base = 0.001;       ///< m, sigma at any range
+  double depth_noise_quadratic = 0.002;  ///< m / m^2: sigma += k z^2 (stereo error grows as z^2)
+  double image_noise = 2.0;   ///< grey levels, Gaussian pixel noise sigma (0 = none)
+  int background = 110;       ///< grey level where no surface is hit (floor colour if < 0: scene's)
+  int tag_pixels_per_cell = 12;  ///< texture resolution of the AprilTag patterns
+  void validate() const;
+};
+
+struct SimConfig {
+  std::string source_file;
+  std::string robot_file;   ///< robot.yaml
+  std::string camera_file;  ///< camera_info YAML of the colour stream
+  std::string scene_file;   ///< default scene (the node's _scene overrides it)
+  double dt = 0.01;               ///< s, control / lock-step period
+  double max_physics_substep = 0.005;  ///< s; Bullet steps ceil(dt / this) times per step
+  unsigned seed = 1;
+  bool free_run = false;          ///< the node's _free_run overrides it
+  double state_republish_period = 1.0;  ///< wall s, lock-step: resend a state nobody answered
+  double command_timeout = 0.5;   ///< wall s, free-run: zero velocities without fresh commands
+  ActuationNoise noise;
+  CollisionConfig collision;
+  GripperConfig gripper;
+  SimulatedCameraConfig camera;
+
+  void validate() const;    ///< throws "[SimConfig] ..."
+  std::string summary() const;
+  /// Number of Bullet sub-steps per control step.
+  int substeps() const;
+};
+
+SimConfig loadSimConfig(const std::string& path);
+SimConfig loadSimConfigString(const std::string& text, const std::string& origin);
+
+ActuationNoise loadActuationNoise(const ehc_control::ConfigNode& n);
+CollisionConfig loadCollisionConfig(const ehc_control::ConfigNode& n);
+GripperConfig loadGripperConfig(const ehc_control::ConfigNode& n);
+SimulatedCameraConfig loadSimulatedCameraConfig(const ehc_control::ConfigNode& n);
+
+}  // namespace ehc_sim

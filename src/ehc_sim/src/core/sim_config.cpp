@@ -1,0 +1,228 @@
+#include "ehc_sim/sim_config.h"
+
+#include "ehc_control/config_node.h"
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace ehc_sim {
+
+using ehc_control::ConfigNode;
+using ehc_control::requirePositive;
+using ehc_control::requireRange;
+
+void CameraIntrinsics::validate() const {
+  const char* o = "CameraIntrinsics";
+  requireRange(o, "image_width", width, 16, 8192);
+  requireRange(o, "image_height", height, 16, 8192);
+  requireRange(o, "fx", fx, 1.0, 1e5);
+  requireRange(o, "fy", fy, 1.0, 1e5);
+  requireRange(o, "cx", cx, 0.0, width);
+  requireRange(o, "cy", cy, 0.0, height);
+}
+
+CameraIntrinsics loadCameraIntrinsics(const std::string& path) {
+  const ConfigNode n = ConfigNode::loadFile(path, "CameraIntrinsics");
+  CameraIntrinsics c;
+  c.source_file = path;
+  c.width = n.require<int>("image_width");
+  c.height = n.require<int>("image_height");
+  const Eigen::VectorXd K = n.child("camera_matrix").requireVector("data", 9);
+  if (K[1] != 0.0 || K[3] != 0.0 || K[6] != 0.0 || K[7] != 0.0 || K[8] != 1.0)
+    n.child("camera_matrix").fail("data", "must be [fx 0 cx 0 fy cy 0 0 1]");
+  c.fx = K[0];
+  c.cx = K[2];
+  c.fy = K[4];
+  c.cy = K[5];
+  try {
+    c.validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string(e.what()) + " (file " + path + ")");
+  }
+  return c;
+}
+
+void CollisionConfig::validate() const {
+  requireRange("CollisionConfig", "sim.collision.tolerance", tolerance, 0.0, 0.05);
+}
+
+void GripperConfig::validate() const {
+  requireRange("GripperConfig", "sim.gripper.speed", speed, 1e-3, 1.0);
+  requireRange("GripperConfig", "sim.gripper.contact_tolerance", contact_tolerance, 0.0, 0.01);
+  requireRange("GripperConfig", "sim.gripper.lift_height", lift_height, 0.005, 1.0);
+}
+
+void SimulatedCameraConfig::validate() const {
+  const char* o = "SimulatedCameraConfig";
+  requireRange(o, "sim.camera.image_rate", image_rate, 0.0, 200.0);
+  requireRange(o, "sim.camera.cloud_rate", cloud_rate, 0.0, 200.0);
+  requireRange(o, "sim.camera.ray_cols", ray_cols, 2, 1280);
+  requireRange(o, "sim.camera.ray_rows", ray_rows, 2, 960);
+  requireRange(o, "sim.camera.min_range", min_range, 0.0, 10.0);
+  requireRange(o, "sim.camera.max_range", max_range, 0.1, 100.0);
+  if (!(min_range < max_range))
+    throw std::invalid_argument("[SimulatedCameraConfig] sim.camera.min_range must be < max_range");
+  requireRange(o, "sim.camera.depth_noise_base", depth_noise_base, 0.0, 0.1);
+  requireRange(o, "sim.camera.depth_noise_quadratic", depth_noise_quadratic, 0.0, 0.1);
+  requireRange(o, "sim.camera.image_noise", image_noise, 0.0, 50.0);
+  requireRange(o, "sim.camera.background", background, -1, 255);
+  requireRange(o, "sim.camera.tag_pixels_per_cell", tag_pixels_per_cell, 1, 64);
+}
+
+void SimConfig::validate() const {
+  const char* o = "SimConfig";
+  if (robot_file.empty()) throw std::invalid_argument("[SimConfig] sim.robot: no robot.yaml given");
+  if (camera_file.empty()) throw std::invalid_argument("[SimConfig] sim.camera_info: no file given");
+  requireRange(o, "sim.dt", dt, 1e-4, 0.1);
+  if (std::abs(dt * 1e9 - std::round(dt * 1e9)) > 1e-3)
+    throw std::invalid_argument("[SimConfig] sim.dt must be a whole number of nanoseconds");
+  requireRange(o, "sim.max_physics_substep", max_physics_substep, 1e-4, 0.02);
+  requirePositive(o, "sim.state_republish_period", state_republish_period);
+  requirePositive(o, "sim.command_timeout", command_timeout);
+  noise.validate();
+  collision.validate();
+  gripper.validate();
+  camera.validate();
+}
+
+int SimConfig::substeps() const {
+  return std::max(1, static_cast<int>(std::ceil(dt / max_physics_substep - 1e-9)));
+}
+
+std::string SimConfig::summary() const {
+  std::ostringstream os;
+  os << "sim config " << source_file << "\n"
+     << "  robot " << robot_file << ", camera " << camera_file << ", scene " << scene_file << "\n"
+     << "  dt " << dt << " s (" << substeps() << " Bullet sub-steps), seed " << seed
+     << ", mode " << (free_run ? "free-run" : "lock-step") << "\n"
+     << "  noise " << (noise.enabled ? "on" : "off") << " (base-T " << noise.base_translation
+     << ", base-R " << noise.base_rotation << ", arm " << noise.arm << ")\n"
+     << "  collision tolerance " << collision.tolerance << " m, " << collision.ignore_pairs.size()
+     << " ignored pairs\n"
+     << "  gripper speed " << gripper.speed << " m/s, lift " << gripper.lift_height << " m\n"
+     << "  camera image " << camera.image_rate << " Hz, cloud " << camera.cloud_rate << " Hz ("
+     << camera.ray_cols << "x" << camera.ray_rows << " rays, " << camera.min_range << ".."
+     << camera.max_range << " m, depth noise " << camera.depth_noise_base << " + "
+     << camera.depth_noise_quadratic << " z^2)\n";
+  return os.str();
+}
+
+ActuationNoise loadActuationNoise(const ConfigNode& n) {
+  ActuationNoise a;
+  a.enabled = n.get<bool>("enabled", a.enabled);
+  a.base_translation = n.get<double>("base_translation", a.base_translation);
+  a.base_rotation = n.get<double>("base_rotation", a.base_rotation);
+  a.arm = n.get<double>("arm", a.arm);
+  for (const char* k : {"base_translation", "base_rotation", "arm"}) {
+    const double v = n.get<double>(k, 0.0);
+    if (v < 0.0 || v > 1.0) n.fail(k, "must be in [0, 1]");
+  }
+  return a;
+}
+
+CollisionConfig loadCollisionConfig(const ConfigNode& n) {
+  CollisionConfig c;
+  c.tolerance = n.get<double>("tolerance", c.tolerance);
+  if (c.tolerance < 0.0 || c.tolerance > 0.05) n.fail("tolerance", "must be in [0, 0.05] m");
+  c.floor_links = n.getStrings("floor_links", c.floor_links);
+  if (n.has("ignore_pairs")) {
+    const YAML::Node l = n.yaml()["ignore_pairs"];
+    if (!l.IsSequence()) n.fail("ignore_pairs", "must be a list of [link_a, link_b] pairs");
+    for (const auto& p : l) {
+      if (!p.IsSequence() || p.size() != 2 || !p[0].IsScalar() || !p[1].IsScalar())
+        n.fail("ignore_pairs", "must be a list of [link_a, link_b] pairs");
+      c.ignore_pairs.emplace_back(p[0].as<std::string>(), p[1].as<std::string>());
+    }
+  }
+  return c;
+}
+
+GripperConfig loadGripperConfig(const ConfigNode& n) {
+  GripperConfig g;
+  g.speed = n.get<double>("speed", g.speed);
+  if (!(g.speed > 0.0 && g.speed <= 1.0)) n.fail("speed", "must be in (0, 1] m/s");
+  g.contact_tolerance = n.get<double>("contact_tolerance", g.contact_tolerance);
+  if (g.contact_tolerance < 0.0 || g.contact_tolerance > 0.01)
+    n.fail("contact_tolerance", "must be in [0, 0.01] m");
+  g.lift_height = n.get<double>("lift_height", g.lift_height);
+  if (!(g.lift_height >= 0.005 && g.lift_height <= 1.0)) n.fail("lift_height", "must be in [0.005, 1] m");
+  g.start_open = n.get<bool>("start_open", g.start_open);
+  return g;
+}
+
+SimulatedCameraConfig loadSimulatedCameraConfig(const ConfigNode& n) {
+  SimulatedCameraConfig c;
+  c.image_rate = n.get<double>("image_rate", c.image_rate);
+  c.cloud_rate = n.get<double>("cloud_rate", c.cloud_rate);
+  if (n.has("ray_grid")) {
+    const Eigen::VectorXd g = n.requireVector("ray_grid", 2);
+    if (g[0] < 2 || g[1] < 2 || g[0] != std::floor(g[0]) || g[1] != std::floor(g[1]))
+      n.fail("ray_grid", "must be two whole numbers >= 2: [columns, rows]");
+    c.ray_cols = static_cast<int>(g[0]);
+    c.ray_rows = static_cast<int>(g[1]);
+  }
+  c.min_range = n.get<double>("min_range", c.min_range);
+  c.max_range = n.get<double>("max_range", c.max_range);
+  if (n.has("depth_noise")) {
+    const ConfigNode d = n.child("depth_noise");
+    c.depth_noise_base = d.get<double>("base", c.depth_noise_base);
+    c.depth_noise_quadratic = d.get<double>("quadratic", c.depth_noise_quadratic);
+    if (c.depth_noise_base < 0 || c.depth_noise_base > 0.1) d.fail("base", "must be in [0, 0.1] m");
+    if (c.depth_noise_quadratic < 0 || c.depth_noise_quadratic > 0.1)
+      d.fail("quadratic", "must be in [0, 0.1] m/m^2");
+  }
+  c.image_noise = n.get<double>("image_noise", c.image_noise);
+  c.background = n.get<int>("background", c.background);
+  c.tag_pixels_per_cell = n.get<int>("tag_pixels_per_cell", c.tag_pixels_per_cell);
+  if (c.image_rate < 0 || c.image_rate > 200) n.fail("image_rate", "must be in [0, 200] Hz");
+  if (c.cloud_rate < 0 || c.cloud_rate > 200) n.fail("cloud_rate", "must be in [0, 200] Hz");
+  if (!(c.min_range >= 0 && c.min_range < c.max_range))
+    n.fail("min_range", "must be >= 0 and smaller than max_range");
+  if (c.max_range > 100) n.fail("max_range", "must be <= 100 m");
+  if (c.image_noise < 0 || c.image_noise > 50) n.fail("image_noise", "must be in [0, 50]");
+  if (c.background < -1 || c.background > 255) n.fail("background", "must be -1 (floor shade) or 0..255");
+  if (c.tag_pixels_per_cell < 1 || c.tag_pixels_per_cell > 64)
+    n.fail("tag_pixels_per_cell", "must be in [1, 64]");
+  return c;
+}
+
+namespace {
+SimConfig loadSim(const ConfigNode& root) {
+  const ConfigNode s = root.child("sim");
+  SimConfig c;
+  c.source_file = root.file();
+  c.robot_file = s.resolvePath(s.require<std::string>("robot"));
+  c.camera_file = s.resolvePath(s.require<std::string>("camera_info"));
+  if (s.has("scene")) c.scene_file = s.resolvePath(s.require<std::string>("scene"));
+  c.dt = s.get<double>("dt", c.dt);
+  if (!(c.dt >= 1e-4 && c.dt <= 0.1)) s.fail("dt", "must be in [0.0001, 0.1] s");
+  c.max_physics_substep = s.get<double>("max_physics_substep", c.max_physics_substep);
+  if (!(c.max_physics_substep >= 1e-4 && c.max_physics_substep <= 0.02))
+    s.fail("max_physics_substep", "must be in [0.0001, 0.02] s");
+  const long seed = s.get<long>("seed", static_cast<long>(c.seed));
+  if (seed < 0 || seed > 4294967295L) s.fail("seed", "must be in [0, 2^32)");
+  c.seed = static_cast<unsigned>(seed);
+  c.free_run = s.get<bool>("free_run", c.free_run);
+  c.state_republish_period = s.get<double>("state_republish_period", c.state_republish_period);
+  if (!(c.state_republish_period > 0)) s.fail("state_republish_period", "must be > 0 s");
+  c.command_timeout = s.get<double>("command_timeout", c.command_timeout);
+  if (!(c.command_timeout > 0)) s.fail("command_timeout", "must be > 0 s");
+  c.noise = loadActuationNoise(s.childOrEmpty("noise"));
+  c.collision = loadCollisionConfig(s.childOrEmpty("collision"));
+  c.gripper = loadGripperConfig(s.childOrEmpty("gripper"));
+  c.camera = loadSimulatedCameraConfig(s.childOrEmpty("camera"));
+  c.validate();
+  return c;
+}
+}  // namespace
+
+SimConfig loadSimConfig(const std::string& path) {
+  return loadSim(ConfigNode::loadFile(path, "SimConfig"));
+}
+
+SimConfig loadSimConfigString(const std::string& text, const std::string& origin) {
+  return loadSim(ConfigNode::loadString(text, origin, "SimConfig"));
+}
+
+}  // namespace ehc_sim

@@ -1,0 +1,274 @@
+#include "ehc_sim/simulated_camera.h"
+
+#include "ehc_sim/sim_world.h"
+
+#include <apriltag/apriltag.h>
+#include <apriltag/common/image_u8.h>
+#include <apriltag/tag36h11.h>
+
+#include <visp3/core/vpCameraParameters.h>
+#include <visp3/core/vpColVector.h>
+#include <visp3/core/vpHomogeneousMatrix.h>
+#include <visp3/core/vpMatrix.h>
+#include <visp3/robot/vpImageSimulator.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace ehc_sim {
+
+namespace {
+[[noreturn]] void fail(const std::string& what) {
+  throw std::invalid_argument("[SimulatedCamera] " + what);
+}
+
+vpHomogeneousMatrix toVisp(const Eigen::Isometry3d& T) {
+  vpHomogeneousMatrix M;
+  for (unsigned r = 0; r < 3; ++r)
+    for (unsigned c = 0; c < 4; ++c) M[r][c] = T.matrix()(r, c);
+  return M;
+}
+
+vpColVector col(const Eigen::Vector3d& p) {
+  vpColVector v(3);
+  v[0] = p.x();
+  v[1] = p.y();
+  v[2] = p.z();
+  return v;
+}
+
+/// A planar convex quad in the body frame, corners ordered so that vpImageSimulator sees it
+/// from the side of `outward` (its corners must turn clockwise when viewed from there).
+std::vector<Eigen::Vector3d> orient(std::vector<Eigen::Vector3d> c, const Eigen::Vector3d& outward) {
+  const Eigen::Vector3d n_in = (c[1] - c[0]).cross(c[2] - c[1]);
+  if (n_in.dot(outward) > 0) std::swap(c[1], c[3]);
+  return c;
+}
+
+/// Orthonormal frame of a box face: z into the body, y = -up, x = y x z (the tag convention).
+Eigen::Matrix3d faceFrame(const Eigen::Vector3d& n, const Eigen::Vector3d& up) {
+  Eigen::Matrix3d R;
+  const Eigen::Vector3d z = -n, y = -up, x = y.cross(z);
+  R.col(0) = x;
+  R.col(1) = y;
+  R.col(2) = z;
+  return R;
+}
+
+constexpr int kNoiseTable = 1 << 18;
+constexpr int kCylinderSides = 16;
+}  // namespace
+
+vpImage<unsigned char> makeTagTexture(int id, int pixels_per_cell) {
+  if (pixels_per_cell < 1 || pixels_per_cell > 64) fail("tag texture: pixels_per_cell must be in [1, 64]");
+  apriltag_family_t* family = tag36h11_create();
+  if (id < 0 || id >= static_cast<int>(family->ncodes)) {
+    const int n = static_cast<int>(family->ncodes);
+    tag36h11_destroy(family);
+    fail("tag id " + std::to_string(id) + " is not in tag36h11 (0.." + std::to_string(n - 1) + ")");
+  }
+  image_u8_t* im = apriltag_to_image(family, id);
+  const int w = im->width;
+  vpImage<unsigned char> out(static_cast<unsigned>(w * pixels_per_cell),
+                             static_cast<unsigned>(w * pixels_per_cell));
+  for (int r = 0; r < w * pixels_per_cell; ++r)
+    for (int c = 0; c < w * pixels_per_cell; ++c)
+      out[r][c] = im->buf[(r / pixels_per_cell) * im->stride + c / pixels_per_cell];
+  image_u8_destroy(im);
+  tag36h11_destroy(family);
+  return out;
+}
+
+struct SimulatedCamera::Impl {
+  struct Quad {
+    int body = 0;
+    vpImageSimulator sim{vpImageSimulator::GRAY_SCALED};
+  };
+  std::vector<std::unique_ptr<Quad>> quads;  // vpImageSimulator is heavy: never copied
+  int background = 110;
+  vpMatrix zbuffer;
+  std::vector<signed char> noise;
+  vpCameraParameters cam;
+};
+
+SimulatedCamera::SimulatedCamera(const CameraIntrinsics& intrinsics,
+                                 const SimulatedCameraConfig& cfg, unsigned seed)
+    : intrinsics_(intrinsics), cfg_(cfg), impl_(std::make_unique<Impl>()) {
+  intrinsics_.validate();
+  cfg_.validate();
+  impl_->cam.initPersProjWithoutDistortion(intrinsics_.fx, intrinsics_.fy, intrinsics_.cx,
+                                           intrinsics_.cy);
+  impl_->zbuffer.resize(static_cast<unsigned>(intrinsics_.height), static_cast<unsigned>(intrinsics_.width));
+  reseed(seed);
+}
+
+SimulatedCamera::~SimulatedCamera() = default;
+SimulatedCamera::SimulatedCamera(SimulatedCamera&&) noexcept = default;
+
+int SimulatedCamera::faceCount() const { return static_cast<int>(impl_->quads.size()); }
+
+void SimulatedCamera::reseed(unsigned seed) {
+  rng_.seed(seed);
+  gauss_.reset();
+  impl_->noise.resize(kNoiseTable);
+  for (auto& v : impl_->noise) {
+    const double n = std::round(cfg_.image_noise * gauss_(rng_));
+    v = static_cast<signed char>(std::max(-127.0, std::min(127.0, n)));
+  }
+}
+
+void SimulatedCamera::setScene(const std::vector<BodyConfig>& bodies, int floor_shade) {
+  Impl& m = *impl_;
+  m.quads.clear();
+  m.background = cfg_.background >= 0 ? cfg_.background : floor_shade;
+  const Eigen::Vector3d light = Eigen::Vector3d(0.3, -0.2, 1.0).normalized();
+  auto addQuad = [&](int body, const vpImage<unsigned char>& tex, std::vector<Eigen::Vector3d> c,
+                     const Eigen::Vector3d& outward, bool bilinear) {
+    c = orient(std::move(c), outward);
+    auto q = std::make_unique<Impl::Quad>();
+    q->body = body;
+    vpColVector X[4];
+    for (int i = 0; i < 4; ++i) X[i] = col(c[static_cast<std::size_t>(i)]);
+    q->sim.init(tex, X);
+    q->sim.setInterpolationType(bilinear ? vpImageSimulator::BILINEAR_INTERPOLATION
+                                         : vpImageSimulator::SIMPLE);
+    m.quads.push_back(std::move(q));
+  };
+  auto flat = [&](int shade, const Eigen::Vector3d& n) {
+    const double k = 0.6 + 0.4 * std::max(0.0, n.dot(light));
+    vpImage<unsigned char> t(4, 4, static_cast<unsigned char>(std::clamp(shade * k, 0.0, 255.0)));
+    return t;
+  };
+
+  for (std::size_t bi = 0; bi < bodies.size(); ++bi) {
+    const BodyConfig& b = bodies[bi];
+    const int body = static_cast<int>(bi);
+    const Eigen::Vector3d he = b.halfExtents();
+    if (b.shape == ShapeType::Box) {
+      for (int axis = 0; axis < 3; ++axis)
+        for (int sign : {1, -1}) {
+          Eigen::Vector3d n = Eigen::Vector3d::Zero();
+          n[axis] = sign;
+          const Eigen::Vector3d up = axis == 2 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitZ();
+          const Eigen::Matrix3d R = faceFrame(n, up);
+          const double a = R.col(0).cwiseAbs().dot(he), h = R.col(1).cwiseAbs().dot(he);
+          const Eigen::Vector3d c0 = n.cwiseProduct(he);
+          addQuad(body, flat(b.shade, n),
+                  {c0 - a * R.col(0) - h * R.col(1), c0 + a * R.col(0) - h * R.col(1),
+                   c0 + a * R.col(0) + h * R.col(1), c0 - a * R.col(0) + h * R.col(1)},
+                  n, false);
+        }
+    } else {
+      const double r = he.x() / std::cos(M_PI / kCylinderSides), hz = he.z();
+      std::vector<Eigen::Vector3d> ring;
+      for (int k = 0; k < kCylinderSides; ++k) {
+        const double t = 2.0 * M_PI * k / kCylinderSides;
+        ring.emplace_back(r * std::cos(t), r * std::sin(t), 0.0);
+      }
+      for (int k = 0; k < kCylinderSides; ++k) {
+        const Eigen::Vector3d p0 = ring[static_cast<std::size_t>(k)];
+        const Eigen::Vector3d p1 = ring[static_cast<std::size_t>((k + 1) % kCylinderSides)];
+        const Eigen::Vector3d n = (p0 + p1).normalized();
+        const Eigen::Vector3d zt(0, 0, hz);
+        addQuad(body, flat(b.shade, n), {p0 + zt, p1 + zt, p1 - zt, p0 - zt}, n, false);
+      }
+      for (int sign : {1, -1}) {
+        const Eigen::Vector3d n(0, 0, sign), zt(0, 0, sign * hz);
+        for (int k = 1; k + 2 <= kCylinderSides; k += 2)
+          addQuad(body, flat(b.shade, n),
+                  {ring[0] + zt, ring[static_cast<std::size_t>(k)] + zt,
+                   ring[static_cast<std::size_t>(k + 1)] + zt,
+                   ring[static_cast<std::size_t>((k + 2) % kCylinderSides)] + zt},
+                  n, false);
+      }
+    }
+    if (b.tag.enabled) {
+      const Eigen::Isometry3d T = tagPoseInBody(b);  // x right, y up, z out of the face
+      const vpImage<unsigned char> tex = makeTagTexture(b.tag.id, cfg_.tag_pixels_per_cell);
+      // vpImageSimulator maps the quad's [0, 1] to texel centres 0 .. W-1: shrink the quad by
+      // half a texel on each side so that the printed pattern has its exact size.
+      const double a = 0.5 * b.tag.size * 10.0 / 8.0 * (1.0 - 1.0 / tex.getWidth());
+      const Eigen::Vector3d lift = 0.0005 * T.linear().col(2);  // 0.5 mm in front of the face
+      // Corners top-left, top-right, bottom-right, bottom-left of the pattern: clockwise seen
+      // from outside, as vpImageSimulator expects.
+      std::vector<Eigen::Vector3d> c = {T * Eigen::Vector3d(-a, a, 0) + lift,
+                                        T * Eigen::Vector3d(a, a, 0) + lift,
+                                        T * Eigen::Vector3d(a, -a, 0) + lift,
+                                        T * Eigen::Vector3d(-a, -a, 0) + lift};
+      auto q = std::make_unique<Impl::Quad>();
+      q->body = body;
+      vpColVector X[4];
+      for (int i = 0; i < 4; ++i) X[i] = col(c[static_cast<std::size_t>(i)]);
+      q->sim.init(tex, X);
+      q->sim.setInterpolationType(vpImageSimulator::BILINEAR_INTERPOLATION);
+      m.quads.push_back(std::move(q));
+    }
+  }
+}
+
+void SimulatedCamera::render(const Eigen::Isometry3d& T_world_cam,
+                             const std::vector<Eigen::Isometry3d>& poses,
+                             vpImage<unsigned char>* image) {
+  Impl& m = *impl_;
+  const unsigned W = static_cast<unsigned>(intrinsics_.width), H = static_cast<unsigned>(intrinsics_.height);
+  image->resize(H, W);
+  *image = static_cast<unsigned char>(m.background);
+  double* zb = m.zbuffer.data;
+  std::fill(zb, zb + static_cast<std::size_t>(W) * H, -1.0);
+  const Eigen::Isometry3d T_cam_world = T_world_cam.inverse();
+  for (auto& q : m.quads) {
+    if (q->body < 0 || q->body >= static_cast<int>(poses.size())) fail("render: fewer poses than bodies");
+    q->sim.setCameraPosition(toVisp(T_cam_world * poses[static_cast<std::size_t>(q->body)]));
+    q->sim.getImage(*image, m.cam, m.zbuffer);
+  }
+  if (cfg_.image_noise > 0.0) {
+    std::uniform_int_distribution<int> off(0, kNoiseTable - 1);
+    int k = off(rng_);
+    unsigned char* px = image->bitmap;
+    const std::size_t n = static_cast<std::size_t>(W) * H;
+    for (std::size_t i = 0; i < n; ++i) {
+      const int v = px[i] + m.noise[static_cast<std::size_t>(k)];
+      px[i] = static_cast<unsigned char>(v < 0 ? 0 : (v > 255 ? 255 : v));
+      k = (k + 1) & (kNoiseTable - 1);
+    }
+  }
+}
+
+void SimulatedCamera::render(const SimWorld& world, vpImage<unsigned char>* image) {
+  std::vector<Eigen::Isometry3d> poses(world.bodies().size());
+  for (std::size_t i = 0; i < poses.size(); ++i) poses[i] = world.bodyPose(static_cast<int>(i));
+  render(world.cameraPose(), poses, image);
+}
+
+void SimulatedCamera::cloud(const SimWorld& world, const Eigen::Isometry3d& T_world_cam,
+                            std::vector<Eigen::Vector3f>* points) {
+  points->clear();
+  points->reserve(static_cast<std::size_t>(cfg_.ray_cols * cfg_.ray_rows));
+  const Eigen::Vector3d origin = T_world_cam.translation();
+  const Eigen::Matrix3d R = T_world_cam.linear();
+  const Eigen::Isometry3d T_cam_world = T_world_cam.inverse();
+  const double su = static_cast<double>(intrinsics_.width) / cfg_.ray_cols;
+  const double sv = static_cast<double>(intrinsics_.height) / cfg_.ray_rows;
+  for (int r = 0; r < cfg_.ray_rows; ++r) {
+    const double v = (r + 0.5) * sv - 0.5;
+    for (int c = 0; c < cfg_.ray_cols; ++c) {
+      const double u = (c + 0.5) * su - 0.5;
+      const Eigen::Vector3d d((u - intrinsics_.cx) / intrinsics_.fx, (v - intrinsics_.cy) / intrinsics_.fy, 1.0);
+      Eigen::Vector3d hit;
+      if (!world.castRay(origin, origin + R * (d * cfg_.max_range), &hit)) continue;
+      Eigen::Vector3d p = T_cam_world * hit;
+      const double z = p.z();
+      if (z < cfg_.min_range || z > cfg_.max_range) continue;
+      const double sigma = cfg_.depth_noise_base + cfg_.depth_noise_quadratic * z * z;
+      if (sigma > 0.0) p *= (z + sigma * gauss_(rng_)) / z;
+      points->emplace_back(p.cast<float>());
+    }
+  }
+}
+
+void SimulatedCamera::cloud(const SimWorld& world, std::vector<Eigen::Vector3f>* points) {
+  cloud(world, world.cameraPose(), points);
+}
+
+}  // namespace ehc_sim

@@ -1,0 +1,191 @@
+// SceneConfig / SimConfig: the shipped scenes match the experiments' geometry; bad files fail
+// with a message naming the file and the field; tag frame convention.
+
+#include "ehc_sim/scene_config.h"
+#include "ehc_sim/sim_config.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+using namespace ehc_sim;
+
+namespace {
+const std::string kScenes = std::string(EHC_CONFIG_DIR) + "/scenes/";
+
+/// Expects loading `yaml` to throw std::invalid_argument mentioning every string in `parts`.
+void expectSceneError(const std::string& yaml, const std::vector<std::string>& parts) {
+  try {
+    loadSceneConfigString(yaml, "bad_scene.yaml");
+    ADD_FAILURE() << "no exception for:\n" << yaml;
+  } catch (const std::invalid_argument& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("[SceneConfig]"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("bad_scene.yaml"), std::string::npos) << msg;
+    for (const auto& p : parts) EXPECT_NE(msg.find(p), std::string::npos) << "'" << p << "' not in: " << msg;
+  }
+}
+
+const char* kGoodObject = R"(
+scene:
+  objects:
+    - {name: a, shape: box, size: [0.06, 0.06, 0.12], position: [1.5, 0, 0.06], mass: 0.1,
+       tag: {id: 3, size: 0.04, face: "-x"}}
+)";
+}  // namespace
+
+TEST(SceneConfig, TableThreeObjectsMatchesExperiment2) {
+  const SceneConfig s = loadSceneConfig(kScenes + "table_three_objects.yaml");
+  ASSERT_EQ(s.tables.size(), 1u);
+  const TableConfig& t = s.tables[0];
+  EXPECT_NEAR(t.height, 0.75, 1e-12);
+  EXPECT_NEAR(t.center.x() - 0.5 * t.size.x(), 1.5, 1e-9) << "near edge 1.5 m in front";
+  ASSERT_EQ(s.objects.size(), 3u);
+  EXPECT_EQ(s.objects[0].name, "front");
+  EXPECT_EQ(s.objects[1].name, "middle");
+  EXPECT_EQ(s.objects[2].name, "back");
+  const double near = t.center.x() - 0.5 * t.size.x(), far = t.center.x() + 0.5 * t.size.x();
+  for (const auto& o : s.objects) {
+    // Standing on the top, inside its outline.
+    EXPECT_NEAR(o.position.z() - o.halfExtents().z(), t.height, 1e-9) << o.name;
+    EXPECT_GT(o.position.x() - o.halfExtents().x(), near) << o.name;
+    EXPECT_LT(o.position.x() + o.halfExtents().x(), far) << o.name;
+    EXPECT_TRUE(o.tag.enabled) << o.name;
+    EXPECT_LE(2 * o.halfExtents().y(), 0.07) << o.name << " must fit the 70 mm gripper";
+  }
+  EXPECT_LT(s.objects[0].position.x(), s.objects[1].position.x());
+  EXPECT_LT(s.objects[1].position.x(), s.objects[2].position.x());
+  EXPECT_EQ(s.objects[1].shape, ShapeType::Cylinder);
+  // Table = top + 4 legs; the top's upper surface at the table height.
+  const auto parts = t.bodies();
+  ASSERT_EQ(parts.size(), 5u);
+  EXPECT_NEAR(parts[0].position.z() + parts[0].halfExtents().z(), 0.75, 1e-12);
+  for (int i = 1; i < 5; ++i) EXPECT_NEAR(parts[i].position.z() - parts[i].halfExtents().z(), 0.0, 1e-12);
+}
+
+TEST(SceneConfig, SingleObjectIsOneTaggedObjectAtOnePointFiveMetres) {
+  const SceneConfig s = loadSceneConfig(kScenes + "single_object.yaml");
+  ASSERT_EQ(s.objects.size(), 1u);
+  const BodyConfig& o = s.objects[0];
+  EXPECT_TRUE(o.tag.enabled);
+  EXPECT_NEAR(o.position.head<2>().norm(), 1.5, 1e-9);
+  EXPECT_EQ(s.objectIndex("target"), 0);
+  EXPECT_EQ(s.objectIndex("nope"), -1);
+  EXPECT_NE(s.summary().find("tag36h11 id 0"), std::string::npos);
+}
+
+TEST(SceneConfig, GoodInlineSceneLoads) {
+  const SceneConfig s = loadSceneConfigString(kGoodObject, "inline");
+  ASSERT_EQ(s.objects.size(), 1u);
+  EXPECT_EQ(s.objects[0].tag.id, 3);
+  EXPECT_TRUE(s.tables.empty());
+}
+
+TEST(SceneConfig, BadFilesNameFileAndField) {
+  expectSceneError("scene:\n  objects:\n    - {name: a, size: [0.1, 0.1, 0.1], position: [1, 0, 0.05]}\n",
+                   {"objects[0].mass", "missing"});
+  expectSceneError("scene:\n  objects:\n    - {name: a, size: [0.1, 0.1], position: [1, 0, 0.05], mass: 1}\n",
+                   {"objects[0].size", "3 elements"});
+  expectSceneError("scene:\n  objects:\n    - {name: a, shape: cone, size: [0.1, 0.1, 0.1], position: [1, 0, 0.05], mass: 1}\n",
+                   {"objects[0].shape", "cone"});
+  expectSceneError("scene:\n  objects:\n    - {name: a, size: [0.1, 0.1, 0.1], position: [1, 0, 0.05], mass: -1}\n",
+                   {"objects[0].mass"});
+  expectSceneError("scene:\n  objects:\n    - {name: a, size: [0.1, 0.1, 0.1], position: [1, 0, 0.05], mass: 1,"
+                   " tag: {id: 1, size: 0.09}}\n",
+                   {"objects[0].tag.size", "does not fit"});
+  expectSceneError("scene:\n  objects:\n    - {name: a, size: [0.1, 0.1, 0.1], position: [1, 0, 0.05], mass: 1,"
+                   " tag: {id: 1, size: 0.04, face: top}}\n",
+                   {"objects[0].tag.face"});
+  expectSceneError("scene:\n  objects:\n    - {name: a, size: [0.1, 0.1, 0.1], position: [1, 0, 0.05], mass: 1,"
+                   " tag: {id: 900, size: 0.04}}\n",
+                   {"objects[0].tag.id"});
+  expectSceneError("scene:\n  tables:\n    - {name: t, size: [0.8, 1.2], center: [2, 0], height: abc}\n",
+                   {"tables[0].height", "wrong type"});
+  expectSceneError("scene:\n  tables:\n    - {name: t, size: [0.8, 1.2], center: [2, 0], height: 0.7, thickness: 0.9}\n",
+                   {"tables[0].thickness"});
+  expectSceneError("scene:\n  obstacles:\n    - {name: o, size: [0.1, 0.1, 0.1], position: [1, 0, 0.05], mass: 2}\n",
+                   {"obstacles[0].mass", "static"});
+  expectSceneError("scene:\n  objects:\n    - {name: a, size: [0.1, 0.1, 0.1], position: [1, 0, 0.05], mass: 1}\n"
+                   "  obstacles:\n    - {name: a, size: [0.1, 0.1, 0.1], position: [2, 0, 0.05]}\n",
+                   {"'a' is used twice"});
+  expectSceneError("scene:\n  objects:\n    - {name: a, size: [0.1, 0.1, 0.1], position: [1, 0, .nan], mass: 1}\n",
+                   {"objects[0].position"});
+  expectSceneError("scene:\n  objects: {name: a}\n", {"objects", "must be a list"});
+  expectSceneError("nothing: 1\n", {"'scene'", "missing"});
+  expectSceneError("scene:\n  objects:\n    - {name: a, size: [0.1, 0.1, 0.1], position: [1, 0, 0.01], mass: 1}\n",
+                   {"below the floor"});
+}
+
+TEST(SceneConfig, MissingFileIsNamed) {
+  try {
+    loadSceneConfig("/nonexistent/scene.yaml");
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/scene.yaml"), std::string::npos);
+  }
+}
+
+TEST(SceneConfig, TagFrameConvention) {
+  BodyConfig b;
+  b.size = Eigen::Vector3d(0.06, 0.08, 0.12);
+  b.tag.enabled = true;
+  b.tag.face = Face::NegX;
+  const Eigen::Isometry3d T = tagPoseInBody(b);
+  EXPECT_TRUE(T.translation().isApprox(Eigen::Vector3d(-0.03, 0, 0)));
+  EXPECT_TRUE(T.linear().col(2).isApprox(-Eigen::Vector3d::UnitX())) << "z out of the face";
+  EXPECT_TRUE(T.linear().col(1).isApprox(Eigen::Vector3d::UnitZ())) << "pattern upright";
+  EXPECT_TRUE(T.linear().col(0).isApprox(-Eigen::Vector3d::UnitY())) << "x to the viewer's right";
+  EXPECT_NEAR(T.linear().determinant(), 1.0, 1e-12);
+  for (Face f : {Face::PosX, Face::NegX, Face::PosY, Face::NegY, Face::PosZ, Face::NegZ}) {
+    b.tag.face = f;
+    const Eigen::Isometry3d Tf = tagPoseInBody(b);
+    EXPECT_NEAR(Tf.linear().determinant(), 1.0, 1e-12) << toString(f);
+    // The tag centre lies on the face, the tag z axis points out of the body.
+    EXPECT_GT((Tf.translation() + 0.01 * Tf.linear().col(2)).cwiseAbs().maxCoeff() -
+                  Tf.translation().cwiseAbs().maxCoeff(), 0.0) << toString(f);
+  }
+}
+
+TEST(SimConfig, ShippedConfigLoadsAndResolvesPaths) {
+  const SimConfig c = loadSimConfig(EHC_SIM_CONFIG);
+  EXPECT_NEAR(c.dt, 0.01, 1e-15);
+  EXPECT_EQ(c.substeps(), 2);
+  EXPECT_TRUE(c.noise.enabled);
+  EXPECT_NEAR(c.noise.base_translation, 0.05, 1e-15);
+  EXPECT_EQ(c.camera.ray_cols, 80);
+  EXPECT_EQ(c.camera.ray_rows, 60);
+  EXPECT_NO_THROW(loadSceneConfig(c.scene_file));
+  const CameraIntrinsics k = loadCameraIntrinsics(c.camera_file);
+  EXPECT_EQ(k.width, 640);
+  EXPECT_NEAR(k.fx, 615.0, 1e-9);
+  EXPECT_FALSE(c.summary().empty());
+}
+
+TEST(SimConfig, BadValuesNameField) {
+  const std::string head = "sim:\n  robot: r.yaml\n  camera_info: c.yaml\n";
+  auto expectError = [&](const std::string& body, const std::string& field) {
+    try {
+      loadSimConfigString(head + body, "bad_sim.yaml");
+      ADD_FAILURE() << body;
+    } catch (const std::invalid_argument& e) {
+      const std::string msg = e.what();
+      EXPECT_NE(msg.find("bad_sim.yaml"), std::string::npos) << msg;
+      EXPECT_NE(msg.find(field), std::string::npos) << msg;
+    }
+  };
+  expectError("  dt: 0\n", "sim.dt");
+  expectError("  dt: fast\n", "sim.dt");
+  expectError("  noise: {arm: -1}\n", "sim.noise.arm");
+  expectError("  gripper: {speed: 0}\n", "sim.gripper.speed");
+  expectError("  camera: {ray_grid: [80]}\n", "sim.camera.ray_grid");
+  expectError("  camera: {min_range: 7, max_range: 6}\n", "sim.camera.min_range");
+  expectError("  camera: {depth_noise: {base: 1}}\n", "sim.camera.depth_noise.base");
+  expectError("  collision: {ignore_pairs: [[a]]}\n", "sim.collision.ignore_pairs");
+  expectError("  seed: -4\n", "sim.seed");
+  try {
+    loadSimConfigString("sim:\n  camera_info: c.yaml\n", "bad_sim.yaml");
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("sim.robot"), std::string::npos) << e.what();
+  }
+}

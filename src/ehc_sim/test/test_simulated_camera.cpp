@@ -1,0 +1,230 @@
+// SimulatedCamera: the rendered tag is found by ViSP's AprilTag detector with a pose error
+// < 1 cm / 2 deg against ground truth; in the ready pose the camera sees the tagged object of
+// single_object.yaml; the depth cloud of the table top lies at the table height within noise;
+// images are reproducible per seed.
+
+#include "ehc_sim/sim_world.h"
+#include "ehc_sim/simulated_camera.h"
+
+#include <gtest/gtest.h>
+
+#include <visp3/core/vpCameraParameters.h>
+#include <visp3/detection/vpDetectorAprilTag.h>
+
+#include <cmath>
+
+using namespace ehc_sim;
+
+namespace {
+const std::string kConfig = std::string(EHC_CONFIG_DIR);
+
+struct Rig {
+  SimConfig cfg;
+  std::unique_ptr<SimWorld> world;
+  std::unique_ptr<SimulatedCamera> camera;
+  explicit Rig(const std::string& scene, bool noise = true) {
+    cfg = loadSimConfig(EHC_SIM_CONFIG);
+    if (!noise) {
+      cfg.camera.image_noise = 0.0;
+      cfg.camera.depth_noise_base = cfg.camera.depth_noise_quadratic = 0.0;
+    }
+    world = std::make_unique<SimWorld>(cfg, ehc_control::loadRobotConfig(cfg.robot_file),
+                                       loadSceneConfig(kConfig + "/scenes/" + scene));
+    camera = std::make_unique<SimulatedCamera>(loadCameraIntrinsics(cfg.camera_file), cfg.camera, 1);
+    camera->setScene(world->bodies(), world->scene().floor_shade);
+    for (int i = 0; i < 5; ++i) world->step(Eigen::VectorXd::Zero(world->robot().nDof()));
+  }
+};
+
+struct Detection {
+  int id = -1;
+  Eigen::Isometry3d cMo = Eigen::Isometry3d::Identity();
+};
+
+std::vector<Detection> detect(const vpImage<unsigned char>& I, const CameraIntrinsics& k, double tag_size) {
+  vpDetectorAprilTag detector(vpDetectorAprilTag::TAG_36h11);
+  detector.setAprilTagQuadDecimate(1.0);
+  detector.setAprilTagNbThreads(1);
+  vpCameraParameters cam;
+  cam.initPersProjWithoutDistortion(k.fx, k.fy, k.cx, k.cy);
+  std::vector<vpHomogeneousMatrix> cMo;
+  vpImage<unsigned char> copy = I;
+  detector.detect(copy, tag_size, cam, cMo);
+  const std::vector<int> ids = detector.getTagsId();
+  std::vector<Detection> out;
+  for (std::size_t i = 0; i < cMo.size() && i < ids.size(); ++i) {
+    Detection d;
+    d.id = ids[i];
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 4; ++c) d.cMo.matrix()(r, c) = cMo[i][static_cast<unsigned>(r)][static_cast<unsigned>(c)];
+    out.push_back(d);
+  }
+  return out;
+}
+
+/// Pose error of the detected tag against ground truth: (m, deg).
+std::pair<double, double> poseError(const Detection& d, const Eigen::Isometry3d& truth) {
+  const Eigen::Isometry3d E = truth.inverse() * d.cMo;
+  return {E.translation().norm(), Eigen::AngleAxisd(E.linear()).angle() * 180.0 / M_PI};
+}
+}  // namespace
+
+TEST(TagTexture, IsTheTag36h11PatternWithItsWhiteBorder) {
+  const vpImage<unsigned char> t = makeTagTexture(0, 4);
+  ASSERT_EQ(t.getWidth(), 40u);
+  ASSERT_EQ(t.getHeight(), 40u);
+  for (unsigned i = 0; i < 40; ++i) {
+    EXPECT_EQ(t[0][i], 255);   // white outer border
+    EXPECT_EQ(t[i][39], 255);
+    EXPECT_EQ(t[4][4 + i % 32], 0);  // black square border (cells 1..8)
+    EXPECT_EQ(t[4 + i % 32][35], 0);
+  }
+  EXPECT_THROW(makeTagTexture(587, 4), std::invalid_argument);
+  EXPECT_THROW(makeTagTexture(-1, 4), std::invalid_argument);
+}
+
+TEST(SimulatedCamera, ReadyPoseSeesTheTaggedObjectOfSingleObjectScene) {
+  Rig rig("single_object.yaml");
+  // The object's centre projects inside the image with positive depth.
+  const Eigen::Isometry3d T_cam = rig.world->cameraPose();
+  const Eigen::Vector3d p = T_cam.inverse() * rig.world->objectPose(0).translation();
+  ASSERT_GT(p.z(), 0.3);
+  const auto& k = rig.camera->intrinsics();
+  const double u = k.fx * p.x() / p.z() + k.cx, v = k.fy * p.y() / p.z() + k.cy;
+  EXPECT_GT(u, 0.2 * k.width);
+  EXPECT_LT(u, 0.8 * k.width);
+  EXPECT_GT(v, 0.2 * k.height);
+  EXPECT_LT(v, 0.8 * k.height);
+  // The detector finds tag 0 from the ready pose (about 1.1 m away).
+  vpImage<unsigned char> I;
+  rig.camera->render(*rig.world, &I);
+  const auto dets = detect(I, k, rig.world->scene().objects[0].tag.size);
+  ASSERT_EQ(dets.size(), 1u);
+  EXPECT_EQ(dets[0].id, 0);
+  const Eigen::Isometry3d truth = T_cam.inverse() * rig.world->tagPose(rig.world->objectBodyIndex(0));
+  const auto [et, er] = poseError(dets[0], truth);
+  EXPECT_LT(et, 0.03) << "at 1.1 m the tag spans ~25 px";
+  EXPECT_LT(er, 6.0);
+}
+
+TEST(SimulatedCamera, DetectedTagPoseMatchesGroundTruth) {
+  Rig rig("single_object.yaml");
+  const auto& k = rig.camera->intrinsics();
+  const int tag_body = rig.world->objectBodyIndex(0);
+  // Views from 0.3 .. 0.8 m, straight on and from the side, wrist tilted up and down.
+  int checked = 0;
+  for (double x : {0.3, 0.45, 0.6, 0.75})
+    for (double yaw : {-0.12, 0.1})
+      for (double dq5 : {-0.4, 0.0, 0.4}) {
+        Eigen::VectorXd q = rig.world->model().config().arm_ready;
+        q[4] += dq5;
+        rig.world->setRobotState(Eigen::Vector3d(x, 0.0, yaw), q);
+        const Eigen::Isometry3d truth = rig.world->cameraPose().inverse() * rig.world->tagPose(tag_body);
+        const Eigen::Vector3d c = truth.translation();
+        const double u = k.fx * c.x() / c.z() + k.cx, v = k.fy * c.y() / c.z() + k.cy;
+        if (c.z() < 0.3 || c.norm() > 0.8 || u < 0.15 * k.width || u > 0.85 * k.width ||
+            v < 0.15 * k.height || v > 0.85 * k.height)
+          continue;  // tag not well inside this view
+        vpImage<unsigned char> I;
+        rig.camera->render(*rig.world, &I);
+        const auto dets = detect(I, k, rig.world->scene().objects[0].tag.size);
+        SCOPED_TRACE("base x " + std::to_string(x) + " yaw " + std::to_string(yaw) + " dq5 " +
+                     std::to_string(dq5) + ", distance " + std::to_string(c.norm()) + " m");
+        ASSERT_EQ(dets.size(), 1u);
+        EXPECT_EQ(dets[0].id, 0);
+        const auto [et, er] = poseError(dets[0], truth);
+        EXPECT_LT(et, 0.01);
+        EXPECT_LT(er, 2.0);
+        ++checked;
+      }
+  EXPECT_GE(checked, 6) << "too few views with the tag in the image";
+}
+
+TEST(SimulatedCamera, AllThreeObjectsAreDetectedOnTheTable) {
+  Rig rig("table_three_objects.yaml");
+  rig.world->setRobotState(Eigen::Vector3d(0.6, 0.0, 0.0), rig.world->model().config().arm_ready);
+  vpImage<unsigned char> I;
+  rig.camera->render(*rig.world, &I);
+  vpDetectorAprilTag detector(vpDetectorAprilTag::TAG_36h11);
+  detector.setAprilTagQuadDecimate(1.0);
+  vpImage<unsigned char> copy = I;
+  detector.detect(copy);
+  std::vector<int> ids = detector.getTagsId();
+  std::sort(ids.begin(), ids.end());
+  EXPECT_EQ(ids, (std::vector<int>{1, 2, 3}));
+}
+
+TEST(SimulatedCamera, TableTopCloudLiesAtTheTableHeight) {
+  Rig rig("table_three_objects.yaml");
+  const double height = rig.world->scene().tables[0].height;
+  const Eigen::Isometry3d T_cam = rig.world->cameraPose();
+  std::vector<Eigen::Vector3f> pts;
+  rig.camera->cloud(*rig.world, &pts);
+  ASSERT_GT(pts.size(), 1000u);
+  int on_top = 0;
+  double sum = 0, worst = 0;
+  for (const auto& pc : pts) {
+    const Eigen::Vector3d p = T_cam * pc.cast<double>();
+    bool near_object = false;
+    for (const auto& o : rig.world->scene().objects)
+      near_object |= (p.head<2>() - o.position.head<2>()).norm() < 0.08;
+    if (near_object || p.x() < 1.6 || p.x() > 2.25 || std::abs(p.y()) > 0.5 || p.z() < 0.5) continue;
+    const double z = (T_cam.inverse() * p).z();  // depth along the optical axis
+    const double sigma = rig.cfg.camera.depth_noise_base + rig.cfg.camera.depth_noise_quadratic * z * z;
+    // Noise is along the ray: the height error is at most the depth error.
+    if (std::abs(p.z() - height) / sigma > worst) {
+      worst = std::abs(p.z() - height) / sigma;
+      if (worst > 5.0) ADD_FAILURE() << "point " << p.transpose() << " depth " << z;
+    }
+    sum += p.z() - height;
+    ++on_top;
+  }
+  ASSERT_GT(on_top, 300);
+  EXPECT_LT(worst, 5.0) << "every table point within 5 sigma of the depth noise";
+  EXPECT_NEAR(sum / on_top, 0.0, 0.002) << "mean height error";
+  // Without noise: exact (float precision of Bullet).
+  Rig exact("table_three_objects.yaml", false);
+  exact.camera->cloud(*exact.world, &pts);
+  const Eigen::Isometry3d T = exact.world->cameraPose();
+  int n = 0;
+  for (const auto& pc : pts) {
+    const Eigen::Vector3d p = T * pc.cast<double>();
+    bool near_object = false;
+    for (const auto& o : exact.world->scene().objects)
+      near_object |= (p.head<2>() - o.position.head<2>()).norm() < 0.08;
+    if (near_object || p.x() < 1.6 || p.x() > 2.25 || std::abs(p.y()) > 0.5 || p.z() < 0.5) continue;
+    EXPECT_NEAR(p.z(), height, 2e-4);
+    ++n;
+  }
+  EXPECT_GT(n, 300);
+  // Every point is inside the range limits and in front of the camera.
+  for (const auto& pc : pts) {
+    EXPECT_GE(pc.z(), exact.cfg.camera.min_range);
+    EXPECT_LE(pc.z(), exact.cfg.camera.max_range);
+  }
+}
+
+TEST(SimulatedCamera, ImagesAreReproduciblePerSeed) {
+  Rig rig("single_object.yaml");
+  vpImage<unsigned char> a, b, c;
+  rig.camera->reseed(5);
+  rig.camera->render(*rig.world, &a);
+  rig.camera->reseed(5);
+  rig.camera->render(*rig.world, &b);
+  rig.camera->reseed(6);
+  rig.camera->render(*rig.world, &c);
+  ASSERT_EQ(a.getSize(), b.getSize());
+  EXPECT_TRUE(std::equal(a.bitmap, a.bitmap + a.getSize(), b.bitmap));
+  EXPECT_FALSE(std::equal(a.bitmap, a.bitmap + a.getSize(), c.bitmap));
+  EXPECT_EQ(a.getWidth(), 640u);
+  EXPECT_EQ(a.getHeight(), 480u);
+}
+
+TEST(SimulatedCamera, BadConfigurationThrows) {
+  SimulatedCameraConfig c;
+  c.ray_cols = 1;
+  EXPECT_THROW(SimulatedCamera(CameraIntrinsics(), c, 1), std::invalid_argument);
+  CameraIntrinsics k;
+  k.fx = -1;
+  EXPECT_THROW(SimulatedCamera(k, SimulatedCameraConfig(), 1), std::invalid_argument);
+}
