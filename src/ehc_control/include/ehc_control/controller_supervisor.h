@@ -1,0 +1,69 @@
+#pragma once
+// ControllerSupervisor: the safety logic around the QP (ROS-free, unit-tested):
+// validates every input (size, finiteness), remembers the last good robot state, target and
+// obstacles with their receipt times, and decides each cycle whether the controller may run or
+// must stop (stale joint state, odometry or target; no target yet). The node only converts
+// messages and publishes what the supervisor and the QP decide.
+
+#include "ehc_control/qp_controller.h"
+
+#include <Eigen/Geometry>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace ehc_control {
+
+class ConfigNode;
+
+struct SupervisorParams {
+  double state_timeout = 0.2;      ///< s: joint state / odometry older than this stops the robot
+  double target_timeout = 0.2;     ///< s: target older than this stops the robot (TARGET_LOST)
+  double obstacle_timeout = 0.5;   ///< s: older obstacle lists are dropped (controller continues)
+  void validate() const;           ///< throws "[SupervisorParams] ..."
+};
+SupervisorParams loadSupervisorParams(const ConfigNode& node);
+
+struct SupervisorDecision {
+  bool run = false;
+  std::string phase;   ///< "" when run, else STOPPED | TARGET_LOST
+  std::string reason;  ///< human-readable, empty when run
+};
+
+class ControllerSupervisor {
+ public:
+  ControllerSupervisor(const RobotConfig& robot, const SupervisorParams& params);
+
+  /// Arm joint state by name (extra names such as finger joints are ignored). Returns "" if
+  /// accepted, else why it was rejected (state unchanged).
+  std::string setJointState(double t, const std::vector<std::string>& names,
+                            const std::vector<double>& positions);
+  std::string setBasePose(double t, const Eigen::Vector3d& base_pose);
+  std::string setTarget(double t, const Eigen::Isometry3d& target);
+  std::string setObstacles(double t, const std::vector<ObstaclePair>& obstacles);
+  void clearTarget();
+
+  SupervisorDecision check(double now) const;
+
+  const Eigen::VectorXd& q() const { return q_; }
+  const Eigen::Vector3d& basePose() const { return base_; }
+  const Eigen::Isometry3d& target() const { return target_; }
+  bool hasTarget() const { return t_target_.has_value(); }
+  /// Obstacles if fresh, else empty.
+  std::vector<ObstaclePair> obstacles(double now) const;
+  double jointStateTime() const { return t_joints_.value_or(-1.0); }
+  long rejected() const { return rejected_; }
+
+ private:
+  RobotConfig robot_;
+  SupervisorParams params_;
+  Eigen::VectorXd q_;
+  Eigen::Vector3d base_ = Eigen::Vector3d::Zero();
+  Eigen::Isometry3d target_ = Eigen::Isometry3d::Identity();
+  std::vector<ObstaclePair> obstacles_;
+  std::optional<double> t_joints_, t_base_, t_target_, t_obstacles_;
+  long rejected_ = 0;
+};
+
+}  // namespace ehc_control

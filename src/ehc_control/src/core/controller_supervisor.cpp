@@ -1,0 +1,133 @@
+#include "ehc_control/controller_supervisor.h"
+
+#include "ehc_control/config_node.h"
+
+#include <cmath>
+#include <sstream>
+
+namespace ehc_control {
+
+void SupervisorParams::validate() const {
+  requireRange("SupervisorParams", "state_timeout", state_timeout, 1e-3, 10.0);
+  requireRange("SupervisorParams", "target_timeout", target_timeout, 1e-3, 60.0);
+  requireRange("SupervisorParams", "obstacle_timeout", obstacle_timeout, 1e-3, 60.0);
+}
+
+SupervisorParams loadSupervisorParams(const ConfigNode& n) {
+  SupervisorParams p;
+  p.state_timeout = n.get("state_timeout", p.state_timeout);
+  p.target_timeout = n.get("target_timeout", p.target_timeout);
+  p.obstacle_timeout = n.get("obstacle_timeout", p.obstacle_timeout);
+  p.validate();
+  return p;
+}
+
+ControllerSupervisor::ControllerSupervisor(const RobotConfig& robot, const SupervisorParams& params)
+    : robot_(robot), params_(params), q_(robot.arm_ready) {
+  robot_.validate();
+  params_.validate();
+}
+
+std::string ControllerSupervisor::setJointState(double t, const std::vector<std::string>& names,
+                                                const std::vector<double>& positions) {
+  if (names.size() != positions.size()) {
+    ++rejected_;
+    return "joint state has " + std::to_string(names.size()) + " names but " +
+           std::to_string(positions.size()) + " positions";
+  }
+  Eigen::VectorXd q(robot_.nArm());
+  for (int i = 0; i < robot_.nArm(); ++i) {
+    const std::string& want = robot_.arm_joints[static_cast<std::size_t>(i)];
+    std::size_t k = 0;
+    while (k < names.size() && names[k] != want) ++k;
+    if (k == names.size()) {
+      ++rejected_;
+      return "joint state lacks arm joint '" + want + "'";
+    }
+    q[i] = positions[k];
+  }
+  if (!q.allFinite()) {
+    ++rejected_;
+    return "joint state contains NaN or Inf";
+  }
+  q_ = q;
+  t_joints_ = t;
+  return "";
+}
+
+std::string ControllerSupervisor::setBasePose(double t, const Eigen::Vector3d& base) {
+  if (!base.allFinite()) {
+    ++rejected_;
+    return "odometry contains NaN or Inf";
+  }
+  base_ = base;
+  t_base_ = t;
+  return "";
+}
+
+std::string ControllerSupervisor::setTarget(double t, const Eigen::Isometry3d& target) {
+  if (!target.matrix().allFinite()) {
+    ++rejected_;
+    return "target pose contains NaN or Inf";
+  }
+  const double det = target.linear().determinant();
+  if (std::abs(det - 1.0) > 1e-3) {
+    ++rejected_;
+    return "target orientation is not a rotation (bad quaternion)";
+  }
+  target_ = target;
+  t_target_ = t;
+  return "";
+}
+
+std::string ControllerSupervisor::setObstacles(double t, const std::vector<ObstaclePair>& obstacles) {
+  for (const auto& o : obstacles)
+    if (!std::isfinite(o.distance) || !o.link_point.allFinite() || !o.obstacle_point.allFinite() ||
+        !o.normal.allFinite() || o.normal.norm() < 1e-9) {
+      ++rejected_;
+      return "obstacle list contains a non-finite or zero-normal pair (link '" + o.link + "')";
+    }
+  obstacles_ = obstacles;
+  t_obstacles_ = t;
+  return "";
+}
+
+void ControllerSupervisor::clearTarget() { t_target_.reset(); }
+
+SupervisorDecision ControllerSupervisor::check(double now) const {
+  SupervisorDecision d;
+  auto stale = [&](const std::optional<double>& t, double timeout) {
+    return !t || now - *t > timeout || now - *t < -timeout;
+  };
+  std::ostringstream why;
+  if (!t_joints_) why << "no joint state yet; ";
+  else if (stale(t_joints_, params_.state_timeout)) why << "joint state is " << now - *t_joints_ << " s old; ";
+  if (!t_base_) why << "no odometry yet; ";
+  else if (stale(t_base_, params_.state_timeout)) why << "odometry is " << now - *t_base_ << " s old; ";
+  if (!why.str().empty()) {
+    d.phase = "STOPPED";
+    d.reason = why.str().substr(0, why.str().size() - 2);
+    return d;
+  }
+  if (!t_target_) {
+    d.phase = "IDLE";
+    d.reason = "no target";
+    return d;
+  }
+  if (stale(t_target_, params_.target_timeout)) {
+    d.phase = "TARGET_LOST";
+    std::ostringstream os;
+    os << "target is " << now - *t_target_ << " s old (timeout " << params_.target_timeout << " s)";
+    d.reason = os.str();
+    return d;
+  }
+  d.run = true;
+  return d;
+}
+
+std::vector<ObstaclePair> ControllerSupervisor::obstacles(double now) const {
+  if (!t_obstacles_ || now - *t_obstacles_ > params_.obstacle_timeout) return {};
+  return obstacles_;
+}
+
+}  // namespace ehc_control
