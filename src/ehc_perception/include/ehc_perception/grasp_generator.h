@@ -1,0 +1,156 @@
+#pragma once
+// GraspGenerator: parallel-jaw grasps from a point cloud (PCL inside, not in this header).
+//
+// Object cloud -> voxel filter -> normals -> antipodal contact pairs (friction cone) ->
+// approach directions around each closing axis -> reject grasps whose fingers or palm hit the
+// cloud or the support plane, or that need more than the gripper's opening -> GS-Net*-style
+// score -> non-maximum suppression -> refinement (centred on the object) -> best first.
+// Scene clouds: the support plane is removed with RANSAC and the objects Euclidean-clustered.
+//
+// Score (GS-Net*, paper section IV-B): antipodal quality x centre-of-gravity weight (the
+// approach line should pass through the object's centroid: weight from the angle between the
+// approach direction and the direction from the gripper's approach origin to the centroid)
+// x PCA weight (finger closing axis, and approach axis, aligned with the object's principal
+// axes). Refinement: the grasp is centred between the object's extreme points along the
+// closing axis and moved along the finger breadth axis onto the centroid's projection.
+//
+// Grasp frame: origin between the fingertips at the grasp centre, z = approach direction
+// (into the object), y = finger closing direction, x = y cross z.
+// All geometry is in the cloud's frame; `up` (config) is the gravity-up direction there.
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace ehc_control {
+class ConfigNode;
+}
+
+namespace ehc_perception {
+
+using PointList = std::vector<Eigen::Vector3f>;
+
+struct GripperGeometry {
+  double max_width = 0.070;         ///< m, maximum opening
+  double finger_length = 0.050;     ///< m, along the approach axis
+  double finger_tip_depth = 0.010;  ///< m, fingertips reach this far beyond the grasp origin
+  double finger_thickness = 0.010;  ///< m, along the closing axis
+  double finger_breadth = 0.020;    ///< m, along the grasp x axis
+  double palm_height = 0.080;       ///< m, gripper body behind the fingers (along approach)
+  double palm_width = 0.110;        ///< m, along the closing axis
+  double palm_breadth = 0.060;      ///< m, along x
+  double clearance = 0.002;         ///< m, free space each side of the object when open
+};
+
+struct GraspGeneratorConfig {
+  GripperGeometry gripper;
+  Eigen::Vector3d up = Eigen::Vector3d::UnitZ();  ///< gravity up in the cloud frame
+  double voxel_size = 0.004;          ///< m, voxel filter leaf
+  double normal_radius = 0.012;       ///< m, normal estimation radius
+  int min_object_points = 30;         ///< after filtering; fewer => no grasp
+  int max_seeds = 200;                ///< contact points sampled
+  int pairs_per_seed = 2;             ///< antipodal partners kept per seed
+  int approach_steps = 16;            ///< approach directions around each closing axis
+  double friction_cone_deg = 20.0;    ///< max angle between contact normal and closing axis
+  double max_approach_tilt_deg = 95.0;  ///< max angle between approach and straight down
+  int max_collision_points = 2;       ///< cloud points tolerated inside fingers/palm (noise)
+  double outlier_fraction = 0.03;     ///< ... or this fraction of the points there, if more
+  int min_points_between_fingers = 10;
+  double support_clearance = 0.005;   ///< m, gripper must stay this far above the support
+  bool assume_support_below = true;   ///< object clouds: support plane at the lowest point
+  double approach_standoff = 0.10;    ///< m, approach origin behind the grasp (centroid angle)
+  double centroid_sigma_deg = 10.0;   ///< width of the centroid-angle weight
+  double pca_power = 8.0;             ///< exponent of the closing-axis PCA alignment
+  double pca_approach_power = 2.0;    ///< exponent of the approach-axis PCA alignment
+  double pca_isotropy_ratio = 0.85;   ///< principal axes with std-dev ratio above: one subspace
+  double max_refine_shift = 0.04;     ///< m, largest move of the refinement step
+  /// Collision checks per object at most (candidates are checked best first); bounds the
+  /// time on objects where most candidates fail.
+  int max_evaluations = 800;
+  /// Antipodal quality given to single-contact hypotheses (closing axis = the seed's normal,
+  /// far side unseen, as in one-view clouds); 0 disables them.
+  double single_contact_weight = 0.7;
+  double nms_distance = 0.01;         ///< m, grasps closer than this and ...
+  double nms_angle_deg = 20.0;        ///< ... this rotation are duplicates
+  int top_k = 10;                     ///< grasps returned per object
+  unsigned seed = 1;                  ///< sampling seed (deterministic)
+  // Scene segmentation (support plane + clusters).
+  double plane_distance = 0.008;      ///< m, RANSAC inlier distance
+  double plane_max_tilt_deg = 15.0;   ///< plane normal vs up
+  double min_plane_fraction = 0.2;    ///< plane inliers / points to accept a support plane
+  double cluster_tolerance = 0.015;   ///< m, Euclidean clustering distance
+  int min_cluster_points = 30;
+  int max_objects = 10;
+
+  void validate() const;  ///< throws std::invalid_argument "[GraspGenerator] ..."
+  std::string summary() const;
+};
+
+/// Reads a `grasp_generator` mapping (all fields optional; gripper: sub-mapping).
+GraspGeneratorConfig loadGraspGeneratorConfig(const ehc_control::ConfigNode& node);
+
+struct Grasp {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();  ///< grasp frame in the cloud frame
+  double width = 0.0;            ///< m, opening needed (object extent + 2 x clearance)
+  double score = 0.0;            ///< antipodal x centroid x pca, in [0, 1]
+  double antipodal = 0.0;        ///< min |cos| between contact normals and closing axis
+  double centroid_weight = 0.0;
+  double pca_weight = 0.0;
+  int object = 0;                ///< index of the object (scene mode), else 0
+};
+
+struct GraspResult {
+  std::vector<Grasp> grasps;     ///< best first
+  std::string reason;            ///< why there is no grasp ("" when there are grasps)
+  int objects = 0;               ///< objects considered
+  std::vector<Eigen::Vector3d> centroids;  ///< per object
+  bool support_plane_found = false;
+  Eigen::Vector4d support_plane = Eigen::Vector4d::Zero();  ///< n.p + d = 0, n = up side
+  int input_points = 0, finite_points = 0;
+};
+
+struct SceneSegmentation {
+  bool plane_found = false;
+  Eigen::Vector4d plane = Eigen::Vector4d::Zero();  ///< n.p + d = 0, n towards up
+  std::vector<PointList> objects;                   ///< largest first
+  PointList obstacles;                              ///< every point above the plane
+  std::string reason;
+};
+
+class GraspGenerator {
+ public:
+  explicit GraspGenerator(const GraspGeneratorConfig& config);  ///< validates
+  ~GraspGenerator();
+
+  /// Grasps on one object. `support_plane` (n.p + d = 0, n up) if known; otherwise the
+  /// lowest point along `up` if assume_support_below. `collision_cloud`: extra points the
+  /// gripper must not hit (e.g. the other objects). Never throws on bad clouds: empty /
+  /// non-finite / too small inputs give no grasp and a `reason`.
+  GraspResult generate(const PointList& object, const Eigen::Vector3d& viewpoint,
+                       const Eigen::Vector4d* support_plane = nullptr,
+                       const PointList* collision_cloud = nullptr) const;
+
+  /// Removes the support plane (RANSAC, normal within plane_max_tilt_deg of up) and clusters
+  /// the rest (Euclidean). Without a plane, the whole finite cloud is one object.
+  SceneSegmentation segmentScene(const PointList& scene) const;
+
+  /// segmentScene + generate per object (the other objects are collision geometry), merged
+  /// best first. With `near`, only the object whose centroid is closest to it is used.
+  GraspResult generateFromScene(const PointList& scene, const Eigen::Vector3d& viewpoint,
+                                const Eigen::Vector3d* near = nullptr) const;
+
+  const GraspGeneratorConfig& config() const { return config_; }
+
+ private:
+  GraspGeneratorConfig config_;
+};
+
+/// PCD files (PCL). loadPcd reads x, y, z of any point type; throws std::invalid_argument
+/// "[PointCloudIO] cannot read '<path>' ..." on a missing or malformed file.
+PointList loadPcd(const std::string& path);
+void savePcd(const std::string& path, const PointList& points);  ///< binary PCD
+
+}  // namespace ehc_perception

@@ -1,0 +1,96 @@
+#pragma once
+// ObstacleDistanceField: an OctoMap occupancy octree built from point clouds (rays from the
+// sensor origin clear free space, end points mark occupied voxels) and FCL distance queries
+// between the robot's collision shapes and the octree. For every link closer than the
+// influence distance: closest point pair, unit normal (obstacle -> link) and distance.
+// ROS-free (OctoMap + FCL inside); not thread-safe.
+
+#include "ehc_perception/grasp_generator.h"  // PointList
+#include "ehc_perception/robot_collision_model.h"
+
+#include <Eigen/Geometry>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace ehc_control {
+class ConfigNode;
+class WholeBodyModel;
+}  // namespace ehc_control
+
+namespace ehc_perception {
+
+struct ObstacleMapConfig {
+  double resolution = 0.02;          ///< m, voxel edge (2-5 cm)
+  double max_range = 3.0;            ///< m, longer rays only clear space
+  double prob_hit = 0.7, prob_miss = 0.4;
+  double clamp_min = 0.12, clamp_max = 0.97;
+  double occupancy_threshold = 0.5;
+  double min_height = 0.03;          ///< m (world z); lower points (the floor) are ignored
+  double self_filter_padding = 0.03; ///< m; points this close to the robot are its own
+  double influence_distance = 0.30;  ///< m; farther link-obstacle pairs are not reported
+  std::vector<std::string> links = {"base_link", "arm_base_link", "link1", "link2", "link3",
+                                    "link4", "link5", "link6", "gripper_base_link",
+                                    "left_finger_link", "right_finger_link", "camera_link"};
+
+  void validate() const;  ///< throws std::invalid_argument "[ObstacleDistanceField] ..."
+  std::string summary() const;
+};
+
+/// Reads an `obstacle_map` mapping (all fields optional).
+ObstacleMapConfig loadObstacleMapConfig(const ehc_control::ConfigNode& node);
+
+struct LinkObstacleDistance {
+  std::string link;
+  Eigen::Vector3d link_point = Eigen::Vector3d::Zero();      ///< world
+  Eigen::Vector3d obstacle_point = Eigen::Vector3d::Zero();  ///< world
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();         ///< unit, obstacle -> link
+  double distance = 0.0;                                     ///< m, <= 0: penetration
+};
+
+class ObstacleDistanceField {
+ public:
+  ObstacleDistanceField(const ObstacleMapConfig& config, const RobotCollisionModel& robot);
+  ~ObstacleDistanceField();
+  ObstacleDistanceField(ObstacleDistanceField&&) noexcept;
+  ObstacleDistanceField& operator=(ObstacleDistanceField&&) noexcept;
+
+  struct InsertStats {
+    int input = 0, non_finite = 0, below_min_height = 0, robot = 0, inserted = 0;
+  };
+  /// Inserts a cloud given in the world frame, with rays from `sensor_origin` (world).
+  /// `link_poses` (world, model link order), if given, removes the robot's own points.
+  /// Throws std::invalid_argument on a non-finite origin or wrong-sized link_poses.
+  InsertStats insertCloud(const PointList& points, const Eigen::Vector3d& sensor_origin,
+                          const std::vector<Eigen::Isometry3d>* link_poses = nullptr);
+  /// Marks every voxel whose centre lies in the axis-aligned box as occupied (static priors,
+  /// tests).
+  void addOccupiedBox(const Eigen::Vector3d& min, const Eigen::Vector3d& max);
+  void clear();
+
+  enum class Cell { Unknown, Free, Occupied };
+  Cell cell(const Eigen::Vector3d& p) const;
+  std::size_t occupiedLeafCount() const;
+
+  /// Closest obstacle of each link within the influence distance (links without an obstacle
+  /// in range are omitted). `link_poses`: world poses in robot().links() order.
+  std::vector<LinkObstacleDistance> distances(const std::vector<Eigen::Isometry3d>& link_poses) const;
+  /// World poses of robot().links() from the whole-body model.
+  std::vector<Eigen::Isometry3d> linkPoses(const ehc_control::WholeBodyModel& model,
+                                           const Eigen::Vector3d& base_pose,
+                                           const Eigen::VectorXd& q) const;
+
+  const ObstacleMapConfig& config() const { return config_; }
+  const RobotCollisionModel& robot() const { return robot_; }
+  /// Writes the octree (OctoMap binary .bt) for inspection with octovis.
+  void writeBinary(const std::string& path) const;
+
+ private:
+  struct Impl;
+  ObstacleMapConfig config_;
+  RobotCollisionModel robot_;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace ehc_perception

@@ -1,0 +1,102 @@
+#pragma once
+// TagDetector: AprilTag detection and pose in the camera optical frame, wrapping ViSP
+// vpDetectorAprilTag. Tag size (edge of the black square, metres) per id from YAML.
+// Tag frame (ViSP / AprilTag convention): origin at the tag centre, x right, y up (as the tag
+// is printed), z out of the printed face; a tag facing the camera squarely has
+// T_cam_tag.rotation() == diag(1, -1, -1).
+// ROS-free; not thread-safe (the ViSP detector keeps state).
+
+#include "ehc_perception/camera_intrinsics.h"
+
+#include <Eigen/Geometry>
+#include <visp3/core/vpImage.h>
+
+#include <array>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace ehc_control {
+class ConfigNode;
+}
+
+namespace ehc_perception {
+
+struct TagDetectorConfig {
+  std::string family = "36h11";           ///< 36h11 | 25h9 | 16h5
+  double default_tag_size = 0.05;          ///< m, black-square edge, for ids not in tag_sizes
+  std::map<int, double> tag_sizes;         ///< m, per tag id
+  double quad_decimate = 1.0;              ///< >= 1; 2 is faster, less range
+  int threads = 1;                         ///< AprilTag worker threads
+  std::string pose_method = "homography_virtual_vs";  ///< see poseMethodNames()
+  double max_reprojection_error = 2.0;     ///< px (RMS); detections above are dropped
+
+  double tagSize(int id) const;
+  void validate() const;  ///< throws std::invalid_argument "[TagDetector] ..."
+  std::string summary() const;
+  static std::vector<std::string> familyNames();
+  static std::vector<std::string> poseMethodNames();
+};
+
+/// Reads a `tag_detector` mapping (every field optional, defaults above) and validates it.
+TagDetectorConfig loadTagDetectorConfig(const ehc_control::ConfigNode& node);
+
+struct TagDetection {
+  int id = -1;
+  double tag_size = 0.0;                            ///< m, the size used for the pose
+  Eigen::Isometry3d T_cam_tag = Eigen::Isometry3d::Identity();
+  std::array<Eigen::Vector2d, 4> corners;           ///< px, ViSP polygon order
+  double reprojection_error = 0.0;                  ///< px, RMS over the 4 corners
+};
+
+class TagDetector {
+ public:
+  /// Throws std::invalid_argument on a bad config or camera.
+  TagDetector(const TagDetectorConfig& config, const CameraIntrinsics& camera);
+  ~TagDetector();
+  TagDetector(TagDetector&&) noexcept;
+  TagDetector& operator=(TagDetector&&) noexcept;
+
+  /// Detects every tag of the family. The image must have the camera's size (throws
+  /// std::invalid_argument otherwise). Distortion is ignored (pass rectified images).
+  std::vector<TagDetection> detect(const vpImage<unsigned char>& gray);
+  /// Same, from a raw 8-bit grey buffer (`stride` bytes per row).
+  std::vector<TagDetection> detect(const unsigned char* data, int width, int height, int stride);
+
+  const TagDetectorConfig& config() const { return config_; }
+  const CameraIntrinsics& camera() const { return camera_; }
+
+ private:
+  struct Impl;
+  TagDetectorConfig config_;
+  CameraIntrinsics camera_;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// Reads a PNG / PGM / PPM / JPEG file as 8-bit grey (ViSP vpImageIo).
+/// Throws std::invalid_argument "[TagDetector] cannot read image '<path>': ...".
+vpImage<unsigned char> loadGrayImage(const std::string& path);
+
+/// The object to reach: a tag id and the fixed pose of the target (grasp) frame in the tag
+/// frame, T_tag_target (the "grasp offset").
+struct TagTargetConfig {
+  int tag_id = 0;
+  Eigen::Vector3d offset_xyz = Eigen::Vector3d::Zero();  ///< m, in the tag frame
+  Eigen::Vector3d offset_rpy = Eigen::Vector3d::Zero();  ///< rad, fixed-axis roll-pitch-yaw
+
+  Eigen::Isometry3d offset() const;
+  void validate() const;  ///< throws std::invalid_argument "[TagTarget] ..."
+  std::string summary() const;
+};
+TagTargetConfig loadTagTargetConfig(const ehc_control::ConfigNode& node);
+
+/// T_cam_target = T_cam_tag * T_tag_target for the configured tag; false if it is not among
+/// the detections.
+bool findTarget(const std::vector<TagDetection>& detections, const TagTargetConfig& target,
+                Eigen::Isometry3d* T_cam_target);
+
+/// Roll-pitch-yaw (fixed axes X, Y, Z as in URDF) to a rotation matrix.
+Eigen::Matrix3d rpyToMatrix(const Eigen::Vector3d& rpy);
+
+}  // namespace ehc_perception

@@ -1,0 +1,784 @@
+// GraspGenerator (PCL translation unit 1 of 2). See grasp_generator.h for the method.
+#include "ehc_perception/grasp_generator.h"
+
+#include "ehc_control/config_node.h"
+
+#include <Eigen/Eigenvalues>
+#include <pcl/common/centroid.h>
+#include <pcl/features/normal_3d.h>
+#include <pcl/filters/voxel_grid.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+#include <pcl/sample_consensus/method_types.h>
+#include <pcl/sample_consensus/model_types.h>
+#include <pcl/search/kdtree.h>
+#include <pcl/segmentation/extract_clusters.h>
+#include <pcl/segmentation/sac_segmentation.h>
+
+#include <algorithm>
+#include <map>
+#include <cmath>
+#include <numeric>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+
+namespace ehc_perception {
+
+namespace {
+
+const char* kOwner = "GraspGenerator";
+constexpr double kDeg = M_PI / 180.0;
+
+using Cloud = pcl::PointCloud<pcl::PointXYZ>;
+using Normals = pcl::PointCloud<pcl::Normal>;
+
+[[noreturn]] void fail(const std::string& what) {
+  throw std::invalid_argument(std::string("[GraspGenerator] ") + what);
+}
+
+Cloud::Ptr toCloud(const PointList& pts, int* finite = nullptr) {
+  Cloud::Ptr c(new Cloud);
+  c->reserve(pts.size());
+  for (const Eigen::Vector3f& p : pts)
+    if (p.allFinite()) c->push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
+  c->width = static_cast<std::uint32_t>(c->size());
+  c->height = 1;
+  c->is_dense = true;
+  if (finite) *finite = static_cast<int>(c->size());
+  return c;
+}
+
+Cloud::Ptr voxelFilter(const Cloud::ConstPtr& in, double leaf) {
+  Cloud::Ptr out(new Cloud);
+  if (in->empty()) return out;
+  pcl::VoxelGrid<pcl::PointXYZ> vg;
+  vg.setInputCloud(in);
+  const float l = static_cast<float>(leaf);
+  vg.setLeafSize(l, l, l);
+  vg.filter(*out);
+  return out;
+}
+
+Eigen::Vector3d pt(const Cloud& c, int i) {
+  return c[static_cast<std::size_t>(i)].getVector3fMap().cast<double>();
+}
+
+/// Orthonormal bases of the principal subspaces (axes with similar spread are merged).
+std::vector<Eigen::MatrixXd> principalSubspaces(const Eigen::Matrix3d& cov, double ratio) {
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
+  const Eigen::Vector3d sd = es.eigenvalues().cwiseMax(0.0).cwiseSqrt();  // ascending
+  const Eigen::Matrix3d V = es.eigenvectors();
+  std::vector<Eigen::MatrixXd> out;
+  int k = 0;
+  while (k < 3) {
+    int e = k + 1;
+    while (e < 3 && sd[e] > 0 && sd[e - 1] / sd[e] >= ratio) ++e;
+    out.push_back(V.middleCols(k, e - k));
+    k = e;
+  }
+  return out;
+}
+
+double alignment(const std::vector<Eigen::MatrixXd>& subspaces, const Eigen::Vector3d& u) {
+  double best = 0.0;
+  for (const Eigen::MatrixXd& S : subspaces) best = std::max(best, (S.transpose() * u).norm());
+  return std::min(best, 1.0);
+}
+
+struct Candidate {
+  Eigen::Matrix3d R;
+  Eigen::Vector3d c;
+  double width = 0, antipodal = 0, wc = 0, wp = 0, score = 0;
+  bool single = false;  ///< single-contact hypothesis (width from the object's extent)
+};
+
+/// Evaluates the gripper at (R, c0): centres it along the closing axis on the points between
+/// the fingers, checks width, finger / palm collisions and the support plane.
+class GripperCheck {
+ public:
+  GripperCheck(const GraspGeneratorConfig& cfg, const Eigen::Vector4d& plane, bool has_plane)
+      : cfg_(cfg), g_(cfg.gripper), plane_(plane), has_plane_(has_plane) {}
+
+  /// Expresses the neighbourhood in the (y, u, v) frame of a closing axis y (u, v span the
+  /// approach plane, v = y x u), dropping points no gripper pose around y can touch.
+  /// A closing axis y at c0 with the neighbourhood expressed in its (y, u, v) frame (u, v
+  /// span the approach plane, v = y x u).
+  struct Prepared {
+    Eigen::Vector3d c0, y, u, v;
+    std::vector<Eigen::Vector3d> local;  ///< (y, u, v) coordinates of reachable points
+    bool use_extent = false;             ///< bound the object by its extent along y
+    bool too_wide = false;               ///< object extent along y exceeds the opening
+    double ext_min = 0, ext_max = 0;
+  };
+
+  /// Drops points no gripper pose around y can touch. `object` (optional): the object's
+  /// points; its extent along y then bounds the part of the object between the fingers
+  /// (used when the far contact is not seen).
+  void prepare(const Eigen::Vector3d& c0, const Eigen::Vector3d& y, const Eigen::Vector3d& u,
+               const std::vector<Eigen::Vector3d>& nbrs, const Cloud* object, Prepared* pr) {
+    pr->c0 = c0;
+    pr->y = y;
+    pr->u = u;
+    pr->v = y.cross(u);
+    pr->use_extent = false;
+    pr->too_wide = false;
+    if (object) {
+      ext_.clear();
+      for (const auto& p : *object) ext_.push_back(y.dot(p.getVector3fMap().cast<double>() - c0));
+      const std::size_t k = static_cast<std::size_t>(cfg_.max_collision_points);
+      if (ext_.size() > 2 * k + 1) {
+        std::nth_element(ext_.begin(), ext_.begin() + static_cast<long>(k), ext_.end());
+        pr->ext_min = ext_[k];
+        std::nth_element(ext_.begin(), ext_.end() - 1 - static_cast<long>(k), ext_.end());
+        pr->ext_max = ext_[ext_.size() - 1 - k];
+        pr->use_extent = true;
+        pr->too_wide = pr->ext_max - pr->ext_min + 2.0 * g_.clearance > g_.max_width;
+        if (pr->too_wide) return;
+      }
+    }
+    const double W = g_.max_width, t = g_.finger_thickness;
+    const double ymax = std::max(W + 2 * t, 0.5 * g_.palm_width + 0.5 * W);
+    const double zmax = std::max(g_.finger_tip_depth, g_.finger_length + g_.palm_height -
+                                                          g_.finger_tip_depth);
+    const double xmax = 0.5 * std::max(g_.finger_breadth, g_.palm_breadth);
+    const double r2 = zmax * zmax + xmax * xmax;
+    pr->local.clear();
+    for (const Eigen::Vector3d& p : nbrs) {
+      const Eigen::Vector3d d = p - c0;
+      const double py = y.dot(d);
+      if (std::abs(py) > ymax) continue;
+      const double pu = u.dot(d), pv = pr->v.dot(d);
+      if (pu * pu + pv * pv > r2) continue;
+      pr->local.emplace_back(py, pu, pv);
+    }
+  }
+
+  /// Gripper with approach a = cos(phi) u + sin(phi) v: centres it along y on the points
+  /// between the fingers, checks the opening, finger / palm collisions and the support plane.
+  bool evaluate(const Prepared& pr, double cphi, double sphi, Eigen::Matrix3d* Rout,
+                Eigen::Vector3d* c, double* width) {
+    const double z1 = g_.finger_tip_depth, z0 = z1 - g_.finger_length;
+    const double zp = z0 - g_.palm_height;
+    const double W = g_.max_width, t = g_.finger_thickness;
+    ys_.clear();
+    inner_.clear();
+    palm_.clear();
+    for (const Eigen::Vector3d& l : pr.local) {
+      const double qz = cphi * l.y() + sphi * l.z();
+      if (qz > z1 || qz < zp) continue;
+      const double qx = cphi * l.z() - sphi * l.y();
+      const double qy = l.x();
+      if (qz >= z0) {
+        if (std::abs(qx) <= 0.5 * g_.finger_breadth && std::abs(qy) <= W + 2 * t) {
+          ys_.push_back(qy);
+          if (std::abs(qy) <= 0.5 * W) inner_.push_back(qy);
+        }
+      } else if (std::abs(qx) <= 0.5 * g_.palm_breadth &&
+                 std::abs(qy) <= 0.5 * g_.palm_width + 0.5 * W) {
+        palm_.push_back(qy);
+      }
+    }
+    Eigen::Matrix3d R;
+    R.col(1) = pr.y;
+    R.col(2) = cphi * pr.u + sphi * pr.v;
+    R.col(0) = cphi * pr.v - sphi * pr.u;
+    const Eigen::Vector3d& c0 = pr.c0;
+    // Object between the fingers: trimmed extent of the points in the opening (the k most
+    // extreme points on each side are treated as noise).
+    if (pr.too_wide) return false;
+    // Outliers tolerated per side: max_collision_points, or outlier_fraction of the points.
+    const int k = std::max(cfg_.max_collision_points,
+                           static_cast<int>(cfg_.outlier_fraction * inner_.size()));
+    if (static_cast<int>(inner_.size()) < cfg_.min_points_between_fingers + 2 * k) return false;
+    const auto kk = static_cast<long>(k);
+    std::nth_element(inner_.begin(), inner_.begin() + kk, inner_.end());
+    double ymin = inner_[static_cast<std::size_t>(k)];
+    std::nth_element(inner_.begin(), inner_.end() - 1 - kk, inner_.end());
+    double ymax = inner_[inner_.size() - 1 - static_cast<std::size_t>(k)];
+    if (pr.use_extent) {
+      ymin = std::min(ymin, pr.ext_min);
+      ymax = std::max(ymax, pr.ext_max);
+    }
+    const double w = ymax - ymin + 2.0 * g_.clearance;
+    if (w > W) return false;
+    const double yc = 0.5 * (ymin + ymax);
+    // Points under the fingers or in the clearance gap (outside the trimmed extent).
+    const double half = 0.5 * (ymax - ymin);
+    int finger_hits = 0;
+    for (double y : ys_) {
+      const double d = std::abs(y - yc);
+      if (d > half + 1e-9 && d <= 0.5 * w + t) ++finger_hits;
+    }
+    if (finger_hits > 2 * k) return false;
+    int palm_hits = 0;
+    for (double y : palm_)
+      if (std::abs(y - yc) <= 0.5 * g_.palm_width) ++palm_hits;
+    if (palm_hits > std::max(cfg_.max_collision_points,
+                             static_cast<int>(cfg_.outlier_fraction * palm_.size())))
+      return false;
+    const Eigen::Vector3d centre = c0 + R.col(1) * yc;
+    if (has_plane_) {
+      const double fy = 0.5 * w + g_.finger_thickness;
+      const double xs[2] = {0.5 * g_.finger_breadth, 0.5 * g_.palm_breadth};
+      const double yss[2] = {fy, 0.5 * g_.palm_width};
+      const double zs[2][2] = {{z0, z1}, {zp, z0}};
+      for (int b = 0; b < 2; ++b)
+        for (double sx : {-1.0, 1.0})
+          for (double sy : {-1.0, 1.0})
+            for (int iz = 0; iz < 2; ++iz) {
+              const Eigen::Vector3d corner =
+                  centre + R * Eigen::Vector3d(sx * xs[b], sy * yss[b], zs[b][iz]);
+              if (plane_.head<3>().dot(corner) + plane_[3] < cfg_.support_clearance) return false;
+            }
+    }
+    *Rout = R;
+    *c = centre;
+    *width = w;
+    return true;
+  }
+
+ private:
+  const GraspGeneratorConfig& cfg_;
+  const GripperGeometry& g_;
+  Eigen::Vector4d plane_;
+  bool has_plane_;
+  std::vector<double> ys_, inner_, palm_;
+  std::vector<double> ext_;
+
+};
+
+double rotationAngle(const Eigen::Matrix3d& A, const Eigen::Matrix3d& B) {
+  const double c = 0.5 * ((A.transpose() * B).trace() - 1.0);
+  return std::acos(std::max(-1.0, std::min(1.0, c)));
+}
+
+}  // namespace
+
+// ------------------------------------------------------------------------------ config
+
+void GraspGeneratorConfig::validate() const {
+  auto range = [](const std::string& f, double v, double lo, double hi) {
+    ehc_control::requireRange(kOwner, f, v, lo, hi);
+  };
+  const GripperGeometry& g = gripper;
+  range("gripper.max_width", g.max_width, 0.005, 0.5);
+  range("gripper.finger_length", g.finger_length, 0.005, 0.3);
+  range("gripper.finger_tip_depth", g.finger_tip_depth, 0.0, g.finger_length);
+  range("gripper.finger_thickness", g.finger_thickness, 0.0, 0.1);
+  range("gripper.finger_breadth", g.finger_breadth, 0.002, 0.2);
+  range("gripper.palm_height", g.palm_height, 0.0, 0.5);
+  range("gripper.palm_width", g.palm_width, 0.0, 1.0);
+  range("gripper.palm_breadth", g.palm_breadth, 0.0, 1.0);
+  range("gripper.clearance", g.clearance, 0.0, 0.5 * g.max_width);
+  if (!up.allFinite() || up.norm() < 1e-6) fail("parameter 'up' must be a non-zero vector");
+  range("voxel_size", voxel_size, 0.0005, 0.05);
+  range("normal_radius", normal_radius, voxel_size, 0.2);
+  range("min_object_points", min_object_points, 3, 1e7);
+  range("max_seeds", max_seeds, 1, 1e6);
+  range("pairs_per_seed", pairs_per_seed, 1, 100);
+  range("approach_steps", approach_steps, 1, 360);
+  range("friction_cone_deg", friction_cone_deg, 1.0, 60.0);
+  range("max_approach_tilt_deg", max_approach_tilt_deg, 0.0, 180.0);
+  range("max_collision_points", max_collision_points, 0, 1000);
+  range("outlier_fraction", outlier_fraction, 0.0, 0.2);
+  range("min_points_between_fingers", min_points_between_fingers, 1, 1e6);
+  range("support_clearance", support_clearance, -0.05, 0.1);
+  range("approach_standoff", approach_standoff, 0.001, 1.0);
+  range("centroid_sigma_deg", centroid_sigma_deg, 0.1, 180.0);
+  range("pca_power", pca_power, 0.0, 100.0);
+  range("pca_approach_power", pca_approach_power, 0.0, 100.0);
+  range("pca_isotropy_ratio", pca_isotropy_ratio, 0.0, 1.0);
+  range("max_refine_shift", max_refine_shift, 0.0, 0.5);
+  range("max_evaluations", max_evaluations, 1, 1e7);
+  range("single_contact_weight", single_contact_weight, 0.0, 1.0);
+  range("nms_distance", nms_distance, 0.0, 1.0);
+  range("nms_angle_deg", nms_angle_deg, 0.0, 180.0);
+  range("top_k", top_k, 1, 10000);
+  range("plane_distance", plane_distance, 0.0005, 0.1);
+  range("plane_max_tilt_deg", plane_max_tilt_deg, 0.0, 90.0);
+  range("min_plane_fraction", min_plane_fraction, 0.0, 1.0);
+  range("cluster_tolerance", cluster_tolerance, 0.001, 0.5);
+  range("min_cluster_points", min_cluster_points, 1, 1e7);
+  range("max_objects", max_objects, 1, 1000);
+}
+
+std::string GraspGeneratorConfig::summary() const {
+  std::ostringstream os;
+  os << "grasp generator: gripper max width " << gripper.max_width << " m, fingers "
+     << gripper.finger_length << " x " << gripper.finger_breadth << " x "
+     << gripper.finger_thickness << " m, palm " << gripper.palm_height << " m; voxel "
+     << voxel_size << " m, normals r " << normal_radius << " m, " << max_seeds << " seeds x "
+     << pairs_per_seed << " pairs x " << approach_steps << " approaches, friction cone "
+     << friction_cone_deg << " deg, centroid sigma " << centroid_sigma_deg << " deg, pca power "
+     << pca_power << "/" << pca_approach_power << ", top " << top_k << ", up ["
+     << up.transpose() << "]";
+  return os.str();
+}
+
+GraspGeneratorConfig loadGraspGeneratorConfig(const ehc_control::ConfigNode& n) {
+  GraspGeneratorConfig c;
+  const ehc_control::ConfigNode g = n.childOrEmpty("gripper");
+  GripperGeometry& gg = c.gripper;
+  gg.max_width = g.get("max_width", gg.max_width);
+  gg.finger_length = g.get("finger_length", gg.finger_length);
+  gg.finger_tip_depth = g.get("finger_tip_depth", gg.finger_tip_depth);
+  gg.finger_thickness = g.get("finger_thickness", gg.finger_thickness);
+  gg.finger_breadth = g.get("finger_breadth", gg.finger_breadth);
+  gg.palm_height = g.get("palm_height", gg.palm_height);
+  gg.palm_width = g.get("palm_width", gg.palm_width);
+  gg.palm_breadth = g.get("palm_breadth", gg.palm_breadth);
+  gg.clearance = g.get("clearance", gg.clearance);
+  c.up = n.getVector("up", c.up, 3);
+  c.voxel_size = n.get("voxel_size", c.voxel_size);
+  c.normal_radius = n.get("normal_radius", c.normal_radius);
+  c.min_object_points = n.get("min_object_points", c.min_object_points);
+  c.max_seeds = n.get("max_seeds", c.max_seeds);
+  c.pairs_per_seed = n.get("pairs_per_seed", c.pairs_per_seed);
+  c.approach_steps = n.get("approach_steps", c.approach_steps);
+  c.friction_cone_deg = n.get("friction_cone_deg", c.friction_cone_deg);
+  c.max_approach_tilt_deg = n.get("max_approach_tilt_deg", c.max_approach_tilt_deg);
+  c.max_collision_points = n.get("max_collision_points", c.max_collision_points);
+  c.outlier_fraction = n.get("outlier_fraction", c.outlier_fraction);
+  c.min_points_between_fingers = n.get("min_points_between_fingers", c.min_points_between_fingers);
+  c.support_clearance = n.get("support_clearance", c.support_clearance);
+  c.assume_support_below = n.get("assume_support_below", c.assume_support_below);
+  c.approach_standoff = n.get("approach_standoff", c.approach_standoff);
+  c.centroid_sigma_deg = n.get("centroid_sigma_deg", c.centroid_sigma_deg);
+  c.pca_power = n.get("pca_power", c.pca_power);
+  c.pca_approach_power = n.get("pca_approach_power", c.pca_approach_power);
+  c.pca_isotropy_ratio = n.get("pca_isotropy_ratio", c.pca_isotropy_ratio);
+  c.max_refine_shift = n.get("max_refine_shift", c.max_refine_shift);
+  c.max_evaluations = n.get("max_evaluations", c.max_evaluations);
+  c.single_contact_weight = n.get("single_contact_weight", c.single_contact_weight);
+  c.nms_distance = n.get("nms_distance", c.nms_distance);
+  c.nms_angle_deg = n.get("nms_angle_deg", c.nms_angle_deg);
+  c.top_k = n.get("top_k", c.top_k);
+  c.seed = n.get("seed", c.seed);
+  c.plane_distance = n.get("plane_distance", c.plane_distance);
+  c.plane_max_tilt_deg = n.get("plane_max_tilt_deg", c.plane_max_tilt_deg);
+  c.min_plane_fraction = n.get("min_plane_fraction", c.min_plane_fraction);
+  c.cluster_tolerance = n.get("cluster_tolerance", c.cluster_tolerance);
+  c.min_cluster_points = n.get("min_cluster_points", c.min_cluster_points);
+  c.max_objects = n.get("max_objects", c.max_objects);
+  try {
+    c.validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string(e.what()) + " (in " + n.file() + ", " +
+                                n.fieldName("") + ")");
+  }
+  return c;
+}
+
+// ------------------------------------------------------------------------------ generator
+
+GraspGenerator::GraspGenerator(const GraspGeneratorConfig& config) : config_(config) {
+  config_.validate();
+  config_.up.normalize();
+}
+
+GraspGenerator::~GraspGenerator() = default;
+
+GraspResult GraspGenerator::generate(const PointList& object, const Eigen::Vector3d& viewpoint,
+                                     const Eigen::Vector4d* support_plane,
+                                     const PointList* collision_cloud) const {
+  const GraspGeneratorConfig& cfg = config_;
+  const GripperGeometry& g = cfg.gripper;
+  GraspResult res;
+  res.objects = 1;
+  res.input_points = static_cast<int>(object.size());
+  if (object.empty()) {
+    res.reason = "empty cloud";
+    return res;
+  }
+  Cloud::Ptr raw = toCloud(object, &res.finite_points);
+  if (res.finite_points == 0) {
+    res.reason = "no finite points (" + std::to_string(object.size()) + " points, all NaN/Inf)";
+    return res;
+  }
+  if (!viewpoint.allFinite()) {
+    res.reason = "viewpoint is not finite";
+    return res;
+  }
+  Cloud::Ptr cloud = voxelFilter(raw, cfg.voxel_size);
+  if (static_cast<int>(cloud->size()) < cfg.min_object_points) {
+    res.reason = "only " + std::to_string(cloud->size()) + " points after the " +
+                 std::to_string(cfg.voxel_size) + " m voxel filter (min_object_points " +
+                 std::to_string(cfg.min_object_points) + ")";
+    return res;
+  }
+
+  // Centre of gravity and principal axes.
+  Eigen::Matrix3f covf = Eigen::Matrix3f::Zero();
+  Eigen::Vector4f cenf = Eigen::Vector4f::Zero();
+  pcl::computeMeanAndCovarianceMatrix(*cloud, covf, cenf);
+  const Eigen::Vector3d centroid = cenf.head<3>().cast<double>();
+  res.centroids.push_back(centroid);
+  const std::vector<Eigen::MatrixXd> subspaces =
+      principalSubspaces(covf.cast<double>(), cfg.pca_isotropy_ratio);
+
+  // Support plane.
+  const Eigen::Vector3d up = cfg.up;
+  Eigen::Vector4d plane = Eigen::Vector4d::Zero();
+  bool has_plane = false;
+  if (support_plane) {
+    if (!support_plane->allFinite() || support_plane->head<3>().norm() < 1e-9) {
+      res.reason = "support plane is not finite";
+      return res;
+    }
+    plane = *support_plane / support_plane->head<3>().norm();
+    if (plane.head<3>().dot(up) < 0) plane = -plane;
+    has_plane = true;
+  } else if (cfg.assume_support_below) {
+    double lowest = std::numeric_limits<double>::max();
+    for (const auto& p : *cloud) lowest = std::min(lowest, up.dot(p.getVector3fMap().cast<double>()));
+    plane << up, -lowest;
+    has_plane = true;
+  }
+  res.support_plane_found = has_plane;
+  res.support_plane = plane;
+
+  // Normals (sign-free use: antipodality is tested with |n . y|).
+  // Unsorted radius results: the neighbourhoods here are large and their order is irrelevant.
+  pcl::search::KdTree<pcl::PointXYZ>::Ptr tree(new pcl::search::KdTree<pcl::PointXYZ>(false));
+  tree->setInputCloud(cloud);
+  Normals::Ptr normals(new Normals);
+  pcl::NormalEstimation<pcl::PointXYZ, pcl::Normal> ne;
+  ne.setInputCloud(cloud);
+  ne.setSearchMethod(tree);
+  ne.setRadiusSearch(cfg.normal_radius);
+  ne.compute(*normals);
+
+  // Collision environment (the object, plus other geometry if given).
+  Cloud::Ptr env = cloud;
+  pcl::search::KdTree<pcl::PointXYZ>::Ptr env_tree = tree;
+  if (collision_cloud && !collision_cloud->empty()) {
+    Cloud::Ptr both = toCloud(*collision_cloud);
+    *both += *raw;
+    env = voxelFilter(both, cfg.voxel_size);
+    env_tree.reset(new pcl::search::KdTree<pcl::PointXYZ>(false));
+    env_tree->setInputCloud(env);
+  }
+
+  // Seeds.
+  const int n = static_cast<int>(cloud->size());
+  std::vector<int> seeds(static_cast<std::size_t>(n));
+  std::iota(seeds.begin(), seeds.end(), 0);
+  std::mt19937 rng(cfg.seed);
+  if (n > cfg.max_seeds) {
+    std::shuffle(seeds.begin(), seeds.end(), rng);
+    seeds.resize(static_cast<std::size_t>(cfg.max_seeds));
+  }
+
+  const double cos_fc = std::cos(cfg.friction_cone_deg * kDeg);
+  const double cos_tilt = std::cos(cfg.max_approach_tilt_deg * kDeg);
+  const Eigen::Vector3d ref = Eigen::Vector3d(0.31, 0.52, 0.79).normalized();
+  const double check_radius =
+      std::sqrt(std::pow(0.5 * std::max(g.palm_width, g.max_width + 2 * g.finger_thickness), 2) +
+                std::pow(0.5 * std::max(g.palm_breadth, g.finger_breadth), 2) +
+                std::pow(g.finger_length + g.palm_height, 2));
+  const double sigma = cfg.centroid_sigma_deg * kDeg;
+
+  GripperCheck check(cfg, plane, has_plane);
+  std::vector<int> idx;
+  std::vector<float> d2;
+  std::vector<Eigen::Vector3d> nbrs;
+
+  auto score = [&](Candidate& cd) {
+    const Eigen::Vector3d a = cd.R.col(2);
+    const Eigen::Vector3d o = cd.c - cfg.approach_standoff * a;
+    const Eigen::Vector3d to_g = centroid - o;
+    const double th = std::acos(std::max(-1.0, std::min(1.0, a.dot(to_g.normalized()))));
+    cd.wc = std::exp(-0.5 * (th / sigma) * (th / sigma));
+    cd.wp = std::pow(alignment(subspaces, cd.R.col(1)), cfg.pca_power) *
+            std::pow(alignment(subspaces, a), cfg.pca_approach_power);
+    cd.score = cd.antipodal * cd.wc * cd.wp;
+  };
+
+  // Hypotheses: (closing axis, centre, antipodal quality). Antipodal contact pairs; and the
+  // seed's own normal as closing axis with the far contact unseen (single-view clouds): the
+  // object's extent along that axis stands in for the unseen side (penalised quality).
+  struct Hyp {
+    Eigen::Vector3d y, c0, u, v;
+    double q;
+    bool single;
+  };
+  std::vector<Hyp> hyps;
+  bool any_pair = false;
+  for (int i : seeds) {
+    const Eigen::Vector3d pi = pt(*cloud, i);
+    const Eigen::Vector3d ni = (*normals)[static_cast<std::size_t>(i)].getNormalVector3fMap().cast<double>();
+    if (!ni.allFinite() || ni.norm() < 0.5) continue;
+    tree->radiusSearch((*cloud)[static_cast<std::size_t>(i)], g.max_width, idx, d2);
+    std::vector<std::pair<double, int>> partners;
+    for (int j : idx) {
+      const Eigen::Vector3d d = pt(*cloud, j) - pi;
+      const double L = d.norm();
+      if (L < 2.0 * cfg.voxel_size || L + 2.0 * g.clearance > g.max_width) continue;
+      const Eigen::Vector3d y = d / L;
+      const Eigen::Vector3d nj = (*normals)[static_cast<std::size_t>(j)].getNormalVector3fMap().cast<double>();
+      if (!nj.allFinite()) continue;
+      const double q = std::min(std::abs(ni.dot(y)), std::abs(nj.dot(y)));
+      if (q >= cos_fc) partners.emplace_back(q, j);
+    }
+    const std::size_t keep = std::min(partners.size(), static_cast<std::size_t>(cfg.pairs_per_seed));
+    std::partial_sort(partners.begin(), partners.begin() + static_cast<long>(keep), partners.end(),
+                      [](const auto& a, const auto& b) { return a.first > b.first; });
+    if (keep > 0) any_pair = true;
+    for (std::size_t k = 0; k < keep; ++k) {
+      const Eigen::Vector3d pj = pt(*cloud, partners[k].second);
+      hyps.push_back({(pj - pi).normalized(), 0.5 * (pi + pj), {}, {}, partners[k].first, false});
+    }
+    if (cfg.single_contact_weight > 0.0) {
+      const Eigen::Vector3d n_out = ni.dot(pi - centroid) >= 0 ? ni : Eigen::Vector3d(-ni);
+      hyps.push_back({n_out, pi - n_out * (0.5 * g.max_width - g.clearance), {}, {},
+                      cfg.single_contact_weight, true});
+    }
+  }
+  // Every (hypothesis, approach) with an optimistic score (before the collision checks,
+  // which are the expensive part): candidates are checked best first until enough pass.
+  struct Pending {
+    double prescore;
+    int hyp, step;
+  };
+  std::vector<Pending> pending;
+  for (std::size_t h = 0; h < hyps.size(); ++h) {
+    Hyp& hp = hyps[h];
+    if (hp.y.dot(ref) < 0) hp.y = -hp.y;
+    // Approach basis perpendicular to y, u = the most downward direction.
+    Eigen::Vector3d u = -up - (-up).dot(hp.y) * hp.y;
+    if (u.norm() < 1e-6) u = hp.y.unitOrthogonal();
+    hp.u = u.normalized();
+    hp.v = hp.y.cross(hp.u);
+    for (int s = 0; s < cfg.approach_steps; ++s) {
+      const double phi = 2.0 * M_PI * s / cfg.approach_steps;
+      const Eigen::Vector3d a = std::cos(phi) * hp.u + std::sin(phi) * hp.v;
+      if (a.dot(-up) < cos_tilt - 1e-12) continue;
+      Candidate cd;
+      cd.R.col(2) = a;
+      cd.R.col(1) = hp.y;
+      cd.R.col(0) = hp.y.cross(a);
+      cd.c = hp.c0;
+      cd.antipodal = hp.q;
+      score(cd);
+      pending.push_back({cd.score, static_cast<int>(h), s});
+    }
+  }
+  std::stable_sort(pending.begin(), pending.end(),
+                   [](const Pending& a, const Pending& b) { return a.prescore > b.prescore; });
+  std::vector<Candidate> cands;
+  std::map<int, GripperCheck::Prepared> prepared;
+  const std::size_t enough = static_cast<std::size_t>(std::max(4 * cfg.top_k, 40));
+  int evaluations = 0;
+  for (const Pending& pd : pending) {
+    if (cands.size() >= enough || evaluations >= cfg.max_evaluations) break;
+    ++evaluations;
+    const Hyp& hp = hyps[static_cast<std::size_t>(pd.hyp)];
+    auto it = prepared.find(pd.hyp);
+    if (it == prepared.end()) {
+      // Neighbourhood of the grasp for the collision checks (shared by all approaches).
+      pcl::PointXYZ pc(static_cast<float>(hp.c0.x()), static_cast<float>(hp.c0.y()),
+                       static_cast<float>(hp.c0.z()));
+      env_tree->radiusSearch(pc, check_radius, idx, d2);
+      nbrs.clear();
+      for (int e : idx) nbrs.push_back(pt(*env, e));
+      it = prepared.emplace(pd.hyp, GripperCheck::Prepared()).first;
+      check.prepare(hp.c0, hp.y, hp.u, nbrs, hp.single ? cloud.get() : nullptr, &it->second);
+    }
+    const double phi = 2.0 * M_PI * pd.step / cfg.approach_steps;
+    Candidate cd;
+    if (!check.evaluate(it->second, std::cos(phi), std::sin(phi), &cd.R, &cd.c, &cd.width))
+      continue;
+    cd.antipodal = hp.q;
+    cd.single = hp.single;
+    cands.push_back(cd);
+  }
+  if (!any_pair && cands.empty()) {
+    res.reason = "no antipodal contact pair within the gripper opening (" +
+                 std::to_string(g.max_width) + " m, friction cone " +
+                 std::to_string(cfg.friction_cone_deg) + " deg)";
+    return res;
+  }
+
+  for (Candidate& cd : cands) score(cd);
+  std::sort(cands.begin(), cands.end(),
+            [](const Candidate& a, const Candidate& b) { return a.score > b.score; });
+
+  // Non-maximum suppression (a grasp and its 180 deg turn about z are the same grasp).
+  const Eigen::Matrix3d flip = Eigen::Vector3d(-1, -1, 1).asDiagonal();
+  std::vector<Candidate> kept;
+  const std::size_t want = static_cast<std::size_t>(cfg.top_k);
+  for (const Candidate& cd : cands) {
+    bool dup = false;
+    for (const Candidate& k : kept) {
+      if ((cd.c - k.c).norm() > cfg.nms_distance) continue;
+      const double ang = std::min(rotationAngle(cd.R, k.R), rotationAngle(cd.R * flip, k.R));
+      if (ang < cfg.nms_angle_deg * kDeg) {
+        dup = true;
+        break;
+      }
+    }
+    if (!dup) kept.push_back(cd);
+    if (kept.size() >= 3 * want) break;
+  }
+
+  // Refinement: move along the finger breadth axis (x) onto the centroid's projection.
+  for (Candidate& cd : kept) {
+    const Eigen::Vector3d x = cd.R.col(0);
+    const double shift =
+        std::max(-cfg.max_refine_shift, std::min(cfg.max_refine_shift, x.dot(centroid - cd.c)));
+    if (std::abs(shift) < 1e-6) continue;
+    const Eigen::Vector3d c0 = cd.c + shift * x;
+    pcl::PointXYZ pc(static_cast<float>(c0.x()), static_cast<float>(c0.y()), static_cast<float>(c0.z()));
+    env_tree->radiusSearch(pc, check_radius, idx, d2);
+    nbrs.clear();
+    for (int e : idx) nbrs.push_back(pt(*env, e));
+    Candidate r = cd;
+    GripperCheck::Prepared pr;
+    check.prepare(c0, cd.R.col(1), cd.R.col(2), nbrs, cd.single ? cloud.get() : nullptr, &pr);
+    if (check.evaluate(pr, 1.0, 0.0, &r.R, &r.c, &r.width)) {
+      score(r);
+      cd = r;
+    }
+  }
+  std::stable_sort(kept.begin(), kept.end(),
+                   [](const Candidate& a, const Candidate& b) { return a.score > b.score; });
+  if (kept.size() > want) kept.resize(want);
+
+  for (const Candidate& cd : kept) {
+    Grasp gr;
+    gr.pose.linear() = cd.R;
+    gr.pose.translation() = cd.c;
+    gr.width = cd.width;
+    gr.score = cd.score;
+    gr.antipodal = cd.antipodal;
+    gr.centroid_weight = cd.wc;
+    gr.pca_weight = cd.wp;
+    res.grasps.push_back(gr);
+  }
+  if (res.grasps.empty())
+    res.reason = "every grasp candidate collides with the cloud or the support, or needs more "
+                 "than the " + std::to_string(g.max_width) + " m opening";
+  return res;
+}
+
+// ------------------------------------------------------------------------------ scenes
+
+SceneSegmentation GraspGenerator::segmentScene(const PointList& scene) const {
+  const GraspGeneratorConfig& cfg = config_;
+  SceneSegmentation seg;
+  int finite = 0;
+  Cloud::Ptr raw = toCloud(scene, &finite);
+  if (finite == 0) {
+    seg.reason = scene.empty() ? "empty cloud" : "no finite points (all NaN/Inf)";
+    return seg;
+  }
+  Cloud::Ptr cloud = voxelFilter(raw, cfg.voxel_size);
+
+  pcl::ModelCoefficients coeffs;
+  pcl::PointIndices inliers;
+  if (cloud->size() >= 3) {
+    pcl::SACSegmentation<pcl::PointXYZ> sac;
+    sac.setOptimizeCoefficients(true);
+    sac.setModelType(pcl::SACMODEL_PERPENDICULAR_PLANE);
+    sac.setMethodType(pcl::SAC_RANSAC);
+    sac.setAxis(cfg.up.cast<float>());
+    sac.setEpsAngle(cfg.plane_max_tilt_deg * kDeg);
+    sac.setDistanceThreshold(cfg.plane_distance);
+    sac.setMaxIterations(500);
+    sac.setInputCloud(cloud);
+    sac.segment(inliers, coeffs);
+  }
+  Cloud::Ptr above(new Cloud);
+  if (coeffs.values.size() == 4 &&
+      static_cast<double>(inliers.indices.size()) >= cfg.min_plane_fraction * cloud->size()) {
+    Eigen::Vector4d pl(coeffs.values[0], coeffs.values[1], coeffs.values[2], coeffs.values[3]);
+    pl /= pl.head<3>().norm();
+    if (pl.head<3>().dot(cfg.up) < 0) pl = -pl;
+    seg.plane_found = true;
+    seg.plane = pl;
+    for (const auto& p : *cloud)
+      if (pl.head<3>().dot(p.getVector3fMap().cast<double>()) + pl[3] > 1.5 * cfg.plane_distance)
+        above->push_back(p);
+  } else {
+    *above = *cloud;
+  }
+  for (const auto& p : *above) seg.obstacles.push_back(p.getVector3fMap());
+  if (above->empty()) {
+    seg.reason = "no points above the support plane";
+    return seg;
+  }
+  pcl::search::KdTree<pcl::PointXYZ>::Ptr tree(new pcl::search::KdTree<pcl::PointXYZ>);
+  tree->setInputCloud(above);
+  std::vector<pcl::PointIndices> clusters;
+  pcl::EuclideanClusterExtraction<pcl::PointXYZ> ec;
+  ec.setClusterTolerance(cfg.cluster_tolerance);
+  ec.setMinClusterSize(cfg.min_cluster_points);
+  ec.setMaxClusterSize(static_cast<int>(above->size()));
+  ec.setSearchMethod(tree);
+  ec.setInputCloud(above);
+  ec.extract(clusters);  // sorted largest first
+  for (const pcl::PointIndices& ci : clusters) {
+    if (static_cast<int>(seg.objects.size()) >= cfg.max_objects) break;
+    PointList obj;
+    obj.reserve(ci.indices.size());
+    for (int i : ci.indices) obj.push_back((*above)[static_cast<std::size_t>(i)].getVector3fMap());
+    seg.objects.push_back(std::move(obj));
+  }
+  if (seg.objects.empty())
+    seg.reason = "no cluster of at least " + std::to_string(cfg.min_cluster_points) + " points";
+  return seg;
+}
+
+GraspResult GraspGenerator::generateFromScene(const PointList& scene,
+                                              const Eigen::Vector3d& viewpoint,
+                                              const Eigen::Vector3d* near) const {
+  const SceneSegmentation seg = segmentScene(scene);
+  GraspResult res;
+  res.input_points = static_cast<int>(scene.size());
+  res.support_plane_found = seg.plane_found;
+  res.support_plane = seg.plane;
+  if (seg.objects.empty()) {
+    res.reason = seg.reason;
+    return res;
+  }
+  std::vector<int> which;
+  if (near && near->allFinite()) {
+    double best = std::numeric_limits<double>::max();
+    int bi = 0;
+    for (std::size_t o = 0; o < seg.objects.size(); ++o) {
+      Eigen::Vector3d c = Eigen::Vector3d::Zero();
+      for (const auto& p : seg.objects[o]) c += p.cast<double>();
+      c /= static_cast<double>(seg.objects[o].size());
+      if ((c - *near).norm() < best) {
+        best = (c - *near).norm();
+        bi = static_cast<int>(o);
+      }
+    }
+    which.push_back(bi);
+  } else {
+    for (std::size_t o = 0; o < seg.objects.size(); ++o) which.push_back(static_cast<int>(o));
+  }
+  std::vector<std::string> reasons;
+  for (int o : which) {
+    const GraspResult r = generate(seg.objects[static_cast<std::size_t>(o)], viewpoint,
+                                   seg.plane_found ? &seg.plane : nullptr, &seg.obstacles);
+    ++res.objects;
+    res.finite_points += r.finite_points;
+    res.centroids.insert(res.centroids.end(), r.centroids.begin(), r.centroids.end());
+    for (Grasp gr : r.grasps) {
+      gr.object = o;
+      res.grasps.push_back(gr);
+    }
+    if (!r.reason.empty()) reasons.push_back("object " + std::to_string(o) + ": " + r.reason);
+  }
+  std::stable_sort(res.grasps.begin(), res.grasps.end(),
+                   [](const Grasp& a, const Grasp& b) { return a.score > b.score; });
+  if (res.grasps.empty()) {
+    for (const std::string& r : reasons) res.reason += (res.reason.empty() ? "" : "; ") + r;
+    if (res.reason.empty()) res.reason = "no grasp";
+  }
+  return res;
+}
+
+}  // namespace ehc_perception

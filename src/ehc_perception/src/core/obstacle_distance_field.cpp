@@ -1,0 +1,282 @@
+#include "ehc_perception/obstacle_distance_field.h"
+
+#include "ehc_control/config_node.h"
+#include "ehc_control/whole_body_model.h"
+
+#include <fcl/geometry/octree/octree.h>
+#include <fcl/geometry/shape/box.h>
+#include <fcl/geometry/shape/cylinder.h>
+#include <fcl/geometry/shape/sphere.h>
+#include <fcl/narrowphase/distance.h>
+#include <octomap/OcTree.h>
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace ehc_perception {
+
+namespace {
+const char* kOwner = "ObstacleDistanceField";
+
+[[noreturn]] void fail(const std::string& what) {
+  throw std::invalid_argument(std::string("[ObstacleDistanceField] ") + what);
+}
+}  // namespace
+
+// ------------------------------------------------------------------------------ config
+
+void ObstacleMapConfig::validate() const {
+  ehc_control::requireRange(kOwner, "resolution", resolution, 0.005, 0.2);
+  ehc_control::requireRange(kOwner, "max_range", max_range, 0.1, 50.0);
+  ehc_control::requireRange(kOwner, "prob_hit", prob_hit, 0.5001, 0.9999);
+  ehc_control::requireRange(kOwner, "prob_miss", prob_miss, 0.0001, 0.4999);
+  ehc_control::requireRange(kOwner, "clamp_min", clamp_min, 0.0001, 0.4999);
+  ehc_control::requireRange(kOwner, "clamp_max", clamp_max, 0.5001, 0.9999);
+  ehc_control::requireRange(kOwner, "occupancy_threshold", occupancy_threshold, clamp_min,
+                            clamp_max);
+  ehc_control::requireRange(kOwner, "min_height", min_height, -10.0, 10.0);
+  ehc_control::requireRange(kOwner, "self_filter_padding", self_filter_padding, 0.0, 0.5);
+  ehc_control::requireRange(kOwner, "influence_distance", influence_distance, resolution, 5.0);
+  if (links.empty()) fail("parameter 'links' must name at least one robot link");
+}
+
+std::string ObstacleMapConfig::summary() const {
+  std::ostringstream os;
+  os << "obstacle map: OctoMap resolution " << resolution << " m, max range " << max_range
+     << " m, hit/miss " << prob_hit << "/" << prob_miss << ", clamp [" << clamp_min << ", "
+     << clamp_max << "], threshold " << occupancy_threshold << ", min height " << min_height
+     << " m, self filter " << self_filter_padding << " m, influence " << influence_distance
+     << " m, " << links.size() << " links";
+  return os.str();
+}
+
+ObstacleMapConfig loadObstacleMapConfig(const ehc_control::ConfigNode& n) {
+  ObstacleMapConfig c;
+  c.resolution = n.get("resolution", c.resolution);
+  c.max_range = n.get("max_range", c.max_range);
+  c.prob_hit = n.get("prob_hit", c.prob_hit);
+  c.prob_miss = n.get("prob_miss", c.prob_miss);
+  c.clamp_min = n.get("clamp_min", c.clamp_min);
+  c.clamp_max = n.get("clamp_max", c.clamp_max);
+  c.occupancy_threshold = n.get("occupancy_threshold", c.occupancy_threshold);
+  c.min_height = n.get("min_height", c.min_height);
+  c.self_filter_padding = n.get("self_filter_padding", c.self_filter_padding);
+  c.influence_distance = n.get("influence_distance", c.influence_distance);
+  c.links = n.getStrings("links", c.links);
+  try {
+    c.validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string(e.what()) + " (in " + n.file() + ", " +
+                                n.fieldName("") + ")");
+  }
+  return c;
+}
+
+// ------------------------------------------------------------------------------ field
+
+struct ObstacleDistanceField::Impl {
+  std::shared_ptr<octomap::OcTree> tree;
+  std::shared_ptr<fcl::OcTree<double>> fcl_tree;
+  std::vector<std::shared_ptr<fcl::CollisionGeometry<double>>> geoms;  // per shape
+  std::vector<int> shape_link;                                          // shape -> link index
+
+  void reset(const ObstacleMapConfig& c) {
+    tree = std::make_shared<octomap::OcTree>(c.resolution);
+    tree->setProbHit(c.prob_hit);
+    tree->setProbMiss(c.prob_miss);
+    tree->setClampingThresMin(c.clamp_min);
+    tree->setClampingThresMax(c.clamp_max);
+    tree->setOccupancyThres(c.occupancy_threshold);
+    // FCL reads the occupancy threshold from the tree at construction.
+    fcl_tree = std::make_shared<fcl::OcTree<double>>(
+        std::static_pointer_cast<const octomap::OcTree>(tree));
+  }
+};
+
+ObstacleDistanceField::ObstacleDistanceField(const ObstacleMapConfig& config,
+                                             const RobotCollisionModel& robot)
+    : config_(config), robot_(robot), impl_(std::make_unique<Impl>()) {
+  config_.validate();
+  impl_->reset(config_);
+  for (const CollisionShape& s : robot_.shapes()) {
+    std::shared_ptr<fcl::CollisionGeometry<double>> g;
+    switch (s.type) {
+      case CollisionShape::Type::Box:
+        g = std::make_shared<fcl::Box<double>>(s.size.x(), s.size.y(), s.size.z());
+        break;
+      case CollisionShape::Type::Cylinder:
+        g = std::make_shared<fcl::Cylinder<double>>(s.size[0], s.size[1]);
+        break;
+      case CollisionShape::Type::Sphere:
+        g = std::make_shared<fcl::Sphere<double>>(s.size[0]);
+        break;
+    }
+    g->computeLocalAABB();
+    impl_->geoms.push_back(g);
+    int li = -1;
+    for (std::size_t l = 0; l < robot_.links().size(); ++l)
+      if (robot_.links()[l] == s.link) li = static_cast<int>(l);
+    impl_->shape_link.push_back(li);
+  }
+}
+
+ObstacleDistanceField::~ObstacleDistanceField() = default;
+ObstacleDistanceField::ObstacleDistanceField(ObstacleDistanceField&&) noexcept = default;
+ObstacleDistanceField& ObstacleDistanceField::operator=(ObstacleDistanceField&&) noexcept = default;
+
+void ObstacleDistanceField::clear() { impl_->reset(config_); }
+
+ObstacleDistanceField::InsertStats ObstacleDistanceField::insertCloud(
+    const PointList& points, const Eigen::Vector3d& origin,
+    const std::vector<Eigen::Isometry3d>* link_poses) {
+  if (!origin.allFinite()) fail("sensor origin is not finite");
+  if (link_poses && link_poses->size() != robot_.links().size())
+    fail("expected " + std::to_string(robot_.links().size()) + " link poses, got " +
+         std::to_string(link_poses->size()));
+  InsertStats st;
+  st.input = static_cast<int>(points.size());
+  // Robot shapes in the world frame, with bounding spheres for a quick reject.
+  struct Posed {
+    const CollisionShape* s;
+    Eigen::Isometry3d link_inv;
+    Eigen::Vector3d centre;
+    double radius;
+  };
+  std::vector<Posed> posed;
+  if (link_poses) {
+    for (std::size_t i = 0; i < robot_.shapes().size(); ++i) {
+      const CollisionShape& s = robot_.shapes()[i];
+      const Eigen::Isometry3d& Tl = (*link_poses)[static_cast<std::size_t>(impl_->shape_link[i])];
+      if (!Tl.matrix().allFinite()) fail("link pose of '" + s.link + "' is not finite");
+      posed.push_back({&s, Tl.inverse(), Tl * s.origin.translation(),
+                       s.boundingRadius() + config_.self_filter_padding});
+    }
+  }
+  octomap::Pointcloud pc;
+  pc.reserve(points.size());
+  for (const Eigen::Vector3f& pf : points) {
+    if (!pf.allFinite()) {
+      ++st.non_finite;
+      continue;
+    }
+    const Eigen::Vector3d p = pf.cast<double>();
+    if (p.z() < config_.min_height) {
+      ++st.below_min_height;
+      continue;
+    }
+    bool own = false;
+    for (const Posed& ps : posed) {
+      if ((p - ps.centre).squaredNorm() > ps.radius * ps.radius) continue;
+      if (ps.s->contains(ps.link_inv * p, config_.self_filter_padding)) {
+        own = true;
+        break;
+      }
+    }
+    if (own) {
+      ++st.robot;
+      continue;
+    }
+    pc.push_back(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()));
+  }
+  st.inserted = static_cast<int>(pc.size());
+  if (!pc.size()) return st;
+  impl_->tree->insertPointCloud(
+      pc, octomap::point3d(static_cast<float>(origin.x()), static_cast<float>(origin.y()),
+                           static_cast<float>(origin.z())),
+      config_.max_range, /*lazy_eval=*/false, /*discretize=*/true);
+  return st;
+}
+
+void ObstacleDistanceField::addOccupiedBox(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
+  if (!lo.allFinite() || !hi.allFinite() || (hi - lo).minCoeff() < 0.0)
+    fail("addOccupiedBox: box must be finite with max >= min");
+  const double r = config_.resolution;
+  auto first = [r](double v) { return (std::ceil(v / r - 0.5) + 0.5) * r; };  // first centre >= v
+  for (double x = first(lo.x()); x <= hi.x(); x += r)
+    for (double y = first(lo.y()); y <= hi.y(); y += r)
+      for (double z = first(lo.z()); z <= hi.z(); z += r)
+        impl_->tree->updateNode(static_cast<float>(x), static_cast<float>(y),
+                                static_cast<float>(z), true, /*lazy_eval=*/true);
+  impl_->tree->updateInnerOccupancy();
+}
+
+ObstacleDistanceField::Cell ObstacleDistanceField::cell(const Eigen::Vector3d& p) const {
+  const octomap::OcTreeNode* n = impl_->tree->search(p.x(), p.y(), p.z());
+  if (!n) return Cell::Unknown;
+  return impl_->tree->isNodeOccupied(n) ? Cell::Occupied : Cell::Free;
+}
+
+std::size_t ObstacleDistanceField::occupiedLeafCount() const {
+  std::size_t n = 0;
+  for (auto it = impl_->tree->begin_leafs(), end = impl_->tree->end_leafs(); it != end; ++it)
+    if (impl_->tree->isNodeOccupied(*it)) ++n;
+  return n;
+}
+
+std::vector<LinkObstacleDistance> ObstacleDistanceField::distances(
+    const std::vector<Eigen::Isometry3d>& link_poses) const {
+  if (link_poses.size() != robot_.links().size())
+    fail("expected " + std::to_string(robot_.links().size()) + " link poses, got " +
+         std::to_string(link_poses.size()));
+  std::vector<LinkObstacleDistance> best(robot_.links().size());
+  std::vector<bool> found(robot_.links().size(), false);
+  if (impl_->tree->size() == 0) return {};
+
+  fcl::DistanceRequest<double> req;
+  req.enable_nearest_points = true;
+  req.enable_signed_distance = true;
+  const fcl::Transform3<double> I = fcl::Transform3<double>::Identity();
+  for (std::size_t i = 0; i < robot_.shapes().size(); ++i) {
+    const CollisionShape& s = robot_.shapes()[i];
+    const std::size_t li = static_cast<std::size_t>(impl_->shape_link[i]);
+    const Eigen::Isometry3d& Tl = link_poses[li];
+    if (!Tl.matrix().allFinite()) fail("link pose of '" + s.link + "' is not finite");
+    const Eigen::Isometry3d Ts = Tl * s.origin;
+    fcl::Transform3<double> tf;
+    tf.linear() = Ts.linear();
+    tf.translation() = Ts.translation();
+    fcl::DistanceResult<double> res;
+    // Start from the influence distance: the octree traversal prunes every voxel farther.
+    const double start = found[li] ? std::min(best[li].distance, config_.influence_distance)
+                                   : config_.influence_distance;
+    res.min_distance = start;
+    fcl::distance(impl_->fcl_tree.get(), I, impl_->geoms[i].get(), tf, req, res);
+    if (!(res.min_distance < start)) continue;
+    LinkObstacleDistance d;
+    d.link = s.link;
+    d.distance = res.min_distance;
+    d.obstacle_point = res.nearest_points[0];
+    d.link_point = res.nearest_points[1];
+    Eigen::Vector3d nrm = d.link_point - d.obstacle_point;
+    if (d.distance <= 0.0 || nrm.norm() < 1e-9) nrm = Ts.translation() - d.obstacle_point;
+    if (nrm.norm() < 1e-9) nrm = Eigen::Vector3d::UnitZ();
+    d.normal = nrm.normalized();
+    best[li] = d;
+    found[li] = true;
+  }
+  std::vector<LinkObstacleDistance> out;
+  for (std::size_t l = 0; l < best.size(); ++l)
+    if (found[l]) out.push_back(best[l]);
+  return out;
+}
+
+std::vector<Eigen::Isometry3d> ObstacleDistanceField::linkPoses(
+    const ehc_control::WholeBodyModel& model, const Eigen::Vector3d& base_pose,
+    const Eigen::VectorXd& q) const {
+  const Eigen::Isometry3d Twb = ehc_control::WholeBodyModel::baseTransform(base_pose);
+  std::vector<Eigen::Isometry3d> out;
+  out.reserve(robot_.links().size());
+  for (const std::string& l : robot_.links()) {
+    if (!model.hasLink(l)) fail("link '" + l + "' is not in the whole-body model");
+    out.push_back(Twb * model.linkPoseInBase(q, l));
+  }
+  return out;
+}
+
+void ObstacleDistanceField::writeBinary(const std::string& path) const {
+  if (!impl_->tree->writeBinary(path))
+    throw std::runtime_error("[ObstacleDistanceField] cannot write '" + path + "'");
+}
+
+}  // namespace ehc_perception

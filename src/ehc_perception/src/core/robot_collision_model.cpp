@@ -1,0 +1,123 @@
+#include "ehc_perception/robot_collision_model.h"
+
+#include <urdf_parser/urdf_parser.h>
+
+#include <cmath>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+
+namespace ehc_perception {
+
+namespace {
+[[noreturn]] void fail(const std::string& what) {
+  throw std::invalid_argument("[RobotCollisionModel] " + what);
+}
+
+Eigen::Isometry3d toEigen(const urdf::Pose& p) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.translation() << p.position.x, p.position.y, p.position.z;
+  T.linear() = Eigen::Quaterniond(p.rotation.w, p.rotation.x, p.rotation.y, p.rotation.z)
+                   .normalized()
+                   .toRotationMatrix();
+  return T;
+}
+
+void addShapes(const urdf::Link& link, std::vector<CollisionShape>* out) {
+  std::vector<urdf::CollisionSharedPtr> cols = link.collision_array;
+  if (cols.empty() && link.collision) cols.push_back(link.collision);
+  for (const auto& c : cols) {
+    if (!c || !c->geometry) continue;
+    CollisionShape s;
+    s.link = link.name;
+    s.origin = toEigen(c->origin);
+    switch (c->geometry->type) {
+      case urdf::Geometry::BOX: {
+        const auto* b = static_cast<const urdf::Box*>(c->geometry.get());
+        s.type = CollisionShape::Type::Box;
+        s.size << b->dim.x, b->dim.y, b->dim.z;
+        break;
+      }
+      case urdf::Geometry::CYLINDER: {
+        const auto* cy = static_cast<const urdf::Cylinder*>(c->geometry.get());
+        s.type = CollisionShape::Type::Cylinder;
+        s.size << cy->radius, cy->length, 0.0;
+        break;
+      }
+      case urdf::Geometry::SPHERE: {
+        const auto* sp = static_cast<const urdf::Sphere*>(c->geometry.get());
+        s.type = CollisionShape::Type::Sphere;
+        s.size << sp->radius, 0.0, 0.0;
+        break;
+      }
+      default:
+        fail("link '" + link.name +
+             "' has a mesh collision geometry; only box, cylinder and sphere are supported");
+    }
+    if (!s.size.allFinite() || s.size.minCoeff() < 0.0 || s.size[0] <= 0.0)
+      fail("link '" + link.name + "' has a degenerate collision shape");
+    out->push_back(s);
+  }
+}
+}  // namespace
+
+bool CollisionShape::contains(const Eigen::Vector3d& p_link, double padding) const {
+  const Eigen::Vector3d q = origin.inverse() * p_link;
+  switch (type) {
+    case Type::Box:
+      return (q.cwiseAbs() - 0.5 * size).maxCoeff() <= padding;
+    case Type::Cylinder:
+      return std::abs(q.z()) <= 0.5 * size[1] + padding && q.head<2>().norm() <= size[0] + padding;
+    case Type::Sphere:
+      return q.norm() <= size[0] + padding;
+  }
+  return false;
+}
+
+double CollisionShape::boundingRadius() const {
+  switch (type) {
+    case Type::Box:
+      return 0.5 * size.norm();
+    case Type::Cylinder:
+      return std::hypot(size[0], 0.5 * size[1]);
+    case Type::Sphere:
+      return size[0];
+  }
+  return 0.0;
+}
+
+RobotCollisionModel::RobotCollisionModel(const std::string& urdf_xml,
+                                         const std::vector<std::string>& links) {
+  const urdf::ModelInterfaceSharedPtr model = urdf::parseURDF(urdf_xml);
+  if (!model) fail("cannot parse the URDF");
+  if (links.empty()) {
+    for (const auto& kv : model->links_) {
+      const std::size_t before = shapes_.size();
+      addShapes(*kv.second, &shapes_);
+      if (shapes_.size() > before) links_.push_back(kv.first);
+    }
+  } else {
+    for (const std::string& name : links) {
+      const auto it = model->links_.find(name);
+      if (it == model->links_.end()) fail("link '" + name + "' is not in the URDF");
+      const std::size_t before = shapes_.size();
+      addShapes(*it->second, &shapes_);
+      if (shapes_.size() == before) fail("link '" + name + "' has no collision geometry");
+      links_.push_back(name);
+    }
+  }
+  if (shapes_.empty()) fail("the URDF has no collision geometry");
+}
+
+std::string RobotCollisionModel::summary() const {
+  std::map<std::string, int> count;
+  for (const auto& s : shapes_) ++count[s.link];
+  std::ostringstream os;
+  os << "robot collision model: " << shapes_.size() << " shapes on " << links_.size()
+     << " links (";
+  for (std::size_t i = 0; i < links_.size(); ++i) os << (i ? ", " : "") << links_[i];
+  os << ")";
+  return os.str();
+}
+
+}  // namespace ehc_perception

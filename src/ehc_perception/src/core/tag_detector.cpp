@@ -1,0 +1,282 @@
+#include "ehc_perception/tag_detector.h"
+
+#include "ehc_control/config_node.h"
+
+#include <visp3/core/vpCameraParameters.h>
+#include <visp3/core/vpHomogeneousMatrix.h>
+#include <visp3/core/vpImagePoint.h>
+#include <visp3/core/vpPoint.h>
+#include <visp3/detection/vpDetectorAprilTag.h>
+#include <visp3/io/vpImageIo.h>
+
+#include <cmath>
+#include <cstring>
+#include <sstream>
+#include <stdexcept>
+
+namespace ehc_perception {
+
+namespace {
+
+const char* kOwner = "TagDetector";
+
+[[noreturn]] void fail(const std::string& what) {
+  throw std::invalid_argument(std::string("[TagDetector] ") + what);
+}
+
+vpDetectorAprilTag::vpAprilTagFamily familyFromString(const std::string& s) {
+  if (s == "36h11") return vpDetectorAprilTag::TAG_36h11;
+  if (s == "25h9") return vpDetectorAprilTag::TAG_25h9;
+  if (s == "16h5") return vpDetectorAprilTag::TAG_16h5;
+  fail("unknown tag family '" + s + "' (expected 36h11, 25h9 or 16h5)");
+}
+
+vpDetectorAprilTag::vpPoseEstimationMethod poseMethodFromString(const std::string& s) {
+  if (s == "homography") return vpDetectorAprilTag::HOMOGRAPHY;
+  if (s == "homography_virtual_vs") return vpDetectorAprilTag::HOMOGRAPHY_VIRTUAL_VS;
+  if (s == "dementhon_virtual_vs") return vpDetectorAprilTag::DEMENTHON_VIRTUAL_VS;
+  if (s == "lagrange_virtual_vs") return vpDetectorAprilTag::LAGRANGE_VIRTUAL_VS;
+  if (s == "best_residual_virtual_vs") return vpDetectorAprilTag::BEST_RESIDUAL_VIRTUAL_VS;
+  if (s == "homography_orthogonal_iteration")
+    return vpDetectorAprilTag::HOMOGRAPHY_ORTHOGONAL_ITERATION;
+  fail("unknown pose_method '" + s + "'");
+}
+
+Eigen::Isometry3d toEigen(const vpHomogeneousMatrix& M) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) T.linear()(r, c) = M[static_cast<unsigned>(r)][static_cast<unsigned>(c)];
+    T.translation()(r) = M[static_cast<unsigned>(r)][3];
+  }
+  return T;
+}
+
+}  // namespace
+
+// ------------------------------------------------------------------------------ config
+
+double TagDetectorConfig::tagSize(int id) const {
+  const auto it = tag_sizes.find(id);
+  return it == tag_sizes.end() ? default_tag_size : it->second;
+}
+
+std::vector<std::string> TagDetectorConfig::familyNames() { return {"36h11", "25h9", "16h5"}; }
+
+std::vector<std::string> TagDetectorConfig::poseMethodNames() {
+  return {"homography", "homography_virtual_vs", "dementhon_virtual_vs", "lagrange_virtual_vs",
+          "best_residual_virtual_vs", "homography_orthogonal_iteration"};
+}
+
+void TagDetectorConfig::validate() const {
+  familyFromString(family);
+  poseMethodFromString(pose_method);
+  ehc_control::requireRange(kOwner, "default_tag_size", default_tag_size, 1e-3, 5.0);
+  for (const auto& kv : tag_sizes) {
+    if (kv.first < 0) fail("tag_sizes: tag id " + std::to_string(kv.first) + " is negative");
+    ehc_control::requireRange(kOwner, "tag_sizes[" + std::to_string(kv.first) + "]", kv.second,
+                              1e-3, 5.0);
+  }
+  ehc_control::requireRange(kOwner, "quad_decimate", quad_decimate, 1.0, 8.0);
+  ehc_control::requireRange(kOwner, "threads", threads, 1, 64);
+  ehc_control::requirePositive(kOwner, "max_reprojection_error", max_reprojection_error);
+}
+
+std::string TagDetectorConfig::summary() const {
+  std::ostringstream os;
+  os << "tag detector: family " << family << ", default size " << default_tag_size << " m";
+  for (const auto& kv : tag_sizes) os << ", id " << kv.first << ": " << kv.second << " m";
+  os << ", quad_decimate " << quad_decimate << ", threads " << threads << ", pose "
+     << pose_method << ", max reprojection error " << max_reprojection_error << " px";
+  return os.str();
+}
+
+TagDetectorConfig loadTagDetectorConfig(const ehc_control::ConfigNode& n) {
+  TagDetectorConfig c;
+  c.family = n.get<std::string>("family", c.family);
+  c.default_tag_size = n.get<double>("default_tag_size", c.default_tag_size);
+  if (n.has("tag_sizes")) {
+    const YAML::Node m = n.yaml()["tag_sizes"];
+    if (!m.IsMap()) n.fail("tag_sizes", "must be a mapping {tag id: size in m}");
+    for (const auto& kv : m) {
+      int id = -1;
+      double size = 0.0;
+      try {
+        id = kv.first.as<int>();
+        size = kv.second.as<double>();
+      } catch (const YAML::Exception&) {
+        n.fail("tag_sizes", "entries must be <integer id>: <size in m>");
+      }
+      if (!std::isfinite(size)) n.fail("tag_sizes", "sizes must be finite");
+      c.tag_sizes[id] = size;
+    }
+  }
+  c.quad_decimate = n.get<double>("quad_decimate", c.quad_decimate);
+  c.threads = n.get<int>("threads", c.threads);
+  c.pose_method = n.get<std::string>("pose_method", c.pose_method);
+  c.max_reprojection_error = n.get<double>("max_reprojection_error", c.max_reprojection_error);
+  try {
+    c.validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string(e.what()) + " (in " + n.file() + ", " +
+                                n.fieldName("") + ")");
+  }
+  return c;
+}
+
+// ------------------------------------------------------------------------------ detector
+
+struct TagDetector::Impl {
+  vpDetectorAprilTag detector;
+  vpCameraParameters cam;
+  vpImage<unsigned char> buffer;
+};
+
+TagDetector::TagDetector(const TagDetectorConfig& config, const CameraIntrinsics& camera)
+    : config_(config), camera_(camera), impl_(std::make_unique<Impl>()) {
+  config_.validate();
+  try {
+    camera_.validate();
+  } catch (const std::invalid_argument& e) {
+    fail(std::string("bad camera: ") + e.what());
+  }
+  impl_->detector.setAprilTagFamily(familyFromString(config_.family));
+  impl_->detector.setAprilTagPoseEstimationMethod(poseMethodFromString(config_.pose_method));
+  impl_->detector.setAprilTagQuadDecimate(static_cast<float>(config_.quad_decimate));
+  impl_->detector.setAprilTagNbThreads(config_.threads);
+  impl_->detector.setDisplayTag(false);
+  impl_->cam.initPersProjWithoutDistortion(camera_.fx, camera_.fy, camera_.cx, camera_.cy);
+}
+
+TagDetector::~TagDetector() = default;
+TagDetector::TagDetector(TagDetector&&) noexcept = default;
+TagDetector& TagDetector::operator=(TagDetector&&) noexcept = default;
+
+std::vector<TagDetection> TagDetector::detect(const unsigned char* data, int width, int height,
+                                              int stride) {
+  if (!data) fail("image buffer is null");
+  if (width <= 0 || height <= 0 || stride < width)
+    fail("bad image geometry " + std::to_string(width) + "x" + std::to_string(height) +
+         " stride " + std::to_string(stride));
+  vpImage<unsigned char>& I = impl_->buffer;
+  if (static_cast<int>(I.getWidth()) != width || static_cast<int>(I.getHeight()) != height)
+    I.resize(static_cast<unsigned>(height), static_cast<unsigned>(width));
+  for (int r = 0; r < height; ++r)
+    std::memcpy(I[static_cast<unsigned>(r)], data + static_cast<std::size_t>(r) * stride,
+                static_cast<std::size_t>(width));
+  return detect(I);
+}
+
+std::vector<TagDetection> TagDetector::detect(const vpImage<unsigned char>& I) {
+  if (I.getSize() == 0) fail("image is empty");
+  if (static_cast<int>(I.getWidth()) != camera_.width ||
+      static_cast<int>(I.getHeight()) != camera_.height)
+    fail("image is " + std::to_string(I.getWidth()) + "x" + std::to_string(I.getHeight()) +
+         " but camera '" + camera_.name + "' is " + std::to_string(camera_.width) + "x" +
+         std::to_string(camera_.height));
+
+  std::vector<TagDetection> out;
+  vpDetectorAprilTag& det = impl_->detector;
+  if (!det.detect(I)) return out;
+  const std::vector<int> ids = det.getTagsId();
+  std::map<int, double> sizes;
+  for (int id : ids) sizes[id] = config_.tagSize(id);
+  const std::vector<std::vector<vpPoint>> pts3d = det.getTagsPoints3D(ids, sizes);
+
+  for (std::size_t i = 0; i < ids.size(); ++i) {
+    TagDetection d;
+    d.id = ids[i];
+    d.tag_size = config_.tagSize(d.id);
+    vpHomogeneousMatrix cMo;
+    if (!det.getPose(i, d.tag_size, impl_->cam, cMo)) continue;
+    d.T_cam_tag = toEigen(cMo);
+    if (!d.T_cam_tag.matrix().allFinite() || d.T_cam_tag.translation().z() <= 0.0) continue;
+    const std::vector<vpImagePoint> poly = det.getPolygon(i);
+    if (poly.size() != 4) continue;
+    double sq = 0.0;
+    for (std::size_t k = 0; k < 4; ++k) {
+      d.corners[k] = Eigen::Vector2d(poly[k].get_u(), poly[k].get_v());
+      if (i < pts3d.size() && pts3d[i].size() == 4) {
+        const vpPoint& P = pts3d[i][k];
+        const Eigen::Vector3d pc =
+            d.T_cam_tag * Eigen::Vector3d(P.get_oX(), P.get_oY(), P.get_oZ());
+        const Eigen::Vector2d uv(camera_.fx * pc.x() / pc.z() + camera_.cx,
+                                 camera_.fy * pc.y() / pc.z() + camera_.cy);
+        sq += (uv - d.corners[k]).squaredNorm();
+      }
+    }
+    d.reprojection_error = std::sqrt(sq / 4.0);
+    if (d.reprojection_error > config_.max_reprojection_error) continue;
+    out.push_back(d);
+  }
+  return out;
+}
+
+vpImage<unsigned char> loadGrayImage(const std::string& path) {
+  vpImage<unsigned char> I;
+  try {
+    vpImageIo::read(I, path);
+  } catch (const std::exception& e) {
+    fail("cannot read image '" + path + "': " + e.what());
+  }
+  if (I.getSize() == 0) fail("cannot read image '" + path + "': empty image");
+  return I;
+}
+
+// ------------------------------------------------------------------------------ target
+
+Eigen::Matrix3d rpyToMatrix(const Eigen::Vector3d& rpy) {
+  return (Eigen::AngleAxisd(rpy.z(), Eigen::Vector3d::UnitZ()) *
+          Eigen::AngleAxisd(rpy.y(), Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(rpy.x(), Eigen::Vector3d::UnitX()))
+      .toRotationMatrix();
+}
+
+Eigen::Isometry3d TagTargetConfig::offset() const {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = rpyToMatrix(offset_rpy);
+  T.translation() = offset_xyz;
+  return T;
+}
+
+void TagTargetConfig::validate() const {
+  if (tag_id < 0) throw std::invalid_argument("[TagTarget] tag_id must be >= 0");
+  if (!offset_xyz.allFinite() || !offset_rpy.allFinite())
+    throw std::invalid_argument("[TagTarget] grasp offset must be finite");
+  if (offset_xyz.norm() > 2.0)
+    throw std::invalid_argument("[TagTarget] grasp offset is farther than 2 m from the tag");
+}
+
+std::string TagTargetConfig::summary() const {
+  std::ostringstream os;
+  os << "target: tag id " << tag_id << ", grasp offset xyz [" << offset_xyz.transpose()
+     << "] m, rpy [" << offset_rpy.transpose() << "] rad";
+  return os.str();
+}
+
+TagTargetConfig loadTagTargetConfig(const ehc_control::ConfigNode& n) {
+  TagTargetConfig t;
+  t.tag_id = n.get<int>("tag_id", t.tag_id);
+  if (n.has("grasp_offset")) {
+    const ehc_control::ConfigNode g = n.child("grasp_offset");
+    t.offset_xyz = g.getVector("xyz", t.offset_xyz, 3);
+    t.offset_rpy = g.getVector("rpy", t.offset_rpy, 3);
+  }
+  try {
+    t.validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string(e.what()) + " (in " + n.file() + ")");
+  }
+  return t;
+}
+
+bool findTarget(const std::vector<TagDetection>& detections, const TagTargetConfig& target,
+                Eigen::Isometry3d* T_cam_target) {
+  for (const TagDetection& d : detections) {
+    if (d.id != target.tag_id) continue;
+    if (T_cam_target) *T_cam_target = d.T_cam_tag * target.offset();
+    return true;
+  }
+  return false;
+}
+
+}  // namespace ehc_perception

@@ -1,0 +1,265 @@
+// GraspGenerator: synthetic box / cylinder / lying bottle clouds with noise, scenes with a
+// table, bad clouds and bad configs.
+#include "ehc_control/config_node.h"
+#include "ehc_perception/grasp_generator.h"
+#include "perception_test_helpers.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <limits>
+
+using namespace ehc_perception;
+using namespace ehc_perception::test;
+
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+const Eigen::Vector3d kView(0.0, 0.0, 0.9);  // camera above and behind the objects
+
+/// Distance from the grasp centre to `centre` measured in the plane perpendicular to the
+/// approach axis (the centroid's projection onto the grasp plane).
+double lateralOffset(const Grasp& g, const Eigen::Vector3d& centre) {
+  const Eigen::Vector3d d = centre - g.pose.translation();
+  const Eigen::Vector3d a = g.pose.linear().col(2);
+  return (d - d.dot(a) * a).norm();
+}
+
+double angleToAxis(const Eigen::Vector3d& v, const Eigen::Vector3d& axis) {
+  return std::acos(std::min(1.0, std::abs(v.normalized().dot(axis.normalized()))));
+}
+
+void expectValidFrame(const Grasp& g) {
+  const Eigen::Matrix3d R = g.pose.linear();
+  EXPECT_NEAR((R.transpose() * R - Eigen::Matrix3d::Identity()).norm(), 0.0, 1e-9);
+  EXPECT_NEAR(R.determinant(), 1.0, 1e-9);
+  EXPECT_GT(g.score, 0.0);
+  EXPECT_LE(g.score, 1.0);
+}
+
+void expectAboveTable(const Grasp& g, double table_z) {
+  // Grasp centre above the table, approach not from below.
+  EXPECT_GT(g.pose.translation().z(), table_z);
+  EXPECT_LT(g.pose.linear().col(2).z(), 0.1);
+}
+
+}  // namespace
+
+TEST(GraspGenerator, StandingBoxWithNoise) {
+  const Eigen::Isometry3d T = pose(0.6, 0.1, 0.05, 30 * kDeg);
+  Surface s = boxSurface(Eigen::Vector3d(0.05, 0.12, 0.10), 0.003);
+  s.transform(T);
+  const GraspGenerator gen{GraspGeneratorConfig()};
+  const GraspResult r = gen.generate(s.noisy(0.0015, 1), kView);
+  ASSERT_FALSE(r.grasps.empty()) << r.reason;
+  EXPECT_TRUE(r.reason.empty());
+  const Grasp& best = r.grasps.front();
+  expectValidFrame(best);
+  expectAboveTable(best, 0.0);
+  EXPECT_LE(lateralOffset(best, T.translation()), 0.01);
+  // Fingers close across the 5 cm side (box x axis).
+  EXPECT_LE(angleToAxis(best.pose.linear().col(1), T.linear().col(0)), 10 * kDeg);
+  EXPECT_LT(best.width, 0.07);
+  EXPECT_GT(best.width, 0.045);
+  for (std::size_t i = 1; i < r.grasps.size(); ++i)
+    EXPECT_GE(r.grasps[i - 1].score, r.grasps[i].score);
+}
+
+TEST(GraspGenerator, StandingBoxSeenFromOneViewpoint) {
+  const Eigen::Isometry3d T = pose(0.7, -0.1, 0.05, -20 * kDeg);
+  Surface s = boxSurface(Eigen::Vector3d(0.05, 0.12, 0.10), 0.003);
+  s.transform(T);
+  const Surface visible = s.visibleFrom(kView);
+  ASSERT_LT(visible.points.size(), s.points.size());
+  const GraspGenerator gen{GraspGeneratorConfig()};
+  const GraspResult r = gen.generate(visible.noisy(0.0015, 2), kView);
+  ASSERT_FALSE(r.grasps.empty()) << r.reason;
+  const Grasp& best = r.grasps.front();
+  expectAboveTable(best, 0.0);
+  // One view: the centre of gravity the generator sees is the visible cloud's centroid
+  // (biased towards the camera). The grasp is moved onto it along the finger breadth axis
+  // (x) and centred between the object's sides along the closing axis (y).
+  const Eigen::Matrix3d R = best.pose.linear();
+  EXPECT_LE(std::abs(R.col(0).dot(visible.centroid() - best.pose.translation())), 0.01);
+  EXPECT_LE(std::abs(R.col(1).dot(T.translation() - best.pose.translation())), 0.01);
+  EXPECT_LE(lateralOffset(best, T.translation()), 0.03);
+  EXPECT_LE(angleToAxis(R.col(1), T.linear().col(0)), 10 * kDeg);
+  EXPECT_LT(best.width, 0.07);
+  EXPECT_GT(best.width, 0.045);
+}
+
+TEST(GraspGenerator, StandingCylinderWithNoise) {
+  const Eigen::Isometry3d T = pose(0.5, -0.2, 0.0, 0.0);
+  Surface s = cylinderSurface(0.03, 0.0, 0.12, 0.003, false, true);
+  s.transform(T);
+  const GraspGenerator gen{GraspGeneratorConfig()};
+  const GraspResult r = gen.generate(s.noisy(0.0015, 3), kView);
+  ASSERT_FALSE(r.grasps.empty()) << r.reason;
+  const Grasp& best = r.grasps.front();
+  expectValidFrame(best);
+  expectAboveTable(best, 0.0);
+  EXPECT_LE(lateralOffset(best, Eigen::Vector3d(0.5, -0.2, 0.06)), 0.01);
+  // Fingers close across the diameter: perpendicular to the cylinder axis.
+  EXPECT_GE(angleToAxis(best.pose.linear().col(1), Eigen::Vector3d::UnitZ()), 80 * kDeg);
+  EXPECT_LT(best.width, 0.07);
+  EXPECT_GT(best.width, 0.055);
+}
+
+TEST(GraspGenerator, LyingBottleWithNoise) {
+  // Bottle lying on the table, axis horizontal at yaw 20 deg.
+  Surface s = bottleSurface(0.03, 0.14, 0.03, 0.013, 0.05, 0.003);
+  const Eigen::Isometry3d T = pose(0.55, 0.05, 0.03, 20 * kDeg, 90 * kDeg);  // local z -> world
+  s.transform(T);
+  const Eigen::Vector3d axis = T.linear().col(2);
+  ASSERT_NEAR(axis.z(), 0.0, 1e-9);
+  const Eigen::Vector3d centroid = s.centroid();
+  const GraspGenerator gen{GraspGeneratorConfig()};
+  const GraspResult r = gen.generate(s.noisy(0.0015, 4), kView);
+  ASSERT_FALSE(r.grasps.empty()) << r.reason;
+  const Grasp& best = r.grasps.front();
+  expectValidFrame(best);
+  expectAboveTable(best, 0.0);
+  EXPECT_LE(lateralOffset(best, centroid), 0.01)
+      << "grasp at " << best.pose.translation().transpose() << ", centroid "
+      << centroid.transpose();
+  EXPECT_GE(angleToAxis(best.pose.linear().col(1), axis), 80 * kDeg);
+  EXPECT_LT(best.width, 0.07);
+}
+
+TEST(GraspGenerator, TooWideObjectHasNoGraspAndAReason) {
+  Surface s = boxSurface(Eigen::Vector3d(0.20, 0.20, 0.15), 0.004);
+  s.transform(pose(0.6, 0.0, 0.075, 0.0));
+  const GraspGenerator gen{GraspGeneratorConfig()};
+  const GraspResult r = gen.generate(s.noisy(0.001, 5), kView);
+  EXPECT_TRUE(r.grasps.empty());
+  EXPECT_FALSE(r.reason.empty());
+}
+
+TEST(GraspGenerator, BadCloudsGiveNoGraspAndAClearReason) {
+  const GraspGenerator gen{GraspGeneratorConfig()};
+  GraspResult r = gen.generate({}, kView);
+  EXPECT_TRUE(r.grasps.empty());
+  EXPECT_EQ(r.reason, "empty cloud");
+
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  PointList all_nan(500, Eigen::Vector3f(nan, 0.f, 1.f));
+  all_nan.push_back(Eigen::Vector3f(std::numeric_limits<float>::infinity(), 0.f, 0.f));
+  r = gen.generate(all_nan, kView);
+  EXPECT_TRUE(r.grasps.empty());
+  EXPECT_NE(r.reason.find("NaN"), std::string::npos) << r.reason;
+
+  r = gen.generate({Eigen::Vector3f(0.5f, 0.f, 0.05f)}, kView);
+  EXPECT_TRUE(r.grasps.empty());
+  EXPECT_NE(r.reason.find("only 1 points"), std::string::npos) << r.reason;
+
+  Surface s = cylinderSurface(0.03, 0.0, 0.12, 0.003, false, true);
+  r = gen.generate(s.points, Eigen::Vector3d(std::nan(""), 0, 0));
+  EXPECT_TRUE(r.grasps.empty());
+  EXPECT_NE(r.reason.find("viewpoint"), std::string::npos);
+
+  // NaN points mixed into a good cloud are skipped, not fatal.
+  PointList mixed = s.points;
+  mixed.insert(mixed.end(), all_nan.begin(), all_nan.end());
+  r = gen.generate(mixed, kView);
+  EXPECT_FALSE(r.grasps.empty()) << r.reason;
+  EXPECT_EQ(r.finite_points, static_cast<int>(s.points.size()));
+
+  // Scene entry point with the same inputs.
+  EXPECT_FALSE(gen.generateFromScene({}, kView).reason.empty());
+  EXPECT_FALSE(gen.generateFromScene(all_nan, kView).reason.empty());
+}
+
+TEST(GraspGenerator, SceneWithTableIsSegmentedAndGraspsAvoidTheTable) {
+  const double table_z = 0.70;
+  Surface scene = tableSurface(0.7, 0.0, 0.6, 0.8, table_z, 0.005);
+  Surface box = boxSurface(Eigen::Vector3d(0.05, 0.12, 0.10), 0.003);
+  box.transform(pose(0.65, 0.15, table_z + 0.05, 0.4));
+  Surface cyl = cylinderSurface(0.03, 0.0, 0.12, 0.003, false, true);
+  cyl.transform(pose(0.75, -0.15, table_z, 0.0));
+  scene.append(box);
+  scene.append(cyl);
+  const PointList cloud = scene.noisy(0.001, 6);
+  const Eigen::Vector3d view(0.2, 0.0, 1.3);
+  const GraspGenerator gen{GraspGeneratorConfig()};
+
+  const SceneSegmentation seg = gen.segmentScene(cloud);
+  ASSERT_TRUE(seg.plane_found) << seg.reason;
+  EXPECT_NEAR(std::abs(seg.plane[2]), 1.0, 0.01);
+  EXPECT_NEAR(-seg.plane[3] / seg.plane[2], table_z, 0.005);
+  ASSERT_EQ(seg.objects.size(), 2u);
+
+  const Eigen::Vector3d near_cyl(0.75, -0.15, table_z + 0.06);
+  const GraspResult r = gen.generateFromScene(cloud, view, &near_cyl);
+  ASSERT_FALSE(r.grasps.empty()) << r.reason;
+  EXPECT_TRUE(r.support_plane_found);
+  for (const Grasp& g : r.grasps) {
+    EXPECT_LT((g.pose.translation() - near_cyl).head<2>().norm(), 0.05);
+    expectAboveTable(g, table_z);
+  }
+  EXPECT_GE(angleToAxis(r.grasps.front().pose.linear().col(1), Eigen::Vector3d::UnitZ()),
+            80 * kDeg);
+
+  const GraspResult all = gen.generateFromScene(cloud, view);
+  EXPECT_EQ(all.objects, 2);
+  bool has0 = false, has1 = false;
+  for (const Grasp& g : all.grasps) (g.object == 0 ? has0 : has1) = true;
+  EXPECT_TRUE(has0 && has1);
+}
+
+TEST(GraspGenerator, IsDeterministic) {
+  Surface s = cylinderSurface(0.03, 0.0, 0.12, 0.003, false, true);
+  const PointList cloud = s.noisy(0.0015, 7);
+  const GraspGenerator gen{GraspGeneratorConfig()};
+  const GraspResult a = gen.generate(cloud, kView), b = gen.generate(cloud, kView);
+  ASSERT_EQ(a.grasps.size(), b.grasps.size());
+  for (std::size_t i = 0; i < a.grasps.size(); ++i)
+    EXPECT_TRUE(a.grasps[i].pose.isApprox(b.grasps[i].pose));
+}
+
+TEST(GraspGenerator, ConfigLoadsAndBadValuesFailNamingTheField) {
+  const auto ok = ehc_control::ConfigNode::loadString(
+      "grasp_generator: {top_k: 3, voxel_size: 0.005, gripper: {max_width: 0.08}}", "ok.yaml",
+      "GraspGenerator");
+  const GraspGeneratorConfig c = loadGraspGeneratorConfig(ok.child("grasp_generator"));
+  EXPECT_EQ(c.top_k, 3);
+  EXPECT_DOUBLE_EQ(c.gripper.max_width, 0.08);
+
+  auto expectFails = [](const std::string& yaml, const std::string& needle) {
+    const auto n = ehc_control::ConfigNode::loadString(yaml, "bad.yaml", "GraspGenerator");
+    try {
+      loadGraspGeneratorConfig(n.childOrEmpty("grasp_generator"));
+      ADD_FAILURE() << "no error for " << yaml;
+    } catch (const std::invalid_argument& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("[GraspGenerator]"), std::string::npos) << what;
+      EXPECT_NE(what.find(needle), std::string::npos) << what;
+      EXPECT_NE(what.find("bad.yaml"), std::string::npos) << what;
+    }
+  };
+  expectFails("grasp_generator: {voxel_size: -0.01}", "voxel_size");
+  expectFails("grasp_generator: {gripper: {max_width: 0}}", "gripper.max_width");
+  expectFails("grasp_generator: {top_k: many}", "top_k");
+  expectFails("grasp_generator: {up: [0, 0]}", "up");
+  expectFails("grasp_generator: {up: [0, 0, 0]}", "up");
+  expectFails("grasp_generator: {friction_cone_deg: .nan}", "friction_cone_deg");
+}
+
+TEST(PointCloudIO, RoundTripAndBadFiles) {
+  Surface s = cylinderSurface(0.03, 0.0, 0.12, 0.01, false, true);
+  const std::string path = "/tmp/ehc_perception_test_cloud.pcd";
+  savePcd(path, s.points);
+  const PointList back = loadPcd(path);
+  ASSERT_EQ(back.size(), s.points.size());
+  EXPECT_TRUE(back[5].isApprox(s.points[5]));
+  savePcd(path, {});
+  EXPECT_TRUE(loadPcd(path).empty());
+  EXPECT_THROW(loadPcd("/nonexistent/cloud.pcd"), std::invalid_argument);
+  std::ofstream("/tmp/ehc_perception_garbage.pcd") << "this is not a point cloud\n";
+  try {
+    loadPcd("/tmp/ehc_perception_garbage.pcd");
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("[PointCloudIO]"), std::string::npos);
+  }
+}

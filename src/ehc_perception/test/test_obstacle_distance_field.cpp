@@ -1,0 +1,271 @@
+// ObstacleDistanceField (OctoMap + FCL) and RobotCollisionModel (URDF collisions): distances
+// against analytic values, free-space clearing by rays, self filtering, the RealMan robot,
+// bad inputs and configs.
+#include "ehc_control/config_node.h"
+#include "ehc_control/whole_body_model.h"
+#include "ehc_perception/obstacle_distance_field.h"
+#include "perception_test_helpers.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+using namespace ehc_perception;
+using ehc_perception::test::pose;
+
+namespace {
+
+/// Probe "robot": a sphere (r 0.05), a box (0.10 x 0.06 x 0.04) and a cylinder (r 0.03,
+/// length 0.20), each on its own link; the tests pose the links directly.
+const char* kProbeUrdf = R"(<?xml version="1.0"?>
+<robot name="probe">
+  <link name="ball"><collision><geometry><sphere radius="0.05"/></geometry></collision></link>
+  <link name="block"><collision><geometry><box size="0.10 0.06 0.04"/></geometry></collision></link>
+  <link name="rod"><collision><origin xyz="0 0 0.1" rpy="0 0 0"/>
+    <geometry><cylinder radius="0.03" length="0.20"/></geometry></collision></link>
+  <link name="mesh"><collision><geometry><mesh filename="package://x/y.stl"/></geometry></collision></link>
+  <link name="bare"/>
+  <joint name="j1" type="fixed"><parent link="ball"/><child link="block"/></joint>
+  <joint name="j2" type="fixed"><parent link="ball"/><child link="rod"/></joint>
+  <joint name="j3" type="fixed"><parent link="ball"/><child link="mesh"/></joint>
+  <joint name="j4" type="fixed"><parent link="ball"/><child link="bare"/></joint>
+</robot>)";
+
+ObstacleMapConfig probeConfig() {
+  ObstacleMapConfig c;
+  c.resolution = 0.02;
+  c.influence_distance = 0.3;
+  c.min_height = -1.0;
+  c.links = {"ball", "block", "rod"};
+  return c;
+}
+
+struct Probe {
+  RobotCollisionModel robot{kProbeUrdf, {"ball", "block", "rod"}};
+  ObstacleDistanceField field{probeConfig(), robot};
+  Eigen::Isometry3d far = pose(-5, -5, 5, 0);
+  /// Link poses: only `link` is near, the others far away.
+  std::vector<Eigen::Isometry3d> place(const std::string& link, const Eigen::Isometry3d& T) {
+    std::vector<Eigen::Isometry3d> p;
+    for (const auto& l : robot.links()) p.push_back(l == link ? T : far);
+    return p;
+  }
+  const LinkObstacleDistance* find(const std::vector<LinkObstacleDistance>& ds,
+                                   const std::string& link) {
+    for (const auto& d : ds)
+      if (d.link == link) return &d;
+    return nullptr;
+  }
+};
+
+void expectConsistent(const LinkObstacleDistance& d) {
+  EXPECT_NEAR(d.normal.norm(), 1.0, 1e-9);
+  if (d.distance > 1e-6) {
+    EXPECT_NEAR((d.link_point - d.obstacle_point).norm(), d.distance, 1e-6);
+    EXPECT_LT((d.link_point - d.obstacle_point - d.distance * d.normal).norm(), 1e-6);
+  }
+}
+
+}  // namespace
+
+TEST(RobotCollisionModel, ParsesShapesAndRejectsBadLinks) {
+  const RobotCollisionModel m(kProbeUrdf, {"ball", "block", "rod"});
+  ASSERT_EQ(m.shapes().size(), 3u);
+  EXPECT_EQ(m.shapes()[0].type, CollisionShape::Type::Sphere);
+  EXPECT_EQ(m.shapes()[1].type, CollisionShape::Type::Box);
+  EXPECT_TRUE(m.shapes()[1].size.isApprox(Eigen::Vector3d(0.10, 0.06, 0.04)));
+  EXPECT_EQ(m.shapes()[2].type, CollisionShape::Type::Cylinder);
+  EXPECT_NEAR(m.shapes()[2].origin.translation().z(), 0.1, 1e-12);
+  EXPECT_TRUE(m.shapes()[2].contains(Eigen::Vector3d(0.02, 0, 0.19), 0.0));
+  EXPECT_FALSE(m.shapes()[2].contains(Eigen::Vector3d(0.02, 0, 0.21), 0.0));
+  EXPECT_TRUE(m.shapes()[2].contains(Eigen::Vector3d(0.02, 0, 0.21), 0.02));
+
+  auto expectFails = [](const std::vector<std::string>& links, const std::string& needle) {
+    try {
+      RobotCollisionModel(kProbeUrdf, links);
+      ADD_FAILURE() << needle;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    }
+  };
+  expectFails({"nope"}, "[RobotCollisionModel] link 'nope' is not in the URDF");
+  expectFails({"bare"}, "link 'bare' has no collision geometry");
+  expectFails({"mesh"}, "mesh");
+  EXPECT_THROW(RobotCollisionModel("<robot", {}), std::invalid_argument);
+}
+
+TEST(ObstacleDistanceField, DistancesMatchAnalyticValuesWithinHalfAVoxel) {
+  Probe p;
+  const double tol = 0.5 * 0.02 + 1e-4;
+  // Grid-aligned obstacle box [0.40, 0.60] x [-0.20, 0.20] x [0.00, 0.40].
+  p.field.addOccupiedBox(Eigen::Vector3d(0.40, -0.20, 0.0), Eigen::Vector3d(0.60, 0.20, 0.40));
+  EXPECT_EQ(p.field.occupiedLeafCount(), 10u * 20u * 20u);
+  EXPECT_EQ(p.field.cell(Eigen::Vector3d(0.5, 0, 0.2)), ObstacleDistanceField::Cell::Occupied);
+  EXPECT_EQ(p.field.cell(Eigen::Vector3d(0.3, 0, 0.2)), ObstacleDistanceField::Cell::Unknown);
+
+  // Sphere in front of the x = 0.40 face.
+  auto ds = p.field.distances(p.place("ball", pose(0.25, 0.0, 0.2, 0)));
+  const LinkObstacleDistance* d = p.find(ds, "ball");
+  ASSERT_NE(d, nullptr);
+  EXPECT_NEAR(d->distance, 0.10, tol);
+  EXPECT_NEAR(d->link_point.x(), 0.30, tol);
+  EXPECT_NEAR(d->obstacle_point.x(), 0.40, tol);
+  EXPECT_NEAR(d->normal.x(), -1.0, 0.01);
+  expectConsistent(*d);
+  EXPECT_EQ(ds.size(), 1u);  // the far links are beyond the influence distance
+
+  // Sphere off the box edge (x = 0.40, y = 0.20): distance to the edge minus the radius.
+  ds = p.field.distances(p.place("ball", pose(0.30, 0.30, 0.2, 0)));
+  ASSERT_NE(p.find(ds, "ball"), nullptr);
+  EXPECT_NEAR(p.find(ds, "ball")->distance, std::sqrt(0.02) - 0.05, tol);
+  EXPECT_NEAR(p.find(ds, "ball")->normal.x(), -std::sqrt(0.5), 0.02);
+  expectConsistent(*p.find(ds, "ball"));
+
+  // Box above the top face (z = 0.40), turned 90 deg about z: gap 0.50 - 0.02 - 0.40.
+  ds = p.field.distances(p.place("block", pose(0.5, 0.0, 0.50, M_PI / 2)));
+  ASSERT_NE(p.find(ds, "block"), nullptr);
+  EXPECT_NEAR(p.find(ds, "block")->distance, 0.08, tol);
+  EXPECT_NEAR(p.find(ds, "block")->normal.z(), 1.0, 0.01);
+  expectConsistent(*p.find(ds, "block"));
+
+  // Upright cylinder beside the y = -0.20 face: gap 0.30 - 0.20 - 0.03.
+  ds = p.field.distances(p.place("rod", pose(0.5, -0.30, 0.1, 0)));
+  ASSERT_NE(p.find(ds, "rod"), nullptr);
+  EXPECT_NEAR(p.find(ds, "rod")->distance, 0.07, tol);
+  EXPECT_NEAR(p.find(ds, "rod")->normal.y(), -1.0, 0.02);
+  expectConsistent(*p.find(ds, "rod"));
+
+  // Beyond the influence distance: omitted.
+  EXPECT_TRUE(p.field.distances(p.place("ball", pose(0.0, 0.0, 0.2, 0))).empty());
+
+  // Penetration: reported with distance <= 0 and a finite unit normal.
+  ds = p.field.distances(p.place("ball", pose(0.42, 0.0, 0.2, 0)));
+  ASSERT_NE(p.find(ds, "ball"), nullptr);
+  EXPECT_LE(p.find(ds, "ball")->distance, 0.0);
+  EXPECT_TRUE(p.find(ds, "ball")->normal.allFinite());
+  EXPECT_NEAR(p.find(ds, "ball")->normal.norm(), 1.0, 1e-9);
+}
+
+TEST(ObstacleDistanceField, CloudsMarkObstaclesAndRaysClearFreeSpace) {
+  Probe p;
+  // A wall facing the sensor at (0, 0, 0.4), spanning +-0.3 m around it, scaled by `grow`.
+  auto wall = [](double x, double grow) {
+    PointList w;
+    for (double y = -0.3 * grow; y <= 0.3 * grow; y += 0.01)
+      for (double z = 0.4 - 0.3 * grow; z <= 0.4 + 0.3 * grow; z += 0.01)
+        w.push_back(Eigen::Vector3f(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z)));
+    return w;
+  };
+  const Eigen::Vector3d origin(0.0, 0.0, 0.4);
+  const auto st = p.field.insertCloud(wall(1.01, 1.0), origin);
+  EXPECT_EQ(st.inserted, st.input);
+  EXPECT_EQ(p.field.cell(Eigen::Vector3d(1.01, 0.0, 0.4)), ObstacleDistanceField::Cell::Occupied);
+  EXPECT_EQ(p.field.cell(Eigen::Vector3d(0.5, 0.0, 0.4)), ObstacleDistanceField::Cell::Free);
+  EXPECT_EQ(p.field.cell(Eigen::Vector3d(1.5, 0.0, 0.4)), ObstacleDistanceField::Cell::Unknown);
+
+  auto ds = p.field.distances(p.place("ball", pose(0.80, 0.0, 0.4, 0)));
+  ASSERT_NE(p.find(ds, "ball"), nullptr);
+  EXPECT_NEAR(p.find(ds, "ball")->distance, 1.00 - 0.80 - 0.05, 0.01 + 1e-4);
+
+  // The wall moves back to x = 1.51 (and grows so that its rays cover the old one): the
+  // rays through the old wall clear it.
+  for (int k = 0; k < 4; ++k) p.field.insertCloud(wall(1.51, 1.6), origin);
+  EXPECT_EQ(p.field.cell(Eigen::Vector3d(1.01, 0.0, 0.4)), ObstacleDistanceField::Cell::Free);
+  EXPECT_EQ(p.field.cell(Eigen::Vector3d(1.51, 0.0, 0.4)), ObstacleDistanceField::Cell::Occupied);
+  EXPECT_TRUE(p.field.distances(p.place("ball", pose(0.80, 0.0, 0.4, 0))).empty());
+  ds = p.field.distances(p.place("ball", pose(1.30, 0.0, 0.4, 0)));
+  ASSERT_NE(p.find(ds, "ball"), nullptr);
+  EXPECT_NEAR(p.find(ds, "ball")->distance, 1.50 - 1.30 - 0.05, 0.01 + 1e-4);
+
+  p.field.clear();
+  EXPECT_EQ(p.field.occupiedLeafCount(), 0u);
+  EXPECT_TRUE(p.field.distances(p.place("ball", pose(1.30, 0.0, 0.4, 0))).empty());
+}
+
+TEST(ObstacleDistanceField, FiltersBadPointsFloorAndTheRobotItself) {
+  ObstacleMapConfig cfg = probeConfig();
+  cfg.min_height = 0.03;
+  const RobotCollisionModel robot(kProbeUrdf, cfg.links);
+  ObstacleDistanceField field(cfg, robot);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  PointList pts = {Eigen::Vector3f(nan, 0, 0.5), Eigen::Vector3f(1.0f, 0.0f, 0.01f)};
+  // Points on the ball (link at (0.5, 0, 0.5)): the robot's own surface.
+  for (int i = 0; i < 20; ++i) {
+    const double a = 0.3 * i;
+    pts.push_back(Eigen::Vector3f(0.5f + 0.05f * std::cos(a), 0.05f * std::sin(a), 0.5f));
+  }
+  pts.push_back(Eigen::Vector3f(1.0f, 0.3f, 0.5f));  // a real obstacle
+  std::vector<Eigen::Isometry3d> links = {pose(0.5, 0, 0.5, 0), pose(-5, -5, 5, 0), pose(-5, 5, 5, 0)};
+  const auto st = field.insertCloud(pts, Eigen::Vector3d(0, 0, 1.0), &links);
+  EXPECT_EQ(st.input, 23);
+  EXPECT_EQ(st.non_finite, 1);
+  EXPECT_EQ(st.below_min_height, 1);
+  EXPECT_EQ(st.robot, 20);
+  EXPECT_EQ(st.inserted, 1);
+  EXPECT_EQ(field.occupiedLeafCount(), 1u);
+
+  EXPECT_THROW(field.insertCloud(pts, Eigen::Vector3d(0, std::nan(""), 0)), std::invalid_argument);
+  std::vector<Eigen::Isometry3d> two = {pose(0, 0, 0, 0), pose(0, 0, 0, 0)};
+  EXPECT_THROW(field.insertCloud(pts, Eigen::Vector3d::Zero(), &two), std::invalid_argument);
+  EXPECT_THROW(field.distances(two), std::invalid_argument);
+  links[0].translation().x() = std::nan("");
+  EXPECT_THROW(field.distances(links), std::invalid_argument);
+  EXPECT_THROW(field.addOccupiedBox(Eigen::Vector3d(1, 1, 1), Eigen::Vector3d(0, 0, 0)),
+               std::invalid_argument);
+}
+
+TEST(ObstacleDistanceField, RealManRobotNextToATable) {
+  const ehc_control::WholeBodyModel model(
+      ehc_control::loadRobotConfig(ehc_perception::test::robotYaml()));
+  ObstacleMapConfig cfg;
+  const RobotCollisionModel robot(model.urdfXml(), cfg.links);
+  EXPECT_EQ(robot.links().size(), 12u);
+  ObstacleDistanceField field(cfg, robot);
+  // Table top 0.66-0.70 m high, front edge 0.10 m ahead of the base cylinder (r 0.25).
+  field.addOccupiedBox(Eigen::Vector3d(0.36, -0.6, 0.66), Eigen::Vector3d(1.2, 0.6, 0.70));
+  const Eigen::VectorXd q = model.config().arm_ready;
+  const auto poses = field.linkPoses(model, Eigen::Vector3d::Zero(), q);
+  ASSERT_EQ(poses.size(), 12u);
+  const auto ds = field.distances(poses);
+  ASSERT_FALSE(ds.empty());
+  bool base_found = false;
+  for (const auto& d : ds) {
+    expectConsistent(d);
+    EXPECT_LE(d.distance, cfg.influence_distance);
+    if (d.link == "base_link") {
+      base_found = true;
+      // Base cylinder top at 0.60 m, radius 0.25: closest table point is its front-bottom edge
+      // (0.36, 0, 0.66): distance hypot(0.11, 0.06).
+      EXPECT_NEAR(d.distance, std::hypot(0.11, 0.06), 0.011);
+    }
+  }
+  EXPECT_TRUE(base_found);
+  // Moving the base back by 1 m takes everything out of range.
+  EXPECT_TRUE(field.distances(field.linkPoses(model, Eigen::Vector3d(-1.0, 0, 0), q)).empty());
+  EXPECT_THROW(field.linkPoses(model, Eigen::Vector3d::Zero(), Eigen::VectorXd::Zero(3)),
+               std::invalid_argument);
+}
+
+TEST(ObstacleDistanceField, ConfigValidationNamesTheField) {
+  auto expectFails = [](const std::string& yaml, const std::string& needle) {
+    const auto n = ehc_control::ConfigNode::loadString(yaml, "obst.yaml", "ObstacleDistanceField");
+    try {
+      loadObstacleMapConfig(n.childOrEmpty("obstacle_map"));
+      ADD_FAILURE() << yaml;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("obst.yaml"), std::string::npos) << e.what();
+    }
+  };
+  expectFails("obstacle_map: {resolution: 0.5}", "resolution");
+  expectFails("obstacle_map: {prob_hit: 0.3}", "prob_hit");
+  expectFails("obstacle_map: {influence_distance: 0.001}", "influence_distance");
+  expectFails("obstacle_map: {links: []}", "links");
+  expectFails("obstacle_map: {links: base_link}", "links");
+  const auto ok = ehc_control::ConfigNode::loadString(
+      "obstacle_map: {resolution: 0.05, links: [base_link]}", "ok.yaml", "ObstacleDistanceField");
+  const ObstacleMapConfig c = loadObstacleMapConfig(ok.child("obstacle_map"));
+  EXPECT_DOUBLE_EQ(c.resolution, 0.05);
+  EXPECT_EQ(c.links.size(), 1u);
+}

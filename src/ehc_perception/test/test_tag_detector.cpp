@@ -1,0 +1,228 @@
+// TagDetector (ViSP vpDetectorAprilTag) on images rendered with TagImageRenderer
+// (vpImageSimulator + libapriltag 36h11 bitmaps): poses, per-id sizes, bad inputs, configs.
+#include "ehc_control/config_node.h"
+#include "ehc_perception/tag_detector.h"
+#include "ehc_perception/tag_image_renderer.h"
+#include "perception_test_helpers.h"
+
+#include <gtest/gtest.h>
+#include <visp3/io/vpImageIo.h>
+
+#include <cmath>
+
+using namespace ehc_perception;
+using ehc_perception::test::pose;
+
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+CameraIntrinsics d435() { return loadCameraIntrinsics(ehc_perception::test::cameraYaml()); }
+
+Eigen::Isometry3d tagPose(double x, double y, double z, double rx, double ry, double rz) {
+  return ehc_perception::test::facingTag(x, y, z, rx, ry, rz);
+}
+
+double rotationError(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+  return Eigen::AngleAxisd(a.linear().transpose() * b.linear()).angle();
+}
+
+}  // namespace
+
+TEST(TagDetector, PoseOfARenderedTagMatchesTheTruth) {
+  const CameraIntrinsics cam = d435();
+  TagImageRenderer renderer(cam);
+  TagDetectorConfig cfg;
+  cfg.default_tag_size = 0.06;
+  TagDetector detector(cfg, cam);
+  const std::vector<Eigen::Isometry3d> truths = {
+      tagPose(0.0, 0.0, 0.5, 0.0, 0.0, 0.0), tagPose(0.05, -0.03, 0.5, 0.3, -0.2, 0.4),
+      tagPose(-0.12, 0.08, 0.8, -0.4, 0.3, 2.0), tagPose(0.02, 0.02, 0.3, 0.5, 0.0, -1.0)};
+  for (std::size_t k = 0; k < truths.size(); ++k) {
+    const Eigen::Isometry3d& truth = truths[k];
+    // A squarely frontal tag is the ill-conditioned case of planar pose (its tilt is weakly
+    // observable): 5 deg there, 2 deg for the oblique views.
+    const double rot_tol = (k == 0 ? 5.0 : 2.0) * kDeg;
+    const vpImage<unsigned char> img = renderer.render({{3, 0.06, truth}});
+    const std::vector<TagDetection> dets = detector.detect(img);
+    ASSERT_EQ(dets.size(), 1u) << "truth\n" << truth.matrix();
+    const TagDetection& d = dets.front();
+    EXPECT_EQ(d.id, 3);
+    EXPECT_DOUBLE_EQ(d.tag_size, 0.06);
+    const double dist = truth.translation().norm();
+    EXPECT_LT((d.T_cam_tag.translation() - truth.translation()).norm(), 0.01 * dist)
+        << d.T_cam_tag.translation().transpose() << " vs " << truth.translation().transpose();
+    EXPECT_LT(rotationError(d.T_cam_tag, truth), rot_tol) << d.T_cam_tag.linear();
+    EXPECT_LT(d.reprojection_error, 1.0);
+    // Corners lie on the projections of the true tag corners (any order).
+    for (const Eigen::Vector2d& c : d.corners) {
+      double best = 1e9;
+      for (double sx : {-1.0, 1.0})
+        for (double sy : {-1.0, 1.0}) {
+          Eigen::Vector2d uv;
+          cam.project(truth * Eigen::Vector3d(0.03 * sx, 0.03 * sy, 0), &uv);
+          best = std::min(best, (uv - c).norm());
+        }
+      EXPECT_LT(best, 1.5);
+    }
+  }
+}
+
+TEST(TagDetector, PerIdTagSizesAndSeveralTags) {
+  const CameraIntrinsics cam = d435();
+  TagImageRenderer renderer(cam);
+  TagDetectorConfig cfg;
+  cfg.default_tag_size = 0.05;
+  cfg.tag_sizes = {{0, 0.04}, {5, 0.08}};
+  TagDetector detector(cfg, cam);
+  const Eigen::Isometry3d t0 = tagPose(-0.12, 0.0, 0.6, 0.2, 0.1, 0.0);
+  const Eigen::Isometry3d t5 = tagPose(0.10, 0.02, 0.7, -0.2, 0.3, 0.5);
+  const Eigen::Isometry3d t9 = tagPose(0.0, -0.12, 0.6, 0.0, 0.0, 0.0);
+  const auto img = renderer.render({{0, 0.04, t0}, {5, 0.08, t5}, {9, 0.05, t9}});
+  const auto dets = detector.detect(img);
+  ASSERT_EQ(dets.size(), 3u);
+  for (const TagDetection& d : dets) {
+    const Eigen::Isometry3d& truth = d.id == 0 ? t0 : d.id == 5 ? t5 : t9;
+    ASSERT_TRUE(d.id == 0 || d.id == 5 || d.id == 9) << d.id;
+    EXPECT_LT((d.T_cam_tag.translation() - truth.translation()).norm(), 0.006) << "id " << d.id;
+    EXPECT_LT(rotationError(d.T_cam_tag, truth), 2.0 * kDeg) << "id " << d.id;
+  }
+  // A wrong size scales the distance: the per-id size matters.
+  TagDetectorConfig wrong = cfg;
+  wrong.tag_sizes.clear();
+  TagDetector wrong_detector(wrong, cam);
+  for (const TagDetection& d : wrong_detector.detect(img))
+    if (d.id == 5) EXPECT_NEAR(d.T_cam_tag.translation().z(), 0.7 * 0.05 / 0.08, 0.01);
+}
+
+TEST(TagDetector, NoTagAndBadImages) {
+  const CameraIntrinsics cam = d435();
+  TagDetector detector(TagDetectorConfig(), cam);
+  vpImage<unsigned char> blank(480, 640, 128);
+  EXPECT_TRUE(detector.detect(blank).empty());
+  // Tag behind the camera: nothing rendered, nothing detected.
+  TagImageRenderer renderer(cam);
+  EXPECT_TRUE(detector.detect(renderer.render({{1, 0.05, tagPose(0, 0, -0.5, 0, 0, 0)}})).empty());
+
+  vpImage<unsigned char> small(240, 320, 128);
+  try {
+    detector.detect(small);
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("[TagDetector] image is 320x240"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW(detector.detect(vpImage<unsigned char>()), std::invalid_argument);
+  EXPECT_THROW(detector.detect(nullptr, 640, 480, 640), std::invalid_argument);
+  std::vector<unsigned char> buf(640 * 480, 200);
+  EXPECT_THROW(detector.detect(buf.data(), 640, 480, 100), std::invalid_argument);
+  EXPECT_TRUE(detector.detect(buf.data(), 640, 480, 640).empty());
+}
+
+TEST(TagDetector, RawBufferWithStrideGivesTheSameDetection) {
+  const CameraIntrinsics cam = d435();
+  TagDetector detector(TagDetectorConfig(), cam);
+  const auto img = TagImageRenderer(cam).render({{7, 0.05, tagPose(0.02, 0.01, 0.45, 0.1, 0.2, 0.3)}});
+  std::vector<unsigned char> buf(700 * 480, 0);
+  for (unsigned r = 0; r < 480; ++r)
+    for (unsigned c = 0; c < 640; ++c) buf[r * 700 + c] = img[r][c];
+  const auto a = detector.detect(img);
+  const auto b = detector.detect(buf.data(), 640, 480, 700);
+  ASSERT_EQ(a.size(), 1u);
+  ASSERT_EQ(b.size(), 1u);
+  EXPECT_TRUE(a[0].T_cam_tag.isApprox(b[0].T_cam_tag, 1e-9));
+}
+
+TEST(TagDetector, TargetOffsetIsAppliedInTheTagFrame) {
+  TagTargetConfig target;
+  target.tag_id = 4;
+  target.offset_xyz << 0.0, 0.0, 0.03;  // 3 cm behind the tag: object centre
+  target.offset_rpy << M_PI, 0.0, 0.0;
+  TagDetection d;
+  d.id = 4;
+  d.T_cam_tag = pose(0.1, -0.05, 0.6, 0.3, 0.2, 0.1);
+  Eigen::Isometry3d T;
+  ASSERT_TRUE(findTarget({d}, target, &T));
+  EXPECT_TRUE(T.isApprox(d.T_cam_tag * target.offset(), 1e-12));
+  EXPECT_NEAR((T.translation() - d.T_cam_tag * Eigen::Vector3d(0, 0, 0.03)).norm(), 0.0, 1e-12);
+  EXPECT_NEAR(T.linear().col(2).dot(d.T_cam_tag.linear().col(2)), -1.0, 1e-9);
+  d.id = 5;
+  EXPECT_FALSE(findTarget({d}, target, &T));
+  EXPECT_FALSE(findTarget({}, target, &T));
+}
+
+TEST(TagDetector, ConfigsAndCamerasAreValidated) {
+  const CameraIntrinsics cam = d435();
+  auto expectFails = [&](const std::string& yaml, const std::string& needle) {
+    const auto n = ehc_control::ConfigNode::loadString(yaml, "tags.yaml", "TagDetector");
+    try {
+      loadTagDetectorConfig(n.childOrEmpty("tag_detector"));
+      ADD_FAILURE() << "no error for " << yaml;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("[TagDetector]"), std::string::npos) << e.what();
+    }
+  };
+  expectFails("tag_detector: {family: 99x1}", "unknown tag family '99x1'");
+  expectFails("tag_detector: {quad_decimate: 0.5}", "quad_decimate");
+  expectFails("tag_detector: {default_tag_size: -0.05}", "default_tag_size");
+  expectFails("tag_detector: {tag_sizes: {3: 0}}", "tag_sizes[3]");
+  expectFails("tag_detector: {tag_sizes: [0.05]}", "tag_sizes");
+  expectFails("tag_detector: {pose_method: magic}", "pose_method");
+  expectFails("tag_detector: {threads: two}", "threads");
+
+  const auto ok = ehc_control::ConfigNode::loadString(
+      "tag_detector: {family: 36h11, default_tag_size: 0.04, tag_sizes: {2: 0.1}}", "ok.yaml",
+      "TagDetector");
+  const TagDetectorConfig c = loadTagDetectorConfig(ok.child("tag_detector"));
+  EXPECT_DOUBLE_EQ(c.tagSize(2), 0.1);
+  EXPECT_DOUBLE_EQ(c.tagSize(7), 0.04);
+
+  const auto tn = ehc_control::ConfigNode::loadString(
+      "target: {tag_id: 2, grasp_offset: {xyz: [0, 0, 0.03], rpy: [3.14159, 0, 0]}}", "t.yaml",
+      "TagTarget");
+  EXPECT_EQ(loadTagTargetConfig(tn.child("target")).tag_id, 2);
+  const auto bad_target = ehc_control::ConfigNode::loadString(
+      "target: {tag_id: -1}", "t.yaml", "TagTarget");
+  EXPECT_THROW(loadTagTargetConfig(bad_target.child("target")), std::invalid_argument);
+  const auto bad_offset = ehc_control::ConfigNode::loadString(
+      "target: {grasp_offset: {xyz: [0, 0]}}", "t.yaml", "TagTarget");
+  EXPECT_THROW(loadTagTargetConfig(bad_offset.child("target")), std::invalid_argument);
+
+  CameraIntrinsics bad = cam;
+  bad.fx = -1;
+  EXPECT_THROW(TagDetector(TagDetectorConfig(), bad), std::invalid_argument);
+}
+
+TEST(TagImageRenderer, BitmapsAndBadIds) {
+  const CameraIntrinsics cam = d435();
+  TagImageRenderer r(cam, "36h11", 4);
+  EXPECT_EQ(r.totalCells(), 10);
+  EXPECT_EQ(r.borderCells(), 8);
+  const auto bmp = r.bitmap(0);
+  EXPECT_EQ(bmp.getWidth(), 40u);
+  EXPECT_EQ(bmp[0][0], 255);   // white quiet zone
+  EXPECT_EQ(bmp[5][5], 0);     // black border
+  EXPECT_THROW(r.bitmap(-1), std::invalid_argument);
+  EXPECT_THROW(r.bitmap(587), std::invalid_argument);  // 36h11 has ids 0..586
+  EXPECT_THROW(TagImageRenderer(cam, "41h12"), std::invalid_argument);
+}
+
+TEST(TagDetector, ImageFilesAreReadOrRejectedClearly) {
+  const CameraIntrinsics cam = d435();
+  const auto img = TagImageRenderer(cam).render({{1, 0.05, tagPose(0, 0, 0.5, 0, 0, 0)}});
+  const std::string path = "/tmp/ehc_perception_test_tag.png";
+  vpImageIo::write(img, path);
+  const auto back = loadGrayImage(path);
+  EXPECT_EQ(back.getWidth(), 640u);
+  TagDetector detector(TagDetectorConfig(), cam);
+  EXPECT_EQ(detector.detect(back).size(), 1u);
+  try {
+    loadGrayImage("/nonexistent/image.png");
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("cannot read image '/nonexistent/image.png'"),
+              std::string::npos)
+        << e.what();
+  }
+}
