@@ -1,0 +1,202 @@
+#pragma once
+// Message conversions of the simulator node (also used by bench_sim): SimWorld state ->
+// sensor_msgs / nav_msgs / tf / ehc_sim messages. Header-only, no logic beyond copying.
+
+#include "ehc_sim/SimObjectPoses.h"
+#include "ehc_sim/SimStatus.h"
+#include "ehc_sim/command_gate.h"
+#include "ehc_sim/sim_world.h"
+#include "ehc_sim/simulated_camera.h"
+
+#include <geometry_msgs/TransformStamped.h>
+#include <nav_msgs/Odometry.h>
+#include <rosgraph_msgs/Clock.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
+#include <sensor_msgs/JointState.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <sensor_msgs/point_cloud2_iterator.h>
+
+#include <Eigen/Geometry>
+
+#include <cstring>
+#include <string>
+#include <vector>
+
+namespace ehc_sim {
+
+/// ROS time of a sim time: the simulation starts at 1 s because ROS reads time 0 as "unset".
+inline ros::Time rosStamp(std::int64_t sim_ns) {
+  ros::Time t;
+  t.fromNSec(static_cast<uint64_t>(sim_ns + 1000000000LL));
+  return t;
+}
+inline std::int64_t simNs(const ros::Time& t) {
+  return static_cast<std::int64_t>(t.toNSec()) - 1000000000LL;
+}
+
+inline geometry_msgs::Pose toPose(const Eigen::Isometry3d& T) {
+  geometry_msgs::Pose p;
+  p.position.x = T.translation().x();
+  p.position.y = T.translation().y();
+  p.position.z = T.translation().z();
+  const Eigen::Quaterniond q(T.linear());
+  p.orientation.x = q.x();
+  p.orientation.y = q.y();
+  p.orientation.z = q.z();
+  p.orientation.w = q.w();
+  return p;
+}
+
+inline geometry_msgs::Transform toTransform(const Eigen::Isometry3d& T) {
+  const geometry_msgs::Pose p = toPose(T);
+  geometry_msgs::Transform t;
+  t.translation.x = p.position.x;
+  t.translation.y = p.position.y;
+  t.translation.z = p.position.z;
+  t.rotation = p.orientation;
+  return t;
+}
+
+inline void fillJointState(const SimWorld& w, const ros::Time& stamp, sensor_msgs::JointState* m) {
+  const auto& cfg = w.model().config();
+  m->header.stamp = stamp;
+  m->name = cfg.arm_joints;
+  const Eigen::VectorXd& q = w.robot().armPositions();
+  const Eigen::VectorXd v = w.robot().executedVelocity().tail(cfg.nArm());
+  m->position.assign(q.data(), q.data() + q.size());
+  m->velocity.assign(v.data(), v.data() + v.size());
+  m->effort.clear();
+}
+
+inline void fillOdometry(const SimWorld& w, const ros::Time& stamp, nav_msgs::Odometry* m) {
+  const auto& cfg = w.model().config();
+  m->header.stamp = stamp;
+  m->header.frame_id = cfg.world_frame;
+  m->child_frame_id = cfg.base_frame;
+  m->pose.pose = toPose(ehc_control::WholeBodyModel::baseTransform(w.robot().basePose()));
+  const Eigen::VectorXd& v = w.robot().executedVelocity();
+  const bool holo = cfg.base_type == ehc_control::BaseType::Holonomic;
+  m->twist.twist.linear.x = v[0];
+  m->twist.twist.linear.y = holo ? v[1] : 0.0;
+  m->twist.twist.angular.z = v[cfg.nBase() - 1];
+}
+
+/// odom -> base_link, then every URDF link relative to its parent.
+inline void fillTransforms(const SimWorld& w, const ros::Time& stamp,
+                           std::vector<geometry_msgs::TransformStamped>* out) {
+  const auto& cfg = w.model().config();
+  const auto& links = w.collisionModel().allLinks();
+  out->resize(links.size());
+  std::size_t k = 0;
+  for (const std::string& link : links) {
+    geometry_msgs::TransformStamped& t = (*out)[k++];
+    t.header.stamp = stamp;
+    const std::string& parent = w.collisionModel().parentOf(link);
+    if (parent.empty()) {
+      t.header.frame_id = cfg.world_frame;
+      t.child_frame_id = link;
+      t.transform = toTransform(ehc_control::WholeBodyModel::baseTransform(w.robot().basePose()));
+    } else {
+      t.header.frame_id = parent;
+      t.child_frame_id = link;
+      t.transform = toTransform(w.linkPoseInParent(link));
+    }
+  }
+}
+
+inline void fillImage(const vpImage<unsigned char>& I, const std::string& frame, const ros::Time& stamp,
+                      sensor_msgs::Image* m) {
+  m->header.stamp = stamp;
+  m->header.frame_id = frame;
+  m->height = I.getHeight();
+  m->width = I.getWidth();
+  m->encoding = "mono8";
+  m->is_bigendian = 0;
+  m->step = I.getWidth();
+  m->data.resize(I.getSize());
+  std::memcpy(m->data.data(), I.bitmap, I.getSize());
+}
+
+inline void fillCameraInfo(const CameraIntrinsics& k, const std::string& frame, const ros::Time& stamp,
+                           sensor_msgs::CameraInfo* m) {
+  m->header.stamp = stamp;
+  m->header.frame_id = frame;
+  m->width = static_cast<uint32_t>(k.width);
+  m->height = static_cast<uint32_t>(k.height);
+  m->distortion_model = "plumb_bob";
+  m->D.assign(5, 0.0);
+  m->K = {k.fx, 0, k.cx, 0, k.fy, k.cy, 0, 0, 1};
+  m->R = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  m->P = {k.fx, 0, k.cx, 0, 0, k.fy, k.cy, 0, 0, 0, 1, 0};
+}
+
+inline void fillCloud(const std::vector<Eigen::Vector3f>& pts, const std::string& frame,
+                      const ros::Time& stamp, sensor_msgs::PointCloud2* m) {
+  m->header.stamp = stamp;
+  m->header.frame_id = frame;
+  sensor_msgs::PointCloud2Modifier mod(*m);
+  mod.setPointCloud2FieldsByString(1, "xyz");
+  mod.resize(pts.size());
+  m->height = 1;
+  m->width = static_cast<uint32_t>(pts.size());
+  m->is_dense = true;
+  sensor_msgs::PointCloud2Iterator<float> x(*m, "x"), y(*m, "y"), z(*m, "z");
+  for (const auto& p : pts) {
+    *x = p.x();
+    *y = p.y();
+    *z = p.z();
+    ++x;
+    ++y;
+    ++z;
+  }
+}
+
+inline void fillObjectPoses(const SimWorld& w, const ros::Time& stamp, SimObjectPoses* m) {
+  const auto& objects = w.scene().objects;
+  m->header.stamp = stamp;
+  m->header.frame_id = w.model().config().world_frame;
+  m->names.resize(objects.size());
+  m->poses.resize(objects.size());
+  m->tag_ids.resize(objects.size());
+  m->tag_sizes.resize(objects.size());
+  m->tag_poses.resize(objects.size());
+  m->held.resize(objects.size());
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    const int b = w.objectBodyIndex(static_cast<int>(i));
+    m->names[i] = objects[i].name;
+    m->poses[i] = toPose(w.bodyPose(b));
+    m->tag_ids[i] = objects[i].tag.enabled ? objects[i].tag.id : -1;
+    m->tag_sizes[i] = objects[i].tag.enabled ? objects[i].tag.size : 0.0;
+    m->tag_poses[i] = objects[i].tag.enabled ? toPose(w.tagPose(b)) : m->poses[i];
+    m->held[i] = w.gripper().heldObject() == static_cast<int>(i);
+  }
+}
+
+inline void fillStatus(const SimWorld& w, const CommandGate& gate, bool lock_step,
+                       const ros::Time& stamp, SimStatus* m) {
+  m->header.stamp = stamp;
+  m->step = static_cast<uint64_t>(w.stepCount());
+  m->lock_step = lock_step;
+  const StepReport& r = w.lastStep();
+  m->robot_world_collision = r.robot_world_collision;
+  m->self_collision = r.self_collision;
+  m->collision_steps = static_cast<uint64_t>(w.counters().collision_steps);
+  m->self_collision_steps = static_cast<uint64_t>(w.counters().self_collision_steps);
+  m->colliding_pairs.clear();
+  for (const auto& c : r.collisions) m->colliding_pairs.push_back(c.a + "|" + c.b);
+  m->base_commands_rejected = static_cast<uint64_t>(gate.counters().base_rejected);
+  m->arm_commands_rejected = static_cast<uint64_t>(gate.counters().arm_rejected);
+  m->arm_commands_stale = static_cast<uint64_t>(gate.counters().arm_stale);
+  m->commands_saturated = static_cast<uint64_t>(w.robot().saturatedCommands());
+  m->joint_limit_clamps = static_cast<uint64_t>(w.robot().jointLimitClamps());
+  const ParallelGripper& g = w.gripper();
+  m->gripper_state = toString(g.state());
+  m->gripper_opening = g.opening();
+  m->held_object = g.heldObject() >= 0 ? w.scene().objects[static_cast<std::size_t>(g.heldObject())].name : "";
+  m->grasp_succeeded = g.graspSucceeded();
+  m->grasp_successes = static_cast<uint64_t>(g.graspSuccesses());
+  m->grasp_failures = static_cast<uint64_t>(g.graspFailures());
+}
+
+}  // namespace ehc_sim
