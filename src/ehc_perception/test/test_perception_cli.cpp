@@ -120,7 +120,9 @@ TEST(GraspsCli, WritesGraspsSortedByScore) {
                          j[i]["orientation"][1].as<double>(), j[i]["orientation"][2].as<double>());
     EXPECT_NEAR(q.norm(), 1.0, 1e-6);
     EXPECT_LT(j[i]["width"].as<double>(), 0.07);
-    if (i > 0) EXPECT_GE(j[i - 1]["score"].as<double>(), j[i]["score"].as<double>());
+    if (i > 0) {
+      EXPECT_GE(j[i - 1]["score"].as<double>(), j[i]["score"].as<double>());
+    }
   }
   const Eigen::Vector3d p(j[0]["position"][0].as<double>(), j[0]["position"][1].as<double>(),
                           j[0]["position"][2].as<double>());

@@ -1,1 +1,149 @@
-int main() { return 1; }  // placeholder, replaced in the next commit
+// ehc_grasp_node: depth cloud -> grasp candidates on /ehc/grasp_candidates.
+//   rosrun ehc_perception ehc_grasp_node _config:=config/perception/grasp_node.yaml
+// Each processed cloud (at most max_rate_hz) is transformed into the world frame (tf2 at the
+// cloud stamp), the support plane removed and the objects clustered; grasps are generated
+// for the object nearest the latest /ehc/target_pose (or every object without a fresh
+// target) and published best first (ehc_control/GraspCandidates, world frame). A cloud
+// without a usable grasp publishes an empty candidate list (reason in the log).
+#include "ehc_control/GraspCandidates.h"
+#include "ehc_control/config_node.h"
+#include "ehc_perception/grasp_generator.h"
+#include "ros_conversions.h"
+
+#include <geometry_msgs/PoseStamped.h>
+#include <ros/ros.h>
+#include <tf2_ros/transform_listener.h>
+
+namespace {
+
+using namespace ehc_perception;
+
+struct GraspNodeConfig {
+  std::string cloud_topic = "/camera/depth/points";
+  std::string target_topic = "/ehc/target_pose";  ///< "" = no target: every object
+  std::string output_topic = "/ehc/grasp_candidates";
+  std::string world_frame = "odom";
+  double max_rate_hz = 2.0;      ///< clouds processed per second at most
+  double target_timeout = 2.0;   ///< s; an older target is ignored
+  double target_gate = 0.15;     ///< m; no grasps if the nearest object is farther
+  double tf_timeout = 0.1;       ///< s
+  GraspGeneratorConfig generator;
+
+  std::string summary() const {
+    return "ehc_grasp_node: " + cloud_topic + " -> " + output_topic + " in '" + world_frame +
+           "', max " + std::to_string(max_rate_hz) + " Hz, target " +
+           (target_topic.empty() ? std::string("<none>") : target_topic) + " (timeout " +
+           std::to_string(target_timeout) + " s, gate " + std::to_string(target_gate) +
+           " m)\n  " + generator.summary();
+  }
+};
+
+GraspNodeConfig loadGraspNodeConfig(const std::string& path) {
+  const auto root = ehc_control::ConfigNode::loadFile(path, "GraspNode");
+  GraspNodeConfig c;
+  const auto n = root.childOrEmpty("node");
+  c.cloud_topic = n.get("cloud_topic", c.cloud_topic);
+  c.target_topic = n.get("target_topic", c.target_topic);
+  c.output_topic = n.get("output_topic", c.output_topic);
+  c.world_frame = n.get("world_frame", c.world_frame);
+  c.max_rate_hz = n.get("max_rate_hz", c.max_rate_hz);
+  c.target_timeout = n.get("target_timeout", c.target_timeout);
+  c.target_gate = n.get("target_gate", c.target_gate);
+  c.tf_timeout = n.get("tf_timeout", c.tf_timeout);
+  ehc_control::requireRange("GraspNode", "node.max_rate_hz", c.max_rate_hz, 0.01, 100.0);
+  ehc_control::requireRange("GraspNode", "node.target_timeout", c.target_timeout, 0.0, 1e6);
+  ehc_control::requirePositive("GraspNode", "node.target_gate", c.target_gate);
+  ehc_control::requireRange("GraspNode", "node.tf_timeout", c.tf_timeout, 0.0, 5.0);
+  c.generator = loadGraspGeneratorConfig(root.childOrEmpty("grasp_generator"));
+  return c;
+}
+
+class GraspNode {
+ public:
+  GraspNode(ros::NodeHandle& nh, const GraspNodeConfig& cfg)
+      : cfg_(cfg), gen_(cfg.generator), listener_(tf_) {
+    pub_ = nh.advertise<ehc_control::GraspCandidates>(cfg_.output_topic, 2);
+    cloud_sub_ = nh.subscribe(cfg_.cloud_topic, 1, &GraspNode::onCloud, this);
+    if (!cfg_.target_topic.empty())
+      target_sub_ = nh.subscribe(cfg_.target_topic, 5, &GraspNode::onTarget, this);
+  }
+
+ private:
+  void onTarget(const geometry_msgs::PoseStamped& msg) {
+    const Eigen::Vector3d p(msg.pose.position.x, msg.pose.position.y, msg.pose.position.z);
+    if (!p.allFinite() || msg.header.frame_id != cfg_.world_frame) {
+      ROS_ERROR_THROTTLE(5.0, "ehc_grasp_node: target ignored (non-finite or frame '%s' != '%s')",
+                         msg.header.frame_id.c_str(), cfg_.world_frame.c_str());
+      return;
+    }
+    target_ = p;
+    target_stamp_ = ros::Time::now();
+    have_target_ = true;
+  }
+
+  void onCloud(const sensor_msgs::PointCloud2& msg) {
+    const ros::Time now = ros::Time::now();
+    if (!last_.isZero() && now >= last_ && (now - last_).toSec() < 1.0 / cfg_.max_rate_hz) return;
+    last_ = now;
+    try {
+      const geometry_msgs::TransformStamped tf = tf_.lookupTransform(
+          cfg_.world_frame, msg.header.frame_id, msg.header.stamp, ros::Duration(cfg_.tf_timeout));
+      const Eigen::Isometry3d T = tf2::transformToEigen(tf);
+      const PointList pts = ros_conv::transformPoints(ros_conv::cloudToPoints(msg), T);
+      const bool fresh = have_target_ && (now - target_stamp_).toSec() <= cfg_.target_timeout;
+      GraspResult res = gen_.generateFromScene(pts, T.translation(), fresh ? &target_ : nullptr);
+      if (fresh && !res.centroids.empty() && (res.centroids.front() - target_).norm() > cfg_.target_gate) {
+        res.reason = "nearest object is " +
+                     std::to_string((res.centroids.front() - target_).norm()) +
+                     " m from the target (gate " + std::to_string(cfg_.target_gate) + " m)";
+        res.grasps.clear();
+      }
+      ehc_control::GraspCandidates out;
+      out.header.stamp = msg.header.stamp;
+      out.header.frame_id = cfg_.world_frame;
+      for (const Grasp& g : res.grasps) {
+        out.poses.push_back(ros_conv::toPose(g.pose));
+        out.widths.push_back(g.width);
+        out.scores.push_back(g.score);
+      }
+      if (res.grasps.empty())
+        ROS_WARN_STREAM_THROTTLE(2.0, "ehc_grasp_node: no grasp: " << res.reason);
+      pub_.publish(out);
+    } catch (const std::exception& e) {
+      ROS_ERROR_STREAM_THROTTLE(2.0, "ehc_grasp_node: cloud dropped: " << e.what());
+    }
+  }
+
+  GraspNodeConfig cfg_;
+  GraspGenerator gen_;
+  tf2_ros::Buffer tf_;
+  tf2_ros::TransformListener listener_;
+  ros::Publisher pub_;
+  ros::Subscriber cloud_sub_, target_sub_;
+  ros::Time last_;
+  bool have_target_ = false;
+  Eigen::Vector3d target_ = Eigen::Vector3d::Zero();
+  ros::Time target_stamp_;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "ehc_grasp_node");
+  ros::NodeHandle nh, pnh("~");
+  std::string config;
+  if (!pnh.getParam("config", config)) {
+    ROS_FATAL("ehc_grasp_node: missing _config:=<file.yaml> (see config/perception/grasp_node.yaml)");
+    return 2;
+  }
+  try {
+    const GraspNodeConfig cfg = loadGraspNodeConfig(config);
+    ROS_INFO_STREAM(cfg.summary());
+    GraspNode node(nh, cfg);
+    ros::spin();
+  } catch (const std::exception& e) {
+    ROS_FATAL_STREAM("ehc_grasp_node: " << e.what());
+    return 2;
+  }
+  return 0;
+}

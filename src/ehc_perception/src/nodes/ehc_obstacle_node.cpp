@@ -1,1 +1,231 @@
-int main() { return 1; }  // placeholder, replaced in the next commit
+// ehc_obstacle_node: depth clouds -> OctoMap; robot state -> FCL link-obstacle distances on
+// /ehc/obstacles (ehc_control/ObstacleArray) for the controller's velocity dampers.
+//   rosrun ehc_perception ehc_obstacle_node _config:=config/perception/obstacle_node.yaml
+// Clouds (at most max_insert_rate_hz) are transformed into the world frame with tf2 at their
+// stamp and inserted with rays from the sensor origin; the robot's own points are removed
+// using the latest state. A timer publishes the distances of every link closer than the
+// influence distance while the state (/joint_states + /odom) is fresh; with a stale state
+// nothing is published and an error is logged (the controller's watchdog then stops).
+#include "ehc_control/ObstacleArray.h"
+#include "ehc_control/config_node.h"
+#include "ehc_control/whole_body_model.h"
+#include "ehc_perception/obstacle_distance_field.h"
+#include "ros_conversions.h"
+
+#include <nav_msgs/Odometry.h>
+#include <ros/ros.h>
+#include <sensor_msgs/JointState.h>
+#include <tf2_ros/transform_listener.h>
+
+#include <cmath>
+#include <map>
+
+namespace {
+
+using namespace ehc_perception;
+
+struct ObstacleNodeConfig {
+  std::string robot_config;  ///< robot.yaml (relative paths: to this file's folder)
+  std::string cloud_topic = "/camera/depth/points";
+  std::string joint_states_topic = "/joint_states";
+  std::string odom_topic = "/odom";
+  std::string output_topic = "/ehc/obstacles";
+  std::string world_frame = "odom";
+  double publish_rate_hz = 50.0;
+  double max_insert_rate_hz = 5.0;
+  double state_timeout = 0.2;  ///< s
+  double tf_timeout = 0.05;    ///< s
+  ObstacleMapConfig map;
+
+  std::string summary() const {
+    return "ehc_obstacle_node: robot " + robot_config + ", " + cloud_topic + " (<= " +
+           std::to_string(max_insert_rate_hz) + " Hz) + " + joint_states_topic + " + " +
+           odom_topic + " -> " + output_topic + " at " + std::to_string(publish_rate_hz) +
+           " Hz in '" + world_frame + "', state timeout " + std::to_string(state_timeout) +
+           " s\n  " + map.summary();
+  }
+};
+
+ObstacleNodeConfig loadObstacleNodeConfig(const std::string& path) {
+  const auto root = ehc_control::ConfigNode::loadFile(path, "ObstacleNode");
+  ObstacleNodeConfig c;
+  const auto n = root.child("node");
+  c.robot_config = root.resolvePath(n.require<std::string>("robot_config"));
+  c.cloud_topic = n.get("cloud_topic", c.cloud_topic);
+  c.joint_states_topic = n.get("joint_states_topic", c.joint_states_topic);
+  c.odom_topic = n.get("odom_topic", c.odom_topic);
+  c.output_topic = n.get("output_topic", c.output_topic);
+  c.world_frame = n.get("world_frame", c.world_frame);
+  c.publish_rate_hz = n.get("publish_rate_hz", c.publish_rate_hz);
+  c.max_insert_rate_hz = n.get("max_insert_rate_hz", c.max_insert_rate_hz);
+  c.state_timeout = n.get("state_timeout", c.state_timeout);
+  c.tf_timeout = n.get("tf_timeout", c.tf_timeout);
+  ehc_control::requireRange("ObstacleNode", "node.publish_rate_hz", c.publish_rate_hz, 0.1, 1000.0);
+  ehc_control::requireRange("ObstacleNode", "node.max_insert_rate_hz", c.max_insert_rate_hz, 0.01, 100.0);
+  ehc_control::requirePositive("ObstacleNode", "node.state_timeout", c.state_timeout);
+  ehc_control::requireRange("ObstacleNode", "node.tf_timeout", c.tf_timeout, 0.0, 5.0);
+  c.map = loadObstacleMapConfig(root.childOrEmpty("obstacle_map"));
+  return c;
+}
+
+class ObstacleNode {
+ public:
+  ObstacleNode(ros::NodeHandle& nh, const ObstacleNodeConfig& cfg)
+      : cfg_(cfg),
+        model_(ehc_control::loadRobotConfig(cfg.robot_config)),
+        field_(cfg.map, RobotCollisionModel(model_.urdfXml(), cfg.map.links)),
+        q_(Eigen::VectorXd::Constant(model_.nArm(), std::nan(""))),
+        listener_(tf_) {
+    for (const std::string& l : field_.robot().links())
+      if (!model_.hasLink(l)) throw std::invalid_argument("link '" + l + "' is not in the robot model");
+    ROS_INFO_STREAM("  " << field_.robot().summary());
+    pub_ = nh.advertise<ehc_control::ObstacleArray>(cfg_.output_topic, 5);
+    cloud_sub_ = nh.subscribe(cfg_.cloud_topic, 1, &ObstacleNode::onCloud, this);
+    joints_sub_ = nh.subscribe(cfg_.joint_states_topic, 5, &ObstacleNode::onJoints, this);
+    odom_sub_ = nh.subscribe(cfg_.odom_topic, 5, &ObstacleNode::onOdom, this);
+    timer_ = nh.createTimer(ros::Duration(1.0 / cfg_.publish_rate_hz), &ObstacleNode::onTimer, this);
+  }
+
+ private:
+  void onJoints(const sensor_msgs::JointState& msg) {
+    if (msg.name.size() != msg.position.size()) {
+      ROS_ERROR_THROTTLE(2.0, "ehc_obstacle_node: joint_states with %zu names and %zu positions",
+                         msg.name.size(), msg.position.size());
+      return;
+    }
+    Eigen::VectorXd q = q_;
+    int found = 0;
+    for (int j = 0; j < model_.nArm(); ++j)
+      for (std::size_t i = 0; i < msg.name.size(); ++i)
+        if (msg.name[i] == model_.config().arm_joints[static_cast<std::size_t>(j)]) {
+          q[j] = msg.position[i];
+          ++found;
+        }
+    if (found < model_.nArm() && !q.allFinite()) {
+      ROS_ERROR_THROTTLE(2.0, "ehc_obstacle_node: joint_states lacks arm joints (%d of %d)", found,
+                         model_.nArm());
+      return;
+    }
+    if (!q.allFinite()) {
+      ROS_ERROR_THROTTLE(2.0, "ehc_obstacle_node: joint_states with NaN/Inf rejected");
+      return;
+    }
+    q_ = q;
+    joints_stamp_ = msg.header.stamp.isZero() ? ros::Time::now() : msg.header.stamp;
+  }
+
+  void onOdom(const nav_msgs::Odometry& msg) {
+    const auto& p = msg.pose.pose;
+    const Eigen::Quaterniond qn(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z);
+    const double yaw = std::atan2(2.0 * (qn.w() * qn.z() + qn.x() * qn.y()),
+                                  1.0 - 2.0 * (qn.y() * qn.y() + qn.z() * qn.z()));
+    const Eigen::Vector3d b(p.position.x, p.position.y, yaw);
+    if (!b.allFinite() || qn.norm() < 1e-6) {
+      ROS_ERROR_THROTTLE(2.0, "ehc_obstacle_node: odometry with NaN/Inf rejected");
+      return;
+    }
+    base_ = b;
+    odom_stamp_ = msg.header.stamp.isZero() ? ros::Time::now() : msg.header.stamp;
+  }
+
+  bool stateFresh(ros::Time* stamp) const {
+    if (joints_stamp_.isZero() || odom_stamp_.isZero()) return false;
+    const ros::Time now = ros::Time::now();
+    const ros::Time oldest = std::min(joints_stamp_, odom_stamp_);
+    *stamp = std::max(joints_stamp_, odom_stamp_);
+    return (now - oldest).toSec() <= cfg_.state_timeout;
+  }
+
+  void onCloud(const sensor_msgs::PointCloud2& msg) {
+    const ros::Time now = ros::Time::now();
+    if (!last_insert_.isZero() && now >= last_insert_ &&
+        (now - last_insert_).toSec() < 1.0 / cfg_.max_insert_rate_hz)
+      return;
+    last_insert_ = now;
+    try {
+      const geometry_msgs::TransformStamped tf = tf_.lookupTransform(
+          cfg_.world_frame, msg.header.frame_id, msg.header.stamp, ros::Duration(cfg_.tf_timeout));
+      const Eigen::Isometry3d T = tf2::transformToEigen(tf);
+      const PointList pts = ros_conv::transformPoints(ros_conv::cloudToPoints(msg), T);
+      ros::Time stamp;
+      if (stateFresh(&stamp)) {
+        const auto poses = field_.linkPoses(model_, base_, q_);
+        field_.insertCloud(pts, T.translation(), &poses);
+      } else {
+        ROS_WARN_THROTTLE(5.0, "ehc_obstacle_node: no fresh robot state; cloud inserted without "
+                               "removing the robot's own points");
+        field_.insertCloud(pts, T.translation());
+      }
+    } catch (const std::exception& e) {
+      ROS_ERROR_STREAM_THROTTLE(2.0, "ehc_obstacle_node: cloud dropped: " << e.what());
+    }
+  }
+
+  void onTimer(const ros::TimerEvent&) {
+    ros::Time stamp;
+    if (!stateFresh(&stamp)) {
+      ROS_ERROR_THROTTLE(5.0, "ehc_obstacle_node: robot state missing or older than %.2f s; "
+                              "no obstacle distances published", cfg_.state_timeout);
+      return;
+    }
+    try {
+      const auto ds = field_.distances(field_.linkPoses(model_, base_, q_));
+      ehc_control::ObstacleArray out;
+      out.header.stamp = stamp;
+      out.header.frame_id = cfg_.world_frame;
+      out.influence_distance = cfg_.map.influence_distance;
+      for (const LinkObstacleDistance& d : ds) {
+        ehc_control::ObstacleDistance o;
+        o.link = d.link;
+        o.link_point.x = d.link_point.x();
+        o.link_point.y = d.link_point.y();
+        o.link_point.z = d.link_point.z();
+        o.obstacle_point.x = d.obstacle_point.x();
+        o.obstacle_point.y = d.obstacle_point.y();
+        o.obstacle_point.z = d.obstacle_point.z();
+        o.normal.x = d.normal.x();
+        o.normal.y = d.normal.y();
+        o.normal.z = d.normal.z();
+        o.distance = d.distance;
+        out.obstacles.push_back(o);
+      }
+      pub_.publish(out);
+    } catch (const std::exception& e) {
+      ROS_ERROR_STREAM_THROTTLE(2.0, "ehc_obstacle_node: distances failed: " << e.what());
+    }
+  }
+
+  ObstacleNodeConfig cfg_;
+  ehc_control::WholeBodyModel model_;
+  ObstacleDistanceField field_;
+  Eigen::VectorXd q_;
+  Eigen::Vector3d base_ = Eigen::Vector3d::Zero();
+  ros::Time joints_stamp_, odom_stamp_, last_insert_;
+  tf2_ros::Buffer tf_;
+  tf2_ros::TransformListener listener_;
+  ros::Publisher pub_;
+  ros::Subscriber cloud_sub_, joints_sub_, odom_sub_;
+  ros::Timer timer_;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "ehc_obstacle_node");
+  ros::NodeHandle nh, pnh("~");
+  std::string config;
+  if (!pnh.getParam("config", config)) {
+    ROS_FATAL("ehc_obstacle_node: missing _config:=<file.yaml> (see config/perception/obstacle_node.yaml)");
+    return 2;
+  }
+  try {
+    const ObstacleNodeConfig cfg = loadObstacleNodeConfig(config);
+    ROS_INFO_STREAM(cfg.summary());
+    ObstacleNode node(nh, cfg);
+    ros::spin();
+  } catch (const std::exception& e) {
+    ROS_FATAL_STREAM("ehc_obstacle_node: " << e.what());
+    return 2;
+  }
+  return 0;
+}

@@ -1,1 +1,148 @@
-int main() { return 1; }  // placeholder, replaced in the next commit
+// ehc_tag_node: camera image + camera_info -> AprilTag target pose on /ehc/target_pose.
+//   rosrun ehc_perception ehc_tag_node _config:=config/perception/tag_node.yaml
+// The pose of the configured tag, with its grasp offset, is transformed into the world frame
+// (odom) with tf2 at the image time stamp and published as geometry_msgs/PoseStamped. Nothing
+// is published for an image without the target (the controller's watchdog handles that).
+#include "ehc_control/config_node.h"
+#include "ehc_perception/tag_detector.h"
+#include "ros_conversions.h"
+
+#include <geometry_msgs/PoseStamped.h>
+#include <ros/ros.h>
+#include <tf2_ros/transform_listener.h>
+
+#include <memory>
+
+namespace {
+
+using namespace ehc_perception;
+
+struct TagNodeConfig {
+  std::string image_topic = "/camera/color/image_raw";
+  std::string camera_info_topic = "/camera/color/camera_info";
+  std::string target_topic = "/ehc/target_pose";
+  std::string world_frame = "odom";
+  std::string camera_frame;  ///< "" = the image's header.frame_id
+  std::string camera_file;   ///< optional camera_info YAML; "" = use the camera_info topic
+  double tf_timeout = 0.05;  ///< s
+  TagDetectorConfig detector;
+  TagTargetConfig target;
+
+  std::string summary() const {
+    return "ehc_tag_node: image " + image_topic + ", camera_info " +
+           (camera_file.empty() ? camera_info_topic : camera_file) + " -> " + target_topic +
+           " in '" + world_frame + "' (camera frame '" +
+           (camera_frame.empty() ? "<image header>" : camera_frame) + "', tf timeout " +
+           std::to_string(tf_timeout) + " s)\n  " + detector.summary() + "\n  " + target.summary();
+  }
+};
+
+TagNodeConfig loadTagNodeConfig(const std::string& path) {
+  const auto root = ehc_control::ConfigNode::loadFile(path, "TagNode");
+  TagNodeConfig c;
+  const auto n = root.childOrEmpty("node");
+  c.image_topic = n.get("image_topic", c.image_topic);
+  c.camera_info_topic = n.get("camera_info_topic", c.camera_info_topic);
+  c.target_topic = n.get("target_topic", c.target_topic);
+  c.world_frame = n.get("world_frame", c.world_frame);
+  c.camera_frame = n.get("camera_frame", c.camera_frame);
+  c.camera_file = n.get("camera_file", c.camera_file);
+  if (!c.camera_file.empty()) c.camera_file = root.resolvePath(c.camera_file);
+  c.tf_timeout = n.get("tf_timeout", c.tf_timeout);
+  ehc_control::requireRange("TagNode", "node.tf_timeout", c.tf_timeout, 0.0, 5.0);
+  if (c.world_frame.empty()) n.fail("world_frame", "must not be empty");
+  c.detector = loadTagDetectorConfig(root.childOrEmpty("tag_detector"));
+  c.target = loadTagTargetConfig(root.childOrEmpty("target"));
+  return c;
+}
+
+class TagNode {
+ public:
+  TagNode(ros::NodeHandle& nh, const TagNodeConfig& cfg) : cfg_(cfg), listener_(tf_) {
+    if (!cfg_.camera_file.empty()) build(loadCameraIntrinsics(cfg_.camera_file));
+    pub_ = nh.advertise<geometry_msgs::PoseStamped>(cfg_.target_topic, 10);
+    image_sub_ = nh.subscribe(cfg_.image_topic, 2, &TagNode::onImage, this);
+    if (cfg_.camera_file.empty())
+      info_sub_ = nh.subscribe(cfg_.camera_info_topic, 2, &TagNode::onInfo, this);
+  }
+
+ private:
+  void build(const CameraIntrinsics& cam) {
+    detector_ = std::make_unique<TagDetector>(cfg_.detector, cam);
+    ROS_INFO_STREAM("ehc_tag_node: " << cam.summary());
+  }
+
+  void onInfo(const sensor_msgs::CameraInfo& msg) {
+    try {
+      const CameraIntrinsics cam = ros_conv::cameraInfoToIntrinsics(msg);
+      if (detector_) {
+        const CameraIntrinsics& old = detector_->camera();
+        if (old.width == cam.width && old.height == cam.height && old.fx == cam.fx &&
+            old.fy == cam.fy && old.cx == cam.cx && old.cy == cam.cy)
+          return;
+      }
+      build(cam);
+    } catch (const std::exception& e) {
+      ROS_ERROR_STREAM_THROTTLE(5.0, "ehc_tag_node: bad camera_info: " << e.what());
+    }
+  }
+
+  void onImage(const sensor_msgs::Image& msg) {
+    if (!detector_) {
+      ROS_WARN_THROTTLE(5.0, "ehc_tag_node: no camera_info yet, image ignored");
+      return;
+    }
+    try {
+      ros_conv::imageToGray(msg, &gray_);
+      const std::vector<TagDetection> dets = detector_->detect(gray_);
+      Eigen::Isometry3d T_cam_target;
+      if (!findTarget(dets, cfg_.target, &T_cam_target)) {
+        ROS_DEBUG_THROTTLE(2.0, "ehc_tag_node: target tag %d not seen (%zu tags)",
+                           cfg_.target.tag_id, dets.size());
+        return;
+      }
+      const std::string cam_frame = cfg_.camera_frame.empty() ? msg.header.frame_id : cfg_.camera_frame;
+      const geometry_msgs::TransformStamped tf = tf_.lookupTransform(
+          cfg_.world_frame, cam_frame, msg.header.stamp, ros::Duration(cfg_.tf_timeout));
+      const Eigen::Isometry3d T_world = tf2::transformToEigen(tf) * T_cam_target;
+      if (!T_world.matrix().allFinite()) throw std::runtime_error("target pose is not finite");
+      geometry_msgs::PoseStamped out;
+      out.header.stamp = msg.header.stamp;
+      out.header.frame_id = cfg_.world_frame;
+      out.pose = ros_conv::toPose(T_world);
+      pub_.publish(out);
+    } catch (const std::exception& e) {
+      ROS_ERROR_STREAM_THROTTLE(2.0, "ehc_tag_node: image dropped: " << e.what());
+    }
+  }
+
+  TagNodeConfig cfg_;
+  tf2_ros::Buffer tf_;
+  tf2_ros::TransformListener listener_;
+  std::unique_ptr<TagDetector> detector_;
+  vpImage<unsigned char> gray_;
+  ros::Publisher pub_;
+  ros::Subscriber image_sub_, info_sub_;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "ehc_tag_node");
+  ros::NodeHandle nh, pnh("~");
+  std::string config;
+  if (!pnh.getParam("config", config)) {
+    ROS_FATAL("ehc_tag_node: missing _config:=<file.yaml> (see config/perception/tag_node.yaml)");
+    return 2;
+  }
+  try {
+    const TagNodeConfig cfg = loadTagNodeConfig(config);
+    ROS_INFO_STREAM(cfg.summary());
+    TagNode node(nh, cfg);
+    ros::spin();
+  } catch (const std::exception& e) {
+    ROS_FATAL_STREAM("ehc_tag_node: " << e.what());
+    return 2;
+  }
+  return 0;
+}

@@ -1,0 +1,95 @@
+#pragma once
+// Message <-> core conversions shared by the perception nodes (node side only: roscpp types).
+
+#include "ehc_perception/camera_intrinsics.h"
+#include "ehc_perception/grasp_generator.h"
+
+#include <geometry_msgs/Pose.h>
+#include <geometry_msgs/TransformStamped.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <sensor_msgs/image_encodings.h>
+#include <sensor_msgs/point_cloud2_iterator.h>
+#include <tf2_eigen/tf2_eigen.h>
+#include <visp3/core/vpImage.h>
+#include <visp3/core/vpImageConvert.h>
+
+#include <stdexcept>
+#include <string>
+
+namespace ehc_perception::ros_conv {
+
+/// sensor_msgs/Image (mono8, rgb8, bgr8, rgba8, bgra8) to an 8-bit grey ViSP image.
+inline void imageToGray(const sensor_msgs::Image& msg, vpImage<unsigned char>* out) {
+  namespace enc = sensor_msgs::image_encodings;
+  int channels = 0;
+  if (msg.encoding == enc::MONO8) channels = 1;
+  else if (msg.encoding == enc::RGB8 || msg.encoding == enc::BGR8) channels = 3;
+  else if (msg.encoding == enc::RGBA8 || msg.encoding == enc::BGRA8) channels = 4;
+  else throw std::invalid_argument("unsupported image encoding '" + msg.encoding + "'");
+  if (msg.width == 0 || msg.height == 0 || msg.step < msg.width * channels ||
+      msg.data.size() < static_cast<std::size_t>(msg.step) * msg.height)
+    throw std::invalid_argument("image " + std::to_string(msg.width) + "x" +
+                                std::to_string(msg.height) + " step " + std::to_string(msg.step) +
+                                " does not match its " + std::to_string(msg.data.size()) +
+                                " data bytes");
+  out->resize(msg.height, msg.width);
+  for (unsigned r = 0; r < msg.height; ++r) {
+    const unsigned char* row = msg.data.data() + static_cast<std::size_t>(r) * msg.step;
+    unsigned char* dst = (*out)[r];
+    if (channels == 1) {
+      std::copy(row, row + msg.width, dst);
+    } else if (msg.encoding == enc::RGB8) {
+      vpImageConvert::RGBToGrey(const_cast<unsigned char*>(row), dst, msg.width);
+    } else if (msg.encoding == enc::BGR8) {
+      vpImageConvert::BGRToGrey(const_cast<unsigned char*>(row), dst, msg.width, 1, false);
+    } else if (msg.encoding == enc::RGBA8) {
+      vpImageConvert::RGBaToGrey(const_cast<unsigned char*>(row), dst, msg.width);
+    } else {
+      vpImageConvert::BGRaToGrey(const_cast<unsigned char*>(row), dst, msg.width, 1, false);
+    }
+  }
+}
+
+/// sensor_msgs/CameraInfo to validated intrinsics (K; distortion kept for information).
+inline CameraIntrinsics cameraInfoToIntrinsics(const sensor_msgs::CameraInfo& msg) {
+  CameraIntrinsics c;
+  c.name = msg.header.frame_id;
+  c.width = static_cast<int>(msg.width);
+  c.height = static_cast<int>(msg.height);
+  c.fx = msg.K[0];
+  c.fy = msg.K[4];
+  c.cx = msg.K[2];
+  c.cy = msg.K[5];
+  c.distortion_model = msg.distortion_model;
+  c.distortion = Eigen::VectorXd::Zero(static_cast<int>(msg.D.size()));
+  for (std::size_t i = 0; i < msg.D.size(); ++i) c.distortion[static_cast<int>(i)] = msg.D[i];
+  c.validate();
+  return c;
+}
+
+/// x, y, z of a PointCloud2 (float32 fields). Throws if the fields are missing.
+inline PointList cloudToPoints(const sensor_msgs::PointCloud2& msg) {
+  PointList out;
+  const std::size_t n = static_cast<std::size_t>(msg.width) * msg.height;
+  if (n == 0) return out;
+  if (msg.data.size() < n * msg.point_step)
+    throw std::invalid_argument("point cloud data is shorter than width x height x point_step");
+  sensor_msgs::PointCloud2ConstIterator<float> x(msg, "x"), y(msg, "y"), z(msg, "z");
+  out.reserve(n);
+  for (std::size_t i = 0; i < n; ++i, ++x, ++y, ++z) out.push_back(Eigen::Vector3f(*x, *y, *z));
+  return out;
+}
+
+inline PointList transformPoints(const PointList& in, const Eigen::Isometry3d& T) {
+  const Eigen::Isometry3f Tf = T.cast<float>();
+  PointList out;
+  out.reserve(in.size());
+  for (const auto& p : in) out.push_back(Tf * p);  // NaN stays NaN (filtered by the core)
+  return out;
+}
+
+inline geometry_msgs::Pose toPose(const Eigen::Isometry3d& T) { return tf2::toMsg(T); }
+
+}  // namespace ehc_perception::ros_conv

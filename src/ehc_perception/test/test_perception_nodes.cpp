@@ -1,0 +1,231 @@
+// rostest: the three perception nodes with their shipped configs. This test publishes a
+// static camera pose (tf), a rendered AprilTag image (rgb8) + camera_info, a table-scene depth
+// cloud in the camera frame, and the robot state; it checks /ehc/target_pose,
+// /ehc/grasp_candidates and /ehc/obstacles against the known geometry, and that a NaN robot
+// state stops the obstacle output.
+#include "ehc_control/GraspCandidates.h"
+#include "ehc_control/ObstacleArray.h"
+#include "ehc_perception/camera_intrinsics.h"
+#include "ehc_perception/tag_image_renderer.h"
+#include "perception_test_helpers.h"
+
+#include <geometry_msgs/PoseStamped.h>
+#include <gtest/gtest.h>
+#include <nav_msgs/Odometry.h>
+#include <ros/ros.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
+#include <sensor_msgs/JointState.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <sensor_msgs/point_cloud2_iterator.h>
+#include <tf2_eigen/tf2_eigen.h>
+#include <tf2_ros/static_transform_broadcaster.h>
+
+#include <cmath>
+#include <functional>
+
+using namespace ehc_perception;
+using namespace ehc_perception::test;
+
+namespace {
+
+const char* kCamFrame = "camera_color_optical_frame";
+
+/// Camera 1.2 m above the floor at (0.3, 0), looking straight down (image x = world -y).
+Eigen::Isometry3d worldFromCamera() {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.translation() << 0.3, 0.0, 1.2;
+  T.linear().col(0) << 0, -1, 0;
+  T.linear().col(1) << -1, 0, 0;
+  T.linear().col(2) << 0, 0, -1;
+  return T;
+}
+
+const Eigen::Isometry3d kTagInCamera = facingTag(0.0, 0.0, 0.5, 0.2, -0.1, 0.3);
+const double kTableZ = 0.58;
+
+class PerceptionNodes : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    cam_ = loadCameraIntrinsics(cameraYaml());
+    image_pub_ = nh_.advertise<sensor_msgs::Image>("/camera/color/image_raw", 1);
+    info_pub_ = nh_.advertise<sensor_msgs::CameraInfo>("/camera/color/camera_info", 1);
+    cloud_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("/camera/depth/points", 1);
+    joints_pub_ = nh_.advertise<sensor_msgs::JointState>("/joint_states", 5);
+    odom_pub_ = nh_.advertise<nav_msgs::Odometry>("/odom", 5);
+    target_sub_ = nh_.subscribe("/ehc/target_pose", 5, &PerceptionNodes::onTarget, this);
+    grasp_sub_ = nh_.subscribe("/ehc/grasp_candidates", 5, &PerceptionNodes::onGrasps, this);
+    obst_sub_ = nh_.subscribe("/ehc/obstacles", 50, &PerceptionNodes::onObstacles, this);
+
+    geometry_msgs::TransformStamped tf = tf2::eigenToTransform(worldFromCamera());
+    tf.header.frame_id = "odom";
+    tf.child_frame_id = kCamFrame;
+    tf.header.stamp = ros::Time::now();
+    static_tf_.sendTransform(tf);
+
+    // Image (rgb8) with tag 0 of 5 cm.
+    const vpImage<unsigned char> gray = TagImageRenderer(cam_).render({{0, 0.05, kTagInCamera}});
+    image_.header.frame_id = kCamFrame;
+    image_.width = gray.getWidth();
+    image_.height = gray.getHeight();
+    image_.encoding = "rgb8";
+    image_.step = 3 * image_.width;
+    image_.data.resize(image_.step * image_.height);
+    for (unsigned r = 0; r < image_.height; ++r)
+      for (unsigned c = 0; c < image_.width; ++c)
+        for (int k = 0; k < 3; ++k) image_.data[r * image_.step + 3 * c + k] = gray[r][c];
+    info_.header.frame_id = kCamFrame;
+    info_.width = 640;
+    info_.height = 480;
+    info_.distortion_model = "plumb_bob";
+    info_.D.assign(5, 0.0);
+    info_.K = {cam_.fx, 0, cam_.cx, 0, cam_.fy, cam_.cy, 0, 0, 1};
+
+    // Scene: table top (0.6 x 0.6 m at 0.58 m, x from 0.0 to 0.6) and a standing cylinder
+    // (r 3 cm, 12 cm tall) under the camera; expressed in the camera frame.
+    Surface scene = tableSurface(0.3, 0.0, 0.6, 0.6, kTableZ, 0.006);
+    Surface cyl = cylinderSurface(0.03, 0.0, 0.12, 0.003, false, true);
+    cyl.transform(pose(0.3, 0.0, kTableZ, 0.0));
+    scene.append(cyl);
+    const Eigen::Isometry3f camFromWorld = worldFromCamera().inverse().cast<float>();
+    PointList pts = scene.noisy(0.001, 3);
+    for (auto& p : pts) p = camFromWorld * p;
+    cloud_.header.frame_id = kCamFrame;
+    sensor_msgs::PointCloud2Modifier mod(cloud_);
+    mod.setPointCloud2FieldsByString(1, "xyz");
+    mod.resize(pts.size());
+    sensor_msgs::PointCloud2Iterator<float> x(cloud_, "x"), y(cloud_, "y"), z(cloud_, "z");
+    for (const auto& p : pts) {
+      *x = p.x();
+      *y = p.y();
+      *z = p.z();
+      ++x, ++y, ++z;
+    }
+  }
+
+  void publishAll(bool state_valid) {
+    const ros::Time now = ros::Time::now();
+    image_.header.stamp = info_.header.stamp = cloud_.header.stamp = now;
+    info_pub_.publish(info_);
+    image_pub_.publish(image_);
+    cloud_pub_.publish(cloud_);
+    sensor_msgs::JointState js;
+    js.header.stamp = now;
+    js.name = {"joint1", "joint2", "joint3", "joint4", "joint5", "joint6"};
+    js.position = {0.0, 0.5, -1.9, 0.0, -0.5, 0.0};
+    if (!state_valid) js.position[2] = std::nan("");
+    joints_pub_.publish(js);
+    nav_msgs::Odometry od;
+    od.header.stamp = now;
+    od.header.frame_id = "odom";
+    od.pose.pose.position.x = -0.5;
+    od.pose.pose.orientation.w = 1.0;
+    odom_pub_.publish(od);
+  }
+
+  /// Publishes at 20 Hz until `done()` or the deadline (seconds); true if done.
+  bool spinUntil(const std::function<bool()>& done, double seconds, bool state_valid = true) {
+    const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(seconds);
+    ros::WallRate rate(20.0);
+    while (ros::ok() && ros::WallTime::now() < end) {
+      publishAll(state_valid);
+      ros::spinOnce();
+      if (done()) return true;
+      rate.sleep();
+    }
+    return done();
+  }
+
+  void onTarget(const geometry_msgs::PoseStamped& m) { targets_.push_back(m); }
+  void onGrasps(const ehc_control::GraspCandidates& m) { grasps_.push_back(m); }
+  void onObstacles(const ehc_control::ObstacleArray& m) { obstacles_.push_back(m); }
+
+  ros::NodeHandle nh_;
+  CameraIntrinsics cam_;
+  tf2_ros::StaticTransformBroadcaster static_tf_;
+  ros::Publisher image_pub_, info_pub_, cloud_pub_, joints_pub_, odom_pub_;
+  ros::Subscriber target_sub_, grasp_sub_, obst_sub_;
+  sensor_msgs::Image image_;
+  sensor_msgs::CameraInfo info_;
+  sensor_msgs::PointCloud2 cloud_;
+  std::vector<geometry_msgs::PoseStamped> targets_;
+  std::vector<ehc_control::GraspCandidates> grasps_;
+  std::vector<ehc_control::ObstacleArray> obstacles_;
+};
+
+}  // namespace
+
+TEST_F(PerceptionNodes, TagNodePublishesTheTargetInOdom) {
+  ASSERT_TRUE(spinUntil([&] { return !targets_.empty(); }, 30.0)) << "no /ehc/target_pose";
+  const auto& m = targets_.back();
+  EXPECT_EQ(m.header.frame_id, "odom");
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  tf2::fromMsg(m.pose, T);
+  const Eigen::Isometry3d truth = worldFromCamera() * kTagInCamera;
+  EXPECT_LT((T.translation() - truth.translation()).norm(), 0.005)
+      << T.translation().transpose() << " vs " << truth.translation().transpose();
+  EXPECT_LT(Eigen::AngleAxisd(T.linear().transpose() * truth.linear()).angle(), 2.0 * M_PI / 180);
+}
+
+TEST_F(PerceptionNodes, GraspNodePublishesGraspsOnTheObjectNearTheTarget) {
+  auto nonEmpty = [&] {
+    for (const auto& g : grasps_)
+      if (!g.poses.empty()) return true;
+    return false;
+  };
+  ASSERT_TRUE(spinUntil(nonEmpty, 40.0)) << "no non-empty /ehc/grasp_candidates";
+  const ehc_control::GraspCandidates* g = nullptr;
+  for (const auto& c : grasps_)
+    if (!c.poses.empty()) g = &c;
+  EXPECT_EQ(g->header.frame_id, "odom");
+  ASSERT_EQ(g->poses.size(), g->widths.size());
+  ASSERT_EQ(g->poses.size(), g->scores.size());
+  for (std::size_t i = 0; i < g->poses.size(); ++i) {
+    const auto& p = g->poses[i].position;
+    EXPECT_LT(std::hypot(p.x - 0.3, p.y - 0.0), 0.05);
+    EXPECT_GT(p.z, kTableZ);
+    EXPECT_LT(g->widths[i], 0.07);
+    if (i > 0) {
+      EXPECT_GE(g->scores[i - 1], g->scores[i]);
+    }
+  }
+}
+
+TEST_F(PerceptionNodes, ObstacleNodePublishesDistancesAndStopsOnABadState) {
+  auto baseSeen = [&] {
+    for (const auto& a : obstacles_)
+      for (const auto& o : a.obstacles)
+        if (o.link == "base_link") return true;
+    return false;
+  };
+  ASSERT_TRUE(spinUntil(baseSeen, 40.0)) << "no base_link distance on /ehc/obstacles";
+  const ehc_control::ObstacleArray* a = nullptr;
+  for (const auto& m : obstacles_)
+    for (const auto& o : m.obstacles)
+      if (o.link == "base_link") a = &m;
+  EXPECT_EQ(a->header.frame_id, "odom");
+  EXPECT_DOUBLE_EQ(a->influence_distance, 0.30);
+  for (const auto& o : a->obstacles) {
+    const Eigen::Vector3d n(o.normal.x, o.normal.y, o.normal.z);
+    EXPECT_NEAR(n.norm(), 1.0, 1e-6);
+    EXPECT_LE(o.distance, 0.30);
+    if (o.link == "base_link") {
+      // Base cylinder (r 0.25, top 0.60) at x = -0.5; table front edge at x = 0.0, top 0.58.
+      EXPECT_NEAR(o.distance, 0.25, 0.021);
+      EXPECT_NEAR(o.normal.x, -1.0, 0.1);
+    }
+  }
+  // A NaN joint state is rejected: once the last good state is older than the timeout,
+  // nothing more is published.
+  spinUntil([] { return false; }, 1.0, /*state_valid=*/false);
+  obstacles_.clear();
+  spinUntil([] { return false; }, 1.0, /*state_valid=*/false);
+  EXPECT_TRUE(obstacles_.empty()) << obstacles_.size() << " messages with a NaN state";
+}
+
+int main(int argc, char** argv) {
+  ::testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "test_perception_nodes");
+  ros::NodeHandle nh;
+  return RUN_ALL_TESTS();
+}
