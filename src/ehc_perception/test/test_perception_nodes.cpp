@@ -5,7 +5,9 @@
 // state stops the obstacle output.
 #include "ehc_control/GraspCandidates.h"
 #include "ehc_control/ObstacleArray.h"
+#include "ehc_control/config_node.h"
 #include "ehc_perception/camera_intrinsics.h"
+#include "ehc_perception/tag_detector.h"
 #include "ehc_perception/tag_image_renderer.h"
 #include "perception_test_helpers.h"
 
@@ -63,8 +65,8 @@ class PerceptionNodes : public ::testing::Test {
     tf.header.stamp = ros::Time::now();
     static_tf_.sendTransform(tf);
 
-    // Image (rgb8) with tag 0 of 5 cm.
-    const vpImage<unsigned char> gray = TagImageRenderer(cam_).render({{0, 0.05, kTagInCamera}});
+    // Image (rgb8) with tag 0 of 4 cm (its size in config/perception/tag_node.yaml).
+    const vpImage<unsigned char> gray = TagImageRenderer(cam_).render({{0, 0.04, kTagInCamera}});
     image_.header.frame_id = kCamFrame;
     image_.width = gray.getWidth();
     image_.height = gray.getHeight();
@@ -161,7 +163,12 @@ TEST_F(PerceptionNodes, TagNodePublishesTheTargetInOdom) {
   EXPECT_EQ(m.header.frame_id, "odom");
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   tf2::fromMsg(m.pose, T);
-  const Eigen::Isometry3d truth = worldFromCamera() * kTagInCamera;
+  // Expected: the tag pose composed with the grasp offset of the shipped config.
+  const auto root = ehc_control::ConfigNode::loadFile(
+      configDir() + "/perception/tag_node.yaml", "TagNode");
+  const TagTargetConfig target = loadTagTargetConfig(root.child("target"));
+  EXPECT_EQ(target.tag_id, 0);
+  const Eigen::Isometry3d truth = worldFromCamera() * kTagInCamera * target.offset();
   EXPECT_LT((T.translation() - truth.translation()).norm(), 0.005)
       << T.translation().transpose() << " vs " << truth.translation().transpose();
   EXPECT_LT(Eigen::AngleAxisd(T.linear().transpose() * truth.linear()).angle(), 2.0 * M_PI / 180);

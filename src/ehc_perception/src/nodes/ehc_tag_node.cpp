@@ -70,6 +70,9 @@ class TagNode {
   void build(const CameraIntrinsics& cam) {
     detector_ = std::make_unique<TagDetector>(cfg_.detector, cam);
     ROS_INFO_STREAM("ehc_tag_node: " << cam.summary());
+    if (cam.distortion.size() > 0 && cam.distortion.cwiseAbs().maxCoeff() > 0.0)
+      ROS_WARN("ehc_tag_node: the camera has non-zero distortion coefficients; they are ignored "
+               "(publish rectified images for accurate tag poses)");
   }
 
   void onInfo(const sensor_msgs::CameraInfo& msg) {
