@@ -58,3 +58,16 @@ TEST(ReachTargets, MalformedCsvNamesTheLine) {
   EXPECT_THROW(readReachTargetsCsv("/tmp/ehc_bad_targets.csv"), std::invalid_argument);
   EXPECT_THROW(readReachTargetsCsv("/nonexistent.csv"), std::invalid_argument);
 }
+
+TEST(ReachTargets, ReachabilityFilterRedrawsRejectedTargets) {
+  const ReachTargetGenerator g;
+  int rejected = 0;
+  // Accept only targets above 0.6 m: every accepted one satisfies it, some were redrawn.
+  const auto t = g.generate(100, 9, Eigen::Vector2d::Zero(),
+                            [](const Eigen::Isometry3d& T) { return T.translation().z() > 0.6; }, &rejected);
+  ASSERT_EQ(t.size(), 100u);
+  for (const auto& T : t) EXPECT_GT(T.translation().z(), 0.6);
+  EXPECT_GT(rejected, 20);
+  EXPECT_THROW(g.generate(1, 9, Eigen::Vector2d::Zero(), [](const Eigen::Isometry3d&) { return false; }),
+               std::invalid_argument);
+}

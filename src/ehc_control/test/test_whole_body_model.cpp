@@ -285,3 +285,29 @@ TEST(WholeBodyModelErrors, ConfigThatDoesNotMatchTheUrdf) {
     EXPECT_THROW(WholeBodyModel(c, xml), std::invalid_argument);
   }
 }
+
+TEST(WholeBodyModel, InverseKinematicsFindsReachablePosesAndRejectsUnreachableOnes) {
+  const WholeBodyModel model(realmanConfig());
+  std::mt19937 rng(11);
+  int found = 0;
+  for (int k = 0; k < 20; ++k) {
+    // A pose produced by FK is reachable by construction.
+    const Eigen::VectorXd q = randomArm(model.config(), rng, 0.2);
+    const Eigen::Vector3d base = randomBase(rng);
+    const Eigen::Isometry3d T = model.fk(base, q, "ee_link");
+    Eigen::Vector3d b;
+    Eigen::VectorXd qs;
+    if (model.inverseKinematics(T, 1, 20, &b, &qs)) {
+      ++found;
+      const Eigen::Isometry3d S = model.fk(b, qs, "ee_link");
+      EXPECT_LT((S.translation() - T.translation()).norm(), 1e-3);
+      EXPECT_TRUE(((qs - model.config().arm_lower).array() >= -1e-9).all());
+      EXPECT_TRUE(((model.config().arm_upper - qs).array() >= -1e-9).all());
+    }
+  }
+  EXPECT_GE(found, 18);
+  // A TCP 3 m above the floor is out of reach for any base pose.
+  Eigen::Isometry3d high = Eigen::Isometry3d::Identity();
+  high.translation() << 1.0, 0.0, 3.0;
+  EXPECT_FALSE(model.inverseKinematics(high, 1, 20));
+}

@@ -4,6 +4,7 @@
 
 #include <Eigen/Geometry>
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -22,8 +23,12 @@ struct ReachTargetGenerator {
 
   /// `count` targets; each is U[min, max] m horizontally from the previous one (the first
   /// from `start_xy`) at a uniform bearing, so the sequence does not depend on the controller.
+  /// With `reachable` set, a drawn target that fails it is drawn again (at most 1000 times;
+  /// then "[ReachTargetGenerator] ..." is thrown); `rejected` counts the redrawn targets.
   std::vector<Eigen::Isometry3d> generate(int count, unsigned seed,
-                                          const Eigen::Vector2d& start_xy = Eigen::Vector2d::Zero()) const;
+                                          const Eigen::Vector2d& start_xy = Eigen::Vector2d::Zero(),
+                                          const std::function<bool(const Eigen::Isometry3d&)>& reachable = nullptr,
+                                          int* rejected = nullptr) const;
 };
 
 /// Reads rows `x y z qx qy qz qw` (space or comma separated; '#' starts a comment).

@@ -18,8 +18,9 @@ void ReachTargetGenerator::validate() const {
     bad("tilt_azimuth_spread_deg must be in [0, 180]");
 }
 
-std::vector<Eigen::Isometry3d> ReachTargetGenerator::generate(int count, unsigned seed,
-                                                              const Eigen::Vector2d& start_xy) const {
+std::vector<Eigen::Isometry3d> ReachTargetGenerator::generate(
+    int count, unsigned seed, const Eigen::Vector2d& start_xy,
+    const std::function<bool(const Eigen::Isometry3d&)>& reachable, int* rejected) const {
   validate();
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> dist(min_distance, max_distance);
@@ -30,6 +31,8 @@ std::vector<Eigen::Isometry3d> ReachTargetGenerator::generate(int count, unsigne
   std::uniform_real_distribution<double> azimuth_offset(-spread, spread);
   std::vector<Eigen::Isometry3d> out;
   Eigen::Vector2d prev = start_xy;
+  if (rejected) *rejected = 0;
+  int redraws = 0;
   for (int i = 0; i < count; ++i) {
     const double d = dist(rng), bearing = angle(rng), z = height(rng);
     const double t = tilt(rng), azimuth = bearing + azimuth_offset(rng), roll = angle(rng);
@@ -45,6 +48,14 @@ std::vector<Eigen::Isometry3d> ReachTargetGenerator::generate(int count, unsigne
     Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
     T.linear() = R;
     T.translation() << xy.x(), xy.y(), z;
+    if (reachable && !reachable(T)) {
+      if (rejected) ++*rejected;
+      if (++redraws > 1000)
+        throw std::invalid_argument("[ReachTargetGenerator] no reachable target in 1000 draws");
+      --i;
+      continue;
+    }
+    redraws = 0;
     out.push_back(T);
     prev = xy;
   }

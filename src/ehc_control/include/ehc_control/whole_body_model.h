@@ -63,6 +63,13 @@ class WholeBodyModel {
   /// Hessian). Zero at an exact singularity (m == 0).
   Eigen::VectorXd manipulabilityGradient(const Eigen::VectorXd& q, double* m = nullptr) const;
 
+  /// Whole-body inverse kinematics of the TCP (KDL ChainIkSolverPos_NR_JL over a virtual
+  /// planar base x, y, yaw + the arm within its joint limits), from `attempts` random seeds.
+  /// Used to tell kinematically unreachable targets from controller failures. Returns true and
+  /// the solution when the TCP reaches `target` within 1 mm / 0.5 deg.
+  bool inverseKinematics(const Eigen::Isometry3d& target, unsigned seed, int attempts,
+                         Eigen::Vector3d* base_pose = nullptr, Eigen::VectorXd* q = nullptr) const;
+
   /// Throws unless q has nArm finite entries / base pose is finite.
   void checkArm(const Eigen::VectorXd& q) const;
   static void checkBase(const Eigen::Vector3d& base_pose);

@@ -2,6 +2,8 @@
 
 #include <kdl/chain.hpp>
 #include <kdl/chainfksolverpos_recursive.hpp>
+#include <kdl/chainiksolverpos_nr_jl.hpp>
+#include <kdl/chainiksolvervel_pinv.hpp>
 #include <kdl/chainjnttojacsolver.hpp>
 #include <kdl/tree.hpp>
 #include <kdl_parser/kdl_parser.hpp>
@@ -13,6 +15,7 @@
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <random>
 #include <sstream>
 #include <stdexcept>
 
@@ -288,6 +291,66 @@ Eigen::VectorXd WholeBodyModel::manipulabilityGradient(const Eigen::VectorXd& q,
     g[b] = m * Ainv.solve(P).trace();
   }
   return g;
+}
+
+bool WholeBodyModel::inverseKinematics(const Eigen::Isometry3d& target, unsigned seed, int attempts,
+                                       Eigen::Vector3d* base_out, Eigen::VectorXd* q_out) const {
+  if (!target.matrix().allFinite()) fail("inverseKinematics: target is not finite");
+  // Virtual planar base (prismatic x, prismatic y, revolute yaw) followed by the TCP chain.
+  KDL::Chain chain;
+  chain.addSegment(KDL::Segment(KDL::Joint("virtual_x", KDL::Joint::TransX)));
+  chain.addSegment(KDL::Segment(KDL::Joint("virtual_y", KDL::Joint::TransY)));
+  chain.addSegment(KDL::Segment(KDL::Joint("virtual_yaw", KDL::Joint::RotZ)));
+  chain.addChain(impl_->tcp->chain);
+  const unsigned n = chain.getNrOfJoints();
+  KDL::JntArray lo(n), hi(n), q0(n), qs(n);
+  const Eigen::Vector3d t = target.translation();
+  for (unsigned i = 0; i < 2; ++i) {
+    lo(i) = t[static_cast<int>(i)] - 3.0;
+    hi(i) = t[static_cast<int>(i)] + 3.0;
+  }
+  lo(2) = -4.0 * M_PI;
+  hi(2) = 4.0 * M_PI;
+  for (int i = 0; i < nArm(); ++i) {
+    lo(3 + static_cast<unsigned>(i)) = cfg_.arm_lower[i];
+    hi(3 + static_cast<unsigned>(i)) = cfg_.arm_upper[i];
+  }
+  KDL::ChainFkSolverPos_recursive fk(chain);
+  KDL::ChainIkSolverVel_pinv ikv(chain);
+  KDL::ChainIkSolverPos_NR_JL ik(chain, lo, hi, fk, ikv, 500, 1e-6);
+  KDL::Frame goal;
+  for (int r = 0; r < 3; ++r) {
+    goal.p[r] = t[r];
+    for (int c = 0; c < 3; ++c) goal.M(r, c) = target.linear()(r, c);
+  }
+  std::mt19937_64 rng(seed);
+  for (int a = 0; a < attempts; ++a) {
+    for (unsigned i = 0; i < n; ++i) {
+      std::uniform_real_distribution<double> u(lo(i), hi(i));
+      q0(i) = u(rng);
+    }
+    // Start the base within arm's reach of the target, facing it.
+    const double yaw = std::uniform_real_distribution<double>(-M_PI, M_PI)(rng);
+    q0(0) = t.x() - 0.4 * std::cos(yaw);
+    q0(1) = t.y() - 0.4 * std::sin(yaw);
+    q0(2) = yaw;
+    if (ik.CartToJnt(q0, goal, qs) < 0) continue;
+    KDL::Frame f;
+    fk.JntToCart(qs, f);
+    const Eigen::Isometry3d T = toEigen(f);
+    const Eigen::AngleAxisd d(Eigen::Matrix3d(T.linear().transpose() * target.linear()));
+    if ((T.translation() - t).norm() > 1e-3 || std::abs(d.angle()) > 0.5 * M_PI / 180.0) continue;
+    bool inside = true;
+    for (unsigned i = 3; i < n; ++i) inside &= qs(i) >= lo(i) - 1e-9 && qs(i) <= hi(i) + 1e-9;
+    if (!inside) continue;
+    if (base_out) *base_out = Eigen::Vector3d(qs(0), qs(1), std::remainder(qs(2), 2.0 * M_PI));
+    if (q_out) {
+      q_out->resize(nArm());
+      for (int i = 0; i < nArm(); ++i) (*q_out)[i] = qs(3 + static_cast<unsigned>(i));
+    }
+    return true;
+  }
+  return false;
 }
 
 }  // namespace ehc_control
