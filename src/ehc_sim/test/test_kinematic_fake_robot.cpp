@@ -96,6 +96,21 @@ TEST(KinematicFakeRobot, ZeroCommandHoldsStill) {
   EXPECT_EQ(r.armPositions(), q0);
 }
 
+TEST(KinematicFakeRobot, BaseDeadbandStandsStillWhileTheArmMoves) {
+  KinematicFakeRobot r(robot(), ActuationNoise{}, 5);
+  Eigen::VectorXd cmd = Eigen::VectorXd::Zero(8);
+  cmd[0] = 0.004;   // below the 5 mm/s deadband
+  cmd[1] = 0.009;   // below the 0.01 rad/s deadband
+  cmd[3] = 0.05;    // the arm moves
+  const Eigen::VectorXd q0 = r.armPositions();
+  for (int i = 0; i < 200; ++i) r.step(cmd, 0.01);
+  EXPECT_EQ(r.basePose(), Eigen::Vector3d::Zero());   // no creep, no noise
+  EXPECT_NEAR(r.armPositions()[1] - q0[1], 0.1, 0.01);  // arm moved (with its small noise)
+  cmd[0] = 0.006;  // above the deadband: the base moves, with noise
+  for (int i = 0; i < 200; ++i) r.step(cmd, 0.01);
+  EXPECT_GT(r.basePose().head<2>().norm(), 0.0);
+}
+
 TEST(KinematicFakeRobot, RejectsBadCommands) {
   KinematicFakeRobot r(robot(), off(), 1);
   EXPECT_THROW(r.step(Eigen::VectorXd::Zero(7), 0.01), std::invalid_argument);

@@ -85,6 +85,7 @@ class ReachExperiment {
   std::shared_ptr<const ehc_control::EhcWeighting> weighting_;
   ReachExperimentParams params_;
   std::ostream* trace_ = nullptr;
+  int roll_joint_ = -1;
   int trace_set_ = 0, trace_index_ = 0;
 };
 

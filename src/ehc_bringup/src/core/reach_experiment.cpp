@@ -33,6 +33,7 @@ ReachExperiment::ReachExperiment(std::shared_ptr<const ehc_control::WholeBodyMod
       params_(params) {
   params_.validate();
   controller_.validate();
+  roll_joint_ = ehc_control::findRollJoint(*model_);
 }
 
 namespace {
@@ -78,7 +79,13 @@ ReachTrial ReachExperiment::reach(ehc_sim::KinematicFakeRobot& robot, EhcQpContr
     }
     if (k == max_steps) break;
     const auto t0 = std::chrono::steady_clock::now();
-    const Vector6d nu = ehc_control::proportionalPoseServo(tcp, target, params_.servo);
+    ehc_control::RollJoint roll;
+    if (roll_joint_ >= 0) {
+      roll.q = robot.armPositions()[roll_joint_];
+      roll.lower = rc.arm_lower[roll_joint_];
+      roll.upper = rc.arm_upper[roll_joint_];
+    }
+    const Vector6d nu = ehc_control::proportionalPoseServo(tcp, target, params_.servo, roll_joint_ >= 0 ? &roll : nullptr);
     const ehc_control::ControllerCommand cmd = ctrl.step(robot.basePose(), robot.armPositions(), target, nu);
     step_us.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
     if (!cmd.ok) ++t.qp_failures;

@@ -1,8 +1,8 @@
 #pragma once
 // EhcWeighting: the EHC function of the paper (eq. 10-13). omega = |e*| / |e| where e is the
-// TCP-to-target position error and e* the largest displacement from the TCP along e that ends
-// inside the arm's high-reachability set r_td = {R > threshold} (ray march in the
-// ReachabilityMap, arm base frame). sig(omega) = 1 / (1 + exp(-k (omega - 1))):
+// TCP-to-target position error and e* the farthest point of the arm's high-reachability set
+// r_td = {R > threshold} along the direction of e (ray march in the ReachabilityMap, arm base
+// frame, from the arm base origin or from the TCP, see ray_origin). sig(omega) = 1 / (1 + exp(-k (omega - 1))):
 //   far  (omega << 1): sig -> 0, the base is cheap and leads;
 //   close (omega > 1): sig -> 1, the base is expensive and the arm works.
 
@@ -21,6 +21,10 @@ struct EhcWeightingParams {
   double max_ray_length = 1.6;    ///< m, ray-march range (>= the arm's reach)
   double ray_step = 0.0;          ///< m, 0 = half a voxel
   double omega_max = 10.0;        ///< cap of omega when |e| -> 0
+  /// Where the ray along e starts: "arm_base" (paper: e* = element of r_td, a set of arm-frame
+  /// poses, best aligned with e, i.e. the reach of r_td in the direction of the error) or
+  /// "tcp" (the largest step from the current TCP that stays in r_td).
+  std::string ray_origin = "arm_base";
   void validate() const;          ///< throws "[EhcWeighting] ..."
 };
 EhcWeightingParams loadEhcWeightingParams(const ConfigNode& node);

@@ -5,11 +5,15 @@
 
 #include <Eigen/Geometry>
 
+#include <cmath>
+
 namespace ehc_control {
 
 class ConfigNode;
+class WholeBodyModel;
 
 struct PoseServoParams {
+  bool unwind_roll = true;          ///< choose the roll direction that keeps the roll joint in range
   double gain = 1.5;                ///< 1/s, translation gain
   double rotation_gain_ratio = 1.3; ///< rotation gain = gain * ratio (NEO: 1.3)
   double max_linear = 2.0;          ///< m/s, |v| saturation of the desired twist
@@ -18,9 +22,24 @@ struct PoseServoParams {
 };
 PoseServoParams loadPoseServoParams(const ConfigNode& node);
 
-/// Desired TCP twist [v; w] (world frame) towards `target`.
+/// The arm joint that rolls the TCP about its approach (z) axis, e.g. joint6 of the RM65-B.
+/// A finite-range roll joint winds up when targets come with random rolls; the servo then
+/// rolls the other way round when the short way would take the joint past its limit.
+struct RollJoint {
+  double q = 0.0;                 ///< current position, rad
+  double lower = -M_PI, upper = M_PI;
+  double margin = 0.3;            ///< rad kept free at each end
+};
+
+/// Index of the arm joint whose axis is the TCP z axis (within 1e-6 at the ready pose), -1 if
+/// none.
+int findRollJoint(const WholeBodyModel& model);
+
+/// Desired TCP twist [v; w] (world frame) towards `target`. With `roll`, the rotation about
+/// the TCP z axis takes the direction that keeps the roll joint inside its range.
 Eigen::Matrix<double, 6, 1> proportionalPoseServo(const Eigen::Isometry3d& tcp,
                                                   const Eigen::Isometry3d& target,
-                                                  const PoseServoParams& params);
+                                                  const PoseServoParams& params,
+                                                  const RollJoint* roll = nullptr);
 
 }  // namespace ehc_control

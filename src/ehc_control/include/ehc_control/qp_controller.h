@@ -41,7 +41,7 @@ struct QpControllerParams {
   ControlMode mode = ControlMode::Ehc;
   double arm_weight = 0.01;            ///< w_arm (NEO's lambda)
   double ehc_base_weight_min = 0.001;  ///< ehc: base weight at sig = 0 (far)
-  double ehc_base_weight_max = 10.0;   ///< ehc: base weight at sig = 1 (close)
+  double ehc_base_weight_max = 1.0;    ///< ehc: base weight at sig = 1 (close)
   double neo_c_base_weight = 0.01;     ///< neo_c: constant base weight
   double min_error = 0.01;             ///< |e| floor in 1/|e| terms (slack and neo_e)
   double slack_bound = 10.0;           ///< |delta_i| bound

@@ -17,6 +17,8 @@ void EhcWeightingParams::validate() const {
   requireRange(kOwner, "max_ray_length", max_ray_length, 0.1, 10.0);
   requireRange(kOwner, "ray_step", ray_step, 0.0, 0.5);
   requireRange(kOwner, "omega_max", omega_max, 1.0, 1e6);
+  if (ray_origin != "arm_base" && ray_origin != "tcp")
+    throw std::invalid_argument("[EhcWeighting] ray_origin must be 'arm_base' or 'tcp' (got '" + ray_origin + "')");
 }
 
 EhcWeightingParams loadEhcWeightingParams(const ConfigNode& n) {
@@ -26,6 +28,7 @@ EhcWeightingParams loadEhcWeightingParams(const ConfigNode& n) {
   p.max_ray_length = n.get("max_ray_length", p.max_ray_length);
   p.ray_step = n.get("ray_step", p.ray_step);
   p.omega_max = n.get("omega_max", p.omega_max);
+  p.ray_origin = n.get<std::string>("ray_origin", p.ray_origin);
   p.validate();
   return p;
 }
@@ -55,11 +58,12 @@ EhcWeight EhcWeighting::evaluate(const Eigen::Vector3d& tcp, const Eigen::Vector
     w.omega = params_.omega_max;
   } else {
     const Eigen::Vector3d dir = e / dist;
-    // Farthest point of the ray (from the TCP, along e) that lies in r_td.
+    // Farthest point of the ray (from the arm base origin or the TCP, along e) in r_td.
+    const Eigen::Vector3d origin = params_.ray_origin == "tcp" ? tcp : Eigen::Vector3d::Zero();
     const int steps = static_cast<int>(std::ceil(params_.max_ray_length / step_));
     for (int i = 0; i <= steps; ++i) {
       const double s = std::min(i * step_, params_.max_ray_length);
-      if (inReachSet(tcp + s * dir)) w.e_star = s;
+      if (inReachSet(origin + s * dir)) w.e_star = s;
     }
     w.omega = std::min(params_.omega_max, w.e_star / dist);
   }

@@ -2,6 +2,7 @@
 
 #include "ehc_control/config_node.h"
 #include "ehc_control/qp_controller.h"
+#include "ehc_control/whole_body_model.h"
 
 namespace ehc_control {
 
@@ -18,13 +19,41 @@ PoseServoParams loadPoseServoParams(const ConfigNode& n) {
   p.rotation_gain_ratio = n.get("rotation_gain_ratio", p.rotation_gain_ratio);
   p.max_linear = n.get("max_linear", p.max_linear);
   p.max_angular = n.get("max_angular", p.max_angular);
+  p.unwind_roll = n.get("unwind_roll", p.unwind_roll);
   p.validate();
   return p;
 }
 
+int findRollJoint(const WholeBodyModel& model) {
+  const RobotConfig& rc = model.config();
+  const Matrix6Xd J = model.armJacobian(rc.arm_ready, rc.tcp_frame);
+  const Eigen::Vector3d z = model.linkPoseInBase(rc.arm_ready, rc.tcp_frame).linear().col(2);
+  for (int i = model.nArm() - 1; i >= 0; --i) {
+    const Eigen::Vector3d axis = J.block<3, 1>(3, i);
+    if (axis.norm() > 0.5 && axis.normalized().dot(z) > 1.0 - 1e-6 && J.block<3, 1>(0, i).norm() < 1e-6) return i;
+  }
+  return -1;
+}
+
 Vector6d proportionalPoseServo(const Eigen::Isometry3d& tcp, const Eigen::Isometry3d& target,
-                               const PoseServoParams& p) {
+                               const PoseServoParams& p, const RollJoint* roll) {
   Vector6d nu = poseError(tcp, target);
+  if (roll && p.unwind_roll) {
+    // Swing-twist split of the rotation error about the TCP z axis a: R_err = R_swing R_twist.
+    const Eigen::Vector3d a = tcp.linear().col(2);
+    Eigen::Quaterniond qe(Eigen::Matrix3d(target.linear() * tcp.linear().transpose()));
+    if (qe.w() < 0) qe.coeffs() *= -1.0;
+    const double psi = 2.0 * std::atan2(qe.vec().dot(a), qe.w());  // twist angle in (-pi, pi]
+    const double lo = roll->lower + roll->margin, hi = roll->upper - roll->margin;
+    double psi_cmd = psi;
+    if (roll->q + psi > hi && roll->q + psi - 2.0 * M_PI >= lo) psi_cmd = psi - 2.0 * M_PI;
+    else if (roll->q + psi < lo && roll->q + psi + 2.0 * M_PI <= hi) psi_cmd = psi + 2.0 * M_PI;
+    if (psi_cmd != psi) {
+      const Eigen::Quaterniond twist(Eigen::AngleAxisd(psi, a));
+      const Eigen::AngleAxisd swing(qe * twist.inverse());
+      nu.tail<3>() = swing.axis() * swing.angle() + psi_cmd * a;
+    }
+  }
   nu.head<3>() *= p.gain;
   nu.tail<3>() *= p.gain * p.rotation_gain_ratio;
   const double v = nu.head<3>().norm(), w = nu.tail<3>().norm();

@@ -11,12 +11,18 @@
 
 namespace ehc_sim {
 
-/// Zero-mean Gaussian noise added to the executed velocity each step (m/s, rad/s).
+/// Actuation model: zero-mean Gaussian noise added to the executed velocity each step
+/// (m/s, rad/s), per joint group and only while that group moves. The base has a deadband
+/// (static friction of a wheeled base): a base command below it is not executed at all, so a
+/// base that is asked to (almost) stand still does not wander. The arm stands still only on an
+/// exactly zero command.
 struct ActuationNoise {
   bool enabled = true;
   double base_translation = 0.05;  ///< sigma of v_x (and v_y), m/s   (Table I Base-T)
   double base_rotation = 0.05;     ///< sigma of w_z, rad/s          (Table I Base-R)
   double arm = 0.002;              ///< sigma of every arm joint rate, rad/s (Table I Arm)
+  double base_deadband_linear = 0.005;   ///< m/s: |v| below (and |w| below its band) = no motion
+  double base_deadband_angular = 0.01;   ///< rad/s
   void validate() const;           ///< throws "[ActuationNoise] ..."
 };
 
@@ -29,8 +35,8 @@ class KinematicFakeRobot {
   void reset(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q, unsigned seed);
 
   /// Executes `command` = [base twist (base frame); arm joint rates] for `dt` seconds.
-  /// Commands beyond the velocity limits are saturated (counted). A command that is exactly
-  /// zero is executed exactly (the robot stands still: brakes hold, no noise). Throws
+  /// Commands beyond the velocity limits are saturated (counted). A base command inside the
+  /// deadband and an exactly zero arm command are executed as standing still (no noise). Throws
   /// "[KinematicFakeRobot] ..." on a wrong size, NaN/Inf or dt <= 0.
   void step(const Eigen::VectorXd& command, double dt);
 

@@ -16,6 +16,9 @@ void ActuationNoise::validate() const {
   for (double s : {base_translation, base_rotation, arm})
     if (!std::isfinite(s) || s < 0.0 || s > 1.0)
       throw std::invalid_argument("[ActuationNoise] noise sigmas must be in [0, 1]");
+  for (double d : {base_deadband_linear, base_deadband_angular})
+    if (!std::isfinite(d) || d < 0.0 || d > 0.5)
+      throw std::invalid_argument("[ActuationNoise] base deadbands must be in [0, 0.5]");
 }
 
 KinematicFakeRobot::KinematicFakeRobot(const ehc_control::RobotConfig& robot,
@@ -53,12 +56,18 @@ void KinematicFakeRobot::step(const Eigen::VectorXd& command, double dt) {
 
   const int nb = robot_.nBase();
   const bool holonomic = robot_.base_type == ehc_control::BaseType::Holonomic;
-  if (noise_.enabled && !command.isZero(0.0)) {
+  const bool base_moves = std::abs(v[0]) >= noise_.base_deadband_linear ||
+                          (holonomic && std::abs(v[1]) >= noise_.base_deadband_linear) ||
+                          std::abs(v[nb - 1]) >= noise_.base_deadband_angular;
+  const bool arm_moves = !v.tail(robot_.nArm()).isZero(0.0);
+  if (!base_moves) v.head(nb).setZero();
+  if (noise_.enabled && base_moves) {
     v[0] += noise_.base_translation * gauss_(rng_);
     if (holonomic) v[1] += noise_.base_translation * gauss_(rng_);
     v[nb - 1] += noise_.base_rotation * gauss_(rng_);
-    for (int i = nb; i < v.size(); ++i) v[i] += noise_.arm * gauss_(rng_);
   }
+  if (noise_.enabled && arm_moves)
+    for (int i = nb; i < v.size(); ++i) v[i] += noise_.arm * gauss_(rng_);
 
   // Base: exact SE(2) exponential of the constant body twist (v_x, v_y, w_z) over dt.
   const double vx = v[0], vy = holonomic ? v[1] : 0.0, wz = v[nb - 1];
