@@ -21,9 +21,12 @@ struct EhcWeightingParams {
   double max_ray_length = 1.6;    ///< m, ray-march range (>= the arm's reach)
   double ray_step = 0.0;          ///< m, 0 = half a voxel
   double omega_max = 10.0;        ///< cap of omega when |e| -> 0
-  /// Where the ray along e starts: "arm_base" (paper: e* = element of r_td, a set of arm-frame
-  /// poses, best aligned with e, i.e. the reach of r_td in the direction of the error) or
-  /// "tcp" (the largest step from the current TCP that stays in r_td).
+  /// How e* and e are measured:
+  ///  "tcp":      e = target - TCP; e* = largest step from the TCP along e that ends in r_td.
+  ///  "arm_base": e = target - TCP; e* = reach of r_td from the arm base along e's direction.
+  ///  "target":   e = target - arm base; e* = reach of r_td from the arm base along e, so
+  ///              omega >= 1 exactly when the target lies inside r_td ("the target is within
+  ///              the arm's high-reachability set: the arm takes over").
   std::string ray_origin = "arm_base";
   void validate() const;          ///< throws "[EhcWeighting] ..."
 };

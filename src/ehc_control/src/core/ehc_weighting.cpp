@@ -17,8 +17,9 @@ void EhcWeightingParams::validate() const {
   requireRange(kOwner, "max_ray_length", max_ray_length, 0.1, 10.0);
   requireRange(kOwner, "ray_step", ray_step, 0.0, 0.5);
   requireRange(kOwner, "omega_max", omega_max, 1.0, 1e6);
-  if (ray_origin != "arm_base" && ray_origin != "tcp")
-    throw std::invalid_argument("[EhcWeighting] ray_origin must be 'arm_base' or 'tcp' (got '" + ray_origin + "')");
+  if (ray_origin != "arm_base" && ray_origin != "tcp" && ray_origin != "target")
+    throw std::invalid_argument("[EhcWeighting] ray_origin must be 'arm_base', 'tcp' or 'target' (got '" +
+                                ray_origin + "')");
 }
 
 EhcWeightingParams loadEhcWeightingParams(const ConfigNode& n) {
@@ -52,7 +53,7 @@ EhcWeight EhcWeighting::evaluate(const Eigen::Vector3d& tcp, const Eigen::Vector
   if (!tcp.allFinite() || !target.allFinite())
     throw std::invalid_argument("[EhcWeighting] TCP or target position is not finite");
   EhcWeight w;
-  const Eigen::Vector3d e = target - tcp;
+  const Eigen::Vector3d e = params_.ray_origin == "target" ? target : Eigen::Vector3d(target - tcp);
   const double dist = e.norm();
   if (dist < 1e-9) {
     w.omega = params_.omega_max;
