@@ -1,0 +1,27 @@
+# Grasping pipeline behind `make demo` (issue 6 items 4-6): grasp sequencer core + node,
+# unit tests and the end-to-end rostests. Included by ../CMakeLists.txt.
+find_package(std_srvs REQUIRED)
+find_package(tf2_eigen REQUIRED)
+
+# ---------------------------------------------------------------- ROS-free core library
+add_library(ehc_grasp_core
+  src/core/grasp_selection.cpp
+  src/core/grasp_sequencer.cpp
+)
+target_include_directories(ehc_grasp_core PUBLIC include ${EIGEN3_INCLUDE_DIR})
+target_link_libraries(ehc_grasp_core PUBLIC ehc_control_core)
+
+# ---------------------------------------------------------------- node (thin ROS wrapper)
+add_executable(ehc_grasp_sequencer_node src/nodes/ehc_grasp_sequencer_node.cpp)
+target_include_directories(ehc_grasp_sequencer_node PRIVATE ${catkin_INCLUDE_DIRS}
+  ${std_srvs_INCLUDE_DIRS} ${tf2_eigen_INCLUDE_DIRS})
+target_link_libraries(ehc_grasp_sequencer_node ehc_grasp_core ${catkin_LIBRARIES})
+add_dependencies(ehc_grasp_sequencer_node ${catkin_EXPORTED_TARGETS}
+  ehc_control_generate_messages_cpp ehc_sim_generate_messages_cpp)
+
+# ---------------------------------------------------------------- tests
+if(CATKIN_ENABLE_TESTING)
+  catkin_add_gtest(test_grasp_sequencer test/test_grasp_sequencer.cpp)
+  target_link_libraries(test_grasp_sequencer ehc_grasp_core gtest_main)
+  target_compile_definitions(test_grasp_sequencer PRIVATE EHC_CONFIG_DIR="${EHC_CONFIG_DIR}")
+endif()

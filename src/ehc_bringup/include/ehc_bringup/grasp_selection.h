@@ -1,0 +1,84 @@
+#pragma once
+// Grasp choice for the grasp sequencer (ROS-free, Eigen only).
+//
+// Inputs: the object's target pose from the AprilTag (tag node: TCP pose of a forward grasp,
+// origin at the grasp centre, z = approach into the tagged face, y = finger closing axis) and
+// the grasp candidates of the perception grasp node (same frame convention, world frame).
+// The preferred approach direction decides which candidates qualify:
+//   tag       the tag target itself (no candidates)
+//   forward   approach along the tag target's z axis (into the tagged face)
+//   downward  approach straight down (world -z)
+//   sideways  approach horizontally, perpendicular to the forward axis (either side)
+//   any       every candidate
+// Without a qualifying candidate the fallback is the tag target turned to the preferred
+// approach (closing axis kept horizontal) and backed off along it by a configured distance.
+
+#include <Eigen/Geometry>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace ehc_bringup {
+
+enum class ApproachDirection { Tag, Forward, Downward, Sideways, Any };
+std::string toString(ApproachDirection d);
+/// Throws std::invalid_argument "[GraspSelection] unknown approach direction '...'".
+ApproachDirection approachDirectionFromString(const std::string& s);
+
+struct GraspCandidate {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();  ///< world frame, z = approach
+  double width = 0.0;                                       ///< m
+  double score = 0.0;
+};
+
+struct GraspSelectionParams {
+  double candidate_gate = 0.05;         ///< m: candidate centre within this of the tag target
+  double max_angle_deg = 30.0;          ///< candidate approach within this of the preferred one
+  double max_width = 0.07;              ///< m: gripper aperture
+  bool require_candidate = false;       ///< false: fall back to the turned tag target
+  double fallback_backoff_forward = 0.0;   ///< m, fallback TCP moved back along the approach
+  double fallback_backoff_downward = 0.03;
+  double fallback_backoff_sideways = 0.0;
+  void validate() const;  ///< throws "[GraspSelectionParams] ..."
+};
+
+struct GraspChoice {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();  ///< TCP grasp pose, world
+  bool from_candidate = false;
+  double score = 0.0;
+  int candidate_index = -1;
+};
+
+/// Unit approach direction wanted for `direction` given the tag target; nullopt for Any
+/// (and the tag target's z for Tag / Forward). For Sideways the sign is arbitrary: both
+/// sides qualify.
+std::optional<Eigen::Vector3d> preferredApproach(ApproachDirection direction,
+                                                 const Eigen::Isometry3d& tag_target);
+
+/// True if the candidate is finite, a proper rotation, within the gate, opens wide enough and
+/// approaches as preferred.
+bool candidateQualifies(const GraspCandidate& c, ApproachDirection direction,
+                        const Eigen::Isometry3d& tag_target, const GraspSelectionParams& p);
+
+/// Best qualifying candidate (highest score), or the fallback, or nullopt (require_candidate
+/// and nothing qualifies, or a non-finite tag target). A parallel-jaw grasp is symmetric about
+/// its approach axis: the candidate or its half-turn about z, whichever is closer to
+/// `reference` (e.g. the current TCP orientation), is returned.
+std::optional<GraspChoice> chooseGrasp(const std::vector<GraspCandidate>& candidates,
+                                       ApproachDirection direction,
+                                       const Eigen::Isometry3d& tag_target,
+                                       const Eigen::Matrix3d& reference,
+                                       const GraspSelectionParams& p);
+
+/// Tag target turned so that its z axis is `approach` (unit), with its y (closing) axis
+/// horizontal when possible, backed off by `backoff` along the approach.
+Eigen::Isometry3d turnedTagGrasp(const Eigen::Isometry3d& tag_target, const Eigen::Vector3d& approach,
+                                 double backoff);
+
+/// Angle (rad) between two rotations.
+double rotationAngle(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b);
+/// True if every entry is finite and R is a rotation (orthonormal, det +1, within 1e-6).
+bool isValidPose(const Eigen::Isometry3d& T);
+
+}  // namespace ehc_bringup

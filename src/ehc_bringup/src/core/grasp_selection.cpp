@@ -1,0 +1,163 @@
+#include "ehc_bringup/grasp_selection.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace ehc_bringup {
+
+std::string toString(ApproachDirection d) {
+  switch (d) {
+    case ApproachDirection::Tag: return "tag";
+    case ApproachDirection::Forward: return "forward";
+    case ApproachDirection::Downward: return "downward";
+    case ApproachDirection::Sideways: return "sideways";
+    case ApproachDirection::Any: return "any";
+  }
+  return "?";
+}
+
+ApproachDirection approachDirectionFromString(const std::string& s) {
+  if (s == "tag") return ApproachDirection::Tag;
+  if (s == "forward") return ApproachDirection::Forward;
+  if (s == "downward") return ApproachDirection::Downward;
+  if (s == "sideways") return ApproachDirection::Sideways;
+  if (s == "any") return ApproachDirection::Any;
+  throw std::invalid_argument("[GraspSelection] unknown approach direction '" + s +
+                              "' (tag | forward | downward | sideways | any)");
+}
+
+void GraspSelectionParams::validate() const {
+  auto check = [](bool ok, const std::string& what) {
+    if (!ok) throw std::invalid_argument("[GraspSelectionParams] " + what);
+  };
+  check(std::isfinite(candidate_gate) && candidate_gate > 0.0, "candidate_gate must be > 0");
+  check(std::isfinite(max_angle_deg) && max_angle_deg > 0.0 && max_angle_deg <= 180.0,
+        "max_angle_deg must be in (0, 180]");
+  check(std::isfinite(max_width) && max_width > 0.0, "max_width must be > 0");
+  for (double b : {fallback_backoff_forward, fallback_backoff_downward, fallback_backoff_sideways})
+    check(std::isfinite(b) && std::abs(b) <= 0.5, "fallback_backoff_* must be finite, |b| <= 0.5 m");
+}
+
+bool isValidPose(const Eigen::Isometry3d& T) {
+  if (!T.matrix().allFinite()) return false;
+  const Eigen::Matrix3d R = T.linear();
+  return (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() < 1e-6 &&
+         std::abs(R.determinant() - 1.0) < 1e-6;
+}
+
+double rotationAngle(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
+  const double c = std::clamp(((a.transpose() * b).trace() - 1.0) / 2.0, -1.0, 1.0);
+  return std::acos(c);
+}
+
+std::optional<Eigen::Vector3d> preferredApproach(ApproachDirection direction,
+                                                 const Eigen::Isometry3d& tag_target) {
+  const Eigen::Vector3d fwd = tag_target.linear().col(2);
+  switch (direction) {
+    case ApproachDirection::Tag:
+    case ApproachDirection::Forward: return fwd.normalized();
+    case ApproachDirection::Downward: return Eigen::Vector3d(0, 0, -1);
+    case ApproachDirection::Sideways: {
+      Eigen::Vector3d s = Eigen::Vector3d::UnitZ().cross(fwd);
+      if (s.norm() < 1e-6) s = Eigen::Vector3d::UnitY();  // forward axis vertical: any horizontal
+      return s.normalized();
+    }
+    case ApproachDirection::Any: return std::nullopt;
+  }
+  return std::nullopt;
+}
+
+bool candidateQualifies(const GraspCandidate& c, ApproachDirection direction,
+                        const Eigen::Isometry3d& tag_target, const GraspSelectionParams& p) {
+  if (direction == ApproachDirection::Tag) return false;
+  if (!isValidPose(c.pose) || !std::isfinite(c.width) || !std::isfinite(c.score)) return false;
+  if (c.width > p.max_width) return false;
+  if ((c.pose.translation() - tag_target.translation()).norm() > p.candidate_gate) return false;
+  const auto want = preferredApproach(direction, tag_target);
+  if (!want) return true;
+  double cosang = c.pose.linear().col(2).dot(*want);
+  if (direction == ApproachDirection::Sideways) cosang = std::abs(cosang);  // either side
+  return std::acos(std::clamp(cosang, -1.0, 1.0)) <= p.max_angle_deg * M_PI / 180.0;
+}
+
+Eigen::Isometry3d turnedTagGrasp(const Eigen::Isometry3d& tag_target, const Eigen::Vector3d& approach,
+                                 double backoff) {
+  const Eigen::Vector3d z = approach.normalized();
+  // Closing axis: keep the tag target's y if it is not along the approach, else world-horizontal.
+  Eigen::Vector3d y = tag_target.linear().col(1);
+  y -= y.dot(z) * z;
+  if (std::abs(z.z()) > 0.9) {
+    // Top-down: the tag target's y is horizontal already; otherwise use its x.
+    if (y.norm() < 1e-3) y = tag_target.linear().col(0) - tag_target.linear().col(0).dot(z) * z;
+  } else {
+    // Horizontal approach: closing axis horizontal = up x approach.
+    y = Eigen::Vector3d::UnitZ().cross(z);
+  }
+  if (y.norm() < 1e-6) y = z.unitOrthogonal();
+  y.normalize();
+  const Eigen::Vector3d x = y.cross(z);
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear().col(0) = x;
+  T.linear().col(1) = y;
+  T.linear().col(2) = z;
+  T.translation() = tag_target.translation() - backoff * z;
+  return T;
+}
+
+namespace {
+/// R or R * Rz(pi), whichever is closer to `reference`.
+Eigen::Matrix3d closerHalfTurn(const Eigen::Matrix3d& R, const Eigen::Matrix3d& reference) {
+  const Eigen::Matrix3d flipped = R * Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  return rotationAngle(flipped, reference) < rotationAngle(R, reference) ? flipped : R;
+}
+}  // namespace
+
+std::optional<GraspChoice> chooseGrasp(const std::vector<GraspCandidate>& candidates,
+                                       ApproachDirection direction,
+                                       const Eigen::Isometry3d& tag_target,
+                                       const Eigen::Matrix3d& reference,
+                                       const GraspSelectionParams& p) {
+  if (!isValidPose(tag_target)) return std::nullopt;
+  GraspChoice best;
+  bool found = false;
+  for (std::size_t i = 0; i < candidates.size(); ++i) {
+    const GraspCandidate& c = candidates[i];
+    if (!candidateQualifies(c, direction, tag_target, p)) continue;
+    if (!found || c.score > best.score) {
+      best.pose = c.pose;
+      best.score = c.score;
+      best.from_candidate = true;
+      best.candidate_index = static_cast<int>(i);
+      found = true;
+    }
+  }
+  if (!found) {
+    if (p.require_candidate && direction != ApproachDirection::Tag) return std::nullopt;
+    double backoff = p.fallback_backoff_forward;
+    Eigen::Vector3d approach = tag_target.linear().col(2);
+    if (direction == ApproachDirection::Downward) {
+      approach = Eigen::Vector3d(0, 0, -1);
+      backoff = p.fallback_backoff_downward;
+    } else if (direction == ApproachDirection::Sideways) {
+      approach = *preferredApproach(direction, tag_target);
+      // The side facing the reference orientation's approach better.
+      if (approach.dot(reference.col(2)) < 0.0) approach = -approach;
+      backoff = p.fallback_backoff_sideways;
+    }
+    if (direction == ApproachDirection::Tag || direction == ApproachDirection::Forward ||
+        direction == ApproachDirection::Any) {
+      best.pose = tag_target;
+      best.pose.translation() -= backoff * tag_target.linear().col(2);
+    } else {
+      best.pose = turnedTagGrasp(tag_target, approach, backoff);
+    }
+    best.from_candidate = false;
+    best.score = 0.0;
+    best.candidate_index = -1;
+  }
+  best.pose.linear() = closerHalfTurn(best.pose.linear(), reference);
+  return best;
+}
+
+}  // namespace ehc_bringup

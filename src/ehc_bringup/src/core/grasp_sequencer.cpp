@@ -1,0 +1,461 @@
+#include "ehc_bringup/grasp_sequencer.h"
+
+#include "ehc_control/config_node.h"
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+#include <stdexcept>
+
+namespace ehc_bringup {
+
+std::string toString(GraspPhase p) {
+  switch (p) {
+    case GraspPhase::WaitTarget: return "WAIT_TARGET";
+    case GraspPhase::Approach: return "APPROACH";
+    case GraspPhase::PreGrasp: return "PRE_GRASP";
+    case GraspPhase::Grasp: return "GRASP";
+    case GraspPhase::Close: return "CLOSE";
+    case GraspPhase::Lift: return "LIFT";
+    case GraspPhase::Release: return "RELEASE";
+    case GraspPhase::Retreat: return "RETREAT";
+    case GraspPhase::Done: return "DONE";
+  }
+  return "?";
+}
+
+// ---------------------------------------------------------------- parameters
+
+void GraspSequencerParams::validate() const {
+  auto check = [](bool ok, const std::string& what) {
+    if (!ok) throw std::invalid_argument("[GraspSequencerParams] " + what);
+  };
+  auto positive = [&](double v, const std::string& name) {
+    check(std::isfinite(v) && v > 0.0, name + " must be a finite number > 0 (is " + std::to_string(v) + ")");
+  };
+  check(!objects.empty(), "objects must list at least one object");
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    check(!objects[i].name.empty(), "objects[" + std::to_string(i) + "].name must not be empty");
+    for (std::size_t j = 0; j < i; ++j)
+      check(objects[i].name != objects[j].name, "object name '" + objects[i].name + "' appears twice");
+  }
+  positive(object_time_limit, "object_time_limit");
+  positive(perception_hold, "perception_hold");
+  check(std::isfinite(pose_filter_gain) && pose_filter_gain > 0.0 && pose_filter_gain <= 1.0,
+        "pose_filter_gain must be in (0, 1]");
+  check(std::isfinite(pregrasp_distance) && pregrasp_distance >= 0.0 && pregrasp_distance <= 0.5,
+        "pregrasp_distance must be in [0, 0.5] m");
+  positive(approach_position_tolerance, "approach_position_tolerance");
+  positive(approach_orientation_tolerance_deg, "approach_orientation_tolerance_deg");
+  positive(pregrasp_position_tolerance, "pregrasp_position_tolerance");
+  positive(pregrasp_orientation_tolerance_deg, "pregrasp_orientation_tolerance_deg");
+  positive(grasp_position_tolerance, "grasp_position_tolerance");
+  positive(grasp_orientation_tolerance_deg, "grasp_orientation_tolerance_deg");
+  positive(gripper_timeout, "gripper_timeout");
+  positive(lift_height, "lift_height");
+  positive(release_timeout, "release_timeout");
+  check(std::isfinite(retreat_distance) && retreat_distance >= 0.0, "retreat_distance must be >= 0");
+  check(std::isfinite(retreat_raise) && retreat_raise >= 0.0, "retreat_raise must be >= 0");
+  positive(retreat_tolerance, "retreat_tolerance");
+  positive(retreat_timeout, "retreat_timeout");
+  selection.validate();
+}
+
+std::string GraspSequencerParams::summary() const {
+  std::ostringstream s;
+  s << "GraspSequencer: " << objects.size() << " object(s):";
+  for (const auto& o : objects) s << " " << o.name << " (" << toString(o.approach) << ")";
+  s << "\n  limit " << object_time_limit << " s/object, perception hold " << perception_hold
+    << " s, pose filter gain " << pose_filter_gain << ", pre-grasp " << pregrasp_distance << " m"
+    << "\n  tolerances: approach " << approach_position_tolerance << " m/" << approach_orientation_tolerance_deg
+    << " deg, pre-grasp " << pregrasp_position_tolerance << " m/" << pregrasp_orientation_tolerance_deg
+    << " deg, grasp " << grasp_position_tolerance << " m/" << grasp_orientation_tolerance_deg << " deg"
+    << "\n  gripper timeout " << gripper_timeout << " s, lift " << lift_height << " m, release timeout "
+    << release_timeout << " s, retreat " << retreat_distance << " m back + " << retreat_raise << " m up (tol "
+    << retreat_tolerance << " m, " << retreat_timeout << " s)"
+    << "\n  selection: gate " << selection.candidate_gate << " m, max angle " << selection.max_angle_deg
+    << " deg, max width " << selection.max_width << " m, "
+    << (selection.require_candidate ? "candidate required" : "tag fallback") << " (backoff forward "
+    << selection.fallback_backoff_forward << ", downward " << selection.fallback_backoff_downward
+    << ", sideways " << selection.fallback_backoff_sideways << " m)";
+  return s.str();
+}
+
+GraspSequencerParams loadGraspSequencerParams(const ehc_control::ConfigNode& root) {
+  GraspSequencerParams p;
+  const ehc_control::ConfigNode s = root.childOrEmpty("sequencer");
+  p.object_time_limit = s.get("object_time_limit", p.object_time_limit);
+  p.perception_hold = s.get("perception_hold", p.perception_hold);
+  p.pose_filter_gain = s.get("pose_filter_gain", p.pose_filter_gain);
+  p.pregrasp_distance = s.get("pregrasp_distance", p.pregrasp_distance);
+  p.approach_position_tolerance = s.get("approach_position_tolerance", p.approach_position_tolerance);
+  p.approach_orientation_tolerance_deg = s.get("approach_orientation_tolerance_deg", p.approach_orientation_tolerance_deg);
+  p.pregrasp_position_tolerance = s.get("pregrasp_position_tolerance", p.pregrasp_position_tolerance);
+  p.pregrasp_orientation_tolerance_deg = s.get("pregrasp_orientation_tolerance_deg", p.pregrasp_orientation_tolerance_deg);
+  p.grasp_position_tolerance = s.get("grasp_position_tolerance", p.grasp_position_tolerance);
+  p.grasp_orientation_tolerance_deg = s.get("grasp_orientation_tolerance_deg", p.grasp_orientation_tolerance_deg);
+  p.gripper_timeout = s.get("gripper_timeout", p.gripper_timeout);
+  p.lift_height = s.get("lift_height", p.lift_height);
+  p.release_timeout = s.get("release_timeout", p.release_timeout);
+  p.retreat_distance = s.get("retreat_distance", p.retreat_distance);
+  p.retreat_raise = s.get("retreat_raise", p.retreat_raise);
+  p.retreat_tolerance = s.get("retreat_tolerance", p.retreat_tolerance);
+  p.retreat_timeout = s.get("retreat_timeout", p.retreat_timeout);
+  const ehc_control::ConfigNode sel = s.childOrEmpty("selection");
+  p.selection.candidate_gate = sel.get("candidate_gate", p.selection.candidate_gate);
+  p.selection.max_angle_deg = sel.get("max_angle_deg", p.selection.max_angle_deg);
+  p.selection.max_width = sel.get("max_width", p.selection.max_width);
+  p.selection.require_candidate = sel.get("require_candidate", p.selection.require_candidate);
+  p.selection.fallback_backoff_forward = sel.get("fallback_backoff_forward", p.selection.fallback_backoff_forward);
+  p.selection.fallback_backoff_downward = sel.get("fallback_backoff_downward", p.selection.fallback_backoff_downward);
+  p.selection.fallback_backoff_sideways = sel.get("fallback_backoff_sideways", p.selection.fallback_backoff_sideways);
+
+  if (!root.has("objects")) root.fail("objects", "is required: a list of {name, approach}");
+  const YAML::Node list = root.yaml()["objects"];
+  if (!list.IsSequence()) root.fail("objects", "must be a list of {name, approach}");
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const std::string field = "objects[" + std::to_string(i) + "]";
+    if (!list[i].IsMap()) root.fail(field, "must be a mapping {name, approach}");
+    const ehc_control::ConfigNode o(list[i], root.file(), root.fieldName(field), root.owner());
+    GraspObjectSpec spec;
+    spec.name = o.require<std::string>("name");
+    const std::string a = o.get<std::string>("approach", "forward");
+    try {
+      spec.approach = approachDirectionFromString(a);
+    } catch (const std::invalid_argument&) {
+      o.fail("approach", "must be tag | forward | downward | sideways | any (is '" + a + "')");
+    }
+    p.objects.push_back(spec);
+  }
+  try {
+    p.validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string(e.what()) + " (" + root.file() + ")");
+  }
+  return p;
+}
+
+// ---------------------------------------------------------------- state machine
+
+GraspSequencer::GraspSequencer(const GraspSequencerParams& params) : params_(params) {
+  params_.validate();
+}
+
+bool GraspSequencer::setObjectPose(std::size_t index, double t, const Eigen::Isometry3d& pose) {
+  if (index >= params_.objects.size() || !std::isfinite(t) || !isValidPose(pose)) {
+    ++rejected_;
+    return false;
+  }
+  if (index != current_ || done()) return true;  // another object's pose: not needed now
+  if (locked_) return true;                      // grasp locked: perception no longer moves it
+  if (!object_pose_) {
+    object_pose_ = pose;
+  } else {
+    const double a = params_.pose_filter_gain;
+    Eigen::Isometry3d f = Eigen::Isometry3d::Identity();
+    f.translation() = (1.0 - a) * object_pose_->translation() + a * pose.translation();
+    const Eigen::Quaterniond q0(object_pose_->linear()), q1(pose.linear());
+    f.linear() = q0.slerp(a, q1).normalized().toRotationMatrix();
+    object_pose_ = f;
+  }
+  object_pose_t_ = t;
+  return true;
+}
+
+void GraspSequencer::setGraspCandidates(double t, const std::vector<GraspCandidate>& candidates) {
+  (void)t;
+  if (locked_) return;
+  candidates_.clear();
+  for (const auto& c : candidates) {
+    if (isValidPose(c.pose) && std::isfinite(c.width) && std::isfinite(c.score)) candidates_.push_back(c);
+    else ++rejected_;
+  }
+}
+
+std::string GraspSequencer::label() const {
+  return current_ < params_.objects.size() ? params_.objects[current_].name : std::string("-");
+}
+
+void GraspSequencer::startObject(double t, SequencerOutput* out) {
+  // Perception of this object may have arrived before its first cycle: kept (cleared when the
+  // previous object is left).
+  object_t0_ = t;
+  locked_.reset();
+  hold_goal_.reset();
+  fov_cycles_ = tfm_cycles_ = 0;
+  counting_tfm_ = true;
+  cur_ = GraspResult();
+  cur_.name = params_.objects[current_].name;
+  cur_.approach = toString(params_.objects[current_].approach);
+  last_controller_phase_.clear();
+  phase_ = GraspPhase::WaitTarget;
+  phase_t0_ = t;
+  std::ostringstream s;
+  s << "object " << (current_ + 1) << "/" << params_.objects.size() << " '" << cur_.name << "' ("
+    << cur_.approach << " grasp): WAIT_TARGET";
+  out->events.push_back(s.str());
+}
+
+void GraspSequencer::enter(GraspPhase p, double t, SequencerOutput* out, const std::string& why) {
+  if (phase_ != GraspPhase::Done && phase_ <= GraspPhase::Lift && current_ < params_.objects.size())
+    cur_.phase_times.emplace_back(toString(phase_), t - phase_t0_);
+  std::ostringstream s;
+  s << label() << ": " << toString(phase_) << " -> " << toString(p) << " at " << std::fixed
+    << std::setprecision(2) << (t - object_t0_) << " s";
+  if (!why.empty()) s << " (" << why << ")";
+  out->events.push_back(s.str());
+  phase_ = p;
+  phase_t0_ = t;
+}
+
+Eigen::Isometry3d GraspSequencer::preGrasp(const Eigen::Isometry3d& grasp) const {
+  Eigen::Isometry3d T = grasp;
+  T.translation() -= params_.pregrasp_distance * grasp.linear().col(2);
+  return T;
+}
+
+bool GraspSequencer::within(const SequencerInput& in, const Eigen::Isometry3d& goal, double pos,
+                            double ori_deg) const {
+  if (!in.tcp || !isValidPose(*in.tcp)) return false;
+  return (in.tcp->translation() - goal.translation()).norm() <= pos &&
+         rotationAngle(in.tcp->linear(), goal.linear()) <= ori_deg * M_PI / 180.0;
+}
+
+std::optional<GraspChoice> GraspSequencer::currentChoice(const SequencerInput& in) const {
+  if (!object_pose_) return std::nullopt;
+  const Eigen::Matrix3d ref = (in.tcp && isValidPose(*in.tcp)) ? Eigen::Matrix3d(in.tcp->linear())
+                                                              : Eigen::Matrix3d(object_pose_->linear());
+  return chooseGrasp(candidates_, params_.objects[current_].approach, *object_pose_, ref, params_.selection);
+}
+
+void GraspSequencer::finishObject(double t, bool success, const std::string& reason,
+                                  const SequencerInput& in, SequencerOutput* out) {
+  cur_.success = success;
+  cur_.time_s = t - object_t0_;
+  cur_.failed_phase = success ? "" : toString(phase_);
+  cur_.reason = reason;
+  cur_.cycles = tfm_cycles_;
+  cur_.tfm = tfm_cycles_ > 0 ? static_cast<double>(fov_cycles_) / static_cast<double>(tfm_cycles_) : 0.0;
+  cur_.used_candidate = locked_ ? locked_->from_candidate : false;
+  // RELEASE holds the TCP where it is; RETREAT backs off along the approach from there.
+  if (locked_) last_approach_ = locked_->pose.linear().col(2);
+  else if (in.tcp && isValidPose(*in.tcp)) last_approach_ = in.tcp->linear().col(2);
+  hold_goal_ = (in.tcp && isValidPose(*in.tcp)) ? std::optional<Eigen::Isometry3d>(*in.tcp) : std::nullopt;
+  enter(GraspPhase::Release, t, out, success ? "grasp succeeded" : "FAILED: " + reason);
+  results_.push_back(cur_);
+  out->events.push_back(graspResultLine(cur_));
+  if (in.gripper_state != "open") out->gripper_command = false;
+}
+
+SequencerOutput GraspSequencer::update(const SequencerInput& in) {
+  if (!std::isfinite(in.t)) throw std::invalid_argument("[GraspSequencer] non-finite time");
+  if (in.t < last_t_) {
+    std::ostringstream s;
+    s << "[GraspSequencer] time went backwards (" << in.t << " s after " << last_t_ << " s)";
+    throw std::invalid_argument(s.str());
+  }
+  last_t_ = in.t;
+  SequencerOutput out;
+  if (!started_) {
+    started_ = true;
+    startObject(in.t, &out);
+  }
+  if (done()) return out;
+  const double t = in.t;
+  const double in_object = t - object_t0_;
+  const double in_phase = t - phase_t0_;
+
+  // Controller phase bookkeeping (counts per phase; tsmm stages and stops show as events).
+  if (phase_ <= GraspPhase::Lift) {
+    const std::string cp = in.controller_phase.empty() ? "NONE" : in.controller_phase;
+    auto it = std::find_if(cur_.controller_phases.begin(), cur_.controller_phases.end(),
+                           [&](const auto& e) { return e.first == cp; });
+    if (it == cur_.controller_phases.end()) cur_.controller_phases.emplace_back(cp, 1);
+    else ++it->second;
+    if (cp != last_controller_phase_ && !last_controller_phase_.empty())
+      out.events.push_back(label() + ": controller " + last_controller_phase_ + " -> " + cp);
+    last_controller_phase_ = cp;
+    if (counting_tfm_ && !in.controller_phase.empty()) {
+      ++tfm_cycles_;
+      if (in.target_in_fov) ++fov_cycles_;
+    }
+  }
+
+  // Time limit per object.
+  if (phase_ <= GraspPhase::Lift && in_object > params_.object_time_limit) {
+    std::ostringstream s;
+    s << "time limit " << params_.object_time_limit << " s in " << toString(phase_);
+    finishObject(t, false, s.str(), in, &out);
+    return out;
+  }
+
+  const bool fresh = object_pose_ && (t - object_pose_t_) <= params_.perception_hold;
+  if (object_pose_ && !locked_) out.object_pose = *object_pose_;
+
+  switch (phase_) {
+    case GraspPhase::WaitTarget: {
+      if (!fresh) break;
+      const auto choice = currentChoice(in);
+      if (!choice) break;  // require_candidate and none yet
+      enter(GraspPhase::Approach, t, &out,
+            choice->from_candidate ? "grasp candidate" : "tag grasp (no candidate yet)");
+      out.goal = preGrasp(choice->pose);
+      break;
+    }
+    case GraspPhase::Approach: {
+      if (!fresh) break;  // perception lost: no goal -> the controller stops (TARGET_LOST)
+      const auto choice = currentChoice(in);
+      if (!choice) break;
+      const Eigen::Isometry3d pre = preGrasp(choice->pose);
+      out.goal = pre;
+      if (within(in, pre, params_.approach_position_tolerance, params_.approach_orientation_tolerance_deg)) {
+        locked_ = choice;
+        enter(GraspPhase::PreGrasp, t, &out,
+              std::string("grasp locked: ") + (choice->from_candidate ? "perception candidate" : "tag fallback"));
+      }
+      break;
+    }
+    case GraspPhase::PreGrasp: {
+      const Eigen::Isometry3d pre = preGrasp(locked_->pose);
+      out.goal = pre;
+      if (within(in, pre, params_.pregrasp_position_tolerance, params_.pregrasp_orientation_tolerance_deg)) {
+        enter(GraspPhase::Grasp, t, &out);
+        out.goal = locked_->pose;
+      }
+      break;
+    }
+    case GraspPhase::Grasp: {
+      out.goal = locked_->pose;
+      if (within(in, locked_->pose, params_.grasp_position_tolerance, params_.grasp_orientation_tolerance_deg)) {
+        enter(GraspPhase::Close, t, &out);
+        counting_tfm_ = false;
+        out.gripper_command = true;
+      }
+      break;
+    }
+    case GraspPhase::Close: {
+      out.goal = locked_->pose;
+      if (in.gripper_state == "holding") {
+        enter(GraspPhase::Lift, t, &out, "object held");
+        Eigen::Isometry3d lift = locked_->pose;
+        lift.translation().z() += params_.lift_height;
+        out.goal = lift;
+      } else if (in.gripper_state == "closed_empty") {
+        finishObject(t, false, "gripper closed on nothing", in, &out);
+      } else if (in_phase > params_.gripper_timeout) {
+        finishObject(t, false, "gripper did not close within " + std::to_string(params_.gripper_timeout) + " s (state '" +
+                                   in.gripper_state + "')", in, &out);
+      }
+      break;
+    }
+    case GraspPhase::Lift: {
+      Eigen::Isometry3d lift = locked_->pose;
+      lift.translation().z() += params_.lift_height;
+      out.goal = lift;
+      if (in.grasp_succeeded && in.gripper_state == "holding") {
+        finishObject(t, true, "", in, &out);
+      } else if (in.gripper_state != "holding" && in_phase > 0.0) {
+        finishObject(t, false, "object lost while lifting (gripper '" + in.gripper_state + "')", in, &out);
+      }
+      break;
+    }
+    case GraspPhase::Release: {
+      if (hold_goal_) out.goal = *hold_goal_;
+      if (in.gripper_state == "open" || in_phase > params_.release_timeout) {
+        if (hold_goal_) {
+          Eigen::Isometry3d back = *hold_goal_;
+          back.translation() -= params_.retreat_distance * last_approach_;
+          back.translation().z() += params_.retreat_raise;
+          hold_goal_ = back;
+          out.goal = back;
+        }
+        enter(GraspPhase::Retreat, t, &out);
+      }
+      break;
+    }
+    case GraspPhase::Retreat: {
+      if (hold_goal_) out.goal = *hold_goal_;
+      const bool there = hold_goal_ && in.tcp && isValidPose(*in.tcp) &&
+                         (in.tcp->translation() - hold_goal_->translation()).norm() <= params_.retreat_tolerance;
+      if (there || !hold_goal_ || in_phase > params_.retreat_timeout) {
+        if (current_ + 1 < params_.objects.size()) {
+          enter(GraspPhase::WaitTarget, t, &out);
+          ++current_;
+          object_pose_.reset();
+          object_pose_t_ = -1.0;
+          candidates_.clear();
+          startObject(t, &out);
+        } else {
+          enter(GraspPhase::Done, t, &out);
+          out.goal.reset();
+          int ok = 0;
+          for (const auto& r : results_) ok += r.success ? 1 : 0;
+          out.events.push_back("all objects handled: " + std::to_string(ok) + "/" +
+                               std::to_string(results_.size()) + " grasped");
+        }
+      }
+      break;
+    }
+    case GraspPhase::Done: break;
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------- reporting
+
+namespace {
+std::string jsonString(const std::string& s) {
+  std::string o = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') { o += '\\'; o += c; }
+    else if (c == '\n') o += "\\n";
+    else if (static_cast<unsigned char>(c) < 0x20) o += ' ';
+    else o += c;
+  }
+  return o + "\"";
+}
+std::string num(double v, int precision = 3) {
+  if (!std::isfinite(v)) return "null";
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(precision) << v;
+  return s.str();
+}
+}  // namespace
+
+std::string graspResultsToJson(const std::vector<GraspResult>& results, const std::string& mode,
+                               double total_time_s) {
+  std::ostringstream s;
+  int ok = 0;
+  for (const auto& r : results) ok += r.success ? 1 : 0;
+  s << "{\"mode\": " << jsonString(mode) << ", \"successes\": " << ok << ", \"objects_total\": " << results.size()
+    << ", \"total_time_s\": " << num(total_time_s, 2) << ", \"objects\": [";
+  for (std::size_t i = 0; i < results.size(); ++i) {
+    const GraspResult& r = results[i];
+    s << (i ? ", " : "") << "{\"name\": " << jsonString(r.name) << ", \"success\": " << (r.success ? "true" : "false")
+      << ", \"time_s\": " << num(r.time_s, 2) << ", \"tfm\": " << num(r.tfm, 4) << ", \"tfm_cycles\": " << r.cycles
+      << ", \"approach\": " << jsonString(r.approach) << ", \"grasp_from_candidate\": "
+      << (r.used_candidate ? "true" : "false") << ", \"failed_phase\": " << jsonString(r.failed_phase)
+      << ", \"reason\": " << jsonString(r.reason) << ", \"phase_times\": {";
+    for (std::size_t k = 0; k < r.phase_times.size(); ++k)
+      s << (k ? ", " : "") << jsonString(r.phase_times[k].first) << ": " << num(r.phase_times[k].second, 2);
+    s << "}, \"controller_phase_cycles\": {";
+    for (std::size_t k = 0; k < r.controller_phases.size(); ++k)
+      s << (k ? ", " : "") << jsonString(r.controller_phases[k].first) << ": " << r.controller_phases[k].second;
+    s << "}}";
+  }
+  s << "]}";
+  return s.str();
+}
+
+std::string graspResultLine(const GraspResult& r) {
+  std::ostringstream s;
+  s << std::left << std::setw(8) << r.name << " " << (r.success ? "SUCCESS" : "FAILED ") << "  time "
+    << std::right << std::fixed << std::setprecision(2) << std::setw(6) << r.time_s << " s  TfM " << std::setprecision(1)
+    << std::setw(5) << 100.0 * r.tfm << " %  grasp " << (r.used_candidate ? "perception candidate" : "tag fallback")
+    << " (" << r.approach << ")";
+  if (!r.success) s << "  [" << r.failed_phase << ": " << r.reason << "]";
+  return s.str();
+}
+
+}  // namespace ehc_bringup

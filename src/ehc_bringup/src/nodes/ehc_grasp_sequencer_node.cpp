@@ -1,0 +1,265 @@
+// ehc_grasp_sequencer_node: thin ROS wrapper of ehc_bringup::GraspSequencer (issue 6 item 4).
+//   rosrun ehc_bringup ehc_grasp_sequencer_node _config:=config/demo/grasp_sequencer.yaml
+//       [_summary:=results/demo/summary.json] [_trace:=results/demo/trace.csv]
+//
+// Owns the controller's goal: perception publishes each object's pose on its own topic
+// (objects[i].pose_topic, e.g. a tag node per object), the sequencer publishes the TCP goal on
+// node.goal_topic (/ehc/target_pose) every controller cycle, the current object's filtered pose
+// on node.object_pose_topic (the grasp node's target, by remapping), and closes / opens the
+// gripper through node.gripper_service (std_srvs/SetBool, true = close). One update per
+// /ehc/status message (lock-step with the simulator). Reads the gripper result from /sim/status.
+// When every object is handled it writes the JSON summary (and the CSV trace) and exits 0.
+// Any exception: log, stop publishing goals (the controller then stops on TARGET_LOST), exit 1.
+
+#include "ehc_bringup/grasp_sequencer.h"
+#include "ehc_control/ControllerStatus.h"
+#include "ehc_control/GraspCandidates.h"
+#include "ehc_control/config_node.h"
+#include "ehc_sim/SimStatus.h"
+
+#include <geometry_msgs/PoseStamped.h>
+#include <nav_msgs/Odometry.h>
+#include <ros/ros.h>
+#include <sensor_msgs/JointState.h>
+#include <std_srvs/SetBool.h>
+#include <tf2_eigen/tf2_eigen.h>
+#include <tf2_ros/transform_listener.h>
+
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <memory>
+
+namespace {
+
+using ehc_bringup::GraspSequencer;
+
+struct NodeParams {
+  std::string world_frame = "odom";
+  std::string tcp_frame = "ee_link";
+  std::string goal_topic = "/ehc/target_pose";
+  std::string object_pose_topic = "/ehc/sequencer/object_pose";
+  std::string candidates_topic = "/ehc/grasp_candidates";
+  std::string status_topic = "/ehc/status";
+  std::string sim_status_topic = "/sim/status";
+  std::string gripper_service = "/sim/gripper";
+  std::vector<std::string> pose_topics;  ///< per object (objects[i].pose_topic)
+  bool exit_when_done = true;
+  std::string summary() const {
+    std::string s = "  goal -> " + goal_topic + ", object pose -> " + object_pose_topic + ", candidates <- " +
+                    candidates_topic + ", status <- " + status_topic + ", gripper <- " + sim_status_topic +
+                    " / -> " + gripper_service + "\n  TCP " + world_frame + " -> " + tcp_frame + " (tf)\n  pose topics:";
+    for (const auto& t : pose_topics) s += " " + t;
+    return s;
+  }
+};
+
+NodeParams loadNodeParams(const ehc_control::ConfigNode& root) {
+  NodeParams p;
+  const auto n = root.childOrEmpty("node");
+  p.world_frame = n.get("world_frame", p.world_frame);
+  p.tcp_frame = n.get("tcp_frame", p.tcp_frame);
+  p.goal_topic = n.get("goal_topic", p.goal_topic);
+  p.object_pose_topic = n.get("object_pose_topic", p.object_pose_topic);
+  p.candidates_topic = n.get("candidates_topic", p.candidates_topic);
+  p.status_topic = n.get("status_topic", p.status_topic);
+  p.sim_status_topic = n.get("sim_status_topic", p.sim_status_topic);
+  p.gripper_service = n.get("gripper_service", p.gripper_service);
+  p.exit_when_done = n.get("exit_when_done", p.exit_when_done);
+  for (const std::string& k : {"world_frame", "tcp_frame", "goal_topic", "status_topic", "gripper_service"})
+    if (n.has(k) && n.get<std::string>(k, "").empty()) n.fail(k, "must not be empty");
+  const YAML::Node list = root.yaml()["objects"];
+  for (std::size_t i = 0; list && list.IsSequence() && i < list.size(); ++i) {
+    const ehc_control::ConfigNode o(list[i], root.file(), root.fieldName("objects[" + std::to_string(i) + "]"),
+                                    root.owner());
+    p.pose_topics.push_back(o.require<std::string>("pose_topic"));
+    if (p.pose_topics.back().empty()) o.fail("pose_topic", "must not be empty");
+  }
+  return p;
+}
+
+Eigen::Isometry3d toEigen(const geometry_msgs::Pose& p) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  const Eigen::Quaterniond q(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z);
+  T.translation() << p.position.x, p.position.y, p.position.z;
+  // A non-unit quaternion is bad input: make the pose invalid so the core rejects it.
+  if (!std::isfinite(q.norm()) || std::abs(q.norm() - 1.0) > 1e-3) T.linear().setConstant(std::nan(""));
+  else T.linear() = q.normalized().toRotationMatrix();
+  return T;
+}
+
+geometry_msgs::PoseStamped toMsg(const Eigen::Isometry3d& T, const std::string& frame, const ros::Time& stamp) {
+  geometry_msgs::PoseStamped m;
+  m.header.frame_id = frame;
+  m.header.stamp = stamp;
+  m.pose = tf2::toMsg(T);
+  return m;
+}
+
+class SequencerNode {
+ public:
+  SequencerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : listener_(tf_) {
+    std::string config;
+    if (!pnh.getParam("config", config))
+      throw std::invalid_argument("missing parameter _config:=<grasp_sequencer.yaml>");
+    pnh.param<std::string>("summary", summary_file_, "");
+    pnh.param<std::string>("trace", trace_file_, "");
+    const auto root = ehc_control::ConfigNode::loadFile(config, "GraspSequencerNode");
+    node_ = loadNodeParams(root);
+    const ehc_bringup::GraspSequencerParams sp = ehc_bringup::loadGraspSequencerParams(root);
+    seq_ = std::make_unique<GraspSequencer>(sp);
+    ROS_INFO_STREAM("ehc_grasp_sequencer_node (" << config << ")\n" << sp.summary() << "\n" << node_.summary());
+    if (!trace_file_.empty()) {
+      trace_.open(trace_file_);
+      if (!trace_) throw std::runtime_error("cannot write the trace file " + trace_file_);
+      trace_ << "t,object,phase,controller_phase,error_norm,position_error,sig_omega,base_speed,base_turn_rate,"
+                "arm_speed,target_in_fov\n";
+    }
+    goal_pub_ = nh.advertise<geometry_msgs::PoseStamped>(node_.goal_topic, 10);
+    object_pub_ = nh.advertise<geometry_msgs::PoseStamped>(node_.object_pose_topic, 10);
+    gripper_ = nh.serviceClient<std_srvs::SetBool>(node_.gripper_service);
+    for (std::size_t i = 0; i < node_.pose_topics.size(); ++i)
+      subs_.push_back(nh.subscribe<geometry_msgs::PoseStamped>(
+          node_.pose_topics[i], 5, [this, i](const geometry_msgs::PoseStamped::ConstPtr& m) { onObjectPose(i, *m); }));
+    subs_.push_back(nh.subscribe(node_.candidates_topic, 2, &SequencerNode::onCandidates, this));
+    subs_.push_back(nh.subscribe(node_.sim_status_topic, 10, &SequencerNode::onSimStatus, this));
+    subs_.push_back(nh.subscribe("joint_states", 10, &SequencerNode::onJoints, this));
+    subs_.push_back(nh.subscribe("odom", 10, &SequencerNode::onOdom, this));
+    subs_.push_back(nh.subscribe(node_.status_topic, 10, &SequencerNode::onStatus, this));
+    t_start_ = -1.0;
+  }
+
+ private:
+  void onObjectPose(std::size_t i, const geometry_msgs::PoseStamped& m) {
+    if (!m.header.frame_id.empty() && m.header.frame_id != node_.world_frame) {
+      ROS_ERROR_STREAM_THROTTLE(2.0, "[ehc_grasp_sequencer_node] object pose in frame '" << m.header.frame_id
+                                         << "' ignored: expected '" << node_.world_frame << "'");
+      return;
+    }
+    if (!seq_->setObjectPose(i, ros::Time::now().toSec(), toEigen(m.pose)))
+      ROS_ERROR_STREAM_THROTTLE(2.0, "[ehc_grasp_sequencer_node] rejected a non-finite / invalid pose on "
+                                         << node_.pose_topics[i]);
+  }
+  void onCandidates(const ehc_control::GraspCandidates& m) {
+    if (!m.header.frame_id.empty() && m.header.frame_id != node_.world_frame) return;
+    std::vector<ehc_bringup::GraspCandidate> c(m.poses.size());
+    for (std::size_t i = 0; i < m.poses.size(); ++i) {
+      c[i].pose = toEigen(m.poses[i]);
+      c[i].width = i < m.widths.size() ? m.widths[i] : std::nan("");
+      c[i].score = i < m.scores.size() ? m.scores[i] : std::nan("");
+    }
+    seq_->setGraspCandidates(ros::Time::now().toSec(), c);
+  }
+  void onSimStatus(const ehc_sim::SimStatus& m) {
+    gripper_state_ = m.gripper_state;
+    grasp_succeeded_ = m.grasp_succeeded;
+  }
+  void onJoints(const sensor_msgs::JointState& m) {
+    double s = 0.0;
+    for (std::size_t i = 0; i < m.velocity.size() && i < m.name.size(); ++i)
+      if (m.name[i].rfind("joint", 0) == 0 && std::isfinite(m.velocity[i])) s += m.velocity[i] * m.velocity[i];
+    arm_speed_ = std::sqrt(s);
+  }
+  void onOdom(const nav_msgs::Odometry& m) {
+    base_speed_ = std::hypot(m.twist.twist.linear.x, m.twist.twist.linear.y);
+    base_turn_ = std::abs(m.twist.twist.angular.z);
+  }
+
+  void onStatus(const ehc_control::ControllerStatus& m) {
+    if (finished_) return;
+    try {
+      step(m);
+    } catch (const std::exception& e) {
+      // No more goals: the controller's target watchdog stops the robot (TARGET_LOST).
+      ROS_FATAL_STREAM("[ehc_grasp_sequencer_node] " << e.what() << " -> no more goals, exiting");
+      finished_ = failed_ = true;
+      ros::shutdown();
+    }
+  }
+
+ public:
+  bool failed() const { return failed_; }
+
+ private:
+  void step(const ehc_control::ControllerStatus& m) {
+    ehc_bringup::SequencerInput in;
+    in.t = m.header.stamp.toSec();
+    if (t_start_ < 0.0) t_start_ = in.t;
+    in.controller_phase = m.phase;
+    in.target_in_fov = m.target_in_fov;
+    in.gripper_state = gripper_state_;
+    in.grasp_succeeded = grasp_succeeded_;
+    try {
+      const auto tf = tf_.lookupTransform(node_.world_frame, node_.tcp_frame, ros::Time(0));
+      in.tcp = tf2::transformToEigen(tf);
+    } catch (const tf2::TransformException& e) {
+      ROS_WARN_STREAM_THROTTLE(2.0, "[ehc_grasp_sequencer_node] no TCP pose yet: " << e.what());
+    }
+    const ehc_bringup::SequencerOutput out = seq_->update(in);
+    for (const auto& e : out.events) ROS_INFO_STREAM("[grasp] t=" << std::fixed << std::setprecision(2) << in.t << " " << e);
+    const ros::Time now = ros::Time::now();
+    if (out.object_pose) object_pub_.publish(toMsg(*out.object_pose, node_.world_frame, now));
+    if (out.goal) goal_pub_.publish(toMsg(*out.goal, node_.world_frame, now));
+    if (out.gripper_command) {
+      std_srvs::SetBool srv;
+      srv.request.data = *out.gripper_command;
+      if (!gripper_.call(srv) || !srv.response.success)
+        ROS_ERROR_STREAM("[ehc_grasp_sequencer_node] gripper " << (srv.request.data ? "close" : "open")
+                                                               << " failed (" << node_.gripper_service << ")");
+    }
+    if (trace_) {
+      const auto& objs = seq_->params().objects;
+      const std::size_t k = std::min(seq_->currentObject(), objs.size() - 1);
+      trace_ << std::fixed << std::setprecision(3) << in.t << "," << objs[k].name << ","
+             << ehc_bringup::toString(seq_->phase()) << "," << m.phase << "," << std::setprecision(5) << m.error_norm
+             << "," << m.position_error << "," << m.sig_omega << "," << base_speed_ << "," << base_turn_ << ","
+             << arm_speed_ << "," << (m.target_in_fov ? 1 : 0) << "\n";
+    }
+    mode_ = m.mode;
+    if (seq_->done()) finish(in.t);
+  }
+
+  void finish(double t) {
+    finished_ = true;
+    const std::string json = ehc_bringup::graspResultsToJson(seq_->results(), mode_, t - t_start_);
+    for (const auto& r : seq_->results()) ROS_INFO_STREAM("[grasp] summary " << ehc_bringup::graspResultLine(r));
+    ROS_INFO_STREAM("[grasp] json " << json);
+    if (!summary_file_.empty()) {
+      std::ofstream f(summary_file_);
+      f << json << "\n";
+      if (!f) ROS_ERROR_STREAM("[ehc_grasp_sequencer_node] cannot write " << summary_file_);
+    }
+    if (trace_) trace_.flush();
+    if (node_.exit_when_done) ros::shutdown();
+  }
+
+  NodeParams node_;
+  std::unique_ptr<GraspSequencer> seq_;
+  tf2_ros::Buffer tf_;
+  tf2_ros::TransformListener listener_;
+  ros::Publisher goal_pub_, object_pub_;
+  ros::ServiceClient gripper_;
+  std::vector<ros::Subscriber> subs_;
+  std::string summary_file_, trace_file_, mode_;
+  std::ofstream trace_;
+  std::string gripper_state_ = "open";
+  bool grasp_succeeded_ = false, finished_ = false, failed_ = false;
+  double arm_speed_ = 0.0, base_speed_ = 0.0, base_turn_ = 0.0, t_start_ = -1.0;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "ehc_grasp_sequencer_node");
+  ros::NodeHandle nh, pnh("~");
+  try {
+    SequencerNode node(nh, pnh);
+    ros::spin();
+    if (node.failed()) return 1;
+  } catch (const std::exception& e) {
+    // No more goals: the controller's target watchdog stops the robot (TARGET_LOST).
+    ROS_FATAL_STREAM("[ehc_grasp_sequencer_node] " << e.what());
+    return 1;
+  }
+  return 0;
+}

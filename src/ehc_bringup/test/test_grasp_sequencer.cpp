@@ -1,0 +1,596 @@
+// GraspSequencer + grasp selection (ROS-free): phase order, timeouts, failure paths, bad input.
+#include "ehc_bringup/grasp_sequencer.h"
+#include "ehc_control/config_node.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+
+using namespace ehc_bringup;
+
+namespace {
+
+/// Forward tag target 1.5 m ahead: z (approach) along world +x, y horizontal (world -y... any).
+Eigen::Isometry3d forwardTarget(double x = 1.5, double y = 0.0, double z = 0.76) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear().col(0) = Eigen::Vector3d(0, 0, -1);
+  T.linear().col(1) = Eigen::Vector3d(0, 1, 0);
+  T.linear().col(2) = Eigen::Vector3d(1, 0, 0);
+  T.translation() << x, y, z;
+  return T;
+}
+
+Eigen::Isometry3d downwardAt(const Eigen::Vector3d& p) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear().col(0) = Eigen::Vector3d(1, 0, 0);
+  T.linear().col(1) = Eigen::Vector3d(0, -1, 0);
+  T.linear().col(2) = Eigen::Vector3d(0, 0, -1);
+  T.translation() = p;
+  return T;
+}
+
+GraspSequencerParams twoObjects() {
+  GraspSequencerParams p;
+  p.objects = {{"a", ApproachDirection::Forward}, {"b", ApproachDirection::Forward}};
+  return p;
+}
+
+/// A perfect robot + gripper around the sequencer: the TCP jumps to the goal each cycle, the
+/// gripper holds after `close_cycles`, the lift succeeds after `lift_cycles`.
+struct Harness {
+  GraspSequencer seq;
+  double t = 1.0, dt = 0.01;
+  Eigen::Isometry3d tcp = Eigen::Isometry3d::Identity();
+  std::string gripper = "open";
+  bool succeeded = false;
+  bool in_fov = true;
+  std::string controller_phase = "TRACKING";
+  bool follow = true;                       ///< the TCP follows the goal
+  std::string close_result = "holding";     ///< what closing ends in
+  int close_cycles = 50, lift_cycles = 100;
+  int closing_for = -1, lifting_for = -1;
+  std::vector<std::string> events;
+  std::vector<GraspPhase> phases;
+  int gripper_closes = 0, gripper_opens = 0;
+  std::optional<Eigen::Isometry3d> last_goal;
+  std::optional<Eigen::Isometry3d> perceive;  ///< fed to object 0 every cycle if set
+
+  explicit Harness(const GraspSequencerParams& p) : seq(p) { tcp.translation() << 0.3, 0, 0.9; }
+
+  SequencerOutput step() {
+    if (perceive) seq.setObjectPose(0, t, *perceive);
+    SequencerInput in;
+    in.t = t;
+    in.tcp = tcp;
+    in.controller_phase = controller_phase;
+    in.target_in_fov = in_fov;
+    in.gripper_state = gripper;
+    in.grasp_succeeded = succeeded;
+    SequencerOutput out = seq.update(in);
+    for (auto& e : out.events) events.push_back(e);
+    if (phases.empty() || phases.back() != seq.phase()) phases.push_back(seq.phase());
+    last_goal = out.goal;
+    if (out.goal && follow) tcp = *out.goal;
+    if (out.gripper_command) {
+      if (*out.gripper_command) {
+        ++gripper_closes;
+        gripper = "closing";
+        closing_for = 0;
+        succeeded = false;
+      } else {
+        ++gripper_opens;
+        gripper = "opening";
+        closing_for = -1;
+        lifting_for = -1;
+      }
+    } else if (gripper == "opening") {
+      gripper = "open";
+    }
+    if (closing_for >= 0 && ++closing_for >= close_cycles) {
+      gripper = close_result;
+      closing_for = -1;
+      if (gripper == "holding") lifting_for = 0;
+    }
+    if (lifting_for >= 0 && ++lifting_for >= lift_cycles) {
+      succeeded = true;
+      lifting_for = -1;
+    }
+    t += dt;
+    return out;
+  }
+  void run(double seconds) {
+    for (int i = 0; i < static_cast<int>(seconds / dt); ++i) step();
+  }
+  void runUntilDone(double max_seconds = 200.0) {
+    while (!seq.done() && t < max_seconds) step();
+  }
+};
+
+bool hasEvent(const std::vector<std::string>& ev, const std::string& s) {
+  for (const auto& e : ev)
+    if (e.find(s) != std::string::npos) return true;
+  return false;
+}
+
+}  // namespace
+
+TEST(GraspSequencer, FullSequencePerObjectInOrder) {
+  Harness h(twoObjects());
+  h.seq.setObjectPose(0, h.t, forwardTarget());
+  // Keep perception of object b fresh once it is current.
+  while (!h.seq.done() && h.t < 100) {
+    if (h.seq.currentObject() == 1) h.seq.setObjectPose(1, h.t, forwardTarget(1.6, 0.2, 0.8));
+    h.step();
+  }
+  ASSERT_TRUE(h.seq.done());
+  const std::vector<GraspPhase> expected = {
+      GraspPhase::Approach, GraspPhase::PreGrasp, GraspPhase::Grasp, GraspPhase::Close,  GraspPhase::Lift,
+      GraspPhase::Release,  GraspPhase::Retreat,  GraspPhase::WaitTarget, GraspPhase::Approach,
+      GraspPhase::PreGrasp, GraspPhase::Grasp,    GraspPhase::Close,  GraspPhase::Lift, GraspPhase::Release,
+      GraspPhase::Retreat,  GraspPhase::Done};
+  // The first recorded phase may be WAIT_TARGET or APPROACH (pose given before the first cycle).
+  std::vector<GraspPhase> got = h.phases;
+  if (!got.empty() && got.front() == GraspPhase::WaitTarget) got.erase(got.begin());
+  EXPECT_EQ(got, expected);
+  ASSERT_EQ(h.seq.results().size(), 2u);
+  for (const auto& r : h.seq.results()) {
+    EXPECT_TRUE(r.success) << r.reason;
+    EXPECT_GT(r.time_s, 0.5);   // close (0.5 s) + lift (1 s) at least
+    EXPECT_LT(r.time_s, 30.0);
+    EXPECT_DOUBLE_EQ(r.tfm, 1.0);
+    EXPECT_FALSE(r.used_candidate);  // no candidates were given: tag fallback
+  }
+  EXPECT_EQ(h.gripper_closes, 2);
+  EXPECT_EQ(h.gripper_opens, 2);
+  EXPECT_EQ(h.seq.results()[0].name, "a");
+  EXPECT_EQ(h.seq.results()[1].name, "b");
+  // Done: no goal any more.
+  h.step();
+  EXPECT_FALSE(h.last_goal.has_value());
+}
+
+TEST(GraspSequencer, GoalsFollowThePhases) {
+  GraspSequencerParams p = twoObjects();
+  p.objects.resize(1);
+  Harness h(p);
+  h.perceive = forwardTarget();
+  h.follow = false;
+  h.step();
+  ASSERT_EQ(h.seq.phase(), GraspPhase::Approach);
+  ASSERT_TRUE(h.last_goal);
+  // Pre-grasp: backed off 10 cm along the approach (x), same orientation up to the half turn.
+  EXPECT_NEAR(h.last_goal->translation().x(), 1.4, 1e-9);
+  EXPECT_NEAR(h.last_goal->linear().col(2).dot(Eigen::Vector3d::UnitX()), 1.0, 1e-9);
+  // Not yet within the approach tolerance: stays in APPROACH.
+  h.run(1.0);
+  EXPECT_EQ(h.seq.phase(), GraspPhase::Approach);
+  h.tcp = *h.last_goal;
+  h.tcp.translation().x() -= 0.04;  // 4 cm short: inside the 5 cm approach tolerance
+  h.step();
+  EXPECT_EQ(h.seq.phase(), GraspPhase::PreGrasp);
+  h.step();
+  EXPECT_EQ(h.seq.phase(), GraspPhase::PreGrasp);  // 4 cm > 1.5 cm pre-grasp tolerance
+  h.tcp = *h.last_goal;
+  h.step();
+  EXPECT_EQ(h.seq.phase(), GraspPhase::Grasp);
+  ASSERT_TRUE(h.last_goal);
+  EXPECT_NEAR(h.last_goal->translation().x(), 1.5, 1e-9);
+  // Orientation off by 10 deg: not at the grasp yet.
+  h.tcp = *h.last_goal;
+  h.tcp.linear() = h.tcp.linear() * Eigen::AngleAxisd(10 * M_PI / 180, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  h.step();
+  EXPECT_EQ(h.seq.phase(), GraspPhase::Grasp);
+  h.tcp = *h.last_goal;
+  h.step();
+  EXPECT_EQ(h.seq.phase(), GraspPhase::Close);
+  EXPECT_EQ(h.gripper_closes, 1);
+  h.follow = true;
+  h.run(0.6);
+  EXPECT_EQ(h.seq.phase(), GraspPhase::Lift);
+  h.step();
+  ASSERT_TRUE(h.last_goal);
+  EXPECT_NEAR(h.last_goal->translation().z(), 0.76 + 0.15, 1e-9);
+}
+
+TEST(GraspSequencer, PerceptionMovesTheGoalUntilTheLock) {
+  GraspSequencerParams p = twoObjects();
+  p.pose_filter_gain = 1.0;  // no filter: the goal follows each pose
+  Harness h(p);
+  h.follow = false;
+  h.seq.setObjectPose(0, h.t, forwardTarget());
+  h.step();
+  ASSERT_EQ(h.seq.phase(), GraspPhase::Approach);
+  h.seq.setObjectPose(0, h.t, forwardTarget(1.5, 0.1));
+  h.step();
+  ASSERT_TRUE(h.last_goal);
+  EXPECT_NEAR(h.last_goal->translation().y(), 0.1, 1e-9);
+  // Lock: at the pre-grasp; later poses do not move the grasp.
+  h.tcp = *h.last_goal;
+  h.step();
+  ASSERT_EQ(h.seq.phase(), GraspPhase::PreGrasp);
+  h.seq.setObjectPose(0, h.t, forwardTarget(1.5, 0.3));
+  h.step();
+  EXPECT_NEAR(h.last_goal->translation().y(), 0.1, 1e-9);
+  EXPECT_NEAR(h.seq.lockedGrasp()->pose.translation().y(), 0.1, 1e-9);
+}
+
+TEST(GraspSequencer, PoseFilterSmoothsPerception) {
+  GraspSequencerParams p = twoObjects();
+  p.pose_filter_gain = 0.5;
+  GraspSequencer s(p);
+  s.setObjectPose(0, 1.0, forwardTarget(1.5, 0.0));
+  s.setObjectPose(0, 1.1, forwardTarget(1.5, 0.1));
+  SequencerInput in;
+  in.t = 1.1;
+  const SequencerOutput out = s.update(in);
+  ASSERT_TRUE(out.object_pose);
+  EXPECT_NEAR(out.object_pose->translation().y(), 0.05, 1e-9);
+}
+
+TEST(GraspSequencer, StalePerceptionWithholdsTheGoalBeforeTheLock) {
+  Harness h(twoObjects());
+  h.follow = false;
+  h.seq.setObjectPose(0, h.t, forwardTarget());
+  h.step();
+  EXPECT_TRUE(h.last_goal);
+  h.run(0.5);
+  EXPECT_TRUE(h.last_goal);  // within perception_hold (1 s)
+  h.run(0.6);
+  EXPECT_FALSE(h.last_goal);  // older than 1 s: no goal -> the controller stops (TARGET_LOST)
+  EXPECT_EQ(h.seq.phase(), GraspPhase::Approach);
+  h.seq.setObjectPose(0, h.t, forwardTarget());
+  h.step();
+  EXPECT_TRUE(h.last_goal);  // re-acquired
+}
+
+TEST(GraspSequencer, LockedGraspKeepsTheGoalWithoutPerception) {
+  Harness h(twoObjects());
+  h.seq.setObjectPose(0, h.t, forwardTarget());
+  h.close_cycles = 100000;  // never closes
+  h.step();
+  h.step();
+  ASSERT_EQ(h.seq.phase(), GraspPhase::PreGrasp);
+  h.run(2.0);  // no perception for 2 s > perception_hold
+  EXPECT_TRUE(h.last_goal);
+  EXPECT_EQ(h.seq.phase(), GraspPhase::Close);
+}
+
+TEST(GraspSequencer, TimeLimitFailsTheObjectAndMovesOn) {
+  Harness h(twoObjects());
+  h.run(29.9);
+  EXPECT_EQ(h.seq.phase(), GraspPhase::WaitTarget);
+  EXPECT_TRUE(h.seq.results().empty());
+  h.run(0.2);
+  ASSERT_EQ(h.seq.results().size(), 1u);
+  const GraspResult& r = h.seq.results()[0];
+  EXPECT_FALSE(r.success);
+  EXPECT_EQ(r.failed_phase, "WAIT_TARGET");
+  EXPECT_NE(r.reason.find("time limit"), std::string::npos);
+  EXPECT_NEAR(r.time_s, 30.0, 0.02);
+  EXPECT_EQ(h.gripper_opens, 0);  // gripper already open: no command
+  h.run(5.0);
+  EXPECT_EQ(h.seq.currentObject(), 1u);  // next object after release + retreat
+}
+
+TEST(GraspSequencer, TimeLimitWhileApproachingAConfiguredLimit) {
+  GraspSequencerParams p = twoObjects();
+  p.object_time_limit = 5.0;
+  Harness h(p);
+  h.follow = false;  // the robot never gets there
+  h.seq.setObjectPose(0, h.t, forwardTarget());
+  for (int i = 0; i < 600; ++i) {
+    h.seq.setObjectPose(0, h.t, forwardTarget());
+    h.step();
+  }
+  ASSERT_GE(h.seq.results().size(), 1u);
+  EXPECT_EQ(h.seq.results()[0].failed_phase, "APPROACH");
+  EXPECT_NEAR(h.seq.results()[0].time_s, 5.0, 0.02);
+}
+
+TEST(GraspSequencer, GripperClosingOnNothingFails) {
+  Harness h(twoObjects());
+  h.close_result = "closed_empty";
+  h.seq.setObjectPose(0, h.t, forwardTarget());
+  h.run(3.0);
+  ASSERT_GE(h.seq.results().size(), 1u);
+  EXPECT_FALSE(h.seq.results()[0].success);
+  EXPECT_EQ(h.seq.results()[0].failed_phase, "CLOSE");
+  EXPECT_NE(h.seq.results()[0].reason.find("nothing"), std::string::npos);
+  EXPECT_EQ(h.gripper_opens, 1);  // released
+}
+
+TEST(GraspSequencer, GripperTimeoutFails) {
+  Harness h(twoObjects());
+  h.close_cycles = 100000;
+  h.seq.setObjectPose(0, h.t, forwardTarget());
+  h.run(3.0);
+  EXPECT_TRUE(h.seq.results().empty());
+  h.run(0.2);
+  ASSERT_EQ(h.seq.results().size(), 1u);
+  EXPECT_EQ(h.seq.results()[0].failed_phase, "CLOSE");
+  EXPECT_NE(h.seq.results()[0].reason.find("did not close"), std::string::npos);
+}
+
+TEST(GraspSequencer, ObjectDroppedWhileLiftingFails) {
+  Harness h(twoObjects());
+  h.lift_cycles = 100000;
+  h.seq.setObjectPose(0, h.t, forwardTarget());
+  h.run(1.0);
+  ASSERT_EQ(h.seq.phase(), GraspPhase::Lift);
+  h.gripper = "closed_empty";  // slipped out
+  h.step();
+  ASSERT_EQ(h.seq.results().size(), 1u);
+  EXPECT_EQ(h.seq.results()[0].failed_phase, "LIFT");
+  EXPECT_NE(h.seq.results()[0].reason.find("lost"), std::string::npos);
+}
+
+TEST(GraspSequencer, TfmCountsCyclesUntilTheGripperCloses) {
+  GraspSequencerParams p = twoObjects();
+  p.objects.resize(1);
+  Harness h(p);
+  h.follow = false;
+  h.seq.setObjectPose(0, h.t, forwardTarget());
+  // 100 cycles in view, 300 out of view, then reach everything.
+  for (int i = 0; i < 400; ++i) {
+    h.in_fov = i < 100;
+    h.seq.setObjectPose(0, h.t, forwardTarget());
+    h.step();
+  }
+  // Then the TCP follows: APPROACH -> PRE_GRASP -> GRASP -> CLOSE in 4 more cycles (all
+  // counted, out of view); the lift cycles after CLOSE are in view but not counted.
+  h.follow = true;
+  h.in_fov = false;
+  while (h.seq.phase() != GraspPhase::Close) h.step();
+  h.in_fov = true;
+  h.runUntilDone();
+  ASSERT_EQ(h.seq.results().size(), 1u);
+  const GraspResult& r = h.seq.results()[0];
+  EXPECT_TRUE(r.success);
+  EXPECT_EQ(r.cycles, 404);
+  EXPECT_NEAR(r.tfm, 100.0 / 404.0, 1e-12);
+}
+
+TEST(GraspSequencer, TsmmStagesAppearAsControllerPhases) {
+  GraspSequencerParams p = twoObjects();
+  p.objects.resize(1);
+  Harness h(p);
+  h.seq.setObjectPose(0, h.t, forwardTarget());
+  h.follow = false;
+  h.controller_phase = "TSMM_BASE";
+  h.run(0.5);
+  h.controller_phase = "TSMM_ARM";
+  h.follow = true;
+  h.runUntilDone();
+  ASSERT_EQ(h.seq.results().size(), 1u);
+  EXPECT_TRUE(hasEvent(h.events, "controller TSMM_BASE -> TSMM_ARM"));
+  bool base = false, arm = false;
+  for (const auto& c : h.seq.results()[0].controller_phases) {
+    base |= c.first == "TSMM_BASE" && c.second == 50;
+    arm |= c.first == "TSMM_ARM" && c.second > 0;
+  }
+  EXPECT_TRUE(base);
+  EXPECT_TRUE(arm);
+}
+
+TEST(GraspSequencer, RejectsNonFiniteInput) {
+  GraspSequencer s(twoObjects());
+  Eigen::Isometry3d bad = forwardTarget();
+  bad.translation().x() = std::nan("");
+  EXPECT_FALSE(s.setObjectPose(0, 1.0, bad));
+  Eigen::Isometry3d skew = forwardTarget();
+  skew.linear() *= 2.0;  // not a rotation
+  EXPECT_FALSE(s.setObjectPose(0, 1.0, skew));
+  EXPECT_FALSE(s.setObjectPose(7, 1.0, forwardTarget()));  // unknown object
+  EXPECT_FALSE(s.setObjectPose(0, std::nan(""), forwardTarget()));
+  GraspCandidate c;
+  c.pose = forwardTarget();
+  c.width = 0.05;
+  c.score = std::numeric_limits<double>::infinity();
+  s.setGraspCandidates(1.0, {c});
+  EXPECT_EQ(s.rejectedInputs(), 5);
+  // Nothing valid arrived: still waiting, no goal.
+  SequencerInput in;
+  in.t = 1.0;
+  EXPECT_FALSE(s.update(in).goal);
+  EXPECT_EQ(s.phase(), GraspPhase::WaitTarget);
+  // A NaN TCP pose never satisfies a tolerance.
+  s.setObjectPose(0, 1.0, forwardTarget());
+  in.t = 1.01;
+  Eigen::Isometry3d nan_tcp = Eigen::Isometry3d::Identity();
+  nan_tcp.translation().setConstant(std::nan(""));
+  in.tcp = nan_tcp;
+  for (int i = 0; i < 10; ++i) {
+    in.t += 0.01;
+    const auto out = s.update(in);
+    ASSERT_TRUE(out.goal);
+    EXPECT_TRUE(out.goal->matrix().allFinite());
+  }
+  EXPECT_EQ(s.phase(), GraspPhase::Approach);
+}
+
+TEST(GraspSequencer, BadTimeThrows) {
+  GraspSequencer s(twoObjects());
+  SequencerInput in;
+  in.t = std::nan("");
+  try {
+    s.update(in);
+    FAIL() << "no throw";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("[GraspSequencer]"), std::string::npos);
+  }
+  in.t = 2.0;
+  s.update(in);
+  in.t = 1.0;
+  EXPECT_THROW(s.update(in), std::invalid_argument);
+}
+
+TEST(GraspSequencerParams, ValidationNamesTheField) {
+  GraspSequencerParams p;
+  EXPECT_THROW(p.validate(), std::invalid_argument);  // no objects
+  p = twoObjects();
+  p.objects[1].name = "a";
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+  p = twoObjects();
+  p.object_time_limit = -1.0;
+  try {
+    p.validate();
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("object_time_limit"), std::string::npos);
+  }
+  p = twoObjects();
+  p.pose_filter_gain = 0.0;
+  EXPECT_THROW(GraspSequencer{p}, std::invalid_argument);
+  p = twoObjects();
+  p.selection.max_angle_deg = std::nan("");
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+}
+
+TEST(GraspSequencerParams, LoadsYamlAndNamesFileAndField) {
+  const std::string ok =
+      "sequencer: {object_time_limit: 20.0, lift_height: 0.12, selection: {max_angle_deg: 25.0}}\n"
+      "objects:\n  - {name: front, approach: downward, pose_topic: /a}\n  - {name: back, pose_topic: /b}\n";
+  const auto p = loadGraspSequencerParams(ehc_control::ConfigNode::loadString(ok, "seq.yaml", "GraspSequencerNode"));
+  ASSERT_EQ(p.objects.size(), 2u);
+  EXPECT_EQ(p.objects[0].approach, ApproachDirection::Downward);
+  EXPECT_EQ(p.objects[1].approach, ApproachDirection::Forward);
+  EXPECT_DOUBLE_EQ(p.object_time_limit, 20.0);
+  EXPECT_DOUBLE_EQ(p.selection.max_angle_deg, 25.0);
+  auto expectError = [](const std::string& yaml, const std::string& needle) {
+    try {
+      loadGraspSequencerParams(ehc_control::ConfigNode::loadString(yaml, "seq.yaml", "GraspSequencerNode"));
+      ADD_FAILURE() << "no error for " << yaml;
+    } catch (const std::invalid_argument& e) {
+      const std::string w = e.what();
+      EXPECT_NE(w.find("seq.yaml"), std::string::npos) << w;
+      EXPECT_NE(w.find(needle), std::string::npos) << w;
+    }
+  };
+  expectError("objects:\n  - {name: a, approach: diagonal}\n", "approach");
+  expectError("objects:\n  - {approach: forward}\n", "name");
+  expectError("sequencer: {lift_height: .nan}\nobjects: [{name: a}]\n", "lift_height");
+  expectError("sequencer: {lift_height: -0.1}\nobjects: [{name: a}]\n", "lift_height");
+  expectError("sequencer: {}\n", "objects");
+}
+
+TEST(GraspSequencerParams, DemoAndTestConfigsLoad) {
+  for (const std::string f : {"/demo/grasp_sequencer.yaml", "/demo/grasp_single_forward.yaml",
+                              "/demo/grasp_single_downward.yaml", "/demo/grasp_single_sideways.yaml"}) {
+    const std::string path = std::string(EHC_CONFIG_DIR) + f;
+    if (!std::ifstream(path)) {
+      ADD_FAILURE() << "missing " << path;
+      continue;
+    }
+    EXPECT_NO_THROW(loadGraspSequencerParams(ehc_control::ConfigNode::loadFile(path, "GraspSequencerNode"))) << path;
+  }
+}
+
+// ---------------------------------------------------------------- grasp selection
+
+TEST(GraspSelection, PrefersTheWantedApproachOverAHigherScore) {
+  const Eigen::Isometry3d tag = forwardTarget();
+  GraspCandidate fwd{forwardTarget(1.51), 0.05, 0.9};
+  GraspCandidate down{downwardAt(Eigen::Vector3d(1.5, 0.0, 0.79)), 0.05, 0.4};
+  GraspSelectionParams p;
+  const auto d = chooseGrasp({fwd, down}, ApproachDirection::Downward, tag, tag.linear(), p);
+  ASSERT_TRUE(d);
+  EXPECT_TRUE(d->from_candidate);
+  EXPECT_EQ(d->candidate_index, 1);
+  EXPECT_NEAR(d->pose.linear().col(2).z(), -1.0, 1e-9);
+  const auto f = chooseGrasp({fwd, down}, ApproachDirection::Forward, tag, tag.linear(), p);
+  ASSERT_TRUE(f);
+  EXPECT_EQ(f->candidate_index, 0);
+  const auto a = chooseGrasp({down, fwd}, ApproachDirection::Any, tag, tag.linear(), p);
+  ASSERT_TRUE(a);
+  EXPECT_EQ(a->candidate_index, 1);  // best score
+  const auto t = chooseGrasp({fwd, down}, ApproachDirection::Tag, tag, tag.linear(), p);
+  ASSERT_TRUE(t);
+  EXPECT_FALSE(t->from_candidate);
+  EXPECT_TRUE(t->pose.translation().isApprox(tag.translation()));
+}
+
+TEST(GraspSelection, SidewaysAcceptsEitherSide) {
+  const Eigen::Isometry3d tag = forwardTarget();
+  Eigen::Isometry3d side = Eigen::Isometry3d::Identity();  // approach along world -y
+  side.linear().col(0) = Eigen::Vector3d(0, 0, 1);
+  side.linear().col(1) = Eigen::Vector3d(-1, 0, 0);
+  side.linear().col(2) = Eigen::Vector3d(0, -1, 0);
+  side.translation() = tag.translation();
+  GraspSelectionParams p;
+  EXPECT_TRUE(candidateQualifies({side, 0.05, 1.0}, ApproachDirection::Sideways, tag, p));
+  Eigen::Isometry3d other = side;
+  other.linear().col(2) = -side.linear().col(2);
+  other.linear().col(0) = -side.linear().col(0);
+  EXPECT_TRUE(candidateQualifies({other, 0.05, 1.0}, ApproachDirection::Sideways, tag, p));
+  EXPECT_FALSE(candidateQualifies({side, 0.05, 1.0}, ApproachDirection::Forward, tag, p));
+  EXPECT_FALSE(candidateQualifies({side, 0.05, 1.0}, ApproachDirection::Downward, tag, p));
+}
+
+TEST(GraspSelection, GateWidthAndBadCandidates) {
+  const Eigen::Isometry3d tag = forwardTarget();
+  GraspSelectionParams p;
+  EXPECT_FALSE(candidateQualifies({forwardTarget(1.6), 0.05, 1.0}, ApproachDirection::Forward, tag, p));  // 10 cm off
+  EXPECT_FALSE(candidateQualifies({forwardTarget(), 0.08, 1.0}, ApproachDirection::Forward, tag, p));     // too wide
+  Eigen::Isometry3d nan = forwardTarget();
+  nan(0, 0) = std::nan("");
+  EXPECT_FALSE(candidateQualifies({nan, 0.05, 1.0}, ApproachDirection::Forward, tag, p));
+  EXPECT_TRUE(candidateQualifies({forwardTarget(1.52), 0.05, 1.0}, ApproachDirection::Forward, tag, p));
+}
+
+TEST(GraspSelection, FallbackAndRequiredCandidate) {
+  const Eigen::Isometry3d tag = forwardTarget();
+  GraspSelectionParams p;
+  p.fallback_backoff_downward = 0.03;
+  const auto d = chooseGrasp({}, ApproachDirection::Downward, tag, tag.linear(), p);
+  ASSERT_TRUE(d);
+  EXPECT_FALSE(d->from_candidate);
+  EXPECT_NEAR(d->pose.linear().col(2).z(), -1.0, 1e-9);                     // straight down
+  EXPECT_NEAR(d->pose.linear().col(1).z(), 0.0, 1e-9);                      // closing axis horizontal
+  EXPECT_NEAR(d->pose.translation().z(), 0.76 + 0.03, 1e-9);                // backed off upwards
+  EXPECT_NEAR(d->pose.linear().determinant(), 1.0, 1e-9);
+  const auto s = chooseGrasp({}, ApproachDirection::Sideways, tag, tag.linear(), p);
+  ASSERT_TRUE(s);
+  EXPECT_NEAR(std::abs(s->pose.linear().col(2).y()), 1.0, 1e-9);
+  EXPECT_NEAR(s->pose.linear().col(1).z(), 0.0, 1e-9);
+  p.require_candidate = true;
+  EXPECT_FALSE(chooseGrasp({}, ApproachDirection::Downward, tag, tag.linear(), p));
+  Eigen::Isometry3d nan = tag;
+  nan.translation().setConstant(std::nan(""));
+  p.require_candidate = false;
+  EXPECT_FALSE(chooseGrasp({}, ApproachDirection::Forward, nan, tag.linear(), p));
+}
+
+TEST(GraspSelection, HalfTurnClosestToTheReference) {
+  const Eigen::Isometry3d tag = forwardTarget();
+  const Eigen::Matrix3d flipped = tag.linear() * Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  GraspSelectionParams p;
+  const auto a = chooseGrasp({}, ApproachDirection::Tag, tag, flipped, p);
+  ASSERT_TRUE(a);
+  EXPECT_LT(rotationAngle(a->pose.linear(), flipped), 1e-9);
+  EXPECT_TRUE(a->pose.linear().col(2).isApprox(tag.linear().col(2)));  // same approach
+  const auto b = chooseGrasp({}, ApproachDirection::Tag, tag, tag.linear(), p);
+  EXPECT_LT(rotationAngle(b->pose.linear(), tag.linear()), 1e-9);
+}
+
+TEST(GraspReport, JsonAndLines) {
+  GraspResult r;
+  r.name = "front";
+  r.success = true;
+  r.time_s = 12.345;
+  r.tfm = 0.9876;
+  r.phase_times = {{"APPROACH", 8.0}};
+  GraspResult f;
+  f.name = "back\"x";
+  f.reason = "time limit";
+  f.failed_phase = "APPROACH";
+  const std::string j = graspResultsToJson({r, f}, "ehc", 40.0);
+  EXPECT_NE(j.find("\"successes\": 1"), std::string::npos) << j;
+  EXPECT_NE(j.find("\"time_s\": 12.35"), std::string::npos) << j;  // rounded to 0.01
+  EXPECT_NE(j.find("\"tfm\": 0.9876"), std::string::npos) << j;
+  EXPECT_NE(j.find("back\\\"x"), std::string::npos) << j;
+  EXPECT_NE(j.find("\"APPROACH\": 8.00"), std::string::npos) << j;
+  EXPECT_NE(graspResultLine(r).find("SUCCESS"), std::string::npos);
+  EXPECT_NE(graspResultLine(f).find("FAILED"), std::string::npos);
+  EXPECT_NE(graspResultLine(f).find("time limit"), std::string::npos);
+}
