@@ -50,6 +50,10 @@ class ControllerSupervisor {
   const Eigen::Vector3d& basePose() const { return base_; }
   const Eigen::Isometry3d& target() const { return target_; }
   bool hasTarget() const { return t_target_.has_value(); }
+  /// Seconds since the last good target pose was received (-1 if none). The controller keeps
+  /// serving that pose while the age is within target_timeout, then stops (TARGET_LOST);
+  /// a fresh pose resumes it.
+  double targetAge(double now) const { return t_target_ ? now - *t_target_ : -1.0; }
   /// Obstacles if fresh, else empty.
   std::vector<ObstaclePair> obstacles(double now) const;
   double jointStateTime() const { return t_joints_.value_or(-1.0); }

@@ -42,4 +42,12 @@ Eigen::Matrix<double, 6, 1> proportionalPoseServo(const Eigen::Isometry3d& tcp,
                                                   const PoseServoParams& params,
                                                   const RollJoint* roll = nullptr);
 
+/// Roll unwinding for servo laws that cannot be told to rotate more than pi (ViSP's theta-u
+/// feature, PbvsServo): when the short way about the TCP z axis would take the roll joint past
+/// its range, returns a waypoint rotated halfway along the long way (same translation, same
+/// swing), so that the short way to the waypoint is the long way to `target`. Re-evaluated
+/// every cycle it leads the joint round; otherwise returns `target` unchanged.
+Eigen::Isometry3d rollUnwoundTarget(const Eigen::Isometry3d& tcp, const Eigen::Isometry3d& target,
+                                    const RollJoint& roll);
+
 }  // namespace ehc_control

@@ -105,9 +105,19 @@ class EhcQpController {
   /// One control cycle: state (base pose x, y, yaw; arm q), target TCP pose (world), desired
   /// TCP twist nu_e (world, [v; w]) and the obstacle pairs. Never throws for bad numbers:
   /// returns a zero command with qp_status QP_FAILED and the reason.
+  /// `weight`: sig(omega) of this cycle if the caller already evaluated it (weight(), e.g. for
+  /// MPBS), else it is evaluated here.
   ControllerCommand step(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q,
                          const Eigen::Isometry3d& target, const Vector6d& nu_e,
-                         const std::vector<ObstaclePair>& obstacles = {});
+                         const std::vector<ObstaclePair>& obstacles = {},
+                         const EhcWeight* weight = nullptr);
+
+  /// The EHC weighting of a TCP position towards a target position (both world frame) for the
+  /// base pose, exactly as step() evaluates it. Throws "[EhcQpController] ..." without a
+  /// weighting (hasWeighting()) or for non-finite input.
+  EhcWeight weight(const Eigen::Vector3d& base_pose, const Eigen::Vector3d& tcp_world,
+                   const Eigen::Vector3d& target_world) const;
+  bool hasWeighting() const { return static_cast<bool>(weighting_); }
 
   /// New target: clears the warm start and the TSMM stage.
   void reset();

@@ -62,4 +62,23 @@ Vector6d proportionalPoseServo(const Eigen::Isometry3d& tcp, const Eigen::Isomet
   return nu;
 }
 
+Eigen::Isometry3d rollUnwoundTarget(const Eigen::Isometry3d& tcp, const Eigen::Isometry3d& target,
+                                    const RollJoint& roll) {
+  // Swing-twist split of the rotation error about the TCP z axis a: R_err = R_swing R_twist.
+  const Eigen::Vector3d a = tcp.linear().col(2);
+  Eigen::Quaterniond qe(Eigen::Matrix3d(target.linear() * tcp.linear().transpose()));
+  if (qe.w() < 0) qe.coeffs() *= -1.0;
+  const double psi = 2.0 * std::atan2(qe.vec().dot(a), qe.w());  // twist angle in (-pi, pi]
+  const double lo = roll.lower + roll.margin, hi = roll.upper - roll.margin;
+  double psi_cmd = psi;
+  if (roll.q + psi > hi && roll.q + psi - 2.0 * M_PI >= lo) psi_cmd = psi - 2.0 * M_PI;
+  else if (roll.q + psi < lo && roll.q + psi + 2.0 * M_PI <= hi) psi_cmd = psi + 2.0 * M_PI;
+  if (psi_cmd == psi) return target;
+  const Eigen::Quaterniond twist(Eigen::AngleAxisd(psi, a));
+  const Eigen::Quaterniond swing = qe * twist.inverse();
+  Eigen::Isometry3d waypoint = target;
+  waypoint.linear() = (swing * Eigen::Quaterniond(Eigen::AngleAxisd(0.5 * psi_cmd, a))).toRotationMatrix() * tcp.linear();
+  return waypoint;
+}
+
 }  // namespace ehc_control

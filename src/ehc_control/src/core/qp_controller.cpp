@@ -155,6 +155,15 @@ void EhcQpController::setMode(ControlMode m) {
   reset();
 }
 
+EhcWeight EhcQpController::weight(const Eigen::Vector3d& base_pose, const Eigen::Vector3d& tcp_world,
+                                  const Eigen::Vector3d& target_world) const {
+  if (!weighting_) throw std::invalid_argument("[EhcQpController] no EHC weighting (reachability map) configured");
+  if (!base_pose.allFinite() || !tcp_world.allFinite() || !target_world.allFinite())
+    throw std::invalid_argument("[EhcQpController] non-finite input to weight()");
+  const Eigen::Isometry3d arm_T_world = (WholeBodyModel::baseTransform(base_pose) * base_T_arm_).inverse();
+  return weighting_->evaluate(arm_T_world * tcp_world, arm_T_world * target_world);
+}
+
 ControllerCommand EhcQpController::fail(ControllerCommand c, const std::string& why) const {
   c.velocity = Eigen::VectorXd::Zero(model_->nDof());
   c.slack.setZero();
@@ -166,7 +175,8 @@ ControllerCommand EhcQpController::fail(ControllerCommand c, const std::string& 
 
 ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q,
                                         const Eigen::Isometry3d& target, const Vector6d& nu_e,
-                                        const std::vector<ObstaclePair>& obstacles) {
+                                        const std::vector<ObstaclePair>& obstacles,
+                                        const EhcWeight* weight) {
   const auto t0 = std::chrono::steady_clock::now();
   const WholeBodyModel& m = *model_;
   const RobotConfig& rc = m.config();
@@ -191,9 +201,11 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
   out.orientation_error = e.tail<3>().norm();
   out.error_norm = e.cwiseAbs().sum();
   const double e_floor = std::max(out.error_norm, params_.min_error);
-  if (weighting_) {
-    const Eigen::Isometry3d arm_T_world = (WholeBodyModel::baseTransform(base_pose) * base_T_arm_).inverse();
-    const EhcWeight w = weighting_->evaluate(arm_T_world * T_tcp.translation(), arm_T_world * target.translation());
+  if (weight) {
+    out.omega = weight->omega;
+    out.sig = weight->sig;
+  } else if (weighting_) {
+    const EhcWeight w = this->weight(base_pose, T_tcp.translation(), target.translation());
     out.omega = w.omega;
     out.sig = w.sig;
   }

@@ -1,0 +1,57 @@
+#pragma once
+// TargetTracker: whether the target is in the camera's view, and TfM (time for monitoring,
+// paper Exp-3): the fraction of control cycles, since the target was set, in which the target
+// centre projects inside the image at positive depth. The camera pose comes from the robot's
+// kinematics (not from detections), so TfM also counts the cycles in which the controller
+// moves on the last good target pose while perception does not see it. A target whose centre
+// jumps by more than new_target_distance is a new target and restarts the count. ROS-free.
+
+#include "ehc_control/pinhole_camera.h"
+
+#include <Eigen/Geometry>
+
+#include <string>
+
+namespace ehc_control {
+
+class ConfigNode;
+
+struct TargetTrackerParams {
+  std::string camera_file;           ///< camera_info YAML (resolved path); "" = PinholeCamera defaults
+  double new_target_distance = 0.10; ///< m: centre jump that counts as a new target (TfM restarts)
+  void validate() const;             ///< throws "[TargetTrackerParams] ..."
+  std::string summary() const;
+};
+/// Reads the `tracking` section; `camera` is resolved against the YAML file's folder.
+TargetTrackerParams loadTargetTrackerParams(const ConfigNode& node);
+
+class TargetTracker {
+ public:
+  TargetTracker(const PinholeCamera& camera, const TargetTrackerParams& params);
+
+  /// A newly accepted target centre (world). Returns true if it is a new target (first one,
+  /// or a jump larger than new_target_distance): the TfM count restarts.
+  bool setTarget(const Eigen::Vector3d& centre_world);
+  /// One control cycle with the camera optical frame's world pose: updates and returns
+  /// whether the target centre is in view. No-op (false) before the first target.
+  bool observe(const Eigen::Isometry3d& world_T_camera);
+  /// Forget the target (TfM 0, no target).
+  void reset();
+
+  bool hasTarget() const { return has_target_; }
+  bool inView() const { return in_view_; }
+  double tfm() const { return cycles_ > 0 ? static_cast<double>(in_view_cycles_) / static_cast<double>(cycles_) : 0.0; }
+  long cycles() const { return cycles_; }
+  long inViewCycles() const { return in_view_cycles_; }
+  const Eigen::Vector3d& centre() const { return centre_; }
+  const PinholeCamera& camera() const { return camera_; }
+
+ private:
+  PinholeCamera camera_;
+  TargetTrackerParams params_;
+  bool has_target_ = false, in_view_ = false;
+  Eigen::Vector3d centre_ = Eigen::Vector3d::Zero();
+  long cycles_ = 0, in_view_cycles_ = 0;
+};
+
+}  // namespace ehc_control
