@@ -50,4 +50,8 @@ if(CATKIN_ENABLE_TESTING)
   ehc_realman_rostest(test_rm_arm_adapter_node)
   ehc_realman_rostest(test_water2_base_bridge_node)
   ehc_realman_rostest(test_run_realman_script)
+  # Closed loop on wall time: ehc_controller_node (timer trigger) -> adapter / bridge -> fake
+  # rm_driver + fake Water2 server -> /joint_states + /odom -> controller.
+  ehc_realman_rostest(test_realman_closed_loop)
+  add_dependencies(test_realman_closed_loop ehc_controller_node)
 endif()

@@ -17,7 +17,8 @@
 #   ARM_CONFIG         rm_arm_adapter YAML            [config/realman/rm_arm_adapter.yaml]
 #   BASE_CONFIG        water2_base_bridge YAML        [config/realman/water2_base_bridge.yaml]
 #   WATER2_HOST/PORT   Water2 API address (override BASE_CONFIG)           [from BASE_CONFIG]
-#   CONTROLLER_CONFIG  controller YAML                       [config/control/controller.yaml]
+#   CONTROLLER_CONFIG  controller YAML (node.trigger: timer)  [config/realman/controller.yaml]
+#   CONTROLLER_MODE    ehc | neo_e | neo_c | tsmm          [the YAML's controller.mode]
 #   TAG_CONFIG, GRASP_CONFIG, OBSTACLE_CONFIG  perception YAMLs       [config/perception/*.yaml]
 #   LOG_DIR            one log file per node                        [$HOME/.ros/ehc_realman]
 #   ROS_MASTER_URI, ROS_IP  as usual (the master runs on the robot computer)
@@ -27,7 +28,7 @@
 # usage or set-up error.
 set -o pipefail
 
-usage() { sed -n '2,27p' "$0" | sed 's/^# \{0,1\}//'; }
+usage() { awk 'NR == 1 { next } /^#/ { sub(/^# ?/, ""); print; next } { exit }' "$0"; }
 
 DRY_RUN=0
 COMPONENTS=()
@@ -62,7 +63,7 @@ fi
 ROBOT_YAML="${ROBOT_YAML:-config/robots/realman_rm65_water2/robot.yaml}"
 ARM_CONFIG="${ARM_CONFIG:-config/realman/rm_arm_adapter.yaml}"
 BASE_CONFIG="${BASE_CONFIG:-config/realman/water2_base_bridge.yaml}"
-CONTROLLER_CONFIG="${CONTROLLER_CONFIG:-config/control/controller.yaml}"
+CONTROLLER_CONFIG="${CONTROLLER_CONFIG:-config/realman/controller.yaml}"
 TAG_CONFIG="${TAG_CONFIG:-config/perception/tag_node.yaml}"
 GRASP_CONFIG="${GRASP_CONFIG:-config/perception/grasp_node.yaml}"
 OBSTACLE_CONFIG="${OBSTACLE_CONFIG:-config/perception/obstacle_node.yaml}"
@@ -86,7 +87,10 @@ for c in arm base perception controller; do
       NODES+=("ehc_perception ehc_grasp_node _config:=$GRASP_CONFIG")
       NODES+=("ehc_perception ehc_obstacle_node _config:=$OBSTACLE_CONFIG") ;;
     controller)
-      NODES+=("ehc_control ehc_controller_node _config:=$CONTROLLER_CONFIG") ;;
+      # The real robot has no lock-step simulator: CONTROLLER_CONFIG must set node.trigger: timer.
+      n="ehc_control ehc_controller_node _config:=$CONTROLLER_CONFIG _robot:=$ROBOT_YAML"
+      [ -n "${CONTROLLER_MODE:-}" ] && n+=" _mode:=$CONTROLLER_MODE"
+      NODES+=("$n") ;;
   esac
 done
 
@@ -107,6 +111,12 @@ for n in "${NODES[@]}"; do
   done
 done
 [ -f "$ROBOT_YAML" ] || { echo "run_realman.sh: robot description not found: $ROBOT_YAML" >&2; problems=1; }
+if [[ " ${COMPONENTS[*]} " == *" controller "* ]] && [ -f "$CONTROLLER_CONFIG" ] &&
+   ! grep -Eq '^[[:space:]]+trigger:[[:space:]]*timer([[:space:]]|$)' "$CONTROLLER_CONFIG"; then
+  # trigger: state waits for a simulator's matching /joint_states + /odom stamps: it never runs here.
+  echo "run_realman.sh: $CONTROLLER_CONFIG must set node.trigger: timer on the real robot" >&2
+  problems=1
+fi
 
 if [ "$DRY_RUN" = 1 ]; then
   echo "ROS_MASTER_URI=${ROS_MASTER_URI:-<unset>} ROS_IP=${ROS_IP:-<unset>}"
