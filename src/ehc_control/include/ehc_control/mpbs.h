@@ -61,9 +61,11 @@ class MpbsServo {
  public:
   MpbsServo(const Eigen::Isometry3d& tcp_T_camera, const PbvsServoParams& pbvs, const MpbsParams& mpbs);
 
-  /// One cycle: TCP pose, target (grasp) pose, sig(omega) of this cycle, optional roll joint.
+  /// One cycle: TCP pose, target (grasp) pose, sig(omega) of this cycle, optional roll joint,
+  /// optional target centre (world; default targetCentre(grasp)) for when the goal is not at
+  /// the object, e.g. a pre-grasp pose.
   MpbsOutput compute(const Eigen::Isometry3d& tcp, const Eigen::Isometry3d& grasp, double sig,
-                     const RollJoint* roll = nullptr);
+                     const RollJoint* roll = nullptr, const Eigen::Vector3d* centre = nullptr);
   /// World position of the target centre for a target pose.
   Eigen::Vector3d targetCentre(const Eigen::Isometry3d& target) const { return target * params_.target_centre; }
 

@@ -86,12 +86,12 @@ MpbsServo::MpbsServo(const Eigen::Isometry3d& tcp_T_camera, const PbvsServoParam
 }
 
 MpbsOutput MpbsServo::compute(const Eigen::Isometry3d& tcp, const Eigen::Isometry3d& grasp, double sig,
-                              const RollJoint* roll) {
+                              const RollJoint* roll, const Eigen::Vector3d* centre) {
   if (!std::isfinite(sig)) throw std::invalid_argument("[MpbsServo] non-finite sig");
   MpbsOutput out;
   if (params_.enabled) {
     out.sig = std::clamp(sig, 0.0, 1.0);
-    out.monitor = monitoringPose(tcp.translation(), grasp, targetCentre(grasp), pbvs_.tcpToCamera(),
+    out.monitor = monitoringPose(tcp.translation(), grasp, centre ? *centre : targetCentre(grasp), pbvs_.tcpToCamera(),
                                  params_.min_monitor_distance);
     out.desired = mpbsDesiredPose(out.sig, grasp, out.monitor);
   } else {

@@ -1,19 +1,28 @@
-// ehc_controller_node: thin ROS wrapper of ControllerSupervisor + EhcQpController.
+// ehc_controller_node: thin ROS wrapper of ControllerSupervisor + MPBS/PBVS servo + EhcQpController.
 //   rosrun ehc_control ehc_controller_node _config:=config/control/controller.yaml
 //       [_robot:=config/robots/realman_rm65_water2/robot.yaml] [_mode:=ehc|neo_e|neo_c|tsmm]
-// Subscribes /joint_states, /odom, /ehc/target_pose (PoseStamped in the world frame),
-// /ehc/obstacles (optional). Publishes /cmd_vel, /arm/joint_velocity_cmd (stamp = joint state
-// stamp), /ehc/status. Cycle: one per joint state (node.trigger: state, lock-step with the
-// simulator) or on a timer (node.trigger: timer, real robot). Any stale or invalid input, and
-// any QP failure, gives zero commands, repeated every cycle, and a status saying why.
+//       [_servo:=pbvs|proportional] [_mpbs:=true|false] [_target_timeout:=<s>]
+// Subscribes /joint_states, /odom, /ehc/target_pose (PoseStamped in the world frame: the TCP goal,
+// e.g. the grasp pose), /ehc/obstacles (optional), /ehc/target_centre (optional PointStamped in
+// the world frame: the object centre the camera watches, when it is not the goal's origin, e.g.
+// while the goal is a pre-grasp pose). Publishes /cmd_vel, /arm/joint_velocity_cmd (stamp =
+// joint state stamp), /ehc/status (incl. target_in_fov, tfm, target_age). Cycle: one per joint
+// state (node.trigger: state, lock-step with the simulator) or on a timer (node.trigger: timer,
+// real robot). The last good target pose is served while it is younger than
+// watchdog.target_timeout; older -> TARGET_LOST and zero commands until a fresh pose arrives.
+// Any stale or invalid input, and any servo or QP failure, gives zero commands, repeated every
+// cycle, and a status saying why.
 
 #include "ehc_control/ControllerStatus.h"
 #include "ehc_control/JointVelocityCommand.h"
 #include "ehc_control/ObstacleArray.h"
 #include "ehc_control/config_node.h"
 #include "ehc_control/controller_supervisor.h"
+#include "ehc_control/mpbs.h"
 #include "ehc_control/pose_servo.h"
+#include "ehc_control/target_tracker.h"
 
+#include <geometry_msgs/PointStamped.h>
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/Twist.h>
 #include <nav_msgs/Odometry.h>
@@ -22,6 +31,8 @@
 
 #include <cmath>
 #include <memory>
+#include <optional>
+#include <sstream>
 
 namespace {
 
@@ -42,6 +53,25 @@ NodeParams loadNodeParams(const ConfigNode& n) {
   return p;
 }
 
+enum class ServoType { Proportional, Pbvs };
+
+ServoType servoTypeFromString(const std::string& s) {
+  if (s == "proportional") return ServoType::Proportional;
+  if (s == "pbvs") return ServoType::Pbvs;
+  throw std::invalid_argument("[ControllerNode] servo type must be 'proportional' or 'pbvs' (got '" + s + "')");
+}
+
+struct TrackingNodeParams {
+  double centre_timeout = 1.0;  ///< s: a /ehc/target_centre older than this is ignored
+};
+
+TrackingNodeParams loadTrackingNodeParams(const ConfigNode& n) {
+  TrackingNodeParams p;
+  p.centre_timeout = n.get("centre_timeout", p.centre_timeout);
+  requireRange("ControllerNode", "tracking.centre_timeout", p.centre_timeout, 1e-3, 3600.0);
+  return p;
+}
+
 class ControllerNode {
  public:
   ControllerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
@@ -55,7 +85,20 @@ class ControllerNode {
     model_ = std::make_shared<const WholeBodyModel>(rc);
     QpControllerParams qp = loadQpControllerParams(cfg.childOrEmpty("controller"));
     if (!mode.empty()) qp.mode = controlModeFromString(mode);
-    servo_ = loadPoseServoParams(cfg.childOrEmpty("servo"));
+
+    // Servo: proportional (NEO p_servo) or ViSP PBVS, with or without MPBS.
+    const ConfigNode servo_cfg = cfg.childOrEmpty("servo");
+    std::string servo_type = servo_cfg.get<std::string>("type", "proportional");
+    pnh.param<std::string>("servo", servo_type, servo_type);
+    try {
+      servo_type_ = servoTypeFromString(servo_type);
+    } catch (const std::invalid_argument&) {
+      servo_cfg.fail("type", "must be 'proportional' or 'pbvs' (got '" + servo_type + "')");
+    }
+    servo_ = loadPoseServoParams(servo_cfg);
+    const PbvsServoParams pbvs = loadPbvsServoParams(servo_cfg);
+    MpbsParams mpbs = loadMpbsParams(cfg.childOrEmpty("mpbs"));
+    if (pnh.hasParam("mpbs")) pnh.getParam("mpbs", mpbs.enabled);
     node_ = loadNodeParams(cfg.childOrEmpty("node"));
     node_.world_frame = rc.world_frame;
     std::shared_ptr<const EhcWeighting> weighting;
@@ -66,9 +109,42 @@ class ControllerNode {
       ROS_INFO_STREAM(map->summary());
     }
     controller_ = std::make_unique<EhcQpController>(model_, qp, weighting);
-    supervisor_ = std::make_unique<ControllerSupervisor>(rc, loadSupervisorParams(cfg.childOrEmpty("watchdog")));
-    ROS_INFO_STREAM("ehc_controller_node\n" << rc.summary() << qp.summary() << "\n  trigger " << node_.trigger
-                                            << (node_.trigger == "timer" ? " at " + std::to_string(node_.rate) + " Hz" : ""));
+    SupervisorParams sup = loadSupervisorParams(cfg.childOrEmpty("watchdog"));
+    if (pnh.hasParam("target_timeout")) {
+      pnh.getParam("target_timeout", sup.target_timeout);
+      sup.validate();
+    }
+    supervisor_ = std::make_unique<ControllerSupervisor>(rc, sup);
+
+    // Camera: mount on the hand (URDF) and intrinsics (tracking.camera) for MPBS and TfM.
+    if (!model_->hasLink(rc.camera_frame) || !model_->hasLink(rc.tcp_frame))
+      throw std::invalid_argument("[ControllerNode] camera frame '" + rc.camera_frame + "' or TCP frame '" +
+                                  rc.tcp_frame + "' is not in the URDF");
+    const Eigen::Isometry3d tcp_T_camera = model_->linkPoseInBase(rc.arm_ready, rc.tcp_frame).inverse() *
+                                           model_->linkPoseInBase(rc.arm_ready, rc.camera_frame);
+    const ConfigNode tracking_cfg = cfg.childOrEmpty("tracking");
+    const TargetTrackerParams tracking = loadTargetTrackerParams(tracking_cfg);
+    tracking_ = loadTrackingNodeParams(tracking_cfg);
+    const PinholeCamera camera = tracking.camera_file.empty() ? PinholeCamera{} : loadPinholeCamera(tracking.camera_file);
+    tracker_ = std::make_unique<TargetTracker>(camera, tracking);
+    if (servo_type_ == ServoType::Pbvs && mpbs.enabled && !controller_->hasWeighting())
+      throw std::invalid_argument("[ControllerNode] mpbs.enabled needs sig(omega), i.e. a reachability map in robot.yaml");
+    mpbs_ = std::make_unique<MpbsServo>(tcp_T_camera, pbvs, mpbs);
+    roll_index_ = findRollJoint(*model_);
+
+    std::ostringstream servo_summary;
+    if (servo_type_ == ServoType::Pbvs)
+      servo_summary << pbvs.summary() << "\n  " << mpbs.summary();
+    else
+      servo_summary << "servo: proportional (gain " << servo_.gain << ", rotation ratio " << servo_.rotation_gain_ratio
+                    << ", roll unwinding " << (servo_.unwind_roll ? "on" : "off") << "); mpbs: n/a";
+    ROS_INFO_STREAM("ehc_controller_node\n"
+                    << rc.summary() << qp.summary() << "\n  " << servo_summary.str() << "\n  roll joint "
+                    << (roll_index_ >= 0 ? rc.arm_joints[static_cast<std::size_t>(roll_index_)] : std::string("none"))
+                    << "\n  " << tracking.summary() << ", " << camera.summary() << ", centre timeout "
+                    << tracking_.centre_timeout << " s\n  watchdog: state " << sup.state_timeout << " s, target "
+                    << sup.target_timeout << " s, obstacles " << sup.obstacle_timeout << " s\n  trigger "
+                    << node_.trigger << (node_.trigger == "timer" ? " at " + std::to_string(node_.rate) + " Hz" : ""));
 
     cmd_vel_ = nh.advertise<geometry_msgs::Twist>("cmd_vel", 1);
     arm_cmd_ = nh.advertise<ehc_control::JointVelocityCommand>("arm/joint_velocity_cmd", 1);
@@ -76,6 +152,7 @@ class ControllerNode {
     subs_.push_back(nh.subscribe("joint_states", 10, &ControllerNode::onJoints, this, ros::TransportHints().tcpNoDelay()));
     subs_.push_back(nh.subscribe("odom", 10, &ControllerNode::onOdom, this, ros::TransportHints().tcpNoDelay()));
     subs_.push_back(nh.subscribe("ehc/target_pose", 10, &ControllerNode::onTarget, this));
+    subs_.push_back(nh.subscribe("ehc/target_centre", 10, &ControllerNode::onTargetCentre, this));
     subs_.push_back(nh.subscribe("ehc/obstacles", 10, &ControllerNode::onObstacles, this));
     if (node_.trigger == "timer")
       timer_ = nh.createTimer(ros::Duration(1.0 / node_.rate), [this](const ros::TimerEvent&) { cycle(ros::Time::now()); });
@@ -121,6 +198,17 @@ class ControllerNode {
       last_target_ = T;
     }
   }
+  void onTargetCentre(const geometry_msgs::PointStamped& m) {
+    const Eigen::Vector3d c(m.point.x, m.point.y, m.point.z);
+    if ((!m.header.frame_id.empty() && m.header.frame_id != node_.world_frame) || !c.allFinite()) {
+      ROS_ERROR_STREAM_THROTTLE(1.0, "[ehc_controller_node] rejected /ehc/target_centre (frame '"
+                                         << m.header.frame_id << "', expected '" << node_.world_frame
+                                         << "', finite " << c.allFinite() << ")");
+      return;
+    }
+    centre_ = c;
+    t_centre_ = ros::Time::now().toSec();
+  }
   void onObstacles(const ehc_control::ObstacleArray& m) {
     std::vector<ObstaclePair> pairs;
     for (const auto& o : m.obstacles) {
@@ -143,6 +231,13 @@ class ControllerNode {
     cycle(stamp);
   }
 
+  /// The point the camera watches: /ehc/target_centre while fresh, else the target's centre.
+  Eigen::Vector3d targetCentre(double now) const {
+    if (t_centre_ && now - *t_centre_ <= tracking_.centre_timeout && now - *t_centre_ >= -tracking_.centre_timeout)
+      return centre_;
+    return mpbs_->targetCentre(supervisor_->target());
+  }
+
   void cycle(const ros::Time& stamp) {
     const double now = ros::Time::now().toSec();
     ehc_control::ControllerStatus st;
@@ -150,31 +245,45 @@ class ControllerNode {
     st.header.frame_id = node_.world_frame;
     st.mode = toString(controller_->params().mode);
     st.qp_status = "NOT_RUN";
+    st.target_age = supervisor_->targetAge(now);
     Eigen::VectorXd v = Eigen::VectorXd::Zero(model_->nDof());
     const SupervisorDecision d = supervisor_->check(now);
-    if (!d.run) {
-      st.phase = d.phase;
-      st.reason = d.reason;
-      if (d.phase != "IDLE") ROS_WARN_STREAM_THROTTLE(1.0, "[ehc_controller_node] " << d.phase << ": " << d.reason << " -> zero command");
-    } else {
-      const auto& rc = model_->config();
-      const Eigen::Isometry3d tcp = model_->fk(supervisor_->basePose(), supervisor_->q(), rc.tcp_frame);
-      const Vector6d nu = proportionalPoseServo(tcp, supervisor_->target(), servo_);
-      const ControllerCommand c = controller_->step(supervisor_->basePose(), supervisor_->q(), supervisor_->target(), nu,
-                                                    supervisor_->obstacles(now));
-      st.phase = c.ok ? c.phase : "QP_FAILED";
-      st.reason = c.failure;
-      st.qp_status = c.qp_status;
-      st.position_error = c.position_error;
-      st.orientation_error = c.orientation_error;
-      st.error_norm = c.error_norm;
-      st.omega = c.omega;
-      st.sig_omega = c.sig;
-      st.base_weight = c.base_weight;
-      st.solve_time_us = c.solve_time_us;
-      st.obstacle_rows = static_cast<uint32_t>(c.obstacle_rows);
-      if (c.ok) v = c.velocity;
-      else ROS_ERROR_STREAM_THROTTLE(1.0, "[ehc_controller_node] QP_FAILED: " << c.failure << " -> zero command");
+    try {
+      // TfM: every cycle with a target (served or lost), camera pose from the kinematics.
+      if (supervisor_->hasTarget() && (d.run || d.phase == "TARGET_LOST")) {
+        const Eigen::Vector3d centre = targetCentre(now);
+        if (tracker_->setTarget(centre))
+          ROS_INFO_STREAM("[ehc_controller_node] new target centre [" << centre.transpose() << "]: TfM restarts");
+        st.target_in_fov = tracker_->observe(
+            model_->fk(supervisor_->basePose(), supervisor_->q(), model_->config().camera_frame));
+      }
+      st.tfm = tracker_->tfm();
+      if (!d.run) {
+        st.phase = d.phase;
+        st.reason = d.reason;
+        if (d.phase != "IDLE") ROS_WARN_STREAM_THROTTLE(1.0, "[ehc_controller_node] " << d.phase << ": " << d.reason << " -> zero command");
+      } else {
+        const ControllerCommand c = step(now);
+        st.phase = c.ok ? c.phase : "QP_FAILED";
+        st.reason = c.failure;
+        st.qp_status = c.qp_status;
+        st.position_error = c.position_error;
+        st.orientation_error = c.orientation_error;
+        st.error_norm = c.error_norm;
+        st.omega = c.omega;
+        st.sig_omega = c.sig;
+        st.base_weight = c.base_weight;
+        st.solve_time_us = c.solve_time_us;
+        st.obstacle_rows = static_cast<uint32_t>(c.obstacle_rows);
+        if (c.ok) v = c.velocity;
+        else ROS_ERROR_STREAM_THROTTLE(1.0, "[ehc_controller_node] QP_FAILED: " << c.failure << " -> zero command");
+      }
+    } catch (const std::exception& e) {  // core errors: stop safely, say why
+      v.setZero();
+      st.phase = "STOPPED";
+      st.reason = std::string("controller error: ") + e.what();
+      st.qp_status = "NOT_RUN";
+      ROS_ERROR_STREAM_THROTTLE(1.0, "[ehc_controller_node] " << e.what() << " -> zero command");
     }
     if (!v.allFinite()) v.setZero();  // never publish NaN
     const int nb = model_->nBase();
@@ -191,17 +300,49 @@ class ControllerNode {
     status_.publish(st);
   }
 
+  /// Servo (proportional or PBVS/MPBS) + QP for the current state and target.
+  ControllerCommand step(double now) {
+    const auto& rc = model_->config();
+    const Eigen::Vector3d& base = supervisor_->basePose();
+    const Eigen::VectorXd& q = supervisor_->q();
+    const Eigen::Isometry3d& target = supervisor_->target();
+    const Eigen::Isometry3d tcp = model_->fk(base, q, rc.tcp_frame);
+    RollJoint roll;
+    if (roll_index_ >= 0) {
+      roll.q = q[roll_index_];
+      roll.lower = rc.arm_lower[roll_index_];
+      roll.upper = rc.arm_upper[roll_index_];
+    }
+    const RollJoint* roll_ptr = roll_index_ >= 0 ? &roll : nullptr;
+    const auto obstacles = supervisor_->obstacles(now);
+    if (servo_type_ == ServoType::Proportional)
+      return controller_->step(base, q, target, proportionalPoseServo(tcp, target, servo_, roll_ptr), obstacles);
+    // sig(omega) once per cycle, shared by MPBS (eq. 14) and the QP weighting.
+    std::optional<EhcWeight> w;
+    if (controller_->hasWeighting()) w = controller_->weight(base, tcp.translation(), target.translation());
+    const Eigen::Vector3d centre = targetCentre(now);
+    const MpbsOutput out = mpbs_->compute(tcp, target, w ? w->sig : 1.0, roll_ptr, &centre);
+    return controller_->step(base, q, target, out.twist, obstacles, w ? &*w : nullptr);
+  }
+
   std::shared_ptr<const WholeBodyModel> model_;
   std::unique_ptr<EhcQpController> controller_;
   std::unique_ptr<ControllerSupervisor> supervisor_;
+  std::unique_ptr<MpbsServo> mpbs_;
+  std::unique_ptr<TargetTracker> tracker_;
+  ServoType servo_type_ = ServoType::Proportional;
   PoseServoParams servo_;
+  TrackingNodeParams tracking_;
   NodeParams node_;
+  int roll_index_ = -1;
   ros::Publisher cmd_vel_, arm_cmd_, status_;
   std::vector<ros::Subscriber> subs_;
   ros::Timer timer_;
   ros::Time pending_, odom_stamp_;
   bool have_target_ = false;
   Eigen::Isometry3d last_target_ = Eigen::Isometry3d::Identity();
+  Eigen::Vector3d centre_ = Eigen::Vector3d::Zero();
+  std::optional<double> t_centre_;
 };
 
 }  // namespace
