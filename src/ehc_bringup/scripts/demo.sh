@@ -1,13 +1,171 @@
 #!/usr/bin/env bash
-# The main job. Until the full grasping pipeline lands this prints the robot's kinematic
-# summary and one whole-body kinematics query at the ready pose.
-set -eo pipefail
-cd "$(dirname "$0")/../../.."
-export PATH="/usr/bin:/bin:$PATH"
-# shellcheck disable=SC1091
-source devel/setup.bash
-ROBOT="${ROBOT:-config/robots/realman_rm65_water2/robot.yaml}"
-echo "== EHC-MM: robot kinematic summary ($ROBOT)"
-rosrun ehc_control ehc_kinematics --robot "$ROBOT" --summary
-echo "== whole-body kinematics of the TCP at the ready pose, base at (1, 0.5, 0.3)"
-rosrun ehc_control ehc_kinematics --robot "$ROBOT" --q ready --base 1,0.5,0.3
+# `make demo`: the product's main job (issue 6). Headless, rosrun only (no roslaunch, no display):
+# a private ROS master, the Bullet sim (config/scenes/table_three_objects.yaml, lock-step sim
+# time), one AprilTag node per object, the grasp node, the obstacle node, the EHC controller and
+# the grasp sequencer, which grasps the three objects in sequence. Prints progress per phase, one
+# summary line per object and the JSON summary; writes to $OUT (default results/demo/):
+#   summary.json   {"objects": [{"name", "success", "time_s", "tfm", ...}], ...}
+#   trace.csv      per control cycle: |e|, sig(omega), base / arm speeds, phases
+#   demo.png       |e|, sig(omega) and base / arm speeds over time
+#   logs/*.log     one log per node
+# Every process started here is stopped on exit, also on Ctrl-C.
+#
+# Environment (defaults in brackets):
+#   EHC_DEVEL          devel space to source                          [devel]
+#   OUT                output folder                                  [results/demo]
+#   EHC_DEMO_PORT      ROS master port                                [a free port from 11411 up]
+#   CONTROLLER_CONFIG  controller YAML                                [config/control/controller.yaml]
+#   MODE               controller mode ehc | neo_e | neo_c | tsmm     [ehc]
+#   SEQUENCER_CONFIG   grasp sequencer YAML                           [config/demo/grasp_sequencer.yaml]
+#   SIM_CONFIG         simulator YAML                                 [src/ehc_sim/config/sim.yaml]
+#   SCENE              scene YAML                                     [config/scenes/table_three_objects.yaml]
+#   SEED               simulator noise seed                           [1]
+#   WALL_LIMIT         wall-clock guard for the whole run, s           [600]
+#   OBSTACLES          1: run the obstacle node (controller obstacle dampers), 0: without  [1]
+# Exit code: 0 when every object was grasped, 1 if a grasp failed, 2 on a set-up error or crash.
+set -o pipefail
+export PATH="/usr/bin:/bin:$PATH"  # the catkin-aware python3 first
+cd "$(dirname "$0")/../../.." || exit 2
+WS="$(pwd)"
+EHC_DEVEL="${EHC_DEVEL:-devel}"
+if [ ! -f "$EHC_DEVEL/setup.bash" ]; then
+  echo "demo.sh: $EHC_DEVEL/setup.bash not found: build first (make build)" >&2
+  exit 2
+fi
+# shellcheck disable=SC1090,SC1091
+source "$EHC_DEVEL/setup.bash"
+
+OUT="${OUT:-results/demo}"
+CONTROLLER_CONFIG="${CONTROLLER_CONFIG:-config/control/controller.yaml}"
+MODE="${MODE:-ehc}"
+SEQUENCER_CONFIG="${SEQUENCER_CONFIG:-config/demo/grasp_sequencer.yaml}"
+SIM_CONFIG="${SIM_CONFIG:-src/ehc_sim/config/sim.yaml}"
+SCENE="${SCENE:-config/scenes/table_three_objects.yaml}"
+SEED="${SEED:-1}"
+WALL_LIMIT="${WALL_LIMIT:-600}"
+OBJECTS=(front middle back)
+for f in "$CONTROLLER_CONFIG" "$SEQUENCER_CONFIG" "$SIM_CONFIG" "$SCENE" config/perception/grasp_node.yaml \
+         config/demo/obstacle_node.yaml; do
+  [ -f "$f" ] || { echo "demo.sh: file not found: $f" >&2; exit 2; }
+done
+for o in "${OBJECTS[@]}"; do
+  [ -f "config/demo/tag_$o.yaml" ] || { echo "demo.sh: file not found: config/demo/tag_$o.yaml" >&2; exit 2; }
+done
+
+mkdir -p "$OUT/logs"
+rm -f "$OUT/summary.json" "$OUT/trace.csv" "$OUT/demo.png" "$OUT"/logs/*.log
+# Private master and ROS_HOME: never touches another ROS system on this machine.
+export ROS_HOME="$WS/$OUT/ros_home"
+export ROS_LOG_DIR="$ROS_HOME/log"
+mkdir -p "$ROS_LOG_DIR"
+free_port() {
+  /usr/bin/python3 - "$1" <<'EOF'
+import socket, sys
+for p in range(int(sys.argv[1]), int(sys.argv[1]) + 200):
+    s = socket.socket()
+    try:
+        s.bind(("127.0.0.1", p)); s.close(); print(p); break
+    except OSError:
+        s.close()
+EOF
+}
+PORT="${EHC_DEMO_PORT:-$(free_port 11411)}"
+export ROS_MASTER_URI="http://127.0.0.1:$PORT"
+export ROS_HOSTNAME=127.0.0.1
+unset ROS_IP
+
+PIDS=()
+NAMES=()
+stopped=0
+stop_all() {
+  [ "$stopped" = 1 ] && return
+  stopped=1
+  trap - INT TERM EXIT
+  # Nodes first (reverse start order), the master last; SIGINT, then SIGKILL after 5 s.
+  for ((i = ${#PIDS[@]} - 1; i >= 0; i--)); do kill -INT "${PIDS[$i]}" 2>/dev/null; done
+  for _ in $(seq 50); do
+    alive=0
+    for p in "${PIDS[@]}"; do kill -0 "$p" 2>/dev/null && alive=1; done
+    [ "$alive" = 0 ] && break
+    sleep 0.1
+  done
+  for p in "${PIDS[@]}"; do kill -KILL "$p" 2>/dev/null; done
+  wait "${PIDS[@]}" 2>/dev/null
+}
+trap 'echo; echo "demo.sh: interrupted, stopping every process it started"; stop_all; exit 130' INT TERM
+trap 'stop_all' EXIT
+
+start() {  # start NAME COMMAND...
+  local name="$1"
+  shift
+  "$@" >"$OUT/logs/$name.log" 2>&1 &
+  PIDS+=($!)
+  NAMES+=("$name")
+}
+
+echo "== EHC-MM demo: grasp three objects with the EHC controller (scene $SCENE, mode $MODE, seed $SEED)"
+echo "   master $ROS_MASTER_URI, logs in $OUT/logs/"
+t0=$(date +%s.%N)
+start rosmaster rosmaster --core -p "$PORT"
+for _ in $(seq 100); do
+  rosparam set /use_sim_time true >/dev/null 2>&1 && break
+  sleep 0.1
+done
+rosparam get /use_sim_time >/dev/null 2>&1 || { echo "demo.sh: the ROS master did not start (port $PORT)" >&2; exit 2; }
+
+# shellcheck disable=SC2086
+start sim rosrun ${SIM_PREFIX:+--prefix "$SIM_PREFIX"} ehc_sim ehc_sim_node _config:="$SIM_CONFIG" _scene:="$SCENE" _seed:="$SEED"
+for o in "${OBJECTS[@]}"; do
+  start "tag_$o" rosrun ehc_perception ehc_tag_node _config:="config/demo/tag_$o.yaml" __name:="ehc_tag_$o"
+done
+# The grasp node computes grasps near the sequencer's current object (remapped target topic).
+start grasp rosrun ehc_perception ehc_grasp_node _config:=config/perception/grasp_node.yaml \
+  /ehc/target_pose:=/ehc/sequencer/object_pose
+[ "${OBSTACLES:-1}" = 1 ] &&
+  start obstacles rosrun ehc_perception ehc_obstacle_node _config:=config/demo/obstacle_node.yaml \
+    /ehc/obstacles:=/ehc/perception/obstacles  # relayed by the sequencer without the grasped object
+start controller rosrun ehc_control ehc_controller_node _config:="$CONTROLLER_CONFIG" _mode:="$MODE"
+start sequencer rosrun ehc_bringup ehc_grasp_sequencer_node _config:="$SEQUENCER_CONFIG" \
+  _summary:="$WS/$OUT/summary.json" _trace:="$WS/$OUT/trace.csv"
+SEQ_PID=${PIDS[-1]}
+
+# Progress: the sequencer's "[grasp]" lines, without the ROS log prefix.
+# tail ends with the sequencer (--pid), so the pipeline never outlives the run.
+tail --pid="$SEQ_PID" -n +1 -F "$OUT/logs/sequencer.log" 2>/dev/null |
+  sed -u -n -e 's/\x1b\[[0-9;]*m//g' -e 's/^.*\[grasp\] //p' | grep --line-buffered -v '^json \|^summary ' &
+TAIL_PID=$!
+PIDS+=($TAIL_PID)
+NAMES+=(progress)
+
+status=0
+deadline=$(( $(date +%s) + WALL_LIMIT ))
+while kill -0 "$SEQ_PID" 2>/dev/null; do
+  for i in "${!PIDS[@]}"; do
+    case "${NAMES[$i]}" in sequencer|progress) continue ;; esac
+    if ! kill -0 "${PIDS[$i]}" 2>/dev/null; then
+      echo "demo.sh: ${NAMES[$i]} exited unexpectedly; last lines of $OUT/logs/${NAMES[$i]}.log:" >&2
+      tail -n 5 "$OUT/logs/${NAMES[$i]}.log" >&2
+      status=2
+      break 2
+    fi
+  done
+  if [ "$(date +%s)" -ge "$deadline" ]; then
+    echo "demo.sh: wall-clock guard of $WALL_LIMIT s reached; stopping" >&2
+    status=2
+    break
+  fi
+  sleep 0.5
+done
+sleep 0.3  # let the progress tail print the last lines
+stop_all
+wall=$(/usr/bin/python3 -c "import time; print(f'{time.time() - $t0:.1f}')")
+
+if [ ! -f "$OUT/summary.json" ]; then
+  echo "demo.sh: no summary written (see $OUT/logs/sequencer.log)" >&2
+  exit 2
+fi
+echo "== summary (wall time ${wall} s)"
+/usr/bin/python3 "src/ehc_bringup/scripts/demo_report.py" "$OUT/summary.json" "$OUT/trace.csv" "$OUT/demo.png" \
+  --controller-config "$CONTROLLER_CONFIG" --wall "$wall" || status=2
+[ "$status" = 0 ] || exit "$status"
+/usr/bin/python3 -c "import json,sys; d=json.load(open('$OUT/summary.json')); sys.exit(0 if d['successes']==d['objects_total'] else 1)"

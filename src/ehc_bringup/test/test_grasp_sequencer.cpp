@@ -55,6 +55,7 @@ struct Harness {
   int gripper_closes = 0, gripper_opens = 0;
   std::optional<Eigen::Isometry3d> last_goal;
   std::optional<Eigen::Isometry3d> perceive;  ///< fed to object 0 every cycle if set
+  std::optional<Eigen::Isometry3d> camera;    ///< camera optical frame (TfM)
 
   explicit Harness(const GraspSequencerParams& p) : seq(p) { tcp.translation() << 0.3, 0, 0.9; }
 
@@ -63,6 +64,7 @@ struct Harness {
     SequencerInput in;
     in.t = t;
     in.tcp = tcp;
+    in.camera = camera;
     in.controller_phase = controller_phase;
     in.target_in_fov = in_fov;
     in.gripper_state = gripper;
@@ -138,7 +140,7 @@ TEST(GraspSequencer, FullSequencePerObjectInOrder) {
     EXPECT_TRUE(r.success) << r.reason;
     EXPECT_GT(r.time_s, 0.5);   // close (0.5 s) + lift (1 s) at least
     EXPECT_LT(r.time_s, 30.0);
-    EXPECT_DOUBLE_EQ(r.tfm, 1.0);
+    EXPECT_DOUBLE_EQ(r.controller_tfm, 1.0);  // no camera pose given: r.tfm counts nothing
     EXPECT_FALSE(r.used_candidate);  // no candidates were given: tag fallback
   }
   EXPECT_EQ(h.gripper_closes, 2);
@@ -159,18 +161,19 @@ TEST(GraspSequencer, GoalsFollowThePhases) {
   h.step();
   ASSERT_EQ(h.seq.phase(), GraspPhase::Approach);
   ASSERT_TRUE(h.last_goal);
-  // Pre-grasp: backed off 10 cm along the approach (x), same orientation up to the half turn.
-  EXPECT_NEAR(h.last_goal->translation().x(), 1.4, 1e-9);
+  // APPROACH: the goal is the grasp itself (the controller's MPBS watches the object).
+  EXPECT_NEAR(h.last_goal->translation().x(), 1.5, 1e-9);
   EXPECT_NEAR(h.last_goal->linear().col(2).dot(Eigen::Vector3d::UnitX()), 1.0, 1e-9);
-  // Not yet within the approach tolerance: stays in APPROACH.
   h.run(1.0);
-  EXPECT_EQ(h.seq.phase(), GraspPhase::Approach);
+  EXPECT_EQ(h.seq.phase(), GraspPhase::Approach);  // TCP 1.2 m away
   h.tcp = *h.last_goal;
-  h.tcp.translation().x() -= 0.04;  // 4 cm short: inside the 5 cm approach tolerance
+  h.tcp.translation().x() -= 0.2;  // inside the 0.25 m pre-grasp switch distance
   h.step();
   EXPECT_EQ(h.seq.phase(), GraspPhase::PreGrasp);
+  ASSERT_TRUE(h.last_goal);
+  EXPECT_NEAR(h.last_goal->translation().x(), 1.4, 1e-9);  // pre-grasp: 10 cm back
   h.step();
-  EXPECT_EQ(h.seq.phase(), GraspPhase::PreGrasp);  // 4 cm > 1.5 cm pre-grasp tolerance
+  EXPECT_EQ(h.seq.phase(), GraspPhase::PreGrasp);  // 10 cm > 1.5 cm pre-grasp tolerance
   h.tcp = *h.last_goal;
   h.step();
   EXPECT_EQ(h.seq.phase(), GraspPhase::Grasp);
@@ -228,20 +231,49 @@ TEST(GraspSequencer, PoseFilterSmoothsPerception) {
   EXPECT_NEAR(out.object_pose->translation().y(), 0.05, 1e-9);
 }
 
-TEST(GraspSequencer, StalePerceptionWithholdsTheGoalBeforeTheLock) {
+TEST(GraspSequencer, StalePerceptionBeforeTheLockSearchesAgain) {
   Harness h(twoObjects());
   h.follow = false;
   h.seq.setObjectPose(0, h.t, forwardTarget());
   h.step();
   EXPECT_TRUE(h.last_goal);
   h.run(0.5);
-  EXPECT_TRUE(h.last_goal);  // within perception_hold (1 s)
+  EXPECT_EQ(h.seq.phase(), GraspPhase::Approach);  // within perception_hold (1 s)
+  EXPECT_NEAR(h.last_goal->translation().x(), 1.5, 1e-9);
   h.run(0.6);
-  EXPECT_FALSE(h.last_goal);  // older than 1 s: no goal -> the controller stops (TARGET_LOST)
-  EXPECT_EQ(h.seq.phase(), GraspPhase::Approach);
+  // Older than 1 s: back to WAIT_TARGET; goal = look pose 0.4 m back along the approach.
+  EXPECT_EQ(h.seq.phase(), GraspPhase::WaitTarget);
+  h.step();
+  ASSERT_TRUE(h.last_goal);
+  EXPECT_NEAR(h.last_goal->translation().x(), 1.1, 1e-9);
+  EXPECT_NEAR(h.last_goal->linear().col(2).x(), 1.0, 1e-9);  // the camera looks along the approach
   h.seq.setObjectPose(0, h.t, forwardTarget());
   h.step();
-  EXPECT_TRUE(h.last_goal);  // re-acquired
+  EXPECT_EQ(h.seq.phase(), GraspPhase::Approach);  // re-acquired
+}
+
+TEST(GraspSequencer, WithoutSearchTheGoalIsWithheld) {
+  GraspSequencerParams p = twoObjects();
+  p.search_distance = 0.0;
+  Harness h(p);
+  h.follow = false;
+  h.seq.setObjectPose(0, h.t, forwardTarget());
+  h.run(1.2);
+  EXPECT_EQ(h.seq.phase(), GraspPhase::WaitTarget);
+  EXPECT_FALSE(h.last_goal);  // no goal: the controller stops (TARGET_LOST)
+}
+
+TEST(GraspSequencer, NextObjectIsSearchedWhereItWasSeen) {
+  Harness h(twoObjects());
+  h.seq.setObjectPose(0, h.t, forwardTarget());
+  h.seq.setObjectPose(1, h.t, forwardTarget(2.0, -0.2, 0.8));  // seen at the start
+  while (h.seq.currentObject() == 0 && h.t < 50) h.step();
+  ASSERT_EQ(h.seq.currentObject(), 1u);
+  h.step();
+  ASSERT_EQ(h.seq.phase(), GraspPhase::WaitTarget);
+  ASSERT_TRUE(h.last_goal);
+  EXPECT_NEAR(h.last_goal->translation().x(), 1.6, 1e-9);
+  EXPECT_NEAR(h.last_goal->translation().y(), -0.2, 1e-9);
 }
 
 TEST(GraspSequencer, LockedGraspKeepsTheGoalWithoutPerception) {
@@ -325,23 +357,53 @@ TEST(GraspSequencer, ObjectDroppedWhileLiftingFails) {
   EXPECT_NE(h.seq.results()[0].reason.find("lost"), std::string::npos);
 }
 
+namespace {
+/// Camera optical frame at (0, 0, 0.76) looking along world +x (toward) or -x (away).
+Eigen::Isometry3d opticalFrame(bool toward) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  const double s = toward ? 1.0 : -1.0;
+  T.linear().col(2) = Eigen::Vector3d(s, 0, 0);   // optical axis
+  T.linear().col(0) = Eigen::Vector3d(0, -s, 0);  // image right
+  T.linear().col(1) = Eigen::Vector3d(0, 0, -1);  // image down
+  T.translation() << 0, 0, 0.76;
+  return T;
+}
+}  // namespace
+
+TEST(GraspSequencer, PointInImage) {
+  const CameraModel cam;
+  EXPECT_TRUE(pointInImage(opticalFrame(true), Eigen::Vector3d(1.5, 0, 0.76), cam));
+  EXPECT_FALSE(pointInImage(opticalFrame(false), Eigen::Vector3d(1.5, 0, 0.76), cam));  // behind
+  // 1.5 m ahead, the half width of the image is 1.5 * 320 / 615 = 0.78 m.
+  EXPECT_TRUE(pointInImage(opticalFrame(true), Eigen::Vector3d(1.5, 0.7, 0.76), cam));
+  EXPECT_FALSE(pointInImage(opticalFrame(true), Eigen::Vector3d(1.5, 0.9, 0.76), cam));
+  EXPECT_FALSE(pointInImage(opticalFrame(true), Eigen::Vector3d(std::nan(""), 0, 0.76), cam));
+  CameraModel bad;
+  bad.fx = 0.0;
+  EXPECT_FALSE(pointInImage(opticalFrame(true), Eigen::Vector3d(1.5, 0, 0.76), bad));
+  GraspSequencer s(twoObjects());
+  EXPECT_FALSE(s.setCamera(bad));
+  EXPECT_TRUE(s.setCamera(cam));
+}
+
 TEST(GraspSequencer, TfmCountsCyclesUntilTheGripperCloses) {
   GraspSequencerParams p = twoObjects();
   p.objects.resize(1);
   Harness h(p);
+  ASSERT_TRUE(h.seq.setCamera(CameraModel()));
   h.follow = false;
-  h.seq.setObjectPose(0, h.t, forwardTarget());
-  // 100 cycles in view, 300 out of view, then reach everything.
+  h.perceive = forwardTarget();
+  // 100 cycles with the object in view, 300 out of view (camera turned away).
   for (int i = 0; i < 400; ++i) {
+    h.camera = opticalFrame(i < 100);
     h.in_fov = i < 100;
-    h.seq.setObjectPose(0, h.t, forwardTarget());
     h.step();
   }
   // Then the TCP follows: APPROACH -> PRE_GRASP -> GRASP -> CLOSE in 4 more cycles (all
   // counted, out of view); the lift cycles after CLOSE are in view but not counted.
   h.follow = true;
-  h.in_fov = false;
   while (h.seq.phase() != GraspPhase::Close) h.step();
+  h.camera = opticalFrame(true);
   h.in_fov = true;
   h.runUntilDone();
   ASSERT_EQ(h.seq.results().size(), 1u);
@@ -349,6 +411,19 @@ TEST(GraspSequencer, TfmCountsCyclesUntilTheGripperCloses) {
   EXPECT_TRUE(r.success);
   EXPECT_EQ(r.cycles, 404);
   EXPECT_NEAR(r.tfm, 100.0 / 404.0, 1e-12);
+  EXPECT_NEAR(r.controller_tfm, 100.0 / 404.0, 1e-12);
+}
+
+TEST(GraspSequencer, TfmWithoutCameraPoseCountsNothing) {
+  GraspSequencerParams p = twoObjects();
+  p.objects.resize(1);
+  Harness h(p);
+  ASSERT_TRUE(h.seq.setCamera(CameraModel()));
+  h.seq.setObjectPose(0, h.t, forwardTarget());
+  h.runUntilDone();
+  ASSERT_EQ(h.seq.results().size(), 1u);
+  EXPECT_EQ(h.seq.results()[0].cycles, 0);
+  EXPECT_EQ(h.seq.results()[0].tfm, 0.0);
 }
 
 TEST(GraspSequencer, TsmmStagesAppearAsControllerPhases) {
@@ -371,6 +446,20 @@ TEST(GraspSequencer, TsmmStagesAppearAsControllerPhases) {
   }
   EXPECT_TRUE(base);
   EXPECT_TRUE(arm);
+}
+
+TEST(GraspSequencer, ObstaclesOnTheGraspedObjectAreExcluded) {
+  GraspSequencer s(twoObjects());
+  EXPECT_FALSE(s.objectCentre());
+  EXPECT_FALSE(s.isGraspedObject(Eigen::Vector3d(1.5, 0, 0.76)));  // no object yet
+  s.setObjectPose(0, 1.0, forwardTarget());
+  SequencerInput in;
+  in.t = 1.0;
+  s.update(in);
+  ASSERT_TRUE(s.objectCentre());
+  EXPECT_TRUE(s.isGraspedObject(Eigen::Vector3d(1.5, 0.05, 0.70)));   // the object / table under it
+  EXPECT_FALSE(s.isGraspedObject(Eigen::Vector3d(1.5, 0.3, 0.76)));   // another object
+  EXPECT_FALSE(s.isGraspedObject(Eigen::Vector3d(std::nan(""), 0, 0.76)));
 }
 
 TEST(GraspSequencer, RejectsNonFiniteInput) {

@@ -3,11 +3,15 @@
 // ehc_grasp_sequencer_node only converts messages and calls it). Issue 6 item 4.
 //
 // For every object in order:
-//   WAIT_TARGET  until the object's perceived pose (tag target) arrives
-//   APPROACH     goal = pre-grasp pose of the current best grasp (re-chosen as perception and
-//                grasp candidates update); the controller drives base + arm. Ends when the TCP is
-//                within approach_tolerance of the pre-grasp pose (tsmm: the controller's base
-//                stage happens here)
+//   WAIT_TARGET  until a fresh perceived pose (tag target) of the object arrives; meanwhile, if
+//                the object was seen before (every object's pose is remembered, e.g. from the
+//                start position), goal = a look pose search_distance back along its approach
+//                axis, so that the camera finds it again (search_distance 0: no goal, the
+//                controller stops on TARGET_LOST)
+//   APPROACH     goal = the current best grasp pose (re-chosen as perception and grasp
+//                candidates update; the controller's MPBS watches this point = the object);
+//                base + arm drive. Ends when the TCP is within pregrasp_switch_distance of the
+//                grasp position (tsmm: the controller's base stage happens here)
 //   PRE_GRASP    the grasp is locked in the world frame (the object is static until touched, and
 //                the tag may leave the view at close range); goal = pre-grasp pose, tight tolerance
 //   GRASP        goal = grasp pose; ends within grasp tolerance
@@ -22,8 +26,11 @@
 // is failed with the phase it was in. Time = sim time (s). NaN/Inf inputs are rejected
 // (counted); a non-finite or decreasing time throws "[GraspSequencer] ...".
 //
-// TfM of an object = fraction of controller cycles from the object's start until the gripper
-// closes in which the controller reported the target inside the camera image.
+// TfM of an object = fraction of cycles, from its first perceived pose until the gripper closes,
+// in which the object centre (perceived pose) projects inside the camera image at positive
+// depth (camera pose from tf, pinhole intrinsics from camera_info). Cycles without a camera
+// pose are not counted. The controller's own in-FOV flag (/ehc/status, about its target) is
+// reported beside it as controller_tfm.
 
 #include "ehc_bringup/grasp_selection.h"
 
@@ -42,6 +49,16 @@ namespace ehc_bringup {
 enum class GraspPhase { WaitTarget, Approach, PreGrasp, Grasp, Close, Lift, Release, Retreat, Done };
 std::string toString(GraspPhase p);
 
+/// Pinhole camera (image size, intrinsics) for TfM.
+struct CameraModel {
+  int width = 640, height = 480;
+  double fx = 615.0, fy = 615.0, cx = 320.0, cy = 240.0;
+  bool valid() const;
+};
+/// True if world point `p` projects inside the image at positive depth; `world_T_camera` is
+/// the optical frame (z forward, x right, y down).
+bool pointInImage(const Eigen::Isometry3d& world_T_camera, const Eigen::Vector3d& p, const CameraModel& cam);
+
 struct GraspObjectSpec {
   std::string name;
   ApproachDirection approach = ApproachDirection::Forward;
@@ -50,11 +67,14 @@ struct GraspObjectSpec {
 struct GraspSequencerParams {
   std::vector<GraspObjectSpec> objects;
   double object_time_limit = 30.0;        ///< s, WAIT_TARGET..LIFT per object
-  double perception_hold = 1.0;           ///< s: before the lock, an older object pose gives no goal
+  double perception_hold = 1.0;           ///< s: before the lock, an older pose -> WAIT_TARGET
+  double search_distance = 0.40;          ///< m: look pose back along the approach (0 = off)
+  /// m: obstacle points this close to the current object's centre are the object itself (and
+  /// the support right under it), not obstacles: the node drops them before the controller.
+  double obstacle_exclusion_radius = 0.10;
   double pose_filter_gain = 0.3;          ///< (0, 1]: weight of a new perceived pose (1 = no filter)
   double pregrasp_distance = 0.10;        ///< m, pre-grasp = grasp backed off along the approach
-  double approach_position_tolerance = 0.05;      ///< m
-  double approach_orientation_tolerance_deg = 15.0;
+  double pregrasp_switch_distance = 0.25;  ///< m: APPROACH -> PRE_GRASP (TCP to grasp position)
   double pregrasp_position_tolerance = 0.015;     ///< m
   double pregrasp_orientation_tolerance_deg = 5.0;
   double grasp_position_tolerance = 0.01;         ///< m
@@ -78,6 +98,7 @@ GraspSequencerParams loadGraspSequencerParams(const ehc_control::ConfigNode& roo
 struct SequencerInput {
   double t = 0.0;                                  ///< sim time, s
   std::optional<Eigen::Isometry3d> tcp;            ///< TCP pose in the world (tf), if known
+  std::optional<Eigen::Isometry3d> camera;         ///< camera optical frame in the world, if known
   std::string controller_phase;                    ///< /ehc/status phase ("" if none yet)
   bool target_in_fov = false;                      ///< /ehc/status target_in_fov
   std::string gripper_state;                       ///< /sim/status: open|closing|holding|closed_empty|opening
@@ -95,8 +116,9 @@ struct GraspResult {
   std::string name;
   bool success = false;
   double time_s = 0.0;            ///< object start -> lift success (or failure)
-  double tfm = 0.0;               ///< [0, 1]
+  double tfm = 0.0;               ///< [0, 1], object centre in the image (see above)
   long cycles = 0;                ///< cycles counted for TfM
+  double controller_tfm = 0.0;    ///< [0, 1], /ehc/status target_in_fov over the same span
   std::string failed_phase;       ///< "" on success
   std::string reason;             ///< "" on success
   bool used_candidate = false;    ///< grasp from perception candidates (else the tag fallback)
@@ -114,6 +136,8 @@ class GraspSequencer {
   bool setObjectPose(std::size_t index, double t, const Eigen::Isometry3d& pose);
   /// Latest grasp candidates (world). Non-finite candidates are dropped (counted).
   void setGraspCandidates(double t, const std::vector<GraspCandidate>& candidates);
+  /// Camera intrinsics for TfM; false (ignored) if invalid.
+  bool setCamera(const CameraModel& camera);
 
   /// One cycle. Throws "[GraspSequencer] ..." for a non-finite or decreasing time.
   SequencerOutput update(const SequencerInput& in);
@@ -126,6 +150,11 @@ class GraspSequencer {
   const GraspSequencerParams& params() const { return params_; }
   /// Locked grasp of the current object (PRE_GRASP onwards).
   const std::optional<GraspChoice>& lockedGrasp() const { return locked_; }
+  /// Centre of the object being grasped (locked or perceived), if any and not DONE.
+  std::optional<Eigen::Vector3d> objectCentre() const;
+  /// True if an obstacle point belongs to the object being grasped (within
+  /// obstacle_exclusion_radius of objectCentre()). Non-finite points are never excluded.
+  bool isGraspedObject(const Eigen::Vector3d& obstacle_point) const;
 
  private:
   void startObject(double t, SequencerOutput* out);
@@ -145,14 +174,17 @@ class GraspSequencer {
   double object_t0_ = 0.0, phase_t0_ = 0.0;
   // perception of the current object
   std::optional<Eigen::Isometry3d> object_pose_;
+  std::vector<std::optional<Eigen::Isometry3d>> remembered_;  ///< last pose of every object
   double object_pose_t_ = -1.0;
   std::vector<GraspCandidate> candidates_;
   std::optional<GraspChoice> locked_;
+  Eigen::Vector3d locked_object_centre_ = Eigen::Vector3d::Zero();
   std::optional<Eigen::Isometry3d> hold_goal_;  ///< RELEASE / RETREAT goal
   Eigen::Vector3d last_approach_ = Eigen::Vector3d::UnitX();
   // bookkeeping
   GraspResult cur_;
-  long fov_cycles_ = 0, tfm_cycles_ = 0;
+  long fov_cycles_ = 0, tfm_cycles_ = 0, ctrl_fov_cycles_ = 0, ctrl_cycles_ = 0;
+  std::optional<CameraModel> camera_;
   bool counting_tfm_ = true;
   std::string last_controller_phase_;
   std::vector<GraspResult> results_;

@@ -25,6 +25,10 @@ std::string toString(GraspPhase p) {
   return "?";
 }
 
+namespace {
+std::string num(double v, int precision = 3);
+}  // namespace
+
 // ---------------------------------------------------------------- parameters
 
 void GraspSequencerParams::validate() const {
@@ -42,12 +46,15 @@ void GraspSequencerParams::validate() const {
   }
   positive(object_time_limit, "object_time_limit");
   positive(perception_hold, "perception_hold");
+  check(std::isfinite(obstacle_exclusion_radius) && obstacle_exclusion_radius >= 0.0 && obstacle_exclusion_radius <= 0.5,
+        "obstacle_exclusion_radius must be in [0, 0.5] m");
+  check(std::isfinite(search_distance) && search_distance >= 0.0 && search_distance <= 2.0,
+        "search_distance must be in [0, 2] m");
   check(std::isfinite(pose_filter_gain) && pose_filter_gain > 0.0 && pose_filter_gain <= 1.0,
         "pose_filter_gain must be in (0, 1]");
   check(std::isfinite(pregrasp_distance) && pregrasp_distance >= 0.0 && pregrasp_distance <= 0.5,
         "pregrasp_distance must be in [0, 0.5] m");
-  positive(approach_position_tolerance, "approach_position_tolerance");
-  positive(approach_orientation_tolerance_deg, "approach_orientation_tolerance_deg");
+  positive(pregrasp_switch_distance, "pregrasp_switch_distance");
   positive(pregrasp_position_tolerance, "pregrasp_position_tolerance");
   positive(pregrasp_orientation_tolerance_deg, "pregrasp_orientation_tolerance_deg");
   positive(grasp_position_tolerance, "grasp_position_tolerance");
@@ -67,9 +74,9 @@ std::string GraspSequencerParams::summary() const {
   s << "GraspSequencer: " << objects.size() << " object(s):";
   for (const auto& o : objects) s << " " << o.name << " (" << toString(o.approach) << ")";
   s << "\n  limit " << object_time_limit << " s/object, perception hold " << perception_hold
-    << " s, pose filter gain " << pose_filter_gain << ", pre-grasp " << pregrasp_distance << " m"
-    << "\n  tolerances: approach " << approach_position_tolerance << " m/" << approach_orientation_tolerance_deg
-    << " deg, pre-grasp " << pregrasp_position_tolerance << " m/" << pregrasp_orientation_tolerance_deg
+    << " s, search " << search_distance << " m, obstacle exclusion " << obstacle_exclusion_radius
+    << " m, pose filter gain " << pose_filter_gain << ", pre-grasp " << pregrasp_distance << " m"
+    << "\n  pre-grasp from " << pregrasp_switch_distance << " m; tolerances: pre-grasp " << pregrasp_position_tolerance << " m/" << pregrasp_orientation_tolerance_deg
     << " deg, grasp " << grasp_position_tolerance << " m/" << grasp_orientation_tolerance_deg << " deg"
     << "\n  gripper timeout " << gripper_timeout << " s, lift " << lift_height << " m, release timeout "
     << release_timeout << " s, retreat " << retreat_distance << " m back + " << retreat_raise << " m up (tol "
@@ -87,10 +94,11 @@ GraspSequencerParams loadGraspSequencerParams(const ehc_control::ConfigNode& roo
   const ehc_control::ConfigNode s = root.childOrEmpty("sequencer");
   p.object_time_limit = s.get("object_time_limit", p.object_time_limit);
   p.perception_hold = s.get("perception_hold", p.perception_hold);
+  p.search_distance = s.get("search_distance", p.search_distance);
+  p.obstacle_exclusion_radius = s.get("obstacle_exclusion_radius", p.obstacle_exclusion_radius);
   p.pose_filter_gain = s.get("pose_filter_gain", p.pose_filter_gain);
   p.pregrasp_distance = s.get("pregrasp_distance", p.pregrasp_distance);
-  p.approach_position_tolerance = s.get("approach_position_tolerance", p.approach_position_tolerance);
-  p.approach_orientation_tolerance_deg = s.get("approach_orientation_tolerance_deg", p.approach_orientation_tolerance_deg);
+  p.pregrasp_switch_distance = s.get("pregrasp_switch_distance", p.pregrasp_switch_distance);
   p.pregrasp_position_tolerance = s.get("pregrasp_position_tolerance", p.pregrasp_position_tolerance);
   p.pregrasp_orientation_tolerance_deg = s.get("pregrasp_orientation_tolerance_deg", p.pregrasp_orientation_tolerance_deg);
   p.grasp_position_tolerance = s.get("grasp_position_tolerance", p.grasp_position_tolerance);
@@ -136,10 +144,24 @@ GraspSequencerParams loadGraspSequencerParams(const ehc_control::ConfigNode& roo
   return p;
 }
 
+bool CameraModel::valid() const {
+  return width > 0 && height > 0 && std::isfinite(fx) && std::isfinite(fy) && std::isfinite(cx) &&
+         std::isfinite(cy) && fx > 0.0 && fy > 0.0;
+}
+
+bool pointInImage(const Eigen::Isometry3d& world_T_camera, const Eigen::Vector3d& p, const CameraModel& cam) {
+  if (!world_T_camera.matrix().allFinite() || !p.allFinite() || !cam.valid()) return false;
+  const Eigen::Vector3d c = world_T_camera.inverse() * p;
+  if (!(c.z() > 1e-6)) return false;
+  const double u = cam.fx * c.x() / c.z() + cam.cx, v = cam.fy * c.y() / c.z() + cam.cy;
+  return u >= 0.0 && u < cam.width && v >= 0.0 && v < cam.height;
+}
+
 // ---------------------------------------------------------------- state machine
 
 GraspSequencer::GraspSequencer(const GraspSequencerParams& params) : params_(params) {
   params_.validate();
+  remembered_.resize(params_.objects.size());
 }
 
 bool GraspSequencer::setObjectPose(std::size_t index, double t, const Eigen::Isometry3d& pose) {
@@ -147,7 +169,8 @@ bool GraspSequencer::setObjectPose(std::size_t index, double t, const Eigen::Iso
     ++rejected_;
     return false;
   }
-  if (index != current_ || done()) return true;  // another object's pose: not needed now
+  remembered_[index] = pose;
+  if (index != current_ || done()) return true;  // another object's pose: remembered only
   if (locked_) return true;                      // grasp locked: perception no longer moves it
   if (!object_pose_) {
     object_pose_ = pose;
@@ -160,6 +183,27 @@ bool GraspSequencer::setObjectPose(std::size_t index, double t, const Eigen::Iso
     object_pose_ = f;
   }
   object_pose_t_ = t;
+  return true;
+}
+
+std::optional<Eigen::Vector3d> GraspSequencer::objectCentre() const {
+  if (done() || phase_ > GraspPhase::Lift) return std::nullopt;
+  if (locked_) return locked_object_centre_;
+  if (object_pose_) return object_pose_->translation();
+  return std::nullopt;
+}
+
+bool GraspSequencer::isGraspedObject(const Eigen::Vector3d& p) const {
+  const auto c = objectCentre();
+  return c && p.allFinite() && (p - *c).norm() <= params_.obstacle_exclusion_radius;
+}
+
+bool GraspSequencer::setCamera(const CameraModel& camera) {
+  if (!camera.valid()) {
+    ++rejected_;
+    return false;
+  }
+  camera_ = camera;
   return true;
 }
 
@@ -183,7 +227,7 @@ void GraspSequencer::startObject(double t, SequencerOutput* out) {
   object_t0_ = t;
   locked_.reset();
   hold_goal_.reset();
-  fov_cycles_ = tfm_cycles_ = 0;
+  fov_cycles_ = tfm_cycles_ = ctrl_fov_cycles_ = ctrl_cycles_ = 0;
   counting_tfm_ = true;
   cur_ = GraspResult();
   cur_.name = params_.objects[current_].name;
@@ -237,6 +281,7 @@ void GraspSequencer::finishObject(double t, bool success, const std::string& rea
   cur_.reason = reason;
   cur_.cycles = tfm_cycles_;
   cur_.tfm = tfm_cycles_ > 0 ? static_cast<double>(fov_cycles_) / static_cast<double>(tfm_cycles_) : 0.0;
+  cur_.controller_tfm = ctrl_cycles_ > 0 ? static_cast<double>(ctrl_fov_cycles_) / static_cast<double>(ctrl_cycles_) : 0.0;
   cur_.used_candidate = locked_ ? locked_->from_candidate : false;
   // RELEASE holds the TCP where it is; RETREAT backs off along the approach from there.
   if (locked_) last_approach_ = locked_->pose.linear().col(2);
@@ -276,9 +321,16 @@ SequencerOutput GraspSequencer::update(const SequencerInput& in) {
     if (cp != last_controller_phase_ && !last_controller_phase_.empty())
       out.events.push_back(label() + ": controller " + last_controller_phase_ + " -> " + cp);
     last_controller_phase_ = cp;
-    if (counting_tfm_ && !in.controller_phase.empty()) {
-      ++tfm_cycles_;
-      if (in.target_in_fov) ++fov_cycles_;
+    if (counting_tfm_ && object_pose_) {
+      if (!in.controller_phase.empty()) {
+        ++ctrl_cycles_;
+        if (in.target_in_fov) ++ctrl_fov_cycles_;
+      }
+      if (in.camera && camera_) {
+        ++tfm_cycles_;
+        const Eigen::Vector3d centre = locked_ ? locked_object_centre_ : object_pose_->translation();
+        if (pointInImage(*in.camera, centre, *camera_)) ++fov_cycles_;
+      }
     }
   }
 
@@ -295,22 +347,34 @@ SequencerOutput GraspSequencer::update(const SequencerInput& in) {
 
   switch (phase_) {
     case GraspPhase::WaitTarget: {
-      if (!fresh) break;
+      if (!fresh) {
+        const auto& seen = object_pose_ ? object_pose_ : remembered_[current_];
+        if (seen && params_.search_distance > 0.0) {
+          Eigen::Isometry3d look = *seen;
+          look.translation() -= params_.search_distance * seen->linear().col(2);
+          out.goal = look;
+        }
+        break;
+      }
       const auto choice = currentChoice(in);
       if (!choice) break;  // require_candidate and none yet
       enter(GraspPhase::Approach, t, &out,
             choice->from_candidate ? "grasp candidate" : "tag grasp (no candidate yet)");
-      out.goal = preGrasp(choice->pose);
+      out.goal = choice->pose;
       break;
     }
     case GraspPhase::Approach: {
-      if (!fresh) break;  // perception lost: no goal -> the controller stops (TARGET_LOST)
+      if (!fresh) {  // perception lost: search again
+        enter(GraspPhase::WaitTarget, t, &out, "object pose older than " + num(params_.perception_hold, 1) + " s");
+        break;
+      }
       const auto choice = currentChoice(in);
       if (!choice) break;
-      const Eigen::Isometry3d pre = preGrasp(choice->pose);
-      out.goal = pre;
-      if (within(in, pre, params_.approach_position_tolerance, params_.approach_orientation_tolerance_deg)) {
+      out.goal = choice->pose;
+      if (within(in, choice->pose, params_.pregrasp_switch_distance, 180.0)) {
         locked_ = choice;
+        locked_object_centre_ = object_pose_->translation();
+        out.goal = preGrasp(choice->pose);
         enter(GraspPhase::PreGrasp, t, &out,
               std::string("grasp locked: ") + (choice->from_candidate ? "perception candidate" : "tag fallback"));
       }
@@ -415,7 +479,7 @@ std::string jsonString(const std::string& s) {
   }
   return o + "\"";
 }
-std::string num(double v, int precision = 3) {
+std::string num(double v, int precision) {
   if (!std::isfinite(v)) return "null";
   std::ostringstream s;
   s << std::fixed << std::setprecision(precision) << v;
@@ -434,6 +498,7 @@ std::string graspResultsToJson(const std::vector<GraspResult>& results, const st
     const GraspResult& r = results[i];
     s << (i ? ", " : "") << "{\"name\": " << jsonString(r.name) << ", \"success\": " << (r.success ? "true" : "false")
       << ", \"time_s\": " << num(r.time_s, 2) << ", \"tfm\": " << num(r.tfm, 4) << ", \"tfm_cycles\": " << r.cycles
+      << ", \"controller_tfm\": " << num(r.controller_tfm, 4)
       << ", \"approach\": " << jsonString(r.approach) << ", \"grasp_from_candidate\": "
       << (r.used_candidate ? "true" : "false") << ", \"failed_phase\": " << jsonString(r.failed_phase)
       << ", \"reason\": " << jsonString(r.reason) << ", \"phase_times\": {";

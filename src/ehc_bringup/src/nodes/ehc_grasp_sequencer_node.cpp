@@ -5,7 +5,8 @@
 // Owns the controller's goal: perception publishes each object's pose on its own topic
 // (objects[i].pose_topic, e.g. a tag node per object), the sequencer publishes the TCP goal on
 // node.goal_topic (/ehc/target_pose) every controller cycle, the current object's filtered pose
-// on node.object_pose_topic (the grasp node's target, by remapping), and closes / opens the
+// on node.object_pose_topic (the grasp node's target, by remapping), the object's centre on
+// node.target_centre_topic (what the controller's camera watches, MPBS), and closes / opens the
 // gripper through node.gripper_service (std_srvs/SetBool, true = close). One update per
 // /ehc/status message (lock-step with the simulator). Reads the gripper result from /sim/status.
 // When every object is handled it writes the JSON summary (and the CSV trace) and exits 0.
@@ -14,13 +15,17 @@
 #include "ehc_bringup/grasp_sequencer.h"
 #include "ehc_control/ControllerStatus.h"
 #include "ehc_control/GraspCandidates.h"
+#include "ehc_control/ObstacleArray.h"
 #include "ehc_control/config_node.h"
 #include "ehc_sim/SimStatus.h"
 
+#include <geometry_msgs/PointStamped.h>
 #include <geometry_msgs/PoseStamped.h>
 #include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
+#include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/JointState.h>
+#include <std_msgs/String.h>
 #include <std_srvs/SetBool.h>
 #include <tf2_eigen/tf2_eigen.h>
 #include <tf2_ros/transform_listener.h>
@@ -37,19 +42,26 @@ using ehc_bringup::GraspSequencer;
 struct NodeParams {
   std::string world_frame = "odom";
   std::string tcp_frame = "ee_link";
+  std::string camera_frame = "camera_color_optical_frame";
+  std::string camera_info_topic = "/camera/color/camera_info";
   std::string goal_topic = "/ehc/target_pose";
   std::string object_pose_topic = "/ehc/sequencer/object_pose";
+  std::string target_centre_topic = "/ehc/target_centre";  ///< point the controller's camera watches
   std::string candidates_topic = "/ehc/grasp_candidates";
   std::string status_topic = "/ehc/status";
   std::string sim_status_topic = "/sim/status";
   std::string gripper_service = "/sim/gripper";
+  std::string obstacles_in_topic;   ///< "" = no obstacle relay
+  std::string obstacles_out_topic = "/ehc/obstacles";
   std::vector<std::string> pose_topics;  ///< per object (objects[i].pose_topic)
   bool exit_when_done = true;
   std::string summary() const {
     std::string s = "  goal -> " + goal_topic + ", object pose -> " + object_pose_topic + ", candidates <- " +
                     candidates_topic + ", status <- " + status_topic + ", gripper <- " + sim_status_topic +
-                    " / -> " + gripper_service + "\n  TCP " + world_frame + " -> " + tcp_frame + " (tf)\n  pose topics:";
+                    " / -> " + gripper_service + "\n  TCP " + world_frame + " -> " + tcp_frame + ", camera " + camera_frame + " (tf) + " + camera_info_topic + " (TfM)\n  pose topics:";
     for (const auto& t : pose_topics) s += " " + t;
+    if (!obstacles_in_topic.empty())
+      s += "\n  obstacles " + obstacles_in_topic + " -> " + obstacles_out_topic + " without the grasped object";
     return s;
   }
 };
@@ -59,14 +71,19 @@ NodeParams loadNodeParams(const ehc_control::ConfigNode& root) {
   const auto n = root.childOrEmpty("node");
   p.world_frame = n.get("world_frame", p.world_frame);
   p.tcp_frame = n.get("tcp_frame", p.tcp_frame);
+  p.camera_frame = n.get("camera_frame", p.camera_frame);
+  p.camera_info_topic = n.get("camera_info_topic", p.camera_info_topic);
   p.goal_topic = n.get("goal_topic", p.goal_topic);
   p.object_pose_topic = n.get("object_pose_topic", p.object_pose_topic);
+  p.target_centre_topic = n.get("target_centre_topic", p.target_centre_topic);
   p.candidates_topic = n.get("candidates_topic", p.candidates_topic);
   p.status_topic = n.get("status_topic", p.status_topic);
   p.sim_status_topic = n.get("sim_status_topic", p.sim_status_topic);
   p.gripper_service = n.get("gripper_service", p.gripper_service);
+  p.obstacles_in_topic = n.get("obstacles_in_topic", p.obstacles_in_topic);
+  p.obstacles_out_topic = n.get("obstacles_out_topic", p.obstacles_out_topic);
   p.exit_when_done = n.get("exit_when_done", p.exit_when_done);
-  for (const std::string& k : {"world_frame", "tcp_frame", "goal_topic", "status_topic", "gripper_service"})
+  for (const char* k : {"world_frame", "tcp_frame", "goal_topic", "status_topic", "gripper_service"})
     if (n.has(k) && n.get<std::string>(k, "").empty()) n.fail(k, "must not be empty");
   const YAML::Node list = root.yaml()["objects"];
   for (std::size_t i = 0; list && list.IsSequence() && i < list.size(); ++i) {
@@ -106,6 +123,7 @@ class SequencerNode {
     pnh.param<std::string>("trace", trace_file_, "");
     const auto root = ehc_control::ConfigNode::loadFile(config, "GraspSequencerNode");
     node_ = loadNodeParams(root);
+    pnh.param("exit_when_done", node_.exit_when_done, node_.exit_when_done);
     const ehc_bringup::GraspSequencerParams sp = ehc_bringup::loadGraspSequencerParams(root);
     seq_ = std::make_unique<GraspSequencer>(sp);
     ROS_INFO_STREAM("ehc_grasp_sequencer_node (" << config << ")\n" << sp.summary() << "\n" << node_.summary());
@@ -113,16 +131,23 @@ class SequencerNode {
       trace_.open(trace_file_);
       if (!trace_) throw std::runtime_error("cannot write the trace file " + trace_file_);
       trace_ << "t,object,phase,controller_phase,error_norm,position_error,sig_omega,base_speed,base_turn_rate,"
-                "arm_speed,target_in_fov\n";
+                "arm_speed,target_in_fov,obstacle_rows,qp_status\n";
     }
     goal_pub_ = nh.advertise<geometry_msgs::PoseStamped>(node_.goal_topic, 10);
     object_pub_ = nh.advertise<geometry_msgs::PoseStamped>(node_.object_pose_topic, 10);
+    centre_pub_ = nh.advertise<geometry_msgs::PointStamped>(node_.target_centre_topic, 10);
+    results_pub_ = nh.advertise<std_msgs::String>("ehc/grasp_results", 1, true);  // latched JSON
     gripper_ = nh.serviceClient<std_srvs::SetBool>(node_.gripper_service);
     for (std::size_t i = 0; i < node_.pose_topics.size(); ++i)
       subs_.push_back(nh.subscribe<geometry_msgs::PoseStamped>(
           node_.pose_topics[i], 5, [this, i](const geometry_msgs::PoseStamped::ConstPtr& m) { onObjectPose(i, *m); }));
     subs_.push_back(nh.subscribe(node_.candidates_topic, 2, &SequencerNode::onCandidates, this));
+    if (!node_.obstacles_in_topic.empty()) {
+      obstacles_pub_ = nh.advertise<ehc_control::ObstacleArray>(node_.obstacles_out_topic, 10);
+      subs_.push_back(nh.subscribe(node_.obstacles_in_topic, 10, &SequencerNode::onObstacles, this));
+    }
     subs_.push_back(nh.subscribe(node_.sim_status_topic, 10, &SequencerNode::onSimStatus, this));
+    subs_.push_back(nh.subscribe(node_.camera_info_topic, 1, &SequencerNode::onCameraInfo, this));
     subs_.push_back(nh.subscribe("joint_states", 10, &SequencerNode::onJoints, this));
     subs_.push_back(nh.subscribe("odom", 10, &SequencerNode::onOdom, this));
     subs_.push_back(nh.subscribe(node_.status_topic, 10, &SequencerNode::onStatus, this));
@@ -149,6 +174,26 @@ class SequencerNode {
       c[i].score = i < m.scores.size() ? m.scores[i] : std::nan("");
     }
     seq_->setGraspCandidates(ros::Time::now().toSec(), c);
+  }
+  /// Relay of the obstacle list without the pairs on the object being grasped.
+  void onObstacles(const ehc_control::ObstacleArray& m) {
+    ehc_control::ObstacleArray out;
+    out.header = m.header;
+    out.influence_distance = m.influence_distance;
+    for (const auto& o : m.obstacles)
+      if (!seq_->isGraspedObject(Eigen::Vector3d(o.obstacle_point.x, o.obstacle_point.y, o.obstacle_point.z)))
+        out.obstacles.push_back(o);
+    obstacles_pub_.publish(out);
+  }
+  void onCameraInfo(const sensor_msgs::CameraInfo& m) {
+    ehc_bringup::CameraModel c;
+    c.width = static_cast<int>(m.width);
+    c.height = static_cast<int>(m.height);
+    c.fx = m.K[0];
+    c.fy = m.K[4];
+    c.cx = m.K[2];
+    c.cy = m.K[5];
+    if (!seq_->setCamera(c)) ROS_ERROR_STREAM_THROTTLE(5.0, "[ehc_grasp_sequencer_node] invalid camera_info ignored");
   }
   void onSimStatus(const ehc_sim::SimStatus& m) {
     gripper_state_ = m.gripper_state;
@@ -195,11 +240,24 @@ class SequencerNode {
     } catch (const tf2::TransformException& e) {
       ROS_WARN_STREAM_THROTTLE(2.0, "[ehc_grasp_sequencer_node] no TCP pose yet: " << e.what());
     }
+    try {
+      in.camera = tf2::transformToEigen(tf_.lookupTransform(node_.world_frame, node_.camera_frame, ros::Time(0)));
+    } catch (const tf2::TransformException&) {
+    }
     const ehc_bringup::SequencerOutput out = seq_->update(in);
     for (const auto& e : out.events) ROS_INFO_STREAM("[grasp] t=" << std::fixed << std::setprecision(2) << in.t << " " << e);
     const ros::Time now = ros::Time::now();
     if (out.object_pose) object_pub_.publish(toMsg(*out.object_pose, node_.world_frame, now));
     if (out.goal) goal_pub_.publish(toMsg(*out.goal, node_.world_frame, now));
+    if (const auto c = seq_->objectCentre()) {
+      geometry_msgs::PointStamped p;
+      p.header.frame_id = node_.world_frame;
+      p.header.stamp = now;
+      p.point.x = c->x();
+      p.point.y = c->y();
+      p.point.z = c->z();
+      centre_pub_.publish(p);
+    }
     if (out.gripper_command) {
       std_srvs::SetBool srv;
       srv.request.data = *out.gripper_command;
@@ -213,9 +271,15 @@ class SequencerNode {
       trace_ << std::fixed << std::setprecision(3) << in.t << "," << objs[k].name << ","
              << ehc_bringup::toString(seq_->phase()) << "," << m.phase << "," << std::setprecision(5) << m.error_norm
              << "," << m.position_error << "," << m.sig_omega << "," << base_speed_ << "," << base_turn_ << ","
-             << arm_speed_ << "," << (m.target_in_fov ? 1 : 0) << "\n";
+             << arm_speed_ << "," << (m.target_in_fov ? 1 : 0) << "," << m.obstacle_rows << "," << m.qp_status << "\n";
     }
     mode_ = m.mode;
+    if (seq_->results().size() != published_results_) {
+      published_results_ = seq_->results().size();
+      std_msgs::String r;
+      r.data = ehc_bringup::graspResultsToJson(seq_->results(), mode_, in.t - t_start_);
+      results_pub_.publish(r);
+    }
     if (seq_->done()) finish(in.t);
   }
 
@@ -237,7 +301,8 @@ class SequencerNode {
   std::unique_ptr<GraspSequencer> seq_;
   tf2_ros::Buffer tf_;
   tf2_ros::TransformListener listener_;
-  ros::Publisher goal_pub_, object_pub_;
+  ros::Publisher goal_pub_, object_pub_, results_pub_, obstacles_pub_, centre_pub_;
+  std::size_t published_results_ = 0;
   ros::ServiceClient gripper_;
   std::vector<ros::Subscriber> subs_;
   std::string summary_file_, trace_file_, mode_;
