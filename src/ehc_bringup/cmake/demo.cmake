@@ -25,3 +25,11 @@ if(CATKIN_ENABLE_TESTING)
   target_link_libraries(test_grasp_sequencer ehc_grasp_core gtest_main)
   target_compile_definitions(test_grasp_sequencer PRIVATE EHC_CONFIG_DIR="${EHC_CONFIG_DIR}")
 endif()
+
+# End-to-end rostests (issue 6 item 6): the whole pipeline on config/scenes/single_object.yaml for
+# the forward, downward and sideways grasps, with and without MPBS (test/test_grasp_single.py).
+if(CATKIN_ENABLE_TESTING AND NOT EHC_SKIP_E2E)
+  foreach(o forward downward sideways)
+    add_rostest(test/grasp_single_${o}.test DEPENDENCIES ehc_grasp_sequencer_node)
+  endforeach()
+endif()

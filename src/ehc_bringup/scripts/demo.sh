@@ -21,6 +21,8 @@
 #   SCENE              scene YAML                                     [config/scenes/table_three_objects.yaml]
 #   SEED               simulator noise seed                           [1]
 #   WALL_LIMIT         wall-clock guard for the whole run, s           [600]
+#   TAG_OBJECTS        objects with a tag node config/demo/tag_<name>.yaml  [front middle back]
+#   MPBS               true | false: override the controller's mpbs.enabled  [from CONTROLLER_CONFIG]
 #   OBSTACLES          1: run the obstacle node (controller obstacle dampers), 0: without  [1]
 # Exit code: 0 when every object was grasped, 1 if a grasp failed, 2 on a set-up error or crash.
 set -o pipefail
@@ -43,7 +45,10 @@ SIM_CONFIG="${SIM_CONFIG:-src/ehc_sim/config/sim.yaml}"
 SCENE="${SCENE:-config/scenes/table_three_objects.yaml}"
 SEED="${SEED:-1}"
 WALL_LIMIT="${WALL_LIMIT:-600}"
-OBJECTS=(front middle back)
+# One tag node per object: config/demo/tag_<object>.yaml (the sequencer config lists the same).
+read -r -a OBJECTS <<<"${TAG_OBJECTS:-front middle back}"
+MPBS_ARG=()
+[ -n "${MPBS:-}" ] && MPBS_ARG=(_mpbs:="$MPBS")
 for f in "$CONTROLLER_CONFIG" "$SEQUENCER_CONFIG" "$SIM_CONFIG" "$SCENE" config/perception/grasp_node.yaml \
          config/demo/obstacle_node.yaml; do
   [ -f "$f" ] || { echo "demo.sh: file not found: $f" >&2; exit 2; }
@@ -98,12 +103,12 @@ trap 'stop_all' EXIT
 start() {  # start NAME COMMAND...
   local name="$1"
   shift
-  "$@" >"$OUT/logs/$name.log" 2>&1 &
+  stdbuf -oL -eL "$@" >"$OUT/logs/$name.log" 2>&1 &  # line-buffered: progress is streamed
   PIDS+=($!)
   NAMES+=("$name")
 }
 
-echo "== EHC-MM demo: grasp three objects with the EHC controller (scene $SCENE, mode $MODE, seed $SEED)"
+echo "== EHC-MM demo: grasp ${#OBJECTS[@]} object(s) with the EHC controller (scene $SCENE, mode $MODE${MPBS:+, MPBS $MPBS}, seed $SEED)"
 echo "   master $ROS_MASTER_URI, logs in $OUT/logs/"
 t0=$(date +%s.%N)
 start rosmaster rosmaster --core -p "$PORT"
@@ -124,7 +129,7 @@ start grasp rosrun ehc_perception ehc_grasp_node _config:=config/perception/gras
 [ "${OBSTACLES:-1}" = 1 ] &&
   start obstacles rosrun ehc_perception ehc_obstacle_node _config:=config/demo/obstacle_node.yaml \
     /ehc/obstacles:=/ehc/perception/obstacles  # relayed by the sequencer without the grasped object
-start controller rosrun ehc_control ehc_controller_node _config:="$CONTROLLER_CONFIG" _mode:="$MODE"
+start controller rosrun ehc_control ehc_controller_node _config:="$CONTROLLER_CONFIG" _mode:="$MODE" "${MPBS_ARG[@]}"
 start sequencer rosrun ehc_bringup ehc_grasp_sequencer_node _config:="$SEQUENCER_CONFIG" \
   _summary:="$WS/$OUT/summary.json" _trace:="$WS/$OUT/trace.csv"
 SEQ_PID=${PIDS[-1]}
@@ -166,6 +171,6 @@ if [ ! -f "$OUT/summary.json" ]; then
 fi
 echo "== summary (wall time ${wall} s)"
 /usr/bin/python3 "src/ehc_bringup/scripts/demo_report.py" "$OUT/summary.json" "$OUT/trace.csv" "$OUT/demo.png" \
-  --controller-config "$CONTROLLER_CONFIG" --wall "$wall" || status=2
+  --controller-config "$CONTROLLER_CONFIG" ${MPBS:+--mpbs "$MPBS"} --wall "$wall" || status=2
 [ "$status" = 0 ] || exit "$status"
 /usr/bin/python3 -c "import json,sys; d=json.load(open('$OUT/summary.json')); sys.exit(0 if d['successes']==d['objects_total'] else 1)"

@@ -35,6 +35,7 @@ def main():
     ap.add_argument("png")
     ap.add_argument("--controller-config", default="")
     ap.add_argument("--wall", type=float, default=None)
+    ap.add_argument("--mpbs", choices=["true", "false"], default=None, help="the controller's _mpbs override")
     a = ap.parse_args()
 
     with open(a.summary) as f:
@@ -42,6 +43,8 @@ def main():
     if a.controller_config:
         s["controller_config"] = a.controller_config
         s["mpbs"] = mpbs_enabled(a.controller_config)
+    if a.mpbs is not None:
+        s["mpbs"] = a.mpbs == "true"
     if a.wall is not None:
         s["wall_time_s"] = a.wall
     with open(a.summary, "w") as f:

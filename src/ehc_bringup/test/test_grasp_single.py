@@ -1,0 +1,93 @@
+#!/usr/bin/python3
+"""End-to-end grasp of config/scenes/single_object.yaml (issue 6 item 6), run by rostest.
+
+For one grasp orientation (~orientation: forward | downward | sideways) the whole headless
+pipeline (src/ehc_bringup/scripts/demo.sh: sim in lock-step sim time, tag node, grasp node,
+obstacle node, EHC controller, grasp sequencer; its own private ROS master) runs twice:
+with MPBS (controller _mpbs:=true) and without (plain PBVS to the grasp pose, _mpbs:=false).
+
+Asserted: with MPBS the object is grasped and lifted (the simulator's gripper/lift result) and
+TfM >= 95 %. Without MPBS the TfM is reported; for downward and sideways grasps it must be lower
+than with MPBS (the direction of the difference, no made-up number). No wall-clock assertion:
+the .test time-limit only guards against a hang.
+"""
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import unittest
+
+import rospy
+import rostest
+
+WS = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
+
+
+def run_scenario(orientation, mpbs, out):
+    env = dict(os.environ)
+    # The pipeline gets its own master: never the rostest master of this test.
+    for k in ("ROS_MASTER_URI", "ROS_HOME", "ROS_LOG_DIR"):
+        env.pop(k, None)
+    env.update({
+        "EHC_DEVEL": os.environ.get("EHC_DEVEL", os.path.relpath(devel_space(), WS)),
+        "OUT": out,
+        "SCENE": "config/scenes/single_object.yaml",
+        "SEQUENCER_CONFIG": "config/demo/grasp_single_%s.yaml" % orientation,
+        "TAG_OBJECTS": "target",
+        "MPBS": "true" if mpbs else "false",
+        "EHC_DEMO_PORT": str(free_port()),
+    })
+    p = subprocess.run([os.path.join(WS, "src/ehc_bringup/scripts/demo.sh")], cwd=WS, env=env,
+                       stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True)
+    sys.stdout.write(p.stdout)
+    summary = os.path.join(WS, out, "summary.json")
+    if not os.path.exists(summary):
+        raise AssertionError("no summary (exit %d):\n%s" % (p.returncode, p.stdout[-3000:]))
+    with open(summary) as f:
+        return json.load(f), p.stdout
+
+
+def devel_space():
+    # CMAKE_PREFIX_PATH's first entry is this workspace's devel space (setup.bash sourced).
+    for d in os.environ.get("CMAKE_PREFIX_PATH", "").split(":"):
+        if d and os.path.exists(os.path.join(d, "setup.bash")) and d.startswith(WS):
+            return d
+    return os.path.join(WS, "devel")
+
+
+def free_port():
+    import socket
+    s = socket.socket()
+    s.bind(("127.0.0.1", 0))
+    port = s.getsockname()[1]
+    s.close()
+    return port
+
+
+class GraspSingle(unittest.TestCase):
+    def test_grasp_with_and_without_mpbs(self):
+        orientation = rospy.get_param("~orientation")
+        base = os.path.relpath(tempfile.mkdtemp(prefix="grasp_%s_" % orientation, dir=os.path.join(WS, "results"))
+                               if os.path.isdir(os.path.join(WS, "results")) else
+                               tempfile.mkdtemp(prefix="grasp_%s_" % orientation), WS)
+        with_mpbs, log1 = run_scenario(orientation, True, os.path.join(base, "mpbs"))
+        without, log2 = run_scenario(orientation, False, os.path.join(base, "pbvs"))
+        a, b = with_mpbs["objects"][0], without["objects"][0]
+        print("[%s] EHC + MPBS: success %s, time %.2f s, TfM %.1f %% | EHC without MPBS: success %s, "
+              "time %.2f s, TfM %.1f %%" % (orientation, a["success"], a["time_s"], 100 * a["tfm"],
+                                            b["success"], b["time_s"], 100 * b["tfm"]))
+        self.assertEqual(with_mpbs["mpbs"], True)
+        self.assertEqual(without["mpbs"], False)
+        self.assertTrue(a["success"], "EHC + MPBS did not grasp (%s: %s)\n%s" % (a["failed_phase"], a["reason"], log1[-2000:]))
+        self.assertGreater(a["tfm_cycles"], 0)
+        self.assertGreaterEqual(a["tfm"], 0.95, "TfM with MPBS %.3f < 0.95" % a["tfm"])
+        if orientation in ("downward", "sideways"):
+            self.assertGreater(b["tfm_cycles"], 0)
+            self.assertLess(b["tfm"], a["tfm"], "without MPBS the TfM (%.3f) should be lower than with MPBS (%.3f)"
+                            % (b["tfm"], a["tfm"]))
+
+
+if __name__ == "__main__":
+    rospy.init_node("test_grasp_single")
+    rostest.rosrun("ehc_bringup", "test_grasp_single", GraspSingle, sys.argv)
