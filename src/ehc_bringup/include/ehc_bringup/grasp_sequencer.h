@@ -26,11 +26,13 @@
 // is failed with the phase it was in. Time = sim time (s). NaN/Inf inputs are rejected
 // (counted); a non-finite or decreasing time throws "[GraspSequencer] ...".
 //
-// TfM of an object = fraction of cycles, from its first perceived pose until the gripper closes,
-// in which the object centre (perceived pose) projects inside the camera image at positive
-// depth (camera pose from tf, pinhole intrinsics from camera_info). Cycles without a camera
-// pose are not counted. The controller's own in-FOV flag (/ehc/status, about its target) is
-// reported beside it as controller_tfm.
+// TfM of an object = fraction of cycles of the approach (from its first perceived pose until the
+// pre-grasp switch, pregrasp_switch_distance from the grasp) in which the object centre
+// (perceived pose) projects inside the camera image at positive depth (camera pose from tf,
+// pinhole intrinsics from camera_info). Closer, the hand camera (off the gripper axis) cannot
+// see the object centre by geometry; tfm_until_close covers the span up to the gripper closing.
+// Cycles without a camera pose are not counted. The controller's own in-FOV flag (/ehc/status)
+// is reported as controller_tfm (from the first pose until the gripper closes).
 
 #include "ehc_bringup/grasp_selection.h"
 
@@ -118,6 +120,7 @@ struct GraspResult {
   double time_s = 0.0;            ///< object start -> lift success (or failure)
   double tfm = 0.0;               ///< [0, 1], object centre in the image (see above)
   long cycles = 0;                ///< cycles counted for TfM
+  double tfm_until_close = 0.0;   ///< [0, 1], same test up to the gripper closing
   double controller_tfm = 0.0;    ///< [0, 1], /ehc/status target_in_fov over the same span
   std::string failed_phase;       ///< "" on success
   std::string reason;             ///< "" on success
@@ -183,7 +186,7 @@ class GraspSequencer {
   Eigen::Vector3d last_approach_ = Eigen::Vector3d::UnitX();
   // bookkeeping
   GraspResult cur_;
-  long fov_cycles_ = 0, tfm_cycles_ = 0, ctrl_fov_cycles_ = 0, ctrl_cycles_ = 0;
+  long fov_cycles_ = 0, tfm_cycles_ = 0, close_cycles_ = 0, close_fov_cycles_ = 0, ctrl_fov_cycles_ = 0, ctrl_cycles_ = 0;
   std::optional<CameraModel> camera_;
   bool counting_tfm_ = true;
   std::string last_controller_phase_;

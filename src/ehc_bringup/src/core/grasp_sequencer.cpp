@@ -227,7 +227,7 @@ void GraspSequencer::startObject(double t, SequencerOutput* out) {
   object_t0_ = t;
   locked_.reset();
   hold_goal_.reset();
-  fov_cycles_ = tfm_cycles_ = ctrl_fov_cycles_ = ctrl_cycles_ = 0;
+  fov_cycles_ = tfm_cycles_ = ctrl_fov_cycles_ = ctrl_cycles_ = close_cycles_ = close_fov_cycles_ = 0;
   counting_tfm_ = true;
   cur_ = GraspResult();
   cur_.name = params_.objects[current_].name;
@@ -281,6 +281,7 @@ void GraspSequencer::finishObject(double t, bool success, const std::string& rea
   cur_.reason = reason;
   cur_.cycles = tfm_cycles_;
   cur_.tfm = tfm_cycles_ > 0 ? static_cast<double>(fov_cycles_) / static_cast<double>(tfm_cycles_) : 0.0;
+  cur_.tfm_until_close = close_cycles_ > 0 ? static_cast<double>(close_fov_cycles_) / static_cast<double>(close_cycles_) : 0.0;
   cur_.controller_tfm = ctrl_cycles_ > 0 ? static_cast<double>(ctrl_fov_cycles_) / static_cast<double>(ctrl_cycles_) : 0.0;
   cur_.used_candidate = locked_ ? locked_->from_candidate : false;
   // RELEASE holds the TCP where it is; RETREAT backs off along the approach from there.
@@ -327,9 +328,14 @@ SequencerOutput GraspSequencer::update(const SequencerInput& in) {
         if (in.target_in_fov) ++ctrl_fov_cycles_;
       }
       if (in.camera && camera_) {
-        ++tfm_cycles_;
         const Eigen::Vector3d centre = locked_ ? locked_object_centre_ : object_pose_->translation();
-        if (pointInImage(*in.camera, centre, *camera_)) ++fov_cycles_;
+        const bool seen = pointInImage(*in.camera, centre, *camera_);
+        ++close_cycles_;
+        if (seen) ++close_fov_cycles_;
+        if (!locked_) {  // the approach: until the pre-grasp switch
+          ++tfm_cycles_;
+          if (seen) ++fov_cycles_;
+        }
       }
     }
   }
@@ -498,7 +504,7 @@ std::string graspResultsToJson(const std::vector<GraspResult>& results, const st
     const GraspResult& r = results[i];
     s << (i ? ", " : "") << "{\"name\": " << jsonString(r.name) << ", \"success\": " << (r.success ? "true" : "false")
       << ", \"time_s\": " << num(r.time_s, 2) << ", \"tfm\": " << num(r.tfm, 4) << ", \"tfm_cycles\": " << r.cycles
-      << ", \"controller_tfm\": " << num(r.controller_tfm, 4)
+      << ", \"tfm_until_close\": " << num(r.tfm_until_close, 4) << ", \"controller_tfm\": " << num(r.controller_tfm, 4)
       << ", \"approach\": " << jsonString(r.approach) << ", \"grasp_from_candidate\": "
       << (r.used_candidate ? "true" : "false") << ", \"failed_phase\": " << jsonString(r.failed_phase)
       << ", \"reason\": " << jsonString(r.reason) << ", \"phase_times\": {";
