@@ -228,3 +228,22 @@ TEST(SimulatedCamera, BadConfigurationThrows) {
   k.fx = -1;
   EXPECT_THROW(SimulatedCamera(k, SimulatedCameraConfig(), 1), std::invalid_argument);
 }
+
+TEST(SimulatedCamera, CameraInsideOrTouchingAnObjectDoesNotCrash) {
+  // Faces with a corner behind the camera used to crash vpImageSimulator: they are skipped.
+  Rig rig("single_object.yaml");
+  const auto& obj = rig.world->scene().objects[0];
+  vpImage<unsigned char> I;
+  const Eigen::Isometry3d T_obj = rig.world->objectPose(0);
+  for (double d : {0.05, 0.02, 0.005, 0.0, -0.01}) {
+    // Camera looking at the object centre from `d` in front of its -x face.
+    Eigen::Isometry3d T_cam = Eigen::Isometry3d::Identity();
+    T_cam.linear() << 0, 0, 1, -1, 0, 0, 0, -1, 0;  // optical z along world x
+    T_cam.translation() = T_obj.translation() - Eigen::Vector3d(0.5 * obj.size.x() + d, 0, 0);
+    std::vector<Eigen::Isometry3d> poses(rig.world->bodies().size());
+    for (std::size_t i = 0; i < poses.size(); ++i) poses[i] = rig.world->bodyPose(static_cast<int>(i));
+    ASSERT_NO_THROW(rig.camera->render(T_cam, poses, &I));
+    EXPECT_EQ(I.getWidth(), 640u);
+  }
+  EXPECT_GT(rig.camera->clippedFaces(), 0);
+}

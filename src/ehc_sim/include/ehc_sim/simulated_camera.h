@@ -32,6 +32,8 @@ class SimulatedCamera {
                   unsigned seed);
   ~SimulatedCamera();
   SimulatedCamera(SimulatedCamera&&) noexcept;
+  /// Faces skipped so far because a corner was behind or at the camera (not drawn).
+  long clippedFaces() const { return clipped_faces_; }
 
   /// (Re)builds the textured faces of `bodies` (call when the scene changes).
   void setScene(const std::vector<BodyConfig>& bodies, int floor_shade);
@@ -58,6 +60,7 @@ class SimulatedCamera {
   CameraIntrinsics intrinsics_;
   SimulatedCameraConfig cfg_;
   std::mt19937 rng_;
+  long clipped_faces_ = 0;
   std::normal_distribution<double> gauss_{0.0, 1.0};
   std::unique_ptr<Impl> impl_;
 };

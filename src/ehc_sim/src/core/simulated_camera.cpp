@@ -12,6 +12,8 @@
 #include <visp3/core/vpMatrix.h>
 #include <visp3/robot/vpImageSimulator.h>
 
+#include <array>
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -57,6 +59,7 @@ Eigen::Matrix3d faceFrame(const Eigen::Vector3d& n, const Eigen::Vector3d& up) {
 }
 
 constexpr int kNoiseTable = 1 << 18;
+constexpr double kNearPlane = 0.01;  ///< m: faces with a corner closer than this are not drawn
 constexpr int kCylinderSides = 16;
 }  // namespace
 
@@ -83,6 +86,7 @@ vpImage<unsigned char> makeTagTexture(int id, int pixels_per_cell) {
 struct SimulatedCamera::Impl {
   struct Quad {
     int body = 0;
+    std::array<Eigen::Vector3d, 4> corners;  ///< body frame
     vpImageSimulator sim{vpImageSimulator::GRAY_SCALED};
   };
   std::vector<std::unique_ptr<Quad>> quads;  // vpImageSimulator is heavy: never copied
@@ -129,7 +133,10 @@ void SimulatedCamera::setScene(const std::vector<BodyConfig>& bodies, int floor_
     auto q = std::make_unique<Impl::Quad>();
     q->body = body;
     vpColVector X[4];
-    for (int i = 0; i < 4; ++i) X[i] = col(c[static_cast<std::size_t>(i)]);
+    for (int i = 0; i < 4; ++i) {
+      X[i] = col(c[static_cast<std::size_t>(i)]);
+      q->corners[static_cast<std::size_t>(i)] = c[static_cast<std::size_t>(i)];
+    }
     q->sim.init(tex, X);
     q->sim.setInterpolationType(bilinear ? vpImageSimulator::BILINEAR_INTERPOLATION
                                          : vpImageSimulator::SIMPLE);
@@ -199,7 +206,10 @@ void SimulatedCamera::setScene(const std::vector<BodyConfig>& bodies, int floor_
       auto q = std::make_unique<Impl::Quad>();
       q->body = body;
       vpColVector X[4];
-      for (int i = 0; i < 4; ++i) X[i] = col(c[static_cast<std::size_t>(i)]);
+      for (int i = 0; i < 4; ++i) {
+        X[i] = col(c[static_cast<std::size_t>(i)]);
+        q->corners[static_cast<std::size_t>(i)] = c[static_cast<std::size_t>(i)];
+      }
       q->sim.init(tex, X);
       q->sim.setInterpolationType(vpImageSimulator::BILINEAR_INTERPOLATION);
       m.quads.push_back(std::move(q));
@@ -219,7 +229,16 @@ void SimulatedCamera::render(const Eigen::Isometry3d& T_world_cam,
   const Eigen::Isometry3d T_cam_world = T_world_cam.inverse();
   for (auto& q : m.quads) {
     if (q->body < 0 || q->body >= static_cast<int>(poses.size())) fail("render: fewer poses than bodies");
-    q->sim.setCameraPosition(toVisp(T_cam_world * poses[static_cast<std::size_t>(q->body)]));
+    const Eigen::Isometry3d T_cam_body = T_cam_world * poses[static_cast<std::size_t>(q->body)];
+    // vpImageSimulator crashes (empty triangles, out-of-bounds writes) on a face with a corner
+    // behind or at the camera: such faces are not drawn (no near-plane clipping).
+    bool in_front = true;
+    for (const auto& c : q->corners) in_front &= (T_cam_body * c).z() > kNearPlane;
+    if (!in_front) {
+      ++clipped_faces_;
+      continue;
+    }
+    q->sim.setCameraPosition(toVisp(T_cam_body));
     q->sim.getImage(*image, m.cam, m.zbuffer);
   }
   if (cfg_.image_noise > 0.0) {
