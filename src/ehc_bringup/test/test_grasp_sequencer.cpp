@@ -653,8 +653,11 @@ TEST(GraspSelection, FallbackAndRequiredCandidate) {
   EXPECT_FALSE(chooseGrasp({}, ApproachDirection::Forward, nan, tag.linear(), p));
 }
 
-TEST(GraspSelection, HalfTurnClosestToTheReference) {
-  const Eigen::Isometry3d tag = forwardTarget();
+TEST(GraspSelection, HalfTurnClosestToTheReferenceForTopGrasps) {
+  // Top-down grasp: of the two equivalent rolls, the one closer to the reference.
+  Eigen::Isometry3d tag = Eigen::Isometry3d::Identity();
+  tag.linear() = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()).toRotationMatrix();  // z down
+  tag.translation() << 1.5, 0.0, 0.8;
   const Eigen::Matrix3d flipped = tag.linear() * Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   GraspSelectionParams p;
   const auto a = chooseGrasp({}, ApproachDirection::Tag, tag, flipped, p);
@@ -663,6 +666,18 @@ TEST(GraspSelection, HalfTurnClosestToTheReference) {
   EXPECT_TRUE(a->pose.linear().col(2).isApprox(tag.linear().col(2)));  // same approach
   const auto b = chooseGrasp({}, ApproachDirection::Tag, tag, tag.linear(), p);
   EXPECT_LT(rotationAngle(b->pose.linear(), tag.linear()), 1e-9);
+}
+
+TEST(GraspSelection, SideGraspRollKeepsTheCameraUpWhateverTheReference) {
+  const Eigen::Isometry3d tag = forwardTarget();
+  const Eigen::Matrix3d flipped = tag.linear() * Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  GraspSelectionParams p;
+  for (const Eigen::Matrix3d& ref : std::vector<Eigen::Matrix3d>{tag.linear(), flipped}) {
+    const auto a = chooseGrasp({}, ApproachDirection::Tag, tag, ref, p);
+    ASSERT_TRUE(a);
+    EXPECT_GE(a->pose.linear().col(0).z(), 0.0);
+    EXPECT_TRUE(a->pose.linear().col(2).isApprox(tag.linear().col(2)));
+  }
 }
 
 TEST(GraspReport, JsonAndLines) {
@@ -685,4 +700,14 @@ TEST(GraspReport, JsonAndLines) {
   EXPECT_NE(graspResultLine(r).find("SUCCESS"), std::string::npos);
   EXPECT_NE(graspResultLine(f).find("FAILED"), std::string::npos);
   EXPECT_NE(graspResultLine(f).find("time limit"), std::string::npos);
+}
+
+TEST(GraspSelection, SideGraspsKeepTheWristCameraAboveTheTcp) {
+  // A horizontal grasp is valid in two rolls; the one with the TCP's +x (camera side) up keeps
+  // the camera and the gripper body off the table.
+  Eigen::Isometry3d tag = Eigen::Isometry3d::Identity();
+  tag.translation() << 1.5, 0.0, 0.8;
+  const Eigen::Isometry3d g = ehc_bringup::turnedTagGrasp(tag, Eigen::Vector3d(1, 0, 0), 0.0);
+  EXPECT_GT(g.linear().col(0).z(), 0.99);
+  EXPECT_NEAR(g.linear().determinant(), 1.0, 1e-9);
 }

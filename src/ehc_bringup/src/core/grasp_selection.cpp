@@ -91,8 +91,8 @@ Eigen::Isometry3d turnedTagGrasp(const Eigen::Isometry3d& tag_target, const Eige
     // Top-down: the tag target's y is horizontal already; otherwise use its x.
     if (y.norm() < 1e-3) y = tag_target.linear().col(0) - tag_target.linear().col(0).dot(z) * z;
   } else {
-    // Horizontal approach: closing axis horizontal = up x approach.
-    y = Eigen::Vector3d::UnitZ().cross(z);
+    // Horizontal approach: closing axis horizontal, x (the wrist camera's side) up.
+    y = z.cross(Eigen::Vector3d::UnitZ());
   }
   if (y.norm() < 1e-6) y = z.unitOrthogonal();
   y.normalize();
@@ -106,9 +106,13 @@ Eigen::Isometry3d turnedTagGrasp(const Eigen::Isometry3d& tag_target, const Eige
 }
 
 namespace {
-/// R or R * Rz(pi), whichever is closer to `reference`.
+/// A parallel-jaw grasp is the same grasp turned by pi about its approach axis: pick R or
+/// R * Rz(pi). For a (near-)horizontal approach the one whose x axis points up, so the wrist
+/// camera and the gripper body (on the TCP's +x side) stay clear of the support surface;
+/// otherwise the one closer to `reference` (less wrist motion).
 Eigen::Matrix3d closerHalfTurn(const Eigen::Matrix3d& R, const Eigen::Matrix3d& reference) {
   const Eigen::Matrix3d flipped = R * Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  if (std::abs(R.col(2).z()) < 0.7) return R.col(0).z() >= 0.0 ? R : flipped;
   return rotationAngle(flipped, reference) < rotationAngle(R, reference) ? flipped : R;
 }
 }  // namespace
