@@ -24,7 +24,8 @@
 #   TAG_OBJECTS        objects with a tag node config/demo/tag_<name>.yaml  [front middle back]
 #   MPBS               true | false: override the controller's mpbs.enabled  [from CONTROLLER_CONFIG]
 #   OBSTACLES          1: run the obstacle node (controller obstacle dampers), 0: without  [1]
-# Exit code: 0 when every object was grasped, 1 if a grasp failed, 2 on a set-up error or crash.
+# Exit code: 0 when the run completed (failed grasps are reported in the summary; with
+# EHC_DEMO_STRICT=1 a failed grasp exits 1), 2 on a set-up error or crash, 130 on Ctrl-C.
 set -o pipefail
 export PATH="/usr/bin:/bin:$PATH"  # the catkin-aware python3 first
 cd "$(dirname "$0")/../../.." || exit 2
@@ -173,4 +174,8 @@ echo "== summary (wall time ${wall} s)"
 /usr/bin/python3 "src/ehc_bringup/scripts/demo_report.py" "$OUT/summary.json" "$OUT/trace.csv" "$OUT/demo.png" \
   --controller-config "$CONTROLLER_CONFIG" ${MPBS:+--mpbs "$MPBS"} --wall "$wall" || status=2
 [ "$status" = 0 ] || exit "$status"
-/usr/bin/python3 -c "import json,sys; d=json.load(open('$OUT/summary.json')); sys.exit(0 if d['successes']==d['objects_total'] else 1)"
+# The run completed and reported every object: exit 0 even if a grasp failed (the summary says
+# so); EHC_DEMO_STRICT=1 makes a failed grasp exit 1 (for scripts and tests).
+if [ "${EHC_DEMO_STRICT:-0}" = 1 ]; then
+  /usr/bin/python3 -c "import json,sys; d=json.load(open('$OUT/summary.json')); sys.exit(0 if d['successes']==d['objects_total'] else 1)"
+fi
