@@ -211,3 +211,40 @@ TEST(QpControllerParams, ValidationAndLoading) {
   EXPECT_THROW(EhcQpController(std::make_shared<const WholeBodyModel>(test::realmanConfig()), QpControllerParams{}, nullptr),
                std::invalid_argument);  // ehc needs a map
 }
+
+TEST(EhcQpController, PerLinkStopDistanceLetsTheHandNearTheTable) {
+  // A table top 3 cm below the target TCP position. With the default d_s = 5 cm the TCP is held
+  // 5 cm above it and never arrives; with d_s = 1 cm for the TCP link it arrives, and never goes
+  // below 1 cm.
+  auto model = std::make_shared<const WholeBodyModel>(test::realmanConfig());
+  const double table_z = 0.77;
+  const Eigen::Isometry3d target = pose(1.3, 0.2, table_z + 0.03, Eigen::Vector3d(1, 0, -0.2));
+  auto table = [&](const Sim& s) {
+    const Eigen::Vector3d p = model->fk(s.base, s.q, "ee_link").translation();
+    ObstaclePair o;
+    o.link = "ee_link";
+    o.link_point = p;
+    o.obstacle_point = Eigen::Vector3d(p.x(), p.y(), table_z);
+    o.normal = Eigen::Vector3d::UnitZ();
+    o.distance = p.z() - table_z;
+    return std::vector<ObstaclePair>{o};
+  };
+  QpControllerParams p;
+  {
+    EhcQpController ctrl(model, p, weighting());
+    Sim sim{Eigen::Vector3d::Zero(), model->config().arm_ready};
+    double min_d = 1e9;
+    EXPECT_LT(run(ctrl, sim, target, 15.0, nullptr, table, &min_d), 0.0);  // blocked
+    EXPECT_GE(min_d, p.obstacle_stop - 0.005);
+  }
+  p.obstacle_stop_links["ee_link"] = 0.01;
+  {
+    EhcQpController ctrl(model, p, weighting());
+    Sim sim{Eigen::Vector3d::Zero(), model->config().arm_ready};
+    double min_d = 1e9;
+    EXPECT_GT(run(ctrl, sim, target, 30.0, nullptr, table, &min_d), 0.0);  // arrives
+    EXPECT_GE(min_d, 0.01 - 0.005);
+  }
+  p.obstacle_stop_links["ee_link"] = 0.5;  // not below the influence distance
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+}

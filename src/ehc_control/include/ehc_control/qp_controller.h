@@ -24,6 +24,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -56,6 +57,13 @@ struct QpControllerParams {
   double joint_damper_gain = 1.0;      ///< xi of the joint dampers, 1/s
   double obstacle_influence = 0.3;     ///< m: d_i
   double obstacle_stop = 0.05;         ///< m: d_s (= S of the paper)
+  /// Per-link d_s overriding obstacle_stop, e.g. the hand links, which must come close to the
+  /// support surface of the object they grasp (each must stay below obstacle_influence).
+  std::map<std::string, double> obstacle_stop_links;
+  double obstacleStop(const std::string& link) const {
+    const auto it = obstacle_stop_links.find(link);
+    return it == obstacle_stop_links.end() ? obstacle_stop : it->second;
+  }
   double obstacle_damper_gain = 1.0;   ///< xi of the obstacle dampers, 1/s
   double tsmm_switch_distance = 0.2;   ///< m: tsmm switches to the arm stage here
   double arrival_position = 0.01;      ///< m

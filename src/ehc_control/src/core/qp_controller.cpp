@@ -57,6 +57,11 @@ void QpControllerParams::validate() const {
   requireRange(kOwner, "obstacle_influence", obstacle_influence, 0.0, 5.0);
   if (obstacle_influence <= obstacle_stop)
     throw std::invalid_argument("[QpControllerParams] obstacle_influence must be > obstacle_stop");
+  for (const auto& [link, d] : obstacle_stop_links) {
+    requireRange(kOwner, "obstacle_stop_links." + link, d, 0.0, 1.0);
+    if (obstacle_influence <= d)
+      throw std::invalid_argument("[QpControllerParams] obstacle_influence must be > obstacle_stop_links." + link);
+  }
   requireRange(kOwner, "obstacle_damper_gain", obstacle_damper_gain, 1e-3, 100.0);
   requireRange(kOwner, "tsmm_switch_distance", tsmm_switch_distance, 0.0, 5.0);
   requireRange(kOwner, "arrival_position", arrival_position, 1e-5, 1.0);
@@ -72,7 +77,9 @@ std::string QpControllerParams::summary() const {
      << posture_gain << "\n"
      << "  joint dampers: influence " << joint_influence << " rad, stop " << joint_stop
      << " rad, gain " << joint_damper_gain << "; obstacle dampers: d_i " << obstacle_influence
-     << " m, d_s " << obstacle_stop << " m, gain " << obstacle_damper_gain
+     << " m, d_s " << obstacle_stop << " m";
+  for (const auto& [link, d] : obstacle_stop_links) os << " (" << link << " " << d << " m)";
+  os << ", gain " << obstacle_damper_gain
      << "; tsmm switch " << tsmm_switch_distance << " m; arrival " << arrival_position << " m / "
      << arrival_orientation * 180.0 / M_PI << " deg";
   return os.str();
@@ -102,6 +109,10 @@ QpControllerParams loadQpControllerParams(const ConfigNode& n) {
   p.joint_damper_gain = n.get("joint_damper_gain", p.joint_damper_gain);
   p.obstacle_influence = n.get("obstacle_influence", p.obstacle_influence);
   p.obstacle_stop = n.get("obstacle_stop", p.obstacle_stop);
+  if (n.has("obstacle_stop_links")) {
+    const ConfigNode links = n.child("obstacle_stop_links");
+    for (const auto& kv : links.yaml()) p.obstacle_stop_links[kv.first.as<std::string>()] = links.require<double>(kv.first.as<std::string>());
+  }
   p.obstacle_damper_gain = n.get("obstacle_damper_gain", p.obstacle_damper_gain);
   p.tsmm_switch_distance = n.get("tsmm_switch_distance", p.tsmm_switch_distance);
   p.arrival_position = n.get("arrival_position", p.arrival_position);
@@ -279,8 +290,9 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
     double b;
   };
   std::vector<Row> rows;
-  const double di = params_.obstacle_influence, ds = params_.obstacle_stop;
+  const double di = params_.obstacle_influence;
   for (const ObstaclePair& o : obstacles) {
+    const double ds = params_.obstacleStop(o.link);
     if (!(std::isfinite(o.distance) && o.link_point.allFinite() && o.normal.allFinite()))
       return fail(out, "non-finite obstacle pair for link '" + o.link + "'");
     if (o.distance >= di) continue;
