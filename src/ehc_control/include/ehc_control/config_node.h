@@ -56,6 +56,17 @@ class ConfigNode {
   std::vector<std::string> getStrings(const std::string& key,
                                       const std::vector<std::string>& fallback) const;
 
+  /// Runs `params.validate()`; a std::invalid_argument it throws is rethrown with this node's
+  /// file and field appended, so cross-field errors also say where they come from.
+  template <class P>
+  void validate(const P& params) const {
+    try {
+      params.validate();
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(std::string(e.what()) + " (in " + file_ + ", " + fieldName("") + ")");
+    }
+  }
+
   /// Throws std::invalid_argument "[Owner] file: field 'a.b.key' <what>".
   [[noreturn]] void fail(const std::string& key, const std::string& what) const;
   std::string fieldName(const std::string& key) const;

@@ -361,12 +361,7 @@ GraspGeneratorConfig loadGraspGeneratorConfig(const ehc_control::ConfigNode& n) 
   c.cluster_tolerance = n.get("cluster_tolerance", c.cluster_tolerance);
   c.min_cluster_points = n.get("min_cluster_points", c.min_cluster_points);
   c.max_objects = n.get("max_objects", c.max_objects);
-  try {
-    c.validate();
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(std::string(e.what()) + " (in " + n.file() + ", " +
-                                n.fieldName("") + ")");
-  }
+  n.validate(c);
   return c;
 }
 

@@ -64,12 +64,7 @@ ObstacleMapConfig loadObstacleMapConfig(const ehc_control::ConfigNode& n) {
   c.self_filter_padding = n.get("self_filter_padding", c.self_filter_padding);
   c.influence_distance = n.get("influence_distance", c.influence_distance);
   c.links = n.getStrings("links", c.links);
-  try {
-    c.validate();
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(std::string(e.what()) + " (in " + n.file() + ", " +
-                                n.fieldName("") + ")");
-  }
+  n.validate(c);
   return c;
 }
 

@@ -114,12 +114,7 @@ TagDetectorConfig loadTagDetectorConfig(const ehc_control::ConfigNode& n) {
   c.threads = n.get<int>("threads", c.threads);
   c.pose_method = n.get<std::string>("pose_method", c.pose_method);
   c.max_reprojection_error = n.get<double>("max_reprojection_error", c.max_reprojection_error);
-  try {
-    c.validate();
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(std::string(e.what()) + " (in " + n.file() + ", " +
-                                n.fieldName("") + ")");
-  }
+  n.validate(c);
   return c;
 }
 
