@@ -1,5 +1,6 @@
 // loadRobotConfig: the shipped robot.yaml loads; bad files fail with a message naming the field.
 
+#include "ehc_control/config_node.h"
 #include "ehc_control/robot_config.h"
 #include "test_helpers.h"
 
@@ -7,6 +8,7 @@
 
 #include <cstdio>
 #include <fstream>
+#include <sstream>
 #include <regex>
 
 using namespace ehc_control;
@@ -88,4 +90,39 @@ TEST(RobotConfig, MissingUrdfField) {
 
 TEST(RobotConfig, YamlSyntaxError) {
   expectLoadError(variant("robot:\n", "robot: [\n"), "YAML syntax error");
+}
+
+TEST(ConfigNode, ExtendsMergesOverTheBaseFile) {
+  std::ofstream("/tmp/ehc_base.yaml") << "a: {x: 1, y: 2, list: [1, 2, 3]}\nb: base\n";
+  std::ofstream("/tmp/ehc_over.yaml") << "extends: ehc_base.yaml\na: {y: 20, list: [9]}\nc: new\n";
+  const auto n = ConfigNode::loadFile("/tmp/ehc_over.yaml", "Test");
+  EXPECT_EQ(n.child("a").require<int>("x"), 1);    // kept from the base
+  EXPECT_EQ(n.child("a").require<int>("y"), 20);   // overridden
+  EXPECT_EQ(n.child("a").requireVector("list").size(), 1);  // lists are replaced
+  EXPECT_EQ(n.require<std::string>("b"), "base");
+  EXPECT_EQ(n.require<std::string>("c"), "new");
+  EXPECT_FALSE(n.has("extends"));
+  std::ofstream("/tmp/ehc_loop.yaml") << "extends: ehc_loop.yaml\n";
+  EXPECT_THROW(ConfigNode::loadFile("/tmp/ehc_loop.yaml", "Test"), std::invalid_argument);
+  std::ofstream("/tmp/ehc_missing.yaml") << "extends: no_such_file.yaml\n";
+  try {
+    ConfigNode::loadFile("/tmp/ehc_missing.yaml", "Test");
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("cannot read config file '/tmp/no_such_file.yaml'"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ConfigNode, RealmanControllerConfigIsTheSimConfigWithATimer) {
+  const auto real = ConfigNode::loadFile(std::string(EHC_CONFIG_DIR) + "/realman/controller.yaml", "Test");
+  const auto sim = ConfigNode::loadFile(std::string(EHC_CONFIG_DIR) + "/control/controller.yaml", "Test");
+  EXPECT_EQ(real.child("node").require<std::string>("trigger"), "timer");
+  EXPECT_EQ(sim.child("node").require<std::string>("trigger"), "state");
+  // Everything else comes from the same file: the controller tuning cannot drift apart.
+  for (const char* section : {"controller", "weighting", "servo", "watchdog"}) {
+    std::ostringstream a, b;
+    a << real.child(section).yaml();
+    b << sim.child(section).yaml();
+    EXPECT_EQ(a.str(), b.str()) << section;
+  }
 }

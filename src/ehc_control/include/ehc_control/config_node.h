@@ -17,6 +17,9 @@ namespace ehc_control {
 class ConfigNode {
  public:
   /// Parses `path`. `owner` is the class name used as the error prefix, e.g. "RobotConfig".
+  /// A top-level `extends: <file>` (relative to this file) loads that file first and merges
+  /// this one over it: mappings merge key by key, anything else (scalars, lists) is replaced.
+  /// Chains of up to 8 files; relative paths inside are resolved against `path`'s folder.
   static ConfigNode loadFile(const std::string& path, const std::string& owner);
   /// Parses YAML text (tests, embedded defaults). `origin` stands in for the file name.
   static ConfigNode loadString(const std::string& text, const std::string& origin,

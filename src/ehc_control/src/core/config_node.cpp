@@ -11,7 +11,20 @@ std::string folderOf(const std::string& path) {
 }
 }  // namespace
 
-ConfigNode ConfigNode::loadFile(const std::string& path, const std::string& owner) {
+namespace {
+
+/// `over` merged onto a copy of `base`: mappings key by key, everything else replaced.
+YAML::Node merged(const YAML::Node& base, const YAML::Node& over) {
+  if (!base.IsMap() || !over.IsMap()) return YAML::Clone(over);
+  YAML::Node out = YAML::Clone(base);
+  for (const auto& kv : over) {
+    const std::string key = kv.first.as<std::string>();
+    out[key] = out[key] ? merged(out[key], kv.second) : YAML::Clone(kv.second);
+  }
+  return out;
+}
+
+YAML::Node loadWithExtends(const std::string& path, const std::string& owner, int depth) {
   YAML::Node root;
   try {
     root = YAML::LoadFile(path);
@@ -22,7 +35,21 @@ ConfigNode ConfigNode::loadFile(const std::string& path, const std::string& owne
   }
   if (!root.IsMap())
     throw std::invalid_argument("[" + owner + "] " + path + ": top level must be a mapping");
-  return ConfigNode(root, path, "", owner);
+  if (!root["extends"]) return root;
+  if (depth >= 8)
+    throw std::invalid_argument("[" + owner + "] " + path + ": 'extends' chain longer than 8 files (a cycle?)");
+  if (!root["extends"].IsScalar())
+    throw std::invalid_argument("[" + owner + "] " + path + ": field 'extends' must be a file name");
+  std::string base = root["extends"].as<std::string>();
+  if (!base.empty() && base[0] != '/') base = folderOf(path) + "/" + base;
+  root.remove("extends");
+  return merged(loadWithExtends(base, owner, depth + 1), root);
+}
+
+}  // namespace
+
+ConfigNode ConfigNode::loadFile(const std::string& path, const std::string& owner) {
+  return ConfigNode(loadWithExtends(path, owner, 0), path, "", owner);
 }
 
 ConfigNode ConfigNode::loadString(const std::string& text, const std::string& origin,
