@@ -10,6 +10,26 @@
 
 namespace ehc_control {
 
+class ConfigNode;
+
+/// The pinhole fields of a ROS camera_info YAML file (camera_calibration format), as written:
+/// the one reader every package's intrinsics loader builds on (validation, and distortion for
+/// the loaders that use it, stay with each loader).
+struct CameraInfoFile {
+  std::string camera_name;         ///< "" when absent
+  int width = 0, height = 0;
+  Eigen::Matrix<double, 9, 1> K;   ///< camera_matrix.data, row-major
+  double fx() const { return K[0]; }
+  double fy() const { return K[4]; }
+  double cx() const { return K[2]; }
+  double cy() const { return K[5]; }
+  /// K = [fx 0 cx; 0 fy cy; 0 0 1] (no skew).
+  bool isPinholeMatrix() const { return K[1] == 0.0 && K[3] == 0.0 && K[6] == 0.0 && K[7] == 0.0 && K[8] == 1.0; }
+};
+/// Reads the fields from a loaded file; missing or malformed required fields throw with the
+/// file and field named (ConfigNode).
+CameraInfoFile readCameraInfo(const ConfigNode& root);
+
 struct PinholeCamera {
   int width = 640;
   int height = 480;

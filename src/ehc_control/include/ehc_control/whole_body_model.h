@@ -53,15 +53,20 @@ class WholeBodyModel {
   /// 6 x nArm geometric Jacobian of `link`'s origin, rows [v; w] in the base frame.
   Matrix6Xd armJacobian(const Eigen::VectorXd& q, const std::string& link) const;
   /// 6 x nDof whole-body Jacobian of `link`'s origin, rows [v; w] in the world frame,
-  /// columns [base..., arm...]. Optionally returns the link pose computed on the way.
+  /// columns [base..., arm...]. Optionally returns the link pose and the arm Jacobian (base
+  /// frame, as armJacobian()) computed on the way.
   Matrix6Xd jacobian(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q,
-                     const std::string& link, Eigen::Isometry3d* pose = nullptr) const;
+                     const std::string& link, Eigen::Isometry3d* pose = nullptr,
+                     Matrix6Xd* arm_jacobian = nullptr) const;
 
   /// Yoshikawa manipulability sqrt(det(J J^T)) of the arm at the TCP (J^T J if nArm < 6).
   double manipulability(const Eigen::VectorXd& q) const;
   /// Gradient d m / d q (size nArm): the manipulability Jacobian J_m. Analytic (kinematic
   /// Hessian). Zero at an exact singularity (m == 0).
   Eigen::VectorXd manipulabilityGradient(const Eigen::VectorXd& q, double* m = nullptr) const;
+  /// Same, from the TCP arm Jacobian (armJacobian(q, tcp frame)) already at hand.
+  Eigen::VectorXd manipulabilityGradientFromJacobian(const Matrix6Xd& tcp_arm_jacobian,
+                                                     double* m = nullptr) const;
 
   /// Whole-body inverse kinematics of the TCP (KDL ChainIkSolverPos_NR_JL over a virtual
   /// planar base x, y, yaw + the arm within its joint limits), from `attempts` random seeds.

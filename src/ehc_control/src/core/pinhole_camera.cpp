@@ -30,16 +30,24 @@ std::string PinholeCamera::summary() const {
   return os.str();
 }
 
+CameraInfoFile readCameraInfo(const ConfigNode& n) {
+  CameraInfoFile f;
+  f.camera_name = n.get<std::string>("camera_name", "");
+  f.width = n.require<int>("image_width");
+  f.height = n.require<int>("image_height");
+  f.K = n.child("camera_matrix").requireVector("data", 9);
+  return f;
+}
+
 PinholeCamera loadPinholeCamera(const std::string& path) {
-  const ConfigNode n = ConfigNode::loadFile(path, "PinholeCamera");
+  const CameraInfoFile f = readCameraInfo(ConfigNode::loadFile(path, "PinholeCamera"));
   PinholeCamera c;
-  c.width = n.require<int>("image_width");
-  c.height = n.require<int>("image_height");
-  const Eigen::VectorXd k = n.child("camera_matrix").requireVector("data", 9);
-  c.fx = k[0];
-  c.cx = k[2];
-  c.fy = k[4];
-  c.cy = k[5];
+  c.width = f.width;
+  c.height = f.height;
+  c.fx = f.fx();
+  c.cx = f.cx();
+  c.fy = f.fy();
+  c.cy = f.cy();
   try {
     c.validate();
   } catch (const std::invalid_argument& e) {

@@ -24,6 +24,34 @@ PoseServoParams loadPoseServoParams(const ConfigNode& n) {
   return p;
 }
 
+namespace {
+
+/// Swing-twist split of the rotation error R* R^T about the TCP z axis (R_err = R_swing R_twist)
+/// and the twist direction that keeps the roll joint inside its range: psi_cmd = psi, or psi
+/// -/+ 2 pi (the long way round) when the short way would pass the joint's limit.
+struct RollSplit {
+  Eigen::Vector3d axis;      ///< TCP z axis, world
+  Eigen::Quaterniond swing;  ///< rotation error without the twist about `axis`
+  double psi = 0.0;          ///< twist angle in (-pi, pi]
+  double psi_cmd = 0.0;      ///< twist to command
+};
+
+RollSplit splitRoll(const Eigen::Isometry3d& tcp, const Eigen::Isometry3d& target, const RollJoint& roll) {
+  RollSplit r;
+  r.axis = tcp.linear().col(2);
+  Eigen::Quaterniond qe(Eigen::Matrix3d(target.linear() * tcp.linear().transpose()));
+  if (qe.w() < 0) qe.coeffs() *= -1.0;
+  r.psi = 2.0 * std::atan2(qe.vec().dot(r.axis), qe.w());
+  const double lo = roll.lower + roll.margin, hi = roll.upper - roll.margin;
+  r.psi_cmd = r.psi;
+  if (roll.q + r.psi > hi && roll.q + r.psi - 2.0 * M_PI >= lo) r.psi_cmd = r.psi - 2.0 * M_PI;
+  else if (roll.q + r.psi < lo && roll.q + r.psi + 2.0 * M_PI <= hi) r.psi_cmd = r.psi + 2.0 * M_PI;
+  r.swing = qe * Eigen::Quaterniond(Eigen::AngleAxisd(r.psi, r.axis)).inverse();
+  return r;
+}
+
+}  // namespace
+
 int findRollJoint(const WholeBodyModel& model) {
   const RobotConfig& rc = model.config();
   const Matrix6Xd J = model.armJacobian(rc.arm_ready, rc.tcp_frame);
@@ -39,19 +67,10 @@ Vector6d proportionalPoseServo(const Eigen::Isometry3d& tcp, const Eigen::Isomet
                                const PoseServoParams& p, const RollJoint* roll) {
   Vector6d nu = poseError(tcp, target);
   if (roll && p.unwind_roll) {
-    // Swing-twist split of the rotation error about the TCP z axis a: R_err = R_swing R_twist.
-    const Eigen::Vector3d a = tcp.linear().col(2);
-    Eigen::Quaterniond qe(Eigen::Matrix3d(target.linear() * tcp.linear().transpose()));
-    if (qe.w() < 0) qe.coeffs() *= -1.0;
-    const double psi = 2.0 * std::atan2(qe.vec().dot(a), qe.w());  // twist angle in (-pi, pi]
-    const double lo = roll->lower + roll->margin, hi = roll->upper - roll->margin;
-    double psi_cmd = psi;
-    if (roll->q + psi > hi && roll->q + psi - 2.0 * M_PI >= lo) psi_cmd = psi - 2.0 * M_PI;
-    else if (roll->q + psi < lo && roll->q + psi + 2.0 * M_PI <= hi) psi_cmd = psi + 2.0 * M_PI;
-    if (psi_cmd != psi) {
-      const Eigen::Quaterniond twist(Eigen::AngleAxisd(psi, a));
-      const Eigen::AngleAxisd swing(qe * twist.inverse());
-      nu.tail<3>() = swing.axis() * swing.angle() + psi_cmd * a;
+    const RollSplit r = splitRoll(tcp, target, *roll);
+    if (r.psi_cmd != r.psi) {
+      const Eigen::AngleAxisd swing(r.swing);
+      nu.tail<3>() = swing.axis() * swing.angle() + r.psi_cmd * r.axis;
     }
   }
   nu.head<3>() *= p.gain;
@@ -64,20 +83,11 @@ Vector6d proportionalPoseServo(const Eigen::Isometry3d& tcp, const Eigen::Isomet
 
 Eigen::Isometry3d rollUnwoundTarget(const Eigen::Isometry3d& tcp, const Eigen::Isometry3d& target,
                                     const RollJoint& roll) {
-  // Swing-twist split of the rotation error about the TCP z axis a: R_err = R_swing R_twist.
-  const Eigen::Vector3d a = tcp.linear().col(2);
-  Eigen::Quaterniond qe(Eigen::Matrix3d(target.linear() * tcp.linear().transpose()));
-  if (qe.w() < 0) qe.coeffs() *= -1.0;
-  const double psi = 2.0 * std::atan2(qe.vec().dot(a), qe.w());  // twist angle in (-pi, pi]
-  const double lo = roll.lower + roll.margin, hi = roll.upper - roll.margin;
-  double psi_cmd = psi;
-  if (roll.q + psi > hi && roll.q + psi - 2.0 * M_PI >= lo) psi_cmd = psi - 2.0 * M_PI;
-  else if (roll.q + psi < lo && roll.q + psi + 2.0 * M_PI <= hi) psi_cmd = psi + 2.0 * M_PI;
-  if (psi_cmd == psi) return target;
-  const Eigen::Quaterniond twist(Eigen::AngleAxisd(psi, a));
-  const Eigen::Quaterniond swing = qe * twist.inverse();
+  const RollSplit r = splitRoll(tcp, target, roll);
+  if (r.psi_cmd == r.psi) return target;
   Eigen::Isometry3d waypoint = target;
-  waypoint.linear() = (swing * Eigen::Quaterniond(Eigen::AngleAxisd(0.5 * psi_cmd, a))).toRotationMatrix() * tcp.linear();
+  waypoint.linear() =
+      (r.swing * Eigen::Quaterniond(Eigen::AngleAxisd(0.5 * r.psi_cmd, r.axis))).toRotationMatrix() * tcp.linear();
   return waypoint;
 }
 

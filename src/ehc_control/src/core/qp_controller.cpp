@@ -203,8 +203,9 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
 
   // --- model: TCP pose, whole-body Jacobian, manipulability gradient
   Eigen::Isometry3d T_tcp;
-  const Matrix6Xd J = m.jacobian(base_pose, q, rc.tcp_frame, &T_tcp);
-  const Eigen::VectorXd Jm = m.manipulabilityGradient(q);
+  Matrix6Xd J_arm;
+  const Matrix6Xd J = m.jacobian(base_pose, q, rc.tcp_frame, &T_tcp, &J_arm);
+  const Eigen::VectorXd Jm = m.manipulabilityGradientFromJacobian(J_arm);
 
   // --- errors and weighting
   const Vector6d e = poseError(T_tcp, target);

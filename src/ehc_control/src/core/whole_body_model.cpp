@@ -229,7 +229,8 @@ Matrix6Xd WholeBodyModel::armJacobian(const Eigen::VectorXd& q, const std::strin
 }
 
 Matrix6Xd WholeBodyModel::jacobian(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q,
-                                   const std::string& link, Eigen::Isometry3d* pose) const {
+                                   const std::string& link, Eigen::Isometry3d* pose,
+                                   Matrix6Xd* arm_jacobian) const {
   const Eigen::Isometry3d Twb = baseTransform(base_pose);
   const Eigen::Isometry3d Tbl = linkPoseInBase(q, link);
   const Matrix6Xd Ja = armJacobian(q, link);
@@ -249,6 +250,7 @@ Matrix6Xd WholeBodyModel::jacobian(const Eigen::Vector3d& base_pose, const Eigen
   J.block(0, nb, 3, nArm()) = R * Ja.topRows<3>();
   J.block(3, nb, 3, nArm()) = R * Ja.bottomRows<3>();
   if (pose) *pose = Twb * Tbl;
+  if (arm_jacobian) *arm_jacobian = Ja;
   return J;
 }
 
@@ -260,8 +262,12 @@ double WholeBodyModel::manipulability(const Eigen::VectorXd& q) const {
 }
 
 Eigen::VectorXd WholeBodyModel::manipulabilityGradient(const Eigen::VectorXd& q, double* m_out) const {
-  const Matrix6Xd J = armJacobian(q, cfg_.tcp_frame);
+  return manipulabilityGradientFromJacobian(armJacobian(q, cfg_.tcp_frame), m_out);
+}
+
+Eigen::VectorXd WholeBodyModel::manipulabilityGradientFromJacobian(const Matrix6Xd& J, double* m_out) const {
   const int n = nArm();
+  if (J.cols() != n) fail("manipulabilityGradientFromJacobian: expected a 6 x " + std::to_string(n) + " arm Jacobian");
   const bool wide = n >= 6;
   const Eigen::MatrixXd A = wide ? Eigen::MatrixXd(J * J.transpose()) : Eigen::MatrixXd(J.transpose() * J);
   const double m = std::sqrt(std::max(0.0, A.determinant()));

@@ -1,6 +1,7 @@
 #include "ehc_perception/camera_intrinsics.h"
 
 #include "ehc_control/config_node.h"
+#include "ehc_control/pinhole_camera.h"
 
 #include <cmath>
 #include <sstream>
@@ -39,17 +40,16 @@ std::string CameraIntrinsics::summary() const {
 
 CameraIntrinsics loadCameraIntrinsics(const std::string& path) {
   const auto root = ehc_control::ConfigNode::loadFile(path, kOwner);
+  const ehc_control::CameraInfoFile f = ehc_control::readCameraInfo(root);
   CameraIntrinsics c;
-  c.name = root.get<std::string>("camera_name", c.name);
-  c.width = root.require<int>("image_width");
-  c.height = root.require<int>("image_height");
-  const Eigen::VectorXd K = root.child("camera_matrix").requireVector("data", 9);
-  c.fx = K[0];
-  c.fy = K[4];
-  c.cx = K[2];
-  c.cy = K[5];
-  if (K[1] != 0.0 || K[3] != 0.0 || K[6] != 0.0 || K[7] != 0.0 || K[8] != 1.0)
-    root.fail("camera_matrix", "must be [fx 0 cx; 0 fy cy; 0 0 1]");
+  if (!f.camera_name.empty()) c.name = f.camera_name;
+  c.width = f.width;
+  c.height = f.height;
+  c.fx = f.fx();
+  c.fy = f.fy();
+  c.cx = f.cx();
+  c.cy = f.cy();
+  if (!f.isPinholeMatrix()) root.fail("camera_matrix", "must be [fx 0 cx; 0 fy cy; 0 0 1]");
   c.distortion_model = root.get<std::string>("distortion_model", c.distortion_model);
   if (root.has("distortion_coefficients"))
     c.distortion = root.child("distortion_coefficients").requireVector("data");

@@ -1,5 +1,7 @@
 #include "ehc_perception/robot_collision_model.h"
 
+#include "ehc_control/urdf_collision.h"
+
 #include <urdf_parser/urdf_parser.h>
 
 #include <cmath>
@@ -14,48 +16,15 @@ namespace {
   throw std::invalid_argument("[RobotCollisionModel] " + what);
 }
 
-Eigen::Isometry3d toEigen(const urdf::Pose& p) {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.translation() << p.position.x, p.position.y, p.position.z;
-  T.linear() = Eigen::Quaterniond(p.rotation.w, p.rotation.x, p.rotation.y, p.rotation.z)
-                   .normalized()
-                   .toRotationMatrix();
-  return T;
-}
-
 void addShapes(const urdf::Link& link, std::vector<CollisionShape>* out) {
-  std::vector<urdf::CollisionSharedPtr> cols = link.collision_array;
-  if (cols.empty() && link.collision) cols.push_back(link.collision);
-  for (const auto& c : cols) {
-    if (!c || !c->geometry) continue;
+  for (const ehc_control::UrdfCollisionShape& u : ehc_control::urdfCollisionShapes(link, "RobotCollisionModel")) {
     CollisionShape s;
     s.link = link.name;
-    s.origin = toEigen(c->origin);
-    switch (c->geometry->type) {
-      case urdf::Geometry::BOX: {
-        const auto* b = static_cast<const urdf::Box*>(c->geometry.get());
-        s.type = CollisionShape::Type::Box;
-        s.size << b->dim.x, b->dim.y, b->dim.z;
-        break;
-      }
-      case urdf::Geometry::CYLINDER: {
-        const auto* cy = static_cast<const urdf::Cylinder*>(c->geometry.get());
-        s.type = CollisionShape::Type::Cylinder;
-        s.size << cy->radius, cy->length, 0.0;
-        break;
-      }
-      case urdf::Geometry::SPHERE: {
-        const auto* sp = static_cast<const urdf::Sphere*>(c->geometry.get());
-        s.type = CollisionShape::Type::Sphere;
-        s.size << sp->radius, 0.0, 0.0;
-        break;
-      }
-      default:
-        fail("link '" + link.name +
-             "' has a mesh collision geometry; only box, cylinder and sphere are supported");
-    }
-    if (!s.size.allFinite() || s.size.minCoeff() < 0.0 || s.size[0] <= 0.0)
-      fail("link '" + link.name + "' has a degenerate collision shape");
+    s.origin = u.origin;
+    s.size = u.size;
+    s.type = u.type == ehc_control::UrdfCollisionShape::Type::Box        ? CollisionShape::Type::Box
+             : u.type == ehc_control::UrdfCollisionShape::Type::Cylinder ? CollisionShape::Type::Cylinder
+                                                                         : CollisionShape::Type::Sphere;
     out->push_back(s);
   }
 }

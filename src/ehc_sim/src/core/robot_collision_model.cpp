@@ -1,5 +1,7 @@
 #include "ehc_sim/robot_collision_model.h"
 
+#include "ehc_control/urdf_collision.h"
+
 #include <urdf_parser/urdf_parser.h>
 
 #include <algorithm>
@@ -13,14 +15,6 @@ namespace {
   throw std::invalid_argument("[RobotCollisionModel] " + what);
 }
 
-Eigen::Isometry3d toEigen(const urdf::Pose& p) {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = Eigen::Quaterniond(p.rotation.w, p.rotation.x, p.rotation.y, p.rotation.z)
-                   .normalized()
-                   .toRotationMatrix();
-  T.translation() = Eigen::Vector3d(p.position.x, p.position.y, p.position.z);
-  return T;
-}
 }  // namespace
 
 RobotCollisionModel::RobotCollisionModel(const std::string& urdf_xml,
@@ -62,35 +56,13 @@ RobotCollisionModel::RobotCollisionModel(const std::string& urdf_xml,
             fail("joint '" + j.name + "' is movable but neither an arm joint nor a prismatic finger");
           }
         }
-        for (const auto& c : link->collision_array) {
-          if (!c || !c->geometry) continue;
+        for (const ehc_control::UrdfCollisionShape& u : ehc_control::urdfCollisionShapes(*link, "RobotCollisionModel")) {
           LinkShape s;
-          s.origin = toEigen(c->origin);
-          switch (c->geometry->type) {
-            case urdf::Geometry::BOX: {
-              const auto* b = static_cast<const urdf::Box*>(c->geometry.get());
-              s.type = LinkShape::Box;
-              s.size = Eigen::Vector3d(b->dim.x, b->dim.y, b->dim.z);
-              break;
-            }
-            case urdf::Geometry::CYLINDER: {
-              const auto* cy = static_cast<const urdf::Cylinder*>(c->geometry.get());
-              s.type = LinkShape::Cylinder;
-              s.size = Eigen::Vector3d(cy->radius, cy->length, 0.0);
-              break;
-            }
-            case urdf::Geometry::SPHERE: {
-              const auto* sp = static_cast<const urdf::Sphere*>(c->geometry.get());
-              s.type = LinkShape::Sphere;
-              s.size = Eigen::Vector3d(sp->radius, 0.0, 0.0);
-              break;
-            }
-            default:
-              fail("link '" + link->name + "': only box, cylinder and sphere collision shapes "
-                   "are supported (mesh found)");
-          }
-          if ((s.size.array() < 0.0).any() || s.size.x() <= 0.0)
-            fail("link '" + link->name + "': collision shape with a non-positive size");
+          s.origin = u.origin;
+          s.size = u.size;
+          s.type = u.type == ehc_control::UrdfCollisionShape::Type::Box        ? LinkShape::Box
+                   : u.type == ehc_control::UrdfCollisionShape::Type::Cylinder ? LinkShape::Cylinder
+                                                                               : LinkShape::Sphere;
           g.shapes.push_back(s);
         }
         const bool has_geometry = !g.shapes.empty();

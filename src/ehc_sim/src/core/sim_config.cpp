@@ -1,5 +1,7 @@
 #include "ehc_sim/sim_config.h"
 
+#include "ehc_control/pinhole_camera.h"
+
 #include "ehc_control/config_node.h"
 
 #include <cmath>
@@ -24,17 +26,16 @@ void CameraIntrinsics::validate() const {
 
 CameraIntrinsics loadCameraIntrinsics(const std::string& path) {
   const ConfigNode n = ConfigNode::loadFile(path, "CameraIntrinsics");
+  const ehc_control::CameraInfoFile f = ehc_control::readCameraInfo(n);
   CameraIntrinsics c;
   c.source_file = path;
-  c.width = n.require<int>("image_width");
-  c.height = n.require<int>("image_height");
-  const Eigen::VectorXd K = n.child("camera_matrix").requireVector("data", 9);
-  if (K[1] != 0.0 || K[3] != 0.0 || K[6] != 0.0 || K[7] != 0.0 || K[8] != 1.0)
-    n.child("camera_matrix").fail("data", "must be [fx 0 cx 0 fy cy 0 0 1]");
-  c.fx = K[0];
-  c.cx = K[2];
-  c.fy = K[4];
-  c.cy = K[5];
+  c.width = f.width;
+  c.height = f.height;
+  if (!f.isPinholeMatrix()) n.child("camera_matrix").fail("data", "must be [fx 0 cx 0 fy cy 0 0 1]");
+  c.fx = f.fx();
+  c.cx = f.cx();
+  c.fy = f.fy();
+  c.cy = f.cy();
   try {
     c.validate();
   } catch (const std::invalid_argument& e) {

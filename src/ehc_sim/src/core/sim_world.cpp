@@ -41,13 +41,6 @@ Eigen::Isometry3d toEigen(const btTransform& t) {
   return T;
 }
 
-std::string readFile(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) fail("cannot read URDF file '" + path + "'");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 std::unique_ptr<btCollisionShape> makeShape(ShapeType type, const Eigen::Vector3d& he) {
   std::unique_ptr<btCollisionShape> s;
@@ -134,7 +127,7 @@ struct SimWorld::Impl {
 // ---------------------------------------------------------------------------- construction
 namespace {
 std::unique_ptr<ehc_control::WholeBodyModel> makeModel(const ehc_control::RobotConfig& r) {
-  return std::make_unique<ehc_control::WholeBodyModel>(r, readFile(r.urdf_path));
+  return std::make_unique<ehc_control::WholeBodyModel>(r);  // reads r.urdf_path
 }
 }  // namespace
 
