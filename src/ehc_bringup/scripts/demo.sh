@@ -128,8 +128,7 @@ done
 start grasp rosrun ehc_perception ehc_grasp_node _config:=config/perception/grasp_node.yaml \
   /ehc/target_pose:=/ehc/sequencer/object_pose
 [ "${OBSTACLES:-1}" = 1 ] &&
-  start obstacles rosrun ehc_perception ehc_obstacle_node _config:=config/demo/obstacle_node.yaml \
-    /ehc/obstacles:=/ehc/perception/obstacles  # relayed by the sequencer without the grasped object
+  start obstacles rosrun ehc_perception ehc_obstacle_node _config:=config/demo/obstacle_node.yaml
 start controller rosrun ehc_control ehc_controller_node _config:="$CONTROLLER_CONFIG" _mode:="$MODE" "${MPBS_ARG[@]}"
 start sequencer rosrun ehc_bringup ehc_grasp_sequencer_node _config:="$SEQUENCER_CONFIG" \
   _summary:="$WS/$OUT/summary.json" _trace:="$WS/$OUT/trace.csv"

@@ -161,13 +161,14 @@ TEST(GraspSequencer, GoalsFollowThePhases) {
   h.step();
   ASSERT_EQ(h.seq.phase(), GraspPhase::Approach);
   ASSERT_TRUE(h.last_goal);
-  // APPROACH: the goal is the grasp itself (the controller's MPBS watches the object).
-  EXPECT_NEAR(h.last_goal->translation().x(), 1.5, 1e-9);
+  // APPROACH: the goal is the pre-grasp, 10 cm back along the approach (the hand arrives from
+  // the approach side; the controller's MPBS watches the object centre).
+  EXPECT_NEAR(h.last_goal->translation().x(), 1.4, 1e-9);
   EXPECT_NEAR(h.last_goal->linear().col(2).dot(Eigen::Vector3d::UnitX()), 1.0, 1e-9);
   h.run(1.0);
   EXPECT_EQ(h.seq.phase(), GraspPhase::Approach);  // TCP 1.2 m away
   h.tcp = *h.last_goal;
-  h.tcp.translation().x() -= 0.2;  // inside the 0.25 m pre-grasp switch distance
+  h.tcp.translation().x() -= 0.1;  // 0.2 m from the grasp: inside the 0.25 m switch distance
   h.step();
   EXPECT_EQ(h.seq.phase(), GraspPhase::PreGrasp);
   ASSERT_TRUE(h.last_goal);
@@ -239,7 +240,7 @@ TEST(GraspSequencer, StalePerceptionBeforeTheLockSearchesAgain) {
   EXPECT_TRUE(h.last_goal);
   h.run(0.5);
   EXPECT_EQ(h.seq.phase(), GraspPhase::Approach);  // within perception_hold (1 s)
-  EXPECT_NEAR(h.last_goal->translation().x(), 1.5, 1e-9);
+  EXPECT_NEAR(h.last_goal->translation().x(), 1.4, 1e-9);  // the pre-grasp
   h.run(0.6);
   // Older than 1 s: back to WAIT_TARGET; goal = look pose 0.4 m back along the approach.
   EXPECT_EQ(h.seq.phase(), GraspPhase::WaitTarget);
@@ -451,18 +452,57 @@ TEST(GraspSequencer, TsmmStagesAppearAsControllerPhases) {
   EXPECT_TRUE(arm);
 }
 
-TEST(GraspSequencer, ObstaclesOnTheGraspedObjectAreExcluded) {
-  GraspSequencer s(twoObjects());
-  EXPECT_FALSE(s.objectCentre());
-  EXPECT_FALSE(s.isGraspedObject(Eigen::Vector3d(1.5, 0, 0.76)));  // no object yet
-  s.setObjectPose(0, 1.0, forwardTarget());
-  SequencerInput in;
-  in.t = 1.0;
-  s.update(in);
-  ASSERT_TRUE(s.objectCentre());
-  EXPECT_TRUE(s.isGraspedObject(Eigen::Vector3d(1.5, 0.05, 0.70)));   // the object / table under it
-  EXPECT_FALSE(s.isGraspedObject(Eigen::Vector3d(1.5, 0.3, 0.76)));   // another object
-  EXPECT_FALSE(s.isGraspedObject(Eigen::Vector3d(std::nan(""), 0, 0.76)));
+TEST(GraspSequencer, TheObjectIsAnObstacleUntilTheDescentAndExcludedWhileTouchedAndCarried) {
+  GraspSequencerParams p = twoObjects();
+  p.obstacle_exclusion_radius = 0.12;
+  Harness h(p);
+  EXPECT_FALSE(h.seq.objectCentre());
+  const Eigen::Vector3d centre(1.5, 0.0, 0.76);
+  h.perceive = forwardTarget(centre.x(), centre.y(), centre.z());
+  int before_grasp = 0, checked = 0;
+  double carried_z_max = -1.0;
+  bool seen_lift = false;
+  while (h.seq.currentObject() == 0 && !h.seq.done() && h.t < 100) {
+    const GraspPhase phase_before = h.seq.phase();
+    const SequencerOutput out = h.step();
+    const GraspPhase ph = h.seq.phase();
+    if (h.seq.currentObject() != 0) {
+      EXPECT_TRUE(out.exclusions.empty()) << "next object: nothing excluded";
+      break;
+    }
+    if (ph < GraspPhase::Grasp) {
+      // Approach and pre-grasp: the object is an obstacle like any other.
+      EXPECT_TRUE(out.exclusions.empty()) << toString(ph);
+      ++before_grasp;
+      continue;
+    }
+    ASSERT_FALSE(out.exclusions.empty()) << toString(ph);
+    ++checked;
+    EXPECT_LT((out.exclusions[0].centre - centre).norm(), 1e-9) << "where it was perceived";
+    EXPECT_DOUBLE_EQ(out.exclusions[0].radius, 0.12);
+    if (ph == GraspPhase::Grasp) {
+      EXPECT_EQ(out.exclusions.size(), 1u) << "not closed yet: only where it stands";
+    } else if (phase_before >= GraspPhase::Close) {
+      // Closed: a second sphere moves with the hand (same offset from the TCP as at closing).
+      ASSERT_EQ(out.exclusions.size(), 2u) << toString(ph);
+      if (ph == GraspPhase::Lift) {
+        seen_lift = true;
+        carried_z_max = std::max(carried_z_max, out.exclusions[1].centre.z());
+      }
+    }
+  }
+  EXPECT_GT(before_grasp, 0);
+  EXPECT_GT(checked, 0);
+  EXPECT_TRUE(seen_lift);
+  // The harness TCP jumps to the lift goal: the carried sphere rises by the lift height.
+  EXPECT_NEAR(carried_z_max - centre.z(), p.lift_height, 1e-6);
+
+  // Radius 0: no exclusion at all.
+  GraspSequencerParams none = twoObjects();
+  none.obstacle_exclusion_radius = 0.0;
+  Harness h0(none);
+  h0.perceive = forwardTarget();
+  while (h0.seq.currentObject() == 0 && h0.t < 100) EXPECT_TRUE(h0.step().exclusions.empty());
 }
 
 TEST(GraspSequencer, RejectsNonFiniteInput) {
@@ -600,6 +640,46 @@ TEST(GraspSelection, PrefersTheWantedApproachOverAHigherScore) {
   ASSERT_TRUE(t);
   EXPECT_FALSE(t->from_candidate);
   EXPECT_TRUE(t->pose.translation().isApprox(tag.translation()));
+}
+
+TEST(GraspSelection, ChosenCandidateIsTurnedOntoTheWantedApproachAboutItsCentre) {
+  const Eigen::Isometry3d tag = forwardTarget();
+  // A top grasp tilted 20 deg about its closing axis and 10 deg about its finger-breadth axis.
+  Eigen::Isometry3d tilted = downwardAt(Eigen::Vector3d(1.49, 0.01, 0.80));
+  tilted.linear() = tilted.linear() * Eigen::AngleAxisd(20 * M_PI / 180, Eigen::Vector3d::UnitY()).toRotationMatrix() *
+                    Eigen::AngleAxisd(10 * M_PI / 180, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  GraspSelectionParams p;
+  ASSERT_TRUE(p.align_approach);  // the default
+  const auto d = chooseGrasp({{tilted, 0.05, 0.8}}, ApproachDirection::Downward, tag, tilted.linear(), p);
+  ASSERT_TRUE(d);
+  EXPECT_TRUE(d->from_candidate);
+  EXPECT_TRUE(isValidPose(d->pose));
+  EXPECT_NEAR(d->pose.linear().col(2).z(), -1.0, 1e-9);     // straight down
+  EXPECT_NEAR(d->pose.linear().col(1).z(), 0.0, 1e-9);      // fingers close level
+  EXPECT_TRUE(d->pose.translation().isApprox(tilted.translation(), 1e-12));  // same centre
+  // The smallest rotation: the closing axis keeps (within a few degrees for this compound
+  // tilt) the horizontal direction it had (up to the half turn).
+  const Eigen::Vector3d y0 = Eigen::Vector3d(tilted.linear().col(1).x(), tilted.linear().col(1).y(), 0).normalized();
+  EXPECT_GT(std::abs(d->pose.linear().col(1).dot(y0)), std::cos(3 * M_PI / 180));
+  // Off: the candidate as perceived.
+  p.align_approach = false;
+  const auto raw = chooseGrasp({{tilted, 0.05, 0.8}}, ApproachDirection::Downward, tag, tilted.linear(), p);
+  ASSERT_TRUE(raw);
+  EXPECT_LT(rotationAngle(raw->pose.linear(), tilted.linear()), 1e-9);
+  // Sideways: onto the horizontal side direction nearest the candidate's own side.
+  Eigen::Isometry3d side = Eigen::Isometry3d::Identity();
+  side.linear().col(0) = Eigen::Vector3d(0, 0, 1);
+  side.linear().col(1) = Eigen::Vector3d(-1, 0, 0);
+  side.linear().col(2) = Eigen::Vector3d(0, -1, 0);
+  side.linear() = Eigen::AngleAxisd(15 * M_PI / 180, Eigen::Vector3d::UnitX()).toRotationMatrix() * side.linear();
+  side.translation() = tag.translation();
+  p.align_approach = true;
+  const auto s = chooseGrasp({{side, 0.05, 0.8}}, ApproachDirection::Sideways, tag, side.linear(), p);
+  ASSERT_TRUE(s);
+  EXPECT_NEAR(s->pose.linear().col(2).y(), -1.0, 1e-9);
+  EXPECT_NEAR(s->pose.linear().col(1).z(), 0.0, 1e-9);   // level closing axis
+  EXPECT_GT(s->pose.linear().col(0).z(), 0.99);          // wrist camera up
+  EXPECT_TRUE(s->pose.translation().isApprox(side.translation(), 1e-12));
 }
 
 TEST(GraspSelection, SidewaysAcceptsEitherSide) {

@@ -147,6 +147,61 @@ TEST(ObstacleDistanceField, DistancesMatchAnalyticValuesWithinHalfAVoxel) {
   EXPECT_NEAR(p.find(ds, "ball")->normal.norm(), 1.0, 1e-9);
 }
 
+TEST(ObstacleDistanceField, ExclusionZonesHideTheObjectButNotItsSurroundings) {
+  Probe p;
+  const double tol = 0.5 * 0.02 + 1e-4;
+  // A small "object" (0.06 m cube centred at (0.5, 0, 0.23)) standing on a "table" top
+  // [0.3, 0.9] x [-0.3, 0.3] x [0.16, 0.20].
+  p.field.addOccupiedBox(Eigen::Vector3d(0.47, -0.03, 0.20), Eigen::Vector3d(0.53, 0.03, 0.26));
+  p.field.addOccupiedBox(Eigen::Vector3d(0.30, -0.30, 0.16), Eigen::Vector3d(0.90, 0.30, 0.20));
+  const std::size_t leaves = p.field.occupiedLeafCount();
+  // Ball (r 0.05) right above the object: the object is the closest obstacle (gap 0.04).
+  const auto above = p.place("ball", pose(0.5, 0.0, 0.35, 0));
+  auto ds = p.field.distances(above);
+  ASSERT_NE(p.find(ds, "ball"), nullptr);
+  EXPECT_NEAR(p.find(ds, "ball")->distance, 0.35 - 0.26 - 0.05, tol);
+
+  // The object excluded: the table below it is the closest obstacle (0.35 - 0.20 - 0.05).
+  p.field.setExclusionZones({{Eigen::Vector3d(0.5, 0.0, 0.23), 0.05}});
+  ds = p.field.distances(above);
+  ASSERT_NE(p.find(ds, "ball"), nullptr);
+  EXPECT_NEAR(p.find(ds, "ball")->distance, 0.10, tol);
+  EXPECT_GT(p.find(ds, "ball")->distance, 0.35 - 0.26 - 0.05 + tol);
+  // The map itself is unchanged (the zone only hides voxels from the queries).
+  EXPECT_EQ(p.field.occupiedLeafCount(), leaves);
+  EXPECT_EQ(p.field.cell(Eigen::Vector3d(0.5, 0.0, 0.23)), ObstacleDistanceField::Cell::Occupied);
+
+  // Cleared: the object is an obstacle again.
+  p.field.setExclusionZones({});
+  ds = p.field.distances(above);
+  ASSERT_NE(p.find(ds, "ball"), nullptr);
+  EXPECT_NEAR(p.find(ds, "ball")->distance, 0.04, tol);
+
+  // A zone covering everything: nothing is reported.
+  p.field.setExclusionZones({{Eigen::Vector3d(0.6, 0.0, 0.2), 1.0}});
+  EXPECT_TRUE(p.field.distances(above).empty());
+
+  // Map updates while a zone is set are seen by the next query (the filtered copy is rebuilt).
+  p.field.setExclusionZones({{Eigen::Vector3d(0.5, 0.0, 0.23), 0.05}});
+  EXPECT_NEAR(p.find(p.field.distances(above), "ball")->distance, 0.10, tol);
+  p.field.addOccupiedBox(Eigen::Vector3d(0.60, -0.03, 0.32), Eigen::Vector3d(0.64, 0.03, 0.38));
+  ds = p.field.distances(above);
+  ASSERT_NE(p.find(ds, "ball"), nullptr);
+  EXPECT_NEAR(p.find(ds, "ball")->distance, 0.10 - 0.05, tol);  // new block at x = 0.60: gap 0.05
+
+  // Bad zones are rejected and leave the zones unchanged.
+  const auto before = p.field.exclusionZones();
+  EXPECT_THROW(p.field.setExclusionZones({{Eigen::Vector3d(std::nan(""), 0, 0), 0.1}}), std::invalid_argument);
+  EXPECT_THROW(p.field.setExclusionZones({{Eigen::Vector3d::Zero(), -0.1}}), std::invalid_argument);
+  try {
+    p.field.setExclusionZones({{Eigen::Vector3d::Zero(), 2.0}});
+    ADD_FAILURE() << "radius 2 m accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("[ObstacleDistanceField] exclusion zone radius"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(p.field.exclusionZones(), before);
+}
+
 TEST(ObstacleDistanceField, CloudsMarkObstaclesAndRaysClearFreeSpace) {
   Probe p;
   // A wall facing the sensor at (0, 0, 0.4), spanning +-0.3 m around it, scaled by `grow`.

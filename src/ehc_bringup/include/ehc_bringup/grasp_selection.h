@@ -37,6 +37,12 @@ struct GraspSelectionParams {
   double max_angle_deg = 30.0;          ///< candidate approach within this of the preferred one
   double max_width = 0.07;              ///< m: gripper aperture
   bool require_candidate = false;       ///< false: fall back to the turned tag target
+  /// Turn a chosen candidate (about its centre, by the smallest rotation) so that its approach
+  /// is exactly the wanted one: straight down, along the tag normal, or horizontal sideways.
+  /// A horizontal approach also gets a level closing axis (an upright object's side faces are
+  /// vertical). The descent from the pre-grasp is then a straight line along that direction
+  /// and the fingers close level. `tag` and `any` keep the candidate as it is.
+  bool align_approach = true;
   double fallback_backoff_forward = 0.0;   ///< m, fallback TCP moved back along the approach
   double fallback_backoff_downward = 0.03;
   double fallback_backoff_sideways = 0.0;

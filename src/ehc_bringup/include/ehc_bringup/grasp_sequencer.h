@@ -8,8 +8,9 @@
 //                start position), goal = a look pose search_distance back along its approach
 //                axis, so that the camera finds it again (search_distance 0: no goal, the
 //                controller stops on TARGET_LOST)
-//   APPROACH     goal = the current best grasp pose (re-chosen as perception and grasp
-//                candidates update; the controller's MPBS watches this point = the object);
+//   APPROACH     goal = the pre-grasp of the current best grasp (re-chosen as perception and
+//                grasp candidates update; the controller's MPBS watches the object centre), so
+//                the hand arrives from the approach side instead of cutting across the object;
 //                base + arm drive. Ends when the TCP is within pregrasp_switch_distance of the
 //                grasp position (tsmm: the controller's base stage happens here)
 //   PRE_GRASP    the grasp is locked in the world frame (the object is static until touched, and
@@ -71,8 +72,9 @@ struct GraspSequencerParams {
   double object_time_limit = 30.0;        ///< s, WAIT_TARGET..LIFT per object
   double perception_hold = 1.0;           ///< s: before the lock, an older pose -> WAIT_TARGET
   double search_distance = 0.40;          ///< m: look pose back along the approach (0 = off)
-  /// m: obstacle points this close to the current object's centre are the object itself (and
-  /// the support right under it), not obstacles: the node drops them before the controller.
+  /// m: radius of the sphere around the object the obstacle map ignores from GRASP (the descent
+  /// from the pre-grasp) until the retreat ends: the object and the support right under it,
+  /// which the fingers must touch. Until then the object is an obstacle like any other.
   double obstacle_exclusion_radius = 0.10;
   double pose_filter_gain = 0.3;          ///< (0, 1]: weight of a new perceived pose (1 = no filter)
   double pregrasp_distance = 0.10;        ///< m, pre-grasp = grasp backed off along the approach
@@ -107,8 +109,17 @@ struct SequencerInput {
   bool grasp_succeeded = false;                    ///< /sim/status grasp_succeeded
 };
 
+/// A sphere of the obstacle map to ignore (world).
+struct ExclusionSphere {
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  double radius = 0.0;
+};
+
 struct SequencerOutput {
   std::optional<Eigen::Isometry3d> goal;           ///< TCP goal for the controller (publish it)
+  /// Obstacle-map exclusions for this cycle (empty: none): from GRASP to the end of RETREAT the
+  /// object where it was perceived and, once the gripper closes, where the hand carries it.
+  std::vector<ExclusionSphere> exclusions;
   std::optional<Eigen::Isometry3d> object_pose;    ///< current object's filtered pose (grasp node)
   std::optional<bool> gripper_command;             ///< true = close, false = open (send once)
   std::vector<std::string> events;                 ///< progress lines
@@ -155,9 +166,6 @@ class GraspSequencer {
   const std::optional<GraspChoice>& lockedGrasp() const { return locked_; }
   /// Centre of the object being grasped (locked or perceived), if any and not DONE.
   std::optional<Eigen::Vector3d> objectCentre() const;
-  /// True if an obstacle point belongs to the object being grasped (within
-  /// obstacle_exclusion_radius of objectCentre()). Non-finite points are never excluded.
-  bool isGraspedObject(const Eigen::Vector3d& obstacle_point) const;
 
  private:
   void startObject(double t, SequencerOutput* out);
@@ -182,6 +190,8 @@ class GraspSequencer {
   std::vector<GraspCandidate> candidates_;
   std::optional<GraspChoice> locked_;
   Eigen::Vector3d locked_object_centre_ = Eigen::Vector3d::Zero();
+  /// Object centre in the TCP frame when the gripper closed (the object moves with the hand).
+  std::optional<Eigen::Vector3d> centre_in_tcp_;
   std::optional<Eigen::Isometry3d> hold_goal_;  ///< RELEASE / RETREAT goal
   Eigen::Vector3d last_approach_ = Eigen::Vector3d::UnitX();
   // bookkeeping

@@ -136,6 +136,24 @@ std::optional<GraspChoice> chooseGrasp(const std::vector<GraspCandidate>& candid
       found = true;
     }
   }
+  if (found && p.align_approach) {
+    if (auto want = preferredApproach(direction, tag_target)) {
+      const Eigen::Vector3d z = best.pose.linear().col(2);
+      if (direction == ApproachDirection::Sideways && z.dot(*want) < 0.0) *want = -*want;
+      Eigen::Matrix3d R = Eigen::Quaterniond::FromTwoVectors(z, *want).toRotationMatrix() * best.pose.linear();
+      if (std::abs(want->z()) < 0.7) {
+        // Horizontal approach: level the closing axis too (the faces it closes on are vertical
+        // for an upright object); closerHalfTurn below then puts the wrist camera up.
+        Eigen::Vector3d y = want->cross(Eigen::Vector3d::UnitZ()).normalized();
+        if (y.dot(R.col(1)) < 0.0) y = -y;
+        R.col(1) = y;
+        R.col(2) = *want;
+        R.col(0) = y.cross(*want);
+      }
+      // Re-orthonormalise (exact to rounding; keep isValidPose happy).
+      best.pose.linear() = Eigen::Quaterniond(R).normalized().toRotationMatrix();
+    }
+  }
   if (!found) {
     if (p.require_candidate && direction != ApproachDirection::Tag) return std::nullopt;
     double backoff = p.fallback_backoff_forward;

@@ -83,6 +83,7 @@ std::string GraspSequencerParams::summary() const {
     << retreat_tolerance << " m, " << retreat_timeout << " s)"
     << "\n  selection: gate " << selection.candidate_gate << " m, max angle " << selection.max_angle_deg
     << " deg, max width " << selection.max_width << " m, "
+    << (selection.align_approach ? "candidates aligned to the approach, " : "")
     << (selection.require_candidate ? "candidate required" : "tag fallback") << " (backoff forward "
     << selection.fallback_backoff_forward << ", downward " << selection.fallback_backoff_downward
     << ", sideways " << selection.fallback_backoff_sideways << " m)";
@@ -115,6 +116,7 @@ GraspSequencerParams loadGraspSequencerParams(const ehc_control::ConfigNode& roo
   p.selection.max_angle_deg = sel.get("max_angle_deg", p.selection.max_angle_deg);
   p.selection.max_width = sel.get("max_width", p.selection.max_width);
   p.selection.require_candidate = sel.get("require_candidate", p.selection.require_candidate);
+  p.selection.align_approach = sel.get("align_approach", p.selection.align_approach);
   p.selection.fallback_backoff_forward = sel.get("fallback_backoff_forward", p.selection.fallback_backoff_forward);
   p.selection.fallback_backoff_downward = sel.get("fallback_backoff_downward", p.selection.fallback_backoff_downward);
   p.selection.fallback_backoff_sideways = sel.get("fallback_backoff_sideways", p.selection.fallback_backoff_sideways);
@@ -193,11 +195,6 @@ std::optional<Eigen::Vector3d> GraspSequencer::objectCentre() const {
   return std::nullopt;
 }
 
-bool GraspSequencer::isGraspedObject(const Eigen::Vector3d& p) const {
-  const auto c = objectCentre();
-  return c && p.allFinite() && (p - *c).norm() <= params_.obstacle_exclusion_radius;
-}
-
 bool GraspSequencer::setCamera(const CameraModel& camera) {
   if (!camera.valid()) {
     ++rejected_;
@@ -226,6 +223,7 @@ void GraspSequencer::startObject(double t, SequencerOutput* out) {
   // previous object is left).
   object_t0_ = t;
   locked_.reset();
+  centre_in_tcp_.reset();
   hold_goal_.reset();
   fov_cycles_ = tfm_cycles_ = ctrl_fov_cycles_ = ctrl_cycles_ = close_cycles_ = close_fov_cycles_ = 0;
   counting_tfm_ = true;
@@ -366,7 +364,7 @@ SequencerOutput GraspSequencer::update(const SequencerInput& in) {
       if (!choice) break;  // require_candidate and none yet
       enter(GraspPhase::Approach, t, &out,
             choice->from_candidate ? "grasp candidate" : "tag grasp (no candidate yet)");
-      out.goal = choice->pose;
+      out.goal = preGrasp(choice->pose);
       break;
     }
     case GraspPhase::Approach: {
@@ -376,7 +374,7 @@ SequencerOutput GraspSequencer::update(const SequencerInput& in) {
       }
       const auto choice = currentChoice(in);
       if (!choice) break;
-      out.goal = choice->pose;
+      out.goal = preGrasp(choice->pose);
       if (within(in, choice->pose, params_.pregrasp_switch_distance, 180.0)) {
         locked_ = choice;
         locked_object_centre_ = object_pose_->translation();
@@ -401,6 +399,7 @@ SequencerOutput GraspSequencer::update(const SequencerInput& in) {
         enter(GraspPhase::Close, t, &out);
         counting_tfm_ = false;
         out.gripper_command = true;
+        centre_in_tcp_ = in.tcp->inverse() * locked_object_centre_;  // within() checked the TCP
       }
       break;
     }
@@ -468,6 +467,12 @@ SequencerOutput GraspSequencer::update(const SequencerInput& in) {
       break;
     }
     case GraspPhase::Done: break;
+  }
+  // The object may be touched from the descent to the pre-grasp on, until the hand has left.
+  if (locked_ && phase_ >= GraspPhase::Grasp && phase_ <= GraspPhase::Retreat && params_.obstacle_exclusion_radius > 0.0) {
+    out.exclusions.push_back({locked_object_centre_, params_.obstacle_exclusion_radius});
+    if (centre_in_tcp_ && in.tcp && isValidPose(*in.tcp))
+      out.exclusions.push_back({*in.tcp * *centre_in_tcp_, params_.obstacle_exclusion_radius});
   }
   return out;
 }

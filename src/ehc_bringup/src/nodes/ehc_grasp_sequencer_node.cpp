@@ -7,7 +7,10 @@
 // node.goal_topic (/ehc/target_pose) every controller cycle, the current object's filtered pose
 // on node.object_pose_topic (the grasp node's target, by remapping), the object's centre on
 // node.target_centre_topic (what the controller's camera watches, MPBS), and closes / opens the
-// gripper through node.gripper_service (std_srvs/SetBool, true = close). One update per
+// gripper through node.gripper_service (std_srvs/SetBool, true = close). From the descent to
+// the pre-grasp until the retreat ends it sends the object's sphere on node.exclusion_topic
+// (ehc_control/ObstacleExclusion): the obstacle node ignores it, so the fingers may touch the
+// object while every other obstacle keeps its damper. One update per
 // /ehc/status message (lock-step with the simulator). Reads the gripper result from /sim/status.
 // When every object is handled it writes the JSON summary (and the CSV trace) and exits 0.
 // Any exception: log, stop publishing goals (the controller then stops on TARGET_LOST), exit 1.
@@ -15,7 +18,7 @@
 #include "ehc_bringup/grasp_sequencer.h"
 #include "ehc_control/ControllerStatus.h"
 #include "ehc_control/GraspCandidates.h"
-#include "ehc_control/ObstacleArray.h"
+#include "ehc_control/ObstacleExclusion.h"
 #include "ehc_control/config_node.h"
 #include "ehc_sim/SimStatus.h"
 
@@ -51,8 +54,7 @@ struct NodeParams {
   std::string status_topic = "/ehc/status";
   std::string sim_status_topic = "/sim/status";
   std::string gripper_service = "/sim/gripper";
-  std::string obstacles_in_topic;   ///< "" = no obstacle relay
-  std::string obstacles_out_topic = "/ehc/obstacles";
+  std::string exclusion_topic = "/ehc/obstacle_exclusion";  ///< "" = none sent
   std::vector<std::string> pose_topics;  ///< per object (objects[i].pose_topic)
   bool exit_when_done = true;
   std::string summary() const {
@@ -60,8 +62,7 @@ struct NodeParams {
                     candidates_topic + ", status <- " + status_topic + ", gripper <- " + sim_status_topic +
                     " / -> " + gripper_service + "\n  TCP " + world_frame + " -> " + tcp_frame + ", camera " + camera_frame + " (tf) + " + camera_info_topic + " (TfM)\n  pose topics:";
     for (const auto& t : pose_topics) s += " " + t;
-    if (!obstacles_in_topic.empty())
-      s += "\n  obstacles " + obstacles_in_topic + " -> " + obstacles_out_topic + " without the grasped object";
+    s += "\n  obstacle exclusion (the object while touched) -> " + (exclusion_topic.empty() ? std::string("off") : exclusion_topic);
     return s;
   }
 };
@@ -80,8 +81,7 @@ NodeParams loadNodeParams(const ehc_control::ConfigNode& root) {
   p.status_topic = n.get("status_topic", p.status_topic);
   p.sim_status_topic = n.get("sim_status_topic", p.sim_status_topic);
   p.gripper_service = n.get("gripper_service", p.gripper_service);
-  p.obstacles_in_topic = n.get("obstacles_in_topic", p.obstacles_in_topic);
-  p.obstacles_out_topic = n.get("obstacles_out_topic", p.obstacles_out_topic);
+  p.exclusion_topic = n.get("exclusion_topic", p.exclusion_topic);
   p.exit_when_done = n.get("exit_when_done", p.exit_when_done);
   for (const char* k : {"world_frame", "tcp_frame", "goal_topic", "status_topic", "gripper_service"})
     if (n.has(k) && n.get<std::string>(k, "").empty()) n.fail(k, "must not be empty");
@@ -142,10 +142,8 @@ class SequencerNode {
       subs_.push_back(nh.subscribe<geometry_msgs::PoseStamped>(
           node_.pose_topics[i], 5, [this, i](const geometry_msgs::PoseStamped::ConstPtr& m) { onObjectPose(i, *m); }));
     subs_.push_back(nh.subscribe(node_.candidates_topic, 2, &SequencerNode::onCandidates, this));
-    if (!node_.obstacles_in_topic.empty()) {
-      obstacles_pub_ = nh.advertise<ehc_control::ObstacleArray>(node_.obstacles_out_topic, 10);
-      subs_.push_back(nh.subscribe(node_.obstacles_in_topic, 10, &SequencerNode::onObstacles, this));
-    }
+    if (!node_.exclusion_topic.empty())
+      exclusion_pub_ = nh.advertise<ehc_control::ObstacleExclusion>(node_.exclusion_topic, 10);
     subs_.push_back(nh.subscribe(node_.sim_status_topic, 10, &SequencerNode::onSimStatus, this));
     subs_.push_back(nh.subscribe(node_.camera_info_topic, 1, &SequencerNode::onCameraInfo, this));
     subs_.push_back(nh.subscribe("joint_states", 10, &SequencerNode::onJoints, this));
@@ -175,15 +173,22 @@ class SequencerNode {
     }
     seq_->setGraspCandidates(ros::Time::now().toSec(), c);
   }
-  /// Relay of the obstacle list without the pairs on the object being grasped.
-  void onObstacles(const ehc_control::ObstacleArray& m) {
-    ehc_control::ObstacleArray out;
-    out.header = m.header;
-    out.influence_distance = m.influence_distance;
-    for (const auto& o : m.obstacles)
-      if (!seq_->isGraspedObject(Eigen::Vector3d(o.obstacle_point.x, o.obstacle_point.y, o.obstacle_point.z)))
-        out.obstacles.push_back(o);
-    obstacles_pub_.publish(out);
+  /// Sends the exclusions while there are any, and one empty list when they end.
+  void publishExclusions(const std::vector<ehc_bringup::ExclusionSphere>& zones, const ros::Time& stamp) {
+    if (node_.exclusion_topic.empty() || (zones.empty() && !excluding_)) return;
+    excluding_ = !zones.empty();
+    ehc_control::ObstacleExclusion m;
+    m.header.frame_id = node_.world_frame;
+    m.header.stamp = stamp;
+    for (const auto& z : zones) {
+      geometry_msgs::Point c;
+      c.x = z.centre.x();
+      c.y = z.centre.y();
+      c.z = z.centre.z();
+      m.centres.push_back(c);
+      m.radii.push_back(z.radius);
+    }
+    exclusion_pub_.publish(m);
   }
   void onCameraInfo(const sensor_msgs::CameraInfo& m) {
     ehc_bringup::CameraModel c;
@@ -249,6 +254,7 @@ class SequencerNode {
     const ros::Time now = ros::Time::now();
     if (out.object_pose) object_pub_.publish(toMsg(*out.object_pose, node_.world_frame, now));
     if (out.goal) goal_pub_.publish(toMsg(*out.goal, node_.world_frame, now));
+    publishExclusions(out.exclusions, now);
     if (const auto c = seq_->objectCentre()) {
       geometry_msgs::PointStamped p;
       p.header.frame_id = node_.world_frame;
@@ -301,14 +307,14 @@ class SequencerNode {
   std::unique_ptr<GraspSequencer> seq_;
   tf2_ros::Buffer tf_;
   tf2_ros::TransformListener listener_;
-  ros::Publisher goal_pub_, object_pub_, results_pub_, obstacles_pub_, centre_pub_;
+  ros::Publisher goal_pub_, object_pub_, results_pub_, exclusion_pub_, centre_pub_;
   std::size_t published_results_ = 0;
   ros::ServiceClient gripper_;
   std::vector<ros::Subscriber> subs_;
   std::string summary_file_, trace_file_, mode_;
   std::ofstream trace_;
   std::string gripper_state_ = "open";
-  bool grasp_succeeded_ = false, finished_ = false, failed_ = false;
+  bool grasp_succeeded_ = false, finished_ = false, failed_ = false, excluding_ = false;
   double arm_speed_ = 0.0, base_speed_ = 0.0, base_turn_ = 0.0, t_start_ = -1.0;
 };
 

@@ -3,6 +3,8 @@
 // sensor origin clear free space, end points mark occupied voxels) and FCL distance queries
 // between the robot's collision shapes and the octree. For every link closer than the
 // influence distance: closest point pair, unit normal (obstacle -> link) and distance.
+// Exclusion zones (spheres) hide parts of the map from the distance queries without erasing
+// them: the object the hand is about to grasp or holds, which it must touch.
 // ROS-free (OctoMap + FCL inside); not thread-safe.
 
 #include "ehc_perception/grasp_generator.h"  // PointList
@@ -49,6 +51,14 @@ struct LinkObstacleDistance {
   double distance = 0.0;                                     ///< m, <= 0: penetration
 };
 
+/// A sphere of the map that distance queries ignore (occupied voxels whose centre is inside).
+struct ExclusionZone {
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();  ///< world
+  double radius = 0.0;                               ///< m, in [0, kMaxRadius]
+  static constexpr double kMaxRadius = 1.0;
+  bool operator==(const ExclusionZone& o) const { return centre == o.centre && radius == o.radius; }
+};
+
 class ObstacleDistanceField {
  public:
   ObstacleDistanceField(const ObstacleMapConfig& config, const RobotCollisionModel& robot);
@@ -73,8 +83,14 @@ class ObstacleDistanceField {
   Cell cell(const Eigen::Vector3d& p) const;
   std::size_t occupiedLeafCount() const;
 
+  /// Replaces the exclusion zones (empty: none). Throws std::invalid_argument on a non-finite
+  /// centre or a radius outside [0, ExclusionZone::kMaxRadius]; the zones are then unchanged.
+  void setExclusionZones(const std::vector<ExclusionZone>& zones);
+  const std::vector<ExclusionZone>& exclusionZones() const { return zones_; }
+
   /// Closest obstacle of each link within the influence distance (links without an obstacle
-  /// in range are omitted). `link_poses`: world poses in robot().links() order.
+  /// in range are omitted), ignoring occupied voxels inside the exclusion zones.
+  /// `link_poses`: world poses in robot().links() order.
   std::vector<LinkObstacleDistance> distances(const std::vector<Eigen::Isometry3d>& link_poses) const;
   /// World poses of robot().links() from the whole-body model.
   std::vector<Eigen::Isometry3d> linkPoses(const ehc_control::WholeBodyModel& model,
@@ -90,6 +106,7 @@ class ObstacleDistanceField {
   struct Impl;
   ObstacleMapConfig config_;
   RobotCollisionModel robot_;
+  std::vector<ExclusionZone> zones_;
   std::unique_ptr<Impl> impl_;
 };
 

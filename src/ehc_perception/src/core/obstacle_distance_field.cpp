@@ -75,6 +75,10 @@ struct ObstacleDistanceField::Impl {
   std::shared_ptr<fcl::OcTree<double>> fcl_tree;
   std::vector<std::shared_ptr<fcl::CollisionGeometry<double>>> geoms;  // per shape
   std::vector<int> shape_link;                                          // shape -> link index
+  // The map without the exclusion zones, rebuilt when the map or the zones change.
+  std::shared_ptr<fcl::OcTree<double>> query_tree;
+  bool query_dirty = true;
+  bool query_empty = false;  ///< every occupied voxel is excluded
 
   void reset(const ObstacleMapConfig& c) {
     tree = std::make_shared<octomap::OcTree>(c.resolution);
@@ -86,6 +90,47 @@ struct ObstacleDistanceField::Impl {
     // FCL reads the occupancy threshold from the tree at construction.
     fcl_tree = std::make_shared<fcl::OcTree<double>>(
         std::static_pointer_cast<const octomap::OcTree>(tree));
+    query_dirty = true;
+  }
+
+  /// The tree the distance queries use: the map itself, or a copy without the voxels whose
+  /// centre lies in an exclusion zone.
+  const fcl::OcTree<double>* queryTree(const std::vector<ExclusionZone>& zones) {
+    if (zones.empty()) return fcl_tree.get();
+    if (query_dirty || !query_tree) {
+      // Only the occupied voxels matter to the distance queries: copy those outside every
+      // zone (pruned nodes voxel by voxel, so a node straddling a zone boundary is split).
+      auto copy = std::make_shared<octomap::OcTree>(tree->getResolution());
+      copy->setOccupancyThres(tree->getOccupancyThres());
+      copy->setClampingThresMin(tree->getClampingThresMin());
+      copy->setClampingThresMax(tree->getClampingThresMax());
+      const double res = tree->getResolution();
+      auto excluded = [&zones](const Eigen::Vector3d& p) {
+        for (const ExclusionZone& z : zones)
+          if ((p - z.centre).norm() <= z.radius) return true;
+        return false;
+      };
+      for (auto it = tree->begin_leafs(), end = tree->end_leafs(); it != end; ++it) {
+        if (!tree->isNodeOccupied(*it)) continue;
+        const float value = it->getLogOdds();
+        const octomap::point3d c = it.getCoordinate();
+        const int n = std::max(1, static_cast<int>(std::lround(it.getSize() / res)));
+        const double first = -0.5 * (n - 1) * res;
+        for (int i = 0; i < n; ++i)
+          for (int j = 0; j < n; ++j)
+            for (int k = 0; k < n; ++k) {
+              const Eigen::Vector3d p(c.x() + first + i * res, c.y() + first + j * res, c.z() + first + k * res);
+              if (excluded(p)) continue;
+              copy->setNodeValue(p.x(), p.y(), p.z(), value, /*lazy_eval=*/true);
+            }
+      }
+      copy->updateInnerOccupancy();
+      copy->prune();
+      query_empty = copy->size() == 0;
+      query_tree = std::make_shared<fcl::OcTree<double>>(std::static_pointer_cast<const octomap::OcTree>(copy));
+      query_dirty = false;
+    }
+    return query_tree.get();
   }
 };
 
@@ -121,6 +166,18 @@ ObstacleDistanceField::ObstacleDistanceField(ObstacleDistanceField&&) noexcept =
 ObstacleDistanceField& ObstacleDistanceField::operator=(ObstacleDistanceField&&) noexcept = default;
 
 void ObstacleDistanceField::clear() { impl_->reset(config_); }
+
+void ObstacleDistanceField::setExclusionZones(const std::vector<ExclusionZone>& zones) {
+  for (const ExclusionZone& z : zones) {
+    if (!z.centre.allFinite()) fail("exclusion zone centre is not finite");
+    if (!(z.radius >= 0.0 && z.radius <= ExclusionZone::kMaxRadius))
+      fail("exclusion zone radius " + std::to_string(z.radius) + " m is outside [0, " +
+           std::to_string(ExclusionZone::kMaxRadius) + "]");
+  }
+  if (zones == zones_) return;
+  zones_ = zones;
+  impl_->query_dirty = true;
+}
 
 ObstacleDistanceField::InsertStats ObstacleDistanceField::insertCloud(
     const PointList& points, const Eigen::Vector3d& origin,
@@ -176,6 +233,7 @@ ObstacleDistanceField::InsertStats ObstacleDistanceField::insertCloud(
   }
   st.inserted = static_cast<int>(pc.size());
   if (!pc.size()) return st;
+  impl_->query_dirty = true;
   impl_->tree->insertPointCloud(
       pc, octomap::point3d(static_cast<float>(origin.x()), static_cast<float>(origin.y()),
                            static_cast<float>(origin.z())),
@@ -194,6 +252,7 @@ void ObstacleDistanceField::addOccupiedBox(const Eigen::Vector3d& lo, const Eige
         impl_->tree->updateNode(static_cast<float>(x), static_cast<float>(y),
                                 static_cast<float>(z), true, /*lazy_eval=*/true);
   impl_->tree->updateInnerOccupancy();
+  impl_->query_dirty = true;
 }
 
 ObstacleDistanceField::Cell ObstacleDistanceField::cell(const Eigen::Vector3d& p) const {
@@ -222,6 +281,8 @@ std::vector<LinkObstacleDistance> ObstacleDistanceField::distances(
   req.enable_nearest_points = true;
   req.enable_signed_distance = true;
   const fcl::Transform3<double> I = fcl::Transform3<double>::Identity();
+  const fcl::OcTree<double>* tree = impl_->queryTree(zones_);
+  if (!zones_.empty() && impl_->query_empty) return {};
   for (std::size_t i = 0; i < robot_.shapes().size(); ++i) {
     const CollisionShape& s = robot_.shapes()[i];
     const std::size_t li = static_cast<std::size_t>(impl_->shape_link[i]);
@@ -236,7 +297,7 @@ std::vector<LinkObstacleDistance> ObstacleDistanceField::distances(
     const double start = found[li] ? std::min(best[li].distance, config_.influence_distance)
                                    : config_.influence_distance;
     res.min_distance = start;
-    fcl::distance(impl_->fcl_tree.get(), I, impl_->geoms[i].get(), tf, req, res);
+    fcl::distance(tree, I, impl_->geoms[i].get(), tf, req, res);
     if (!(res.min_distance < start)) continue;
     LinkObstacleDistance d;
     d.link = s.link;

@@ -6,7 +6,11 @@
 // using the latest state. A timer publishes the distances of every link closer than the
 // influence distance while the state (/joint_states + /odom) is fresh; with a stale state
 // nothing is published and an error is logged (the controller's watchdog then stops).
+// Exclusion spheres (ehc_control/ObstacleExclusion on exclusion_topic, e.g. the object being
+// grasped, sent by the grasp sequencer) are ignored by the distance queries while the list is
+// younger than exclusion_timeout; an older list is dropped (the object is an obstacle again).
 #include "ehc_control/ObstacleArray.h"
+#include "ehc_control/ObstacleExclusion.h"
 #include "ehc_control/config_node.h"
 #include "ehc_control/whole_body_model.h"
 #include "ehc_perception/obstacle_distance_field.h"
@@ -30,6 +34,8 @@ struct ObstacleNodeConfig {
   std::string joint_states_topic = "/joint_states";
   std::string odom_topic = "/odom";
   std::string output_topic = "/ehc/obstacles";
+  std::string exclusion_topic = "/ehc/obstacle_exclusion";  ///< "" = no exclusions
+  double exclusion_timeout = 0.5;  ///< s
   std::string world_frame = "odom";
   double publish_rate_hz = 50.0;
   double max_insert_rate_hz = 5.0;
@@ -42,7 +48,8 @@ struct ObstacleNodeConfig {
            std::to_string(max_insert_rate_hz) + " Hz) + " + joint_states_topic + " + " +
            odom_topic + " -> " + output_topic + " at " + std::to_string(publish_rate_hz) +
            " Hz in '" + world_frame + "', state timeout " + std::to_string(state_timeout) +
-           " s\n  " + map.summary();
+           " s, exclusions " + (exclusion_topic.empty() ? std::string("off") : exclusion_topic + " (timeout " +
+           std::to_string(exclusion_timeout) + " s)") + "\n  " + map.summary();
   }
 };
 
@@ -55,6 +62,8 @@ ObstacleNodeConfig loadObstacleNodeConfig(const std::string& path) {
   c.joint_states_topic = n.get("joint_states_topic", c.joint_states_topic);
   c.odom_topic = n.get("odom_topic", c.odom_topic);
   c.output_topic = n.get("output_topic", c.output_topic);
+  c.exclusion_topic = n.get("exclusion_topic", c.exclusion_topic);
+  c.exclusion_timeout = n.get("exclusion_timeout", c.exclusion_timeout);
   c.world_frame = n.get("world_frame", c.world_frame);
   c.publish_rate_hz = n.get("publish_rate_hz", c.publish_rate_hz);
   c.max_insert_rate_hz = n.get("max_insert_rate_hz", c.max_insert_rate_hz);
@@ -64,6 +73,7 @@ ObstacleNodeConfig loadObstacleNodeConfig(const std::string& path) {
   ehc_control::requireRange("ObstacleNode", "node.max_insert_rate_hz", c.max_insert_rate_hz, 0.01, 100.0);
   ehc_control::requirePositive("ObstacleNode", "node.state_timeout", c.state_timeout);
   ehc_control::requireRange("ObstacleNode", "node.tf_timeout", c.tf_timeout, 0.0, 5.0);
+  ehc_control::requireRange("ObstacleNode", "node.exclusion_timeout", c.exclusion_timeout, 0.01, 10.0);
   c.map = loadObstacleMapConfig(root.childOrEmpty("obstacle_map"));
   return c;
 }
@@ -83,6 +93,8 @@ class ObstacleNode {
     cloud_sub_ = nh.subscribe(cfg_.cloud_topic, 1, &ObstacleNode::onCloud, this);
     joints_sub_ = nh.subscribe(cfg_.joint_states_topic, 5, &ObstacleNode::onJoints, this);
     odom_sub_ = nh.subscribe(cfg_.odom_topic, 5, &ObstacleNode::onOdom, this);
+    if (!cfg_.exclusion_topic.empty())
+      exclusion_sub_ = nh.subscribe(cfg_.exclusion_topic, 5, &ObstacleNode::onExclusion, this);
     timer_ = nh.createTimer(ros::Duration(1.0 / cfg_.publish_rate_hz), &ObstacleNode::onTimer, this);
   }
 
@@ -128,6 +140,29 @@ class ObstacleNode {
     odom_stamp_ = msg.header.stamp.isZero() ? ros::Time::now() : msg.header.stamp;
   }
 
+  void onExclusion(const ehc_control::ObstacleExclusion& msg) {
+    if (msg.centres.size() != msg.radii.size()) {
+      ROS_ERROR_THROTTLE(2.0, "ehc_obstacle_node: exclusion list with %zu centres and %zu radii rejected",
+                         msg.centres.size(), msg.radii.size());
+      return;
+    }
+    if (!msg.header.frame_id.empty() && msg.header.frame_id != cfg_.world_frame) {
+      ROS_ERROR_THROTTLE(2.0, "ehc_obstacle_node: exclusion list in frame '%s' rejected (expected '%s')",
+                         msg.header.frame_id.c_str(), cfg_.world_frame.c_str());
+      return;
+    }
+    std::vector<ExclusionZone> zones;
+    for (std::size_t i = 0; i < msg.centres.size(); ++i)
+      zones.push_back({Eigen::Vector3d(msg.centres[i].x, msg.centres[i].y, msg.centres[i].z), msg.radii[i]});
+    try {
+      field_.setExclusionZones(zones);  // validates (finite centre, radius range)
+    } catch (const std::exception& e) {
+      ROS_ERROR_STREAM_THROTTLE(2.0, "ehc_obstacle_node: exclusion list rejected: " << e.what());
+      return;
+    }
+    exclusion_stamp_ = msg.header.stamp.isZero() ? ros::Time::now() : msg.header.stamp;
+  }
+
   bool stateFresh(ros::Time* stamp) const {
     if (joints_stamp_.isZero() || odom_stamp_.isZero()) return false;
     const ros::Time now = ros::Time::now();
@@ -168,6 +203,11 @@ class ObstacleNode {
                               "no obstacle distances published", cfg_.state_timeout);
       return;
     }
+    if (!field_.exclusionZones().empty() && (ros::Time::now() - exclusion_stamp_).toSec() > cfg_.exclusion_timeout) {
+      ROS_WARN("ehc_obstacle_node: exclusion list older than %.2f s dropped: every obstacle counts again",
+               cfg_.exclusion_timeout);
+      field_.setExclusionZones({});
+    }
     try {
       const auto ds = field_.distances(field_.linkPoses(model_, base_, q_));
       ehc_control::ObstacleArray out;
@@ -200,11 +240,11 @@ class ObstacleNode {
   ObstacleDistanceField field_;
   Eigen::VectorXd q_;
   Eigen::Vector3d base_ = Eigen::Vector3d::Zero();
-  ros::Time joints_stamp_, odom_stamp_, last_insert_;
+  ros::Time joints_stamp_, odom_stamp_, last_insert_, exclusion_stamp_;
   tf2_ros::Buffer tf_;
   tf2_ros::TransformListener listener_;
   ros::Publisher pub_;
-  ros::Subscriber cloud_sub_, joints_sub_, odom_sub_;
+  ros::Subscriber cloud_sub_, joints_sub_, odom_sub_, exclusion_sub_;
   ros::Timer timer_;
 };
 
