@@ -14,7 +14,7 @@
 #   EHC_DEVEL          devel space to source                          [devel]
 #   OUT                output folder                                  [results/demo]
 #   EHC_DEMO_PORT      ROS master port                                [a free port from 11411 up]
-#   CONTROLLER_CONFIG  controller YAML                                [config/control/controller.yaml]
+#   CONTROLLER_CONFIG  controller YAML                                [config/demo/controller.yaml]
 #   MODE               controller mode ehc | neo_e | neo_c | tsmm     [ehc]
 #   SEQUENCER_CONFIG   grasp sequencer YAML                           [config/demo/grasp_sequencer.yaml]
 #   SIM_CONFIG         simulator YAML                                 [src/ehc_sim/config/sim.yaml]
@@ -39,7 +39,7 @@ fi
 source "$EHC_DEVEL/setup.bash"
 
 OUT="${OUT:-results/demo}"
-CONTROLLER_CONFIG="${CONTROLLER_CONFIG:-config/control/controller.yaml}"
+CONTROLLER_CONFIG="${CONTROLLER_CONFIG:-config/demo/controller.yaml}"
 MODE="${MODE:-ehc}"
 SEQUENCER_CONFIG="${SEQUENCER_CONFIG:-config/demo/grasp_sequencer.yaml}"
 SIM_CONFIG="${SIM_CONFIG:-src/ehc_sim/config/sim.yaml}"

@@ -9,23 +9,30 @@ object and the JSON, and plots |e|, sig(omega), base and arm speeds over sim tim
 object phases shaded.
 """
 import argparse
+import os
 import csv
 import json
 import sys
 
 
 def mpbs_enabled(path):
-    """mpbs.enabled of the controller YAML; None when the file has no mpbs section."""
+    """mpbs.enabled of the controller YAML, following its `extends:` chain (as ConfigNode does);
+    None when no file of the chain has an mpbs section."""
     try:
         import yaml
-        with open(path) as f:
-            cfg = yaml.safe_load(f) or {}
+        for _ in range(8):
+            with open(path) as f:
+                cfg = yaml.safe_load(f) or {}
+            m = cfg.get("mpbs")
+            if isinstance(m, dict) and "enabled" in m:
+                return bool(m["enabled"])
+            base = cfg.get("extends")
+            if not base:
+                return True if isinstance(m, dict) else None
+            path = os.path.join(os.path.dirname(path), base)
     except Exception:  # noqa: BLE001 - the report must not fail on this
         return None
-    m = cfg.get("mpbs")
-    if not isinstance(m, dict):
-        return None
-    return bool(m.get("enabled", True))
+    return None
 
 
 def main():

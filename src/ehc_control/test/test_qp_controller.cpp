@@ -248,3 +248,46 @@ TEST(EhcQpController, PerLinkStopDistanceLetsTheHandNearTheTable) {
   p.obstacle_stop_links["ee_link"] = 0.5;  // not below the influence distance
   EXPECT_THROW(p.validate(), std::invalid_argument);
 }
+
+TEST(EhcQpController, ManipulabilityFadeStopsNullSpaceDriftAtTheTarget) {
+  // At the target (zero error, zero desired twist) the only thing that moves the robot is the
+  // linear cost: with the constant manipulability term the arm keeps drifting in the null
+  // space (the QP trades a little slack for manipulability); with the fade it holds still.
+  auto model = std::make_shared<const WholeBodyModel>(test::realmanConfig());
+  const auto& rc = model->config();
+  Eigen::VectorXd q = rc.arm_ready;
+  q[1] += 0.6;  // a stretched pose: large manipulability gradient
+  q[2] += 0.8;
+  const Eigen::Vector3d base = Eigen::Vector3d::Zero();
+  const Eigen::Isometry3d here = model->fk(base, q, rc.tcp_frame);
+  QpControllerParams p;
+  p.posture_gain = 0.0;  // the manipulability term alone
+  p.base_turn_gain = 0.0;
+  EhcQpController constant(model, p, weighting());
+  const ControllerCommand c0 = constant.step(base, q, here, Vector6d::Zero(), {});
+  ASSERT_TRUE(c0.ok) << c0.failure;
+  p.manipulability_fade_distance = 0.10;
+  EhcQpController faded(model, p, weighting());
+  const ControllerCommand c1 = faded.step(base, q, here, Vector6d::Zero(), {});
+  ASSERT_TRUE(c1.ok) << c1.failure;
+  EXPECT_GT(c0.velocity.tail(model->nArm()).norm(), 1e-3) << "no drift to remove: the test proves nothing";
+  EXPECT_LT(c1.velocity.tail(model->nArm()).norm(), 0.1 * c0.velocity.tail(model->nArm()).norm())
+      << "constant " << c0.velocity.transpose() << " | faded " << c1.velocity.transpose() << " slack " << c1.slack.transpose();
+  // Far from the target (beyond the fade distance) both behave the same.
+  Eigen::Isometry3d far = here;
+  far.translation().x() += 0.3;
+  const Vector6d nu = (Vector6d() << 0.3, 0, 0, 0, 0, 0).finished();
+  constant.reset();
+  faded.reset();
+  const ControllerCommand f0 = constant.step(base, q, far, nu, {});
+  const ControllerCommand f1 = faded.step(base, q, far, nu, {});
+  EXPECT_LT((f0.velocity - f1.velocity).norm(), 1e-9);
+  // Validation: a negative fade distance fails naming the field.
+  const auto bad = ConfigNode::loadString("controller: {manipulability_fade_distance: -0.1}", "test.yaml", "Test");
+  try {
+    loadQpControllerParams(bad.child("controller"));
+    FAIL() << "negative fade distance accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("manipulability_fade_distance"), std::string::npos) << e.what();
+  }
+}

@@ -48,6 +48,11 @@ struct QpControllerParams {
   double slack_bound = 10.0;           ///< |delta_i| bound
   double base_turn_gain = 0.5;         ///< k_eps: turn the base toward the TCP
   double manipulability_gain = 1.0;    ///< k_m: weight of -J_m in C
+  /// m; > 0: k_m fades linearly to 0 as the TCP comes within this distance of the target.
+  /// Near a stretched pose the manipulability gradient is large and, with the 1/|e| slack
+  /// weight shrinking the task's pull, can hold the TCP a few cm short of the target (grasping
+  /// far over a table). 0 (default, the paper's formulation): constant k_m.
+  double manipulability_fade_distance = 0.0;
   /// Auxiliary task in C (paper: "C incorporates manipulability maximisation and auxiliary
   /// performance tasks"): a weak pull of the arm towards its ready posture,
   /// C_arm += k_p (q - q_ready), which keeps the joints away from their limits.

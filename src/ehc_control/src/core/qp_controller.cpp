@@ -47,6 +47,7 @@ void QpControllerParams::validate() const {
   requireRange(kOwner, "slack_bound", slack_bound, 1e-3, 1e3);
   requireRange(kOwner, "base_turn_gain", base_turn_gain, 0.0, 100.0);
   requireRange(kOwner, "manipulability_gain", manipulability_gain, 0.0, 100.0);
+  requireRange(kOwner, "manipulability_fade_distance", manipulability_fade_distance, 0.0, 5.0);
   requireRange(kOwner, "posture_gain", posture_gain, 0.0, 100.0);
   requireRange(kOwner, "joint_stop", joint_stop, 0.0, 1.0);
   requireRange(kOwner, "joint_influence", joint_influence, 0.0, 3.0);
@@ -73,7 +74,9 @@ std::string QpControllerParams::summary() const {
   os << "controller: mode " << toString(mode) << ", w_arm " << arm_weight << ", ehc base weight ["
      << ehc_base_weight_min << ", " << ehc_base_weight_max << "], neo_c base weight "
      << neo_c_base_weight << ", |e| floor " << min_error << ", slack bound " << slack_bound
-     << ", k_eps " << base_turn_gain << ", k_m " << manipulability_gain << ", k_p "
+     << ", k_eps " << base_turn_gain << ", k_m " << manipulability_gain
+     << (manipulability_fade_distance > 0.0 ? " (fading within " + std::to_string(manipulability_fade_distance) + " m)" : std::string())
+     << ", k_p "
      << posture_gain << "\n"
      << "  joint dampers: influence " << joint_influence << " rad, stop " << joint_stop
      << " rad, gain " << joint_damper_gain << "; obstacle dampers: d_i " << obstacle_influence
@@ -103,6 +106,7 @@ QpControllerParams loadQpControllerParams(const ConfigNode& n) {
   p.slack_bound = n.get("slack_bound", p.slack_bound);
   p.base_turn_gain = n.get("base_turn_gain", p.base_turn_gain);
   p.manipulability_gain = n.get("manipulability_gain", p.manipulability_gain);
+  p.manipulability_fade_distance = n.get("manipulability_fade_distance", p.manipulability_fade_distance);
   p.posture_gain = n.get("posture_gain", p.posture_gain);
   p.joint_influence = n.get("joint_influence", p.joint_influence);
   p.joint_stop = n.get("joint_stop", p.joint_stop);
@@ -254,7 +258,10 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
   const Eigen::Vector3d tcp_in_base =
       WholeBodyModel::baseTransform(base_pose).inverse() * T_tcp.translation();
   c[nb - 1] = -params_.base_turn_gain * std::atan2(tcp_in_base.y(), tcp_in_base.x());
-  c.segment(nb, na) = -params_.manipulability_gain * Jm + params_.posture_gain * (q - rc.arm_ready);
+  const double fade = params_.manipulability_fade_distance > 0.0
+                          ? std::min(1.0, out.position_error / params_.manipulability_fade_distance)
+                          : 1.0;
+  c.segment(nb, na) = -params_.manipulability_gain * fade * Jm + params_.posture_gain * (q - rc.arm_ready);
 
   // --- bounds
   Eigen::VectorXd ub(nx);
