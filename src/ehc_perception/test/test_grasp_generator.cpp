@@ -1,5 +1,5 @@
 // GraspGenerator: synthetic box / cylinder / lying bottle clouds with noise, scenes with a
-// table, bad clouds and bad configs.
+// table, depth refinement (standing box, short box on a table), bad clouds and bad configs.
 #include "ehc_control/config_node.h"
 #include "ehc_perception/grasp_generator.h"
 #include "perception_test_helpers.h"
@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <limits>
 
@@ -224,6 +225,14 @@ TEST(GraspGenerator, ConfigLoadsAndBadValuesFailNamingTheField) {
   const GraspGeneratorConfig c = loadGraspGeneratorConfig(ok.child("grasp_generator"));
   EXPECT_EQ(c.top_k, 3);
   EXPECT_DOUBLE_EQ(c.gripper.max_width, 0.08);
+  const auto depth = ehc_control::ConfigNode::loadString(
+      "grasp_generator: {max_depth_shift: 0.03, depth_step: 0.0025, depth_margin: 0.004}",
+      "ok.yaml", "GraspGenerator");
+  const GraspGeneratorConfig cd = loadGraspGeneratorConfig(depth.child("grasp_generator"));
+  EXPECT_DOUBLE_EQ(cd.max_depth_shift, 0.03);
+  EXPECT_DOUBLE_EQ(cd.depth_step, 0.0025);
+  EXPECT_DOUBLE_EQ(cd.depth_margin, 0.004);
+  EXPECT_NE(cd.summary().find("depth shift <= 0.03 m"), std::string::npos) << cd.summary();
 
   auto expectFails = [](const std::string& yaml, const std::string& needle) {
     const auto n = ehc_control::ConfigNode::loadString(yaml, "bad.yaml", "GraspGenerator");
@@ -243,6 +252,144 @@ TEST(GraspGenerator, ConfigLoadsAndBadValuesFailNamingTheField) {
   expectFails("grasp_generator: {up: [0, 0]}", "up");
   expectFails("grasp_generator: {up: [0, 0, 0]}", "up");
   expectFails("grasp_generator: {friction_cone_deg: .nan}", "friction_cone_deg");
+  // Depth refinement.
+  expectFails("grasp_generator: {max_depth_shift: -0.01}", "'max_depth_shift'");
+  expectFails("grasp_generator: {max_depth_shift: 0.9}", "'max_depth_shift'");
+  expectFails("grasp_generator: {depth_step: 0}", "'depth_step'");           // enabled: > 0
+  expectFails("grasp_generator: {depth_step: -0.001}", "'depth_step'");
+  expectFails("grasp_generator: {max_depth_shift: 0.02, depth_step: 0.03}", "'depth_step'");
+  expectFails("grasp_generator: {depth_step: 0.00001}", "'depth_step'");     // > 1000 steps
+  expectFails("grasp_generator: {depth_margin: -0.001}", "'depth_margin'");
+  expectFails("grasp_generator: {max_depth_shift: 0.01, depth_margin: 0.01}", "'depth_margin'");
+  expectFails("grasp_generator: {depth_margin: .inf}", "depth_margin");
+  // Disabled (max_depth_shift 0): step and margin are not constrained by it.
+  const auto off = ehc_control::ConfigNode::loadString(
+      "grasp_generator: {max_depth_shift: 0, depth_step: 0, depth_margin: 0.01}", "off.yaml",
+      "GraspGenerator");
+  const GraspGeneratorConfig c_off = loadGraspGeneratorConfig(off.child("grasp_generator"));
+  EXPECT_EQ(c_off.max_depth_shift, 0.0);
+}
+
+namespace {
+
+/// Best grasp whose approach is within `max_tilt` of straight down (nullptr if none).
+const Grasp* bestTopDown(const GraspResult& r, double max_tilt) {
+  for (const Grasp& g : r.grasps)  // best first
+    if (std::acos(std::min(1.0, -g.pose.linear().col(2).z())) <= max_tilt) return &g;
+  return nullptr;
+}
+
+Eigen::Vector3d fingertips(const Grasp& g, const GripperGeometry& gr) {
+  return g.pose * Eigen::Vector3d(0, 0, gr.finger_tip_depth);
+}
+
+/// Centre of the palm's front face (where the fingers start).
+Eigen::Vector3d palmFace(const Grasp& g, const GripperGeometry& gr) {
+  return g.pose * Eigen::Vector3d(0, 0, gr.finger_tip_depth - gr.finger_length);
+}
+
+/// Lowest corner of the finger boxes' tips above the plane z = table_z.
+double lowestFingertipHeight(const Grasp& g, const GripperGeometry& gr, double table_z) {
+  double lowest = std::numeric_limits<double>::max();
+  for (double sx : {-1.0, 1.0})
+    for (double sy : {-1.0, 1.0}) {
+      const Eigen::Vector3d corner =
+          g.pose * Eigen::Vector3d(sx * 0.5 * gr.finger_breadth,
+                                   sy * (0.5 * g.width + gr.finger_thickness),
+                                   gr.finger_tip_depth);
+      lowest = std::min(lowest, corner.z() - table_z);
+    }
+  return lowest;
+}
+
+/// A box of `size` standing at `at` (x, y) on a table at `table_z` (yaw `yaw`), the scene
+/// seen from `view` (visible points only) with 1 mm noise.
+PointList boxOnTable(const Eigen::Vector3d& size, const Eigen::Vector2d& at, double yaw,
+                     double table_z, const Eigen::Vector3d& view, unsigned seed) {
+  Surface scene = tableSurface(at.x(), at.y(), 0.5, 0.6, table_z, 0.005);
+  Surface box = boxSurface(size, 0.003);
+  box.transform(pose(at.x(), at.y(), table_z + 0.5 * size.z(), yaw));
+  scene.append(box);
+  return scene.visibleFrom(view).noisy(0.001, seed);
+}
+
+}  // namespace
+
+TEST(GraspGenerator, DepthRefinementPutsTheFingersDeepOnAStandingBox) {
+  // 6 x 6 x 12 cm box standing on a table, one view from above and in front, at several
+  // yaws. The contact pairs alone often leave the top-down grasp near the top edge (fingers
+  // overlapping the box by ~2 cm); the depth refinement pushes it down until the palm nears
+  // the top.
+  const double table_z = 0.70, top = table_z + 0.12;
+  const Eigen::Vector2d at(0.6, 0.02);
+  const Eigen::Vector3d view(0.1, 0.0, 1.3);
+  const Eigen::Vector3d near(at.x(), at.y(), table_z + 0.06);
+  GraspGeneratorConfig cfg;
+  const GripperGeometry gr = cfg.gripper;
+  GraspGeneratorConfig cfg0 = cfg;
+  cfg0.max_depth_shift = 0.0;  // refinement off: the grasps as before this step existed
+  const GraspGenerator gen(cfg), gen0(cfg0);
+  double sum = 0, sum0 = 0;
+  int n = 0;
+  for (int yaw = 15; yaw <= 75; yaw += 15) {
+    SCOPED_TRACE("yaw " + std::to_string(yaw));
+    const PointList cloud =
+        boxOnTable(Eigen::Vector3d(0.06, 0.06, 0.12), at, yaw * kDeg, table_z, view, 1);
+    const GraspResult deep = gen.generateFromScene(cloud, view, &near);
+    const GraspResult shallow = gen0.generateFromScene(cloud, view, &near);
+    const Grasp* g = bestTopDown(deep, 20 * kDeg);
+    const Grasp* g0 = bestTopDown(shallow, 20 * kDeg);
+    ASSERT_TRUE(g) << deep.reason;
+    ASSERT_TRUE(g0) << shallow.reason;
+    expectValidFrame(*g);
+    // Fingertips well inside the box's height, palm not into its top.
+    const double tip = top - fingertips(*g, gr).z(), tip0 = top - fingertips(*g0, gr).z();
+    const double palm = palmFace(*g, gr).z() - top;
+    EXPECT_GE(tip, 0.03);
+    EXPECT_GT(palm, 0.0);
+    // Never shallower than without the refinement.
+    EXPECT_GE(tip, tip0 - 1e-9);
+    std::printf("standing 6x6x12 cm box, yaw %2d deg, best top-down grasp: fingertips %.1f mm "
+                "below the top (%.1f mm without depth refinement), palm %.1f mm above it\n",
+                yaw, 1e3 * tip, 1e3 * tip0, 1e3 * palm);
+    sum += tip;
+    sum0 += tip0;
+    ++n;
+  }
+  // Without the refinement the grasps are shallower.
+  EXPECT_GT(sum, sum0);
+  RecordProperty("mean_fingertips_below_top_mm", std::to_string(1e3 * sum / n));
+  RecordProperty("mean_fingertips_below_top_unrefined_mm", std::to_string(1e3 * sum0 / n));
+}
+
+TEST(GraspGenerator, DepthRefinementStopsAboveTheSupport) {
+  // A 4 cm tall box: the push is limited by the table (fingertips must stay
+  // support_clearance above it), not by the palm or max_depth_shift.
+  const double table_z = 0.70;
+  const Eigen::Vector2d at(0.6, 0.02);
+  const Eigen::Vector3d view(0.1, 0.0, 1.3);
+  const PointList cloud =
+      boxOnTable(Eigen::Vector3d(0.05, 0.05, 0.04), at, 30 * kDeg, table_z, view, 1);
+  const Eigen::Vector3d near(at.x(), at.y(), table_z + 0.02);
+
+  GraspGeneratorConfig cfg;
+  const GripperGeometry gr = cfg.gripper;
+  const GraspResult deep = GraspGenerator(cfg).generateFromScene(cloud, view, &near);
+  ASSERT_FALSE(deep.grasps.empty()) << deep.reason;
+  ASSERT_TRUE(deep.support_plane_found);
+  // Tolerance: the support plane is estimated from the noisy table (RANSAC).
+  for (const Grasp& g : deep.grasps) {
+    expectValidFrame(g);
+    EXPECT_GE(lowestFingertipHeight(g, gr, table_z), cfg.support_clearance - 0.0015)
+        << "grasp at " << g.pose.translation().transpose();
+  }
+  // The refinement did push the top-down grasp down (towards the table).
+  cfg.max_depth_shift = 0.0;
+  const GraspResult shallow = GraspGenerator(cfg).generateFromScene(cloud, view, &near);
+  const Grasp* g = bestTopDown(deep, 20 * kDeg);
+  const Grasp* g0 = bestTopDown(shallow, 20 * kDeg);
+  ASSERT_TRUE(g && g0);
+  EXPECT_LT(fingertips(*g, gr).z(), fingertips(*g0, gr).z());
 }
 
 TEST(PointCloudIO, RoundTripAndBadFiles) {

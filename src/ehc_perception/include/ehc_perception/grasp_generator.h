@@ -4,7 +4,8 @@
 // Object cloud -> voxel filter -> normals -> antipodal contact pairs (friction cone) ->
 // approach directions around each closing axis -> reject grasps whose fingers or palm hit the
 // cloud or the support plane, or that need more than the gripper's opening -> GS-Net*-style
-// score -> non-maximum suppression -> refinement (centred on the object) -> best first.
+// score -> non-maximum suppression -> refinement (centred on the object, then pushed as deep
+// as collision-free) -> non-maximum suppression again -> best first.
 // Scene clouds: the support plane is removed with RANSAC and the objects Euclidean-clustered.
 //
 // Score (GS-Net*, paper section IV-B): antipodal quality x centre-of-gravity weight (the
@@ -13,6 +14,17 @@
 // x PCA weight (finger closing axis, and approach axis, aligned with the object's principal
 // axes). Refinement: the grasp is centred between the object's extreme points along the
 // closing axis and moved along the finger breadth axis onto the centroid's projection.
+// Depth refinement: the contact pairs give a grasp centre near the contacts, often close to
+// an edge (e.g. just below the top face of a standing box, fingers overlapping the object by
+// ~2 cm). The grasp is then pushed forward along its approach axis (z) in steps of
+// depth_step, up to max_depth_shift, re-running the same finger / palm / width / support
+// check at each step; the search stops at the first step that fails (palm reaching the
+// object's top, fingertips reaching support_clearance above the support, ...). When a step
+// failed, the grasp is backed off by depth_margin from the deepest passing step (never
+// behind its original depth), so depth noise does not bring the palm onto the object: the
+// gripper then keeps at least ~depth_margin from whatever stopped it. When no step failed
+// (max_depth_shift reached) there is no back-off. Refined grasps are rescored, and as
+// several candidates can converge onto the same deep pose, suppressed again.
 //
 // Grasp frame: origin between the fingertips at the grasp centre, z = approach direction
 // (into the object), y = finger closing direction, x = y cross z.
@@ -67,6 +79,12 @@ struct GraspGeneratorConfig {
   double pca_approach_power = 2.0;    ///< exponent of the approach-axis PCA alignment
   double pca_isotropy_ratio = 0.85;   ///< principal axes with std-dev ratio above: one subspace
   double max_refine_shift = 0.04;     ///< m, largest move of the refinement step
+  /// m, largest push of the grasp along its approach axis (depth refinement); 0 disables.
+  double max_depth_shift = 0.04;
+  double depth_step = 0.005;          ///< m, step of the depth search (> 0 if enabled)
+  /// m, back-off from the deepest collision-free step when a deeper step collided (never
+  /// behind the original depth); < max_depth_shift.
+  double depth_margin = 0.005;
   /// Collision checks per object at most (candidates are checked best first); bounds the
   /// time on objects where most candidates fail.
   int max_evaluations = 800;

@@ -248,6 +248,12 @@ class GripperCheck {
 
 };
 
+std::string num(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
 double rotationAngle(const Eigen::Matrix3d& A, const Eigen::Matrix3d& B) {
   const double c = 0.5 * ((A.transpose() * B).trace() - 1.0);
   return std::acos(std::max(-1.0, std::min(1.0, c)));
@@ -290,6 +296,21 @@ void GraspGeneratorConfig::validate() const {
   range("pca_approach_power", pca_approach_power, 0.0, 100.0);
   range("pca_isotropy_ratio", pca_isotropy_ratio, 0.0, 1.0);
   range("max_refine_shift", max_refine_shift, 0.0, 0.5);
+  range("max_depth_shift", max_depth_shift, 0.0, 0.5);
+  range("depth_step", depth_step, 0.0, 0.5);
+  range("depth_margin", depth_margin, 0.0, 0.5);
+  if (max_depth_shift > 0.0) {  // depth refinement enabled
+    const std::string ds = "parameter 'depth_step' = " + num(depth_step);
+    if (depth_step <= 0.0) fail(ds + " must be > 0 when max_depth_shift > 0");
+    if (depth_step > max_depth_shift)
+      fail(ds + " must be <= max_depth_shift (" + num(max_depth_shift) + ")");
+    if (max_depth_shift / depth_step > 1000.0)
+      fail(ds + " is too small: more than 1000 steps up to max_depth_shift (" +
+           num(max_depth_shift) + ")");
+    if (depth_margin >= max_depth_shift)
+      fail("parameter 'depth_margin' = " + num(depth_margin) + " must be < max_depth_shift (" +
+           num(max_depth_shift) + ")");
+  }
   range("max_evaluations", max_evaluations, 1, 1e7);
   range("single_contact_weight", single_contact_weight, 0.0, 1.0);
   range("nms_distance", nms_distance, 0.0, 1.0);
@@ -311,7 +332,9 @@ std::string GraspGeneratorConfig::summary() const {
      << voxel_size << " m, normals r " << normal_radius << " m, " << max_seeds << " seeds x "
      << pairs_per_seed << " pairs x " << approach_steps << " approaches, friction cone "
      << friction_cone_deg << " deg, centroid sigma " << centroid_sigma_deg << " deg, pca power "
-     << pca_power << "/" << pca_approach_power << ", top " << top_k << ", up ["
+     << pca_power << "/" << pca_approach_power << ", refine shift <= " << max_refine_shift
+     << " m, depth shift <= " << max_depth_shift << " m (step " << depth_step << " m, margin "
+     << depth_margin << " m), top " << top_k << ", up ["
      << up.transpose() << "]";
   return os.str();
 }
@@ -349,6 +372,9 @@ GraspGeneratorConfig loadGraspGeneratorConfig(const ehc_control::ConfigNode& n) 
   c.pca_approach_power = n.get("pca_approach_power", c.pca_approach_power);
   c.pca_isotropy_ratio = n.get("pca_isotropy_ratio", c.pca_isotropy_ratio);
   c.max_refine_shift = n.get("max_refine_shift", c.max_refine_shift);
+  c.max_depth_shift = n.get("max_depth_shift", c.max_depth_shift);
+  c.depth_step = n.get("depth_step", c.depth_step);
+  c.depth_margin = n.get("depth_margin", c.depth_margin);
   c.max_evaluations = n.get("max_evaluations", c.max_evaluations);
   c.single_contact_weight = n.get("single_contact_weight", c.single_contact_weight);
   c.nms_distance = n.get("nms_distance", c.nms_distance);
@@ -525,7 +551,10 @@ GraspResult GraspGenerator::generate(const PointList& object, const Eigen::Vecto
       hyps.push_back({(pj - pi).normalized(), 0.5 * (pi + pj), {}, {}, partners[k].first, false});
     }
     if (cfg.single_contact_weight > 0.0) {
-      const Eigen::Vector3d n_out = ni.dot(pi - centroid) >= 0 ? ni : Eigen::Vector3d(-ni);
+      // Renormalised in double: the float normal's unit length is only float-accurate,
+      // and this axis becomes a column of the grasp rotation.
+      const Eigen::Vector3d n_out =
+          (ni.dot(pi - centroid) >= 0 ? ni : Eigen::Vector3d(-ni)).normalized();
       hyps.push_back({n_out, pi - n_out * (0.5 * g.max_width - g.clearance), {}, {},
                       cfg.single_contact_weight, true});
     }
@@ -600,22 +629,44 @@ GraspResult GraspGenerator::generate(const PointList& object, const Eigen::Vecto
             [](const Candidate& a, const Candidate& b) { return a.score > b.score; });
 
   // Non-maximum suppression (a grasp and its 180 deg turn about z are the same grasp).
+  // `in` best first; keeps at most `limit`.
   const Eigen::Matrix3d flip = Eigen::Vector3d(-1, -1, 1).asDiagonal();
-  std::vector<Candidate> kept;
-  const std::size_t want = static_cast<std::size_t>(cfg.top_k);
-  for (const Candidate& cd : cands) {
-    bool dup = false;
-    for (const Candidate& k : kept) {
-      if ((cd.c - k.c).norm() > cfg.nms_distance) continue;
-      const double ang = std::min(rotationAngle(cd.R, k.R), rotationAngle(cd.R * flip, k.R));
-      if (ang < cfg.nms_angle_deg * kDeg) {
-        dup = true;
-        break;
+  auto suppress = [&](const std::vector<Candidate>& in, std::size_t limit) {
+    std::vector<Candidate> out;
+    for (const Candidate& cd : in) {
+      if (out.size() >= limit) break;
+      bool dup = false;
+      for (const Candidate& k : out) {
+        if ((cd.c - k.c).norm() > cfg.nms_distance) continue;
+        const double ang = std::min(rotationAngle(cd.R, k.R), rotationAngle(cd.R * flip, k.R));
+        if (ang < cfg.nms_angle_deg * kDeg) {
+          dup = true;
+          break;
+        }
       }
+      if (!dup) out.push_back(cd);
     }
-    if (!dup) kept.push_back(cd);
-    if (kept.size() >= 3 * want) break;
-  }
+    return out;
+  };
+  const std::size_t want = static_cast<std::size_t>(cfg.top_k);
+  std::vector<Candidate> kept = suppress(cands, 3 * want);
+
+  // Refinement checks: the gripper with cd's rotation, centred near c0 (re-centred along the
+  // closing axis by evaluate), approach unchanged ((cphi, sphi) = (1, 0)). `nbrs` must hold
+  // the environment within check_radius of c0.
+  auto gather = [&](const Eigen::Vector3d& centre, double radius) {
+    pcl::PointXYZ pc(static_cast<float>(centre.x()), static_cast<float>(centre.y()),
+                     static_cast<float>(centre.z()));
+    env_tree->radiusSearch(pc, radius, idx, d2);
+    nbrs.clear();
+    for (int e : idx) nbrs.push_back(pt(*env, e));
+  };
+  auto checkAt = [&](const Candidate& cd, const Eigen::Vector3d& c0, Candidate* out) {
+    GripperCheck::Prepared pr;
+    check.prepare(c0, cd.R.col(1), cd.R.col(2), nbrs, cd.single ? cloud.get() : nullptr, &pr);
+    *out = cd;
+    return check.evaluate(pr, 1.0, 0.0, &out->R, &out->c, &out->width);
+  };
 
   // Refinement: move along the finger breadth axis (x) onto the centroid's projection.
   for (Candidate& cd : kept) {
@@ -624,21 +675,61 @@ GraspResult GraspGenerator::generate(const PointList& object, const Eigen::Vecto
         std::max(-cfg.max_refine_shift, std::min(cfg.max_refine_shift, x.dot(centroid - cd.c)));
     if (std::abs(shift) < 1e-6) continue;
     const Eigen::Vector3d c0 = cd.c + shift * x;
-    pcl::PointXYZ pc(static_cast<float>(c0.x()), static_cast<float>(c0.y()), static_cast<float>(c0.z()));
-    env_tree->radiusSearch(pc, check_radius, idx, d2);
-    nbrs.clear();
-    for (int e : idx) nbrs.push_back(pt(*env, e));
-    Candidate r = cd;
-    GripperCheck::Prepared pr;
-    check.prepare(c0, cd.R.col(1), cd.R.col(2), nbrs, cd.single ? cloud.get() : nullptr, &pr);
-    if (check.evaluate(pr, 1.0, 0.0, &r.R, &r.c, &r.width)) {
+    gather(c0, check_radius);
+    Candidate r;
+    if (checkAt(cd, c0, &r)) {
       score(r);
       cd = r;
     }
   }
+
+  // Depth refinement: push the grasp along its approach axis (z) while the check passes,
+  // stop at the first failing step, back off by depth_margin if a step failed (see the
+  // header). One neighbourhood covers every step: radius check_radius + max/2 around the
+  // middle of the search segment.
+  if (cfg.max_depth_shift > 0.0) {
+    const double smax = cfg.max_depth_shift;
+    std::vector<std::pair<double, Candidate>> passed;  // (shift, checked pose), increasing
+    for (Candidate& cd : kept) {
+      const Eigen::Vector3d a = cd.R.col(2);
+      const Eigen::Vector3d base = cd.c;
+      gather(base + 0.5 * smax * a, check_radius + 0.5 * smax);
+      passed.clear();
+      bool blocked = false;
+      for (int k = 1;; ++k) {
+        const double s = k * cfg.depth_step >= smax - 1e-9 ? smax : k * cfg.depth_step;
+        Candidate r;
+        if (!checkAt(cd, base + s * a, &r)) {
+          blocked = true;
+          break;
+        }
+        passed.emplace_back(s, r);
+        if (s >= smax) break;
+      }
+      if (passed.empty()) continue;  // the first step already fails: depth kept
+      const double target = passed.back().first - (blocked ? cfg.depth_margin : 0.0);
+      if (target <= 1e-9) continue;  // never behind the original depth
+      // The target pose if it is a checked step or passes the check; else the deepest
+      // checked step in front of it.
+      const Candidate* best = nullptr;
+      bool checked = false;
+      for (const auto& sp : passed)
+        if (sp.first <= target + 1e-9) {
+          best = &sp.second;
+          checked = std::abs(sp.first - target) < 1e-9;
+        }
+      Candidate r;
+      if (!checked && checkAt(cd, base + target * a, &r)) best = &r;
+      if (!best) continue;
+      cd = *best;
+      score(cd);
+    }
+  }
   std::stable_sort(kept.begin(), kept.end(),
                    [](const Candidate& a, const Candidate& b) { return a.score > b.score; });
-  if (kept.size() > want) kept.resize(want);
+  // Refined candidates can converge onto the same pose (e.g. several contact pairs at
+  // different heights along one approach, all pushed to the deepest pose): suppress again.
+  kept = suppress(kept, want);
 
   for (const Candidate& cd : kept) {
     Grasp gr;
