@@ -26,14 +26,20 @@ if(CATKIN_ENABLE_TESTING)
   target_compile_definitions(test_grasp_sequencer PRIVATE EHC_CONFIG_DIR="${EHC_CONFIG_DIR}")
 endif()
 
-# End-to-end rostests (issue 6 item 6): the whole pipeline on config/scenes/single_object.yaml for
-# the forward, downward and sideways grasps, with and without MPBS (test/test_grasp_single.py).
-# Opt-in (-DEHC_E2E=ON) until the grasp pipeline is reliable: measured on 2026-11-21 with MPBS,
-# forward 1/1, downward 0/3 (gripper closed on nothing / lift time-out), sideways 1/3 (pre-grasp
-# time-out: the obstacle dampers hold the hand off the table). Issue 6 stays open for this.
-option(EHC_E2E "Run the end-to-end grasp rostests in make test" OFF)
+# End-to-end rostests (issue 6 item 6): the whole pipeline on config/scenes/single_object.yaml,
+# with and without MPBS (test/test_grasp_single.py). Forward and downward run in make test
+# (measured 2026-11-22 on the 2-core CI-like machine: 4/4 downward and 4/4 forward grasped with
+# MPBS; downward TfM 100 % with MPBS vs 34 % without). Sideways is opt-in (-DEHC_E2E_SIDEWAYS=ON):
+# the hand stalls before the side pre-grasp with joint5 at its limit and the forearm over the
+# table (issue 6 stays open for it).
+option(EHC_E2E "Run the forward / downward end-to-end grasp rostests in make test" ON)
+option(EHC_E2E_SIDEWAYS "Also run the sideways end-to-end grasp rostest (not reliable yet)" OFF)
 if(CATKIN_ENABLE_TESTING AND EHC_E2E)
-  foreach(o forward downward sideways)
+  set(_e2e forward downward)
+  if(EHC_E2E_SIDEWAYS)
+    list(APPEND _e2e sideways)
+  endif()
+  foreach(o ${_e2e})
     add_rostest(test/grasp_single_${o}.test DEPENDENCIES ehc_grasp_sequencer_node)
   endforeach()
 endif()

@@ -232,6 +232,41 @@ TEST(GraspSequencer, PoseFilterSmoothsPerception) {
   EXPECT_NEAR(out.object_pose->translation().y(), 0.05, 1e-9);
 }
 
+TEST(GraspSequencer, AStallNearTheGraspClosesThereAndAFarStallWaits) {
+  for (const double short_by : {0.015, 0.03}) {
+    GraspSequencerParams p = twoObjects();
+    p.objects.resize(1);
+    p.object_time_limit = 5.0;
+    Harness h(p);
+    h.perceive = forwardTarget();
+    while (h.seq.phase() != GraspPhase::Grasp && h.t < 20) h.step();
+    ASSERT_EQ(h.seq.phase(), GraspPhase::Grasp);
+    // The robot stops short of the grasp along the approach (e.g. held by obstacle dampers).
+    h.follow = false;
+    h.tcp = h.seq.lockedGrasp()->pose;
+    h.tcp.translation() -= short_by * h.tcp.linear().col(2);
+    h.run(0.9);
+    EXPECT_EQ(h.seq.phase(), GraspPhase::Grasp) << "not stalled long enough yet";
+    h.run(0.3);
+    if (short_by < p.stall_tolerance_factor * p.grasp_position_tolerance) {
+      EXPECT_EQ(h.seq.phase(), GraspPhase::Close) << short_by;
+      EXPECT_TRUE(hasEvent(h.events, "stalled 1.5 cm from the grasp: closing there"));
+    } else {
+      EXPECT_EQ(h.seq.phase(), GraspPhase::Grasp) << short_by;
+      h.run(5.0);
+      ASSERT_EQ(h.seq.results().size(), 1u);
+      EXPECT_FALSE(h.seq.results()[0].success);
+      EXPECT_EQ(h.seq.results()[0].failed_phase, "GRASP");
+    }
+  }
+  // stall_time 0: off.
+  GraspSequencerParams off = twoObjects();
+  off.stall_time = 0.0;
+  EXPECT_NO_THROW(off.validate());
+  off.stall_tolerance_factor = 0.5;
+  EXPECT_THROW(off.validate(), std::invalid_argument);
+}
+
 TEST(GraspSequencer, StalePerceptionBeforeTheLockSearchesAgain) {
   Harness h(twoObjects());
   h.follow = false;

@@ -15,7 +15,8 @@
 //                grasp position (tsmm: the controller's base stage happens here)
 //   PRE_GRASP    the grasp is locked in the world frame (the object is static until touched, and
 //                the tag may leave the view at close range); goal = pre-grasp pose, tight tolerance
-//   GRASP        goal = grasp pose; ends within grasp tolerance
+//   GRASP        goal = grasp pose; ends within grasp tolerance (or stalled near it, see
+//                stall_time; PRE_GRASP likewise)
 //   CLOSE        gripper close command once; HOLDING -> LIFT, CLOSED_EMPTY -> failure
 //   LIFT         goal = grasp pose raised by lift_height; the simulator's grasp result decides:
 //                grasp_succeeded -> success, the object dropped -> failure
@@ -83,6 +84,13 @@ struct GraspSequencerParams {
   double pregrasp_orientation_tolerance_deg = 5.0;
   double grasp_position_tolerance = 0.01;         ///< m
   double grasp_orientation_tolerance_deg = 4.0;
+  /// When the TCP has come no closer (by 2 mm) to the pre-grasp / grasp for stall_time, the
+  /// controller has converged as far as its constraints allow (obstacle dampers near clutter,
+  /// joint limits): within stall_tolerance_factor x the position tolerance (orientation
+  /// within its tolerance) the sequencer goes on anyway and says so; otherwise it keeps waiting
+  /// (the object time limit ends it). stall_time 0: off.
+  double stall_time = 1.0;                ///< s
+  double stall_tolerance_factor = 2.5;
   double gripper_timeout = 3.0;           ///< s, CLOSE without HOLDING / CLOSED_EMPTY
   double lift_height = 0.15;              ///< m, above the grasp pose (> the sim's 0.10 m)
   double release_timeout = 2.0;           ///< s
@@ -176,6 +184,10 @@ class GraspSequencer {
   Eigen::Isometry3d preGrasp(const Eigen::Isometry3d& grasp) const;
   bool within(const SequencerInput& in, const Eigen::Isometry3d& goal, double pos, double ori_deg) const;
   std::string label() const;
+  /// Updates the best distance to `goal` in this phase; true when it has not improved for
+  /// stall_time.
+  bool stalled(const SequencerInput& in, const Eigen::Isometry3d& goal);
+  bool nearEnoughWhenStalled(const SequencerInput& in, const Eigen::Isometry3d& goal, double pos, double ori_deg);
 
   GraspSequencerParams params_;
   GraspPhase phase_ = GraspPhase::WaitTarget;
@@ -183,6 +195,7 @@ class GraspSequencer {
   bool started_ = false;
   double last_t_ = -1.0;
   double object_t0_ = 0.0, phase_t0_ = 0.0;
+  double best_distance_ = 1e9, best_distance_t_ = 0.0;  ///< stall detection, per phase
   // perception of the current object
   std::optional<Eigen::Isometry3d> object_pose_;
   std::vector<std::optional<Eigen::Isometry3d>> remembered_;  ///< last pose of every object

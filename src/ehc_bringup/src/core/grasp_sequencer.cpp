@@ -55,6 +55,9 @@ void GraspSequencerParams::validate() const {
   check(std::isfinite(pregrasp_distance) && pregrasp_distance >= 0.0 && pregrasp_distance <= 0.5,
         "pregrasp_distance must be in [0, 0.5] m");
   positive(pregrasp_switch_distance, "pregrasp_switch_distance");
+  check(std::isfinite(stall_time) && stall_time >= 0.0 && stall_time <= 30.0, "stall_time must be in [0, 30] s");
+  check(std::isfinite(stall_tolerance_factor) && stall_tolerance_factor >= 1.0 && stall_tolerance_factor <= 10.0,
+        "stall_tolerance_factor must be in [1, 10]");
   positive(pregrasp_position_tolerance, "pregrasp_position_tolerance");
   positive(pregrasp_orientation_tolerance_deg, "pregrasp_orientation_tolerance_deg");
   positive(grasp_position_tolerance, "grasp_position_tolerance");
@@ -78,6 +81,7 @@ std::string GraspSequencerParams::summary() const {
     << " m, pose filter gain " << pose_filter_gain << ", pre-grasp " << pregrasp_distance << " m"
     << "\n  pre-grasp from " << pregrasp_switch_distance << " m; tolerances: pre-grasp " << pregrasp_position_tolerance << " m/" << pregrasp_orientation_tolerance_deg
     << " deg, grasp " << grasp_position_tolerance << " m/" << grasp_orientation_tolerance_deg << " deg"
+    << " (stalled for " << stall_time << " s: x" << stall_tolerance_factor << ")"
     << "\n  gripper timeout " << gripper_timeout << " s, lift " << lift_height << " m, release timeout "
     << release_timeout << " s, retreat " << retreat_distance << " m back + " << retreat_raise << " m up (tol "
     << retreat_tolerance << " m, " << retreat_timeout << " s)"
@@ -100,6 +104,8 @@ GraspSequencerParams loadGraspSequencerParams(const ehc_control::ConfigNode& roo
   p.pose_filter_gain = s.get("pose_filter_gain", p.pose_filter_gain);
   p.pregrasp_distance = s.get("pregrasp_distance", p.pregrasp_distance);
   p.pregrasp_switch_distance = s.get("pregrasp_switch_distance", p.pregrasp_switch_distance);
+  p.stall_time = s.get("stall_time", p.stall_time);
+  p.stall_tolerance_factor = s.get("stall_tolerance_factor", p.stall_tolerance_factor);
   p.pregrasp_position_tolerance = s.get("pregrasp_position_tolerance", p.pregrasp_position_tolerance);
   p.pregrasp_orientation_tolerance_deg = s.get("pregrasp_orientation_tolerance_deg", p.pregrasp_orientation_tolerance_deg);
   p.grasp_position_tolerance = s.get("grasp_position_tolerance", p.grasp_position_tolerance);
@@ -249,6 +255,23 @@ void GraspSequencer::enter(GraspPhase p, double t, SequencerOutput* out, const s
   out->events.push_back(s.str());
   phase_ = p;
   phase_t0_ = t;
+  best_distance_ = 1e9;
+  best_distance_t_ = t;
+}
+
+bool GraspSequencer::stalled(const SequencerInput& in, const Eigen::Isometry3d& goal) {
+  if (!in.tcp || !isValidPose(*in.tcp)) return false;
+  const double d = (in.tcp->translation() - goal.translation()).norm();
+  if (d < best_distance_ - 0.002) {
+    best_distance_ = d;
+    best_distance_t_ = in.t;
+  }
+  return params_.stall_time > 0.0 && in.t - best_distance_t_ >= params_.stall_time;
+}
+
+bool GraspSequencer::nearEnoughWhenStalled(const SequencerInput& in, const Eigen::Isometry3d& goal, double pos,
+                                           double ori_deg) {
+  return stalled(in, goal) && within(in, goal, params_.stall_tolerance_factor * pos, ori_deg);
 }
 
 Eigen::Isometry3d GraspSequencer::preGrasp(const Eigen::Isometry3d& grasp) const {
@@ -387,16 +410,24 @@ SequencerOutput GraspSequencer::update(const SequencerInput& in) {
     case GraspPhase::PreGrasp: {
       const Eigen::Isometry3d pre = preGrasp(locked_->pose);
       out.goal = pre;
-      if (within(in, pre, params_.pregrasp_position_tolerance, params_.pregrasp_orientation_tolerance_deg)) {
-        enter(GraspPhase::Grasp, t, &out);
+      const bool there = within(in, pre, params_.pregrasp_position_tolerance, params_.pregrasp_orientation_tolerance_deg);
+      if (there || nearEnoughWhenStalled(in, pre, params_.pregrasp_position_tolerance,
+                                         params_.pregrasp_orientation_tolerance_deg)) {
+        enter(GraspPhase::Grasp, t, &out,
+              there ? "" : "stalled " + num((in.tcp->translation() - pre.translation()).norm() * 100.0, 1) +
+                               " cm from the pre-grasp: going on");
         out.goal = locked_->pose;
       }
       break;
     }
     case GraspPhase::Grasp: {
       out.goal = locked_->pose;
-      if (within(in, locked_->pose, params_.grasp_position_tolerance, params_.grasp_orientation_tolerance_deg)) {
-        enter(GraspPhase::Close, t, &out);
+      const bool there = within(in, locked_->pose, params_.grasp_position_tolerance, params_.grasp_orientation_tolerance_deg);
+      if (there || nearEnoughWhenStalled(in, locked_->pose, params_.grasp_position_tolerance,
+                                         params_.grasp_orientation_tolerance_deg)) {
+        enter(GraspPhase::Close, t, &out,
+              there ? "" : "stalled " + num((in.tcp->translation() - locked_->pose.translation()).norm() * 100.0, 1) +
+                               " cm from the grasp: closing there");
         counting_tfm_ = false;
         out.gripper_command = true;
         centre_in_tcp_ = in.tcp->inverse() * locked_object_centre_;  // within() checked the TCP
