@@ -54,16 +54,9 @@ constexpr double kDriverMaxStep = 10.0 * M_PI / 180.0;   // rm_driver ignores la
 constexpr double kDriverMaxSpeed = 180.0 * M_PI / 180.0;  // rm_driver per-joint bound, rad/s
 constexpr double kFloatTol = 2e-6;                        // float32 rounding of JointPos
 
-double now() { return FakeWater2Server::now(); }
-void sleepFor(double s) { std::this_thread::sleep_for(std::chrono::duration<double>(s)); }
-bool waitFor(const std::function<bool()>& pred, double timeout) {
-  const double end = now() + timeout;
-  while (now() < end) {
-    if (pred()) return true;
-    sleepFor(0.01);
-  }
-  return pred();
-}
+using ehc_bringup_test::now;
+using ehc_bringup_test::sleepFor;
+using ehc_bringup_test::waitFor;
 
 struct Frame {
   double time;

@@ -5,6 +5,8 @@
 // A scripted commander publishes /arm/joint_velocity_cmd. Rates are measured over many frames
 // with generous tolerances.
 
+#include "wall_clock.h"
+
 #include "ehc_bringup/realman_adapter_config.h"
 #include "ehc_bringup/realman_joint_streamer.h"
 
@@ -32,10 +34,9 @@
 
 namespace {
 
-double now() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
+using ehc_bringup_test::now;
+using ehc_bringup_test::sleepFor;
+using ehc_bringup_test::waitFor;
 
 struct Frame {
   double time;
@@ -159,16 +160,6 @@ class FakeRmDriver {
 std::unique_ptr<FakeRmDriver> g_driver;
 ros::Publisher g_cmd, g_estop, g_reset, g_gripper, g_width;
 
-void sleepFor(double s) { std::this_thread::sleep_for(std::chrono::duration<double>(s)); }
-
-bool waitFor(const std::function<bool()>& pred, double timeout) {
-  const double end = now() + timeout;
-  while (now() < end) {
-    if (pred()) return true;
-    sleepFor(0.01);
-  }
-  return pred();
-}
 
 /// Publishes `v` at 50 Hz for `seconds` (the controller).
 void command(const std::vector<double>& v, double seconds,

@@ -26,12 +26,7 @@ const std::string kWorkspace = std::string(EHC_CONFIG_DIR) + "/..";
 const std::string kScript = kWorkspace + "/src/ehc_bringup/scripts/run_realman.sh";
 
 bool waitFor(const std::function<bool()>& pred, double timeout) {
-  const double end = FakeWater2Server::now() + timeout;
-  while (FakeWater2Server::now() < end) {
-    if (pred()) return true;
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
-  return pred();
+  return ehc_bringup_test::waitFor(pred, timeout, 0.02);
 }
 
 std::string runCapture(const std::string& cmd, int& rc) {

@@ -27,16 +27,9 @@ using ehc_bringup_test::FakeWater2Server;
 
 namespace {
 
-double now() { return FakeWater2Server::now(); }
-void sleepFor(double s) { std::this_thread::sleep_for(std::chrono::duration<double>(s)); }
-bool waitFor(const std::function<bool()>& pred, double timeout) {
-  const double end = now() + timeout;
-  while (now() < end) {
-    if (pred()) return true;
-    sleepFor(0.01);
-  }
-  return pred();
-}
+using ehc_bringup_test::now;
+using ehc_bringup_test::sleepFor;
+using ehc_bringup_test::waitFor;
 
 struct Observed {
   std::mutex mutex;

@@ -17,14 +17,7 @@ using namespace ehc_bringup;
 using ehc_bringup_test::FakeWater2Server;
 
 namespace {
-bool waitFor(const std::function<bool()>& pred, double timeout_s) {
-  const double end = FakeWater2Server::now() + timeout_s;
-  while (FakeWater2Server::now() < end) {
-    if (pred()) return true;
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
-  return pred();
-}
+using ehc_bringup_test::waitFor;
 
 Water2BridgeConfig loopbackConfig(int port) {
   Water2BridgeConfig c;

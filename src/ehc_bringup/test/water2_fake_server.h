@@ -6,6 +6,8 @@
 // bad pose, oversized, error status, silence). stop() closes everything ("killed"); start()
 // listens again on the same port.
 
+#include "wall_clock.h"
+
 #include <arpa/inet.h>
 #include <netinet/in.h>
 #include <poll.h>
@@ -37,10 +39,7 @@ class FakeWater2Server {
   enum class ReplyMode { Normal, Garbage, Truncated, BadJson, MissingType, BadPose, Oversized,
                          ErrorStatus, Silent };
 
-  static double now() {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
-        .count();
-  }
+  static double now() { return ehc_bringup_test::now(); }
 
   /// port 0: an ephemeral port is chosen by the first start().
   explicit FakeWater2Server(int port = 0) : port_(port) {}

@@ -28,6 +28,13 @@ inline Eigen::VectorXd randomArm(const RobotConfig& c, std::mt19937& rng, double
   return q;
 }
 
+/// TCP -> camera optical frame of the RealMan description (fixed, read at the ready pose).
+inline Eigen::Isometry3d realmanTcpToCamera() {
+  const RobotConfig rc = realmanConfig();
+  const WholeBodyModel model(rc);
+  return model.linkPoseInBase(rc.arm_ready, rc.tcp_frame).inverse() * model.linkPoseInBase(rc.arm_ready, rc.camera_frame);
+}
+
 inline Eigen::Vector3d randomBase(std::mt19937& rng) {
   std::uniform_real_distribution<double> xy(-5.0, 5.0), yaw(-3.14, 3.14);
   return Eigen::Vector3d(xy(rng), xy(rng), yaw(rng));

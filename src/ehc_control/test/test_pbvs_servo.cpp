@@ -15,11 +15,7 @@
 namespace ehc_control {
 namespace {
 
-Eigen::Isometry3d realmanTcpToCamera() {
-  const RobotConfig rc = test::realmanConfig();
-  const WholeBodyModel model(rc);
-  return model.linkPoseInBase(rc.arm_ready, rc.tcp_frame).inverse() * model.linkPoseInBase(rc.arm_ready, rc.camera_frame);
-}
+using test::realmanTcpToCamera;
 
 Eigen::Isometry3d randomPose(std::mt19937& rng, double extent) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);

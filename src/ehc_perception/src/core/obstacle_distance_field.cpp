@@ -75,10 +75,25 @@ struct ObstacleDistanceField::Impl {
   std::shared_ptr<fcl::OcTree<double>> fcl_tree;
   std::vector<std::shared_ptr<fcl::CollisionGeometry<double>>> geoms;  // per shape
   std::vector<int> shape_link;                                          // shape -> link index
-  // The map without the exclusion zones, rebuilt when the map or the zones change.
+  // The map without the exclusion zones, rebuilt when the map changes or the zones move
+  // (see zonesMoved).
   std::shared_ptr<fcl::OcTree<double>> query_tree;
+  std::vector<ExclusionZone> built_zones;  ///< the zones query_tree was built with
   bool query_dirty = true;
   bool query_empty = false;  ///< every occupied voxel is excluded
+
+  /// A zone carried by the hand is re-sent every control cycle with sub-millimetre motion;
+  /// rebuilding the filtered copy for that would copy the map at the query rate. Rebuild only
+  /// when a zone moved or grew by a quarter voxel since the last build (or the count changed).
+  bool zonesMoved(const std::vector<ExclusionZone>& zones) const {
+    if (zones.size() != built_zones.size()) return true;
+    const double tol = 0.25 * tree->getResolution();
+    for (std::size_t i = 0; i < zones.size(); ++i)
+      if ((zones[i].centre - built_zones[i].centre).norm() >= tol ||
+          std::abs(zones[i].radius - built_zones[i].radius) >= tol)
+        return true;
+    return false;
+  }
 
   void reset(const ObstacleMapConfig& c) {
     tree = std::make_shared<octomap::OcTree>(c.resolution);
@@ -97,7 +112,7 @@ struct ObstacleDistanceField::Impl {
   /// centre lies in an exclusion zone.
   const fcl::OcTree<double>* queryTree(const std::vector<ExclusionZone>& zones) {
     if (zones.empty()) return fcl_tree.get();
-    if (query_dirty || !query_tree) {
+    if (query_dirty || !query_tree || zonesMoved(zones)) {
       // Only the occupied voxels matter to the distance queries: copy those outside every
       // zone (pruned nodes voxel by voxel, so a node straddling a zone boundary is split).
       auto copy = std::make_shared<octomap::OcTree>(tree->getResolution());
@@ -128,6 +143,7 @@ struct ObstacleDistanceField::Impl {
       copy->prune();
       query_empty = copy->size() == 0;
       query_tree = std::make_shared<fcl::OcTree<double>>(std::static_pointer_cast<const octomap::OcTree>(copy));
+      built_zones = zones;
       query_dirty = false;
     }
     return query_tree.get();
@@ -174,9 +190,7 @@ void ObstacleDistanceField::setExclusionZones(const std::vector<ExclusionZone>& 
       fail("exclusion zone radius " + std::to_string(z.radius) + " m is outside [0, " +
            std::to_string(ExclusionZone::kMaxRadius) + "]");
   }
-  if (zones == zones_) return;
-  zones_ = zones;
-  impl_->query_dirty = true;
+  zones_ = zones;  // the filtered copy follows when the zones have moved (Impl::zonesMoved)
 }
 
 ObstacleDistanceField::InsertStats ObstacleDistanceField::insertCloud(

@@ -127,9 +127,9 @@ void SimulatedCamera::setScene(const std::vector<BodyConfig>& bodies, int floor_
   m.quads.clear();
   m.background = cfg_.background >= 0 ? cfg_.background : floor_shade;
   const Eigen::Vector3d light = Eigen::Vector3d(0.3, -0.2, 1.0).normalized();
-  auto addQuad = [&](int body, const vpImage<unsigned char>& tex, std::vector<Eigen::Vector3d> c,
-                     const Eigen::Vector3d& outward, bool bilinear) {
-    c = orient(std::move(c), outward);
+  // A textured quad; corners clockwise seen from outside, as vpImageSimulator expects.
+  auto pushQuad = [&](int body, const vpImage<unsigned char>& tex, const std::vector<Eigen::Vector3d>& c,
+                      bool bilinear) {
     auto q = std::make_unique<Impl::Quad>();
     q->body = body;
     vpColVector X[4];
@@ -141,6 +141,10 @@ void SimulatedCamera::setScene(const std::vector<BodyConfig>& bodies, int floor_
     q->sim.setInterpolationType(bilinear ? vpImageSimulator::BILINEAR_INTERPOLATION
                                          : vpImageSimulator::SIMPLE);
     m.quads.push_back(std::move(q));
+  };
+  auto addQuad = [&](int body, const vpImage<unsigned char>& tex, std::vector<Eigen::Vector3d> c,
+                     const Eigen::Vector3d& outward, bool bilinear) {
+    pushQuad(body, tex, orient(std::move(c), outward), bilinear);
   };
   auto flat = [&](int shade, const Eigen::Vector3d& n) {
     const double k = 0.6 + 0.4 * std::max(0.0, n.dot(light));
@@ -203,16 +207,7 @@ void SimulatedCamera::setScene(const std::vector<BodyConfig>& bodies, int floor_
                                         T * Eigen::Vector3d(a, a, 0) + lift,
                                         T * Eigen::Vector3d(a, -a, 0) + lift,
                                         T * Eigen::Vector3d(-a, -a, 0) + lift};
-      auto q = std::make_unique<Impl::Quad>();
-      q->body = body;
-      vpColVector X[4];
-      for (int i = 0; i < 4; ++i) {
-        X[i] = col(c[static_cast<std::size_t>(i)]);
-        q->corners[static_cast<std::size_t>(i)] = c[static_cast<std::size_t>(i)];
-      }
-      q->sim.init(tex, X);
-      q->sim.setInterpolationType(vpImageSimulator::BILINEAR_INTERPOLATION);
-      m.quads.push_back(std::move(q));
+      pushQuad(body, tex, c, true);
     }
   }
 }
