@@ -734,6 +734,55 @@ TEST(GraspSelection, SidewaysAcceptsEitherSide) {
   EXPECT_FALSE(candidateQualifies({side, 0.05, 1.0}, ApproachDirection::Downward, tag, p));
 }
 
+TEST(GraspSelection, SidewaysTurnedTowardsTheRobot) {
+  // Tag target approach +x (the robot looks along +x at the tagged face). A 45 deg turn: the
+  // side approach of either side gets a +x part, so the hand comes from the robot's side.
+  const Eigen::Isometry3d tag = forwardTarget();
+  GraspSelectionParams p;
+  p.sideways_turn_deg = 45.0;
+  const double c = std::sqrt(0.5);
+  const auto right = wantedApproach(ApproachDirection::Sideways, tag, p.sideways_turn_deg, Eigen::Vector3d(0, 1, 0));
+  const auto left = wantedApproach(ApproachDirection::Sideways, tag, p.sideways_turn_deg, Eigen::Vector3d(0, -1, 0));
+  ASSERT_TRUE(right && left);
+  EXPECT_TRUE(right->isApprox(Eigen::Vector3d(c, c, 0), 1e-12)) << right->transpose();
+  EXPECT_TRUE(left->isApprox(Eigen::Vector3d(c, -c, 0), 1e-12)) << left->transpose();
+  // 0 deg: straight from the side (the default).
+  const auto pure = wantedApproach(ApproachDirection::Sideways, tag, 0.0, Eigen::Vector3d(0, -1, 0));
+  EXPECT_TRUE(pure->isApprox(Eigen::Vector3d(0, -1, 0), 1e-12));
+  // Qualification against the turned direction: a pure side candidate is 45 deg off (> 30).
+  Eigen::Isometry3d side = Eigen::Isometry3d::Identity();  // approach along world -y
+  side.linear().col(0) = Eigen::Vector3d(0, 0, 1);
+  side.linear().col(1) = Eigen::Vector3d(-1, 0, 0);
+  side.linear().col(2) = Eigen::Vector3d(0, -1, 0);
+  side.translation() = tag.translation();
+  EXPECT_FALSE(candidateQualifies({side, 0.05, 1.0}, ApproachDirection::Sideways, tag, p));
+  Eigen::Isometry3d turned = side;
+  turned.linear() = Eigen::AngleAxisd(30 * M_PI / 180, Eigen::Vector3d::UnitZ()).toRotationMatrix() * side.linear();
+  ASSERT_NEAR(turned.linear().col(2).x(), std::sin(30 * M_PI / 180), 1e-12);  // 15 deg off the wanted
+  EXPECT_TRUE(candidateQualifies({turned, 0.05, 1.0}, ApproachDirection::Sideways, tag, p));
+  // Aligned onto the wanted direction, level, wrist camera up, same centre.
+  const auto a = chooseGrasp({{turned, 0.05, 0.8}}, ApproachDirection::Sideways, tag, turned.linear(), p);
+  ASSERT_TRUE(a && a->from_candidate);
+  EXPECT_TRUE(a->pose.linear().col(2).isApprox(*left, 1e-9)) << a->pose.linear().col(2).transpose();
+  EXPECT_NEAR(a->pose.linear().col(1).z(), 0.0, 1e-9);
+  EXPECT_GT(a->pose.linear().col(0).z(), 0.99);
+  EXPECT_TRUE(a->pose.translation().isApprox(turned.translation(), 1e-12));
+  // Fallback (no candidate): the side the reference approach faces, turned the same way.
+  const Eigen::Matrix3d ref = Eigen::AngleAxisd(-0.3, Eigen::Vector3d::UnitZ()).toRotationMatrix() * tag.linear();
+  const auto f = chooseGrasp({}, ApproachDirection::Sideways, tag, ref, p);
+  ASSERT_TRUE(f && !f->from_candidate);
+  EXPECT_TRUE(f->pose.linear().col(2).isApprox(*left, 1e-9)) << f->pose.linear().col(2).transpose();
+  EXPECT_TRUE(isValidPose(f->pose));
+  // Out of range: a clear error.
+  p.sideways_turn_deg = 70.0;
+  try {
+    p.validate();
+    FAIL() << "sideways_turn_deg 70 accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("[GraspSelectionParams] sideways_turn_deg"), std::string::npos) << e.what();
+  }
+}
+
 TEST(GraspSelection, GateWidthAndBadCandidates) {
   const Eigen::Isometry3d tag = forwardTarget();
   GraspSelectionParams p;

@@ -8,7 +8,10 @@
 //   tag       the tag target itself (no candidates)
 //   forward   approach along the tag target's z axis (into the tagged face)
 //   downward  approach straight down (world -z)
-//   sideways  approach horizontally, perpendicular to the forward axis (either side)
+//   sideways  approach horizontally from either side, perpendicular to the forward axis or
+//             turned by sideways_turn_deg towards it (the hand then comes from the robot's
+//             side of the object: an arm in front of the table reaches the side of an object
+//             near the table edge without bending its wrist past the joint limit)
 //   any       every candidate
 // Without a qualifying candidate the fallback is the tag target turned to the preferred
 // approach (closing axis kept horizontal) and backed off along it by a configured distance.
@@ -43,6 +46,9 @@ struct GraspSelectionParams {
   /// vertical). The descent from the pre-grasp is then a straight line along that direction
   /// and the fingers close level. `tag` and `any` keep the candidate as it is.
   bool align_approach = true;
+  /// Sideways approach turned this much (deg, [0, 60]) from the pure side direction towards the
+  /// forward approach. 0 = straight from the side.
+  double sideways_turn_deg = 0.0;
   double fallback_backoff_forward = 0.0;   ///< m, fallback TCP moved back along the approach
   double fallback_backoff_downward = 0.03;
   double fallback_backoff_sideways = 0.0;
@@ -57,10 +63,13 @@ struct GraspChoice {
 };
 
 /// Unit approach direction wanted for `direction` given the tag target; nullopt for Any
-/// (and the tag target's z for Tag / Forward). For Sideways the sign is arbitrary: both
-/// sides qualify.
-std::optional<Eigen::Vector3d> preferredApproach(ApproachDirection direction,
-                                                 const Eigen::Isometry3d& tag_target);
+/// (the tag target's z for Tag / Forward, world -z for Downward). Sideways has one direction
+/// per side (see sideways_turn_deg): the one closer to `hint` (e.g. a candidate's approach or
+/// the current TCP's) is returned.
+std::optional<Eigen::Vector3d> wantedApproach(ApproachDirection direction,
+                                              const Eigen::Isometry3d& tag_target,
+                                              double sideways_turn_deg,
+                                              const Eigen::Vector3d& hint);
 
 /// True if the candidate is finite, a proper rotation, within the gate, opens wide enough and
 /// approaches as preferred.

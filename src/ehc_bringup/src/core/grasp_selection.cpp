@@ -35,6 +35,8 @@ void GraspSelectionParams::validate() const {
   check(std::isfinite(max_angle_deg) && max_angle_deg > 0.0 && max_angle_deg <= 180.0,
         "max_angle_deg must be in (0, 180]");
   check(std::isfinite(max_width) && max_width > 0.0, "max_width must be > 0");
+  check(std::isfinite(sideways_turn_deg) && sideways_turn_deg >= 0.0 && sideways_turn_deg <= 60.0,
+        "sideways_turn_deg must be in [0, 60] (0 = straight from the side)");
   for (double b : {fallback_backoff_forward, fallback_backoff_downward, fallback_backoff_sideways})
     check(std::isfinite(b) && std::abs(b) <= 0.5, "fallback_backoff_* must be finite, |b| <= 0.5 m");
 }
@@ -51,17 +53,32 @@ double rotationAngle(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
   return std::acos(c);
 }
 
-std::optional<Eigen::Vector3d> preferredApproach(ApproachDirection direction,
-                                                 const Eigen::Isometry3d& tag_target) {
-  const Eigen::Vector3d fwd = tag_target.linear().col(2);
+namespace {
+/// Horizontal side approach on side `sign` (+1: along z x fwd, -1: the other side), turned by
+/// `turn_deg` towards the forward approach (the hand comes from the robot's side of the object).
+Eigen::Vector3d sideApproach(const Eigen::Vector3d& fwd, double turn_deg, double sign) {
+  Eigen::Vector3d f(fwd.x(), fwd.y(), 0.0);
+  if (f.norm() < 1e-6) return sign * Eigen::Vector3d::UnitY();  // forward axis vertical: any horizontal
+  f.normalize();
+  const Eigen::Vector3d s = sign * Eigen::Vector3d::UnitZ().cross(f);
+  const double a = turn_deg * M_PI / 180.0;
+  return (std::cos(a) * s + std::sin(a) * f).normalized();
+}
+}  // namespace
+
+std::optional<Eigen::Vector3d> wantedApproach(ApproachDirection direction,
+                                              const Eigen::Isometry3d& tag_target,
+                                              double sideways_turn_deg,
+                                              const Eigen::Vector3d& hint) {
+  const Eigen::Vector3d fwd = tag_target.linear().col(2).normalized();
   switch (direction) {
     case ApproachDirection::Tag:
-    case ApproachDirection::Forward: return fwd.normalized();
+    case ApproachDirection::Forward: return fwd;
     case ApproachDirection::Downward: return Eigen::Vector3d(0, 0, -1);
     case ApproachDirection::Sideways: {
-      Eigen::Vector3d s = Eigen::Vector3d::UnitZ().cross(fwd);
-      if (s.norm() < 1e-6) s = Eigen::Vector3d::UnitY();  // forward axis vertical: any horizontal
-      return s.normalized();
+      const Eigen::Vector3d a = sideApproach(fwd, sideways_turn_deg, 1.0);
+      const Eigen::Vector3d b = sideApproach(fwd, sideways_turn_deg, -1.0);
+      return b.dot(hint) > a.dot(hint) ? b : a;
     }
     case ApproachDirection::Any: return std::nullopt;
   }
@@ -74,10 +91,10 @@ bool candidateQualifies(const GraspCandidate& c, ApproachDirection direction,
   if (!isValidPose(c.pose) || !std::isfinite(c.width) || !std::isfinite(c.score)) return false;
   if (c.width > p.max_width) return false;
   if ((c.pose.translation() - tag_target.translation()).norm() > p.candidate_gate) return false;
-  const auto want = preferredApproach(direction, tag_target);
+  const Eigen::Vector3d z = c.pose.linear().col(2);
+  const auto want = wantedApproach(direction, tag_target, p.sideways_turn_deg, z);  // sideways: either side
   if (!want) return true;
-  double cosang = c.pose.linear().col(2).dot(*want);
-  if (direction == ApproachDirection::Sideways) cosang = std::abs(cosang);  // either side
+  const double cosang = z.dot(*want);
   return std::acos(std::clamp(cosang, -1.0, 1.0)) <= p.max_angle_deg * M_PI / 180.0;
 }
 
@@ -137,9 +154,8 @@ std::optional<GraspChoice> chooseGrasp(const std::vector<GraspCandidate>& candid
     }
   }
   if (found && p.align_approach) {
-    if (auto want = preferredApproach(direction, tag_target)) {
-      const Eigen::Vector3d z = best.pose.linear().col(2);
-      if (direction == ApproachDirection::Sideways && z.dot(*want) < 0.0) *want = -*want;
+    const Eigen::Vector3d z = best.pose.linear().col(2);
+    if (auto want = wantedApproach(direction, tag_target, p.sideways_turn_deg, z)) {
       Eigen::Matrix3d R = Eigen::Quaterniond::FromTwoVectors(z, *want).toRotationMatrix() * best.pose.linear();
       if (std::abs(want->z()) < 0.7) {
         // Horizontal approach: level the closing axis too (the faces it closes on are vertical
@@ -162,9 +178,8 @@ std::optional<GraspChoice> chooseGrasp(const std::vector<GraspCandidate>& candid
       approach = Eigen::Vector3d(0, 0, -1);
       backoff = p.fallback_backoff_downward;
     } else if (direction == ApproachDirection::Sideways) {
-      approach = *preferredApproach(direction, tag_target);
       // The side facing the reference orientation's approach better.
-      if (approach.dot(reference.col(2)) < 0.0) approach = -approach;
+      approach = *wantedApproach(direction, tag_target, p.sideways_turn_deg, reference.col(2));
       backoff = p.fallback_backoff_sideways;
     }
     if (direction == ApproachDirection::Tag || direction == ApproachDirection::Forward ||

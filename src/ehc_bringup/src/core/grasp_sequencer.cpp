@@ -87,6 +87,7 @@ std::string GraspSequencerParams::summary() const {
     << retreat_tolerance << " m, " << retreat_timeout << " s)"
     << "\n  selection: gate " << selection.candidate_gate << " m, max angle " << selection.max_angle_deg
     << " deg, max width " << selection.max_width << " m, "
+    << "sideways turned " << selection.sideways_turn_deg << " deg towards forward, "
     << (selection.align_approach ? "candidates aligned to the approach, " : "")
     << (selection.require_candidate ? "candidate required" : "tag fallback") << " (backoff forward "
     << selection.fallback_backoff_forward << ", downward " << selection.fallback_backoff_downward
@@ -123,6 +124,7 @@ GraspSequencerParams loadGraspSequencerParams(const ehc_control::ConfigNode& roo
   p.selection.max_width = sel.get("max_width", p.selection.max_width);
   p.selection.require_candidate = sel.get("require_candidate", p.selection.require_candidate);
   p.selection.align_approach = sel.get("align_approach", p.selection.align_approach);
+  p.selection.sideways_turn_deg = sel.get("sideways_turn_deg", p.selection.sideways_turn_deg);
   p.selection.fallback_backoff_forward = sel.get("fallback_backoff_forward", p.selection.fallback_backoff_forward);
   p.selection.fallback_backoff_downward = sel.get("fallback_backoff_downward", p.selection.fallback_backoff_downward);
   p.selection.fallback_backoff_sideways = sel.get("fallback_backoff_sideways", p.selection.fallback_backoff_sideways);
