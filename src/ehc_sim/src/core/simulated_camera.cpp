@@ -173,8 +173,12 @@ void SimulatedCamera::setScene(const std::vector<BodyConfig>& bodies, int floor_
     } else {
       const double r = he.x() / std::cos(M_PI / kCylinderSides), hz = he.z();
       std::vector<Eigen::Vector3d> ring;
+      // Vertices half a side off the axes, so that a side's middle faces +-x and +-y: a tag on
+      // a +-x / +-y face then lies flat 0.5 mm in front of a side. (With a vertex on the axis,
+      // the edge there poked 0.1 mm through the tag and drew a seam across it; close up the
+      // detector lost the tag.)
       for (int k = 0; k < kCylinderSides; ++k) {
-        const double t = 2.0 * M_PI * k / kCylinderSides;
+        const double t = 2.0 * M_PI * (k + 0.5) / kCylinderSides;
         ring.emplace_back(r * std::cos(t), r * std::sin(t), 0.0);
       }
       for (int k = 0; k < kCylinderSides; ++k) {
