@@ -302,6 +302,50 @@ TEST(ObstacleDistanceField, RealManRobotNextToATable) {
                std::invalid_argument);
 }
 
+TEST(ObstacleDistanceField, FingersAreModelledFullyOpen) {
+  // WholeBodyModel holds the finger joints at 0 (closed); the sim and the real gripper open
+  // them 35 mm each during the approach. The obstacle field must see the open fingers.
+  const ehc_control::WholeBodyModel model(
+      ehc_control::loadRobotConfig(ehc_perception::test::robotYaml()));
+  ObstacleMapConfig cfg;
+  const RobotCollisionModel robot(model.urdfXml(), cfg.links);
+  ObstacleDistanceField field(cfg, robot);
+  const Eigen::VectorXd q = model.config().arm_ready;
+  const auto poses = field.linkPoses(model, Eigen::Vector3d::Zero(), q);
+  const Eigen::Isometry3d grip = model.fk(Eigen::Vector3d::Zero(), q, "gripper_base_link");
+  for (std::size_t i = 0; i < robot.links().size(); ++i) {
+    const std::string& l = robot.links()[i];
+    const Eigen::Isometry3d held = model.fk(Eigen::Vector3d::Zero(), q, l);
+    if (l == "left_finger_link" || l == "right_finger_link") {
+      const double sign = l == "left_finger_link" ? 1.0 : -1.0;  // URDF axes +y / -y of the gripper
+      EXPECT_TRUE((poses[i].translation() - held.translation()).isApprox(sign * 0.035 * grip.linear().col(1), 1e-9))
+          << l << ": " << (poses[i].translation() - held.translation()).transpose();
+      EXPECT_TRUE(poses[i].linear().isApprox(held.linear(), 1e-12));
+    } else {
+      EXPECT_TRUE(poses[i].isApprox(held, 1e-12)) << l;
+    }
+  }
+  // One 2 cm obstacle voxel around a point 25 mm beyond the open left finger's outer face: its
+  // nearest face is 5-25 mm from the open finger (60 mm from the closed one).
+  std::size_t left = 0;
+  while (robot.links()[left] != "left_finger_link") ++left;
+  const Eigen::Vector3d p = poses[left] * Eigen::Vector3d(0, 0.010 + 0.025, 0.025);
+  const double r = cfg.resolution;
+  const Eigen::Vector3d c = ((p / r).array().floor() + 0.5).matrix() * r;  // its voxel's centre
+  field.addOccupiedBox(c, c);
+  ASSERT_EQ(field.occupiedLeafCount(), 1u);
+  const auto ds = field.distances(poses);
+  bool found = false;
+  for (const auto& d : ds)
+    if (d.link == "left_finger_link") {
+      found = true;
+      EXPECT_LT(d.distance, 0.035) << "open finger not modelled";
+      EXPECT_GT(d.distance, 0.0);
+    }
+  EXPECT_TRUE(found);
+  EXPECT_NE(robot.summary().find("left_finger_link (prismatic: at its upper limit"), std::string::npos) << robot.summary();
+}
+
 TEST(ObstacleDistanceField, ConfigValidationNamesTheField) {
   auto expectFails = [](const std::string& yaml, const std::string& needle) {
     const auto n = ehc_control::ConfigNode::loadString(yaml, "obst.yaml", "ObstacleDistanceField");

@@ -92,7 +92,8 @@ class ObstacleDistanceField {
   /// in range are omitted), ignoring occupied voxels inside the exclusion zones.
   /// `link_poses`: world poses in robot().links() order.
   std::vector<LinkObstacleDistance> distances(const std::vector<Eigen::Isometry3d>& link_poses) const;
-  /// World poses of robot().links() from the whole-body model.
+  /// World poses of robot().links() from the whole-body model, each times
+  /// robot().linkOffset(i) (gripper fingers fully open).
   std::vector<Eigen::Isometry3d> linkPoses(const ehc_control::WholeBodyModel& model,
                                            const Eigen::Vector3d& base_pose,
                                            const Eigen::VectorXd& q) const;

@@ -36,11 +36,17 @@ class RobotCollisionModel {
   const std::vector<CollisionShape>& shapes() const { return shapes_; }
   /// Link names in the order given (or URDF order), each with at least one shape.
   const std::vector<std::string>& links() const { return links_; }
+  /// Pose of links()[i] relative to where WholeBodyModel puts it. WholeBodyModel holds every
+  /// joint outside the arm at 0; a link on a prismatic joint (a gripper finger: 0 = closed)
+  /// is moved here to the joint's upper limit, i.e. the gripper fully open, the widest it
+  /// gets. Identity for every other link.
+  const Eigen::Isometry3d& linkOffset(std::size_t i) const { return link_offsets_.at(i); }
   std::string summary() const;
 
  private:
   std::vector<CollisionShape> shapes_;
   std::vector<std::string> links_;
+  std::vector<Eigen::Isometry3d> link_offsets_;  ///< per links_ entry, see linkOffset()
 };
 
 }  // namespace ehc_perception

@@ -337,9 +337,10 @@ std::vector<Eigen::Isometry3d> ObstacleDistanceField::linkPoses(
   const Eigen::Isometry3d Twb = ehc_control::WholeBodyModel::baseTransform(base_pose);
   std::vector<Eigen::Isometry3d> out;
   out.reserve(robot_.links().size());
-  for (const std::string& l : robot_.links()) {
+  for (std::size_t i = 0; i < robot_.links().size(); ++i) {
+    const std::string& l = robot_.links()[i];
     if (!model.hasLink(l)) fail("link '" + l + "' is not in the whole-body model");
-    out.push_back(Twb * model.linkPoseInBase(q, l));
+    out.push_back(Twb * model.linkPoseInBase(q, l) * robot_.linkOffset(i));
   }
   return out;
 }

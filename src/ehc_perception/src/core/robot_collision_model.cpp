@@ -76,6 +76,17 @@ RobotCollisionModel::RobotCollisionModel(const std::string& urdf_xml,
     }
   }
   if (shapes_.empty()) fail("the URDF has no collision geometry");
+  for (const std::string& name : links_) {
+    Eigen::Isometry3d offset = Eigen::Isometry3d::Identity();
+    const urdf::JointConstSharedPtr& j = model->links_.at(name)->parent_joint;
+    if (j && j->type == urdf::Joint::PRISMATIC) {
+      if (!j->limits || !(j->limits->upper > j->limits->lower))
+        fail("prismatic joint '" + j->name + "' of link '" + name + "' needs limits lower < upper");
+      // The child link frame is the joint frame, where the axis is expressed.
+      offset.translation() = j->limits->upper * Eigen::Vector3d(j->axis.x, j->axis.y, j->axis.z);
+    }
+    link_offsets_.push_back(offset);
+  }
 }
 
 std::string RobotCollisionModel::summary() const {
@@ -84,7 +95,9 @@ std::string RobotCollisionModel::summary() const {
   std::ostringstream os;
   os << "robot collision model: " << shapes_.size() << " shapes on " << links_.size()
      << " links (";
-  for (std::size_t i = 0; i < links_.size(); ++i) os << (i ? ", " : "") << links_[i];
+  for (std::size_t i = 0; i < links_.size(); ++i)
+    os << (i ? ", " : "") << links_[i]
+       << (link_offsets_[i].translation().isZero() ? "" : " (prismatic: at its upper limit, e.g. a finger fully open)");
   os << ")";
   return os.str();
 }
