@@ -27,19 +27,13 @@ if(CATKIN_ENABLE_TESTING)
 endif()
 
 # End-to-end rostests (issue 6 item 6): the whole pipeline on config/scenes/single_object.yaml,
-# with and without MPBS (test/test_grasp_single.py). Measured 2026-11-22 on the 2-core CI-like
-# machine, EHC + MPBS: forward 5/5 grasped; downward 5/6 (one "gripper closed on nothing" in a
-# full make test run; TfM 100 % with MPBS vs 34 % without); sideways 0/4 (stalls before the side
-# pre-grasp with joint5 at its limit). Forward runs in make test; downward and sideways are
-# opt-in until they pass reliably (issue 6 stays open for them).
-option(EHC_E2E "Run the forward end-to-end grasp rostest in make test" ON)
-option(EHC_E2E_ALL "Also run the downward and sideways end-to-end grasp rostests" OFF)
+# with and without MPBS (test/test_grasp_single.py), one per grasp orientation. Measured
+# 2026-11-22 on the 2-core CI-like machine with one extra busy core, EHC + MPBS: downward 4/4
+# grasped (TfM 100 %), sideways 4/4 (45 deg turned approach, TfM 100 %; 45-53 % without MPBS).
+# -DEHC_E2E=OFF leaves them out (about 30 s wall each).
+option(EHC_E2E "Run the end-to-end grasp rostests in make test" ON)
 if(CATKIN_ENABLE_TESTING AND EHC_E2E)
-  set(_e2e forward)
-  if(EHC_E2E_ALL)
-    list(APPEND _e2e downward sideways)
-  endif()
-  foreach(o ${_e2e})
+  foreach(o forward downward sideways)
     add_rostest(test/grasp_single_${o}.test DEPENDENCIES ehc_grasp_sequencer_node)
   endforeach()
 endif()

@@ -612,6 +612,19 @@ TEST(GraspSequencerParams, ValidationNamesTheField) {
   p = twoObjects();
   p.selection.max_angle_deg = std::nan("");
   EXPECT_THROW(p.validate(), std::invalid_argument);
+  // Cross-field: the approach (heading for the pre-grasp) must be able to reach the switch.
+  p = twoObjects();
+  p.pregrasp_distance = 0.20;
+  p.pregrasp_position_tolerance = 0.03;
+  p.pregrasp_switch_distance = 0.22;
+  try {
+    p.validate();
+    FAIL() << "pre-grasp beyond the switch distance accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("pregrasp_switch_distance"), std::string::npos) << e.what();
+  }
+  p.pregrasp_switch_distance = 0.25;
+  EXPECT_NO_THROW(p.validate());
 }
 
 TEST(GraspSequencerParams, LoadsYamlAndNamesFileAndField) {
@@ -685,6 +698,8 @@ TEST(GraspSelection, ChosenCandidateIsTurnedOntoTheWantedApproachAboutItsCentre)
                     Eigen::AngleAxisd(10 * M_PI / 180, Eigen::Vector3d::UnitX()).toRotationMatrix();
   GraspSelectionParams p;
   ASSERT_TRUE(p.align_approach);  // the default
+  p.centre_from_tag = false;      // the turn alone (centring and closing axis: the tests below)
+  p.closing_axis_from_tag = false;
   const auto d = chooseGrasp({{tilted, 0.05, 0.8}}, ApproachDirection::Downward, tag, tilted.linear(), p);
   ASSERT_TRUE(d);
   EXPECT_TRUE(d->from_candidate);
@@ -741,13 +756,13 @@ TEST(GraspSelection, SidewaysTurnedTowardsTheRobot) {
   GraspSelectionParams p;
   p.sideways_turn_deg = 45.0;
   const double c = std::sqrt(0.5);
-  const auto right = wantedApproach(ApproachDirection::Sideways, tag, p.sideways_turn_deg, Eigen::Vector3d(0, 1, 0));
-  const auto left = wantedApproach(ApproachDirection::Sideways, tag, p.sideways_turn_deg, Eigen::Vector3d(0, -1, 0));
+  const auto right = wantedApproach(ApproachDirection::Sideways, tag, p, Eigen::Vector3d(0, 1, 0));
+  const auto left = wantedApproach(ApproachDirection::Sideways, tag, p, Eigen::Vector3d(0, -1, 0));
   ASSERT_TRUE(right && left);
   EXPECT_TRUE(right->isApprox(Eigen::Vector3d(c, c, 0), 1e-12)) << right->transpose();
   EXPECT_TRUE(left->isApprox(Eigen::Vector3d(c, -c, 0), 1e-12)) << left->transpose();
   // 0 deg: straight from the side (the default).
-  const auto pure = wantedApproach(ApproachDirection::Sideways, tag, 0.0, Eigen::Vector3d(0, -1, 0));
+  const auto pure = wantedApproach(ApproachDirection::Sideways, tag, GraspSelectionParams{}, Eigen::Vector3d(0, -1, 0));
   EXPECT_TRUE(pure->isApprox(Eigen::Vector3d(0, -1, 0), 1e-12));
   // Qualification against the turned direction: a pure side candidate is 45 deg off (> 30).
   Eigen::Isometry3d side = Eigen::Isometry3d::Identity();  // approach along world -y
@@ -781,6 +796,53 @@ TEST(GraspSelection, SidewaysTurnedTowardsTheRobot) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("[GraspSelectionParams] sideways_turn_deg"), std::string::npos) << e.what();
   }
+}
+
+TEST(GraspSelection, CandidateCentredOnTheTagAcrossTheApproach) {
+  // A top-grasp candidate closing along world x (the camera's line of sight) centred 2.7 cm
+  // short of the object (a single-view cloud misses the far face) and 1 cm deeper than the
+  // tag centre: across the approach it is moved onto the tag centre, its depth is kept.
+  const Eigen::Isometry3d tag = forwardTarget();
+  Eigen::Isometry3d top = Eigen::Isometry3d::Identity();
+  top.linear().col(0) = Eigen::Vector3d(0, 1, 0);
+  top.linear().col(1) = Eigen::Vector3d(1, 0, 0);
+  top.linear().col(2) = Eigen::Vector3d(0, 0, -1);
+  top.translation() = tag.translation() + Eigen::Vector3d(-0.027, 0.004, -0.01);
+  GraspSelectionParams p;
+  const auto c = chooseGrasp({{top, 0.05, 0.9}}, ApproachDirection::Downward, tag, top.linear(), p);
+  ASSERT_TRUE(c && c->from_candidate);
+  EXPECT_TRUE(c->pose.translation().isApprox(tag.translation() + Eigen::Vector3d(0, 0, -0.01), 1e-12))
+      << c->pose.translation().transpose();
+  p.centre_from_tag = false;
+  const auto raw = chooseGrasp({{top, 0.05, 0.9}}, ApproachDirection::Downward, tag, top.linear(), p);
+  ASSERT_TRUE(raw);
+  EXPECT_TRUE(raw->pose.translation().isApprox(top.translation(), 1e-12));
+}
+
+TEST(GraspSelection, CandidateClosesAlongTheNearestTagAxis) {
+  // A top grasp whose closing axis is 25 deg off the box's x faces (the tag target's z): it is
+  // turned about the approach onto that axis; with the option off it stays as perceived.
+  const Eigen::Isometry3d tag = forwardTarget();
+  Eigen::Isometry3d top = downwardAt(tag.translation());
+  top.linear() = Eigen::AngleAxisd(25 * M_PI / 180, Eigen::Vector3d::UnitZ()).toRotationMatrix() *
+                 (Eigen::Matrix3d() << 0, 1, 0, 1, 0, 0, 0, 0, -1).finished();
+  ASSERT_TRUE(isValidPose(top));
+  GraspSelectionParams p;
+  const auto c = chooseGrasp({{top, 0.05, 0.9}}, ApproachDirection::Downward, tag, top.linear(), p);
+  ASSERT_TRUE(c && c->from_candidate);
+  EXPECT_TRUE(isValidPose(c->pose));
+  EXPECT_NEAR(std::abs(c->pose.linear().col(1).x()), 1.0, 1e-9) << c->pose.linear();   // along world x
+  EXPECT_NEAR(c->pose.linear().col(2).z(), -1.0, 1e-9);                                // still straight down
+  // 65 deg off x is 25 deg off y (the tag's y): the nearer one wins.
+  top.linear() = Eigen::AngleAxisd(65 * M_PI / 180, Eigen::Vector3d::UnitZ()).toRotationMatrix() *
+                 (Eigen::Matrix3d() << 0, 1, 0, 1, 0, 0, 0, 0, -1).finished();
+  const auto d = chooseGrasp({{top, 0.05, 0.9}}, ApproachDirection::Downward, tag, top.linear(), p);
+  ASSERT_TRUE(d);
+  EXPECT_NEAR(std::abs(d->pose.linear().col(1).y()), 1.0, 1e-9) << d->pose.linear();
+  p.closing_axis_from_tag = false;
+  const auto raw = chooseGrasp({{top, 0.05, 0.9}}, ApproachDirection::Downward, tag, top.linear(), p);
+  ASSERT_TRUE(raw);
+  EXPECT_NEAR(std::abs(raw->pose.linear().col(1).dot(top.linear().col(1))), 1.0, 1e-9);
 }
 
 TEST(GraspSelection, GateWidthAndBadCandidates) {

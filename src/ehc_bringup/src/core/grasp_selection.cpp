@@ -37,6 +37,8 @@ void GraspSelectionParams::validate() const {
   check(std::isfinite(max_width) && max_width > 0.0, "max_width must be > 0");
   check(std::isfinite(sideways_turn_deg) && sideways_turn_deg >= 0.0 && sideways_turn_deg <= 60.0,
         "sideways_turn_deg must be in [0, 60] (0 = straight from the side)");
+  check(std::isfinite(sideways_tilt_deg) && sideways_tilt_deg >= 0.0 && sideways_tilt_deg <= 60.0,
+        "sideways_tilt_deg must be in [0, 60] (0 = horizontal)");
   for (double b : {fallback_backoff_forward, fallback_backoff_downward, fallback_backoff_sideways})
     check(std::isfinite(b) && std::abs(b) <= 0.5, "fallback_backoff_* must be finite, |b| <= 0.5 m");
 }
@@ -54,21 +56,27 @@ double rotationAngle(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
 }
 
 namespace {
-/// Horizontal side approach on side `sign` (+1: along z x fwd, -1: the other side), turned by
-/// `turn_deg` towards the forward approach (the hand comes from the robot's side of the object).
-Eigen::Vector3d sideApproach(const Eigen::Vector3d& fwd, double turn_deg, double sign) {
+/// |approach . up| below this (approach within ~64 deg of horizontal, e.g. a tilted side
+/// grasp): the closing axis is levelled and the wrist camera side (TCP +x) put up.
+constexpr double kShallow = 0.9;
+
+/// Side approach on side `sign` (+1: along z x fwd, -1: the other side), turned by `turn_deg`
+/// towards the forward approach (the hand comes from the robot's side of the object) and
+/// tilted down by `tilt_deg` (the hand comes from above the side).
+Eigen::Vector3d sideApproach(const Eigen::Vector3d& fwd, double turn_deg, double tilt_deg, double sign) {
   Eigen::Vector3d f(fwd.x(), fwd.y(), 0.0);
-  if (f.norm() < 1e-6) return sign * Eigen::Vector3d::UnitY();  // forward axis vertical: any horizontal
+  if (f.norm() < 1e-6) f = Eigen::Vector3d::UnitX();  // forward axis vertical: any horizontal
   f.normalize();
   const Eigen::Vector3d s = sign * Eigen::Vector3d::UnitZ().cross(f);
-  const double a = turn_deg * M_PI / 180.0;
-  return (std::cos(a) * s + std::sin(a) * f).normalized();
+  const double a = turn_deg * M_PI / 180.0, b = tilt_deg * M_PI / 180.0;
+  const Eigen::Vector3d horizontal = std::cos(a) * s + std::sin(a) * f;
+  return (std::cos(b) * horizontal - std::sin(b) * Eigen::Vector3d::UnitZ()).normalized();
 }
 }  // namespace
 
 std::optional<Eigen::Vector3d> wantedApproach(ApproachDirection direction,
                                               const Eigen::Isometry3d& tag_target,
-                                              double sideways_turn_deg,
+                                              const GraspSelectionParams& p,
                                               const Eigen::Vector3d& hint) {
   const Eigen::Vector3d fwd = tag_target.linear().col(2).normalized();
   switch (direction) {
@@ -76,8 +84,8 @@ std::optional<Eigen::Vector3d> wantedApproach(ApproachDirection direction,
     case ApproachDirection::Forward: return fwd;
     case ApproachDirection::Downward: return Eigen::Vector3d(0, 0, -1);
     case ApproachDirection::Sideways: {
-      const Eigen::Vector3d a = sideApproach(fwd, sideways_turn_deg, 1.0);
-      const Eigen::Vector3d b = sideApproach(fwd, sideways_turn_deg, -1.0);
+      const Eigen::Vector3d a = sideApproach(fwd, p.sideways_turn_deg, p.sideways_tilt_deg, 1.0);
+      const Eigen::Vector3d b = sideApproach(fwd, p.sideways_turn_deg, p.sideways_tilt_deg, -1.0);
       return b.dot(hint) > a.dot(hint) ? b : a;
     }
     case ApproachDirection::Any: return std::nullopt;
@@ -92,7 +100,7 @@ bool candidateQualifies(const GraspCandidate& c, ApproachDirection direction,
   if (c.width > p.max_width) return false;
   if ((c.pose.translation() - tag_target.translation()).norm() > p.candidate_gate) return false;
   const Eigen::Vector3d z = c.pose.linear().col(2);
-  const auto want = wantedApproach(direction, tag_target, p.sideways_turn_deg, z);  // sideways: either side
+  const auto want = wantedApproach(direction, tag_target, p, z);  // sideways: either side
   if (!want) return true;
   const double cosang = z.dot(*want);
   return std::acos(std::clamp(cosang, -1.0, 1.0)) <= p.max_angle_deg * M_PI / 180.0;
@@ -104,7 +112,7 @@ Eigen::Isometry3d turnedTagGrasp(const Eigen::Isometry3d& tag_target, const Eige
   // Closing axis: keep the tag target's y if it is not along the approach, else world-horizontal.
   Eigen::Vector3d y = tag_target.linear().col(1);
   y -= y.dot(z) * z;
-  if (std::abs(z.z()) > 0.9) {
+  if (std::abs(z.z()) >= kShallow) {
     // Top-down: the tag target's y is horizontal already; otherwise use its x.
     if (y.norm() < 1e-3) y = tag_target.linear().col(0) - tag_target.linear().col(0).dot(z) * z;
   } else {
@@ -129,7 +137,7 @@ namespace {
 /// otherwise the one closer to `reference` (less wrist motion).
 Eigen::Matrix3d closerHalfTurn(const Eigen::Matrix3d& R, const Eigen::Matrix3d& reference) {
   const Eigen::Matrix3d flipped = R * Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  if (std::abs(R.col(2).z()) < 0.7) return R.col(0).z() >= 0.0 ? R : flipped;
+  if (std::abs(R.col(2).z()) < kShallow) return R.col(0).z() >= 0.0 ? R : flipped;
   return rotationAngle(flipped, reference) < rotationAngle(R, reference) ? flipped : R;
 }
 }  // namespace
@@ -155,9 +163,9 @@ std::optional<GraspChoice> chooseGrasp(const std::vector<GraspCandidate>& candid
   }
   if (found && p.align_approach) {
     const Eigen::Vector3d z = best.pose.linear().col(2);
-    if (auto want = wantedApproach(direction, tag_target, p.sideways_turn_deg, z)) {
+    if (auto want = wantedApproach(direction, tag_target, p, z)) {
       Eigen::Matrix3d R = Eigen::Quaterniond::FromTwoVectors(z, *want).toRotationMatrix() * best.pose.linear();
-      if (std::abs(want->z()) < 0.7) {
+      if (std::abs(want->z()) < kShallow) {
         // Horizontal approach: level the closing axis too (the faces it closes on are vertical
         // for an upright object); closerHalfTurn below then puts the wrist camera up.
         Eigen::Vector3d y = want->cross(Eigen::Vector3d::UnitZ()).normalized();
@@ -170,6 +178,33 @@ std::optional<GraspChoice> chooseGrasp(const std::vector<GraspCandidate>& candid
       best.pose.linear() = Eigen::Quaterniond(R).normalized().toRotationMatrix();
     }
   }
+  if (found && p.closing_axis_from_tag) {
+    // The tag target's axis (its frame is the object's: face normals for a box) nearest the
+    // candidate's closing axis, within the plane across the approach.
+    const Eigen::Matrix3d R = best.pose.linear();
+    const Eigen::Vector3d z = R.col(2);
+    Eigen::Vector3d y = R.col(1);
+    double best_dot = -1.0;
+    for (int k = 0; k < 3; ++k) {
+      Eigen::Vector3d a = tag_target.linear().col(k);
+      a -= a.dot(z) * z;
+      if (a.norm() < 0.5) continue;  // mostly along the approach: not a closing axis
+      a.normalize();
+      if (a.dot(R.col(1)) < 0.0) a = -a;
+      if (a.dot(R.col(1)) > best_dot) {
+        best_dot = a.dot(R.col(1));
+        y = a;
+      }
+    }
+    best.pose.linear().col(1) = y;
+    best.pose.linear().col(0) = y.cross(z);
+  }
+  if (found && p.centre_from_tag) {
+    // Across the approach, the tag target's centre; along it, the candidate's depth.
+    const Eigen::Vector3d z = best.pose.linear().col(2);
+    const Eigen::Vector3d d = tag_target.translation() - best.pose.translation();
+    best.pose.translation() += d - d.dot(z) * z;
+  }
   if (!found) {
     if (p.require_candidate && direction != ApproachDirection::Tag) return std::nullopt;
     double backoff = p.fallback_backoff_forward;
@@ -179,7 +214,7 @@ std::optional<GraspChoice> chooseGrasp(const std::vector<GraspCandidate>& candid
       backoff = p.fallback_backoff_downward;
     } else if (direction == ApproachDirection::Sideways) {
       // The side facing the reference orientation's approach better.
-      approach = *wantedApproach(direction, tag_target, p.sideways_turn_deg, reference.col(2));
+      approach = *wantedApproach(direction, tag_target, p, reference.col(2));
       backoff = p.fallback_backoff_sideways;
     }
     if (direction == ApproachDirection::Tag || direction == ApproachDirection::Forward ||

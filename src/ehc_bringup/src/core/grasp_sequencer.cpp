@@ -59,6 +59,12 @@ void GraspSequencerParams::validate() const {
   check(std::isfinite(stall_tolerance_factor) && stall_tolerance_factor >= 1.0 && stall_tolerance_factor <= 10.0,
         "stall_tolerance_factor must be in [1, 10]");
   positive(pregrasp_position_tolerance, "pregrasp_position_tolerance");
+  // APPROACH heads for the pre-grasp and ends within pregrasp_switch_distance of the grasp:
+  // a TCP at the pre-grasp (within its tolerance) must be inside that distance.
+  check(pregrasp_switch_distance > pregrasp_distance + pregrasp_position_tolerance,
+        "pregrasp_switch_distance (" + num(pregrasp_switch_distance, 3) + " m) must be > pregrasp_distance + "
+        "pregrasp_position_tolerance (" + num(pregrasp_distance + pregrasp_position_tolerance, 3) +
+        " m): the approach heads for the pre-grasp and would never switch");
   positive(pregrasp_orientation_tolerance_deg, "pregrasp_orientation_tolerance_deg");
   positive(grasp_position_tolerance, "grasp_position_tolerance");
   positive(grasp_orientation_tolerance_deg, "grasp_orientation_tolerance_deg");
@@ -87,8 +93,11 @@ std::string GraspSequencerParams::summary() const {
     << retreat_tolerance << " m, " << retreat_timeout << " s)"
     << "\n  selection: gate " << selection.candidate_gate << " m, max angle " << selection.max_angle_deg
     << " deg, max width " << selection.max_width << " m, "
-    << "sideways turned " << selection.sideways_turn_deg << " deg towards forward, "
+    << "sideways turned " << selection.sideways_turn_deg << " deg towards forward and tilted "
+    << selection.sideways_tilt_deg << " deg down, "
     << (selection.align_approach ? "candidates aligned to the approach, " : "")
+    << (selection.centre_from_tag ? "centred on the tag target across the approach, " : "")
+    << (selection.closing_axis_from_tag ? "closing along a tag target axis, " : "")
     << (selection.require_candidate ? "candidate required" : "tag fallback") << " (backoff forward "
     << selection.fallback_backoff_forward << ", downward " << selection.fallback_backoff_downward
     << ", sideways " << selection.fallback_backoff_sideways << " m)";
@@ -124,7 +133,10 @@ GraspSequencerParams loadGraspSequencerParams(const ehc_control::ConfigNode& roo
   p.selection.max_width = sel.get("max_width", p.selection.max_width);
   p.selection.require_candidate = sel.get("require_candidate", p.selection.require_candidate);
   p.selection.align_approach = sel.get("align_approach", p.selection.align_approach);
+  p.selection.centre_from_tag = sel.get("centre_from_tag", p.selection.centre_from_tag);
+  p.selection.closing_axis_from_tag = sel.get("closing_axis_from_tag", p.selection.closing_axis_from_tag);
   p.selection.sideways_turn_deg = sel.get("sideways_turn_deg", p.selection.sideways_turn_deg);
+  p.selection.sideways_tilt_deg = sel.get("sideways_tilt_deg", p.selection.sideways_tilt_deg);
   p.selection.fallback_backoff_forward = sel.get("fallback_backoff_forward", p.selection.fallback_backoff_forward);
   p.selection.fallback_backoff_downward = sel.get("fallback_backoff_downward", p.selection.fallback_backoff_downward);
   p.selection.fallback_backoff_sideways = sel.get("fallback_backoff_sideways", p.selection.fallback_backoff_sideways);
