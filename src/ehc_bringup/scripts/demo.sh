@@ -17,7 +17,7 @@
 #   CONTROLLER_CONFIG  controller YAML                                [config/demo/controller.yaml]
 #   MODE               controller mode ehc | neo_e | neo_c | tsmm     [ehc]
 #   SEQUENCER_CONFIG   grasp sequencer YAML                           [config/demo/grasp_sequencer.yaml]
-#   SIM_CONFIG         simulator YAML                                 [src/ehc_sim/config/sim.yaml]
+#   SIM_CONFIG         simulator YAML                                 [config/sim/bullet_sim.yaml]
 #   SCENE              scene YAML                                     [config/scenes/table_three_objects.yaml]
 #   SEED               simulator noise seed                           [1]
 #   WALL_LIMIT         wall-clock guard for the whole run, s           [600]
@@ -42,7 +42,7 @@ OUT="${OUT:-results/demo}"
 CONTROLLER_CONFIG="${CONTROLLER_CONFIG:-config/demo/controller.yaml}"
 MODE="${MODE:-ehc}"
 SEQUENCER_CONFIG="${SEQUENCER_CONFIG:-config/demo/grasp_sequencer.yaml}"
-SIM_CONFIG="${SIM_CONFIG:-src/ehc_sim/config/sim.yaml}"
+SIM_CONFIG="${SIM_CONFIG:-config/sim/bullet_sim.yaml}"
 SCENE="${SCENE:-config/scenes/table_three_objects.yaml}"
 SEED="${SEED:-1}"
 WALL_LIMIT="${WALL_LIMIT:-600}"

@@ -1,7 +1,7 @@
 // ehc_sim_node: the Bullet-backed fake robot (ROS wrapper of ehc_sim::SimWorld,
 // SimulatedCamera and CommandGate).
 //
-//   rosrun ehc_sim ehc_sim_node _config:=src/ehc_sim/config/sim.yaml
+//   rosrun ehc_sim ehc_sim_node _config:=config/sim/bullet_sim.yaml
 //       [_scene:=config/scenes/table_three_objects.yaml] [_free_run:=true] [_seed:=N]
 //
 // Lock-step (default): publishes /clock and the state stamped t, waits for the
