@@ -59,9 +59,10 @@ def main():
         f.write("\n")
 
     for o in s["objects"]:
-        line = "%-8s %-7s time %6.2f s  TfM %5.1f %% (approach; %5.1f %% until the gripper closes)  %s grasp from %s" % (
+        line = ("%-8s %-7s time %6.2f s  TfM %5.1f %% (at a distance; %5.1f %% to the pre-grasp switch, %5.1f %% to the "
+                "gripper closing)  %s grasp from %s") % (
             o["name"], "SUCCESS" if o["success"] else "FAILED", o["time_s"], 100.0 * o["tfm"],
-            100.0 * o.get("tfm_until_close", 0.0), o["approach"],
+            100.0 * o.get("tfm_until_switch", 0.0), 100.0 * o.get("tfm_until_close", 0.0), o["approach"],
             "perception candidate" if o["grasp_from_candidate"] else "tag target")
         if not o["success"]:
             line += "  [%s: %s]" % (o["failed_phase"], o["reason"])

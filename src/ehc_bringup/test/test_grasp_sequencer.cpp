@@ -56,6 +56,7 @@ struct Harness {
   std::optional<Eigen::Isometry3d> last_goal;
   std::optional<Eigen::Isometry3d> perceive;  ///< fed to object 0 every cycle if set
   std::optional<Eigen::Isometry3d> camera;    ///< camera optical frame (TfM)
+  std::optional<double> sig;                  ///< /ehc/status sig(w)
 
   explicit Harness(const GraspSequencerParams& p) : seq(p) { tcp.translation() << 0.3, 0, 0.9; }
 
@@ -67,6 +68,7 @@ struct Harness {
     in.camera = camera;
     in.controller_phase = controller_phase;
     in.target_in_fov = in_fov;
+    in.sig = sig;
     in.gripper_state = gripper;
     in.grasp_succeeded = succeeded;
     SequencerOutput out = seq.update(in);
@@ -451,6 +453,53 @@ TEST(GraspSequencer, TfmCountsCyclesUntilTheGripperCloses) {
   EXPECT_NEAR(r.tfm, 100.0 / 402.0, 1e-12);
   EXPECT_NEAR(r.tfm_until_close, 100.0 / 404.0, 1e-12);
   EXPECT_NEAR(r.controller_tfm, 100.0 / 404.0, 1e-12);
+}
+
+TEST(GraspSequencer, TfmCountsTheApproachUntilTheArmTakesOver) {
+  GraspSequencerParams p = twoObjects();
+  p.objects.resize(1);
+  ASSERT_DOUBLE_EQ(p.tfm_handover_sig, 0.5);  // the default
+  Harness h(p);
+  ASSERT_TRUE(h.seq.setCamera(CameraModel()));
+  h.follow = false;
+  h.perceive = forwardTarget();
+  // 100 cycles far away (sig 0.2) in view; then the arm takes over (sig 0.6) and the camera
+  // turns away for 100 cycles; sig dropping back (0.3) does not reopen the window.
+  for (int i = 0; i < 250; ++i) {
+    h.sig = i < 100 ? 0.2 : (i < 200 ? 0.6 : 0.3);
+    h.camera = opticalFrame(i < 100);
+    h.in_fov = i < 100;
+    h.step();
+  }
+  h.follow = true;
+  while (h.seq.phase() != GraspPhase::Close) h.step();
+  h.runUntilDone();
+  ASSERT_EQ(h.seq.results().size(), 1u);
+  const GraspResult& r = h.seq.results()[0];
+  EXPECT_EQ(r.cycles, 100);
+  EXPECT_DOUBLE_EQ(r.tfm, 1.0);
+  // Until the pre-grasp switch: the 250 cycles + 2 to the lock, 100 in view.
+  EXPECT_NEAR(r.tfm_until_switch, 100.0 / 252.0, 1e-12);
+  const std::string j = graspResultsToJson(h.seq.results(), "ehc", 1.0);
+  EXPECT_NE(j.find("\"tfm_until_switch\": 0.3968"), std::string::npos) << j;
+  // tfm_handover_sig 1: the window is the whole approach again.
+  p.tfm_handover_sig = 1.0;
+  Harness g(p);
+  ASSERT_TRUE(g.seq.setCamera(CameraModel()));
+  g.follow = false;
+  g.perceive = forwardTarget();
+  for (int i = 0; i < 250; ++i) {
+    g.sig = 0.9;
+    g.camera = opticalFrame(i < 100);
+    g.step();
+  }
+  g.follow = true;
+  g.runUntilDone();
+  ASSERT_EQ(g.seq.results().size(), 1u);
+  EXPECT_EQ(g.seq.results()[0].cycles, 252);
+  EXPECT_NEAR(g.seq.results()[0].tfm, 100.0 / 252.0, 1e-12);
+  p.tfm_handover_sig = 0.0;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
 }
 
 TEST(GraspSequencer, TfmWithoutCameraPoseCountsNothing) {

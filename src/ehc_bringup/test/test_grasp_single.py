@@ -7,7 +7,7 @@ obstacle node, EHC controller, grasp sequencer; its own private ROS master) runs
 with MPBS (controller _mpbs:=true) and without (plain PBVS to the grasp pose, _mpbs:=false).
 
 Asserted: with MPBS the object is grasped and lifted (the simulator's gripper/lift result) and
-TfM >= 95 %. Without MPBS the TfM is reported; for downward and sideways grasps it must be lower
+TfM >= 95 % (TfM: the approach at a distance, until the arm takes over; see grasp_sequencer.h). Without MPBS the TfM is reported; for downward and sideways grasps it must be lower
 than with MPBS (the direction of the difference, no made-up number). No wall-clock assertion:
 the .test time-limit only guards against a hang.
 """
@@ -74,9 +74,10 @@ class GraspSingle(unittest.TestCase):
         with_mpbs, log1 = run_scenario(orientation, True, os.path.join(base, "mpbs"))
         without, log2 = run_scenario(orientation, False, os.path.join(base, "pbvs"))
         a, b = with_mpbs["objects"][0], without["objects"][0]
-        print("[%s] EHC + MPBS: success %s, time %.2f s, TfM %.1f %% | EHC without MPBS: success %s, "
-              "time %.2f s, TfM %.1f %%" % (orientation, a["success"], a["time_s"], 100 * a["tfm"],
-                                            b["success"], b["time_s"], 100 * b["tfm"]))
+        print("[%s] EHC + MPBS: success %s, time %.2f s, TfM %.1f %% (%.1f %% to the pre-grasp switch) | "
+              "EHC without MPBS: success %s, time %.2f s, TfM %.1f %% (%.1f %%)"
+              % (orientation, a["success"], a["time_s"], 100 * a["tfm"], 100 * a["tfm_until_switch"],
+                 b["success"], b["time_s"], 100 * b["tfm"], 100 * b["tfm_until_switch"]))
         self.assertEqual(with_mpbs["mpbs"], True)
         self.assertEqual(without["mpbs"], False)
         self.assertTrue(a["success"], "EHC + MPBS did not grasp (%s: %s)\n%s" % (a["failed_phase"], a["reason"], log1[-2000:]))

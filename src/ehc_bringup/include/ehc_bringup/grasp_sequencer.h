@@ -28,11 +28,17 @@
 // is failed with the phase it was in. Time = sim time (s). NaN/Inf inputs are rejected
 // (counted); a non-finite or decreasing time throws "[GraspSequencer] ...".
 //
-// TfM of an object = fraction of cycles of the approach (from its first perceived pose until the
-// pre-grasp switch, pregrasp_switch_distance from the grasp) in which the object centre
+// TfM of an object = fraction of cycles of the approach at a distance in which the object centre
 // (perceived pose) projects inside the camera image at positive depth (camera pose from tf,
-// pinhole intrinsics from camera_info). Closer, the hand camera (off the gripper axis) cannot
-// see the object centre by geometry; tfm_until_close covers the span up to the gripper closing.
+// pinhole intrinsics from camera_info). The approach at a distance runs from the object's first
+// perceived pose until the arm takes over (/ehc/status sig(w) >= tfm_handover_sig: the target
+// is within the arm's reach) or the pre-grasp switch (pregrasp_switch_distance from the grasp),
+// whichever comes first. That is what MPBS is for (paper, Exp-3: the camera keeps the target
+// in view while the robot is at a distance). Once sig(w) ~ 1, MPBS's desired pose is the grasp
+// pose, and a grasp orientation that looks away from the object (a side grasp reached from
+// the front) turns the camera away from it. tfm_until_switch counts until the pre-grasp
+// switch whatever sig(w) is; tfm_until_close up to the gripper closing (closer, the hand
+// camera, off the gripper axis, cannot see the object centre by geometry).
 // Cycles without a camera pose are not counted. The controller's own in-FOV flag (/ehc/status)
 // is reported as controller_tfm (from the first pose until the gripper closes).
 
@@ -91,6 +97,9 @@ struct GraspSequencerParams {
   /// (the object time limit ends it). stall_time 0: off.
   double stall_time = 1.0;                ///< s
   double stall_tolerance_factor = 2.5;
+  /// TfM counts the approach until sig(w) reaches this (the arm takes over), see above.
+  /// (0, 1]; 1 = until the pre-grasp switch.
+  double tfm_handover_sig = 0.5;
   double gripper_timeout = 3.0;           ///< s, CLOSE without HOLDING / CLOSED_EMPTY
   double lift_height = 0.15;              ///< m, above the grasp pose (> the sim's 0.10 m)
   double release_timeout = 2.0;           ///< s
@@ -113,6 +122,7 @@ struct SequencerInput {
   std::optional<Eigen::Isometry3d> camera;         ///< camera optical frame in the world, if known
   std::string controller_phase;                    ///< /ehc/status phase ("" if none yet)
   bool target_in_fov = false;                      ///< /ehc/status target_in_fov
+  std::optional<double> sig;                       ///< /ehc/status sig_omega, if any
   std::string gripper_state;                       ///< /sim/status: open|closing|holding|closed_empty|opening
   bool grasp_succeeded = false;                    ///< /sim/status grasp_succeeded
 };
@@ -139,6 +149,7 @@ struct GraspResult {
   double time_s = 0.0;            ///< object start -> lift success (or failure)
   double tfm = 0.0;               ///< [0, 1], object centre in the image (see above)
   long cycles = 0;                ///< cycles counted for TfM
+  double tfm_until_switch = 0.0;  ///< [0, 1], same test until the pre-grasp switch
   double tfm_until_close = 0.0;   ///< [0, 1], same test up to the gripper closing
   double controller_tfm = 0.0;    ///< [0, 1], /ehc/status target_in_fov over the same span
   std::string failed_phase;       ///< "" on success
@@ -209,6 +220,8 @@ class GraspSequencer {
   Eigen::Vector3d last_approach_ = Eigen::Vector3d::UnitX();
   // bookkeeping
   GraspResult cur_;
+  long switch_cycles_ = 0, switch_fov_cycles_ = 0;
+  bool distant_ = true;  ///< TfM window: sig(w) has not reached tfm_handover_sig yet
   long fov_cycles_ = 0, tfm_cycles_ = 0, close_cycles_ = 0, close_fov_cycles_ = 0, ctrl_fov_cycles_ = 0, ctrl_cycles_ = 0;
   std::optional<CameraModel> camera_;
   bool counting_tfm_ = true;

@@ -58,6 +58,8 @@ void GraspSequencerParams::validate() const {
   check(std::isfinite(stall_time) && stall_time >= 0.0 && stall_time <= 30.0, "stall_time must be in [0, 30] s");
   check(std::isfinite(stall_tolerance_factor) && stall_tolerance_factor >= 1.0 && stall_tolerance_factor <= 10.0,
         "stall_tolerance_factor must be in [1, 10]");
+  check(std::isfinite(tfm_handover_sig) && tfm_handover_sig > 0.0 && tfm_handover_sig <= 1.0,
+        "tfm_handover_sig must be in (0, 1]");
   positive(pregrasp_position_tolerance, "pregrasp_position_tolerance");
   // APPROACH heads for the pre-grasp and ends within pregrasp_switch_distance of the grasp:
   // a TCP at the pre-grasp (within its tolerance) must be inside that distance.
@@ -88,6 +90,7 @@ std::string GraspSequencerParams::summary() const {
     << "\n  pre-grasp from " << pregrasp_switch_distance << " m; tolerances: pre-grasp " << pregrasp_position_tolerance << " m/" << pregrasp_orientation_tolerance_deg
     << " deg, grasp " << grasp_position_tolerance << " m/" << grasp_orientation_tolerance_deg << " deg"
     << " (stalled for " << stall_time << " s: x" << stall_tolerance_factor << ")"
+    << "; TfM until sig(w) >= " << tfm_handover_sig << " or the pre-grasp switch"
     << "\n  gripper timeout " << gripper_timeout << " s, lift " << lift_height << " m, release timeout "
     << release_timeout << " s, retreat " << retreat_distance << " m back + " << retreat_raise << " m up (tol "
     << retreat_tolerance << " m, " << retreat_timeout << " s)"
@@ -116,6 +119,7 @@ GraspSequencerParams loadGraspSequencerParams(const ehc_control::ConfigNode& roo
   p.pregrasp_switch_distance = s.get("pregrasp_switch_distance", p.pregrasp_switch_distance);
   p.stall_time = s.get("stall_time", p.stall_time);
   p.stall_tolerance_factor = s.get("stall_tolerance_factor", p.stall_tolerance_factor);
+  p.tfm_handover_sig = s.get("tfm_handover_sig", p.tfm_handover_sig);
   p.pregrasp_position_tolerance = s.get("pregrasp_position_tolerance", p.pregrasp_position_tolerance);
   p.pregrasp_orientation_tolerance_deg = s.get("pregrasp_orientation_tolerance_deg", p.pregrasp_orientation_tolerance_deg);
   p.grasp_position_tolerance = s.get("grasp_position_tolerance", p.grasp_position_tolerance);
@@ -246,6 +250,8 @@ void GraspSequencer::startObject(double t, SequencerOutput* out) {
   centre_in_tcp_.reset();
   hold_goal_.reset();
   fov_cycles_ = tfm_cycles_ = ctrl_fov_cycles_ = ctrl_cycles_ = close_cycles_ = close_fov_cycles_ = 0;
+  switch_cycles_ = switch_fov_cycles_ = 0;
+  distant_ = true;
   counting_tfm_ = true;
   cur_ = GraspResult();
   cur_.name = params_.objects[current_].name;
@@ -316,6 +322,7 @@ void GraspSequencer::finishObject(double t, bool success, const std::string& rea
   cur_.reason = reason;
   cur_.cycles = tfm_cycles_;
   cur_.tfm = tfm_cycles_ > 0 ? static_cast<double>(fov_cycles_) / static_cast<double>(tfm_cycles_) : 0.0;
+  cur_.tfm_until_switch = switch_cycles_ > 0 ? static_cast<double>(switch_fov_cycles_) / static_cast<double>(switch_cycles_) : 0.0;
   cur_.tfm_until_close = close_cycles_ > 0 ? static_cast<double>(close_fov_cycles_) / static_cast<double>(close_cycles_) : 0.0;
   cur_.controller_tfm = ctrl_cycles_ > 0 ? static_cast<double>(ctrl_fov_cycles_) / static_cast<double>(ctrl_cycles_) : 0.0;
   cur_.used_candidate = locked_ ? locked_->from_candidate : false;
@@ -368,8 +375,13 @@ SequencerOutput GraspSequencer::update(const SequencerInput& in) {
         ++close_cycles_;
         if (seen) ++close_fov_cycles_;
         if (!locked_) {  // the approach: until the pre-grasp switch
-          ++tfm_cycles_;
-          if (seen) ++fov_cycles_;
+          ++switch_cycles_;
+          if (seen) ++switch_fov_cycles_;
+          if (in.sig && *in.sig >= params_.tfm_handover_sig) distant_ = false;  // the arm takes over
+          if (distant_) {
+            ++tfm_cycles_;
+            if (seen) ++fov_cycles_;
+          }
         }
       }
     }
@@ -554,6 +566,7 @@ std::string graspResultsToJson(const std::vector<GraspResult>& results, const st
     const GraspResult& r = results[i];
     s << (i ? ", " : "") << "{\"name\": " << jsonString(r.name) << ", \"success\": " << (r.success ? "true" : "false")
       << ", \"time_s\": " << num(r.time_s, 2) << ", \"tfm\": " << num(r.tfm, 4) << ", \"tfm_cycles\": " << r.cycles
+      << ", \"tfm_until_switch\": " << num(r.tfm_until_switch, 4)
       << ", \"tfm_until_close\": " << num(r.tfm_until_close, 4) << ", \"controller_tfm\": " << num(r.controller_tfm, 4)
       << ", \"approach\": " << jsonString(r.approach) << ", \"grasp_from_candidate\": "
       << (r.used_candidate ? "true" : "false") << ", \"failed_phase\": " << jsonString(r.failed_phase)
@@ -573,7 +586,8 @@ std::string graspResultLine(const GraspResult& r) {
   std::ostringstream s;
   s << std::left << std::setw(8) << r.name << " " << (r.success ? "SUCCESS" : "FAILED ") << "  time "
     << std::right << std::fixed << std::setprecision(2) << std::setw(6) << r.time_s << " s  TfM " << std::setprecision(1)
-    << std::setw(5) << 100.0 * r.tfm << " %  grasp " << (r.used_candidate ? "perception candidate" : "tag fallback")
+    << std::setw(5) << 100.0 * r.tfm << " % (" << std::setw(5) << 100.0 * r.tfm_until_switch
+    << " % to the pre-grasp switch)  grasp " << (r.used_candidate ? "perception candidate" : "tag fallback")
     << " (" << r.approach << ")";
   if (!r.success) s << "  [" << r.failed_phase << ": " << r.reason << "]";
   return s.str();

@@ -237,6 +237,7 @@ class SequencerNode {
     if (t_start_ < 0.0) t_start_ = in.t;
     in.controller_phase = m.phase;
     in.target_in_fov = m.target_in_fov;
+    if (std::isfinite(m.sig_omega)) in.sig = m.sig_omega;
     in.gripper_state = gripper_state_;
     in.grasp_succeeded = grasp_succeeded_;
     try {
