@@ -482,6 +482,24 @@ TEST(GraspSequencer, TfmCountsTheApproachUntilTheArmTakesOver) {
   EXPECT_NEAR(r.tfm_until_switch, 100.0 / 252.0, 1e-12);
   const std::string j = graspResultsToJson(h.seq.results(), "ehc", 1.0);
   EXPECT_NE(j.find("\"tfm_until_switch\": 0.3968"), std::string::npos) << j;
+  // Within reach from the first cycle (the next object on the same table): no distant part,
+  // the whole approach counts.
+  {
+    Harness w(p);
+    ASSERT_TRUE(w.seq.setCamera(CameraModel()));
+    w.follow = false;
+    w.perceive = forwardTarget();
+    for (int i = 0; i < 250; ++i) {
+      w.sig = 0.95;
+      w.camera = opticalFrame(i < 100);
+      w.step();
+    }
+    w.follow = true;
+    w.runUntilDone();
+    ASSERT_EQ(w.seq.results().size(), 1u);
+    EXPECT_EQ(w.seq.results()[0].cycles, 252);
+    EXPECT_NEAR(w.seq.results()[0].tfm, 100.0 / 252.0, 1e-12);
+  }
   // tfm_handover_sig 1: the window is the whole approach again.
   p.tfm_handover_sig = 1.0;
   Harness g(p);

@@ -33,7 +33,8 @@
 // pinhole intrinsics from camera_info). The approach at a distance runs from the object's first
 // perceived pose until the arm takes over (/ehc/status sig(w) >= tfm_handover_sig: the target
 // is within the arm's reach) or the pre-grasp switch (pregrasp_switch_distance from the grasp),
-// whichever comes first. That is what MPBS is for (paper, Exp-3: the camera keeps the target
+// whichever comes first. An approach that starts within reach (the next object on the same
+// table: sig(w) at or above the threshold from its first cycle) counts whole, up to the switch. That is what MPBS is for (paper, Exp-3: the camera keeps the target
 // in view while the robot is at a distance). Once sig(w) ~ 1, MPBS's desired pose is the grasp
 // pose, and a grasp orientation that looks away from the object (a side grasp reached from
 // the front) turns the camera away from it. tfm_until_switch counts until the pre-grasp
@@ -221,7 +222,8 @@ class GraspSequencer {
   // bookkeeping
   GraspResult cur_;
   long switch_cycles_ = 0, switch_fov_cycles_ = 0;
-  bool distant_ = true;  ///< TfM window: sig(w) has not reached tfm_handover_sig yet
+  bool distant_ = true;       ///< TfM window open: the arm has not taken over yet
+  bool was_distant_ = false;  ///< a cycle of this approach had sig(w) below tfm_handover_sig
   long fov_cycles_ = 0, tfm_cycles_ = 0, close_cycles_ = 0, close_fov_cycles_ = 0, ctrl_fov_cycles_ = 0, ctrl_cycles_ = 0;
   std::optional<CameraModel> camera_;
   bool counting_tfm_ = true;

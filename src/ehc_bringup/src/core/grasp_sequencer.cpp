@@ -252,6 +252,7 @@ void GraspSequencer::startObject(double t, SequencerOutput* out) {
   fov_cycles_ = tfm_cycles_ = ctrl_fov_cycles_ = ctrl_cycles_ = close_cycles_ = close_fov_cycles_ = 0;
   switch_cycles_ = switch_fov_cycles_ = 0;
   distant_ = true;
+  was_distant_ = false;
   counting_tfm_ = true;
   cur_ = GraspResult();
   cur_.name = params_.objects[current_].name;
@@ -377,7 +378,11 @@ SequencerOutput GraspSequencer::update(const SequencerInput& in) {
         if (!locked_) {  // the approach: until the pre-grasp switch
           ++switch_cycles_;
           if (seen) ++switch_fov_cycles_;
-          if (in.sig && *in.sig >= params_.tfm_handover_sig) distant_ = false;  // the arm takes over
+          // The arm takes over: sig(w) rises to the threshold. An approach that starts within
+          // reach (the next object on the same table) has no distant part: it counts whole.
+          const bool within_reach = in.sig && *in.sig >= params_.tfm_handover_sig;
+          if (!within_reach) was_distant_ = true;
+          else if (was_distant_) distant_ = false;
           if (distant_) {
             ++tfm_cycles_;
             if (seen) ++fov_cycles_;
