@@ -482,40 +482,31 @@ TEST(GraspSequencer, TfmCountsTheApproachUntilTheArmTakesOver) {
   EXPECT_NEAR(r.tfm_until_switch, 100.0 / 252.0, 1e-12);
   const std::string j = graspResultsToJson(h.seq.results(), "ehc", 1.0);
   EXPECT_NE(j.find("\"tfm_until_switch\": 0.3968"), std::string::npos) << j;
-  // Within reach from the first cycle (the next object on the same table): no distant part,
-  // the whole approach counts.
-  {
-    Harness w(p);
-    ASSERT_TRUE(w.seq.setCamera(CameraModel()));
+  // 250 cycles at a constant sig, the first 100 in view, then on to the grasp: the TfM result.
+  auto constantSig = [](const GraspSequencerParams& q, double sig) {
+    Harness w(q);
+    EXPECT_TRUE(w.seq.setCamera(CameraModel()));
     w.follow = false;
     w.perceive = forwardTarget();
     for (int i = 0; i < 250; ++i) {
-      w.sig = 0.95;
+      w.sig = sig;
       w.camera = opticalFrame(i < 100);
       w.step();
     }
     w.follow = true;
     w.runUntilDone();
-    ASSERT_EQ(w.seq.results().size(), 1u);
-    EXPECT_EQ(w.seq.results()[0].cycles, 252);
-    EXPECT_NEAR(w.seq.results()[0].tfm, 100.0 / 252.0, 1e-12);
-  }
+    return w.seq.results().empty() ? GraspResult() : w.seq.results()[0];
+  };
+  // Within reach from the first cycle (the next object on the same table): no distant part,
+  // the whole approach counts.
+  GraspResult w = constantSig(p, 0.95);
+  EXPECT_EQ(w.cycles, 252);
+  EXPECT_NEAR(w.tfm, 100.0 / 252.0, 1e-12);
   // tfm_handover_sig 1: the window is the whole approach again.
   p.tfm_handover_sig = 1.0;
-  Harness g(p);
-  ASSERT_TRUE(g.seq.setCamera(CameraModel()));
-  g.follow = false;
-  g.perceive = forwardTarget();
-  for (int i = 0; i < 250; ++i) {
-    g.sig = 0.9;
-    g.camera = opticalFrame(i < 100);
-    g.step();
-  }
-  g.follow = true;
-  g.runUntilDone();
-  ASSERT_EQ(g.seq.results().size(), 1u);
-  EXPECT_EQ(g.seq.results()[0].cycles, 252);
-  EXPECT_NEAR(g.seq.results()[0].tfm, 100.0 / 252.0, 1e-12);
+  w = constantSig(p, 0.9);
+  EXPECT_EQ(w.cycles, 252);
+  EXPECT_NEAR(w.tfm, 100.0 / 252.0, 1e-12);
   p.tfm_handover_sig = 0.0;
   EXPECT_THROW(p.validate(), std::invalid_argument);
 }
