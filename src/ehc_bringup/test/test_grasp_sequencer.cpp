@@ -111,6 +111,17 @@ struct Harness {
   }
 };
 
+/// `f` throws std::invalid_argument whose message contains `needle`.
+template <class F>
+void expectInvalid(F&& f, const std::string& needle) {
+  try {
+    f();
+    ADD_FAILURE() << "no std::invalid_argument (expected one naming '" << needle << "')";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+  }
+}
+
 bool hasEvent(const std::vector<std::string>& ev, const std::string& s) {
   for (const auto& e : ev)
     if (e.find(s) != std::string::npos) return true;
@@ -638,12 +649,7 @@ TEST(GraspSequencer, BadTimeThrows) {
   GraspSequencer s(twoObjects());
   SequencerInput in;
   in.t = std::nan("");
-  try {
-    s.update(in);
-    FAIL() << "no throw";
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("[GraspSequencer]"), std::string::npos);
-  }
+  expectInvalid([&] { s.update(in); }, "[GraspSequencer]");
   in.t = 2.0;
   s.update(in);
   in.t = 1.0;
@@ -658,12 +664,7 @@ TEST(GraspSequencerParams, ValidationNamesTheField) {
   EXPECT_THROW(p.validate(), std::invalid_argument);
   p = twoObjects();
   p.object_time_limit = -1.0;
-  try {
-    p.validate();
-    FAIL();
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("object_time_limit"), std::string::npos);
-  }
+  expectInvalid([&] { p.validate(); }, "object_time_limit");
   p = twoObjects();
   p.pose_filter_gain = 0.0;
   EXPECT_THROW(GraspSequencer{p}, std::invalid_argument);
@@ -675,12 +676,7 @@ TEST(GraspSequencerParams, ValidationNamesTheField) {
   p.pregrasp_distance = 0.20;
   p.pregrasp_position_tolerance = 0.03;
   p.pregrasp_switch_distance = 0.22;
-  try {
-    p.validate();
-    FAIL() << "pre-grasp beyond the switch distance accepted";
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("pregrasp_switch_distance"), std::string::npos) << e.what();
-  }
+  expectInvalid([&] { p.validate(); }, "pregrasp_switch_distance");  // pre-grasp beyond the switch
   p.pregrasp_switch_distance = 0.25;
   EXPECT_NO_THROW(p.validate());
 }
@@ -848,12 +844,7 @@ TEST(GraspSelection, SidewaysTurnedTowardsTheRobot) {
   EXPECT_TRUE(isValidPose(f->pose));
   // Out of range: a clear error.
   p.sideways_turn_deg = 70.0;
-  try {
-    p.validate();
-    FAIL() << "sideways_turn_deg 70 accepted";
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("[GraspSelectionParams] sideways_turn_deg"), std::string::npos) << e.what();
-  }
+  expectInvalid([&] { p.validate(); }, "[GraspSelectionParams] sideways_turn_deg");
 }
 
 TEST(GraspSelection, CandidateCentredOnTheTagAcrossTheApproach) {

@@ -209,13 +209,10 @@ std::optional<GraspChoice> chooseGrasp(const std::vector<GraspCandidate>& candid
     if (p.require_candidate && direction != ApproachDirection::Tag) return std::nullopt;
     double backoff = p.fallback_backoff_forward;
     Eigen::Vector3d approach = tag_target.linear().col(2);
-    if (direction == ApproachDirection::Downward) {
-      approach = Eigen::Vector3d(0, 0, -1);
-      backoff = p.fallback_backoff_downward;
-    } else if (direction == ApproachDirection::Sideways) {
-      // The side facing the reference orientation's approach better.
+    if (direction == ApproachDirection::Downward || direction == ApproachDirection::Sideways) {
+      // Sideways: the side facing the reference orientation's approach better.
       approach = *wantedApproach(direction, tag_target, p, reference.col(2));
-      backoff = p.fallback_backoff_sideways;
+      backoff = direction == ApproachDirection::Downward ? p.fallback_backoff_downward : p.fallback_backoff_sideways;
     }
     if (direction == ApproachDirection::Tag || direction == ApproachDirection::Forward ||
         direction == ApproachDirection::Any) {
