@@ -4,8 +4,8 @@
 // 3. Watchdog: when the target stops arriving, zero commands and TARGET_LOST within 0.2 s
 //    (+ one cycle) of sim time, repeated.
 
-#include "ehc_control/ControllerStatus.h"
-#include "ehc_control/JointVelocityCommand.h"
+#include "ehc_msgs/ControllerStatus.h"
+#include "ehc_msgs/JointVelocityCommand.h"
 
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/Twist.h>
@@ -18,13 +18,13 @@
 namespace {
 
 struct Monitor {
-  ehc_control::ControllerStatus status;
+  ehc_msgs::ControllerStatus status;
   geometry_msgs::Twist twist;
-  ehc_control::JointVelocityCommand arm;
+  ehc_msgs::JointVelocityCommand arm;
   int statuses = 0;
   bool any_nan = false;
   double max_arm = 0.0, max_v = 0.0, max_w = 0.0;
-  void onStatus(const ehc_control::ControllerStatus& s) {
+  void onStatus(const ehc_msgs::ControllerStatus& s) {
     status = s;
     ++statuses;
   }
@@ -34,7 +34,7 @@ struct Monitor {
     max_v = std::max(max_v, std::abs(t.linear.x));
     max_w = std::max(max_w, std::abs(t.angular.z));
   }
-  void onArm(const ehc_control::JointVelocityCommand& a) {
+  void onArm(const ehc_msgs::JointVelocityCommand& a) {
     arm = a;
     for (double v : a.velocities) {
       any_nan |= !std::isfinite(v);

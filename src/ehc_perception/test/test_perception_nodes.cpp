@@ -3,8 +3,8 @@
 // cloud in the camera frame, and the robot state; it checks /ehc/target_pose,
 // /ehc/grasp_candidates and /ehc/obstacles against the known geometry, and that a NaN robot
 // state stops the obstacle output.
-#include "ehc_control/GraspCandidates.h"
-#include "ehc_control/ObstacleArray.h"
+#include "ehc_msgs/GraspCandidates.h"
+#include "ehc_msgs/ObstacleArray.h"
 #include "ehc_control/config_node.h"
 #include "ehc_perception/camera_intrinsics.h"
 #include "ehc_perception/tag_detector.h"
@@ -139,8 +139,8 @@ class PerceptionNodes : public ::testing::Test {
   }
 
   void onTarget(const geometry_msgs::PoseStamped& m) { targets_.push_back(m); }
-  void onGrasps(const ehc_control::GraspCandidates& m) { grasps_.push_back(m); }
-  void onObstacles(const ehc_control::ObstacleArray& m) { obstacles_.push_back(m); }
+  void onGrasps(const ehc_msgs::GraspCandidates& m) { grasps_.push_back(m); }
+  void onObstacles(const ehc_msgs::ObstacleArray& m) { obstacles_.push_back(m); }
 
   ros::NodeHandle nh_;
   CameraIntrinsics cam_;
@@ -151,8 +151,8 @@ class PerceptionNodes : public ::testing::Test {
   sensor_msgs::CameraInfo info_;
   sensor_msgs::PointCloud2 cloud_;
   std::vector<geometry_msgs::PoseStamped> targets_;
-  std::vector<ehc_control::GraspCandidates> grasps_;
-  std::vector<ehc_control::ObstacleArray> obstacles_;
+  std::vector<ehc_msgs::GraspCandidates> grasps_;
+  std::vector<ehc_msgs::ObstacleArray> obstacles_;
 };
 
 }  // namespace
@@ -181,7 +181,7 @@ TEST_F(PerceptionNodes, GraspNodePublishesGraspsOnTheObjectNearTheTarget) {
     return false;
   };
   ASSERT_TRUE(spinUntil(nonEmpty, 40.0)) << "no non-empty /ehc/grasp_candidates";
-  const ehc_control::GraspCandidates* g = nullptr;
+  const ehc_msgs::GraspCandidates* g = nullptr;
   for (const auto& c : grasps_)
     if (!c.poses.empty()) g = &c;
   EXPECT_EQ(g->header.frame_id, "odom");
@@ -206,7 +206,7 @@ TEST_F(PerceptionNodes, ObstacleNodePublishesDistancesAndStopsOnABadState) {
     return false;
   };
   ASSERT_TRUE(spinUntil(baseSeen, 40.0)) << "no base_link distance on /ehc/obstacles";
-  const ehc_control::ObstacleArray* a = nullptr;
+  const ehc_msgs::ObstacleArray* a = nullptr;
   for (const auto& m : obstacles_)
     for (const auto& o : m.obstacles)
       if (o.link == "base_link") a = &m;

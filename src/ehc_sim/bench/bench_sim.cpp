@@ -58,8 +58,8 @@ int main() {
   sensor_msgs::JointState js;
   nav_msgs::Odometry odom;
   tf2_msgs::TFMessage tf;
-  SimObjectPoses objects;
-  SimStatus status;
+  ehc_msgs::SimObjectPoses objects;
+  ehc_msgs::SimStatus status;
   const auto s = ehc_control::benchReport(
       "sim_step_and_state_publication", n,
       [&](int i) {

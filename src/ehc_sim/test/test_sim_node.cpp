@@ -6,11 +6,11 @@
 // /tf and /sim/object_poses) and depth cloud (table top at the table height).
 // No assertion depends on wall time; wall timeouts only stop a hung test.
 
-#include "ehc_control/JointVelocityCommand.h"
+#include "ehc_msgs/JointVelocityCommand.h"
 #include "ehc_control/whole_body_model.h"
-#include "ehc_sim/ResetScene.h"
-#include "ehc_sim/SimObjectPoses.h"
-#include "ehc_sim/SimStatus.h"
+#include "ehc_msgs/ResetScene.h"
+#include "ehc_msgs/SimObjectPoses.h"
+#include "ehc_msgs/SimStatus.h"
 
 #include <geometry_msgs/Twist.h>
 #include <nav_msgs/Odometry.h>
@@ -69,8 +69,8 @@ class FakeController {
     info_sub_ = nh.subscribe("/camera/color/camera_info", 5, &FakeController::onInfo, this);
     cloud_sub_ = nh.subscribe("/camera/depth/points", 5, &FakeController::onCloud, this);
     cmd_pub_ = nh.advertise<geometry_msgs::Twist>("/cmd_vel", 10);
-    arm_pub_ = nh.advertise<ehc_control::JointVelocityCommand>("/arm/joint_velocity_cmd", 10);
-    reset_ = nh.serviceClient<ehc_sim::ResetScene>("/sim/reset");
+    arm_pub_ = nh.advertise<ehc_msgs::JointVelocityCommand>("/arm/joint_velocity_cmd", 10);
+    reset_ = nh.serviceClient<ehc_msgs::ResetScene>("/sim/reset");
     gripper_ = nh.serviceClient<std_srvs::SetBool>("/sim/gripper");
     tf_ = std::make_unique<tf2_ros::TransformListener>(buffer_);
   }
@@ -96,7 +96,7 @@ class FakeController {
 
   /// Resets the sim and waits for its first state (stamp 1 s).
   bool reset(unsigned seed, const std::string& scene = "") {
-    ehc_sim::ResetScene srv;
+    ehc_msgs::ResetScene srv;
     srv.request.seed = seed;
     srv.request.scene_file = scene;
     if (!reset_.call(srv) || !srv.response.success) return false;
@@ -133,7 +133,7 @@ class FakeController {
       out.push_back(s);
       if (k == n) break;
       geometry_msgs::Twist base;
-      ehc_control::JointVelocityCommand arm;
+      ehc_msgs::JointVelocityCommand arm;
       arm.header.stamp = s.stamp;
       arm.names = {"joint1", "joint2", "joint3", "joint4", "joint5", "joint6"};
       arm.velocities.assign(6, 0.0);
@@ -148,8 +148,8 @@ class FakeController {
   State js_;
   State odom_;
   ros::Time odom_stamp_;
-  ehc_sim::SimStatus status_;
-  ehc_sim::SimObjectPoses objects_;
+  ehc_msgs::SimStatus status_;
+  ehc_msgs::SimObjectPoses objects_;
   ros::Time clock_;
   sensor_msgs::Image::ConstPtr image_;
   sensor_msgs::CameraInfo::ConstPtr info_;
@@ -169,8 +169,8 @@ class FakeController {
     const auto& o = m->pose.pose.orientation;
     odom_.yaw = std::atan2(2 * (o.w * o.z + o.x * o.y), 1 - 2 * (o.y * o.y + o.z * o.z));
   }
-  void onStatus(const ehc_sim::SimStatus::ConstPtr& m) { status_ = *m; }
-  void onObjects(const ehc_sim::SimObjectPoses::ConstPtr& m) { objects_ = *m; }
+  void onStatus(const ehc_msgs::SimStatus::ConstPtr& m) { status_ = *m; }
+  void onObjects(const ehc_msgs::SimObjectPoses::ConstPtr& m) { objects_ = *m; }
   void onClock(const rosgraph_msgs::Clock::ConstPtr& m) { clock_ = m->clock; }
   void onImage(const sensor_msgs::Image::ConstPtr& m) { image_ = m; }
   void onInfo(const sensor_msgs::CameraInfo::ConstPtr& m) { info_ = m; }

@@ -9,18 +9,18 @@
 // node.target_centre_topic (what the controller's camera watches, MPBS), and closes / opens the
 // gripper through node.gripper_service (std_srvs/SetBool, true = close). From the descent to
 // the pre-grasp until the retreat ends it sends the object's sphere on node.exclusion_topic
-// (ehc_control/ObstacleExclusion): the obstacle node ignores it, so the fingers may touch the
+// (ehc_msgs/ObstacleExclusion): the obstacle node ignores it, so the fingers may touch the
 // object while every other obstacle keeps its damper. One update per
 // /ehc/status message (lock-step with the simulator). Reads the gripper result from /sim/status.
 // When every object is handled it writes the JSON summary (and the CSV trace) and exits 0.
 // Any exception: log, stop publishing goals (the controller then stops on TARGET_LOST), exit 1.
 
 #include "ehc_bringup/grasp_sequencer.h"
-#include "ehc_control/ControllerStatus.h"
-#include "ehc_control/GraspCandidates.h"
-#include "ehc_control/ObstacleExclusion.h"
+#include "ehc_msgs/ControllerStatus.h"
+#include "ehc_msgs/GraspCandidates.h"
+#include "ehc_msgs/ObstacleExclusion.h"
 #include "ehc_control/config_node.h"
-#include "ehc_sim/SimStatus.h"
+#include "ehc_msgs/SimStatus.h"
 
 #include <geometry_msgs/PointStamped.h>
 #include <geometry_msgs/PoseStamped.h>
@@ -143,7 +143,7 @@ class SequencerNode {
           node_.pose_topics[i], 5, [this, i](const geometry_msgs::PoseStamped::ConstPtr& m) { onObjectPose(i, *m); }));
     subs_.push_back(nh.subscribe(node_.candidates_topic, 2, &SequencerNode::onCandidates, this));
     if (!node_.exclusion_topic.empty())
-      exclusion_pub_ = nh.advertise<ehc_control::ObstacleExclusion>(node_.exclusion_topic, 10);
+      exclusion_pub_ = nh.advertise<ehc_msgs::ObstacleExclusion>(node_.exclusion_topic, 10);
     subs_.push_back(nh.subscribe(node_.sim_status_topic, 10, &SequencerNode::onSimStatus, this));
     subs_.push_back(nh.subscribe(node_.camera_info_topic, 1, &SequencerNode::onCameraInfo, this));
     subs_.push_back(nh.subscribe("joint_states", 10, &SequencerNode::onJoints, this));
@@ -163,7 +163,7 @@ class SequencerNode {
       ROS_ERROR_STREAM_THROTTLE(2.0, "[ehc_grasp_sequencer_node] rejected a non-finite / invalid pose on "
                                          << node_.pose_topics[i]);
   }
-  void onCandidates(const ehc_control::GraspCandidates& m) {
+  void onCandidates(const ehc_msgs::GraspCandidates& m) {
     if (!m.header.frame_id.empty() && m.header.frame_id != node_.world_frame) return;
     std::vector<ehc_bringup::GraspCandidate> c(m.poses.size());
     for (std::size_t i = 0; i < m.poses.size(); ++i) {
@@ -177,7 +177,7 @@ class SequencerNode {
   void publishExclusions(const std::vector<ehc_bringup::ExclusionSphere>& zones, const ros::Time& stamp) {
     if (node_.exclusion_topic.empty() || (zones.empty() && !excluding_)) return;
     excluding_ = !zones.empty();
-    ehc_control::ObstacleExclusion m;
+    ehc_msgs::ObstacleExclusion m;
     m.header.frame_id = node_.world_frame;
     m.header.stamp = stamp;
     for (const auto& z : zones) {
@@ -200,7 +200,7 @@ class SequencerNode {
     c.cy = m.K[5];
     if (!seq_->setCamera(c)) ROS_ERROR_STREAM_THROTTLE(5.0, "[ehc_grasp_sequencer_node] invalid camera_info ignored");
   }
-  void onSimStatus(const ehc_sim::SimStatus& m) {
+  void onSimStatus(const ehc_msgs::SimStatus& m) {
     gripper_state_ = m.gripper_state;
     grasp_succeeded_ = m.grasp_succeeded;
   }
@@ -215,7 +215,7 @@ class SequencerNode {
     base_turn_ = std::abs(m.twist.twist.angular.z);
   }
 
-  void onStatus(const ehc_control::ControllerStatus& m) {
+  void onStatus(const ehc_msgs::ControllerStatus& m) {
     if (finished_) return;
     try {
       step(m);
@@ -231,7 +231,7 @@ class SequencerNode {
   bool failed() const { return failed_; }
 
  private:
-  void step(const ehc_control::ControllerStatus& m) {
+  void step(const ehc_msgs::ControllerStatus& m) {
     ehc_bringup::SequencerInput in;
     in.t = m.header.stamp.toSec();
     if (t_start_ < 0.0) t_start_ = in.t;

@@ -13,9 +13,9 @@
 // Any stale or invalid input, and any servo or QP failure, gives zero commands, repeated every
 // cycle, and a status saying why.
 
-#include "ehc_control/ControllerStatus.h"
-#include "ehc_control/JointVelocityCommand.h"
-#include "ehc_control/ObstacleArray.h"
+#include "ehc_msgs/ControllerStatus.h"
+#include "ehc_msgs/JointVelocityCommand.h"
+#include "ehc_msgs/ObstacleArray.h"
 #include "ehc_control/config_node.h"
 #include "ehc_control/controller_supervisor.h"
 #include "ehc_control/mpbs.h"
@@ -147,8 +147,8 @@ class ControllerNode {
                     << node_.trigger << (node_.trigger == "timer" ? " at " + std::to_string(node_.rate) + " Hz" : ""));
 
     cmd_vel_ = nh.advertise<geometry_msgs::Twist>("cmd_vel", 1);
-    arm_cmd_ = nh.advertise<ehc_control::JointVelocityCommand>("arm/joint_velocity_cmd", 1);
-    status_ = nh.advertise<ehc_control::ControllerStatus>("ehc/status", 10);
+    arm_cmd_ = nh.advertise<ehc_msgs::JointVelocityCommand>("arm/joint_velocity_cmd", 1);
+    status_ = nh.advertise<ehc_msgs::ControllerStatus>("ehc/status", 10);
     subs_.push_back(nh.subscribe("joint_states", 10, &ControllerNode::onJoints, this, ros::TransportHints().tcpNoDelay()));
     subs_.push_back(nh.subscribe("odom", 10, &ControllerNode::onOdom, this, ros::TransportHints().tcpNoDelay()));
     subs_.push_back(nh.subscribe("ehc/target_pose", 10, &ControllerNode::onTarget, this));
@@ -209,7 +209,7 @@ class ControllerNode {
     centre_ = c;
     t_centre_ = ros::Time::now().toSec();
   }
-  void onObstacles(const ehc_control::ObstacleArray& m) {
+  void onObstacles(const ehc_msgs::ObstacleArray& m) {
     std::vector<ObstaclePair> pairs;
     for (const auto& o : m.obstacles) {
       ObstaclePair p;
@@ -240,7 +240,7 @@ class ControllerNode {
 
   void cycle(const ros::Time& stamp) {
     const double now = ros::Time::now().toSec();
-    ehc_control::ControllerStatus st;
+    ehc_msgs::ControllerStatus st;
     st.header.stamp = stamp;
     st.header.frame_id = node_.world_frame;
     st.mode = toString(controller_->params().mode);
@@ -291,7 +291,7 @@ class ControllerNode {
     tw.linear.x = v[0];
     if (nb == 3) tw.linear.y = v[1];
     tw.angular.z = v[nb - 1];
-    ehc_control::JointVelocityCommand ac;
+    ehc_msgs::JointVelocityCommand ac;
     ac.header.stamp = stamp;
     ac.names = model_->config().arm_joints;
     ac.velocities.assign(v.data() + nb, v.data() + v.size());

@@ -3,9 +3,9 @@
 // Each processed cloud (at most max_rate_hz) is transformed into the world frame (tf2 at the
 // cloud stamp), the support plane removed and the objects clustered; grasps are generated
 // for the object nearest the latest /ehc/target_pose (or every object without a fresh
-// target) and published best first (ehc_control/GraspCandidates, world frame). A cloud
+// target) and published best first (ehc_msgs/GraspCandidates, world frame). A cloud
 // without a usable grasp publishes an empty candidate list (reason in the log).
-#include "ehc_control/GraspCandidates.h"
+#include "ehc_msgs/GraspCandidates.h"
 #include "ehc_control/config_node.h"
 #include "ehc_perception/grasp_generator.h"
 #include "ros_conversions.h"
@@ -62,7 +62,7 @@ class GraspNode {
  public:
   GraspNode(ros::NodeHandle& nh, const GraspNodeConfig& cfg)
       : cfg_(cfg), gen_(cfg.generator), listener_(tf_) {
-    pub_ = nh.advertise<ehc_control::GraspCandidates>(cfg_.output_topic, 2);
+    pub_ = nh.advertise<ehc_msgs::GraspCandidates>(cfg_.output_topic, 2);
     cloud_sub_ = nh.subscribe(cfg_.cloud_topic, 1, &GraspNode::onCloud, this);
     if (!cfg_.target_topic.empty())
       target_sub_ = nh.subscribe(cfg_.target_topic, 5, &GraspNode::onTarget, this);
@@ -98,7 +98,7 @@ class GraspNode {
                      " m from the target (gate " + std::to_string(cfg_.target_gate) + " m)";
         res.grasps.clear();
       }
-      ehc_control::GraspCandidates out;
+      ehc_msgs::GraspCandidates out;
       out.header.stamp = msg.header.stamp;
       out.header.frame_id = cfg_.world_frame;
       for (const Grasp& g : res.grasps) {

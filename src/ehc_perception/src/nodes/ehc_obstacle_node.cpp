@@ -1,16 +1,16 @@
 // ehc_obstacle_node: depth clouds -> OctoMap; robot state -> FCL link-obstacle distances on
-// /ehc/obstacles (ehc_control/ObstacleArray) for the controller's velocity dampers.
+// /ehc/obstacles (ehc_msgs/ObstacleArray) for the controller's velocity dampers.
 //   rosrun ehc_perception ehc_obstacle_node _config:=config/perception/obstacle_node.yaml
 // Clouds (at most max_insert_rate_hz) are transformed into the world frame with tf2 at their
 // stamp and inserted with rays from the sensor origin; the robot's own points are removed
 // using the latest state. A timer publishes the distances of every link closer than the
 // influence distance while the state (/joint_states + /odom) is fresh; with a stale state
 // nothing is published and an error is logged (the controller's watchdog then stops).
-// Exclusion spheres (ehc_control/ObstacleExclusion on exclusion_topic, e.g. the object being
+// Exclusion spheres (ehc_msgs/ObstacleExclusion on exclusion_topic, e.g. the object being
 // grasped, sent by the grasp sequencer) are ignored by the distance queries while the list is
 // younger than exclusion_timeout; an older list is dropped (the object is an obstacle again).
-#include "ehc_control/ObstacleArray.h"
-#include "ehc_control/ObstacleExclusion.h"
+#include "ehc_msgs/ObstacleArray.h"
+#include "ehc_msgs/ObstacleExclusion.h"
 #include "ehc_control/config_node.h"
 #include "ehc_control/whole_body_model.h"
 #include "ehc_perception/obstacle_distance_field.h"
@@ -89,7 +89,7 @@ class ObstacleNode {
     for (const std::string& l : field_.robot().links())
       if (!model_.hasLink(l)) throw std::invalid_argument("link '" + l + "' is not in the robot model");
     ROS_INFO_STREAM("  " << field_.robot().summary());
-    pub_ = nh.advertise<ehc_control::ObstacleArray>(cfg_.output_topic, 5);
+    pub_ = nh.advertise<ehc_msgs::ObstacleArray>(cfg_.output_topic, 5);
     cloud_sub_ = nh.subscribe(cfg_.cloud_topic, 1, &ObstacleNode::onCloud, this);
     joints_sub_ = nh.subscribe(cfg_.joint_states_topic, 5, &ObstacleNode::onJoints, this);
     odom_sub_ = nh.subscribe(cfg_.odom_topic, 5, &ObstacleNode::onOdom, this);
@@ -140,7 +140,7 @@ class ObstacleNode {
     odom_stamp_ = msg.header.stamp.isZero() ? ros::Time::now() : msg.header.stamp;
   }
 
-  void onExclusion(const ehc_control::ObstacleExclusion& msg) {
+  void onExclusion(const ehc_msgs::ObstacleExclusion& msg) {
     if (msg.centres.size() != msg.radii.size()) {
       ROS_ERROR_THROTTLE(2.0, "ehc_obstacle_node: exclusion list with %zu centres and %zu radii rejected",
                          msg.centres.size(), msg.radii.size());
@@ -210,12 +210,12 @@ class ObstacleNode {
     }
     try {
       const auto ds = field_.distances(field_.linkPoses(model_, base_, q_));
-      ehc_control::ObstacleArray out;
+      ehc_msgs::ObstacleArray out;
       out.header.stamp = stamp;
       out.header.frame_id = cfg_.world_frame;
       out.influence_distance = cfg_.map.influence_distance;
       for (const LinkObstacleDistance& d : ds) {
-        ehc_control::ObstacleDistance o;
+        ehc_msgs::ObstacleDistance o;
         o.link = d.link;
         o.link_point.x = d.link_point.x();
         o.link_point.y = d.link_point.y();

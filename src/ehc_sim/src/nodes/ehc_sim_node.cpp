@@ -12,13 +12,13 @@
 // Publishes /clock, /joint_states, /odom, /tf (odom -> base_link and every URDF link),
 // /camera/color/image_raw (mono8) + /camera/color/camera_info, /camera/depth/points,
 // /sim/object_poses (ground truth, metrics only), /sim/status.
-// Subscribes /cmd_vel, /arm/joint_velocity_cmd. Services /sim/reset (ehc_sim/ResetScene),
+// Subscribes /cmd_vel, /arm/joint_velocity_cmd. Services /sim/reset (ehc_msgs/ResetScene),
 // /sim/gripper (std_srvs/SetBool: true = close, false = open).
 
 #include "sim_ros_conversions.h"
 
-#include "ehc_control/JointVelocityCommand.h"
-#include "ehc_sim/ResetScene.h"
+#include "ehc_msgs/JointVelocityCommand.h"
+#include "ehc_msgs/ResetScene.h"
 
 #include <geometry_msgs/Twist.h>
 #include <ros/callback_queue.h>
@@ -67,8 +67,8 @@ class SimNode {
     image_pub_ = nh_.advertise<sensor_msgs::Image>("/camera/color/image_raw", 2);
     info_pub_ = nh_.advertise<sensor_msgs::CameraInfo>("/camera/color/camera_info", 2);
     cloud_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("/camera/depth/points", 2);
-    objects_pub_ = nh_.advertise<ehc_sim::SimObjectPoses>("/sim/object_poses", 10);
-    status_pub_ = nh_.advertise<ehc_sim::SimStatus>("/sim/status", 10);
+    objects_pub_ = nh_.advertise<ehc_msgs::SimObjectPoses>("/sim/object_poses", 10);
+    status_pub_ = nh_.advertise<ehc_msgs::SimStatus>("/sim/status", 10);
     cmd_vel_sub_ = nh_.subscribe("/cmd_vel", 10, &SimNode::onCmdVel, this, fast);
     arm_sub_ = nh_.subscribe("/arm/joint_velocity_cmd", 10, &SimNode::onArmCommand, this, fast);
     reset_srv_ = nh_.advertiseService("/sim/reset", &SimNode::onReset, this);
@@ -127,10 +127,10 @@ class SimNode {
     ehc_sim::fillTransforms(*world_, stamp, &tf.transforms);
     tf_pub_.publish(tf);
     odom_pub_.publish(odom);
-    ehc_sim::SimObjectPoses objects;
+    ehc_msgs::SimObjectPoses objects;
     ehc_sim::fillObjectPoses(*world_, stamp, &objects);
     objects_pub_.publish(objects);
-    ehc_sim::SimStatus status;
+    ehc_msgs::SimStatus status;
     ehc_sim::fillStatus(*world_, *gate_, !cfg_.free_run, stamp, &status);
     status_pub_.publish(status);
     joint_pub_.publish(js);  // last: the controller answers this one
@@ -170,7 +170,7 @@ class SimNode {
                                         << gate_->counters().base_rejected << " rejected so far)");
   }
 
-  void onArmCommand(const ehc_control::JointVelocityCommand::ConstPtr& m) {
+  void onArmCommand(const ehc_msgs::JointVelocityCommand::ConstPtr& m) {
     const std::string why = gate_->onArmCommand(static_cast<std::int64_t>(m->header.stamp.toNSec()),
                                                 m->names, m->velocities, !cfg_.free_run);
     answered_ = true;
@@ -181,7 +181,7 @@ class SimNode {
                                         << gate_->counters().arm_stale << " stale so far)");
   }
 
-  bool onReset(ehc_sim::ResetScene::Request& req, ehc_sim::ResetScene::Response& res) {
+  bool onReset(ehc_msgs::ResetScene::Request& req, ehc_msgs::ResetScene::Response& res) {
     try {
       if (!req.scene_file.empty()) {
         const ehc_sim::SceneConfig scene = ehc_sim::loadSceneConfig(req.scene_file);

@@ -2,8 +2,8 @@
 // Message conversions of the simulator node (also used by bench_sim): SimWorld state ->
 // sensor_msgs / nav_msgs / tf / ehc_sim messages. Header-only, no logic beyond copying.
 
-#include "ehc_sim/SimObjectPoses.h"
-#include "ehc_sim/SimStatus.h"
+#include "ehc_msgs/SimObjectPoses.h"
+#include "ehc_msgs/SimStatus.h"
 #include "ehc_sim/command_gate.h"
 #include "ehc_sim/sim_world.h"
 #include "ehc_sim/simulated_camera.h"
@@ -152,7 +152,7 @@ inline void fillCloud(const std::vector<Eigen::Vector3f>& pts, const std::string
   }
 }
 
-inline void fillObjectPoses(const SimWorld& w, const ros::Time& stamp, SimObjectPoses* m) {
+inline void fillObjectPoses(const SimWorld& w, const ros::Time& stamp, ehc_msgs::SimObjectPoses* m) {
   const auto& objects = w.scene().objects;
   m->header.stamp = stamp;
   m->header.frame_id = w.model().config().world_frame;
@@ -174,7 +174,7 @@ inline void fillObjectPoses(const SimWorld& w, const ros::Time& stamp, SimObject
 }
 
 inline void fillStatus(const SimWorld& w, const CommandGate& gate, bool lock_step,
-                       const ros::Time& stamp, SimStatus* m) {
+                       const ros::Time& stamp, ehc_msgs::SimStatus* m) {
   m->header.stamp = stamp;
   m->step = static_cast<uint64_t>(w.stepCount());
   m->lock_step = lock_step;

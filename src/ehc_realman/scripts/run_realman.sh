@@ -1,0 +1,182 @@
+#!/usr/bin/env bash
+# Bring-up of EHC-MM on the RealMan compound robot (RM65-B arm + Water2 base + D435), with
+# rosrun only (no roslaunch). See src/ehc_realman/REALMAN.md for the machine set-up.
+#
+#   run_realman.sh [--dry-run] [COMPONENT...]
+#
+# COMPONENT: arm | base | perception | controller | robot (= arm base) | all (default)
+#   arm         rm_arm_adapter       /arm/joint_velocity_cmd -> /rm_driver/JointPos
+#   base        water2_base_bridge   /cmd_vel -> Water2 joy_control, robot_status -> /odom + tf
+#   perception  ehc_tag_node, ehc_grasp_node, ehc_obstacle_node (camera-facing nodes)
+#   controller  ehc_controller_node  /cmd_vel + /arm/joint_velocity_cmd
+# The vendor rm_driver and the D435 driver are not started here (see REALMAN.md).
+#
+# Environment (defaults in brackets):
+#   EHC_WS             workspace root                         [three levels above this script]
+#   ROBOT_YAML         robot description      [config/robots/realman_rm65_water2/robot.yaml]
+#   ARM_CONFIG         rm_arm_adapter YAML            [config/realman/rm_arm_adapter.yaml]
+#   BASE_CONFIG        water2_base_bridge YAML        [config/realman/water2_base_bridge.yaml]
+#   WATER2_HOST/PORT   Water2 API address (override BASE_CONFIG)           [from BASE_CONFIG]
+#   CONTROLLER_CONFIG  controller YAML (node.trigger: timer)  [config/realman/controller.yaml]
+#   CONTROLLER_MODE    ehc | neo_e | neo_c | tsmm          [the YAML's controller.mode]
+#   TAG_CONFIG, GRASP_CONFIG, OBSTACLE_CONFIG  perception YAMLs       [config/perception/*.yaml]
+#   LOG_DIR            one log file per node                        [$HOME/.ros/ehc_realman]
+#   ROS_MASTER_URI, ROS_IP  as usual (the master runs on the robot computer)
+#
+# Every node is started in the background; Ctrl-C (or any node exiting) stops all the nodes
+# this script started, by their process ids. Exit code: 0 on Ctrl-C, 1 if a node died, 2 on a
+# usage or set-up error.
+set -o pipefail
+
+usage() { awk 'NR == 1 { next } /^#/ { sub(/^# ?/, ""); print; next } { exit }' "$0"; }
+
+DRY_RUN=0
+COMPONENTS=()
+for arg in "$@"; do
+  case "$arg" in
+    --dry-run) DRY_RUN=1 ;;
+    -h|--help) usage; exit 0 ;;
+    arm|base|perception|controller) COMPONENTS+=("$arg") ;;
+    robot) COMPONENTS+=(arm base) ;;
+    all) COMPONENTS+=(arm base perception controller) ;;
+    *) echo "run_realman.sh: unknown argument '$arg'" >&2; usage >&2; exit 2 ;;
+  esac
+done
+[ ${#COMPONENTS[@]} -eq 0 ] && COMPONENTS=(arm base perception controller)
+
+export PATH="/usr/bin:/bin:$PATH"  # the catkin-aware python3 first
+EHC_WS="${EHC_WS:-$(cd "$(dirname "$0")/../../.." && pwd)}"
+cd "$EHC_WS" || exit 2
+if [ -z "${EHC_SKIP_SETUP:-}" ]; then
+  if [ -f devel/setup.bash ]; then
+    # shellcheck disable=SC1091
+    source devel/setup.bash
+  elif [ -f install/setup.bash ]; then
+    # shellcheck disable=SC1091
+    source install/setup.bash
+  else
+    echo "run_realman.sh: no devel/setup.bash in $EHC_WS: build first (make build)" >&2
+    exit 2
+  fi
+fi
+
+ROBOT_YAML="${ROBOT_YAML:-config/robots/realman_rm65_water2/robot.yaml}"
+ARM_CONFIG="${ARM_CONFIG:-config/realman/rm_arm_adapter.yaml}"
+BASE_CONFIG="${BASE_CONFIG:-config/realman/water2_base_bridge.yaml}"
+CONTROLLER_CONFIG="${CONTROLLER_CONFIG:-config/realman/controller.yaml}"
+TAG_CONFIG="${TAG_CONFIG:-config/perception/tag_node.yaml}"
+GRASP_CONFIG="${GRASP_CONFIG:-config/perception/grasp_node.yaml}"
+OBSTACLE_CONFIG="${OBSTACLE_CONFIG:-config/perception/obstacle_node.yaml}"
+LOG_DIR="${LOG_DIR:-${HOME:-/tmp}/.ros/ehc_realman}"
+
+# ---------------------------------------------------------------- the node list
+# Each entry: "package executable arg..." (arguments in rosrun form).
+# Fixed start order whatever the argument order: drivers' adapters first, controller last.
+NODES=()
+for c in arm base perception controller; do
+  [[ " ${COMPONENTS[*]} " == *" $c "* ]] || continue
+  case "$c" in
+    arm) NODES+=("ehc_realman rm_arm_adapter _config:=$ARM_CONFIG") ;;
+    base)
+      n="ehc_realman water2_base_bridge _config:=$BASE_CONFIG"
+      [ -n "${WATER2_HOST:-}" ] && n+=" _host:=$WATER2_HOST"
+      [ -n "${WATER2_PORT:-}" ] && n+=" _port:=$WATER2_PORT"
+      NODES+=("$n") ;;
+    perception)
+      NODES+=("ehc_perception ehc_tag_node _config:=$TAG_CONFIG")
+      NODES+=("ehc_perception ehc_grasp_node _config:=$GRASP_CONFIG")
+      NODES+=("ehc_perception ehc_obstacle_node _config:=$OBSTACLE_CONFIG") ;;
+    controller)
+      # The real robot has no lock-step simulator: CONTROLLER_CONFIG must set node.trigger: timer.
+      n="ehc_control ehc_controller_node _config:=$CONTROLLER_CONFIG _robot:=$ROBOT_YAML"
+      [ -n "${CONTROLLER_MODE:-}" ] && n+=" _mode:=$CONTROLLER_MODE"
+      NODES+=("$n") ;;
+  esac
+done
+
+# ---------------------------------------------------------------- pre-flight checks
+problems=0
+for n in "${NODES[@]}"; do
+  read -r pkg exe args <<<"$n"
+  if ! catkin_find --libexec --first-only "$pkg" "$exe" >/dev/null 2>&1; then
+    echo "run_realman.sh: $pkg/$exe is not built (or not in this workspace)" >&2
+    problems=1
+  fi
+  for a in $args; do
+    case "$a" in
+      _config:=*)
+        f="${a#*:=}"
+        [ -f "$f" ] || { echo "run_realman.sh: $pkg/$exe: file not found: $f" >&2; problems=1; } ;;
+    esac
+  done
+done
+[ -f "$ROBOT_YAML" ] || { echo "run_realman.sh: robot description not found: $ROBOT_YAML" >&2; problems=1; }
+if [[ " ${COMPONENTS[*]} " == *" controller "* ]] && [ -f "$CONTROLLER_CONFIG" ] &&
+   ! grep -Eq '^[[:space:]]+trigger:[[:space:]]*timer([[:space:]]|$)' "$CONTROLLER_CONFIG"; then
+  # trigger: state waits for a simulator's matching /joint_states + /odom stamps: it never runs here.
+  echo "run_realman.sh: $CONTROLLER_CONFIG must set node.trigger: timer on the real robot" >&2
+  problems=1
+fi
+
+if [ "$DRY_RUN" = 1 ]; then
+  echo "ROS_MASTER_URI=${ROS_MASTER_URI:-<unset>} ROS_IP=${ROS_IP:-<unset>}"
+  for n in "${NODES[@]}"; do echo "rosrun $n"; done
+  exit $(( problems ? 2 : 0 ))
+fi
+[ "$problems" = 0 ] || exit 2
+
+if [ -z "${ROS_MASTER_URI:-}" ]; then
+  echo "run_realman.sh: ROS_MASTER_URI is not set (the master runs on the robot computer)" >&2
+  exit 2
+fi
+if ! timeout 5 rosnode list >/dev/null 2>&1; then
+  echo "run_realman.sh: no ROS master at $ROS_MASTER_URI (start roscore on the robot computer)" >&2
+  exit 2
+fi
+
+# ---------------------------------------------------------------- start, watch, stop
+mkdir -p "$LOG_DIR"
+PIDS=()
+NAMES=()
+stop_all() {
+  trap - INT TERM EXIT
+  for i in "${!PIDS[@]}"; do
+    kill -INT "${PIDS[$i]}" 2>/dev/null
+  done
+  for _ in $(seq 50); do  # at most 5 s for a clean shutdown
+    alive=0
+    for p in "${PIDS[@]}"; do kill -0 "$p" 2>/dev/null && alive=1; done
+    [ "$alive" = 0 ] && break
+    sleep 0.1
+  done
+  for p in "${PIDS[@]}"; do kill -KILL "$p" 2>/dev/null; done
+  wait 2>/dev/null
+}
+trap 'echo; echo "run_realman.sh: stopping"; stop_all; exit 0' INT TERM
+trap 'stop_all' EXIT
+
+for n in "${NODES[@]}"; do
+  read -r pkg exe args <<<"$n"
+  log="$LOG_DIR/$exe.log"
+  # shellcheck disable=SC2086
+  rosrun "$pkg" "$exe" $args >"$log" 2>&1 &
+  PIDS+=($!)
+  NAMES+=("$exe")
+  echo "started $exe (pid $!, log $log): rosrun $n"
+done
+
+# Any node exiting is an error: stop everything (the robot must not run half-controlled).
+while :; do
+  for i in "${!PIDS[@]}"; do
+    if ! kill -0 "${PIDS[$i]}" 2>/dev/null; then
+      wait "${PIDS[$i]}"
+      rc=$?
+      echo "run_realman.sh: ${NAMES[$i]} exited (code $rc); stopping the others." >&2
+      echo "  last lines of $LOG_DIR/${NAMES[$i]}.log:" >&2
+      tail -n 5 "$LOG_DIR/${NAMES[$i]}.log" >&2
+      stop_all
+      exit 1
+    fi
+  done
+  sleep 0.5
+done

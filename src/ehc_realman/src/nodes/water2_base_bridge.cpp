@@ -1,0 +1,178 @@
+// water2_base_bridge: /cmd_vel -> Water2 joy_control over TCP (clamped, resent while fresh,
+// zero after a timeout), /odom + tf odom->base_link from the base's robot_status replies
+// (withheld when stale), reconnection with back-off. Thin wrapper around
+// ehc_realman::Water2BaseBridge; the network work runs in its own thread.
+//
+//   rosrun ehc_realman water2_base_bridge _config:=config/realman/water2_base_bridge.yaml
+//       [_host:=192.168.10.10] [_port:=31001]   (one line)
+//
+// Subscribes: /cmd_vel (geometry_msgs/Twist; linear.x, angular.z)
+// Publishes:  /odom (nav_msgs/Odometry), tf odom->base_link,
+//             /water2/status (diagnostic_msgs/DiagnosticStatus: OK / WARN stale / ERROR link)
+
+#include "ehc_realman/water2_base_bridge.h"
+
+#include <diagnostic_msgs/DiagnosticStatus.h>
+#include <geometry_msgs/TransformStamped.h>
+#include <geometry_msgs/Twist.h>
+#include <nav_msgs/Odometry.h>
+#include <ros/ros.h>
+#include <tf2_ros/transform_broadcaster.h>
+
+#include <atomic>
+#include <cmath>
+#include <memory>
+#include <sstream>
+#include <thread>
+
+namespace {
+
+diagnostic_msgs::KeyValue kv(const std::string& key, const std::string& value) {
+  diagnostic_msgs::KeyValue k;
+  k.key = key;
+  k.value = value;
+  return k;
+}
+
+class Water2BaseBridgeNode {
+ public:
+  Water2BaseBridgeNode(ros::NodeHandle& nh, const ehc_realman::Water2BridgeConfig& config)
+      : bridge_(config) {
+    odom_pub_ = nh.advertise<nav_msgs::Odometry>("/odom", 10);
+    status_pub_ = nh.advertise<diagnostic_msgs::DiagnosticStatus>("/water2/status", 1, true);
+    cmd_sub_ = nh.subscribe("/cmd_vel", 10, &Water2BaseBridgeNode::onCmdVel, this,
+                            ros::TransportHints().tcpNoDelay());
+    odom_timer_ = nh.createSteadyTimer(ros::WallDuration(1.0 / config.odom_rate_hz),
+                                       [this](const ros::SteadyTimerEvent&) { publishOdometry(); });
+    status_timer_ = nh.createSteadyTimer(ros::WallDuration(1.0 / config.status_rate_hz),
+                                         [this](const ros::SteadyTimerEvent&) { publishStatus(); });
+    network_thread_ = std::thread([this] {
+      while (running_ && ros::ok()) bridge_.spinOnce(0.02);
+    });
+  }
+
+  ~Water2BaseBridgeNode() {
+    running_ = false;
+    if (network_thread_.joinable()) network_thread_.join();
+  }
+
+ private:
+  void onCmdVel(const geometry_msgs::Twist::ConstPtr& msg) {
+    if (msg->linear.y != 0.0 || msg->angular.x != 0.0 || msg->angular.y != 0.0 ||
+        msg->linear.z != 0.0)
+      ROS_WARN_THROTTLE(5.0, "water2_base_bridge: differential base: only linear.x and "
+                             "angular.z of /cmd_vel are used");
+    try {
+      bridge_.setCommand(msg->linear.x, msg->angular.z);
+    } catch (const std::exception& e) {
+      ROS_ERROR_THROTTLE(1.0, "water2_base_bridge: /cmd_vel rejected: %s", e.what());
+    }
+  }
+
+  void publishOdometry() {
+    const auto odom = bridge_.odometry();
+    if (!odom) return;  // no fresh status: publish nothing rather than stale data
+    const auto& c = bridge_.config();
+    const ros::Time stamp = ros::Time::now();
+    nav_msgs::Odometry o;
+    o.header.stamp = stamp;
+    o.header.frame_id = c.odom_frame;
+    o.child_frame_id = c.base_frame;
+    o.pose.pose.position.x = odom->x;
+    o.pose.pose.position.y = odom->y;
+    o.pose.pose.orientation.z = std::sin(0.5 * odom->theta);
+    o.pose.pose.orientation.w = std::cos(0.5 * odom->theta);
+    o.twist.twist.linear.x = odom->linear;
+    o.twist.twist.angular.z = odom->angular;
+    // Uncertainty grows with the age of the status the pose is based on (dead reckoning).
+    const double age = odom->status_age;
+    const double pos_var = 1e-4 + std::pow(0.5 * age, 2);
+    const double yaw_var = 1e-4 + std::pow(1.0 * age, 2);
+    o.pose.covariance[0] = o.pose.covariance[7] = pos_var;
+    o.pose.covariance[14] = o.pose.covariance[21] = o.pose.covariance[28] = 1e6;  // z, roll, pitch
+    o.pose.covariance[35] = yaw_var;
+    o.twist.covariance[0] = 0.01;
+    o.twist.covariance[35] = 0.01;
+    odom_pub_.publish(o);
+
+    geometry_msgs::TransformStamped t;
+    t.header = o.header;
+    t.child_frame_id = c.base_frame;
+    t.transform.translation.x = odom->x;
+    t.transform.translation.y = odom->y;
+    t.transform.rotation = o.pose.pose.orientation;
+    tf_.sendTransform(t);
+  }
+
+  void publishStatus() {
+    const auto s = bridge_.status();
+    diagnostic_msgs::DiagnosticStatus d;
+    d.name = "water2_base_bridge";
+    d.hardware_id = bridge_.config().host + ":" + std::to_string(bridge_.config().port);
+    using Level = ehc_realman::Water2BridgeStatus::Level;
+    d.level = s.level == Level::Ok     ? diagnostic_msgs::DiagnosticStatus::OK
+              : s.level == Level::Warn ? diagnostic_msgs::DiagnosticStatus::WARN
+                                       : diagnostic_msgs::DiagnosticStatus::ERROR;
+    d.message = s.message;
+    std::ostringstream age;
+    age << s.status_age;
+    d.values = {kv("connected", s.connected ? "true" : "false"), kv("status_age", age.str()),
+                kv("connects", std::to_string(s.connects)),
+                kv("connection_losses", std::to_string(s.connection_losses)),
+                kv("failed_connects", std::to_string(s.failed_connects)),
+                kv("joy_requests", std::to_string(s.joy_requests)),
+                kv("status_requests", std::to_string(s.status_requests)),
+                kv("replies", std::to_string(s.replies)),
+                kv("malformed_replies", std::to_string(s.malformed_replies)),
+                kv("error_replies", std::to_string(s.error_replies)),
+                kv("clamped_commands", std::to_string(s.clamped_commands)),
+                kv("rejected_commands", std::to_string(s.rejected_commands)),
+                kv("last_error", s.last_error)};
+    status_pub_.publish(d);
+    if (s.level != last_level_) {
+      if (s.level == Level::Ok) ROS_INFO("water2_base_bridge: %s", s.message.c_str());
+      else if (s.level == Level::Warn) ROS_WARN("water2_base_bridge: %s", s.message.c_str());
+      else ROS_ERROR("water2_base_bridge: %s", s.message.c_str());
+      last_level_ = s.level;
+    }
+  }
+
+  ehc_realman::Water2BaseBridge bridge_;
+  ros::Publisher odom_pub_, status_pub_;
+  ros::Subscriber cmd_sub_;
+  ros::SteadyTimer odom_timer_, status_timer_;
+  tf2_ros::TransformBroadcaster tf_;
+  ehc_realman::Water2BridgeStatus::Level last_level_ = ehc_realman::Water2BridgeStatus::Level::Ok;
+  std::atomic<bool> running_{true};
+  std::thread network_thread_;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "water2_base_bridge");
+  ros::NodeHandle nh;
+  ros::NodeHandle pnh("~");
+  std::unique_ptr<Water2BaseBridgeNode> node;
+  try {
+    ehc_realman::Water2BridgeConfig config;
+    std::string config_path;
+    if (pnh.getParam("config", config_path))
+      config = ehc_realman::loadWater2BridgeConfig(config_path);
+    else
+      ROS_WARN("water2_base_bridge: no _config:=<file.yaml>; using built-in defaults");
+    std::string host;
+    if (pnh.getParam("host", host)) config.host = host;
+    int port = 0;
+    if (pnh.getParam("port", port)) config.port = port;
+    config.validate();
+    ROS_INFO_STREAM("water2_base_bridge configuration:\n" << config.summary());
+    node = std::make_unique<Water2BaseBridgeNode>(nh, config);
+  } catch (const std::exception& e) {
+    ROS_FATAL("water2_base_bridge: %s", e.what());
+    return 2;
+  }
+  ros::spin();
+  node.reset();
+  return 0;
+}

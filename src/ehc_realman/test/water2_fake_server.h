@@ -1,0 +1,257 @@
+#pragma once
+// FakeWater2Server (tests only): a Water2 chassis API stand-in on 127.0.0.1 (loopback only).
+// Records every request with its arrival time, simulates the base (unicycle driven by the last
+// joy_control, each command lasting 0.5 s as on the real base), answers robot_status with the
+// simulated pose, and can misbehave on request (garbage, truncated, invalid JSON, missing fields,
+// bad pose, oversized, error status, silence). stop() closes everything ("killed"); start()
+// listens again on the same port.
+
+#include "wall_clock.h"
+
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <mutex>
+#include <regex>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace ehc_realman_test {
+
+class FakeWater2Server {
+ public:
+  struct Request {
+    double time = 0.0;  ///< steady-clock seconds at arrival
+    std::string text;
+    bool joy = false;
+    double linear = 0.0, angular = 0.0;
+    int connection = 0;  ///< 1 for the first accepted connection, 2 for the next, ...
+  };
+  enum class ReplyMode { Normal, Garbage, Truncated, BadJson, MissingType, BadPose, Oversized,
+                         ErrorStatus, Silent };
+
+  static double now() { return ehc_realman_test::now(); }
+
+  /// port 0: an ephemeral port is chosen by the first start().
+  explicit FakeWater2Server(int port = 0) : port_(port) {}
+  ~FakeWater2Server() { stop(); }
+
+  void start() {
+    stop();
+    listen_fd_ = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    if (listen_fd_ < 0) throw std::runtime_error("FakeWater2Server: socket failed");
+    const int one = 1;
+    ::setsockopt(listen_fd_, SOL_SOCKET, SO_REUSEADDR, &one, sizeof(one));
+    sockaddr_in addr{};
+    addr.sin_family = AF_INET;
+    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);  // 127.0.0.1 only
+    addr.sin_port = htons(static_cast<uint16_t>(port_));
+    if (::bind(listen_fd_, reinterpret_cast<sockaddr*>(&addr), sizeof(addr)) != 0 ||
+        ::listen(listen_fd_, 4) != 0) {
+      ::close(listen_fd_);
+      listen_fd_ = -1;
+      throw std::runtime_error("FakeWater2Server: cannot listen on 127.0.0.1:" +
+                               std::to_string(port_));
+    }
+    socklen_t len = sizeof(addr);
+    ::getsockname(listen_fd_, reinterpret_cast<sockaddr*>(&addr), &len);
+    port_ = ntohs(addr.sin_port);
+    running_ = true;
+    thread_ = std::thread([this] { loop(); });
+  }
+
+  /// Closes the listening socket and the client connection ("kill").
+  void stop() {
+    running_ = false;
+    if (thread_.joinable()) thread_.join();
+    if (client_fd_ >= 0) ::close(client_fd_);
+    if (listen_fd_ >= 0) ::close(listen_fd_);
+    client_fd_ = listen_fd_ = -1;
+  }
+
+  int port() const { return port_; }
+  bool running() const { return running_; }
+  void setReplyMode(ReplyMode m) { mode_ = m; }
+  int connections() const { return connections_; }
+  std::vector<Request> requests() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return requests_;
+  }
+  void clearRequests() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    requests_.clear();
+  }
+  void pose(double& x, double& y, double& theta) const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    x = x_;
+    y = y_;
+    theta = theta_;
+  }
+  void setPose(double x, double y, double theta) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    x_ = x;
+    y_ = y;
+    theta_ = theta;
+  }
+
+ private:
+  void loop() {
+    double last = now();
+    std::string in;
+    while (running_) {
+      pollfd fds[2] = {{listen_fd_, POLLIN, 0}, {client_fd_, POLLIN, 0}};
+      ::poll(fds, client_fd_ >= 0 ? 2 : 1, 5);
+      const double t = now();
+      simulate(t - last, t);
+      last = t;
+      if (fds[0].revents & POLLIN) {
+        const int fd = ::accept4(listen_fd_, nullptr, nullptr, SOCK_CLOEXEC);
+        if (fd >= 0) {
+          if (client_fd_ >= 0) ::close(client_fd_);
+          client_fd_ = fd;
+          ++connections_;
+          in.clear();
+        }
+      }
+      if (client_fd_ >= 0 && (fds[1].revents & (POLLIN | POLLHUP | POLLERR))) {
+        char buf[4096];
+        const ssize_t n = ::recv(client_fd_, buf, sizeof(buf), MSG_DONTWAIT);
+        if (n <= 0) {
+          ::close(client_fd_);
+          client_fd_ = -1;
+          continue;
+        }
+        in.append(buf, static_cast<std::size_t>(n));
+        for (const std::string& r : splitRequests(in)) handle(r, t);
+      }
+    }
+  }
+
+  /// Requests start with "/api/"; the vendor protocol has no terminator, so a request is
+  /// complete when the next one starts or when it matches its full fixed format.
+  static std::vector<std::string> splitRequests(std::string& in) {
+    static const std::regex complete_joy(
+        R"(/api/joy_control\?angular_velocity=-?\d+\.\d{4}&linear_velocity=-?\d+\.\d{4}\s*)");
+    std::vector<std::string> out;
+    for (;;) {
+      const auto start = in.find("/api/");
+      if (start == std::string::npos) {
+        in.clear();
+        return out;
+      }
+      const auto next = in.find("/api/", start + 5);
+      std::string r = in.substr(start, next == std::string::npos ? std::string::npos : next - start);
+      if (next == std::string::npos) {
+        const bool whole = std::regex_match(r, complete_joy) ||
+                           r.find("/api/robot_status") == 0 ||
+                           (!r.empty() && r.back() == '\n');
+        if (!whole) {
+          in.erase(0, start);
+          return out;
+        }
+        in.clear();
+      } else {
+        in.erase(0, next);
+      }
+      while (!r.empty() && std::isspace(static_cast<unsigned char>(r.back()))) r.pop_back();
+      out.push_back(r);
+    }
+  }
+
+  void simulate(double dt, double t) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (t - joy_time_ > 0.5 || dt <= 0.0) return;
+    x_ += joy_v_ * dt * std::cos(theta_);
+    y_ += joy_v_ * dt * std::sin(theta_);
+    theta_ = std::atan2(std::sin(theta_ + joy_w_ * dt), std::cos(theta_ + joy_w_ * dt));
+  }
+
+  void handle(const std::string& text, double t) {
+    Request r;
+    r.time = t;
+    r.text = text;
+    r.connection = connections_;
+    const std::string command = text.substr(0, text.find('?'));
+    if (command == "/api/joy_control") {
+      double w = NAN, v = NAN;
+      if (std::sscanf(text.c_str(), "/api/joy_control?angular_velocity=%lf&linear_velocity=%lf",
+                      &w, &v) == 2) {
+        r.joy = true;
+        r.linear = v;
+        r.angular = w;
+      }
+    }
+    std::string pose_json;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      requests_.push_back(r);
+      if (r.joy) {
+        joy_v_ = r.linear;
+        joy_w_ = r.angular;
+        joy_time_ = t;
+      }
+      char buf[160];
+      std::snprintf(buf, sizeof(buf), R"({"x":%.6f,"y":%.6f,"theta":%.6f})", x_, y_, theta_);
+      pose_json = buf;
+    }
+    reply(command, pose_json);
+  }
+
+  void reply(const std::string& command, const std::string& pose_json) {
+    std::string out;
+    const std::string head = R"({"type":"response","command":")" + command + R"(","uuid":"",)";
+    switch (mode_.load()) {
+      case ReplyMode::Normal:
+        out = head + R"("status":"OK","error_message":"")";
+        if (command == "/api/robot_status")
+          out += R"(,"results":{"move_status":"idle","charge_state":false,"power_percent":87,)"
+                 R"("current_pose":)" + pose_json + "}";
+        out += "}";
+        break;
+      case ReplyMode::Garbage: out = "HTTP/1.1 500 oops\r\n\r\n<html>not json</html>\n"; break;
+      case ReplyMode::Truncated: out = head + R"("status":"O)"; break;
+      case ReplyMode::BadJson: out = R"({"type":"response","command": ,,})"; break;
+      case ReplyMode::MissingType: out = R"({"command":")" + command + R"(","status":"OK"})"; break;
+      case ReplyMode::BadPose:
+        out = head + R"("status":"OK","error_message":"","results":{"current_pose":)"
+                     R"({"x":"abc","y":1,"theta":null}}})";
+        break;
+      case ReplyMode::Oversized:
+        out = head + R"("status":"OK","error_message":")" + std::string(100000, 'x') + R"("})";
+        break;
+      case ReplyMode::ErrorStatus:
+        out = head + R"("status":"ESTOP_ACTIVE","error_message":"emergency stop pressed"})";
+        break;
+      case ReplyMode::Silent: return;
+    }
+    std::size_t done = 0;
+    while (done < out.size() && client_fd_ >= 0) {
+      const ssize_t n = ::send(client_fd_, out.data() + done, out.size() - done, MSG_NOSIGNAL);
+      if (n <= 0) break;
+      done += static_cast<std::size_t>(n);
+    }
+  }
+
+  int port_;
+  int listen_fd_ = -1;
+  int client_fd_ = -1;
+  std::atomic<bool> running_{false};
+  std::atomic<ReplyMode> mode_{ReplyMode::Normal};
+  std::atomic<int> connections_{0};
+  std::thread thread_;
+  mutable std::mutex mutex_;
+  std::vector<Request> requests_;
+  double x_ = 0.0, y_ = 0.0, theta_ = 0.0;
+  double joy_v_ = 0.0, joy_w_ = 0.0, joy_time_ = -1e9;
+};
+
+}  // namespace ehc_realman_test
