@@ -2,10 +2,18 @@
 // ConfigNode: a read-only view of a YAML document that names the file and the field in every
 // error, so that a bad configuration fails at start-up with a message a user can act on.
 // ROS-free (yaml-cpp only); used by every package's parameter loaders.
+//
+// Unknown keys are errors: every node made from one loaded document shares a record of the
+// keys the loaders asked for. After the last loader has run, the program calls
+// rejectUnknownKeys() on the root: a key no loader asked for (a misspelling such as
+// `speed_scal`) throws, naming the file, the field and the nearest known key. Sections read by
+// another program (e.g. the `node:` section of a shared file) are declared with ignore().
 
 #include <Eigen/Core>
 
 #include <cmath>
+#include <memory>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -78,7 +86,24 @@ class ConfigNode {
 
   const std::string& file() const { return file_; }
   const std::string& owner() const { return owner_; }
+  /// The raw YAML of this node. Reading through it is not recorded: use child(), element()
+  /// and the getters, or mark what you parse yourself with ignore().
   const YAML::Node& yaml() const { return node_; }
+  /// Number of elements of list `key` (0 if absent); fails if it is not a list.
+  std::size_t listSize(const std::string& key) const;
+  /// Element `i` of list `key`, a mapping, whose field names read "key[i].field".
+  ConfigNode element(const std::string& key, std::size_t i) const;
+  /// Keys of this mapping node, in file order.
+  std::vector<std::string> keys() const;
+
+  /// Declares `key` of this node (and everything below it) as read by another program.
+  void ignore(const std::string& key) const;
+  /// Every key of this node's document (below this node) that no loader asked for, as field
+  /// names ("a.b.key", list elements "a.list[2].key").
+  std::vector<std::string> unknownKeys() const;
+  /// Throws std::invalid_argument "[Owner] file: unknown field 'a.b.key' (did you mean
+  /// 'a.b.other'?)" for the first unknown key; lists the rest in the same message.
+  void rejectUnknownKeys() const;
 
  private:
   YAML::Node value(const std::string& key) const;
@@ -90,10 +115,21 @@ class ConfigNode {
     }
   }
 
+  /// Shared by every node of one document: field names asked for (present or not) and the
+  /// subtrees counted as read whole.
+  struct Usage {
+    std::set<std::string> asked;
+    std::set<std::string> whole;
+  };
+  void mark(const std::string& key) const;
+  bool used(const std::string& field) const;
+  void collectUnknown(const YAML::Node& n, const std::string& field, std::vector<std::string>* out) const;
+
   YAML::Node node_;
   std::string file_;
   std::string field_;
   std::string owner_;
+  std::shared_ptr<Usage> usage_ = std::make_shared<Usage>();
 };
 
 /// Helpers for validation rules shared by every parameter struct.

@@ -1,5 +1,6 @@
 #include "ehc_control/config_node.h"
 
+#include <algorithm>
 #include <sstream>
 
 namespace ehc_control {
@@ -70,6 +71,7 @@ ConfigNode::ConfigNode(YAML::Node node, std::string file, std::string field, std
       owner_(std::move(owner)) {}
 
 bool ConfigNode::has(const std::string& key) const {
+  mark(key);
   return node_.IsMap() && node_[key] && !node_[key].IsNull();
 }
 
@@ -81,12 +83,131 @@ YAML::Node ConfigNode::value(const std::string& key) const {
 ConfigNode ConfigNode::child(const std::string& key) const {
   const YAML::Node n = value(key);
   if (!n.IsMap()) fail(key, "must be a mapping");
-  return ConfigNode(n, file_, fieldName(key), owner_);
+  ConfigNode c(n, file_, fieldName(key), owner_);
+  c.usage_ = usage_;
+  return c;
 }
 
 ConfigNode ConfigNode::childOrEmpty(const std::string& key) const {
-  if (!has(key)) return ConfigNode(YAML::Node(YAML::NodeType::Map), file_, fieldName(key), owner_);
+  if (!has(key)) {
+    ConfigNode c(YAML::Node(YAML::NodeType::Map), file_, fieldName(key), owner_);
+    c.usage_ = usage_;
+    return c;
+  }
   return child(key);
+}
+
+std::size_t ConfigNode::listSize(const std::string& key) const {
+  if (!has(key)) return 0;
+  if (!node_[key].IsSequence()) fail(key, "must be a list");
+  return node_[key].size();
+}
+
+ConfigNode ConfigNode::element(const std::string& key, std::size_t i) const {
+  if (i >= listSize(key)) fail(key, "has no element " + std::to_string(i));
+  const std::string field = fieldName(key) + "[" + std::to_string(i) + "]";
+  const YAML::Node e = node_[key][i];
+  if (!e.IsMap())
+    throw std::invalid_argument("[" + owner_ + "] " + file_ + ": field '" + field + "' must be a mapping");
+  ConfigNode c(e, file_, field, owner_);
+  c.usage_ = usage_;
+  return c;
+}
+
+std::vector<std::string> ConfigNode::keys() const {
+  std::vector<std::string> out;
+  if (!node_.IsMap()) return out;
+  for (const auto& kv : node_) out.push_back(kv.first.as<std::string>());
+  return out;
+}
+
+void ConfigNode::ignore(const std::string& key) const {
+  mark(key);
+  usage_->whole.insert(fieldName(key));
+}
+
+void ConfigNode::mark(const std::string& key) const { usage_->asked.insert(fieldName(key)); }
+
+bool ConfigNode::used(const std::string& field) const {
+  if (usage_->asked.count(field)) return true;
+  // Inside a subtree read whole (yaml(), ignore()): the subtree's root is a prefix.
+  for (const auto& w : usage_->whole)
+    if (w.empty() || field == w || (field.size() > w.size() && field.compare(0, w.size(), w) == 0 &&
+                                    (field[w.size()] == '.' || field[w.size()] == '[')))
+      return true;
+  return false;
+}
+
+void ConfigNode::collectUnknown(const YAML::Node& n, const std::string& field,
+                                std::vector<std::string>* out) const {
+  if (n.IsMap()) {
+    for (const auto& kv : n) {
+      const std::string key = kv.first.as<std::string>();
+      const std::string f = field.empty() ? key : field + "." + key;
+      if (!used(f)) out->push_back(f);
+      else collectUnknown(kv.second, f, out);
+    }
+  } else if (n.IsSequence()) {
+    for (std::size_t i = 0; i < n.size(); ++i)
+      collectUnknown(n[i], field + "[" + std::to_string(i) + "]", out);
+  }
+}
+
+std::vector<std::string> ConfigNode::unknownKeys() const {
+  std::vector<std::string> out;
+  if (!used(field_) && !field_.empty()) return {field_};
+  collectUnknown(node_, field_, &out);
+  return out;
+}
+
+namespace {
+std::size_t editDistance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diag = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diag = up;
+    }
+  }
+  return row[b.size()];
+}
+std::string parentOf(const std::string& field) {
+  const auto dot = field.find_last_of('.');
+  return dot == std::string::npos ? std::string() : field.substr(0, dot);
+}
+}  // namespace
+
+void ConfigNode::rejectUnknownKeys() const {
+  const std::vector<std::string> unknown = unknownKeys();
+  if (unknown.empty()) return;
+  const std::string& f = unknown.front();
+  // Nearest key a loader asked for in the same mapping.
+  std::string best;
+  std::size_t best_d = 4;
+  const std::string parent = parentOf(f);
+  const std::string leaf = parent.empty() ? f : f.substr(parent.size() + 1);
+  for (const auto& a : usage_->asked) {
+    if (parentOf(a) != parent) continue;
+    const std::string a_leaf = parent.empty() ? a : a.substr(parent.size() + 1);
+    const std::size_t d = editDistance(leaf, a_leaf);
+    if (d < best_d || (d == best_d && !best.empty() && a < best)) {
+      best_d = d;
+      best = a;
+    }
+  }
+  std::ostringstream os;
+  os << "[" << owner_ << "] " << file_ << ": unknown field '" << f << "'";
+  if (!best.empty()) os << " (did you mean '" << best << "'?)";
+  else os << " (no parameter of that name is read here)";
+  if (unknown.size() > 1) {
+    os << "; also unknown:";
+    for (std::size_t i = 1; i < unknown.size(); ++i) os << " '" << unknown[i] << "'";
+  }
+  throw std::invalid_argument(os.str());
 }
 
 Eigen::VectorXd ConfigNode::getVector(const std::string& key, const Eigen::VectorXd& fallback,
