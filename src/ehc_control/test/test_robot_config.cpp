@@ -126,3 +126,22 @@ TEST(ConfigNode, RealmanControllerConfigIsTheSimConfigWithATimer) {
     EXPECT_EQ(a.str(), b.str()) << section;
   }
 }
+
+TEST(RobotConfig, MisspelledKeyIsAStartUpError) {
+  const std::string path = ::testing::TempDir() + "/typo_robot.yaml";
+  {
+    std::ofstream f(path);
+    f << "robot:\n  urdf: " EHC_CONFIG_DIR "/robots/realman_rm65_water2/robot.urdf\n"
+      << "  base: {type: differential, max_linear_velocty: 0.2}\n"
+      << "  arm: {joints: [joint1, joint2, joint3, joint4, joint5, joint6], lower: [-3, -2, -2, -3, -2, -6],"
+      << " upper: [3, 2, 2, 3, 2, 6], velocity: [3, 3, 3, 3, 3, 3]}\n";
+  }
+  try {
+    ehc_control::loadRobotConfig(path);
+    FAIL() << "a misspelled key was silently ignored";
+  } catch (const std::invalid_argument& e) {
+    const std::string w = e.what();
+    EXPECT_NE(w.find("typo_robot.yaml"), std::string::npos) << w;
+    EXPECT_NE(w.find("did you mean 'robot.base.max_linear_velocity'"), std::string::npos) << w;
+  }
+}

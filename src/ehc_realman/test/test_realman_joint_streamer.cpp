@@ -374,3 +374,22 @@ TEST(RmArmAdapterConfig, ErrorsNameTheFileAndField) {
   }
   EXPECT_THROW(ehc_realman::loadRmArmAdapterConfig(path), std::invalid_argument);
 }
+
+// The first-run safety settings of REALMAN.md, misspelled, must not run at full limits.
+TEST(RmArmAdapterConfig, MisspelledKeyIsAStartUpError) {
+  const std::string path = ::testing::TempDir() + "/typo_rm_arm_adapter.yaml";
+  {
+    std::ofstream f(path);
+    f << "rm_arm_adapter:\n  robot: " EHC_CONFIG_DIR "/robots/realman_rm65_water2/robot.yaml\n"
+      << "  stream:\n    speed_scal: 0.2\n";
+  }
+  try {
+    ehc_realman::loadRmArmAdapterConfig(path);
+    FAIL() << "a misspelled key was silently ignored";
+  } catch (const std::invalid_argument& e) {
+    const std::string w = e.what();
+    EXPECT_NE(w.find("typo_rm_arm_adapter.yaml"), std::string::npos) << w;
+    EXPECT_NE(w.find("unknown field 'rm_arm_adapter.stream.speed_scal'"), std::string::npos) << w;
+    EXPECT_NE(w.find("did you mean 'rm_arm_adapter.stream.speed_scale'"), std::string::npos) << w;
+  }
+}

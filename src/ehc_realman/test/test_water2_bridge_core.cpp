@@ -10,6 +10,7 @@
 
 #include <atomic>
 #include <cmath>
+#include <fstream>
 #include <functional>
 #include <thread>
 
@@ -290,4 +291,24 @@ TEST(Water2BaseBridge, UnreachableBaseBacksOffWithoutThrowing) {
   EXPECT_GE(s.failed_connects, 3u);
   EXPECT_LE(s.failed_connects, 12u) << "attempts are spaced by the back-off";
   EXPECT_FALSE(bridge.odometry());
+}
+
+TEST(Water2BridgeConfig, MisspelledKeyIsAStartUpError) {
+  const std::string path = ::testing::TempDir() + "/typo_water2.yaml";
+  {
+    std::ofstream f(path);
+    f << "water2_base_bridge:\n  max_linear_velocty: 0.2\n";
+  }
+  try {
+    loadWater2BridgeConfig(path);
+    FAIL() << "a misspelled key was silently ignored";
+  } catch (const std::invalid_argument& e) {
+    const std::string w = e.what();
+    EXPECT_NE(w.find("typo_water2.yaml"), std::string::npos) << w;
+    EXPECT_NE(w.find("did you mean 'water2_base_bridge.max_linear_velocity'"), std::string::npos) << w;
+  }
+}
+
+TEST(Water2BridgeConfig, ShippedFileLoads) {
+  EXPECT_NO_THROW(loadWater2BridgeConfig(EHC_CONFIG_DIR "/realman/water2_base_bridge.yaml"));
 }

@@ -132,6 +132,7 @@ RobotConfig loadRobotConfig(const std::string& path) {
     o.rpy = e.requireVector("rpy", 3);
     c.calibration.push_back(o);
   }
+  root.rejectUnknownKeys();
   try {
     c.validate();
   } catch (const std::invalid_argument& e) {

@@ -71,6 +71,7 @@ RmArmAdapterConfig loadRmArmAdapterConfig(const std::string& path) {
   c.gripper.pick_speed = u16("pick_speed", c.gripper.pick_speed);
   c.gripper.pick_force = u16("pick_force", c.gripper.pick_force);
   c.status_rate_hz = a.get<double>("status_rate_hz", c.status_rate_hz);
+  root.rejectUnknownKeys();
   try {
     c.validate();
   } catch (const std::invalid_argument& e) {

@@ -109,6 +109,7 @@ Water2BridgeConfig loadWater2BridgeConfig(const std::string& path) {
     c.max_linear_velocity = std::min(c.max_linear_velocity, robot.max_linear_velocity);
     c.max_angular_velocity = std::min(c.max_angular_velocity, robot.max_angular_velocity);
   }
+  root.rejectUnknownKeys();
   try {
     c.validate();
   } catch (const std::invalid_argument& e) {
