@@ -1,8 +1,8 @@
 // rostest: the three perception nodes with their shipped configs. This test publishes a
 // static camera pose (tf), a rendered AprilTag image (rgb8) + camera_info, a table-scene depth
 // cloud in the camera frame, and the robot state; it checks /ehc/target_pose,
-// /ehc/grasp_candidates and /ehc/obstacles against the known geometry, and that a NaN robot
-// state stops the obstacle output.
+// /ehc/grasp_candidates and /ehc/obstacles against the known geometry, that a NaN robot
+// state stops the obstacle output, and that malformed clouds are rejected without harm.
 #include "ehc_msgs/GraspCandidates.h"
 #include "ehc_msgs/ObstacleArray.h"
 #include "ehc_control/config_node.h"
@@ -15,6 +15,7 @@
 #include <gtest/gtest.h>
 #include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
+#include <rosgraph_msgs/Log.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/JointState.h>
@@ -25,6 +26,7 @@
 
 #include <cmath>
 #include <functional>
+#include <type_traits>
 
 using namespace ehc_perception;
 using namespace ehc_perception::test;
@@ -45,6 +47,65 @@ Eigen::Isometry3d worldFromCamera() {
 
 const Eigen::Isometry3d kTagInCamera = facingTag(0.0, 0.0, 0.5, 0.2, -0.1, 0.3);
 const double kTableZ = 0.58;
+
+/// The points as a PointCloud2 in the camera frame: FLOAT32 x, y, z padded to 16 bytes (the
+/// layout of PointCloud2Modifier's "xyz", which the simulated camera publishes) or FLOAT64.
+template <class Scalar>
+sensor_msgs::PointCloud2 xyzCloud(const PointList& pts) {
+  static_assert(std::is_same<Scalar, float>::value || std::is_same<Scalar, double>::value);
+  sensor_msgs::PointCloud2 c;
+  c.header.frame_id = kCamFrame;
+  sensor_msgs::PointCloud2Modifier mod(c);
+  if (std::is_same<Scalar, float>::value) {
+    mod.setPointCloud2FieldsByString(1, "xyz");
+  } else {
+    using sensor_msgs::PointField;
+    mod.setPointCloud2Fields(3, "x", 1, PointField::FLOAT64, "y", 1, PointField::FLOAT64, "z", 1,
+                             PointField::FLOAT64);
+  }
+  mod.resize(pts.size());
+  sensor_msgs::PointCloud2Iterator<Scalar> x(c, "x"), y(c, "y"), z(c, "z");
+  for (const auto& p : pts) {
+    *x = p.x();
+    *y = p.y();
+    *z = p.z();
+    ++x, ++y, ++z;
+  }
+  return c;
+}
+
+/// `good` with its layout broken in each way a fault campaign found or the validation rejects;
+/// the data bytes stay `good`'s unless the fault is about them.
+std::vector<sensor_msgs::PointCloud2> malformedClouds(const sensor_msgs::PointCloud2& good) {
+  std::vector<sensor_msgs::PointCloud2> bad;
+  auto add = [&](const char* /*fault*/, const std::function<void(sensor_msgs::PointCloud2&)>& f) {
+    bad.push_back(good);
+    f(bad.back());
+  };
+  add("point_step 0, large width, no data", [](auto& c) {
+    c.width = 1000000;
+    c.height = 1;
+    c.point_step = c.row_step = 0;
+    c.data.clear();
+  });
+  add("z offset beyond point_step", [](auto& c) { c.fields[2].offset = c.point_step; });
+  add("data shorter than claimed", [](auto& c) { c.data.resize(c.data.size() / 2); });
+  add("row_step smaller than a row", [](auto& c) { c.row_step = c.point_step; });
+  add("width x height beyond 2^32", [](auto& c) {
+    c.width = 65536;
+    c.height = 65537;
+    c.row_step = c.width * c.point_step;
+  });
+  add("no z field", [](auto& c) { c.fields.pop_back(); });
+  add("UINT8 x, y, z", [](auto& c) {
+    for (auto& f : c.fields) f.datatype = sensor_msgs::PointField::UINT8;
+  });
+  add("INT16 x, y, z", [](auto& c) {
+    for (auto& f : c.fields) f.datatype = sensor_msgs::PointField::INT16;
+  });
+  add("big-endian", [](auto& c) { c.is_bigendian = true; });
+  return bad;
+}
 
 class PerceptionNodes : public ::testing::Test {
  protected:
@@ -92,17 +153,8 @@ class PerceptionNodes : public ::testing::Test {
     const Eigen::Isometry3f camFromWorld = worldFromCamera().inverse().cast<float>();
     PointList pts = scene.noisy(0.001, 3);
     for (auto& p : pts) p = camFromWorld * p;
-    cloud_.header.frame_id = kCamFrame;
-    sensor_msgs::PointCloud2Modifier mod(cloud_);
-    mod.setPointCloud2FieldsByString(1, "xyz");
-    mod.resize(pts.size());
-    sensor_msgs::PointCloud2Iterator<float> x(cloud_, "x"), y(cloud_, "y"), z(cloud_, "z");
-    for (const auto& p : pts) {
-      *x = p.x();
-      *y = p.y();
-      *z = p.z();
-      ++x, ++y, ++z;
-    }
+    scene_in_camera_ = pts;
+    cloud_ = xyzCloud<float>(pts);
   }
 
   void publishAll(bool state_valid) {
@@ -149,7 +201,8 @@ class PerceptionNodes : public ::testing::Test {
   ros::Subscriber target_sub_, grasp_sub_, obst_sub_;
   sensor_msgs::Image image_;
   sensor_msgs::CameraInfo info_;
-  sensor_msgs::PointCloud2 cloud_;
+  PointList scene_in_camera_;
+  sensor_msgs::PointCloud2 cloud_;  ///< published by publishAll
   std::vector<geometry_msgs::PoseStamped> targets_;
   std::vector<ehc_msgs::GraspCandidates> grasps_;
   std::vector<ehc_msgs::ObstacleArray> obstacles_;
@@ -228,6 +281,79 @@ TEST_F(PerceptionNodes, ObstacleNodePublishesDistancesAndStopsOnABadState) {
   obstacles_.clear();
   spinUntil([] { return false; }, 1.0, /*state_valid=*/false);
   EXPECT_TRUE(obstacles_.empty()) << obstacles_.size() << " messages with a NaN state";
+}
+
+// Malformed clouds (issue 16): both cloud nodes reject each with a logged reason before
+// reading it, stay alive, publish nothing made from it, and afterwards process a valid FLOAT64
+// cloud of the scene (grasps on the cylinder; the base's distance to the table).
+TEST_F(PerceptionNodes, MalformedCloudsAreRejectedAndTheNodesKeepWorking) {
+  // The bad clouds carry the scene and a ghost box 0.10 m behind the robot base: a bad cloud
+  // read as points would put an obstacle there, nearer the base than the table.
+  Surface ghost = boxSurface(Eigen::Vector3d(0.15, 0.2, 0.4), 0.01);
+  ghost.transform(pose(-0.925, 0.0, 0.3, 0.0));
+  PointList with_ghost = scene_in_camera_;
+  const Eigen::Isometry3f camFromWorld = worldFromCamera().inverse().cast<float>();
+  for (const auto& p : ghost.points) with_ghost.push_back(camFromWorld * p);
+  // On the table top (x 0 .. 0.6, |y| <= 0.3, z 0.58) or the cylinder on it: the real scene.
+  auto inScene = [](const geometry_msgs::Point& p) {
+    return p.x > -0.05 && p.x < 0.65 && std::abs(p.y) < 0.35 && p.z > 0.5 && p.z < 0.75;
+  };
+
+  std::vector<rosgraph_msgs::Log> errors;
+  const boost::function<void(const rosgraph_msgs::LogConstPtr&)> onLog =
+      [&](const rosgraph_msgs::LogConstPtr& m) {
+        if (m->level >= rosgraph_msgs::Log::ERROR) errors.push_back(*m);
+      };
+  ros::Subscriber log_sub = nh_.subscribe<rosgraph_msgs::Log>("/rosout", 200, onLog);
+
+  const ros::Time bad_start = ros::Time::now();
+  for (const sensor_msgs::PointCloud2& bad : malformedClouds(xyzCloud<float>(with_ghost))) {
+    cloud_ = bad;
+    // Longer than one period of each node's cloud rate limit (grasp 2 Hz, obstacles 5 Hz).
+    spinUntil([] { return false; }, 0.8);
+  }
+  const ros::Time good_start = ros::Time::now();
+  EXPECT_TRUE(ros::service::exists("/ehc_grasp_node/get_loggers", false)) << "grasp node died";
+  EXPECT_TRUE(ros::service::exists("/ehc_obstacle_node/get_loggers", false))
+      << "obstacle node died";
+
+  cloud_ = xyzCloud<double>(scene_in_camera_);
+  auto freshGrasps = [&] {
+    for (const auto& g : grasps_)
+      if (g.header.stamp >= good_start && !g.poses.empty()) return &g;
+    return static_cast<const ehc_msgs::GraspCandidates*>(nullptr);
+  };
+  auto freshBaseDistance = [&] {
+    for (const auto& a : obstacles_)
+      for (const auto& o : a.obstacles)
+        if (a.header.stamp >= good_start && o.link == "base_link") return &o;
+    return static_cast<const ehc_msgs::ObstacleDistance*>(nullptr);
+  };
+  ASSERT_TRUE(spinUntil([&] { return freshGrasps() && freshBaseDistance(); }, 40.0))
+      << "no grasps or no base_link distance after the malformed clouds";
+  for (const auto& p : freshGrasps()->poses)
+    EXPECT_LT(std::hypot(p.position.x - 0.3, p.position.y - 0.0), 0.05);
+  EXPECT_NEAR(freshBaseDistance()->distance, 0.25, 0.021);
+
+  int from_bad_clouds = 0;
+  for (const auto& g : grasps_)
+    from_bad_clouds += g.header.stamp >= bad_start && g.header.stamp < good_start;
+  EXPECT_EQ(from_bad_clouds, 0) << "grasp messages from malformed clouds";
+  std::string not_in_scene;
+  for (const auto& a : obstacles_)
+    for (const auto& o : a.obstacles)
+      if (!inScene(o.obstacle_point) && not_in_scene.empty())
+        not_in_scene = o.link + " at " + std::to_string(o.obstacle_point.x) + " " +
+                       std::to_string(o.obstacle_point.y) + " " + std::to_string(o.obstacle_point.z);
+  EXPECT_EQ(not_in_scene, "") << "an obstacle that is not in the scene";
+  auto rejected = [&](const std::string& node) {
+    for (const auto& e : errors)
+      if (e.name == node && e.msg.find("cloud dropped: [PointCloudLayout]") != std::string::npos)
+        return true;
+    return false;
+  };
+  EXPECT_TRUE(rejected("/ehc_grasp_node")) << "no malformed-cloud error logged";
+  EXPECT_TRUE(rejected("/ehc_obstacle_node")) << "no malformed-cloud error logged";
 }
 
 int main(int argc, char** argv) {

@@ -3,6 +3,7 @@
 
 #include "ehc_perception/camera_intrinsics.h"
 #include "ehc_perception/grasp_generator.h"
+#include "ehc_perception/point_cloud_layout.h"
 
 #include <geometry_msgs/Pose.h>
 #include <geometry_msgs/TransformStamped.h>
@@ -10,7 +11,6 @@
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <sensor_msgs/image_encodings.h>
-#include <sensor_msgs/point_cloud2_iterator.h>
 #include <tf2_eigen/tf2_eigen.h>
 #include <visp3/core/vpImage.h>
 #include <visp3/core/vpImageConvert.h>
@@ -69,24 +69,26 @@ inline CameraIntrinsics cameraInfoToIntrinsics(const sensor_msgs::CameraInfo& ms
   return c;
 }
 
-/// x, y, z of a PointCloud2 (float32 fields). Throws if the fields are missing.
+/// The finite x, y, z points of a PointCloud2: the message's layout is copied into a
+/// PointCloudLayout and validated before any byte is read (FLOAT64 converted, NaN / Inf points
+/// dropped). Throws std::invalid_argument("[PointCloudLayout] ...") on a malformed cloud.
 inline PointList cloudToPoints(const sensor_msgs::PointCloud2& msg) {
-  PointList out;
-  const std::size_t n = static_cast<std::size_t>(msg.width) * msg.height;
-  if (n == 0) return out;
-  if (msg.data.size() < n * msg.point_step)
-    throw std::invalid_argument("point cloud data is shorter than width x height x point_step");
-  sensor_msgs::PointCloud2ConstIterator<float> x(msg, "x"), y(msg, "y"), z(msg, "z");
-  out.reserve(n);
-  for (std::size_t i = 0; i < n; ++i, ++x, ++y, ++z) out.push_back(Eigen::Vector3f(*x, *y, *z));
-  return out;
+  PointCloudLayout layout;
+  layout.width = msg.width;
+  layout.height = msg.height;
+  for (const sensor_msgs::PointField& f : msg.fields)
+    layout.fields.push_back({f.name, f.offset, f.datatype, f.count});
+  layout.is_bigendian = msg.is_bigendian;
+  layout.point_step = msg.point_step;
+  layout.row_step = msg.row_step;
+  return extractCloudPoints(layout, msg.data.data(), msg.data.size()).points;
 }
 
 inline PointList transformPoints(const PointList& in, const Eigen::Isometry3d& T) {
   const Eigen::Isometry3f Tf = T.cast<float>();
   PointList out;
   out.reserve(in.size());
-  for (const auto& p : in) out.push_back(Tf * p);  // NaN stays NaN (filtered by the core)
+  for (const auto& p : in) out.push_back(Tf * p);
   return out;
 }
 
