@@ -51,6 +51,7 @@
 
 #include <Eigen/Geometry>
 
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
@@ -196,6 +197,7 @@ class GraspSequencer {
   Eigen::Isometry3d preGrasp(const Eigen::Isometry3d& grasp) const;
   bool within(const SequencerInput& in, const Eigen::Isometry3d& goal, double pos, double ori_deg) const;
   std::string label() const;
+  std::array<ehc_control::TargetTracker*, 3> tfmWindows();  ///< the three TfM trackers
   /// Updates the best distance to `goal` in this phase; true when it has not improved for
   /// stall_time.
   bool stalled(const SequencerInput& in, const Eigen::Isometry3d& goal);

@@ -3,6 +3,7 @@
 #include "ehc_control/config_node.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <iomanip>
 #include <sstream>
@@ -213,7 +214,7 @@ bool GraspSequencer::setCamera(const ehc_control::PinholeCamera& camera) {
     ++rejected_;
     return false;
   }
-  for (ehc_control::TargetTracker* t : {&tfm_distant_, &tfm_switch_, &tfm_close_}) t->setCamera(camera);
+  for (ehc_control::TargetTracker* t : tfmWindows()) t->setCamera(camera);
   has_camera_ = true;
   return true;
 }
@@ -228,6 +229,10 @@ void GraspSequencer::setGraspCandidates(double t, const std::vector<GraspCandida
   }
 }
 
+std::array<ehc_control::TargetTracker*, 3> GraspSequencer::tfmWindows() {
+  return {&tfm_distant_, &tfm_switch_, &tfm_close_};
+}
+
 std::string GraspSequencer::label() const {
   return current_ < params_.objects.size() ? params_.objects[current_].name : std::string("-");
 }
@@ -240,7 +245,7 @@ void GraspSequencer::startObject(double t, SequencerOutput* out) {
   centre_in_tcp_.reset();
   hold_goal_.reset();
   ctrl_fov_cycles_ = ctrl_cycles_ = 0;
-  for (ehc_control::TargetTracker* t : {&tfm_distant_, &tfm_switch_, &tfm_close_}) t->reset();
+  for (ehc_control::TargetTracker* t : tfmWindows()) t->reset();
   was_distant_ = false;
   counting_tfm_ = true;
   cur_ = GraspResult();
@@ -371,7 +376,7 @@ SequencerOutput GraspSequencer::update(const SequencerInput& in) {
           else if (was_distant_) tfm_distant_.pause();
         }
         const Eigen::Vector3d centre = *objectCentre();  // up to LIFT: there is one
-        for (ehc_control::TargetTracker* t : {&tfm_distant_, &tfm_switch_, &tfm_close_}) {
+        for (ehc_control::TargetTracker* t : tfmWindows()) {
           t->moveTarget(centre);
           t->observe(*in.camera);
         }
