@@ -419,19 +419,29 @@ Eigen::Isometry3d opticalFrame(bool toward) {
 }
 }  // namespace
 
-TEST(GraspSequencer, PointInImage) {
-  const CameraModel cam;
-  EXPECT_TRUE(pointInImage(opticalFrame(true), Eigen::Vector3d(1.5, 0, 0.76), cam));
-  EXPECT_FALSE(pointInImage(opticalFrame(false), Eigen::Vector3d(1.5, 0, 0.76), cam));  // behind
+TEST(GraspSequencer, TheInImageTestIsTheTrackersAndBadCamerasAreIgnored) {
+  // TfM's in-view test: ehc_control::TargetTracker with the sequencer's camera.
+  const ehc_control::PinholeCamera cam;
+  auto inImage = [&cam](const Eigen::Isometry3d& world_T_camera, const Eigen::Vector3d& p) {
+    ehc_control::TargetTracker t(cam, ehc_control::TargetTrackerParams{});
+    t.moveTarget(p);
+    return t.observe(world_T_camera);
+  };
+  EXPECT_TRUE(inImage(opticalFrame(true), Eigen::Vector3d(1.5, 0, 0.76)));
+  EXPECT_FALSE(inImage(opticalFrame(false), Eigen::Vector3d(1.5, 0, 0.76)));  // behind
   // 1.5 m ahead, the half width of the image is 1.5 * 320 / 615 = 0.78 m.
-  EXPECT_TRUE(pointInImage(opticalFrame(true), Eigen::Vector3d(1.5, 0.7, 0.76), cam));
-  EXPECT_FALSE(pointInImage(opticalFrame(true), Eigen::Vector3d(1.5, 0.9, 0.76), cam));
-  EXPECT_FALSE(pointInImage(opticalFrame(true), Eigen::Vector3d(std::nan(""), 0, 0.76), cam));
-  CameraModel bad;
+  EXPECT_TRUE(inImage(opticalFrame(true), Eigen::Vector3d(1.5, 0.7, 0.76)));
+  EXPECT_FALSE(inImage(opticalFrame(true), Eigen::Vector3d(1.5, 0.9, 0.76)));
+  EXPECT_THROW(inImage(opticalFrame(true), Eigen::Vector3d(std::nan(""), 0, 0.76)), std::invalid_argument);
+  Eigen::Isometry3d nan_pose = opticalFrame(true);
+  nan_pose.translation().x() = std::nan("");
+  EXPECT_FALSE(inImage(nan_pose, Eigen::Vector3d(1.5, 0, 0.76)));
+  ehc_control::PinholeCamera bad;
   bad.fx = 0.0;
-  EXPECT_FALSE(pointInImage(opticalFrame(true), Eigen::Vector3d(1.5, 0, 0.76), bad));
+  EXPECT_THROW(ehc_control::TargetTracker(bad, ehc_control::TargetTrackerParams{}), std::invalid_argument);
   GraspSequencer s(twoObjects());
   EXPECT_FALSE(s.setCamera(bad));
+  EXPECT_EQ(s.rejectedInputs(), 1);
   EXPECT_TRUE(s.setCamera(cam));
 }
 
@@ -439,7 +449,7 @@ TEST(GraspSequencer, TfmCountsCyclesUntilTheGripperCloses) {
   GraspSequencerParams p = twoObjects();
   p.objects.resize(1);
   Harness h(p);
-  ASSERT_TRUE(h.seq.setCamera(CameraModel()));
+  ASSERT_TRUE(h.seq.setCamera(ehc_control::PinholeCamera()));
   h.follow = false;
   h.perceive = forwardTarget();
   // 100 cycles with the object in view, 300 out of view (camera turned away).
@@ -471,7 +481,7 @@ TEST(GraspSequencer, TfmCountsTheApproachUntilTheArmTakesOver) {
   p.objects.resize(1);
   ASSERT_DOUBLE_EQ(p.tfm_handover_sig, 0.5);  // the default
   Harness h(p);
-  ASSERT_TRUE(h.seq.setCamera(CameraModel()));
+  ASSERT_TRUE(h.seq.setCamera(ehc_control::PinholeCamera()));
   h.follow = false;
   h.perceive = forwardTarget();
   // 100 cycles far away (sig 0.2) in view; then the arm takes over (sig 0.6) and the camera
@@ -496,7 +506,7 @@ TEST(GraspSequencer, TfmCountsTheApproachUntilTheArmTakesOver) {
   // 250 cycles at a constant sig, the first 100 in view, then on to the grasp: the TfM result.
   auto constantSig = [](const GraspSequencerParams& q, double sig) {
     Harness w(q);
-    EXPECT_TRUE(w.seq.setCamera(CameraModel()));
+    EXPECT_TRUE(w.seq.setCamera(ehc_control::PinholeCamera()));
     w.follow = false;
     w.perceive = forwardTarget();
     for (int i = 0; i < 250; ++i) {
@@ -526,12 +536,20 @@ TEST(GraspSequencer, TfmWithoutCameraPoseCountsNothing) {
   GraspSequencerParams p = twoObjects();
   p.objects.resize(1);
   Harness h(p);
-  ASSERT_TRUE(h.seq.setCamera(CameraModel()));
+  ASSERT_TRUE(h.seq.setCamera(ehc_control::PinholeCamera()));
   h.seq.setObjectPose(0, h.t, forwardTarget());
   h.runUntilDone();
   ASSERT_EQ(h.seq.results().size(), 1u);
   EXPECT_EQ(h.seq.results()[0].cycles, 0);
   EXPECT_EQ(h.seq.results()[0].tfm, 0.0);
+  // Nor without intrinsics (no camera_info yet), with a camera pose.
+  Harness n(p);
+  n.camera = opticalFrame(true);
+  n.seq.setObjectPose(0, n.t, forwardTarget());
+  n.runUntilDone();
+  ASSERT_EQ(n.seq.results().size(), 1u);
+  EXPECT_EQ(n.seq.results()[0].cycles, 0);
+  EXPECT_EQ(n.seq.results()[0].tfm_until_close, 0.0);
 }
 
 TEST(GraspSequencer, TsmmStagesAppearAsControllerPhases) {

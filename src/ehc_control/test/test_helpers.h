@@ -12,6 +12,11 @@ inline std::string realmanYaml() {
   return std::string(EHC_CONFIG_DIR) + "/robots/realman_rm65_water2/robot.yaml";
 }
 
+/// The D435 colour stream's camera_info YAML of the RealMan robot.
+inline std::string realmanCameraYaml() {
+  return std::string(EHC_CONFIG_DIR) + "/robots/realman_rm65_water2/camera.yaml";
+}
+
 inline RobotConfig realmanConfig(BaseType type = BaseType::Differential) {
   RobotConfig c = loadRobotConfig(realmanYaml());
   c.base_type = type;

@@ -1,5 +1,6 @@
-// Target tracking state: camera intrinsics from camera.yaml, in-view test, TfM counting (and
-// its restart on a new target), and the supervisor's hold / TARGET_LOST / resume sequence.
+// Target tracking state: TfM counting (its restart on a new target, a moving target, paused
+// windows, new intrinsics), and the supervisor's hold / TARGET_LOST / resume sequence. The
+// camera model itself: test_pinhole_camera.
 
 #include "ehc_control/config_node.h"
 #include "ehc_control/controller_supervisor.h"
@@ -8,75 +9,11 @@
 
 #include <gtest/gtest.h>
 
-#include <cstdio>
-#include <fstream>
 
 namespace ehc_control {
 namespace {
 
-std::string cameraYaml() { return std::string(EHC_CONFIG_DIR) + "/robots/realman_rm65_water2/camera.yaml"; }
-
-std::string writeTemp(const std::string& name, const std::string& text) {
-  const std::string path = "/tmp/ehc_control_test_" + std::to_string(::getpid()) + "_" + name;
-  std::ofstream(path) << text;
-  return path;
-}
-
-TEST(PinholeCamera, LoadsTheD435Intrinsics) {
-  const PinholeCamera c = loadPinholeCamera(cameraYaml());
-  EXPECT_EQ(c.width, 640);
-  EXPECT_EQ(c.height, 480);
-  EXPECT_EQ(c.fx, 615.0);
-  EXPECT_EQ(c.fy, 615.0);
-  EXPECT_EQ(c.cx, 320.0);
-  EXPECT_EQ(c.cy, 240.0);
-}
-
-TEST(PinholeCamera, BadFilesNameTheFileAndField) {
-  try {
-    loadPinholeCamera("/nonexistent/camera.yaml");
-    FAIL();
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("[PinholeCamera]"), std::string::npos) << e.what();
-  }
-  const std::string no_k = writeTemp("no_k.yaml", "image_width: 640\nimage_height: 480\n");
-  try {
-    loadPinholeCamera(no_k);
-    FAIL();
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("camera_matrix"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find(no_k), std::string::npos) << e.what();
-  }
-  const std::string bad_f =
-      writeTemp("bad_f.yaml", "image_width: 640\nimage_height: 480\ncamera_matrix: {data: [0, 0, 320, 0, 615, 240, 0, 0, 1]}\n");
-  try {
-    loadPinholeCamera(bad_f);
-    FAIL();
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("fx"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find(bad_f), std::string::npos) << e.what();
-  }
-  std::remove(no_k.c_str());
-  std::remove(bad_f.c_str());
-}
-
-TEST(PinholeCamera, InViewMeansInsideTheImageAtPositiveDepth) {
-  const PinholeCamera c = loadPinholeCamera(cameraYaml());
-  Eigen::Vector2d uv;
-  EXPECT_TRUE(c.projectsInside(Eigen::Vector3d(0, 0, 1), &uv));
-  EXPECT_TRUE(uv.isApprox(Eigen::Vector2d(320, 240)));
-  EXPECT_FALSE(c.projectsInside(Eigen::Vector3d(0, 0, -1)));  // behind
-  EXPECT_FALSE(c.projectsInside(Eigen::Vector3d(0, 0, 0)));
-  // Horizontal edge: u = 320 + 615 x / z; inside for u < 640, i.e. x/z < 320/615.
-  EXPECT_TRUE(c.projectsInside(Eigen::Vector3d(0.52, 0, 1)));
-  EXPECT_FALSE(c.projectsInside(Eigen::Vector3d(0.521, 0, 1)));
-  EXPECT_TRUE(c.projectsInside(Eigen::Vector3d(-0.52, 0, 1)));
-  EXPECT_FALSE(c.projectsInside(Eigen::Vector3d(-0.521, 0, 1)));
-  // Vertical edge: v = 240 + 615 y / z; inside for |y/z| < 240/615 = 0.390.
-  EXPECT_TRUE(c.projectsInside(Eigen::Vector3d(0, 0.39, 1)));
-  EXPECT_FALSE(c.projectsInside(Eigen::Vector3d(0, 0.391, 1)));
-  EXPECT_FALSE(c.projectsInside(Eigen::Vector3d(std::nan(""), 0, 1)));
-}
+using test::realmanCameraYaml;
 
 Eigen::Isometry3d cameraLookingAlongX(double x) {  // optical z = world x, image x = -world y
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
@@ -86,7 +23,7 @@ Eigen::Isometry3d cameraLookingAlongX(double x) {  // optical z = world x, image
 }
 
 TEST(TargetTracker, TfmIsTheFractionOfCyclesInViewSinceTheTargetWasSet) {
-  TargetTracker t(loadPinholeCamera(cameraYaml()), TargetTrackerParams{});
+  TargetTracker t(loadPinholeCamera(realmanCameraYaml()), TargetTrackerParams{});
   EXPECT_FALSE(t.observe(cameraLookingAlongX(0.0)));  // no target: not counted
   EXPECT_EQ(t.cycles(), 0);
   EXPECT_TRUE(t.setTarget(Eigen::Vector3d(2, 0, 0)));
@@ -113,6 +50,58 @@ TEST(TargetTracker, TfmIsTheFractionOfCyclesInViewSinceTheTargetWasSet) {
   t.reset();
   EXPECT_FALSE(t.hasTarget());
   EXPECT_THROW(t.setTarget(Eigen::Vector3d(std::nan(""), 0, 0)), std::invalid_argument);
+}
+
+TEST(TargetTracker, MovingTargetsPausedWindowsAndNewIntrinsics) {
+  TargetTracker t(loadPinholeCamera(realmanCameraYaml()), TargetTrackerParams{});
+  const Eigen::Isometry3d looking = cameraLookingAlongX(0.0);
+  // moveTarget starts a target like setTarget, then follows it whatever the jump.
+  t.moveTarget(Eigen::Vector3d(2, 0, 0));
+  EXPECT_TRUE(t.hasTarget());
+  EXPECT_TRUE(t.observe(looking));
+  t.moveTarget(Eigen::Vector3d(2, 1.5, 0));  // 1.5 m jump: out of view, the count continues
+  EXPECT_FALSE(t.observe(looking));
+  EXPECT_EQ(t.cycles(), 2);
+  EXPECT_DOUBLE_EQ(t.tfm(), 0.5);
+  EXPECT_TRUE(t.centre().isApprox(Eigen::Vector3d(2, 1.5, 0)));
+  EXPECT_THROW(t.moveTarget(Eigen::Vector3d(std::nan(""), 0, 0)), std::invalid_argument);
+  // Paused: in view is still answered, nothing is counted; resumed: counting goes on.
+  t.moveTarget(Eigen::Vector3d(2, 0, 0));
+  t.pause();
+  EXPECT_TRUE(t.paused());
+  EXPECT_TRUE(t.observe(looking));
+  EXPECT_TRUE(t.inView());
+  EXPECT_EQ(t.cycles(), 2);
+  EXPECT_EQ(t.inViewCycles(), 1);
+  t.resume();
+  EXPECT_FALSE(t.paused());
+  EXPECT_TRUE(t.observe(looking));
+  EXPECT_EQ(t.cycles(), 3);
+  EXPECT_NEAR(t.tfm(), 2.0 / 3.0, 1e-12);
+  // New intrinsics: a narrower image loses the off-axis target; the count continues.
+  t.moveTarget(Eigen::Vector3d(2, -0.5, 0));  // 0.5 m left of the axis at 2 m: u = 320 + 615 / 4
+  EXPECT_TRUE(t.observe(looking));
+  PinholeCamera narrow = t.camera();
+  narrow.fx = narrow.fy = 200.0;
+  narrow.width = 400;
+  narrow.cx = 100.0;
+  t.setCamera(narrow);
+  EXPECT_EQ(t.camera().width, 400);
+  EXPECT_TRUE(t.observe(looking));  // u = 100 + 200 / 4 = 150
+  narrow.cx = 360.0;                // u = 410 >= 400
+  t.setCamera(narrow);
+  EXPECT_FALSE(t.observe(looking));
+  EXPECT_EQ(t.cycles(), 6);
+  EXPECT_EQ(t.inViewCycles(), 4);
+  narrow.fx = -1.0;
+  EXPECT_THROW(t.setCamera(narrow), std::invalid_argument);
+  EXPECT_EQ(t.camera().fx, 200.0);
+  // reset forgets the target and resumes counting.
+  t.pause();
+  t.reset();
+  EXPECT_FALSE(t.hasTarget());
+  EXPECT_FALSE(t.paused());
+  EXPECT_EQ(t.cycles(), 0);
 }
 
 TEST(TargetTracker, ParamsLoadAndResolveTheCameraPath) {

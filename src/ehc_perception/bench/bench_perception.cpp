@@ -6,7 +6,7 @@
 //  - perception.octomap_insert_cloud: ray insertion of a 20 000-point depth cloud
 #include "ehc_control/bench_util.h"
 #include "ehc_control/whole_body_model.h"
-#include "ehc_perception/camera_intrinsics.h"
+#include "ehc_control/pinhole_camera.h"
 #include "ehc_perception/grasp_generator.h"
 #include "ehc_perception/obstacle_distance_field.h"
 #include "ehc_perception/tag_detector.h"
@@ -37,7 +37,7 @@ int main() {
   double sink = 0.0;
   // ------------------------------------------------------------------ AprilTag
   {
-    const CameraIntrinsics cam = loadCameraIntrinsics(cameraYaml());
+    const ehc_control::PinholeCamera cam = ehc_control::loadPinholeCamera(cameraYaml());
     TagDetectorConfig cfg;
     cfg.default_tag_size = 0.05;
     TagDetector det(cfg, cam);
@@ -91,7 +91,7 @@ int main() {
     const ehc_control::WholeBodyModel model(ehc_control::loadRobotConfig(robotYaml()));
     ObstacleMapConfig cfg;
     cfg.resolution = 0.02;
-    const RobotCollisionModel robot(model.urdfXml(), cfg.links);
+    const ehc_control::RobotCollisionModel robot(model.urdfXml(), model.config().arm_joints, cfg.links);
     ObstacleDistanceField field(cfg, robot);
     // Table scene: 0.8 x 1.2 m table top at 0.7 m with legs, two objects, a wall behind.
     field.addOccupiedBox(Eigen::Vector3d(0.9, -0.6, 0.66), Eigen::Vector3d(1.7, 0.6, 0.70));

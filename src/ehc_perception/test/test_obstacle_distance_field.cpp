@@ -1,6 +1,7 @@
-// ObstacleDistanceField (OctoMap + FCL) and RobotCollisionModel (URDF collisions): distances
-// against analytic values, free-space clearing by rays, self filtering, the RealMan robot,
-// bad inputs and configs.
+// ObstacleDistanceField (OctoMap + FCL) on ehc_control::RobotCollisionModel (URDF collisions;
+// the model itself: ehc_control/test/test_robot_collision_model): distances against analytic
+// values, free-space clearing by rays, self filtering, the RealMan robot with its fingers fully
+// open, bad inputs and configs.
 #include "ehc_control/config_node.h"
 #include "ehc_control/whole_body_model.h"
 #include "ehc_perception/obstacle_distance_field.h"
@@ -12,6 +13,7 @@
 #include <limits>
 
 using namespace ehc_perception;
+using ehc_control::RobotCollisionModel;
 using ehc_perception::test::pose;
 
 namespace {
@@ -42,13 +44,13 @@ ObstacleMapConfig probeConfig() {
 }
 
 struct Probe {
-  RobotCollisionModel robot{kProbeUrdf, {"ball", "block", "rod"}};
+  RobotCollisionModel robot{kProbeUrdf, {}, {"ball", "block", "rod"}};
   ObstacleDistanceField field{probeConfig(), robot};
   Eigen::Isometry3d far = pose(-5, -5, 5, 0);
   /// Link poses: only `link` is near, the others far away.
   std::vector<Eigen::Isometry3d> place(const std::string& link, const Eigen::Isometry3d& T) {
     std::vector<Eigen::Isometry3d> p;
-    for (const auto& l : robot.links()) p.push_back(l == link ? T : far);
+    for (const auto& l : robot.links()) p.push_back(l.name == link ? T : far);
     return p;
   }
   const LinkObstacleDistance* find(const std::vector<LinkObstacleDistance>& ds,
@@ -68,32 +70,6 @@ void expectConsistent(const LinkObstacleDistance& d) {
 }
 
 }  // namespace
-
-TEST(RobotCollisionModel, ParsesShapesAndRejectsBadLinks) {
-  const RobotCollisionModel m(kProbeUrdf, {"ball", "block", "rod"});
-  ASSERT_EQ(m.shapes().size(), 3u);
-  EXPECT_EQ(m.shapes()[0].type, CollisionShape::Type::Sphere);
-  EXPECT_EQ(m.shapes()[1].type, CollisionShape::Type::Box);
-  EXPECT_TRUE(m.shapes()[1].size.isApprox(Eigen::Vector3d(0.10, 0.06, 0.04)));
-  EXPECT_EQ(m.shapes()[2].type, CollisionShape::Type::Cylinder);
-  EXPECT_NEAR(m.shapes()[2].origin.translation().z(), 0.1, 1e-12);
-  EXPECT_TRUE(m.shapes()[2].contains(Eigen::Vector3d(0.02, 0, 0.19), 0.0));
-  EXPECT_FALSE(m.shapes()[2].contains(Eigen::Vector3d(0.02, 0, 0.21), 0.0));
-  EXPECT_TRUE(m.shapes()[2].contains(Eigen::Vector3d(0.02, 0, 0.21), 0.02));
-
-  auto expectFails = [](const std::vector<std::string>& links, const std::string& needle) {
-    try {
-      RobotCollisionModel(kProbeUrdf, links);
-      ADD_FAILURE() << needle;
-    } catch (const std::invalid_argument& e) {
-      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
-    }
-  };
-  expectFails({"nope"}, "[RobotCollisionModel] link 'nope' is not in the URDF");
-  expectFails({"bare"}, "link 'bare' has no collision geometry");
-  expectFails({"mesh"}, "mesh");
-  EXPECT_THROW(RobotCollisionModel("<robot", {}), std::invalid_argument);
-}
 
 TEST(ObstacleDistanceField, DistancesMatchAnalyticValuesWithinHalfAVoxel) {
   Probe p;
@@ -241,7 +217,7 @@ TEST(ObstacleDistanceField, CloudsMarkObstaclesAndRaysClearFreeSpace) {
 TEST(ObstacleDistanceField, FiltersBadPointsFloorAndTheRobotItself) {
   ObstacleMapConfig cfg = probeConfig();
   cfg.min_height = 0.03;
-  const RobotCollisionModel robot(kProbeUrdf, cfg.links);
+  const RobotCollisionModel robot(kProbeUrdf, {}, cfg.links);
   ObstacleDistanceField field(cfg, robot);
   const float nan = std::numeric_limits<float>::quiet_NaN();
   PointList pts = {Eigen::Vector3f(nan, 0, 0.5), Eigen::Vector3f(1.0f, 0.0f, 0.01f)};
@@ -274,7 +250,7 @@ TEST(ObstacleDistanceField, RealManRobotNextToATable) {
   const ehc_control::WholeBodyModel model(
       ehc_control::loadRobotConfig(ehc_perception::test::robotYaml()));
   ObstacleMapConfig cfg;
-  const RobotCollisionModel robot(model.urdfXml(), cfg.links);
+  const RobotCollisionModel robot(model.urdfXml(), model.config().arm_joints, cfg.links);
   EXPECT_EQ(robot.links().size(), 12u);
   ObstacleDistanceField field(cfg, robot);
   // Table top 0.66-0.70 m high, front edge 0.10 m ahead of the base cylinder (r 0.25).
@@ -308,14 +284,17 @@ TEST(ObstacleDistanceField, FingersAreModelledFullyOpen) {
   const ehc_control::WholeBodyModel model(
       ehc_control::loadRobotConfig(ehc_perception::test::robotYaml()));
   ObstacleMapConfig cfg;
-  const RobotCollisionModel robot(model.urdfXml(), cfg.links);
+  const RobotCollisionModel robot(model.urdfXml(), model.config().arm_joints, cfg.links);
   ObstacleDistanceField field(cfg, robot);
   const Eigen::VectorXd q = model.config().arm_ready;
   const auto poses = field.linkPoses(model, Eigen::Vector3d::Zero(), q);
+  // An explicit opening poses the fingers there (0: closed, where WholeBodyModel puts them).
+  const auto closed = field.linkPoses(model, Eigen::Vector3d::Zero(), q, 0.0);
   const Eigen::Isometry3d grip = model.fk(Eigen::Vector3d::Zero(), q, "gripper_base_link");
   for (std::size_t i = 0; i < robot.links().size(); ++i) {
-    const std::string& l = robot.links()[i];
+    const std::string& l = robot.links()[i].name;
     const Eigen::Isometry3d held = model.fk(Eigen::Vector3d::Zero(), q, l);
+    EXPECT_TRUE(closed[i].isApprox(held, 1e-12)) << l;
     if (l == "left_finger_link" || l == "right_finger_link") {
       const double sign = l == "left_finger_link" ? 1.0 : -1.0;  // URDF axes +y / -y of the gripper
       EXPECT_TRUE((poses[i].translation() - held.translation()).isApprox(sign * 0.035 * grip.linear().col(1), 1e-9))
@@ -328,7 +307,7 @@ TEST(ObstacleDistanceField, FingersAreModelledFullyOpen) {
   // One 2 cm obstacle voxel around a point 25 mm beyond the open left finger's outer face: its
   // nearest face is 5-25 mm from the open finger (60 mm from the closed one).
   std::size_t left = 0;
-  while (robot.links()[left] != "left_finger_link") ++left;
+  while (robot.links()[left].name != "left_finger_link") ++left;
   const Eigen::Vector3d p = poses[left] * Eigen::Vector3d(0, 0.010 + 0.025, 0.025);
   const double r = cfg.resolution;
   const Eigen::Vector3d c = ((p / r).array().floor() + 0.5).matrix() * r;  // its voxel's centre
@@ -343,7 +322,9 @@ TEST(ObstacleDistanceField, FingersAreModelledFullyOpen) {
       EXPECT_GT(d.distance, 0.0);
     }
   EXPECT_TRUE(found);
-  EXPECT_NE(robot.summary().find("left_finger_link (prismatic: at its upper limit"), std::string::npos) << robot.summary();
+  EXPECT_NE(field.summary().find("left_finger_link (finger joint"), std::string::npos) << field.summary();
+  EXPECT_NE(field.summary().find("fingers posed at their upper limit (fully open)"), std::string::npos)
+      << field.summary();
 }
 
 TEST(ObstacleDistanceField, ConfigValidationNamesTheField) {

@@ -45,7 +45,7 @@ std::string slurp(const std::string& path) {
 }  // namespace
 
 TEST(DetectTagsCli, PrintsTagPosesAsJson) {
-  const CameraIntrinsics cam = loadCameraIntrinsics(cameraYaml());
+  const ehc_control::PinholeCamera cam = ehc_control::loadPinholeCamera(cameraYaml());
   const Eigen::Isometry3d truth = facingTag(0.04, -0.02, 0.55, 0.3, -0.2, 0.5);
   const std::string img = "/tmp/ehc_cli_tag.png";
   vpImageIo::write(TagImageRenderer(cam).render({{7, 0.05, truth}}), img);
@@ -80,7 +80,7 @@ TEST(DetectTagsCli, BadInputsExitWithCode2AndAClearError) {
   std::ofstream("/tmp/ehc_cli_bad_camera.yaml") << "image_width: 640\n";
   r = run(bin + " --image /tmp/ehc_cli_tag.png --camera /tmp/ehc_cli_bad_camera.yaml --tag-size 0.05");
   EXPECT_EQ(r.code, 2);
-  EXPECT_NE(r.out.find("[CameraIntrinsics]"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("[PinholeCamera]"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("image_height"), std::string::npos) << r.out;
 
   r = run(bin + " --image /tmp/ehc_cli_tag.png --camera " + cameraYaml() + " --tag-size -1");

@@ -6,7 +6,7 @@
 #include "ehc_msgs/GraspCandidates.h"
 #include "ehc_msgs/ObstacleArray.h"
 #include "ehc_control/config_node.h"
-#include "ehc_perception/camera_intrinsics.h"
+#include "ehc_control/pinhole_camera.h"
 #include "ehc_perception/tag_detector.h"
 #include "ehc_perception/tag_image_renderer.h"
 #include "perception_test_helpers.h"
@@ -110,7 +110,7 @@ std::vector<sensor_msgs::PointCloud2> malformedClouds(const sensor_msgs::PointCl
 class PerceptionNodes : public ::testing::Test {
  protected:
   void SetUp() override {
-    cam_ = loadCameraIntrinsics(cameraYaml());
+    cam_ = ehc_control::loadPinholeCamera(cameraYaml());
     image_pub_ = nh_.advertise<sensor_msgs::Image>("/camera/color/image_raw", 1);
     info_pub_ = nh_.advertise<sensor_msgs::CameraInfo>("/camera/color/camera_info", 1);
     cloud_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("/camera/depth/points", 1);
@@ -195,7 +195,7 @@ class PerceptionNodes : public ::testing::Test {
   void onObstacles(const ehc_msgs::ObstacleArray& m) { obstacles_.push_back(m); }
 
   ros::NodeHandle nh_;
-  CameraIntrinsics cam_;
+  ehc_control::PinholeCamera cam_;
   tf2_ros::StaticTransformBroadcaster static_tf_;
   ros::Publisher image_pub_, info_pub_, cloud_pub_, joints_pub_, odom_pub_;
   ros::Subscriber target_sub_, grasp_sub_, obst_sub_;

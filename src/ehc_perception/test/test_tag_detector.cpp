@@ -17,7 +17,7 @@ namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 
-CameraIntrinsics d435() { return loadCameraIntrinsics(ehc_perception::test::cameraYaml()); }
+ehc_control::PinholeCamera d435() { return ehc_control::loadPinholeCamera(ehc_perception::test::cameraYaml()); }
 
 Eigen::Isometry3d tagPose(double x, double y, double z, double rx, double ry, double rz) {
   return ehc_perception::test::facingTag(x, y, z, rx, ry, rz);
@@ -30,7 +30,7 @@ double rotationError(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
 }  // namespace
 
 TEST(TagDetector, PoseOfARenderedTagMatchesTheTruth) {
-  const CameraIntrinsics cam = d435();
+  const ehc_control::PinholeCamera cam = d435();
   TagImageRenderer renderer(cam);
   TagDetectorConfig cfg;
   cfg.default_tag_size = 0.06;
@@ -59,8 +59,7 @@ TEST(TagDetector, PoseOfARenderedTagMatchesTheTruth) {
       double best = 1e9;
       for (double sx : {-1.0, 1.0})
         for (double sy : {-1.0, 1.0}) {
-          Eigen::Vector2d uv;
-          cam.project(truth * Eigen::Vector3d(0.03 * sx, 0.03 * sy, 0), &uv);
+          const Eigen::Vector2d uv = cam.pixel(truth * Eigen::Vector3d(0.03 * sx, 0.03 * sy, 0));
           best = std::min(best, (uv - c).norm());
         }
       EXPECT_LT(best, 1.5);
@@ -69,7 +68,7 @@ TEST(TagDetector, PoseOfARenderedTagMatchesTheTruth) {
 }
 
 TEST(TagDetector, PerIdTagSizesAndSeveralTags) {
-  const CameraIntrinsics cam = d435();
+  const ehc_control::PinholeCamera cam = d435();
   TagImageRenderer renderer(cam);
   TagDetectorConfig cfg;
   cfg.default_tag_size = 0.05;
@@ -101,7 +100,7 @@ TEST(TagDetector, PerIdTagSizesAndSeveralTags) {
 }
 
 TEST(TagDetector, NoTagAndBadImages) {
-  const CameraIntrinsics cam = d435();
+  const ehc_control::PinholeCamera cam = d435();
   TagDetector detector(TagDetectorConfig(), cam);
   vpImage<unsigned char> blank(480, 640, 128);
   EXPECT_TRUE(detector.detect(blank).empty());
@@ -125,7 +124,7 @@ TEST(TagDetector, NoTagAndBadImages) {
 }
 
 TEST(TagDetector, RawBufferWithStrideGivesTheSameDetection) {
-  const CameraIntrinsics cam = d435();
+  const ehc_control::PinholeCamera cam = d435();
   TagDetector detector(TagDetectorConfig(), cam);
   const auto img = TagImageRenderer(cam).render({{7, 0.05, tagPose(0.02, 0.01, 0.45, 0.1, 0.2, 0.3)}});
   std::vector<unsigned char> buf(700 * 480, 0);
@@ -157,7 +156,7 @@ TEST(TagDetector, TargetOffsetIsAppliedInTheTagFrame) {
 }
 
 TEST(TagDetector, ConfigsAndCamerasAreValidated) {
-  const CameraIntrinsics cam = d435();
+  const ehc_control::PinholeCamera cam = d435();
   auto expectFails = [&](const std::string& yaml, const std::string& needle) {
     const auto n = ehc_control::ConfigNode::loadString(yaml, "tags.yaml", "TagDetector");
     try {
@@ -194,13 +193,13 @@ TEST(TagDetector, ConfigsAndCamerasAreValidated) {
       "target: {grasp_offset: {xyz: [0, 0]}}", "t.yaml", "TagTarget");
   EXPECT_THROW(loadTagTargetConfig(bad_offset.child("target")), std::invalid_argument);
 
-  CameraIntrinsics bad = cam;
+  ehc_control::PinholeCamera bad = cam;
   bad.fx = -1;
   EXPECT_THROW(TagDetector(TagDetectorConfig(), bad), std::invalid_argument);
 }
 
 TEST(TagImageRenderer, BitmapsAndBadIds) {
-  const CameraIntrinsics cam = d435();
+  const ehc_control::PinholeCamera cam = d435();
   TagImageRenderer r(cam, "36h11", 4);
   EXPECT_EQ(r.totalCells(), 10);
   EXPECT_EQ(r.borderCells(), 8);
@@ -214,7 +213,7 @@ TEST(TagImageRenderer, BitmapsAndBadIds) {
 }
 
 TEST(TagDetector, ImageFilesAreReadOrRejectedClearly) {
-  const CameraIntrinsics cam = d435();
+  const ehc_control::PinholeCamera cam = d435();
   const auto img = TagImageRenderer(cam).render({{1, 0.05, tagPose(0, 0, 0.5, 0, 0, 0)}});
   const std::string path = "/tmp/ehc_perception_test_tag.png";
   vpImageIo::write(img, path);

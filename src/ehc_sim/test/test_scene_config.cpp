@@ -1,6 +1,7 @@
 // SceneConfig / SimConfig: the shipped scenes match the experiments' geometry; bad files fail
 // with a message naming the file and the field; tag frame convention.
 
+#include "ehc_control/pinhole_camera.h"
 #include "ehc_sim/scene_config.h"
 #include "ehc_sim/sim_config.h"
 
@@ -155,7 +156,7 @@ TEST(SimConfig, ShippedConfigLoadsAndResolvesPaths) {
   EXPECT_EQ(c.camera.ray_cols, 80);
   EXPECT_EQ(c.camera.ray_rows, 60);
   EXPECT_NO_THROW(loadSceneConfig(c.scene_file));
-  const CameraIntrinsics k = loadCameraIntrinsics(c.camera_file);
+  const ehc_control::PinholeCamera k = ehc_control::loadPinholeCamera(c.camera_file);
   EXPECT_EQ(k.width, 640);
   EXPECT_NEAR(k.fx, 615.0, 1e-9);
   EXPECT_FALSE(c.summary().empty());

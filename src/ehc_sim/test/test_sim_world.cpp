@@ -67,30 +67,27 @@ Eigen::VectorXd forwardPose() {
 }
 }  // namespace
 
-TEST(RobotCollisionModel, ParsesRealManGeometry) {
-  const SimWorld w(simConfig(false), robotConfig(), emptyScene());
-  const RobotCollisionModel& m = w.collisionModel();
+// The collision model itself: ehc_control/test/test_robot_collision_model.
+TEST(SimWorld, UsesTheUrdfCollisionModelAndPosesTheFingersFromTheGripper) {
+  SimWorld w(simConfig(false), robotConfig(), emptyScene());
+  const ehc_control::RobotCollisionModel& m = w.collisionModel();
   EXPECT_EQ(m.root(), "base_link");
   ASSERT_EQ(m.fingers().size(), 2u);
-  EXPECT_EQ(m.fingers()[0].child_link, "left_finger_link");
-  EXPECT_NEAR(m.fingers()[0].upper, 0.035, 1e-12);
-  EXPECT_TRUE(m.adjacent("link1", "link2"));
-  EXPECT_TRUE(m.adjacent("link6", "camera_link"));
-  EXPECT_FALSE(m.adjacent("link1", "link3"));
-  EXPECT_FALSE(m.adjacent("left_finger_link", "right_finger_link"));
   EXPECT_GE(m.links().size(), 10u);
-}
-
-TEST(RobotCollisionModel, RejectsMeshesAndBadXml) {
-  const std::string mesh = R"(<robot name="r"><link name="base_link"><collision><geometry>
-      <mesh filename="a.stl"/></geometry></collision></link></robot>)";
-  try {
-    RobotCollisionModel m(mesh, {});
-    FAIL();
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("[RobotCollisionModel] link 'base_link'"), std::string::npos) << e.what();
-  }
-  EXPECT_THROW(RobotCollisionModel("<robot", {}), std::invalid_argument);
+  auto fingerShift = [&](const std::string& finger) {  // from where WholeBodyModel puts it
+    const Eigen::Isometry3d held = w.model().fk(w.robot().basePose(), w.robot().armPositions(), finger);
+    return Eigen::Vector3d(w.linkPose(finger).translation() - held.translation());
+  };
+  const Eigen::Vector3d closing = w.linkPose("gripper_base_link").linear().col(1);
+  EXPECT_NEAR(w.gripper().opening(), 0.035, 1e-12);  // starts open
+  EXPECT_TRUE(fingerShift("left_finger_link").isApprox(0.035 * closing, 1e-9));
+  EXPECT_TRUE(fingerShift("right_finger_link").isApprox(-0.035 * closing, 1e-9));
+  EXPECT_TRUE(w.linkBodyPose("left_finger_link").translation().isApprox(w.linkPose("left_finger_link").translation(), 1e-6));
+  w.commandGripper(true);  // closes on nothing
+  for (int i = 0; i < 150; ++i) w.step(zeroCmd(w));
+  ASSERT_NEAR(w.gripper().opening(), 0.0, 1e-12);
+  EXPECT_LT(fingerShift("left_finger_link").norm(), 1e-9);
+  EXPECT_LT(fingerShift("right_finger_link").norm(), 1e-9);
 }
 
 TEST(SimWorld, RobotBodiesFollowTheIntegratedState) {

@@ -30,7 +30,7 @@ struct Rig {
     }
     world = std::make_unique<SimWorld>(cfg, ehc_control::loadRobotConfig(cfg.robot_file),
                                        loadSceneConfig(kConfig + "/scenes/" + scene));
-    camera = std::make_unique<SimulatedCamera>(loadCameraIntrinsics(cfg.camera_file), cfg.camera, 1);
+    camera = std::make_unique<SimulatedCamera>(ehc_control::loadPinholeCamera(cfg.camera_file), cfg.camera, 1);
     camera->setScene(world->bodies(), world->scene().floor_shade);
     for (int i = 0; i < 5; ++i) world->step(Eigen::VectorXd::Zero(world->robot().nDof()));
   }
@@ -41,7 +41,7 @@ struct Detection {
   Eigen::Isometry3d cMo = Eigen::Isometry3d::Identity();
 };
 
-std::vector<Detection> detect(const vpImage<unsigned char>& I, const CameraIntrinsics& k, double tag_size) {
+std::vector<Detection> detect(const vpImage<unsigned char>& I, const ehc_control::PinholeCamera& k, double tag_size) {
   vpDetectorAprilTag detector(vpDetectorAprilTag::TAG_36h11);
   detector.setAprilTagQuadDecimate(1.0);
   detector.setAprilTagNbThreads(1);
@@ -266,10 +266,20 @@ TEST(SimulatedCamera, ImagesAreReproduciblePerSeed) {
 TEST(SimulatedCamera, BadConfigurationThrows) {
   SimulatedCameraConfig c;
   c.ray_cols = 1;
-  EXPECT_THROW(SimulatedCamera(CameraIntrinsics(), c, 1), std::invalid_argument);
-  CameraIntrinsics k;
+  EXPECT_THROW(SimulatedCamera(ehc_control::PinholeCamera(), c, 1), std::invalid_argument);
+  ehc_control::PinholeCamera k;
   k.fx = -1;
   EXPECT_THROW(SimulatedCamera(k, SimulatedCameraConfig(), 1), std::invalid_argument);
+  // Valid cameras the simulator does not render: tiny images, extreme focal lengths.
+  ehc_control::PinholeCamera tiny;
+  tiny.width = tiny.height = 8;
+  tiny.cx = tiny.cy = 4;
+  ASSERT_NO_THROW(tiny.validate());
+  EXPECT_THROW(SimulatedCamera(tiny, SimulatedCameraConfig(), 1), std::invalid_argument);
+  ehc_control::PinholeCamera wide;
+  wide.fx = 0.5;
+  ASSERT_NO_THROW(wide.validate());
+  EXPECT_THROW(SimulatedCamera(wide, SimulatedCameraConfig(), 1), std::invalid_argument);
 }
 
 TEST(SimulatedCamera, CameraInsideOrTouchingAnObjectDoesNotCrash) {

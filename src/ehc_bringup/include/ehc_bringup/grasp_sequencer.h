@@ -29,8 +29,10 @@
 // (counted); a non-finite or decreasing time throws "[GraspSequencer] ...".
 //
 // TfM of an object = fraction of cycles of the approach at a distance in which the object centre
-// (perceived pose) projects inside the camera image at positive depth (camera pose from tf,
-// pinhole intrinsics from camera_info). The approach at a distance runs from the object's first
+// (objectCentre()) projects inside the camera image in front of the camera (camera pose from tf,
+// ehc_control::PinholeCamera from camera_info; the in-view test and the counting are
+// ehc_control::TargetTracker's, the controller's too: one tracker per window below, paused when
+// its window closes). The approach at a distance runs from the object's first
 // perceived pose until the arm takes over (/ehc/status sig(w) >= tfm_handover_sig: the target
 // is within the arm's reach) or the pre-grasp switch (pregrasp_switch_distance from the grasp),
 // whichever comes first. An approach that starts within reach (the next object on the same
@@ -44,9 +46,12 @@
 // is reported as controller_tfm (from the first pose until the gripper closes).
 
 #include "ehc_bringup/grasp_selection.h"
+#include "ehc_control/pinhole_camera.h"
+#include "ehc_control/target_tracker.h"
 
 #include <Eigen/Geometry>
 
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
@@ -59,16 +64,6 @@ namespace ehc_bringup {
 
 enum class GraspPhase { WaitTarget, Approach, PreGrasp, Grasp, Close, Lift, Release, Retreat, Done };
 std::string toString(GraspPhase p);
-
-/// Pinhole camera (image size, intrinsics) for TfM.
-struct CameraModel {
-  int width = 640, height = 480;
-  double fx = 615.0, fy = 615.0, cx = 320.0, cy = 240.0;
-  bool valid() const;
-};
-/// True if world point `p` projects inside the image at positive depth; `world_T_camera` is
-/// the optical frame (z forward, x right, y down).
-bool pointInImage(const Eigen::Isometry3d& world_T_camera, const Eigen::Vector3d& p, const CameraModel& cam);
 
 struct GraspObjectSpec {
   std::string name;
@@ -170,8 +165,9 @@ class GraspSequencer {
   bool setObjectPose(std::size_t index, double t, const Eigen::Isometry3d& pose);
   /// Latest grasp candidates (world). Non-finite candidates are dropped (counted).
   void setGraspCandidates(double t, const std::vector<GraspCandidate>& candidates);
-  /// Camera intrinsics for TfM; false (ignored) if invalid.
-  bool setCamera(const CameraModel& camera);
+  /// Camera intrinsics for TfM (e.g. from camera_info); false (ignored, counted) if invalid
+  /// (PinholeCamera::validate). No TfM cycle is counted before the first valid camera.
+  bool setCamera(const ehc_control::PinholeCamera& camera);
 
   /// One cycle. Throws "[GraspSequencer] ..." for a non-finite or decreasing time.
   SequencerOutput update(const SequencerInput& in);
@@ -184,7 +180,12 @@ class GraspSequencer {
   const GraspSequencerParams& params() const { return params_; }
   /// Locked grasp of the current object (PRE_GRASP onwards).
   const std::optional<GraspChoice>& lockedGrasp() const { return locked_; }
-  /// Centre of the object being grasped (locked or perceived), if any and not DONE.
+  /// Centre of the object being grasped, if any and up to LIFT: the origin of its perceived
+  /// (filtered) pose, frozen where it was at the grasp lock. That pose is the tag node's target,
+  /// which sits at the object centre (its grasp_offset), so this is MpbsServo::targetCentre of
+  /// the object pose with a zero offset; MPBS's own fallback applies its offset to the
+  /// controller's goal (pre-grasp, grasp, lift pose), hence this centre is published on
+  /// /ehc/target_centre. The one centre TfM and the node use.
   std::optional<Eigen::Vector3d> objectCentre() const;
 
  private:
@@ -196,6 +197,7 @@ class GraspSequencer {
   Eigen::Isometry3d preGrasp(const Eigen::Isometry3d& grasp) const;
   bool within(const SequencerInput& in, const Eigen::Isometry3d& goal, double pos, double ori_deg) const;
   std::string label() const;
+  std::array<ehc_control::TargetTracker*, 3> tfmWindows();  ///< the three TfM trackers
   /// Updates the best distance to `goal` in this phase; true when it has not improved for
   /// stall_time.
   bool stalled(const SequencerInput& in, const Eigen::Isometry3d& goal);
@@ -221,11 +223,14 @@ class GraspSequencer {
   Eigen::Vector3d last_approach_ = Eigen::Vector3d::UnitX();
   // bookkeeping
   GraspResult cur_;
-  long switch_cycles_ = 0, switch_fov_cycles_ = 0;
-  bool distant_ = true;       ///< TfM window open: the arm has not taken over yet
+  // TfM windows (see the header comment), one tracker each: until the arm takes over (tfm),
+  // until the pre-grasp switch, until the gripper closes.
+  ehc_control::TargetTracker tfm_distant_{ehc_control::PinholeCamera{}, ehc_control::TargetTrackerParams{}};
+  ehc_control::TargetTracker tfm_switch_{ehc_control::PinholeCamera{}, ehc_control::TargetTrackerParams{}};
+  ehc_control::TargetTracker tfm_close_{ehc_control::PinholeCamera{}, ehc_control::TargetTrackerParams{}};
+  bool has_camera_ = false;   ///< a valid camera was set
   bool was_distant_ = false;  ///< a cycle of this approach had sig(w) below tfm_handover_sig
-  long fov_cycles_ = 0, tfm_cycles_ = 0, close_cycles_ = 0, close_fov_cycles_ = 0, ctrl_fov_cycles_ = 0, ctrl_cycles_ = 0;
-  std::optional<CameraModel> camera_;
+  long ctrl_fov_cycles_ = 0, ctrl_cycles_ = 0;
   bool counting_tfm_ = true;
   std::string last_controller_phase_;
   std::vector<GraspResult> results_;

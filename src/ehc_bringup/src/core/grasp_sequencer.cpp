@@ -3,6 +3,7 @@
 #include "ehc_control/config_node.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <iomanip>
 #include <sstream>
@@ -170,19 +171,6 @@ GraspSequencerParams loadGraspSequencerParams(const ehc_control::ConfigNode& roo
   return p;
 }
 
-bool CameraModel::valid() const {
-  return width > 0 && height > 0 && std::isfinite(fx) && std::isfinite(fy) && std::isfinite(cx) &&
-         std::isfinite(cy) && fx > 0.0 && fy > 0.0;
-}
-
-bool pointInImage(const Eigen::Isometry3d& world_T_camera, const Eigen::Vector3d& p, const CameraModel& cam) {
-  if (!world_T_camera.matrix().allFinite() || !p.allFinite() || !cam.valid()) return false;
-  const Eigen::Vector3d c = world_T_camera.inverse() * p;
-  if (!(c.z() > 1e-6)) return false;
-  const double u = cam.fx * c.x() / c.z() + cam.cx, v = cam.fy * c.y() / c.z() + cam.cy;
-  return u >= 0.0 && u < cam.width && v >= 0.0 && v < cam.height;
-}
-
 // ---------------------------------------------------------------- state machine
 
 GraspSequencer::GraspSequencer(const GraspSequencerParams& params) : params_(params) {
@@ -219,12 +207,15 @@ std::optional<Eigen::Vector3d> GraspSequencer::objectCentre() const {
   return std::nullopt;
 }
 
-bool GraspSequencer::setCamera(const CameraModel& camera) {
-  if (!camera.valid()) {
+bool GraspSequencer::setCamera(const ehc_control::PinholeCamera& camera) {
+  try {
+    camera.validate();
+  } catch (const std::invalid_argument&) {
     ++rejected_;
     return false;
   }
-  camera_ = camera;
+  for (ehc_control::TargetTracker* t : tfmWindows()) t->setCamera(camera);
+  has_camera_ = true;
   return true;
 }
 
@@ -238,6 +229,10 @@ void GraspSequencer::setGraspCandidates(double t, const std::vector<GraspCandida
   }
 }
 
+std::array<ehc_control::TargetTracker*, 3> GraspSequencer::tfmWindows() {
+  return {&tfm_distant_, &tfm_switch_, &tfm_close_};
+}
+
 std::string GraspSequencer::label() const {
   return current_ < params_.objects.size() ? params_.objects[current_].name : std::string("-");
 }
@@ -249,9 +244,8 @@ void GraspSequencer::startObject(double t, SequencerOutput* out) {
   locked_.reset();
   centre_in_tcp_.reset();
   hold_goal_.reset();
-  fov_cycles_ = tfm_cycles_ = ctrl_fov_cycles_ = ctrl_cycles_ = close_cycles_ = close_fov_cycles_ = 0;
-  switch_cycles_ = switch_fov_cycles_ = 0;
-  distant_ = true;
+  ctrl_fov_cycles_ = ctrl_cycles_ = 0;
+  for (ehc_control::TargetTracker* t : tfmWindows()) t->reset();
   was_distant_ = false;
   counting_tfm_ = true;
   cur_ = GraspResult();
@@ -321,10 +315,10 @@ void GraspSequencer::finishObject(double t, bool success, const std::string& rea
   cur_.time_s = t - object_t0_;
   cur_.failed_phase = success ? "" : toString(phase_);
   cur_.reason = reason;
-  cur_.cycles = tfm_cycles_;
-  cur_.tfm = tfm_cycles_ > 0 ? static_cast<double>(fov_cycles_) / static_cast<double>(tfm_cycles_) : 0.0;
-  cur_.tfm_until_switch = switch_cycles_ > 0 ? static_cast<double>(switch_fov_cycles_) / static_cast<double>(switch_cycles_) : 0.0;
-  cur_.tfm_until_close = close_cycles_ > 0 ? static_cast<double>(close_fov_cycles_) / static_cast<double>(close_cycles_) : 0.0;
+  cur_.cycles = tfm_distant_.cycles();
+  cur_.tfm = tfm_distant_.tfm();
+  cur_.tfm_until_switch = tfm_switch_.tfm();
+  cur_.tfm_until_close = tfm_close_.tfm();
   cur_.controller_tfm = ctrl_cycles_ > 0 ? static_cast<double>(ctrl_fov_cycles_) / static_cast<double>(ctrl_cycles_) : 0.0;
   cur_.used_candidate = locked_ ? locked_->from_candidate : false;
   // RELEASE holds the TCP where it is; RETREAT backs off along the approach from there.
@@ -370,23 +364,21 @@ SequencerOutput GraspSequencer::update(const SequencerInput& in) {
         ++ctrl_cycles_;
         if (in.target_in_fov) ++ctrl_fov_cycles_;
       }
-      if (in.camera && camera_) {
-        const Eigen::Vector3d centre = locked_ ? locked_object_centre_ : object_pose_->translation();
-        const bool seen = pointInImage(*in.camera, centre, *camera_);
-        ++close_cycles_;
-        if (seen) ++close_fov_cycles_;
-        if (!locked_) {  // the approach: until the pre-grasp switch
-          ++switch_cycles_;
-          if (seen) ++switch_fov_cycles_;
+      if (in.camera && has_camera_) {
+        if (locked_) {  // the approach ended at the pre-grasp switch
+          tfm_switch_.pause();
+          tfm_distant_.pause();
+        } else {
           // The arm takes over: sig(w) rises to the threshold. An approach that starts within
           // reach (the next object on the same table) has no distant part: it counts whole.
           const bool within_reach = in.sig && *in.sig >= params_.tfm_handover_sig;
           if (!within_reach) was_distant_ = true;
-          else if (was_distant_) distant_ = false;
-          if (distant_) {
-            ++tfm_cycles_;
-            if (seen) ++fov_cycles_;
-          }
+          else if (was_distant_) tfm_distant_.pause();
+        }
+        const Eigen::Vector3d centre = *objectCentre();  // up to LIFT: there is one
+        for (ehc_control::TargetTracker* t : tfmWindows()) {
+          t->moveTarget(centre);
+          t->observe(*in.camera);
         }
       }
     }
@@ -430,8 +422,8 @@ SequencerOutput GraspSequencer::update(const SequencerInput& in) {
       if (!choice) break;
       out.goal = preGrasp(choice->pose);
       if (within(in, choice->pose, params_.pregrasp_switch_distance, 180.0)) {
+        locked_object_centre_ = *objectCentre();  // frozen from here (before locked_ is set)
         locked_ = choice;
-        locked_object_centre_ = object_pose_->translation();
         out.goal = preGrasp(choice->pose);
         enter(GraspPhase::PreGrasp, t, &out,
               std::string("grasp locked: ") + (choice->from_candidate ? "perception candidate" : "tag fallback"));

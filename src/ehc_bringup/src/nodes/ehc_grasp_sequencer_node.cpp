@@ -42,6 +42,8 @@ namespace {
 
 using ehc_bringup::GraspSequencer;
 
+constexpr double kLogThrottle = 2.0;  ///< s, period of every throttled log line
+
 struct NodeParams {
   std::string world_frame = "odom";
   std::string tcp_frame = "ee_link";
@@ -155,12 +157,12 @@ class SequencerNode {
  private:
   void onObjectPose(std::size_t i, const geometry_msgs::PoseStamped& m) {
     if (!m.header.frame_id.empty() && m.header.frame_id != node_.world_frame) {
-      ROS_ERROR_STREAM_THROTTLE(2.0, "[ehc_grasp_sequencer_node] object pose in frame '" << m.header.frame_id
+      ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "[ehc_grasp_sequencer_node] object pose in frame '" << m.header.frame_id
                                          << "' ignored: expected '" << node_.world_frame << "'");
       return;
     }
     if (!seq_->setObjectPose(i, ros::Time::now().toSec(), toEigen(m.pose)))
-      ROS_ERROR_STREAM_THROTTLE(2.0, "[ehc_grasp_sequencer_node] rejected a non-finite / invalid pose on "
+      ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "[ehc_grasp_sequencer_node] rejected a non-finite / invalid pose on "
                                          << node_.pose_topics[i]);
   }
   void onCandidates(const ehc_msgs::GraspCandidates& m) {
@@ -191,14 +193,12 @@ class SequencerNode {
     exclusion_pub_.publish(m);
   }
   void onCameraInfo(const sensor_msgs::CameraInfo& m) {
-    ehc_bringup::CameraModel c;
-    c.width = static_cast<int>(m.width);
-    c.height = static_cast<int>(m.height);
-    c.fx = m.K[0];
-    c.fy = m.K[4];
-    c.cx = m.K[2];
-    c.cy = m.K[5];
-    if (!seq_->setCamera(c)) ROS_ERROR_STREAM_THROTTLE(5.0, "[ehc_grasp_sequencer_node] invalid camera_info ignored");
+    const ehc_control::PinholeCamera c = ehc_control::PinholeCamera::fromCameraInfo(
+        m.header.frame_id, static_cast<int>(m.width), static_cast<int>(m.height),
+        Eigen::Map<const Eigen::Matrix<double, 9, 1>>(m.K.data()), m.distortion_model,
+        Eigen::Map<const Eigen::VectorXd>(m.D.data(), static_cast<Eigen::Index>(m.D.size())));
+    if (!seq_->setCamera(c))
+      ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "[ehc_grasp_sequencer_node] invalid camera_info ignored");
   }
   void onSimStatus(const ehc_msgs::SimStatus& m) {
     gripper_state_ = m.gripper_state;
@@ -244,7 +244,7 @@ class SequencerNode {
       const auto tf = tf_.lookupTransform(node_.world_frame, node_.tcp_frame, ros::Time(0));
       in.tcp = tf2::transformToEigen(tf);
     } catch (const tf2::TransformException& e) {
-      ROS_WARN_STREAM_THROTTLE(2.0, "[ehc_grasp_sequencer_node] no TCP pose yet: " << e.what());
+      ROS_WARN_STREAM_THROTTLE(kLogThrottle, "[ehc_grasp_sequencer_node] no TCP pose yet: " << e.what());
     }
     try {
       in.camera = tf2::transformToEigen(tf_.lookupTransform(node_.world_frame, node_.camera_frame, ros::Time(0)));

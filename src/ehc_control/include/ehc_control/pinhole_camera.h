@@ -1,8 +1,12 @@
 #pragma once
-// PinholeCamera: the intrinsics the controller needs to tell whether the target is in view
-// (TfM, MPBS monitoring). Loaded from a ROS camera_info YAML file (camera_calibration format:
-// image_width, image_height, camera_matrix). ROS-free. (ehc_perception has the full
-// CameraIntrinsics with distortion; ehc_control cannot depend on it.)
+// PinholeCamera: the one camera model of the stack (controller TfM and MPBS monitoring, tag
+// detection and rendering, the simulated camera, the grasp sequencer's TfM): image size, pinhole
+// intrinsics, name, distortion model + coefficients (kept for information: every user projects
+// an ideal pinhole, i.e. rectified images), projection of a point in the optical frame and the
+// in-image test. Loaded from a ROS camera_info YAML file (camera_calibration format:
+// camera_name, image_width, image_height, camera_matrix, distortion_model,
+// distortion_coefficients); nodes build it from sensor_msgs/CameraInfo with fromCameraInfo().
+// ROS-free.
 
 #include <Eigen/Core>
 
@@ -10,40 +14,40 @@
 
 namespace ehc_control {
 
-class ConfigNode;
-
-/// The pinhole fields of a ROS camera_info YAML file (camera_calibration format), as written:
-/// the one reader every package's intrinsics loader builds on (validation, and distortion for
-/// the loaders that use it, stay with each loader).
-struct CameraInfoFile {
-  std::string camera_name;         ///< "" when absent
-  int width = 0, height = 0;
-  Eigen::Matrix<double, 9, 1> K;   ///< camera_matrix.data, row-major
-  double fx() const { return K[0]; }
-  double fy() const { return K[4]; }
-  double cx() const { return K[2]; }
-  double cy() const { return K[5]; }
-  /// K = [fx 0 cx; 0 fy cy; 0 0 1] (no skew).
-  bool isPinholeMatrix() const { return K[1] == 0.0 && K[3] == 0.0 && K[6] == 0.0 && K[7] == 0.0 && K[8] == 1.0; }
-};
-/// Reads the fields from a loaded file; missing or malformed required fields throw with the
-/// file and field named (ConfigNode).
-CameraInfoFile readCameraInfo(const ConfigNode& root);
-
 struct PinholeCamera {
+  std::string name = "camera";  ///< camera_name (YAML) or the camera_info frame
   int width = 640;
   int height = 480;
   double fx = 615.0, fy = 615.0, cx = 320.0, cy = 240.0;
+  std::string distortion_model = "plumb_bob";
+  Eigen::VectorXd distortion = Eigen::VectorXd::Zero(5);  ///< coefficients (any length, may be empty)
   double min_depth = 1e-3;  ///< m, points closer to the image plane count as not visible
 
-  void validate() const;  ///< throws "[PinholeCamera] ..."
-  /// True when the point (camera optical frame: z forward, x right, y down) lies at depth
-  /// > min_depth and projects inside the image [0, width) x [0, height). Optional pixel.
+  /// Throws std::invalid_argument "[PinholeCamera] parameter '<field>' ...": image size in
+  /// [1, 10000] px, fx, fy in [1e-3, 1e6], principal point inside the image, finite
+  /// distortion coefficients, min_depth in [0, 10] m.
+  void validate() const;
+  /// Pixel (u right, v down) of a point in the optical frame (z forward, x right, y down):
+  /// [fx x / z + cx, fy y / z + cy]. No depth check (see projectsInside).
+  Eigen::Vector2d pixel(const Eigen::Vector3d& p_camera) const;
+  /// True when the point (optical frame) is finite, lies at depth > min_depth and projects
+  /// inside the image [0, width) x [0, height). The pixel is written to `uv` (if given) when
+  /// the depth test passes.
   bool projectsInside(const Eigen::Vector3d& p_camera, Eigen::Vector2d* uv = nullptr) const;
   std::string summary() const;
+
+  /// The camera of ROS camera_info fields (YAML file or sensor_msgs/CameraInfo): K row-major
+  /// [fx 0 cx; 0 fy cy; 0 0 1] (the other entries are not read), distortion model and
+  /// coefficients D. Not validated (call validate()).
+  static PinholeCamera fromCameraInfo(const std::string& name, int width, int height,
+                                      const Eigen::Matrix<double, 9, 1>& K,
+                                      const std::string& distortion_model, const Eigen::VectorXd& D);
 };
 
-/// Loads and validates a camera_info YAML file. Throws "[PinholeCamera] <file>: ...".
+/// Loads and validates a camera_info YAML file. Missing or malformed fields, a camera_matrix
+/// with skew or a bad value throw std::invalid_argument "[PinholeCamera] <file>: ..." naming
+/// the field (ConfigNode). camera_name, distortion_model and distortion_coefficients are
+/// optional (defaults: "camera", plumb_bob, 5 zeros).
 PinholeCamera loadPinholeCamera(const std::string& path);
 
 }  // namespace ehc_control

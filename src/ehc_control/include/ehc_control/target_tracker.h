@@ -4,7 +4,11 @@
 // centre projects inside the image at positive depth. The camera pose comes from the robot's
 // kinematics (not from detections), so TfM also counts the cycles in which the controller
 // moves on the last good target pose while perception does not see it. A target whose centre
-// jumps by more than new_target_distance is a new target and restarts the count. ROS-free.
+// jumps by more than new_target_distance is a new target and restarts the count (setTarget);
+// moveTarget follows a target whose centre estimate moves without restarting. A paused tracker
+// still answers whether the target is in view but does not count the cycle, so one tracker per
+// TfM window (e.g. the grasp sequencer's: until the arm takes over, until the pre-grasp switch,
+// until the gripper closes) counts its own span. ROS-free.
 
 #include "ehc_control/pinhole_camera.h"
 
@@ -32,10 +36,21 @@ class TargetTracker {
   /// A newly accepted target centre (world). Returns true if it is a new target (first one,
   /// or a jump larger than new_target_distance): the TfM count restarts.
   bool setTarget(const Eigen::Vector3d& centre_world);
+  /// The same target at a new centre estimate (world), e.g. a filtered or locked object pose:
+  /// the count continues whatever the jump. Starts a target (count 0) when there is none.
+  /// Throws on a non-finite centre.
+  void moveTarget(const Eigen::Vector3d& centre_world);
   /// One control cycle with the camera optical frame's world pose: updates and returns
-  /// whether the target centre is in view. No-op (false) before the first target.
+  /// whether the target centre is in view (PinholeCamera::projectsInside); counts the cycle
+  /// unless paused. No-op (false) before the first target.
   bool observe(const Eigen::Isometry3d& world_T_camera);
-  /// Forget the target (TfM 0, no target).
+  /// Stop / resume counting cycles (observe still updates inView()); the counts are kept.
+  void pause() { counting_ = false; }
+  void resume() { counting_ = true; }
+  bool paused() const { return !counting_; }
+  /// New intrinsics (e.g. a camera_info update); the count continues. Validates (throws).
+  void setCamera(const PinholeCamera& camera);
+  /// Forget the target (TfM 0, no target) and resume counting.
   void reset();
 
   bool hasTarget() const { return has_target_; }
@@ -49,7 +64,7 @@ class TargetTracker {
  private:
   PinholeCamera camera_;
   TargetTrackerParams params_;
-  bool has_target_ = false, in_view_ = false;
+  bool has_target_ = false, in_view_ = false, counting_ = true;
   Eigen::Vector3d centre_ = Eigen::Vector3d::Zero();
   long cycles_ = 0, in_view_cycles_ = 0;
 };

@@ -6,52 +6,79 @@
 
 namespace ehc_control {
 
+namespace {
+const char* kOwner = "PinholeCamera";
+}
+
 void PinholeCamera::validate() const {
-  if (width <= 0 || height <= 0)
-    throw std::invalid_argument("[PinholeCamera] image size must be positive (got " + std::to_string(width) + " x " +
-                                std::to_string(height) + ")");
-  requireRange("PinholeCamera", "fx", fx, 1e-3, 1e6);
-  requireRange("PinholeCamera", "fy", fy, 1e-3, 1e6);
-  requireRange("PinholeCamera", "cx", cx, -1e6, 1e6);
-  requireRange("PinholeCamera", "cy", cy, -1e6, 1e6);
-  requireRange("PinholeCamera", "min_depth", min_depth, 0.0, 10.0);
+  requireRange(kOwner, "image_width", width, 1, 10000);
+  requireRange(kOwner, "image_height", height, 1, 10000);
+  requireRange(kOwner, "fx", fx, 1e-3, 1e6);
+  requireRange(kOwner, "fy", fy, 1e-3, 1e6);
+  requireRange(kOwner, "cx", cx, 0.0, width);
+  requireRange(kOwner, "cy", cy, 0.0, height);
+  if (!distortion.allFinite()) throw std::invalid_argument("[PinholeCamera] distortion coefficients must be finite");
+  requireRange(kOwner, "min_depth", min_depth, 0.0, 10.0);
+}
+
+Eigen::Vector2d PinholeCamera::pixel(const Eigen::Vector3d& p) const {
+  return Eigen::Vector2d(cx + fx * p.x() / p.z(), cy + fy * p.y() / p.z());
 }
 
 bool PinholeCamera::projectsInside(const Eigen::Vector3d& p, Eigen::Vector2d* uv) const {
   if (!p.allFinite() || !(p.z() > min_depth)) return false;
-  const double u = cx + fx * p.x() / p.z(), v = cy + fy * p.y() / p.z();
-  if (uv) *uv << u, v;
-  return u >= 0.0 && u < width && v >= 0.0 && v < height;
+  const Eigen::Vector2d px = pixel(p);
+  if (uv) *uv = px;
+  return px.x() >= 0.0 && px.x() < width && px.y() >= 0.0 && px.y() < height;
 }
 
 std::string PinholeCamera::summary() const {
   std::ostringstream os;
-  os << "camera " << width << "x" << height << " fx " << fx << " fy " << fy << " cx " << cx << " cy " << cy;
+  os << "camera '" << name << "': " << width << "x" << height << ", fx " << fx << " fy " << fy << " cx " << cx
+     << " cy " << cy << ", " << distortion_model << " (" << distortion.size() << " coefficients)";
   return os.str();
 }
 
-CameraInfoFile readCameraInfo(const ConfigNode& n) {
-  CameraInfoFile f;
-  f.camera_name = n.get<std::string>("camera_name", "");
-  f.width = n.require<int>("image_width");
-  f.height = n.require<int>("image_height");
-  f.K = n.child("camera_matrix").requireVector("data", 9);
-  return f;
+PinholeCamera PinholeCamera::fromCameraInfo(const std::string& name, int width, int height,
+                                            const Eigen::Matrix<double, 9, 1>& K,
+                                            const std::string& distortion_model, const Eigen::VectorXd& D) {
+  PinholeCamera c;
+  c.name = name;
+  c.width = width;
+  c.height = height;
+  c.fx = K[0];
+  c.cx = K[2];
+  c.fy = K[4];
+  c.cy = K[5];
+  c.distortion_model = distortion_model;
+  c.distortion = D;
+  return c;
 }
 
 PinholeCamera loadPinholeCamera(const std::string& path) {
-  const CameraInfoFile f = readCameraInfo(ConfigNode::loadFile(path, "PinholeCamera"));
-  PinholeCamera c;
-  c.width = f.width;
-  c.height = f.height;
-  c.fx = f.fx();
-  c.cx = f.cx();
-  c.fy = f.fy();
-  c.cy = f.cy();
+  const ConfigNode root = ConfigNode::loadFile(path, kOwner);
+  const PinholeCamera defaults;
+  const int width = root.require<int>("image_width");
+  const int height = root.require<int>("image_height");
+  const ConfigNode matrix = root.child("camera_matrix");
+  const Eigen::Matrix<double, 9, 1> K = matrix.requireVector("data", 9);
+  if (!(K[1] == 0.0 && K[3] == 0.0 && K[6] == 0.0 && K[7] == 0.0 && K[8] == 1.0))
+    matrix.fail("data", "must be [fx 0 cx 0 fy cy 0 0 1] (no skew)");
+  const Eigen::VectorXd D = root.has("distortion_coefficients")
+                                ? root.child("distortion_coefficients").requireVector("data")
+                                : defaults.distortion;
+  std::string name = root.get<std::string>("camera_name", "");
+  if (name.empty()) name = defaults.name;
+  const PinholeCamera c = PinholeCamera::fromCameraInfo(
+      name, width, height, K, root.get<std::string>("distortion_model", defaults.distortion_model), D);
   try {
     c.validate();
   } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument("[PinholeCamera] " + path + ": " + std::string(e.what()).substr(16));
+    // "[PinholeCamera] <what>" -> "[PinholeCamera] <file>: <what>"
+    const std::string prefix = std::string("[") + kOwner + "] ";
+    std::string what = e.what();
+    if (what.rfind(prefix, 0) == 0) what.erase(0, prefix.size());
+    throw std::invalid_argument(prefix + path + ": " + what);
   }
   return c;
 }

@@ -46,17 +46,34 @@ bool TargetTracker::setTarget(const Eigen::Vector3d& centre) {
   return is_new;
 }
 
+void TargetTracker::moveTarget(const Eigen::Vector3d& centre) {
+  if (!has_target_) {
+    setTarget(centre);
+    return;
+  }
+  if (!centre.allFinite()) throw std::invalid_argument("[TargetTracker] non-finite target centre");
+  centre_ = centre;
+}
+
 bool TargetTracker::observe(const Eigen::Isometry3d& world_T_camera) {
   if (!has_target_) return false;
   in_view_ = world_T_camera.matrix().allFinite() && camera_.projectsInside(world_T_camera.inverse() * centre_);
-  ++cycles_;
-  if (in_view_) ++in_view_cycles_;
+  if (counting_) {
+    ++cycles_;
+    if (in_view_) ++in_view_cycles_;
+  }
   return in_view_;
+}
+
+void TargetTracker::setCamera(const PinholeCamera& camera) {
+  camera.validate();
+  camera_ = camera;
 }
 
 void TargetTracker::reset() {
   has_target_ = false;
   in_view_ = false;
+  counting_ = true;
   cycles_ = 0;
   in_view_cycles_ = 0;
 }

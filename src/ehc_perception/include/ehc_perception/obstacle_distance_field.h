@@ -5,14 +5,17 @@
 // influence distance: closest point pair, unit normal (obstacle -> link) and distance.
 // Exclusion zones (spheres) hide parts of the map from the distance queries without erasing
 // them: the object the hand is about to grasp or holds, which it must touch.
+// The robot's shapes: ehc_control::RobotCollisionModel (the links in ObstacleMapConfig::links);
+// its gripper fingers are posed fully open by default (linkPoses), the widest they get.
 // ROS-free (OctoMap + FCL inside); not thread-safe.
 
 #include "ehc_perception/grasp_generator.h"  // PointList
-#include "ehc_perception/robot_collision_model.h"
+#include "ehc_control/robot_collision_model.h"
 
 #include <Eigen/Geometry>
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -61,7 +64,8 @@ struct ExclusionZone {
 
 class ObstacleDistanceField {
  public:
-  ObstacleDistanceField(const ObstacleMapConfig& config, const RobotCollisionModel& robot);
+  /// `robot`: built with config.links (its links() are the ones the field checks, in order).
+  ObstacleDistanceField(const ObstacleMapConfig& config, const ehc_control::RobotCollisionModel& robot);
   ~ObstacleDistanceField();
   ObstacleDistanceField(ObstacleDistanceField&&) noexcept;
   ObstacleDistanceField& operator=(ObstacleDistanceField&&) noexcept;
@@ -92,21 +96,27 @@ class ObstacleDistanceField {
   /// in range are omitted), ignoring occupied voxels inside the exclusion zones.
   /// `link_poses`: world poses in robot().links() order.
   std::vector<LinkObstacleDistance> distances(const std::vector<Eigen::Isometry3d>& link_poses) const;
-  /// World poses of robot().links() from the whole-body model, each times
-  /// robot().linkOffset(i) (gripper fingers fully open).
+  /// World poses of robot().links() from the whole-body model (which holds the finger joints
+  /// at 0), a finger link moved by robot().fingerOffset(link, finger_opening).
+  /// `finger_opening` (m per finger): default std::nullopt = each finger at its upper limit,
+  /// i.e. the gripper fully open, the widest it gets: the sim and the real gripper open during
+  /// the approach, and the map must keep the open fingers clear of obstacles.
   std::vector<Eigen::Isometry3d> linkPoses(const ehc_control::WholeBodyModel& model,
                                            const Eigen::Vector3d& base_pose,
-                                           const Eigen::VectorXd& q) const;
+                                           const Eigen::VectorXd& q,
+                                           std::optional<double> finger_opening = std::nullopt) const;
 
   const ObstacleMapConfig& config() const { return config_; }
-  const RobotCollisionModel& robot() const { return robot_; }
+  /// The robot model's summary and how linkPoses poses the fingers by default.
+  std::string summary() const;
+  const ehc_control::RobotCollisionModel& robot() const { return robot_; }
   /// Writes the octree (OctoMap binary .bt) for inspection with octovis.
   void writeBinary(const std::string& path) const;
 
  private:
   struct Impl;
   ObstacleMapConfig config_;
-  RobotCollisionModel robot_;
+  ehc_control::RobotCollisionModel robot_;
   std::vector<ExclusionZone> zones_;
   std::unique_ptr<Impl> impl_;
 };

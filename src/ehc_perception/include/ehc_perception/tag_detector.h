@@ -6,7 +6,7 @@
 // T_cam_tag.rotation() == diag(1, -1, -1).
 // ROS-free; not thread-safe (the ViSP detector keeps state).
 
-#include "ehc_perception/camera_intrinsics.h"
+#include "ehc_control/pinhole_camera.h"
 
 #include <Eigen/Geometry>
 #include <visp3/core/vpImage.h>
@@ -53,7 +53,7 @@ struct TagDetection {
 class TagDetector {
  public:
   /// Throws std::invalid_argument on a bad config or camera.
-  TagDetector(const TagDetectorConfig& config, const CameraIntrinsics& camera);
+  TagDetector(const TagDetectorConfig& config, const ehc_control::PinholeCamera& camera);
   ~TagDetector();
   TagDetector(TagDetector&&) noexcept;
   TagDetector& operator=(TagDetector&&) noexcept;
@@ -65,12 +65,12 @@ class TagDetector {
   std::vector<TagDetection> detect(const unsigned char* data, int width, int height, int stride);
 
   const TagDetectorConfig& config() const { return config_; }
-  const CameraIntrinsics& camera() const { return camera_; }
+  const ehc_control::PinholeCamera& camera() const { return camera_; }
 
  private:
   struct Impl;
   TagDetectorConfig config_;
-  CameraIntrinsics camera_;
+  ehc_control::PinholeCamera camera_;
   std::unique_ptr<Impl> impl_;
 };
 

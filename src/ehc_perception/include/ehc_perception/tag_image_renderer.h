@@ -4,7 +4,7 @@
 // (apriltag_to_image). Used by tests and benchmarks, and by the simulator's camera.
 // Tag frame = TagDetector's (centre, x right, y up, z out of the printed face).
 
-#include "ehc_perception/camera_intrinsics.h"
+#include "ehc_control/pinhole_camera.h"
 
 #include <Eigen/Geometry>
 #include <visp3/core/vpImage.h>
@@ -23,7 +23,7 @@ struct TagPlacement {
 class TagImageRenderer {
  public:
   /// family: 36h11 | 25h9 | 16h5. Throws std::invalid_argument "[TagImageRenderer] ...".
-  TagImageRenderer(const CameraIntrinsics& camera, const std::string& family = "36h11",
+  TagImageRenderer(const ehc_control::PinholeCamera& camera, const std::string& family = "36h11",
                    int pixels_per_cell = 12);
 
   /// Renders the tags (farthest first) over a uniform background of the camera's size.
@@ -38,7 +38,7 @@ class TagImageRenderer {
   int borderCells() const { return border_cells_; }
 
  private:
-  CameraIntrinsics camera_;
+  ehc_control::PinholeCamera camera_;
   std::string family_;
   int pixels_per_cell_;
   int total_cells_ = 0;

@@ -16,6 +16,8 @@
 
 namespace ehc_perception {
 
+using ehc_control::CollisionShape;
+
 namespace {
 const char* kOwner = "ObstacleDistanceField";
 
@@ -74,7 +76,10 @@ struct ObstacleDistanceField::Impl {
   std::shared_ptr<octomap::OcTree> tree;
   std::shared_ptr<fcl::OcTree<double>> fcl_tree;
   std::vector<std::shared_ptr<fcl::CollisionGeometry<double>>> geoms;  // per shape
-  std::vector<int> shape_link;                                          // shape -> link index
+  struct ShapeIndex {
+    std::size_t link, shape;  // robot.links()[link].shapes[shape]
+  };
+  std::vector<ShapeIndex> shapes;  // every shape of every link, in order
   // The map without the exclusion zones, rebuilt when the map changes or the zones move
   // (see zonesMoved).
   std::shared_ptr<fcl::OcTree<double>> query_tree;
@@ -151,30 +156,29 @@ struct ObstacleDistanceField::Impl {
 };
 
 ObstacleDistanceField::ObstacleDistanceField(const ObstacleMapConfig& config,
-                                             const RobotCollisionModel& robot)
+                                             const ehc_control::RobotCollisionModel& robot)
     : config_(config), robot_(robot), impl_(std::make_unique<Impl>()) {
   config_.validate();
   impl_->reset(config_);
-  for (const CollisionShape& s : robot_.shapes()) {
-    std::shared_ptr<fcl::CollisionGeometry<double>> g;
-    switch (s.type) {
-      case CollisionShape::Type::Box:
-        g = std::make_shared<fcl::Box<double>>(s.size.x(), s.size.y(), s.size.z());
-        break;
-      case CollisionShape::Type::Cylinder:
-        g = std::make_shared<fcl::Cylinder<double>>(s.size[0], s.size[1]);
-        break;
-      case CollisionShape::Type::Sphere:
-        g = std::make_shared<fcl::Sphere<double>>(s.size[0]);
-        break;
+  for (std::size_t li = 0; li < robot_.links().size(); ++li)
+    for (std::size_t si = 0; si < robot_.links()[li].shapes.size(); ++si) {
+      const CollisionShape& s = robot_.links()[li].shapes[si];
+      std::shared_ptr<fcl::CollisionGeometry<double>> g;
+      switch (s.type) {
+        case CollisionShape::Type::Box:
+          g = std::make_shared<fcl::Box<double>>(s.size.x(), s.size.y(), s.size.z());
+          break;
+        case CollisionShape::Type::Cylinder:
+          g = std::make_shared<fcl::Cylinder<double>>(s.size[0], s.size[1]);
+          break;
+        case CollisionShape::Type::Sphere:
+          g = std::make_shared<fcl::Sphere<double>>(s.size[0]);
+          break;
+      }
+      g->computeLocalAABB();
+      impl_->geoms.push_back(g);
+      impl_->shapes.push_back({li, si});
     }
-    g->computeLocalAABB();
-    impl_->geoms.push_back(g);
-    int li = -1;
-    for (std::size_t l = 0; l < robot_.links().size(); ++l)
-      if (robot_.links()[l] == s.link) li = static_cast<int>(l);
-    impl_->shape_link.push_back(li);
-  }
 }
 
 ObstacleDistanceField::~ObstacleDistanceField() = default;
@@ -211,10 +215,11 @@ ObstacleDistanceField::InsertStats ObstacleDistanceField::insertCloud(
   };
   std::vector<Posed> posed;
   if (link_poses) {
-    for (std::size_t i = 0; i < robot_.shapes().size(); ++i) {
-      const CollisionShape& s = robot_.shapes()[i];
-      const Eigen::Isometry3d& Tl = (*link_poses)[static_cast<std::size_t>(impl_->shape_link[i])];
-      if (!Tl.matrix().allFinite()) fail("link pose of '" + s.link + "' is not finite");
+    for (const Impl::ShapeIndex& k : impl_->shapes) {
+      const ehc_control::RobotLinkGeometry& link = robot_.links()[k.link];
+      const CollisionShape& s = link.shapes[k.shape];
+      const Eigen::Isometry3d& Tl = (*link_poses)[k.link];
+      if (!Tl.matrix().allFinite()) fail("link pose of '" + link.name + "' is not finite");
       posed.push_back({&s, Tl.inverse(), Tl * s.origin.translation(),
                        s.boundingRadius() + config_.self_filter_padding});
     }
@@ -297,11 +302,12 @@ std::vector<LinkObstacleDistance> ObstacleDistanceField::distances(
   const fcl::Transform3<double> I = fcl::Transform3<double>::Identity();
   const fcl::OcTree<double>* tree = impl_->queryTree(zones_);
   if (!zones_.empty() && impl_->query_empty) return {};
-  for (std::size_t i = 0; i < robot_.shapes().size(); ++i) {
-    const CollisionShape& s = robot_.shapes()[i];
-    const std::size_t li = static_cast<std::size_t>(impl_->shape_link[i]);
+  for (std::size_t i = 0; i < impl_->shapes.size(); ++i) {
+    const std::size_t li = impl_->shapes[i].link;
+    const ehc_control::RobotLinkGeometry& link = robot_.links()[li];
+    const CollisionShape& s = link.shapes[impl_->shapes[i].shape];
     const Eigen::Isometry3d& Tl = link_poses[li];
-    if (!Tl.matrix().allFinite()) fail("link pose of '" + s.link + "' is not finite");
+    if (!Tl.matrix().allFinite()) fail("link pose of '" + link.name + "' is not finite");
     const Eigen::Isometry3d Ts = Tl * s.origin;
     fcl::Transform3<double> tf;
     tf.linear() = Ts.linear();
@@ -314,7 +320,7 @@ std::vector<LinkObstacleDistance> ObstacleDistanceField::distances(
     fcl::distance(tree, I, impl_->geoms[i].get(), tf, req, res);
     if (!(res.min_distance < start)) continue;
     LinkObstacleDistance d;
-    d.link = s.link;
+    d.link = link.name;
     d.distance = res.min_distance;
     d.obstacle_point = res.nearest_points[0];
     d.link_point = res.nearest_points[1];
@@ -333,16 +339,20 @@ std::vector<LinkObstacleDistance> ObstacleDistanceField::distances(
 
 std::vector<Eigen::Isometry3d> ObstacleDistanceField::linkPoses(
     const ehc_control::WholeBodyModel& model, const Eigen::Vector3d& base_pose,
-    const Eigen::VectorXd& q) const {
+    const Eigen::VectorXd& q, std::optional<double> finger_opening) const {
   const Eigen::Isometry3d Twb = ehc_control::WholeBodyModel::baseTransform(base_pose);
   std::vector<Eigen::Isometry3d> out;
   out.reserve(robot_.links().size());
   for (std::size_t i = 0; i < robot_.links().size(); ++i) {
-    const std::string& l = robot_.links()[i];
+    const std::string& l = robot_.links()[i].name;
     if (!model.hasLink(l)) fail("link '" + l + "' is not in the whole-body model");
-    out.push_back(Twb * model.linkPoseInBase(q, l) * robot_.linkOffset(i));
+    out.push_back(Twb * model.linkPoseInBase(q, l) * robot_.fingerOffset(l, finger_opening));
   }
   return out;
+}
+
+std::string ObstacleDistanceField::summary() const {
+  return robot_.summary() + "; gripper fingers posed at their upper limit (fully open) unless an opening is given";
 }
 
 void ObstacleDistanceField::writeBinary(const std::string& path) const {

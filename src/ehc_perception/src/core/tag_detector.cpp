@@ -126,7 +126,7 @@ struct TagDetector::Impl {
   vpImage<unsigned char> buffer;
 };
 
-TagDetector::TagDetector(const TagDetectorConfig& config, const CameraIntrinsics& camera)
+TagDetector::TagDetector(const TagDetectorConfig& config, const ehc_control::PinholeCamera& camera)
     : config_(config), camera_(camera), impl_(std::make_unique<Impl>()) {
   config_.validate();
   try {
@@ -194,9 +194,7 @@ std::vector<TagDetection> TagDetector::detect(const vpImage<unsigned char>& I) {
         const vpPoint& P = pts3d[i][k];
         const Eigen::Vector3d pc =
             d.T_cam_tag * Eigen::Vector3d(P.get_oX(), P.get_oY(), P.get_oZ());
-        const Eigen::Vector2d uv(camera_.fx * pc.x() / pc.z() + camera_.cx,
-                                 camera_.fy * pc.y() / pc.z() + camera_.cy);
-        sq += (uv - d.corners[k]).squaredNorm();
+        sq += (camera_.pixel(pc) - d.corners[k]).squaredNorm();
       }
     }
     d.reprojection_error = std::sqrt(sq / 4.0);

@@ -59,7 +59,7 @@ vpHomogeneousMatrix toVisp(const Eigen::Isometry3d& T) {
 
 }  // namespace
 
-TagImageRenderer::TagImageRenderer(const CameraIntrinsics& camera, const std::string& family,
+TagImageRenderer::TagImageRenderer(const ehc_control::PinholeCamera& camera, const std::string& family,
                                    int pixels_per_cell)
     : camera_(camera), family_(family), pixels_per_cell_(pixels_per_cell) {
   camera_.validate();

@@ -38,7 +38,7 @@ int main(int argc, char** argv) {
       cfg.tag_sizes.clear();
     }
     if (args.count("family")) cfg.family = args.at("family");
-    const CameraIntrinsics cam = loadCameraIntrinsics(args.at("camera"));
+    const ehc_control::PinholeCamera cam = ehc_control::loadPinholeCamera(args.at("camera"));
     TagDetector detector(cfg, cam);
     const vpImage<unsigned char> image = loadGrayImage(args.at("image"));
     std::cout << tagDetectionsToJson(detector.detect(image)) << std::endl;

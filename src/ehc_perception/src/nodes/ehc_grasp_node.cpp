@@ -18,6 +18,8 @@ namespace {
 
 using namespace ehc_perception;
 
+constexpr double kLogThrottle = 2.0;  ///< s, period of every throttled log line
+
 struct GraspNodeConfig {
   std::string cloud_topic = "/camera/depth/points";
   std::string target_topic = "/ehc/target_pose";  ///< "" = no target: every object
@@ -72,7 +74,7 @@ class GraspNode {
   void onTarget(const geometry_msgs::PoseStamped& msg) {
     const Eigen::Vector3d p(msg.pose.position.x, msg.pose.position.y, msg.pose.position.z);
     if (!p.allFinite() || msg.header.frame_id != cfg_.world_frame) {
-      ROS_ERROR_THROTTLE(5.0, "ehc_grasp_node: target ignored (non-finite or frame '%s' != '%s')",
+      ROS_ERROR_THROTTLE(kLogThrottle, "ehc_grasp_node: target ignored (non-finite or frame '%s' != '%s')",
                          msg.header.frame_id.c_str(), cfg_.world_frame.c_str());
       return;
     }
@@ -107,10 +109,10 @@ class GraspNode {
         out.scores.push_back(g.score);
       }
       if (res.grasps.empty())
-        ROS_WARN_STREAM_THROTTLE(2.0, "ehc_grasp_node: no grasp: " << res.reason);
+        ROS_WARN_STREAM_THROTTLE(kLogThrottle, "ehc_grasp_node: no grasp: " << res.reason);
       pub_.publish(out);
     } catch (const std::exception& e) {
-      ROS_ERROR_STREAM_THROTTLE(2.0, "ehc_grasp_node: cloud dropped: " << e.what());
+      ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "ehc_grasp_node: cloud dropped: " << e.what());
     }
   }
 

@@ -83,12 +83,12 @@ class ObstacleNode {
   ObstacleNode(ros::NodeHandle& nh, const ObstacleNodeConfig& cfg)
       : cfg_(cfg),
         model_(ehc_control::loadRobotConfig(cfg.robot_config)),
-        field_(cfg.map, RobotCollisionModel(model_.urdfXml(), cfg.map.links)),
+        field_(cfg.map, ehc_control::RobotCollisionModel(model_.urdfXml(), model_.config().arm_joints, cfg.map.links)),
         q_(Eigen::VectorXd::Constant(model_.nArm(), std::nan(""))),
         listener_(tf_) {
-    for (const std::string& l : field_.robot().links())
-      if (!model_.hasLink(l)) throw std::invalid_argument("link '" + l + "' is not in the robot model");
-    ROS_INFO_STREAM("  " << field_.robot().summary());
+    for (const auto& l : field_.robot().links())
+      if (!model_.hasLink(l.name)) throw std::invalid_argument("link '" + l.name + "' is not in the robot model");
+    ROS_INFO_STREAM("  " << field_.summary());
     pub_ = nh.advertise<ehc_msgs::ObstacleArray>(cfg_.output_topic, 5);
     cloud_sub_ = nh.subscribe(cfg_.cloud_topic, 1, &ObstacleNode::onCloud, this);
     joints_sub_ = nh.subscribe(cfg_.joint_states_topic, 5, &ObstacleNode::onJoints, this);

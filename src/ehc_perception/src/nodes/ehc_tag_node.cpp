@@ -16,6 +16,9 @@
 namespace {
 
 using namespace ehc_perception;
+using ehc_control::PinholeCamera;
+
+constexpr double kLogThrottle = 2.0;  ///< s, period of every throttled log line
 
 struct TagNodeConfig {
   std::string image_topic = "/camera/color/image_raw";
@@ -59,7 +62,7 @@ TagNodeConfig loadTagNodeConfig(const std::string& path) {
 class TagNode {
  public:
   TagNode(ros::NodeHandle& nh, const TagNodeConfig& cfg) : cfg_(cfg), listener_(tf_) {
-    if (!cfg_.camera_file.empty()) build(loadCameraIntrinsics(cfg_.camera_file));
+    if (!cfg_.camera_file.empty()) build(ehc_control::loadPinholeCamera(cfg_.camera_file));
     pub_ = nh.advertise<geometry_msgs::PoseStamped>(cfg_.target_topic, 10);
     image_sub_ = nh.subscribe(cfg_.image_topic, 2, &TagNode::onImage, this);
     if (cfg_.camera_file.empty())
@@ -67,7 +70,7 @@ class TagNode {
   }
 
  private:
-  void build(const CameraIntrinsics& cam) {
+  void build(const PinholeCamera& cam) {
     detector_ = std::make_unique<TagDetector>(cfg_.detector, cam);
     ROS_INFO_STREAM("ehc_tag_node: " << cam.summary());
     if (cam.distortion.size() > 0 && cam.distortion.cwiseAbs().maxCoeff() > 0.0)
@@ -77,22 +80,22 @@ class TagNode {
 
   void onInfo(const sensor_msgs::CameraInfo& msg) {
     try {
-      const CameraIntrinsics cam = ros_conv::cameraInfoToIntrinsics(msg);
+      const PinholeCamera cam = ros_conv::cameraInfoToCamera(msg);
       if (detector_) {
-        const CameraIntrinsics& old = detector_->camera();
+        const PinholeCamera& old = detector_->camera();
         if (old.width == cam.width && old.height == cam.height && old.fx == cam.fx &&
             old.fy == cam.fy && old.cx == cam.cx && old.cy == cam.cy)
           return;
       }
       build(cam);
     } catch (const std::exception& e) {
-      ROS_ERROR_STREAM_THROTTLE(5.0, "ehc_tag_node: bad camera_info: " << e.what());
+      ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "ehc_tag_node: bad camera_info: " << e.what());
     }
   }
 
   void onImage(const sensor_msgs::Image& msg) {
     if (!detector_) {
-      ROS_WARN_THROTTLE(5.0, "ehc_tag_node: no camera_info yet, image ignored");
+      ROS_WARN_THROTTLE(kLogThrottle, "ehc_tag_node: no camera_info yet, image ignored");
       return;
     }
     try {
@@ -100,7 +103,7 @@ class TagNode {
       const std::vector<TagDetection> dets = detector_->detect(gray_);
       Eigen::Isometry3d T_cam_target;
       if (!findTarget(dets, cfg_.target, &T_cam_target)) {
-        ROS_DEBUG_THROTTLE(2.0, "ehc_tag_node: target tag %d not seen (%zu tags)",
+        ROS_DEBUG_THROTTLE(kLogThrottle, "ehc_tag_node: target tag %d not seen (%zu tags)",
                            cfg_.target.tag_id, dets.size());
         return;
       }
@@ -115,7 +118,7 @@ class TagNode {
       out.pose = ros_conv::toPose(T_world);
       pub_.publish(out);
     } catch (const std::exception& e) {
-      ROS_ERROR_STREAM_THROTTLE(2.0, "ehc_tag_node: image dropped: " << e.what());
+      ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "ehc_tag_node: image dropped: " << e.what());
     }
   }
 

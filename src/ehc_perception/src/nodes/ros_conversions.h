@@ -1,7 +1,7 @@
 #pragma once
 // Message <-> core conversions shared by the perception nodes (node side only: roscpp types).
 
-#include "ehc_perception/camera_intrinsics.h"
+#include "ehc_control/pinhole_camera.h"
 #include "ehc_perception/grasp_generator.h"
 #include "ehc_perception/point_cloud_layout.h"
 
@@ -52,19 +52,12 @@ inline void imageToGray(const sensor_msgs::Image& msg, vpImage<unsigned char>* o
   }
 }
 
-/// sensor_msgs/CameraInfo to validated intrinsics (K; distortion kept for information).
-inline CameraIntrinsics cameraInfoToIntrinsics(const sensor_msgs::CameraInfo& msg) {
-  CameraIntrinsics c;
-  c.name = msg.header.frame_id;
-  c.width = static_cast<int>(msg.width);
-  c.height = static_cast<int>(msg.height);
-  c.fx = msg.K[0];
-  c.fy = msg.K[4];
-  c.cx = msg.K[2];
-  c.cy = msg.K[5];
-  c.distortion_model = msg.distortion_model;
-  c.distortion = Eigen::VectorXd::Zero(static_cast<int>(msg.D.size()));
-  for (std::size_t i = 0; i < msg.D.size(); ++i) c.distortion[static_cast<int>(i)] = msg.D[i];
+/// sensor_msgs/CameraInfo to a validated camera (K; distortion kept for information).
+inline ehc_control::PinholeCamera cameraInfoToCamera(const sensor_msgs::CameraInfo& msg) {
+  const ehc_control::PinholeCamera c = ehc_control::PinholeCamera::fromCameraInfo(
+      msg.header.frame_id, static_cast<int>(msg.width), static_cast<int>(msg.height),
+      Eigen::Map<const Eigen::Matrix<double, 9, 1>>(msg.K.data()), msg.distortion_model,
+      Eigen::Map<const Eigen::VectorXd>(msg.D.data(), static_cast<Eigen::Index>(msg.D.size())));
   c.validate();
   return c;
 }

@@ -1,6 +1,7 @@
 #pragma once
 // SimConfig: parameters of the simulator (time step, actuation noise, collision checking,
-// gripper, simulated camera), loaded from a YAML file (top-level key `sim`) with one loader per
+// gripper, simulated camera; the camera intrinsics are ehc_control::PinholeCamera, loaded with
+// loadPinholeCamera(camera_file)), loaded from a YAML file (top-level key `sim`) with one loader per
 // struct. Paths inside the file are resolved against its folder. ROS-free.
 
 #include "ehc_sim/kinematic_fake_robot.h"
@@ -16,19 +17,6 @@ class ConfigNode;
 }
 
 namespace ehc_sim {
-
-/// Pinhole intrinsics of the colour stream (ROS camera_info YAML: image_width, image_height,
-/// camera_matrix.data). Distortion is ignored by the simulator (it renders an ideal pinhole).
-struct CameraIntrinsics {
-  int width = 640;
-  int height = 480;
-  double fx = 615.0, fy = 615.0, cx = 320.0, cy = 240.0;
-  std::string source_file;
-  void validate() const;  ///< throws "[CameraIntrinsics] ..."
-};
-
-/// Reads a camera_info YAML file (camera_calibration format).
-CameraIntrinsics loadCameraIntrinsics(const std::string& path);
 
 struct CollisionConfig {
   double tolerance = 0.001;  ///< m; a contact deeper than this is a collision

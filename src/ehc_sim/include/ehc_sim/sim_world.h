@@ -8,11 +8,11 @@
 // made kinematic and follows the gripper). Deterministic: reset(seed) rebuilds the world.
 // ROS-free (Bullet, Eigen, KDL via ehc_control::WholeBodyModel).
 
+#include "ehc_control/robot_collision_model.h"
 #include "ehc_control/robot_config.h"
 #include "ehc_control/whole_body_model.h"
 #include "ehc_sim/kinematic_fake_robot.h"
 #include "ehc_sim/parallel_gripper.h"
-#include "ehc_sim/robot_collision_model.h"
 #include "ehc_sim/scene_config.h"
 #include "ehc_sim/sim_config.h"
 
@@ -81,7 +81,7 @@ class SimWorld {
   long stepCount() const { return step_count_; }
   const KinematicFakeRobot& robot() const { return robot_; }
   const ehc_control::WholeBodyModel& model() const { return *model_; }
-  const RobotCollisionModel& collisionModel() const { return *collision_model_; }
+  const ehc_control::RobotCollisionModel& collisionModel() const { return *collision_model_; }
   const ParallelGripper& gripper() const { return gripper_; }
   const StepReport& lastStep() const { return report_; }
   const SimCounters& counters() const { return counters_; }
@@ -123,7 +123,7 @@ class SimWorld {
   ehc_control::RobotConfig robot_cfg_;
   SceneConfig scene_;
   std::unique_ptr<ehc_control::WholeBodyModel> model_;
-  std::unique_ptr<RobotCollisionModel> collision_model_;
+  std::unique_ptr<ehc_control::RobotCollisionModel> collision_model_;
   KinematicFakeRobot robot_;
   ParallelGripper gripper_;
   std::vector<BodyConfig> bodies_;

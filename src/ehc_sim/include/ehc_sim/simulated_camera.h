@@ -6,6 +6,7 @@
 // Gaussian depth noise. The floor is the background colour. The robot itself is not rendered
 // and is transparent to the rays (from the hand camera it is out of view). ROS-free.
 
+#include "ehc_control/pinhole_camera.h"
 #include "ehc_sim/scene_config.h"
 #include "ehc_sim/sim_config.h"
 
@@ -28,7 +29,10 @@ vpImage<unsigned char> makeTagTexture(int id, int pixels_per_cell);
 
 class SimulatedCamera {
  public:
-  SimulatedCamera(const CameraIntrinsics& intrinsics, const SimulatedCameraConfig& cfg,
+  /// Renders an ideal pinhole (the distortion coefficients are not applied). Throws
+  /// std::invalid_argument on an invalid camera (PinholeCamera::validate) or one the renderer
+  /// does not render ("[SimulatedCamera] ...": image 16..8192 px, fx, fy in [1, 1e5] px).
+  SimulatedCamera(const ehc_control::PinholeCamera& intrinsics, const SimulatedCameraConfig& cfg,
                   unsigned seed);
   ~SimulatedCamera();
   SimulatedCamera(SimulatedCamera&&) noexcept;
@@ -51,13 +55,13 @@ class SimulatedCamera {
              std::vector<Eigen::Vector3f>* points);
   void cloud(const SimWorld& world, std::vector<Eigen::Vector3f>* points);
 
-  const CameraIntrinsics& intrinsics() const { return intrinsics_; }
+  const ehc_control::PinholeCamera& intrinsics() const { return intrinsics_; }
   const SimulatedCameraConfig& config() const { return cfg_; }
   int faceCount() const;
 
  private:
   struct Impl;
-  CameraIntrinsics intrinsics_;
+  ehc_control::PinholeCamera intrinsics_;
   SimulatedCameraConfig cfg_;
   std::mt19937 rng_;
   long clipped_faces_ = 0;

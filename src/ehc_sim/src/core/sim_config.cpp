@@ -1,7 +1,5 @@
 #include "ehc_sim/sim_config.h"
 
-#include "ehc_control/pinhole_camera.h"
-
 #include "ehc_control/config_node.h"
 
 #include <cmath>
@@ -13,36 +11,6 @@ namespace ehc_sim {
 using ehc_control::ConfigNode;
 using ehc_control::requirePositive;
 using ehc_control::requireRange;
-
-void CameraIntrinsics::validate() const {
-  const char* o = "CameraIntrinsics";
-  requireRange(o, "image_width", width, 16, 8192);
-  requireRange(o, "image_height", height, 16, 8192);
-  requireRange(o, "fx", fx, 1.0, 1e5);
-  requireRange(o, "fy", fy, 1.0, 1e5);
-  requireRange(o, "cx", cx, 0.0, width);
-  requireRange(o, "cy", cy, 0.0, height);
-}
-
-CameraIntrinsics loadCameraIntrinsics(const std::string& path) {
-  const ConfigNode n = ConfigNode::loadFile(path, "CameraIntrinsics");
-  const ehc_control::CameraInfoFile f = ehc_control::readCameraInfo(n);
-  CameraIntrinsics c;
-  c.source_file = path;
-  c.width = f.width;
-  c.height = f.height;
-  if (!f.isPinholeMatrix()) n.child("camera_matrix").fail("data", "must be [fx 0 cx 0 fy cy 0 0 1]");
-  c.fx = f.fx();
-  c.cx = f.cx();
-  c.fy = f.fy();
-  c.cy = f.cy();
-  try {
-    c.validate();
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(std::string(e.what()) + " (file " + path + ")");
-  }
-  return c;
-}
 
 void CollisionConfig::validate() const {
   requireRange("CollisionConfig", "sim.collision.tolerance", tolerance, 0.0, 0.05);

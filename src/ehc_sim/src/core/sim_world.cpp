@@ -137,7 +137,7 @@ SimWorld::SimWorld(const SimConfig& cfg, const ehc_control::RobotConfig& robot,
       robot_cfg_(robot),
       scene_(scene),
       model_(makeModel(robot)),
-      collision_model_(std::make_unique<RobotCollisionModel>(model_->urdfXml(), robot.arm_joints)),
+      collision_model_(std::make_unique<ehc_control::RobotCollisionModel>(model_->urdfXml(), robot.arm_joints)),
       robot_(robot, cfg.noise, cfg.seed),
       gripper_(cfg.gripper, collision_model_->fingers().empty()
                                 ? 0.035
@@ -243,24 +243,24 @@ void SimWorld::build() {
   m.gripper_link.assign(n, false);
   const auto& fingers = collision_model_->fingers();
   for (std::size_t i = 0; i < n; ++i) {
-    const RobotLinkGeometry& g = links[i];
+    const ehc_control::RobotLinkGeometry& g = links[i];
     m.link_names[i] = g.name;
     auto compound = std::make_unique<btCompoundShape>();
     Impl::Body& b = m.links[i];
-    for (const LinkShape& s : g.shapes) {
+    for (const ehc_control::CollisionShape& s : g.shapes) {
       std::unique_ptr<btCollisionShape> child;
       switch (s.type) {
-        case LinkShape::Box:
+        case ehc_control::CollisionShape::Type::Box:
           child = std::make_unique<btBoxShape>(btVector3(0.5 * s.size.x(), 0.5 * s.size.y(), 0.5 * s.size.z()));
           break;
-        case LinkShape::Cylinder:
+        case ehc_control::CollisionShape::Type::Cylinder:
           child = std::make_unique<btCylinderShapeZ>(btVector3(s.size.x(), s.size.x(), 0.5 * s.size.y()));
           break;
-        case LinkShape::Sphere:
+        case ehc_control::CollisionShape::Type::Sphere:
           child = std::make_unique<btSphereShape>(s.size.x());
           break;
       }
-      if (s.type != LinkShape::Sphere) child->setMargin(kMargin);
+      if (s.type != ehc_control::CollisionShape::Type::Sphere) child->setMargin(kMargin);
       compound->addChildShape(toBt(s.origin), child.get());
       b.shapes.push_back(std::move(child));
     }
@@ -295,20 +295,16 @@ void SimWorld::build() {
 
 // ---------------------------------------------------------------------------- kinematics
 Eigen::Isometry3d SimWorld::linkPose(const std::string& link) const {
-  Eigen::Isometry3d T = model_->fk(robot_.basePose(), robot_.armPositions(), link);
-  if (const FingerJoint* f = collision_model_->fingerOf(link))
-    T = T * Eigen::Translation3d(f->axis * gripper_.opening());
-  return T;
+  return model_->fk(robot_.basePose(), robot_.armPositions(), link) *
+         collision_model_->fingerOffset(link, gripper_.opening());
 }
 
 Eigen::Isometry3d SimWorld::linkPoseInParent(const std::string& link) const {
   const std::string& parent = collision_model_->parentOf(link);
   if (parent.empty()) return Eigen::Isometry3d::Identity();
   const Eigen::VectorXd& q = robot_.armPositions();
-  Eigen::Isometry3d Tl = model_->linkPoseInBase(q, link);
-  if (const FingerJoint* f = collision_model_->fingerOf(link))
-    Tl = Tl * Eigen::Translation3d(f->axis * gripper_.opening());
-  return model_->linkPoseInBase(q, parent).inverse() * Tl;
+  return model_->linkPoseInBase(q, parent).inverse() *
+         (model_->linkPoseInBase(q, link) * collision_model_->fingerOffset(link, gripper_.opening()));
 }
 
 Eigen::Isometry3d SimWorld::cameraPose() const { return linkPose(robot_cfg_.camera_frame); }
@@ -336,9 +332,8 @@ void SimWorld::placeRobot(const Eigen::Vector3d& base, const Eigen::VectorXd& q)
   Eigen::Isometry3d gripper_pose = Eigen::Isometry3d::Identity();
   const std::string& gripper_link = collision_model_->fingers().front().parent_link;
   for (std::size_t i = 0; i < links.size(); ++i) {
-    Eigen::Isometry3d T = Twb * model_->linkPoseInBase(q, links[i].name);
-    if (const FingerJoint* f = collision_model_->fingerOf(links[i].name))
-      T = T * Eigen::Translation3d(f->axis * gripper_.opening());
+    const Eigen::Isometry3d T = Twb * model_->linkPoseInBase(q, links[i].name) *
+                                collision_model_->fingerOffset(links[i].name, gripper_.opening());
     m.links[i].motion->setWorldTransform(toBt(T));
     if (links[i].name == gripper_link) gripper_pose = T;
   }

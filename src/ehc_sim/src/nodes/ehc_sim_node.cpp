@@ -47,7 +47,7 @@ class SimNode {
     cfg_.seed = static_cast<unsigned>(seed);
     const ehc_control::RobotConfig robot = ehc_control::loadRobotConfig(cfg_.robot_file);
     const ehc_sim::SceneConfig scene = ehc_sim::loadSceneConfig(scene_file);
-    const ehc_sim::CameraIntrinsics intrinsics = ehc_sim::loadCameraIntrinsics(cfg_.camera_file);
+    const ehc_control::PinholeCamera intrinsics = ehc_control::loadPinholeCamera(cfg_.camera_file);
     ROS_INFO_STREAM("[ehc_sim_node] start-up configuration\n"
                     << cfg_.summary() << robot.summary() << "\n"
                     << scene.summary());

@@ -118,7 +118,8 @@ inline void fillImage(const vpImage<unsigned char>& I, const std::string& frame,
   std::memcpy(m->data.data(), I.bitmap, I.getSize());
 }
 
-inline void fillCameraInfo(const CameraIntrinsics& k, const std::string& frame, const ros::Time& stamp,
+/// The simulated camera renders an ideal pinhole: zero plumb_bob distortion whatever `k` carries.
+inline void fillCameraInfo(const ehc_control::PinholeCamera& k, const std::string& frame, const ros::Time& stamp,
                            sensor_msgs::CameraInfo* m) {
   m->header.stamp = stamp;
   m->header.frame_id = frame;
