@@ -17,6 +17,8 @@
 
 namespace {
 
+using Status = ehc_msgs::ControllerStatus;  // PHASE_* constants: the strings of ehc_control::ControlPhase
+
 struct Monitor {
   ehc_msgs::ControllerStatus status;
   geometry_msgs::Twist twist;
@@ -102,13 +104,13 @@ TEST_F(ControllerNodeTest, NanTargetIsRejectedThenConvergesThenWatchdogStops) {
   geometry_msgs::PoseStamped bad = target(std::numeric_limits<double>::quiet_NaN(), 0, 0.8);
   ros::Time last;
   spinUntil([] { return false; }, 1.0, [&] { publishTargetEvery(bad, last); });
-  EXPECT_NE(m_.status.phase, "TRACKING");
-  EXPECT_NE(m_.status.phase, "ARRIVED");
+  EXPECT_NE(m_.status.phase, Status::PHASE_TRACKING);
+  EXPECT_NE(m_.status.phase, Status::PHASE_ARRIVED);
   EXPECT_TRUE(m_.zeroCommand()) << "phase " << m_.status.phase;
 
   // --- 2. A target 1.5 m ahead: converge through topics.
   const geometry_msgs::PoseStamped goal = target(1.5, 0.3, 0.8);
-  const bool arrived = spinUntil([&] { return m_.status.phase == "ARRIVED"; }, 30.0,
+  const bool arrived = spinUntil([&] { return m_.status.phase == Status::PHASE_ARRIVED; }, 30.0,
                                  [&] { publishTargetEvery(goal, last); });
   ASSERT_TRUE(arrived) << "phase " << m_.status.phase << " position error " << m_.status.position_error
                        << " reason " << m_.status.reason;
@@ -123,7 +125,7 @@ TEST_F(ControllerNodeTest, NanTargetIsRejectedThenConvergesThenWatchdogStops) {
   // last target was sent up to a cycle before `stop`, and the test's spin adds delivery delay
   // under CI load; measured 0.27 s once on the 2-core machine).
   const ros::Time stop = ros::Time::now();
-  ASSERT_TRUE(spinUntil([&] { return m_.status.phase == "TARGET_LOST"; }, 2.0));
+  ASSERT_TRUE(spinUntil([&] { return m_.status.phase == Status::PHASE_TARGET_LOST; }, 2.0));
   EXPECT_LE((m_.status.header.stamp - stop).toSec(), 0.2 + 0.15);
   EXPECT_NE(m_.status.reason.find("target"), std::string::npos) << m_.status.reason;
   // Repeated zero commands.
@@ -131,7 +133,7 @@ TEST_F(ControllerNodeTest, NanTargetIsRejectedThenConvergesThenWatchdogStops) {
   spinUntil([&] { return m_.statuses > before + 10; }, 2.0);
   EXPECT_GT(m_.statuses, before + 10);
   EXPECT_TRUE(m_.zeroCommand());
-  EXPECT_EQ(m_.status.phase, "TARGET_LOST");
+  EXPECT_EQ(m_.status.phase, Status::PHASE_TARGET_LOST);
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 
 #include "ehc_control/whole_body_model.h"
 
+#include <cmath>
 #include <random>
 #include <string>
 
@@ -38,6 +39,36 @@ inline Eigen::Isometry3d realmanTcpToCamera() {
   const RobotConfig rc = realmanConfig();
   const WholeBodyModel model(rc);
   return model.linkPoseInBase(rc.arm_ready, rc.tcp_frame).inverse() * model.linkPoseInBase(rc.arm_ready, rc.camera_frame);
+}
+
+/// Noise-free kinematic robot for closed loops: integrates [base twist; arm rates] over dt
+/// (base twist in the base frame: v_x, [v_y,] w_z).
+struct KinematicSim {
+  Eigen::Vector3d base = Eigen::Vector3d::Zero();
+  Eigen::VectorXd q;
+  void step(const WholeBodyModel& m, const Eigen::VectorXd& v, double dt) {
+    const int nb = m.nBase();
+    const double vx = v[0], vy = nb == 3 ? v[1] : 0.0, wz = v[nb - 1];
+    const double c = std::cos(base.z()), s = std::sin(base.z());
+    base.x() += (c * vx - s * vy) * dt;
+    base.y() += (s * vx + c * vy) * dt;
+    base.z() += wz * dt;
+    q += v.tail(m.nArm()) * dt;
+  }
+};
+
+/// TCP pose at (x, y, z) whose z axis is `approach`, x axis horizontal.
+inline Eigen::Isometry3d approachPose(double x, double y, double z, const Eigen::Vector3d& approach) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  const Eigen::Vector3d zz = approach.normalized();
+  Eigen::Vector3d xx = Eigen::Vector3d::UnitZ().cross(zz);
+  if (xx.norm() < 1e-6) xx = Eigen::Vector3d::UnitX();
+  xx.normalize();
+  T.linear().col(0) = xx;
+  T.linear().col(1) = zz.cross(xx);
+  T.linear().col(2) = zz;
+  T.translation() << x, y, z;
+  return T;
 }
 
 inline Eigen::Vector3d randomBase(std::mt19937& rng) {

@@ -1,13 +1,13 @@
 // MPBS (paper eq. 14): T* = sig T_grasp (+) (1 - sig) T_monitor on SE(3).
 // sig = 1 gives the grasp pose; sig = 0 puts the target centre on the camera's optical axis;
 // every interpolated rotation is a rotation; T* is continuous in sig and along the approach;
-// MPBS off serves the grasp pose. Last, a whole-body closed loop (model + EHC QP + MPBS, no
-// ROS) shows the point of it: with MPBS the camera keeps the target in view while the robot
+// MPBS off serves the grasp pose. Last, a whole-body closed loop (ControlCycle: model + EHC QP +
+// MPBS, no ROS) shows the point of it: with MPBS the camera keeps the target in view while the robot
 // approaches a downward grasp, without MPBS it loses it for part of the approach.
 
 #include "ehc_control/config_node.h"
+#include "ehc_control/control_cycle.h"
 #include "ehc_control/mpbs.h"
-#include "ehc_control/target_tracker.h"
 #include "test_helpers.h"
 
 #include <gtest/gtest.h>
@@ -198,64 +198,44 @@ struct LoopResult {
   double tfm_monitoring = 0.0;  ///< over the cycles with sig(omega) < 0.5 (T* closer to T_monitor)
 };
 
-std::string uvString(const TargetTracker& t, const Eigen::Isometry3d& cam) {
-  Eigen::Vector2d uv(-1, -1);
-  const Eigen::Vector3d p = cam.inverse() * t.centre();
-  t.camera().projectsInside(p, &uv);
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%6.0f %6.0f z %.2f", uv.x(), uv.y(), p.z());
-  return buf;
-}
-
-/// Kinematic closed loop at 100 Hz: RealMan robot (differential base), EHC QP, PBVS/MPBS.
+/// Kinematic closed loop at 100 Hz through the control cycle: RealMan robot (differential
+/// base), EHC QP, PBVS with or without MPBS, TfM from the cycle's status.
 LoopResult runLoop(bool mpbs, const Eigen::Isometry3d& grasp, double time_limit) {
-  const RobotConfig rc = test::realmanConfig();
-  auto model = std::make_shared<const WholeBodyModel>(rc);
-  auto map = std::make_shared<const ReachabilityMap>(ReachabilityMap::load(rc.reachability_map_path));
-  auto weighting = std::make_shared<const EhcWeighting>(map, EhcWeightingParams{});
-  EhcQpController ctrl(model, QpControllerParams{}, weighting);
-  const Eigen::Isometry3d eTc = model->linkPoseInBase(rc.arm_ready, rc.tcp_frame).inverse() *
-                                model->linkPoseInBase(rc.arm_ready, rc.camera_frame);
-  MpbsParams mp;
-  mp.enabled = mpbs;
-  MpbsServo servo(eTc, PbvsServoParams{}, mp);
-  TargetTracker tracker(loadPinholeCamera(std::string(EHC_CONFIG_DIR) + "/robots/realman_rm65_water2/camera.yaml"),
-                        TargetTrackerParams{});
-  tracker.setTarget(servo.targetCentre(grasp));
-  TargetTracker monitoring = tracker;
-  const int roll_index = findRollJoint(*model);
-  Eigen::Vector3d base = Eigen::Vector3d::Zero();
-  Eigen::VectorXd q = rc.arm_ready;
+  ControlCycleParams p;
+  p.robot_file = test::realmanYaml();
+  p.servo_type = ServoType::Pbvs;
+  p.mpbs.enabled = mpbs;
+  p.tracking.camera_file = std::string(EHC_CONFIG_DIR) + "/robots/realman_rm65_water2/camera.yaml";
+  ControlCycle cycle(p);
+  const RobotConfig& rc = cycle.model().config();
+  test::KinematicSim sim{Eigen::Vector3d::Zero(), rc.arm_ready};
   LoopResult r;
+  long monitoring_cycles = 0, monitoring_in_view = 0;
   const double dt = 0.01;
   for (int k = 0; k < static_cast<int>(time_limit / dt); ++k) {
-    tracker.observe(model->fk(base, q, rc.camera_frame));
-    const Eigen::Isometry3d tcp = model->fk(base, q, rc.tcp_frame);
-    const EhcWeight w = ctrl.weight(base, tcp.translation(), grasp.translation());
-    if (w.sig < 0.5) monitoring.observe(model->fk(base, q, rc.camera_frame));
-    RollJoint roll;
-    roll.q = q[roll_index];
-    roll.lower = rc.arm_lower[roll_index];
-    roll.upper = rc.arm_upper[roll_index];
-    const MpbsOutput out = servo.compute(tcp, grasp, w.sig, &roll);
-    const ControllerCommand c = ctrl.step(base, q, grasp, out.twist, {}, &w);
+    const double t = k * dt;
+    EXPECT_EQ(cycle.setJointState(t, rc.arm_joints, std::vector<double>(sim.q.data(), sim.q.data() + sim.q.size())), "");
+    EXPECT_EQ(cycle.setBasePose(t, sim.base), "");
+    EXPECT_EQ(cycle.setTarget(t, grasp), "");
+    const ControlCycleOutput out = cycle.update(t);
+    const ControlCycleStatus& s = out.status;
+    if (s.sig < 0.5) {
+      ++monitoring_cycles;
+      monitoring_in_view += s.target_in_fov;
+    }
     if (std::getenv("EHC_TRACE") && mpbs && k % 20 == 0)
-      std::printf("t %.2f in_view %d uv %s |p| %.3f rot %.3f sig %.3f rot* %.3f mon-grasp %.3f base %.2f %.2f %.2f q5 %.2f nu %.2f %.2f\n", k * dt,
-                  tracker.inView(), uvString(tracker, model->fk(base, q, rc.camera_frame)).c_str(), c.position_error, c.orientation_error, w.sig, poseError(tcp, out.desired).tail<3>().norm(), poseError(out.monitor, grasp).tail<3>().norm(), base.x(), base.y(), base.z(),
-                  q[roll_index], out.twist.head<3>().norm(), out.twist.tail<3>().norm());
-    EXPECT_TRUE(c.ok) << c.failure;
-    if (c.phase == "ARRIVED") {
+      std::printf("t %.2f in_view %d |p| %.3f rot %.3f sig %.3f base %.2f %.2f %.2f\n", t, s.target_in_fov,
+                  s.position_error, s.orientation_error, s.sig, sim.base.x(), sim.base.y(), sim.base.z());
+    EXPECT_EQ(s.qp_status, QpStatus::Ok) << s.phase << ": " << s.reason;
+    if (s.phase == ControlPhase::Arrived) {
       r.arrived = true;
-      r.time_s = k * dt;
+      r.time_s = t;
       break;
     }
-    base.x() += std::cos(base.z()) * c.velocity[0] * dt;
-    base.y() += std::sin(base.z()) * c.velocity[0] * dt;
-    base.z() += c.velocity[1] * dt;
-    q += c.velocity.tail(rc.nArm()) * dt;
+    sim.step(cycle.model(), out.velocity, dt);
   }
-  r.tfm = tracker.tfm();
-  r.tfm_monitoring = monitoring.tfm();
+  r.tfm = cycle.tracker().tfm();
+  r.tfm_monitoring = monitoring_cycles > 0 ? static_cast<double>(monitoring_in_view) / static_cast<double>(monitoring_cycles) : 0.0;
   return r;
 }
 
@@ -287,7 +267,9 @@ TEST(Mpbs, WholeBodyLoopKeepsTheTargetInViewAndStillGrasps) {
       EXPECT_TRUE(with.arrived);
       EXPECT_TRUE(without.arrived);
       EXPECT_GE(with.tfm_monitoring, 0.95);
-      if (orientation > 0) EXPECT_GT(with.tfm, without.tfm);
+      if (orientation > 0) {
+        EXPECT_GT(with.tfm, without.tfm);
+      }
     }
   }
 }

@@ -15,19 +15,7 @@ using namespace ehc_control;
 
 namespace {
 
-struct Sim {
-  Eigen::Vector3d base = Eigen::Vector3d::Zero();
-  Eigen::VectorXd q;
-  void step(const WholeBodyModel& m, const Eigen::VectorXd& v, double dt) {
-    const int nb = m.nBase();
-    const double vx = v[0], vy = nb == 3 ? v[1] : 0.0, wz = v[nb - 1];
-    const double c = std::cos(base.z()), s = std::sin(base.z());
-    base.x() += (c * vx - s * vy) * dt;
-    base.y() += (s * vx + c * vy) * dt;
-    base.z() += wz * dt;
-    q += v.tail(m.nArm()) * dt;
-  }
-};
+using test::approachPose;
 
 std::shared_ptr<const EhcWeighting> weighting() {
   static auto w = std::make_shared<const EhcWeighting>(
@@ -36,23 +24,9 @@ std::shared_ptr<const EhcWeighting> weighting() {
   return w;
 }
 
-Eigen::Isometry3d pose(double x, double y, double z, const Eigen::Vector3d& approach) {
-  // z axis = approach, x axis horizontal.
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  const Eigen::Vector3d zz = approach.normalized();
-  Eigen::Vector3d xx = Eigen::Vector3d::UnitZ().cross(zz);
-  if (xx.norm() < 1e-6) xx = Eigen::Vector3d::UnitX();
-  xx.normalize();
-  T.linear().col(0) = xx;
-  T.linear().col(1) = zz.cross(xx);
-  T.linear().col(2) = zz;
-  T.translation() << x, y, z;
-  return T;
-}
-
 /// Runs the loop at 100 Hz; returns the time of arrival or -1.
-double run(EhcQpController& ctrl, Sim& sim, const Eigen::Isometry3d& target, double limit_s,
-           double* min_margin = nullptr, const std::function<std::vector<ObstaclePair>(const Sim&)>& obstacles = nullptr,
+double run(EhcQpController& ctrl, test::KinematicSim& sim, const Eigen::Isometry3d& target, double limit_s,
+           double* min_margin = nullptr, const std::function<std::vector<ObstaclePair>(const test::KinematicSim&)>& obstacles = nullptr,
            double* min_distance = nullptr) {
   const WholeBodyModel& m = ctrl.model();
   const auto& rc = m.config();
@@ -69,7 +43,7 @@ double run(EhcQpController& ctrl, Sim& sim, const Eigen::Isometry3d& target, dou
     const ControllerCommand c = ctrl.step(sim.base, sim.q, target, proportionalPoseServo(tcp, target, servo), obs);
     EXPECT_TRUE(c.velocity.allFinite());
     EXPECT_TRUE((c.velocity.cwiseAbs().array() <= vmax.array() + 1e-12).all()) << c.velocity.transpose();
-    EXPECT_EQ(c.qp_status, "OK") << c.failure;
+    EXPECT_EQ(c.qp_status, QpStatus::Ok) << c.failure;
     if (!c.ok) return -1;
     sim.step(m, c.velocity, 0.01);
     if (min_margin)
@@ -89,11 +63,11 @@ TEST_P(Convergence, ReachesTargetsFromSeveralStarts) {
   EhcQpController ctrl(model, p, weighting());
   const std::vector<Eigen::Vector3d> starts = {{0, 0, 0}, {-0.5, 0.3, 0.8}, {0.2, -0.4, -1.2}};
   const std::vector<Eigen::Isometry3d> targets = {
-      pose(2.0, 0.0, 0.8, Eigen::Vector3d(1, 0, -1)),     // ahead, 45 deg down
-      pose(1.2, 1.5, 0.75, Eigen::Vector3d(0.6, 0.8, -1)), // left, 45 deg down, table height
-      pose(-1.5, -0.5, 0.9, Eigen::Vector3d(-1, 0, 0))};  // behind, horizontal
+      approachPose(2.0, 0.0, 0.8, Eigen::Vector3d(1, 0, -1)),     // ahead, 45 deg down
+      approachPose(1.2, 1.5, 0.75, Eigen::Vector3d(0.6, 0.8, -1)), // left, 45 deg down, table height
+      approachPose(-1.5, -0.5, 0.9, Eigen::Vector3d(-1, 0, 0))};  // behind, horizontal
   for (std::size_t s = 0; s < starts.size(); ++s) {
-    Sim sim{starts[s], model->config().arm_ready};
+    test::KinematicSim sim{starts[s], model->config().arm_ready};
     ctrl.reset();
     const double t = run(ctrl, sim, targets[s], 30.0);
     EXPECT_GT(t, 0.0) << toString(GetParam()) << " start " << s << " did not arrive in 30 s";
@@ -107,14 +81,14 @@ INSTANTIATE_TEST_SUITE_P(AllModes, Convergence,
 TEST(EhcQpController, JointDampersKeepJointsInsideLimitsOverALongRandomRun) {
   auto model = std::make_shared<const WholeBodyModel>(test::realmanConfig());
   EhcQpController ctrl(model, QpControllerParams{}, weighting());
-  Sim sim{Eigen::Vector3d::Zero(), model->config().arm_ready};
+  test::KinematicSim sim{Eigen::Vector3d::Zero(), model->config().arm_ready};
   std::mt19937 rng(4);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   double margin = 1e9;
   for (int i = 0; i < 15; ++i) {
     const Eigen::Vector3d tcp = model->fk(sim.base, sim.q, "ee_link").translation();
     const Eigen::Isometry3d target =
-        pose(tcp.x() + 1.5 * u(rng), tcp.y() + 1.5 * u(rng), 0.65 + 0.3 * u(rng), Eigen::Vector3d(u(rng), u(rng), -1.5));
+        approachPose(tcp.x() + 1.5 * u(rng), tcp.y() + 1.5 * u(rng), 0.65 + 0.3 * u(rng), Eigen::Vector3d(u(rng), u(rng), -1.5));
     ctrl.reset();
     run(ctrl, sim, target, 10.0, &margin);
   }
@@ -126,12 +100,12 @@ TEST(EhcQpController, ObstacleInThePathIsNeverApproachedCloserThanDs) {
   auto model = std::make_shared<const WholeBodyModel>(test::realmanConfig());
   QpControllerParams p;
   EhcQpController ctrl(model, p, weighting());
-  Sim sim{Eigen::Vector3d::Zero(), model->config().arm_ready};
+  test::KinematicSim sim{Eigen::Vector3d::Zero(), model->config().arm_ready};
   // A 10 cm sphere on the straight path of the TCP to a target 1.6 m ahead.
   const Eigen::Vector3d centre(0.9, 0.0, 0.95);
   const double radius = 0.10;
   const std::vector<std::string> links = {"ee_link", "link6", "link5", "link3", "camera_link", "gripper_base_link"};
-  auto obstacles = [&](const Sim& s) {
+  auto obstacles = [&](const test::KinematicSim& s) {
     std::vector<ObstaclePair> out;
     for (const auto& l : links) {
       const Eigen::Vector3d pl = model->fk(s.base, s.q, l).translation();
@@ -147,7 +121,7 @@ TEST(EhcQpController, ObstacleInThePathIsNeverApproachedCloserThanDs) {
     return out;
   };
   double min_d = 1e9;
-  const double t = run(ctrl, sim, pose(1.6, 0.0, 0.9, Eigen::Vector3d(1, 0, -0.3)), 30.0, nullptr, obstacles, &min_d);
+  const double t = run(ctrl, sim, approachPose(1.6, 0.0, 0.9, Eigen::Vector3d(1, 0, -0.3)), 30.0, nullptr, obstacles, &min_d);
   EXPECT_GE(min_d, p.obstacle_stop - 0.005) << "closest approach " << min_d;
   EXPECT_LT(min_d, p.obstacle_influence);  // the obstacle really was in the way
   RecordProperty("arrival_s", std::to_string(t));
@@ -157,7 +131,7 @@ TEST(EhcQpController, BadInputGivesZeroCommandAndQpFailed) {
   auto model = std::make_shared<const WholeBodyModel>(test::realmanConfig());
   EhcQpController ctrl(model, QpControllerParams{}, weighting());
   const Eigen::VectorXd q = model->config().arm_ready;
-  Eigen::Isometry3d target = pose(1, 0, 0.8, Eigen::Vector3d(0, 0, -1));
+  Eigen::Isometry3d target = approachPose(1, 0, 0.8, Eigen::Vector3d(0, 0, -1));
   Vector6d nu = Vector6d::Constant(0.1);
   Eigen::Isometry3d bad = target;
   bad.translation().x() = std::nan("");
@@ -166,7 +140,7 @@ TEST(EhcQpController, BadInputGivesZeroCommandAndQpFailed) {
         ctrl.step(Eigen::Vector3d(0, std::nan(""), 0), q, target, nu),
         ctrl.step(Eigen::Vector3d::Zero(), q, target, Vector6d::Constant(std::nan("")))}) {
     EXPECT_FALSE(c.ok);
-    EXPECT_EQ(c.qp_status, "QP_FAILED");
+    EXPECT_EQ(c.qp_status, QpStatus::Failed);
     EXPECT_FALSE(c.failure.empty());
     EXPECT_EQ(c.velocity.size(), model->nDof());
     EXPECT_TRUE(c.velocity.isZero(0.0));
@@ -185,10 +159,10 @@ TEST(EhcQpController, InfeasibleConstraintsGiveZeroCommandAndQpFailed) {
   a.normal = Eigen::Vector3d::UnitX();
   b.normal = -Eigen::Vector3d::UnitX();
   a.distance = b.distance = -0.5;
-  const ControllerCommand c = ctrl.step(Eigen::Vector3d::Zero(), q, pose(1, 0, 0.8, Eigen::Vector3d(0, 0, -1)),
+  const ControllerCommand c = ctrl.step(Eigen::Vector3d::Zero(), q, approachPose(1, 0, 0.8, Eigen::Vector3d(0, 0, -1)),
                                         Vector6d::Zero(), {a, b});
   EXPECT_FALSE(c.ok);
-  EXPECT_EQ(c.qp_status, "QP_FAILED");
+  EXPECT_EQ(c.qp_status, QpStatus::Failed);
   EXPECT_TRUE(c.velocity.isZero(0.0));
   EXPECT_EQ(c.obstacle_rows, 2);
 }
@@ -218,8 +192,8 @@ TEST(EhcQpController, PerLinkStopDistanceLetsTheHandNearTheTable) {
   // below 1 cm.
   auto model = std::make_shared<const WholeBodyModel>(test::realmanConfig());
   const double table_z = 0.77;
-  const Eigen::Isometry3d target = pose(1.3, 0.2, table_z + 0.03, Eigen::Vector3d(1, 0, -0.2));
-  auto table = [&](const Sim& s) {
+  const Eigen::Isometry3d target = approachPose(1.3, 0.2, table_z + 0.03, Eigen::Vector3d(1, 0, -0.2));
+  auto table = [&](const test::KinematicSim& s) {
     const Eigen::Vector3d p = model->fk(s.base, s.q, "ee_link").translation();
     ObstaclePair o;
     o.link = "ee_link";
@@ -232,7 +206,7 @@ TEST(EhcQpController, PerLinkStopDistanceLetsTheHandNearTheTable) {
   QpControllerParams p;
   {
     EhcQpController ctrl(model, p, weighting());
-    Sim sim{Eigen::Vector3d::Zero(), model->config().arm_ready};
+    test::KinematicSim sim{Eigen::Vector3d::Zero(), model->config().arm_ready};
     double min_d = 1e9;
     EXPECT_LT(run(ctrl, sim, target, 15.0, nullptr, table, &min_d), 0.0);  // blocked
     EXPECT_GE(min_d, p.obstacle_stop - 0.005);
@@ -240,7 +214,7 @@ TEST(EhcQpController, PerLinkStopDistanceLetsTheHandNearTheTable) {
   p.obstacle_stop_links["ee_link"] = 0.01;
   {
     EhcQpController ctrl(model, p, weighting());
-    Sim sim{Eigen::Vector3d::Zero(), model->config().arm_ready};
+    test::KinematicSim sim{Eigen::Vector3d::Zero(), model->config().arm_ready};
     double min_d = 1e9;
     EXPECT_GT(run(ctrl, sim, target, 30.0, nullptr, table, &min_d), 0.0);  // arrives
     EXPECT_GE(min_d, 0.01 - 0.005);

@@ -127,7 +127,7 @@ TEST(ControllerSupervisor, HoldsTheLastTargetThenStopsThenResumes) {
   Eigen::Isometry3d target = Eigen::Isometry3d::Identity();
   target.translation() << 1.0, 0.0, 0.8;
   feed(1.0);
-  EXPECT_EQ(s.check(1.0).phase, "IDLE");
+  EXPECT_EQ(s.check(1.0).phase, ControlPhase::Idle);
   ASSERT_EQ(s.setTarget(1.0, target), "");
   // No new target pose (out of view / not detected): keeps serving the last good one.
   for (double t = 1.0; t <= 1.5; t += 0.1) {
@@ -145,7 +145,7 @@ TEST(ControllerSupervisor, HoldsTheLastTargetThenStopsThenResumes) {
   feed(1.6);
   const SupervisorDecision lost = s.check(1.6);
   EXPECT_FALSE(lost.run);
-  EXPECT_EQ(lost.phase, "TARGET_LOST");
+  EXPECT_EQ(lost.phase, ControlPhase::TargetLost);
   EXPECT_NEAR(s.targetAge(1.6), 0.6, 1e-12);
   // Re-acquired: continue.
   target.translation().x() = 1.01;

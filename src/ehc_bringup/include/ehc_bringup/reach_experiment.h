@@ -1,11 +1,11 @@
 #pragma once
 // ReachExperiment: paper Exp-1 (random reaching) in-process, without a ROS master.
-// The EHC QP controller drives the noisy KinematicFakeRobot through sequences of target TCP
-// poses; a target is reached when the TCP is within the arrival tolerance (1 cm, 2 deg) and
+// The control cycle (ehc_control::ControlCycle with the proportional servo and the EHC QP)
+// drives the noisy KinematicFakeRobot through sequences of target TCP poses, fed with the sim
+// time; a target is reached when the TCP is within the arrival tolerance (1 cm, 2 deg) and
 // failed after the time limit (30 s); the next target starts from where the last one ended.
 
-#include "ehc_control/pose_servo.h"
-#include "ehc_control/qp_controller.h"
+#include "ehc_control/control_cycle.h"
 #include "ehc_sim/kinematic_fake_robot.h"
 
 #include <Eigen/Geometry>
@@ -74,8 +74,9 @@ class ReachExperiment {
   /// sig,base_weight,qp_status,v...). Not owned; nullptr disables it.
   void setTrace(std::ostream* trace) { trace_ = trace; }
 
-  /// Drives `robot` to one target (at most the time limit), accumulating speeds and timings.
-  ReachTrial reach(ehc_sim::KinematicFakeRobot& robot, ehc_control::EhcQpController& ctrl,
+  /// Drives `robot` to one target (at most the time limit) through `cycle` (built by run() from
+  /// the constructor's arguments), accumulating speeds and the update() timings.
+  ReachTrial reach(ehc_sim::KinematicFakeRobot& robot, ehc_control::ControlCycle& cycle,
                    const Eigen::Isometry3d& target, SpeedMeans& distant, SpeedMeans& close,
                    std::vector<double>& step_us);
 
@@ -84,8 +85,9 @@ class ReachExperiment {
   ehc_control::QpControllerParams controller_;
   std::shared_ptr<const ehc_control::EhcWeighting> weighting_;
   ReachExperimentParams params_;
+  ehc_control::ControlCycleParams cycle_params_;
   std::ostream* trace_ = nullptr;
-  int roll_joint_ = -1;
+  double sim_time_ = 0.0;  ///< s, advanced by one control period per cycle
   int trace_set_ = 0, trace_index_ = 0;
 };
 

@@ -12,7 +12,7 @@
 
 namespace ehc_bringup {
 
-using ehc_control::EhcQpController;
+using ehc_control::ControlCycle;
 using ehc_control::Vector6d;
 
 void ReachExperimentParams::validate() const {
@@ -33,7 +33,9 @@ ReachExperiment::ReachExperiment(std::shared_ptr<const ehc_control::WholeBodyMod
       params_(params) {
   params_.validate();
   controller_.validate();
-  roll_joint_ = ehc_control::findRollJoint(*model_);
+  cycle_params_.controller = controller_;
+  cycle_params_.servo_type = ehc_control::ServoType::Proportional;
+  cycle_params_.servo = params_.servo;
 }
 
 namespace {
@@ -57,7 +59,7 @@ double limitMargin(const ehc_control::RobotConfig& rc, const Eigen::VectorXd& q)
 }
 }  // namespace
 
-ReachTrial ReachExperiment::reach(ehc_sim::KinematicFakeRobot& robot, EhcQpController& ctrl,
+ReachTrial ReachExperiment::reach(ehc_sim::KinematicFakeRobot& robot, ControlCycle& cycle,
                                   const Eigen::Isometry3d& target, SpeedMeans& distant,
                                   SpeedMeans& close, std::vector<double>& step_us) {
   const auto& rc = model_->config();
@@ -65,7 +67,6 @@ ReachTrial ReachExperiment::reach(ehc_sim::KinematicFakeRobot& robot, EhcQpContr
   const int max_steps = static_cast<int>(std::ceil(params_.time_limit * params_.control_rate));
   ReachTrial t;
   t.min_joint_limit_margin = limitMargin(rc, robot.armPositions());
-  ctrl.reset();
   for (int k = 0; k <= max_steps; ++k) {
     const Eigen::Isometry3d tcp = model_->fk(robot.basePose(), robot.armPositions(), rc.tcp_frame);
     const Vector6d e = ehc_control::poseError(tcp, target);
@@ -78,31 +79,34 @@ ReachTrial ReachExperiment::reach(ehc_sim::KinematicFakeRobot& robot, EhcQpContr
       return t;
     }
     if (k == max_steps) break;
+    // The robot's state and the target, stamped with the sim time (a new target restarts the QP).
+    const Eigen::VectorXd& q = robot.armPositions();
+    const auto check = [](const std::string& err) {
+      if (!err.empty()) throw std::runtime_error("[ReachExperiment] control cycle rejected an input: " + err);
+    };
+    check(cycle.setJointState(sim_time_, rc.arm_joints, std::vector<double>(q.data(), q.data() + q.size())));
+    check(cycle.setBasePose(sim_time_, robot.basePose()));
+    check(cycle.setTarget(sim_time_, target));
     const auto t0 = std::chrono::steady_clock::now();
-    ehc_control::RollJoint roll;
-    if (roll_joint_ >= 0) {
-      roll.q = robot.armPositions()[roll_joint_];
-      roll.lower = rc.arm_lower[roll_joint_];
-      roll.upper = rc.arm_upper[roll_joint_];
-    }
-    const Vector6d nu = ehc_control::proportionalPoseServo(tcp, target, params_.servo, roll_joint_ >= 0 ? &roll : nullptr);
-    const ehc_control::ControllerCommand cmd = ctrl.step(robot.basePose(), robot.armPositions(), target, nu);
+    const ehc_control::ControlCycleOutput out = cycle.update(sim_time_);
     step_us.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
-    if (!cmd.ok) ++t.qp_failures;
+    sim_time_ += dt;
+    const ehc_control::ControlCycleStatus& st = out.status;
+    if (st.qp_status != ehc_control::QpStatus::Ok) ++t.qp_failures;  // any cycle without a good QP solve
     if (trace_) {
       std::ostream& o = *trace_;
       o << ehc_control::toString(controller_.mode) << "," << trace_set_ << "," << trace_index_ << ","
         << k * dt << "," << robot.basePose().x() << "," << robot.basePose().y() << ","
         << robot.basePose().z();
       for (int i = 0; i < robot.armPositions().size(); ++i) o << "," << robot.armPositions()[i];
-      o << "," << cmd.position_error << "," << cmd.orientation_error << "," << cmd.omega << ","
-        << cmd.sig << "," << cmd.base_weight << "," << cmd.qp_status;
-      for (int i = 0; i < cmd.velocity.size(); ++i) o << "," << cmd.velocity[i];
+      o << "," << st.position_error << "," << st.orientation_error << "," << st.omega << ","
+        << st.sig << "," << st.base_weight << "," << ehc_control::toString(st.qp_status);
+      for (int i = 0; i < out.velocity.size(); ++i) o << "," << out.velocity[i];
       o << "\n";
     }
-    accumulate(t.final_position_error > params_.distant_threshold ? distant : close, cmd.velocity,
+    accumulate(t.final_position_error > params_.distant_threshold ? distant : close, out.velocity,
                model_->nBase());
-    robot.step(cmd.velocity, dt);
+    robot.step(out.velocity, dt);
     t.min_joint_limit_margin = std::min(t.min_joint_limit_margin, limitMargin(rc, robot.armPositions()));
   }
   t.time_s = params_.time_limit;
@@ -121,14 +125,14 @@ ReachSummary ReachExperiment::run(const std::vector<std::vector<Eigen::Isometry3
   std::vector<double> step_us;
   double time_sum = 0.0;
   s.min_joint_limit_margin = 1e9;
-  EhcQpController ctrl(model_, controller_, weighting_);
+  ControlCycle cycle(model_, weighting_, cycle_params_);
   for (std::size_t si = 0; si < sets.size(); ++si) {
     ehc_sim::KinematicFakeRobot robot(model_->config(), params_.noise, seed + static_cast<unsigned>(si));
     robot.reset(Eigen::Vector3d::Zero(), model_->config().arm_ready, seed + static_cast<unsigned>(si));
     for (std::size_t ti = 0; ti < sets[si].size(); ++ti) {
       trace_set_ = static_cast<int>(si);
       trace_index_ = static_cast<int>(ti);
-      ReachTrial t = reach(robot, ctrl, sets[si][ti], distant, close, step_us);
+      ReachTrial t = reach(robot, cycle, sets[si][ti], distant, close, step_us);
       t.method = s.method;
       t.set = static_cast<int>(si);
       t.index = static_cast<int>(ti);

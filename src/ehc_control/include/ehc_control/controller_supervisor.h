@@ -27,7 +27,7 @@ SupervisorParams loadSupervisorParams(const ConfigNode& node);
 
 struct SupervisorDecision {
   bool run = false;
-  std::string phase;   ///< "" when run, else STOPPED | TARGET_LOST
+  ControlPhase phase = ControlPhase::Tracking;  ///< when !run: Stopped | Idle | TargetLost
   std::string reason;  ///< human-readable, empty when run
 };
 

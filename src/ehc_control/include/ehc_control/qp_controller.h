@@ -18,6 +18,7 @@
 // A failed, infeasible or non-finite solve gives a zero command and qp_status QP_FAILED; the
 // command never contains NaN/Inf and never exceeds a velocity limit. ROS-free.
 
+#include "ehc_control/control_status.h"
 #include "ehc_control/ehc_weighting.h"
 #include "ehc_control/whole_body_model.h"
 
@@ -87,21 +88,25 @@ struct ObstaclePair {
   double distance = 0.0;
 };
 
-struct ControllerCommand {
-  Eigen::VectorXd velocity;  ///< [base twist; arm rates]; all zero unless ok
-  Vector6d slack = Vector6d::Zero();
-  bool ok = false;
-  std::string qp_status = "NOT_RUN";  ///< OK | QP_FAILED
-  std::string phase;                  ///< TRACKING | ARRIVED | TSMM_BASE | TSMM_ARM
-  std::string failure;                ///< reason when qp_status == QP_FAILED
+/// What one QP step measured and chose (reported per cycle in /ehc/status).
+struct QpStepFigures {
   double position_error = 0.0;        ///< m
   double orientation_error = 0.0;     ///< rad
   double error_norm = 0.0;            ///< sum |[dp; theta u]| (NEO's e_t)
   double omega = 0.0;
-  double sig = 0.0;
+  double sig = 0.0;                   ///< sig(omega)
   double base_weight = 0.0;
   double solve_time_us = 0.0;         ///< QP build + solve
   int obstacle_rows = 0;
+};
+
+struct ControllerCommand : QpStepFigures {
+  Eigen::VectorXd velocity;  ///< [base twist; arm rates]; all zero unless ok
+  Vector6d slack = Vector6d::Zero();
+  bool ok = false;
+  QpStatus qp_status = QpStatus::NotRun;        ///< Ok | Failed after step()
+  ControlPhase phase = ControlPhase::Tracking;  ///< Tracking | Arrived | TsmmBase | TsmmArm
+  std::string failure;                          ///< reason when qp_status == QpStatus::Failed
   int joint_damper_rows = 0;
 };
 

@@ -105,17 +105,17 @@ SupervisorDecision ControllerSupervisor::check(double now) const {
   if (!t_base_) why << "no odometry yet; ";
   else if (stale(t_base_, params_.state_timeout)) why << "odometry is " << now - *t_base_ << " s old; ";
   if (!why.str().empty()) {
-    d.phase = "STOPPED";
+    d.phase = ControlPhase::Stopped;
     d.reason = why.str().substr(0, why.str().size() - 2);
     return d;
   }
   if (!t_target_) {
-    d.phase = "IDLE";
+    d.phase = ControlPhase::Idle;
     d.reason = "no target";
     return d;
   }
   if (stale(t_target_, params_.target_timeout)) {
-    d.phase = "TARGET_LOST";
+    d.phase = ControlPhase::TargetLost;
     std::ostringstream os;
     os << "target is " << now - *t_target_ << " s old (timeout " << params_.target_timeout << " s)";
     d.reason = os.str();

@@ -183,7 +183,7 @@ ControllerCommand EhcQpController::fail(ControllerCommand c, const std::string& 
   c.velocity = Eigen::VectorXd::Zero(model_->nDof());
   c.slack.setZero();
   c.ok = false;
-  c.qp_status = "QP_FAILED";
+  c.qp_status = QpStatus::Failed;
   c.failure = why;
   return c;
 }
@@ -198,7 +198,6 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
   const int nb = m.nBase(), na = m.nArm(), nd = m.nDof(), nx = nd + 6;
   ControllerCommand out;
   out.velocity = Eigen::VectorXd::Zero(nd);
-  out.phase = "TRACKING";
 
   if (q.size() != na) return fail(out, "arm state has " + std::to_string(q.size()) + " joints, expected " + std::to_string(na));
   if (!q.allFinite() || !base_pose.allFinite()) return fail(out, "non-finite robot state");
@@ -243,12 +242,12 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
       out.base_weight = params_.arm_weight;
       lock_arm = !tsmm_arm_stage_;
       lock_base = tsmm_arm_stage_;
-      out.phase = tsmm_arm_stage_ ? "TSMM_ARM" : "TSMM_BASE";
+      out.phase = tsmm_arm_stage_ ? ControlPhase::TsmmArm : ControlPhase::TsmmBase;
       break;
     }
   }
   if (out.position_error < params_.arrival_position && out.orientation_error < params_.arrival_orientation)
-    out.phase = "ARRIVED";
+    out.phase = ControlPhase::Arrived;
 
   // --- cost: Q diagonal, C
   Eigen::VectorXd h(nx), c = Eigen::VectorXd::Zero(nx);
@@ -410,7 +409,7 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
   out.velocity = x.head(nd);
   out.slack = x.tail<6>();
   out.ok = true;
-  out.qp_status = "OK";
+  out.qp_status = QpStatus::Ok;
   return out;
 }
 

@@ -1,0 +1,223 @@
+#include "ehc_control/control_cycle.h"
+
+#include "ehc_control/config_node.h"
+#include "ehc_control/enum_names.h"
+
+#include <sstream>
+#include <stdexcept>
+
+namespace ehc_control {
+
+namespace {
+constexpr EnumNames<ServoType, 2> kServoTypeNames = {{{ServoType::Proportional, "proportional"}, {ServoType::Pbvs, "pbvs"}}};
+}  // namespace
+
+std::string toString(ServoType type) { return enumName(kServoTypeNames, type, "ControlCycle"); }
+ServoType servoTypeFromString(const std::string& s) { return enumValue(kServoTypeNames, s, "ControlCycle", "servo type"); }
+
+void ControlCycleParams::validate() const {
+  controller.validate();
+  weighting.validate();
+  servo.validate();
+  pbvs.validate();
+  mpbs.validate();
+  tracking.validate();
+  watchdog.validate();
+  requireRange("ControlCycleParams", "tracking.centre_timeout", centre_timeout, 1e-3, 3600.0);
+}
+
+ControlCycleParams loadControlCycleParams(const ConfigNode& root) {
+  ControlCycleParams p;
+  p.robot_file = root.resolvePath(root.get<std::string>("robot", "../robots/realman_rm65_water2/robot.yaml"));
+  p.controller = loadQpControllerParams(root.childOrEmpty("controller"));
+  p.weighting = loadEhcWeightingParams(root.childOrEmpty("weighting"));
+  const ConfigNode servo = root.childOrEmpty("servo");
+  const std::string type = servo.get<std::string>("type", toString(p.servo_type));
+  try {
+    p.servo_type = servoTypeFromString(type);
+  } catch (const std::invalid_argument&) {
+    servo.fail("type", "must be 'proportional' or 'pbvs' (got '" + type + "')");
+  }
+  p.servo = loadPoseServoParams(servo);
+  p.pbvs = loadPbvsServoParams(servo);
+  p.mpbs = loadMpbsParams(root.childOrEmpty("mpbs"));
+  const ConfigNode tracking = root.childOrEmpty("tracking");
+  p.tracking = loadTargetTrackerParams(tracking);
+  p.centre_timeout = tracking.get("centre_timeout", p.centre_timeout);
+  p.watchdog = loadSupervisorParams(root.childOrEmpty("watchdog"));
+  root.validate(p);
+  return p;
+}
+
+namespace {
+
+std::shared_ptr<const WholeBodyModel> loadModel(const ControlCycleParams& params) {
+  params.validate();
+  if (params.robot_file.empty()) throw std::invalid_argument("[ControlCycle] no robot.yaml given (robot_file)");
+  return std::make_shared<const WholeBodyModel>(loadRobotConfig(params.robot_file));
+}
+
+/// The EHC weighting of the robot's reachability map, nullptr if robot.yaml names none.
+std::shared_ptr<const EhcWeighting> loadWeighting(const RobotConfig& rc, const EhcWeightingParams& params) {
+  if (rc.reachability_map_path.empty()) return nullptr;
+  auto map = std::make_shared<const ReachabilityMap>(ReachabilityMap::load(rc.reachability_map_path));
+  map->checkCompatible(rc);
+  return std::make_shared<const EhcWeighting>(map, params);
+}
+
+}  // namespace
+
+ControlCycle::ControlCycle(const ControlCycleParams& params) : ControlCycle(loadModel(params), params) {}
+
+ControlCycle::ControlCycle(const std::shared_ptr<const WholeBodyModel>& model, const ControlCycleParams& params)
+    : ControlCycle(model, loadWeighting(model->config(), params.weighting), params) {}
+
+ControlCycle::ControlCycle(std::shared_ptr<const WholeBodyModel> model, std::shared_ptr<const EhcWeighting> weighting,
+                           const ControlCycleParams& params)
+    : params_(params), model_(std::move(model)), weighting_(std::move(weighting)) {
+  if (!model_) throw std::invalid_argument("[ControlCycle] no whole-body model");
+  params_.validate();
+  const RobotConfig& rc = model_->config();
+  controller_ = std::make_unique<EhcQpController>(model_, params_.controller, weighting_);
+  supervisor_ = std::make_unique<ControllerSupervisor>(rc, params_.watchdog);
+  // Camera: mount on the hand (URDF) for MPBS and TfM, intrinsics from tracking.camera.
+  if (!model_->hasLink(rc.camera_frame) || !model_->hasLink(rc.tcp_frame))
+    throw std::invalid_argument("[ControlCycle] camera frame '" + rc.camera_frame + "' or TCP frame '" +
+                                rc.tcp_frame + "' is not in the URDF");
+  tcp_T_camera_ = model_->linkPoseInBase(rc.arm_ready, rc.tcp_frame).inverse() *
+                  model_->linkPoseInBase(rc.arm_ready, rc.camera_frame);
+  const PinholeCamera camera =
+      params_.tracking.camera_file.empty() ? PinholeCamera{} : loadPinholeCamera(params_.tracking.camera_file);
+  tracker_ = std::make_unique<TargetTracker>(camera, params_.tracking);
+  if (params_.servo_type == ServoType::Pbvs && params_.mpbs.enabled && !controller_->hasWeighting())
+    throw std::invalid_argument("[ControlCycle] mpbs.enabled needs sig(omega), i.e. a reachability map in robot.yaml");
+  mpbs_ = std::make_unique<MpbsServo>(tcp_T_camera_, params_.pbvs, params_.mpbs);
+  roll_index_ = findRollJoint(*model_);
+}
+
+std::string ControlCycle::setJointState(double t, const std::vector<std::string>& names,
+                                        const std::vector<double>& positions) {
+  return supervisor_->setJointState(t, names, positions);
+}
+
+std::string ControlCycle::setBasePose(double t, const Eigen::Vector3d& base_pose) {
+  return supervisor_->setBasePose(t, base_pose);
+}
+
+std::string ControlCycle::setTarget(double t, const Eigen::Isometry3d& target) {
+  const std::string err = supervisor_->setTarget(t, target);
+  if (!err.empty()) return err;
+  if (!have_target_ || !target.isApprox(last_target_, 1e-4)) controller_->reset();
+  have_target_ = true;
+  last_target_ = target;
+  return "";
+}
+
+std::string ControlCycle::setWatchedCentre(double t, const Eigen::Vector3d& centre) {
+  if (!centre.allFinite()) return "watched target centre contains NaN or Inf";
+  centre_ = centre;
+  t_centre_ = t;
+  return "";
+}
+
+std::string ControlCycle::setObstacles(double t, const std::vector<ObstaclePair>& obstacles) {
+  return supervisor_->setObstacles(t, obstacles);
+}
+
+Eigen::Vector3d ControlCycle::watchedCentre(double now) const {
+  const double timeout = params_.centre_timeout;
+  if (t_centre_ && now - *t_centre_ <= timeout && now - *t_centre_ >= -timeout) return centre_;
+  return mpbs_->targetCentre(supervisor_->target());
+}
+
+ControlCycleOutput ControlCycle::update(double now) {
+  ControlCycleOutput out;
+  out.velocity = Eigen::VectorXd::Zero(model_->nDof());
+  ControlCycleStatus& st = out.status;
+  st.mode = controller_->params().mode;
+  st.target_age = supervisor_->targetAge(now);
+  const SupervisorDecision d = supervisor_->check(now);
+  try {
+    // TfM: every cycle with a target (served or lost), camera pose from the kinematics.
+    if (supervisor_->hasTarget() && (d.run || d.phase == ControlPhase::TargetLost)) {
+      const Eigen::Vector3d centre = watchedCentre(now);
+      if (tracker_->setTarget(centre)) {
+        std::ostringstream os;
+        os << "new target centre [" << centre.transpose() << "]: TfM restarts";
+        out.event = os.str();
+      }
+      st.target_in_fov =
+          tracker_->observe(model_->fk(supervisor_->basePose(), supervisor_->q(), model_->config().camera_frame));
+    }
+    st.tfm = tracker_->tfm();
+    if (!d.run) {
+      st.phase = d.phase;
+      st.reason = d.reason;
+    } else {
+      const ControllerCommand c = step(now);
+      st.phase = c.ok ? c.phase : ControlPhase::QpFailed;
+      st.reason = c.failure;
+      st.qp_status = c.qp_status;
+      static_cast<QpStepFigures&>(st) = c;
+      if (c.ok) out.velocity = c.velocity;
+    }
+  } catch (const std::exception& e) {  // core errors: stop safely, say why
+    out.velocity.setZero();
+    st.phase = ControlPhase::Stopped;
+    st.reason = std::string("controller error: ") + e.what();
+    st.qp_status = QpStatus::NotRun;
+    st.controller_error = true;
+  }
+  if (!out.velocity.allFinite()) out.velocity.setZero();  // never command NaN
+  return out;
+}
+
+std::optional<RollJoint> ControlCycle::rollJointAt(const Eigen::VectorXd& q) const {
+  if (roll_index_ < 0) return std::nullopt;
+  const RobotConfig& rc = model_->config();
+  RollJoint roll;
+  roll.q = q[roll_index_];
+  roll.lower = rc.arm_lower[roll_index_];
+  roll.upper = rc.arm_upper[roll_index_];
+  return roll;
+}
+
+ControllerCommand ControlCycle::step(double now) {
+  const RobotConfig& rc = model_->config();
+  const Eigen::Vector3d& base = supervisor_->basePose();
+  const Eigen::VectorXd& q = supervisor_->q();
+  const Eigen::Isometry3d& target = supervisor_->target();
+  const Eigen::Isometry3d tcp = model_->fk(base, q, rc.tcp_frame);
+  const std::optional<RollJoint> roll = rollJointAt(q);
+  const RollJoint* roll_ptr = roll ? &*roll : nullptr;
+  const std::vector<ObstaclePair> obstacles = supervisor_->obstacles(now);
+  if (params_.servo_type == ServoType::Proportional)
+    return controller_->step(base, q, target, proportionalPoseServo(tcp, target, params_.servo, roll_ptr), obstacles);
+  // sig(omega) once per cycle, shared by MPBS (eq. 14) and the QP weighting.
+  std::optional<EhcWeight> w;
+  if (controller_->hasWeighting()) w = controller_->weight(base, tcp.translation(), target.translation());
+  const Eigen::Vector3d centre = watchedCentre(now);
+  const MpbsOutput servo = mpbs_->compute(tcp, target, w ? w->sig : 1.0, roll_ptr, &centre);
+  return controller_->step(base, q, target, servo.twist, obstacles, w ? &*w : nullptr);
+}
+
+std::string ControlCycle::summary() const {
+  const RobotConfig& rc = model_->config();
+  std::ostringstream os;
+  os << rc.summary();
+  if (weighting_) os << weighting_->map().summary() << "\n";
+  os << params_.controller.summary() << "\n  ";
+  if (params_.servo_type == ServoType::Pbvs)
+    os << params_.pbvs.summary() << "\n  " << params_.mpbs.summary();
+  else
+    os << "servo: proportional (gain " << params_.servo.gain << ", rotation ratio " << params_.servo.rotation_gain_ratio
+       << ", roll unwinding " << (params_.servo.unwind_roll ? "on" : "off") << "); mpbs: n/a";
+  os << "\n  roll joint "
+     << (roll_index_ >= 0 ? rc.arm_joints[static_cast<std::size_t>(roll_index_)] : std::string("none")) << "\n  "
+     << params_.tracking.summary() << ", " << tracker_->camera().summary() << ", centre timeout "
+     << params_.centre_timeout << " s\n  watchdog: state " << params_.watchdog.state_timeout << " s, target "
+     << params_.watchdog.target_timeout << " s, obstacles " << params_.watchdog.obstacle_timeout << " s";
+  return os.str();
+}
+
+}  // namespace ehc_control

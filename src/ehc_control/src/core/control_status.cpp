@@ -1,0 +1,36 @@
+#include "ehc_control/control_status.h"
+
+#include "ehc_control/enum_names.h"
+
+namespace ehc_control {
+
+namespace {
+
+// The one string map of each enum.
+constexpr EnumNames<ControlPhase, 8> kPhaseNames = {{
+    {ControlPhase::Idle, "IDLE"},
+    {ControlPhase::Tracking, "TRACKING"},
+    {ControlPhase::Arrived, "ARRIVED"},
+    {ControlPhase::TsmmBase, "TSMM_BASE"},
+    {ControlPhase::TsmmArm, "TSMM_ARM"},
+    {ControlPhase::Stopped, "STOPPED"},
+    {ControlPhase::TargetLost, "TARGET_LOST"},
+    {ControlPhase::QpFailed, "QP_FAILED"},
+}};
+constexpr EnumNames<QpStatus, 3> kQpStatusNames = {{
+    {QpStatus::Ok, "OK"},
+    {QpStatus::Failed, "QP_FAILED"},
+    {QpStatus::NotRun, "NOT_RUN"},
+}};
+const char* kOwner = "ControlStatus";
+
+}  // namespace
+
+std::string toString(ControlPhase phase) { return enumName(kPhaseNames, phase, kOwner); }
+std::string toString(QpStatus status) { return enumName(kQpStatusNames, status, kOwner); }
+ControlPhase controlPhaseFromString(const std::string& s) { return enumValue(kPhaseNames, s, kOwner, "control phase"); }
+QpStatus qpStatusFromString(const std::string& s) { return enumValue(kQpStatusNames, s, kOwner, "QP status"); }
+std::vector<ControlPhase> controlPhases() { return enumValues(kPhaseNames); }
+std::vector<QpStatus> qpStatuses() { return enumValues(kQpStatusNames); }
+
+}  // namespace ehc_control

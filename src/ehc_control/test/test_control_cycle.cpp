@@ -1,0 +1,333 @@
+// ControlCycle (the one control cycle): closed-loop convergence through update() with each servo
+// (proportional, PBVS, PBVS + MPBS); the watchdog (stale state -> STOPPED, no target -> IDLE,
+// old target -> TARGET_LOST, a fresh one resumes) with zero commands; rejected inputs; TfM
+// bookkeeping with the watched centre; a new target restarts the QP (TSMM stage); parameter
+// loading from the shipped controller.yaml and the configuration checks.
+
+#include "ehc_control/config_node.h"
+#include "ehc_control/control_cycle.h"
+#include "test_helpers.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+namespace ehc_control {
+namespace {
+
+using test::approachPose;
+
+const std::string kConfigDir = EHC_CONFIG_DIR;
+
+ControlCycleParams cycleParams(ServoType servo = ServoType::Proportional, bool mpbs = false) {
+  ControlCycleParams p;
+  p.robot_file = test::realmanYaml();
+  p.servo_type = servo;
+  p.mpbs.enabled = mpbs;
+  p.tracking.camera_file = kConfigDir + "/robots/realman_rm65_water2/camera.yaml";
+  return p;
+}
+
+/// The cycle closed over a noise-free kinematic robot at 100 Hz; inputs stamped with sim time.
+struct Loop {
+  explicit Loop(const ControlCycleParams& p) : cycle(p) { sim.q = cycle.model().config().arm_ready; }
+
+  void feedState(double t) {
+    const RobotConfig& rc = cycle.model().config();
+    ASSERT_EQ(cycle.setJointState(t, rc.arm_joints, std::vector<double>(sim.q.data(), sim.q.data() + sim.q.size())), "");
+    ASSERT_EQ(cycle.setBasePose(t, sim.base), "");
+  }
+  /// One cycle at t = k dt: state (and the target, if given) stamped t, update, integrate.
+  ControlCycleOutput step(const Eigen::Isometry3d* target = nullptr) {
+    const double t = k * dt;
+    feedState(t);
+    if (target) {
+      EXPECT_EQ(cycle.setTarget(t, *target), "");
+    }
+    ControlCycleOutput out = cycle.update(t);
+    sim.step(cycle.model(), out.velocity, dt);
+    ++k;
+    return out;
+  }
+  double now() const { return k * dt; }
+
+  ControlCycle cycle;
+  test::KinematicSim sim;
+  long k = 0;
+  const double dt = 0.01;
+};
+
+bool isZero(const Eigen::VectorXd& v) { return v.size() > 0 && (v.array() == 0.0).all(); }
+
+// ------------------------------------------------------------------ closed loop
+
+struct ServoCase {
+  const char* name;
+  ServoType type;
+  bool mpbs;
+};
+
+class ClosedLoop : public ::testing::TestWithParam<ServoCase> {};
+
+TEST_P(ClosedLoop, ConvergesToTheTargetThroughUpdate) {
+  Loop loop(cycleParams(GetParam().type, GetParam().mpbs));
+  const Eigen::VectorXd vmax = loop.cycle.model().config().velocityLimits();
+  const Eigen::Isometry3d target = approachPose(1.5, 0.3, 0.8, Eigen::Vector3d(1, 0, -1));
+  ControlCycleStatus last;
+  bool arrived = false;
+  for (int i = 0; i < 3000 && !arrived; ++i) {
+    const ControlCycleOutput out = loop.step(&target);
+    last = out.status;
+    ASSERT_TRUE(out.velocity.allFinite());
+    EXPECT_TRUE((out.velocity.cwiseAbs().array() <= vmax.array() + 1e-12).all()) << out.velocity.transpose();
+    ASSERT_EQ(last.qp_status, QpStatus::Ok) << last.phase << ": " << last.reason;
+    EXPECT_EQ(last.mode, ControlMode::Ehc);
+    EXPECT_TRUE(last.reason.empty()) << last.reason;
+    EXPECT_GE(last.sig, 0.0);
+    EXPECT_LE(last.sig, 1.0);
+    arrived = last.phase == ControlPhase::Arrived;
+    if (!arrived) {
+      EXPECT_EQ(last.phase, ControlPhase::Tracking);
+    }
+  }
+  ASSERT_TRUE(arrived) << GetParam().name << ": position error " << last.position_error << " after "
+                       << loop.now() << " s";
+  EXPECT_LT(last.position_error, 0.01);
+  EXPECT_LT(last.orientation_error, 2.0 * M_PI / 180.0);
+  EXPECT_GT(last.tfm, 0.0);  // TfM counted every cycle
+  EXPECT_EQ(loop.cycle.tracker().cycles(), loop.k);
+  const std::string& tcp = loop.cycle.model().config().tcp_frame;
+  const Vector6d e = poseError(loop.cycle.model().fk(loop.sim.base, loop.sim.q, tcp), target);
+  EXPECT_LT(e.head<3>().norm(), 0.012);  // one more integrated step past the arrival check
+}
+
+INSTANTIATE_TEST_SUITE_P(EveryServo, ClosedLoop,
+                         ::testing::Values(ServoCase{"proportional", ServoType::Proportional, false},
+                                           ServoCase{"pbvs", ServoType::Pbvs, false},
+                                           ServoCase{"mpbs", ServoType::Pbvs, true}),
+                         [](const auto& info) { return std::string(info.param.name); });
+
+// ------------------------------------------------------------------ watchdog
+
+TEST(ControlCycle, NoStateIsStoppedAndNoTargetIsIdleWithZeroCommands) {
+  Loop loop(cycleParams());
+  ControlCycleOutput out = loop.cycle.update(0.0);
+  EXPECT_EQ(out.status.phase, ControlPhase::Stopped);
+  EXPECT_NE(out.status.reason.find("no joint state"), std::string::npos) << out.status.reason;
+  EXPECT_TRUE(isZero(out.velocity));
+  EXPECT_EQ(out.velocity.size(), loop.cycle.model().nDof());
+  loop.feedState(0.0);
+  out = loop.cycle.update(0.0);
+  EXPECT_EQ(out.status.phase, ControlPhase::Idle);
+  EXPECT_EQ(out.status.reason, "no target");
+  EXPECT_EQ(out.status.qp_status, QpStatus::NotRun);
+  EXPECT_EQ(out.status.target_age, -1.0);
+  EXPECT_FALSE(out.status.controller_error);
+  EXPECT_TRUE(isZero(out.velocity));
+  EXPECT_EQ(loop.cycle.tracker().cycles(), 0);  // TfM counts only with a target
+}
+
+TEST(ControlCycle, StaleJointStateStopsWithZeroCommand) {
+  Loop loop(cycleParams());
+  const Eigen::Isometry3d target = approachPose(1.5, 0.0, 0.8, Eigen::Vector3d(1, 0, -1));
+  for (int i = 0; i < 10; ++i) EXPECT_EQ(loop.step(&target).status.phase, ControlPhase::Tracking);
+  // Odometry and the target keep arriving, the joint state does not (state_timeout 0.2 s).
+  const double t = loop.now() + 0.3;
+  ASSERT_EQ(loop.cycle.setBasePose(t, loop.sim.base), "");
+  ASSERT_EQ(loop.cycle.setTarget(t, target), "");
+  const ControlCycleOutput out = loop.cycle.update(t);
+  EXPECT_EQ(out.status.phase, ControlPhase::Stopped);
+  EXPECT_NE(out.status.reason.find("joint state is"), std::string::npos) << out.status.reason;
+  EXPECT_EQ(out.status.qp_status, QpStatus::NotRun);
+  EXPECT_TRUE(isZero(out.velocity));
+  // A fresh joint state resumes.
+  loop.feedState(t);
+  EXPECT_EQ(loop.cycle.update(t).status.phase, ControlPhase::Tracking);
+}
+
+TEST(ControlCycle, OldTargetIsLostWithZeroCommandsAndAFreshOneResumes) {
+  ControlCycleParams p = cycleParams();
+  p.watchdog.target_timeout = 0.25;
+  Loop loop(p);
+  const Eigen::Isometry3d target = approachPose(1.5, 0.0, 0.8, Eigen::Vector3d(1, 0, -1));
+  ControlCycleOutput out = loop.step(&target);
+  EXPECT_EQ(out.status.phase, ControlPhase::Tracking);
+  EXPECT_FALSE(isZero(out.velocity));
+  // The last good pose is served while younger than the timeout ...
+  for (int i = 0; i < 24; ++i) {
+    out = loop.step();
+    EXPECT_EQ(out.status.phase, ControlPhase::Tracking) << loop.now();
+    EXPECT_FALSE(isZero(out.velocity));
+  }
+  EXPECT_NEAR(out.status.target_age, 0.24, 1e-9);
+  loop.step();  // age 0.25: the boundary
+  // ... then TARGET_LOST, zero commands, every cycle; TfM keeps counting.
+  const long tfm_cycles = loop.cycle.tracker().cycles();
+  for (int i = 0; i < 20; ++i) {
+    out = loop.step();
+    EXPECT_EQ(out.status.phase, ControlPhase::TargetLost);
+    EXPECT_NE(out.status.reason.find("target is"), std::string::npos) << out.status.reason;
+    EXPECT_EQ(out.status.qp_status, QpStatus::NotRun);
+    EXPECT_TRUE(isZero(out.velocity));
+  }
+  EXPECT_EQ(loop.cycle.tracker().cycles(), tfm_cycles + 20);
+  EXPECT_NEAR(out.status.target_age, 0.45, 1e-9);
+  // A fresh pose resumes.
+  out = loop.step(&target);
+  EXPECT_EQ(out.status.phase, ControlPhase::Tracking);
+  EXPECT_EQ(out.status.qp_status, QpStatus::Ok);
+  EXPECT_NEAR(out.status.target_age, 0.0, 1e-12);
+  EXPECT_FALSE(isZero(out.velocity));
+}
+
+TEST(ControlCycle, InvalidInputsAreRejectedAndTheLastGoodOnesKept) {
+  Loop loop(cycleParams());
+  const RobotConfig& rc = loop.cycle.model().config();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  std::vector<double> q(rc.arm_ready.data(), rc.arm_ready.data() + rc.nArm());
+  q[2] = nan;
+  EXPECT_NE(loop.cycle.setJointState(0.0, rc.arm_joints, q), "");
+  EXPECT_NE(loop.cycle.setJointState(0.0, {"joint1"}, {0.0}), "");  // lacks arm joints
+  EXPECT_NE(loop.cycle.setBasePose(0.0, Eigen::Vector3d(nan, 0, 0)), "");
+  ControlCycleOutput out = loop.cycle.update(0.0);
+  EXPECT_EQ(out.status.phase, ControlPhase::Stopped);  // nothing accepted yet
+  EXPECT_TRUE(isZero(out.velocity));
+  const Eigen::Isometry3d target = approachPose(1.5, 0.0, 0.8, Eigen::Vector3d(1, 0, -1));
+  out = loop.step(&target);
+  ASSERT_EQ(out.status.phase, ControlPhase::Tracking);
+  // A NaN joint state later is rejected; the cycle runs on the last good state.
+  EXPECT_NE(loop.cycle.setJointState(loop.now(), rc.arm_joints, q), "");
+  EXPECT_TRUE(loop.cycle.supervisor().q().allFinite());
+  Eigen::Isometry3d bad = target;
+  bad.linear() *= 2.0;  // not a rotation
+  EXPECT_NE(loop.cycle.setTarget(loop.now(), bad), "");
+  EXPECT_NE(loop.cycle.setWatchedCentre(loop.now(), Eigen::Vector3d(0, nan, 0)), "");
+  ObstaclePair o;
+  o.link = "link6";
+  o.normal.setZero();
+  EXPECT_NE(loop.cycle.setObstacles(loop.now(), {o}), "");
+  EXPECT_TRUE(loop.cycle.supervisor().target().isApprox(target));
+  EXPECT_EQ(loop.cycle.supervisor().rejected(), 6);  // the centre is checked by the cycle
+}
+
+// ------------------------------------------------------------------ TfM, watched centre, new target
+
+TEST(ControlCycle, TfmCountsInViewCyclesAndRestartsForANewTargetCentre) {
+  Loop loop(cycleParams());
+  // In front of the camera (ready pose looks ahead and slightly down).
+  const Eigen::Isometry3d ahead = approachPose(1.5, 0.0, 0.6, Eigen::Vector3d(1, 0, -1));
+  ControlCycleOutput out = loop.step(&ahead);
+  EXPECT_NE(out.event.find("TfM restarts"), std::string::npos) << out.event;
+  EXPECT_TRUE(out.status.target_in_fov);
+  for (int i = 0; i < 9; ++i) {
+    out = loop.step(&ahead);
+    EXPECT_TRUE(out.event.empty()) << out.event;  // same target: no restart
+  }
+  EXPECT_EQ(loop.cycle.tracker().cycles(), 10);
+  EXPECT_EQ(out.status.tfm, 1.0);
+  // The camera watches another point (e.g. the object behind a pre-grasp goal): behind the
+  // robot it is not in view; TfM restarts for it.
+  ASSERT_EQ(loop.cycle.setWatchedCentre(loop.now(), Eigen::Vector3d(-2.0, 0.0, 0.6)), "");
+  out = loop.step(&ahead);
+  EXPECT_NE(out.event.find("TfM restarts"), std::string::npos);
+  EXPECT_FALSE(out.status.target_in_fov);
+  EXPECT_EQ(out.status.tfm, 0.0);
+  EXPECT_TRUE(loop.cycle.watchedCentre(loop.now()).isApprox(Eigen::Vector3d(-2.0, 0.0, 0.6)));
+  // Not refreshed for longer than centre_timeout (1 s): the target's own centre again.
+  while (loop.now() < 2.5) loop.step(&ahead);
+  EXPECT_TRUE(loop.cycle.watchedCentre(loop.now()).isApprox(ahead.translation()));
+  EXPECT_TRUE(loop.cycle.tracker().centre().isApprox(ahead.translation()));
+  EXPECT_GT(loop.cycle.tracker().tfm(), 0.0);
+}
+
+TEST(ControlCycle, ANewTargetRestartsTheQp) {
+  // tsmm keeps its stage (base first, then arm) per target: a new target starts with the base.
+  ControlCycleParams p = cycleParams();
+  p.controller.mode = ControlMode::Tsmm;
+  Loop loop(p);
+  const Eigen::Isometry3d first = approachPose(1.2, 0.0, 0.8, Eigen::Vector3d(1, 0, -1));
+  ControlCycleOutput out = loop.step(&first);
+  EXPECT_EQ(out.status.phase, ControlPhase::TsmmBase);
+  EXPECT_EQ(out.status.mode, ControlMode::Tsmm);
+  for (int i = 0; i < 3000 && out.status.phase == ControlPhase::TsmmBase; ++i) out = loop.step(&first);
+  ASSERT_EQ(out.status.phase, ControlPhase::TsmmArm);
+  // The same pose again (every cycle, as the node receives it): the arm stage continues.
+  for (int i = 0; i < 5; ++i) EXPECT_EQ(loop.step(&first).status.phase, ControlPhase::TsmmArm);
+  // A different target 1 m further: the stage was reset, the base drives again (without the
+  // reset the arm stage would go on: it is only left for a new target).
+  Eigen::Isometry3d second = first;
+  second.translation().x() += 1.0;
+  out = loop.step(&second);
+  EXPECT_EQ(out.status.phase, ControlPhase::TsmmBase);
+  for (int i = 0; i < 3000 && out.status.phase == ControlPhase::TsmmBase; ++i) out = loop.step(&second);
+  EXPECT_EQ(out.status.phase, ControlPhase::TsmmArm);
+}
+
+// ------------------------------------------------------------------ parameters
+
+TEST(ControlCycle, LoadsTheShippedControllerYamlAndChecksTheConfiguration) {
+  const ConfigNode cfg = ConfigNode::loadFile(kConfigDir + "/control/controller.yaml", "ControllerNode");
+  const ControlCycleParams p = loadControlCycleParams(cfg);
+  EXPECT_EQ(p.servo_type, ServoType::Pbvs);
+  EXPECT_TRUE(p.mpbs.enabled);
+  EXPECT_EQ(p.centre_timeout, 1.0);
+  EXPECT_EQ(p.watchdog.target_timeout, 0.2);
+  EXPECT_EQ(p.controller.mode, ControlMode::Ehc);
+  EXPECT_NE(p.robot_file.find("robots/realman_rm65_water2/robot.yaml"), std::string::npos) << p.robot_file;
+  EXPECT_NE(p.tracking.camera_file.find("camera.yaml"), std::string::npos);
+  const ControlCycle cycle(p);
+  EXPECT_TRUE(cycle.controller().hasWeighting());
+  EXPECT_GE(cycle.rollJointIndex(), 0);
+  const Eigen::VectorXd& ready = cycle.model().config().arm_ready;
+  const std::optional<RollJoint> roll = cycle.rollJointAt(ready);
+  ASSERT_TRUE(roll.has_value());
+  EXPECT_EQ(roll->q, ready[cycle.rollJointIndex()]);
+  const std::string summary = cycle.summary();
+  for (const char* part : {"servo: pbvs", "mpbs: on", "roll joint joint6", "centre timeout 1 s", "watchdog: state 0.2 s"})
+    EXPECT_NE(summary.find(part), std::string::npos) << part << " not in\n" << summary;
+
+  // Every shipped controller.yaml (demo and real robot extend this one) builds a cycle.
+  for (const char* file : {"/demo/controller.yaml", "/realman/controller.yaml"}) {
+    SCOPED_TRACE(file);
+    const ControlCycleParams other = loadControlCycleParams(ConfigNode::loadFile(kConfigDir + file, "ControllerNode"));
+    EXPECT_EQ(other.servo_type, ServoType::Pbvs);
+    EXPECT_NO_THROW(ControlCycle{other});
+  }
+
+  auto load = [](const std::string& yaml) {
+    return loadControlCycleParams(ConfigNode::loadString(yaml, "/cfg/controller.yaml", "ControllerNode"));
+  };
+  EXPECT_EQ(load("servo: {type: proportional}\n").servo_type, ServoType::Proportional);
+  EXPECT_EQ(load("{}\n").robot_file, "/cfg/../robots/realman_rm65_water2/robot.yaml");
+  try {
+    load("servo: {type: visp}\n");
+    ADD_FAILURE() << "bad servo type accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("servo.type"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(load("tracking: {centre_timeout: 0}\n"), std::invalid_argument);
+  EXPECT_THROW(load("watchdog: {target_timeout: -1}\n"), std::invalid_argument);
+  EXPECT_THROW(servoTypeFromString("PBVS"), std::invalid_argument);
+  EXPECT_EQ(servoTypeFromString(toString(ServoType::Pbvs)), ServoType::Pbvs);
+
+  // MPBS needs sig(omega), i.e. a reachability map.
+  RobotConfig no_map = test::realmanConfig();
+  no_map.reachability_map_path.clear();
+  auto model = std::make_shared<const WholeBodyModel>(no_map);
+  ControlCycleParams mpbs = cycleParams(ServoType::Pbvs, true);
+  mpbs.controller.mode = ControlMode::NeoC;
+  try {
+    ControlCycle(model, nullptr, mpbs);
+    ADD_FAILURE() << "MPBS without a map accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("[ControlCycle] mpbs.enabled needs"), std::string::npos) << e.what();
+  }
+  mpbs.mpbs.enabled = false;
+  EXPECT_NO_THROW(ControlCycle(model, nullptr, mpbs));
+  mpbs.controller.mode = ControlMode::Ehc;  // ehc needs the map too
+  EXPECT_THROW(ControlCycle(model, nullptr, mpbs), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace ehc_control
