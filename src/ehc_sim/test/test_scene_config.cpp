@@ -240,6 +240,13 @@ TEST(FakeRobotConfig, FormerKinematicKeysAreErrorsNamingFileAndField) {
 
   // The robot file moved under sim; unknown top-level keys are errors too.
   const std::string path = testing::TempDir() + "/old_kinematic_sim.yaml";
+  std::ofstream(path) << "sim:\n  robot: r.yaml\n  camera_info: c.yaml\n";
+  try {
+    loadFakeRobotConfigFile(path);
+    ADD_FAILURE() << "a Bullet key in the kinematic file";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("field 'sim.camera_info'"), std::string::npos) << e.what();
+  }
   for (const std::string& top : {std::string("robot: r.yaml\n"), std::string("simulation: {}\n")}) {
     std::ofstream(path) << top << "sim:\n  robot: r.yaml\n";
     try {

@@ -100,6 +100,21 @@ TEST(StepScheduler, RejectedCommandsAreCountedAnswersExecutedAsZero) {
   EXPECT_TRUE(s.command().isZero());
 }
 
+TEST(StepScheduler, PacingDelaysAnAnsweredStepButNeverMakesOne) {
+  ehc_sim::FakeRobotConfig c = config(false);
+  c.max_real_time_factor = 10.0;  // dt 10 ms -> at least 1 ms of wall time per step
+  StepScheduler s(robot(), c);
+  s.statePublished(5.0, kT0, true);
+  EXPECT_EQ(s.onBaseTwist(5.0, 0.0, 0.0, 0.0), "");
+  EXPECT_EQ(s.onArmCommand(5.0, kT0, kNames, kRates), "");
+  EXPECT_EQ(s.next(5.0005), StepAction::Wait);
+  EXPECT_EQ(s.next(5.0011), StepAction::Step);
+  EXPECT_LE(s.callbackWait(), 0.00025 + 1e-12) << "wakes up in time for the next step";
+  // Unanswered: paced or not, never a step.
+  s.statePublished(5.0011, kT1, true);
+  for (double wall = 5.0011; wall < 50.0; wall += 0.01) ASSERT_NE(s.next(wall), StepAction::Step);
+}
+
 TEST(StepScheduler, FreeRunStepsEveryPeriodAndZeroesStaleCommands) {
   StepScheduler s(robot(), config(true));
   ASSERT_FALSE(s.lockStep());

@@ -12,6 +12,7 @@
 //     free_run: false              # false = lock-step
 //     state_republish_period: 1.0  # wall s, lock-step: resend a state nobody answered
 //     command_timeout: 0.5         # wall s, free-run: zero commands older than this
+//     max_real_time_factor: 0      # lock-step pacing: at most this many sim s per wall s (0 = none)
 //     noise: {enabled: true, base_translation: 0.05, base_rotation: 0.05, arm: 0.002}
 //     robot_start: {x: 0, y: 0, yaw: 0}  # kinematic simulator only (Bullet: the scene's)
 //
@@ -39,6 +40,10 @@ struct FakeRobotConfig {
   bool free_run = false;                ///< false = lock-step (the nodes' _free_run overrides it)
   double state_republish_period = 1.0;  ///< wall s, lock-step: resend a state nobody answered
   double command_timeout = 0.5;         ///< wall s, free-run: zero velocities without fresh commands
+  /// Lock-step pacing: at most this many sim seconds per wall second (0 = as fast as the
+  /// controller answers). Only ever delays an answered step, never makes one; for tests whose
+  /// other inputs (targets) come on wall-clock timers.
+  double max_real_time_factor = 0.0;
   ActuationNoise noise;
   Eigen::Vector3d robot_start = Eigen::Vector3d::Zero();  ///< base x, y, yaw in odom
 
@@ -51,7 +56,8 @@ struct FakeRobotConfig {
 
 /// Reads the shared keys of a simulator's `sim` mapping (see the file comment).
 FakeRobotConfig loadFakeRobotConfig(const ehc_control::ConfigNode& sim);
-/// Reads a kinematic simulator file: everything under `sim`, nothing else at the top level.
+/// Reads a kinematic simulator file: only the keys above, under `sim` (anything else, e.g. a
+/// Bullet simulator key, is an error naming the file and the field).
 FakeRobotConfig loadFakeRobotConfigFile(const std::string& path);
 
 /// `noise` mapping: enabled, base_translation, base_rotation, arm (all optional).

@@ -10,10 +10,12 @@
 //     since the last step. A rejected command (NaN, wrong size, over a limit) is an answer: it
 //     is counted and its group executed as zero, so lock-step never stalls on a bad command;
 //   - sim time never advances on a timeout: a controller that stops answering stops time.
-//     The only wall-clock rule: a state NOBODY answered (no command of either kind since it
-//     was published) is published again (RepublishState, statePublished(.., fresh = false))
-//     every state_republish_period wall seconds, for a controller that starts late or missed
-//     the message.
+//     Wall-clock rules only resend or delay, never step: a state NOBODY answered (no command of
+//     either kind since it was published) is published again (RepublishState,
+//     statePublished(.., fresh = false)) every state_republish_period wall seconds, for a
+//     controller that starts late or missed the message; with max_real_time_factor > 0 an
+//     answered step waits until dt / max_real_time_factor wall seconds have passed since the
+//     state was published (pacing for tests whose other inputs come on wall-clock timers).
 // Free-run (free_run = true): a step every dt of wall time (no catching up after a stall)
 // with the latest commands; arm commands need no matching stamp; both groups are zeroed when
 // either the last /cmd_vel or the last accepted arm command is older than command_timeout.
@@ -53,6 +55,8 @@ class StepScheduler {
                            const std::vector<double>& velocities);
   /// What to do at wall time `wall_s`. In free-run a Step may zero stale commands first.
   StepAction next(double wall_s);
+  /// How long (wall s) the node may block waiting for callbacks before asking next() again.
+  double callbackWait() const;
 
   /// [base twist; arm rates] to execute on a Step (zeros for rejected or zeroed groups).
   Eigen::VectorXd command() const { return gate_.command(); }
@@ -68,6 +72,7 @@ class StepScheduler {
   CommandGate gate_;
   bool answered_ = false;  ///< any command since the last fresh state
   double last_publish_ = 0.0;
+  double last_fresh_publish_ = 0.0;
   std::optional<double> last_base_cmd_, last_arm_cmd_, next_step_;
 };
 

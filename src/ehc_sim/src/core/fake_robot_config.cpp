@@ -2,7 +2,9 @@
 
 #include "ehc_control/config_node.h"
 
+#include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <sstream>
 #include <stdexcept>
 
@@ -20,6 +22,7 @@ void FakeRobotConfig::validate() const {
     throw std::invalid_argument("[FakeRobotConfig] sim.dt must be a whole number of nanoseconds");
   ehc_control::requirePositive(o, "sim.state_republish_period", state_republish_period);
   ehc_control::requirePositive(o, "sim.command_timeout", command_timeout);
+  ehc_control::requireRange(o, "sim.max_real_time_factor", max_real_time_factor, 0.0, 1e6);
   if (!robot_start.allFinite()) throw std::invalid_argument("[FakeRobotConfig] sim.robot_start must be finite");
   noise.validate();
 }
@@ -32,7 +35,9 @@ std::string FakeRobotConfig::summary() const {
   if (free_run)
     os << "free-run (command timeout " << command_timeout << " wall s)";
   else
-    os << "lock-step (unanswered state resent every " << state_republish_period << " wall s)";
+    os << "lock-step (unanswered state resent every " << state_republish_period << " wall s"
+       << (max_real_time_factor > 0 ? ", at most " + std::to_string(max_real_time_factor) + " x real time" : "")
+       << ")";
   os << ", noise " << (noise.enabled ? "on" : "off") << " (base-T " << noise.base_translation
      << ", base-R " << noise.base_rotation << ", arm " << noise.arm << ")\n";
   return os.str();
@@ -86,6 +91,9 @@ FakeRobotConfig loadFakeRobotConfig(const ConfigNode& s) {
   if (!(c.state_republish_period > 0)) s.fail("state_republish_period", "must be > 0 s");
   c.command_timeout = s.get<double>("command_timeout", c.command_timeout);
   if (!(c.command_timeout > 0)) s.fail("command_timeout", "must be > 0 s");
+  c.max_real_time_factor = s.get<double>("max_real_time_factor", c.max_real_time_factor);
+  if (!(c.max_real_time_factor >= 0 && c.max_real_time_factor <= 1e6))
+    s.fail("max_real_time_factor", "must be in [0, 1e6] (0 = no pacing)");
   c.noise = loadActuationNoise(s.childOrEmpty("noise"));
   if (s.has("robot_start")) c.robot_start = loadBasePose(s.child("robot_start"));
   s.validate(c);
@@ -99,7 +107,16 @@ FakeRobotConfig loadFakeRobotConfigFile(const std::string& path) {
     if (key == "robot") root.fail(key, "was moved to sim.robot");
     if (key != "sim") root.fail(key, "is not a setting of the kinematic simulator (only 'sim')");
   }
-  return loadFakeRobotConfig(root.child("sim"));
+  const ConfigNode sim = root.child("sim");
+  FakeRobotConfig c = loadFakeRobotConfig(sim);  // the former keys fail here, with their replacement
+  static const char* kKeys[] = {"robot", "dt", "seed", "free_run", "state_republish_period",
+                                "command_timeout", "max_real_time_factor", "noise", "robot_start"};
+  for (const auto& kv : sim.yaml()) {
+    const std::string key = kv.first.as<std::string>();
+    if (std::none_of(std::begin(kKeys), std::end(kKeys), [&](const char* k) { return key == k; }))
+      sim.fail(key, "is not a setting of the kinematic simulator (a Bullet simulator key, or a typo)");
+  }
+  return c;
 }
 
 }  // namespace ehc_sim

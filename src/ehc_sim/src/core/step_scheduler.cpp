@@ -1,5 +1,7 @@
 #include "ehc_sim/step_scheduler.h"
 
+#include <algorithm>
+
 namespace ehc_sim {
 
 const char* toString(StepAction a) {
@@ -20,6 +22,7 @@ void StepScheduler::statePublished(double wall_s, std::int64_t stamp_ns, bool fr
   if (fresh) {
     gate_.newState(stamp_ns);
     answered_ = false;
+    last_fresh_publish_ = wall_s;
   }
   last_publish_ = wall_s;
 }
@@ -41,7 +44,11 @@ std::string StepScheduler::onArmCommand(double wall_s, std::int64_t stamp_ns,
 
 StepAction StepScheduler::next(double wall_s) {
   if (lockStep()) {
-    if (gate_.ready()) return StepAction::Step;
+    if (gate_.ready()) {
+      const bool paced = config_.max_real_time_factor > 0.0 &&
+                         wall_s - last_fresh_publish_ < config_.dt / config_.max_real_time_factor;
+      return paced ? StepAction::Wait : StepAction::Step;
+    }
     if (!answered_ && wall_s - last_publish_ > config_.state_republish_period)
       return StepAction::RepublishState;
     return StepAction::Wait;
@@ -53,6 +60,13 @@ StepAction StepScheduler::next(double wall_s) {
   *next_step_ += config_.dt;
   if (*next_step_ < wall_s) next_step_ = wall_s;  // do not try to catch up after a stall
   return StepAction::Step;
+}
+
+double StepScheduler::callbackWait() const {
+  if (!lockStep()) return 0.0005;
+  if (config_.max_real_time_factor > 0.0)
+    return std::min(0.002, 0.25 * config_.dt / config_.max_real_time_factor);
+  return 0.002;
 }
 
 void StepScheduler::reset() {

@@ -50,7 +50,7 @@ class LockStepNode {
   /// publishes the fresh state), `republish()` on StepAction::RepublishState.
   void run(const std::function<void()>& step, const std::function<void()>& republish) {
     while (ros::ok()) {
-      queue_.callAvailable(ros::WallDuration(scheduler_.lockStep() ? 0.002 : 0.0005));
+      queue_.callAvailable(ros::WallDuration(scheduler_.callbackWait()));
       switch (scheduler_.next(ros::WallTime::now().toSec())) {
         case StepAction::Step: step(); break;
         case StepAction::RepublishState: republish(); break;  // nobody answered
