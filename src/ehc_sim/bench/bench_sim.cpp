@@ -36,7 +36,7 @@ std::string hz(double mean_us, double bar_hz) {
 int main() {
   using namespace ehc_sim;
   const SimConfig cfg = loadSimConfig(EHC_SIM_CONFIG);
-  const ehc_control::RobotConfig robot = ehc_control::loadRobotConfig(cfg.robot_file);
+  const ehc_control::RobotConfig robot = ehc_control::loadRobotConfig(cfg.fake_robot.robot_file);
   const std::string scenes = std::string(EHC_CONFIG_DIR) + "/scenes/";
   SimWorld world(cfg, robot, loadSceneConfig(scenes + "table_three_objects.yaml"));
   CommandGate gate(robot);
@@ -48,7 +48,7 @@ int main() {
     return cmd;
   };
   const int n = 5000;
-  const std::string setting = "\"scene\":\"table_three_objects\",\"dt\":" + std::to_string(cfg.dt) +
+  const std::string setting = "\"scene\":\"table_three_objects\",\"dt\":" + std::to_string(cfg.fake_robot.dt) +
                               ",\"substeps\":" + std::to_string(cfg.substeps());
 
   ehc_control::benchReport("sim_physics_step", n, [&](int i) { world.step(command(i)); }, setting);
@@ -65,8 +65,8 @@ int main() {
       [&](int i) {
         world.step(command(i));
         const ros::Time stamp = rosStamp(world.timeNs());
-        fillJointState(world, stamp, &js);
-        fillOdometry(world, stamp, &odom);
+        fillJointState(world.robot(), stamp, &js);
+        fillOdometry(world.robot(), stamp, &odom);
         fillTransforms(world, stamp, &tf.transforms);
         fillObjectPoses(world, stamp, &objects);
         fillStatus(world, gate, true, stamp, &status);

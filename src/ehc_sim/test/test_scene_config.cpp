@@ -1,13 +1,17 @@
-// SceneConfig / SimConfig: the shipped scenes match the experiments' geometry; bad files fail
-// with a message naming the file and the field; tag frame convention.
+// SceneConfig / SimConfig / FakeRobotConfig: the shipped scenes match the experiments'
+// geometry; both simulators' files share one schema for the fake robot; bad files (and the
+// kinematic simulator's former keys) fail with a message naming the file and the field; tag
+// frame convention.
 
 #include "ehc_control/pinhole_camera.h"
+#include "ehc_control/config_node.h"
 #include "ehc_sim/scene_config.h"
 #include "ehc_sim/sim_config.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
 
 using namespace ehc_sim;
 
@@ -149,10 +153,10 @@ TEST(SceneConfig, TagFrameConvention) {
 
 TEST(SimConfig, ShippedConfigLoadsAndResolvesPaths) {
   const SimConfig c = loadSimConfig(EHC_SIM_CONFIG);
-  EXPECT_NEAR(c.dt, 0.01, 1e-15);
+  EXPECT_NEAR(c.fake_robot.dt, 0.01, 1e-15);
   EXPECT_EQ(c.substeps(), 2);
-  EXPECT_TRUE(c.noise.enabled);
-  EXPECT_NEAR(c.noise.base_translation, 0.05, 1e-15);
+  EXPECT_TRUE(c.fake_robot.noise.enabled);
+  EXPECT_NEAR(c.fake_robot.noise.base_translation, 0.05, 1e-15);
   EXPECT_EQ(c.camera.ray_cols, 80);
   EXPECT_EQ(c.camera.ray_rows, 60);
   EXPECT_NO_THROW(loadSceneConfig(c.scene_file));
@@ -188,5 +192,81 @@ TEST(SimConfig, BadValuesNameField) {
     FAIL();
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("sim.robot"), std::string::npos) << e.what();
+  }
+}
+
+TEST(FakeRobotConfig, BothSimulatorsReadTheSameSchema) {
+  const SimConfig bullet = loadSimConfig(EHC_SIM_CONFIG);
+  const FakeRobotConfig kin = loadFakeRobotConfigFile(std::string(EHC_CONFIG_DIR) + "/sim/kinematic_sim.yaml");
+  EXPECT_EQ(kin.robot_file, bullet.fake_robot.robot_file);  // same folder, same relative path
+  EXPECT_EQ(kin.dt, bullet.fake_robot.dt);
+  EXPECT_EQ(kin.dtNs(), 10'000'000);
+  EXPECT_FALSE(kin.free_run);
+  EXPECT_EQ(kin.state_republish_period, bullet.fake_robot.state_republish_period);
+  EXPECT_EQ(kin.command_timeout, bullet.fake_robot.command_timeout);
+  EXPECT_FALSE(kin.noise.enabled) << "controller tests run without noise";
+  EXPECT_EQ(kin.noise.base_translation, bullet.fake_robot.noise.base_translation);
+  EXPECT_EQ(kin.noise.arm, bullet.fake_robot.noise.arm);
+  EXPECT_TRUE(kin.robot_start.isZero());
+  EXPECT_NO_THROW(ehc_control::loadRobotConfig(kin.robot_file));
+  EXPECT_FALSE(kin.summary().empty());
+
+  const FakeRobotConfig moved = loadFakeRobotConfig(
+      ehc_control::ConfigNode::loadString("sim:\n  robot: r.yaml\n  robot_start: {x: 1.5, yaw: 0.3}\n",
+                                          "k.yaml", "FakeRobotConfig").child("sim"));
+  EXPECT_EQ(moved.robot_start, Eigen::Vector3d(1.5, 0.0, 0.3));
+}
+
+TEST(FakeRobotConfig, FormerKinematicKeysAreErrorsNamingFileAndField) {
+  auto expectError = [](const std::string& body, const std::string& field, const std::string& hint) {
+    try {
+      loadFakeRobotConfig(ehc_control::ConfigNode::loadString("sim:\n  robot: r.yaml\n" + body, "old_kin.yaml",
+                                                              "FakeRobotConfig").child("sim"));
+      ADD_FAILURE() << body;
+    } catch (const std::invalid_argument& e) {
+      const std::string msg = e.what();
+      EXPECT_NE(msg.find("old_kin.yaml"), std::string::npos) << msg;
+      EXPECT_NE(msg.find(field), std::string::npos) << msg;
+      EXPECT_NE(msg.find(hint), std::string::npos) << msg;
+    }
+  };
+  expectError("  lockstep: true\n", "sim.lockstep", "sim.free_run");
+  expectError("  lockstep_timeout_wall: 1.0\n", "sim.lockstep_timeout_wall", "state_republish_period");
+  expectError("  noise: false\n", "sim.noise", "enabled: false");
+  expectError("  noise_base_translation: 0.05\n", "sim.noise_base_translation", "sim.noise.base_translation");
+  expectError("  noise_base_rotation: 0.05\n", "sim.noise_base_rotation", "sim.noise.base_rotation");
+  expectError("  noise_arm: 0.002\n", "sim.noise_arm", "sim.noise.arm");
+  expectError("  initial_base: [0, 0, 0]\n", "sim.initial_base", "sim.robot_start");
+  expectError("  dt: 0.0100000001\n", "sim.dt", "nanoseconds");
+
+  // The robot file moved under sim; unknown top-level keys are errors too.
+  const std::string path = testing::TempDir() + "/old_kinematic_sim.yaml";
+  std::ofstream(path) << "sim:\n  robot: r.yaml\n  camera_info: c.yaml\n";
+  try {
+    loadFakeRobotConfigFile(path);
+    ADD_FAILURE() << "a Bullet key in the kinematic file";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("field 'sim.camera_info'"), std::string::npos) << e.what();
+  }
+  for (const std::string& top : {std::string("robot: r.yaml\n"), std::string("simulation: {}\n")}) {
+    std::ofstream(path) << top << "sim:\n  robot: r.yaml\n";
+    try {
+      loadFakeRobotConfigFile(path);
+      ADD_FAILURE() << top;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("field '" + top.substr(0, top.find(':')) + "'"), std::string::npos)
+          << e.what();
+    }
+  }
+}
+
+TEST(SimConfig, RobotStartComesFromTheScene) {
+  try {
+    loadSimConfigString("sim:\n  robot: r.yaml\n  camera_info: c.yaml\n  robot_start: {x: 1}\n", "bad_sim.yaml");
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("sim.robot_start"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("scene"), std::string::npos) << e.what();
   }
 }

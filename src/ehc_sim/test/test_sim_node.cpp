@@ -6,7 +6,8 @@
 // /tf and /sim/object_poses) and depth cloud (table top at the table height).
 // No assertion depends on wall time; wall timeouts only stop a hung test.
 
-#include "ehc_msgs/JointVelocityCommand.h"
+#include "lock_step_controller.h"
+
 #include "ehc_control/whole_body_model.h"
 #include "ehc_msgs/ResetScene.h"
 #include "ehc_msgs/SimObjectPoses.h"
@@ -39,12 +40,6 @@
 
 namespace {
 
-struct State {
-  ros::Time stamp;
-  std::vector<double> q, qd;
-  double x = 0, y = 0, yaw = 0;
-};
-
 Eigen::Isometry3d toEigen(const geometry_msgs::Pose& p) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.linear() = Eigen::Quaterniond(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z)
@@ -53,45 +48,26 @@ Eigen::Isometry3d toEigen(const geometry_msgs::Pose& p) {
   return T;
 }
 
-class FakeController {
- public:
-  using Policy = std::function<void(int k, const State& s, geometry_msgs::Twist* base, std::vector<double>* arm)>;
+using ehc_sim::test::State;
 
+/// The shared lock-step controller plus what only the Bullet simulator has: ground-truth
+/// object poses, the camera, tf of every link, the reset and gripper services.
+class FakeController : public ehc_sim::test::LockStepController {
+ public:
   FakeController() {
     ros::NodeHandle nh;
     const auto fast = ros::TransportHints().tcpNoDelay();
-    js_sub_ = nh.subscribe("/joint_states", 100, &FakeController::onJs, this, fast);
-    odom_sub_ = nh.subscribe("/odom", 100, &FakeController::onOdom, this, fast);
-    status_sub_ = nh.subscribe("/sim/status", 100, &FakeController::onStatus, this, fast);
     objects_sub_ = nh.subscribe("/sim/object_poses", 100, &FakeController::onObjects, this, fast);
-    clock_sub_ = nh.subscribe("/clock", 100, &FakeController::onClock, this, fast);
     image_sub_ = nh.subscribe("/camera/color/image_raw", 5, &FakeController::onImage, this);
     info_sub_ = nh.subscribe("/camera/color/camera_info", 5, &FakeController::onInfo, this);
     cloud_sub_ = nh.subscribe("/camera/depth/points", 5, &FakeController::onCloud, this);
-    cmd_pub_ = nh.advertise<geometry_msgs::Twist>("/cmd_vel", 10);
-    arm_pub_ = nh.advertise<ehc_msgs::JointVelocityCommand>("/arm/joint_velocity_cmd", 10);
     reset_ = nh.serviceClient<ehc_msgs::ResetScene>("/sim/reset");
     gripper_ = nh.serviceClient<std_srvs::SetBool>("/sim/gripper");
     tf_ = std::make_unique<tf2_ros::TransformListener>(buffer_);
   }
 
-  /// Spins until `done()` or a generous wall-time guard expires (a hang, not a timing check).
-  bool spinUntil(const std::function<bool()>& done, double guard_s = 60.0) {
-    const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(guard_s);
-    while (ros::ok() && ros::WallTime::now() < end) {
-      ros::spinOnce();
-      if (done()) return true;
-      ros::WallDuration(0.0002).sleep();
-    }
-    return false;
-  }
-
-  bool connected() {
-    return spinUntil([&] {
-      return cmd_pub_.getNumSubscribers() > 0 && arm_pub_.getNumSubscribers() > 0 &&
-             js_sub_.getNumPublishers() > 0 && odom_sub_.getNumPublishers() > 0 &&
-             reset_.exists() && gripper_.exists();
-    });
+  bool connected() override {
+    return LockStepController::connected() && spinUntil([&] { return reset_.exists() && gripper_.exists(); });
   }
 
   /// Resets the sim and waits for its first state (stamp 1 s).
@@ -110,77 +86,21 @@ class FakeController {
     return gripper_.call(srv) && srv.response.success;
   }
 
-  /// Waits until the state (joint_states + odom + status) stamped `t` is in.
-  bool waitState(const ros::Time& t) {
-    return spinUntil([&] {
-      return js_.stamp == t && odom_stamp_ == t && status_.header.stamp == t;
-    });
-  }
-
-  /// Answers `n` states with `policy`, returns the states seen (n + 1, the last unanswered).
-  std::vector<State> run(int n, const Policy& policy) {
-    std::vector<State> out;
-    for (int k = 0; k <= n; ++k) {
-      if (!spinUntil([&] { return js_.stamp > last_answered_ && odom_stamp_ == js_.stamp &&
-                                  status_.header.stamp == js_.stamp; })) {
-        ADD_FAILURE() << "no state after " << k << " steps";
-        return out;
-      }
-      State s = js_;
-      s.x = odom_.x;
-      s.y = odom_.y;
-      s.yaw = odom_.yaw;
-      out.push_back(s);
-      if (k == n) break;
-      geometry_msgs::Twist base;
-      ehc_msgs::JointVelocityCommand arm;
-      arm.header.stamp = s.stamp;
-      arm.names = {"joint1", "joint2", "joint3", "joint4", "joint5", "joint6"};
-      arm.velocities.assign(6, 0.0);
-      policy(k, s, &base, &arm.velocities);
-      cmd_pub_.publish(base);
-      arm_pub_.publish(arm);
-      last_answered_ = s.stamp;
-    }
-    return out;
-  }
-
-  State js_;
-  State odom_;
-  ros::Time odom_stamp_;
-  ehc_msgs::SimStatus status_;
   ehc_msgs::SimObjectPoses objects_;
-  ros::Time clock_;
   sensor_msgs::Image::ConstPtr image_;
   sensor_msgs::CameraInfo::ConstPtr info_;
   sensor_msgs::PointCloud2::ConstPtr cloud_;
   tf2_ros::Buffer buffer_{ros::Duration(30.0)};
 
  private:
-  void onJs(const sensor_msgs::JointState::ConstPtr& m) {
-    js_.stamp = m->header.stamp;
-    js_.q = m->position;
-    js_.qd = m->velocity;
-  }
-  void onOdom(const nav_msgs::Odometry::ConstPtr& m) {
-    odom_stamp_ = m->header.stamp;
-    odom_.x = m->pose.pose.position.x;
-    odom_.y = m->pose.pose.position.y;
-    const auto& o = m->pose.pose.orientation;
-    odom_.yaw = std::atan2(2 * (o.w * o.z + o.x * o.y), 1 - 2 * (o.y * o.y + o.z * o.z));
-  }
-  void onStatus(const ehc_msgs::SimStatus::ConstPtr& m) { status_ = *m; }
   void onObjects(const ehc_msgs::SimObjectPoses::ConstPtr& m) { objects_ = *m; }
-  void onClock(const rosgraph_msgs::Clock::ConstPtr& m) { clock_ = m->clock; }
   void onImage(const sensor_msgs::Image::ConstPtr& m) { image_ = m; }
   void onInfo(const sensor_msgs::CameraInfo::ConstPtr& m) { info_ = m; }
   void onCloud(const sensor_msgs::PointCloud2::ConstPtr& m) { cloud_ = m; }
 
-  ros::Subscriber js_sub_, odom_sub_, status_sub_, objects_sub_, clock_sub_, image_sub_, info_sub_, cloud_sub_;
-  ros::Publisher cmd_pub_, arm_pub_;
+  ros::Subscriber objects_sub_, image_sub_, info_sub_, cloud_sub_;
   ros::ServiceClient reset_, gripper_;
   std::unique_ptr<tf2_ros::TransformListener> tf_;
-  ros::Time last_answered_;
 };
 
 FakeController* ctl = nullptr;

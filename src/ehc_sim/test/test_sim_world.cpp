@@ -17,7 +17,7 @@ const std::string kConfig = std::string(EHC_CONFIG_DIR);
 
 SimConfig simConfig(bool noise) {
   SimConfig c = loadSimConfig(EHC_SIM_CONFIG);
-  c.noise.enabled = noise;
+  c.fake_robot.noise.enabled = noise;
   return c;
 }
 

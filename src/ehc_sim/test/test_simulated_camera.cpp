@@ -28,7 +28,7 @@ struct Rig {
       cfg.camera.image_noise = 0.0;
       cfg.camera.depth_noise_base = cfg.camera.depth_noise_quadratic = 0.0;
     }
-    world = std::make_unique<SimWorld>(cfg, ehc_control::loadRobotConfig(cfg.robot_file),
+    world = std::make_unique<SimWorld>(cfg, ehc_control::loadRobotConfig(cfg.fake_robot.robot_file),
                                        loadSceneConfig(kConfig + "/scenes/" + scene));
     camera = std::make_unique<SimulatedCamera>(ehc_control::loadPinholeCamera(cfg.camera_file), cfg.camera, 1);
     camera->setScene(world->bodies(), world->scene().floor_shade);

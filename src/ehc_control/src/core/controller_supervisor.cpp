@@ -1,6 +1,7 @@
 #include "ehc_control/controller_supervisor.h"
 
 #include "ehc_control/config_node.h"
+#include "ehc_control/joint_state.h"
 
 #include <cmath>
 #include <sstream>
@@ -30,27 +31,11 @@ ControllerSupervisor::ControllerSupervisor(const RobotConfig& robot, const Super
 
 std::string ControllerSupervisor::setJointState(double t, const std::vector<std::string>& names,
                                                 const std::vector<double>& positions) {
-  if (names.size() != positions.size()) {
+  const std::string why = armPositionsFromJointState(robot_.arm_joints, names, positions, &q_);
+  if (!why.empty()) {
     ++rejected_;
-    return "joint state has " + std::to_string(names.size()) + " names but " +
-           std::to_string(positions.size()) + " positions";
+    return why;
   }
-  Eigen::VectorXd q(robot_.nArm());
-  for (int i = 0; i < robot_.nArm(); ++i) {
-    const std::string& want = robot_.arm_joints[static_cast<std::size_t>(i)];
-    std::size_t k = 0;
-    while (k < names.size() && names[k] != want) ++k;
-    if (k == names.size()) {
-      ++rejected_;
-      return "joint state lacks arm joint '" + want + "'";
-    }
-    q[i] = positions[k];
-  }
-  if (!q.allFinite()) {
-    ++rejected_;
-    return "joint state contains NaN or Inf";
-  }
-  q_ = q;
   t_joints_ = t;
   return "";
 }

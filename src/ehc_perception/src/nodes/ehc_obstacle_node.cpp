@@ -1,5 +1,8 @@
 // ehc_obstacle_node: depth clouds -> OctoMap; robot state -> FCL link-obstacle distances on
-// /ehc/obstacles (ehc_msgs/ObstacleArray) for the controller's velocity dampers.
+// /ehc/obstacles (ehc_msgs/ObstacleArray) for the controller's velocity dampers. The logic
+// (state parsing and freshness, insert rate, exclusion expiry, what to publish) is
+// ehc_perception::ObstacleMonitor; this node loads parameters, converts messages (clouds, tf),
+// runs the timer and publishes.
 //   rosrun ehc_perception ehc_obstacle_node _config:=config/perception/obstacle_node.yaml
 // Clouds (at most max_insert_rate_hz) are transformed into the world frame with tf2 at their
 // stamp and inserted with rays from the sensor origin; the robot's own points are removed
@@ -12,8 +15,7 @@
 #include "ehc_msgs/ObstacleArray.h"
 #include "ehc_msgs/ObstacleExclusion.h"
 #include "ehc_control/config_node.h"
-#include "ehc_control/whole_body_model.h"
-#include "ehc_perception/obstacle_distance_field.h"
+#include "ehc_perception/obstacle_monitor.h"
 #include "ros_conversions.h"
 
 #include <nav_msgs/Odometry.h>
@@ -22,11 +24,12 @@
 #include <tf2_ros/transform_listener.h>
 
 #include <cmath>
-#include <map>
 
 namespace {
 
 using namespace ehc_perception;
+
+constexpr double kLogThrottle = 2.0;  ///< s between repeats of a throttled log message
 
 struct ObstacleNodeConfig {
   std::string robot_config;  ///< robot.yaml (relative paths: to this file's folder)
@@ -35,21 +38,18 @@ struct ObstacleNodeConfig {
   std::string odom_topic = "/odom";
   std::string output_topic = "/ehc/obstacles";
   std::string exclusion_topic = "/ehc/obstacle_exclusion";  ///< "" = no exclusions
-  double exclusion_timeout = 0.5;  ///< s
   std::string world_frame = "odom";
   double publish_rate_hz = 50.0;
-  double max_insert_rate_hz = 5.0;
-  double state_timeout = 0.2;  ///< s
   double tf_timeout = 0.05;    ///< s
+  ObstacleMonitorParams monitor;  ///< state / exclusion timeouts, insert rate
   ObstacleMapConfig map;
 
   std::string summary() const {
-    return "ehc_obstacle_node: robot " + robot_config + ", " + cloud_topic + " (<= " +
-           std::to_string(max_insert_rate_hz) + " Hz) + " + joint_states_topic + " + " +
-           odom_topic + " -> " + output_topic + " at " + std::to_string(publish_rate_hz) +
-           " Hz in '" + world_frame + "', state timeout " + std::to_string(state_timeout) +
-           " s, exclusions " + (exclusion_topic.empty() ? std::string("off") : exclusion_topic + " (timeout " +
-           std::to_string(exclusion_timeout) + " s)") + "\n  " + map.summary();
+    return "ehc_obstacle_node: robot " + robot_config + ", " + cloud_topic + " + " + joint_states_topic +
+           " + " + odom_topic + " -> " + output_topic + " at " + std::to_string(publish_rate_hz) +
+           " Hz in '" + world_frame + "', exclusions " +
+           (exclusion_topic.empty() ? std::string("off") : exclusion_topic) + "\n  " + monitor.summary() +
+           "\n  " + map.summary();
   }
 };
 
@@ -63,17 +63,12 @@ ObstacleNodeConfig loadObstacleNodeConfig(const std::string& path) {
   c.odom_topic = n.get("odom_topic", c.odom_topic);
   c.output_topic = n.get("output_topic", c.output_topic);
   c.exclusion_topic = n.get("exclusion_topic", c.exclusion_topic);
-  c.exclusion_timeout = n.get("exclusion_timeout", c.exclusion_timeout);
   c.world_frame = n.get("world_frame", c.world_frame);
   c.publish_rate_hz = n.get("publish_rate_hz", c.publish_rate_hz);
-  c.max_insert_rate_hz = n.get("max_insert_rate_hz", c.max_insert_rate_hz);
-  c.state_timeout = n.get("state_timeout", c.state_timeout);
   c.tf_timeout = n.get("tf_timeout", c.tf_timeout);
   ehc_control::requireRange("ObstacleNode", "node.publish_rate_hz", c.publish_rate_hz, 0.1, 1000.0);
-  ehc_control::requireRange("ObstacleNode", "node.max_insert_rate_hz", c.max_insert_rate_hz, 0.01, 100.0);
-  ehc_control::requirePositive("ObstacleNode", "node.state_timeout", c.state_timeout);
   ehc_control::requireRange("ObstacleNode", "node.tf_timeout", c.tf_timeout, 0.0, 5.0);
-  ehc_control::requireRange("ObstacleNode", "node.exclusion_timeout", c.exclusion_timeout, 0.01, 10.0);
+  c.monitor = loadObstacleMonitorParams(n);
   c.map = loadObstacleMapConfig(root.childOrEmpty("obstacle_map"));
   return c;
 }
@@ -81,14 +76,8 @@ ObstacleNodeConfig loadObstacleNodeConfig(const std::string& path) {
 class ObstacleNode {
  public:
   ObstacleNode(ros::NodeHandle& nh, const ObstacleNodeConfig& cfg)
-      : cfg_(cfg),
-        model_(ehc_control::loadRobotConfig(cfg.robot_config)),
-        field_(cfg.map, ehc_control::RobotCollisionModel(model_.urdfXml(), model_.config().arm_joints, cfg.map.links)),
-        q_(Eigen::VectorXd::Constant(model_.nArm(), std::nan(""))),
-        listener_(tf_) {
-    for (const auto& l : field_.robot().links())
-      if (!model_.hasLink(l.name)) throw std::invalid_argument("link '" + l.name + "' is not in the robot model");
-    ROS_INFO_STREAM("  " << field_.summary());
+      : cfg_(cfg), monitor_(ehc_control::loadRobotConfig(cfg.robot_config), cfg.map, cfg.monitor), listener_(tf_) {
+    ROS_INFO_STREAM("  " << monitor_.field().summary());
     pub_ = nh.advertise<ehc_msgs::ObstacleArray>(cfg_.output_topic, 5);
     cloud_sub_ = nh.subscribe(cfg_.cloud_topic, 1, &ObstacleNode::onCloud, this);
     joints_sub_ = nh.subscribe(cfg_.joint_states_topic, 5, &ObstacleNode::onJoints, this);
@@ -99,31 +88,12 @@ class ObstacleNode {
   }
 
  private:
+  /// A message's stamp in seconds; an unstamped message counts as received now.
+  static double stampOrNow(const ros::Time& stamp) { return (stamp.isZero() ? ros::Time::now() : stamp).toSec(); }
+
   void onJoints(const sensor_msgs::JointState& msg) {
-    if (msg.name.size() != msg.position.size()) {
-      ROS_ERROR_THROTTLE(2.0, "ehc_obstacle_node: joint_states with %zu names and %zu positions",
-                         msg.name.size(), msg.position.size());
-      return;
-    }
-    Eigen::VectorXd q = q_;
-    int found = 0;
-    for (int j = 0; j < model_.nArm(); ++j)
-      for (std::size_t i = 0; i < msg.name.size(); ++i)
-        if (msg.name[i] == model_.config().arm_joints[static_cast<std::size_t>(j)]) {
-          q[j] = msg.position[i];
-          ++found;
-        }
-    if (found < model_.nArm() && !q.allFinite()) {
-      ROS_ERROR_THROTTLE(2.0, "ehc_obstacle_node: joint_states lacks arm joints (%d of %d)", found,
-                         model_.nArm());
-      return;
-    }
-    if (!q.allFinite()) {
-      ROS_ERROR_THROTTLE(2.0, "ehc_obstacle_node: joint_states with NaN/Inf rejected");
-      return;
-    }
-    q_ = q;
-    joints_stamp_ = msg.header.stamp.isZero() ? ros::Time::now() : msg.header.stamp;
+    const std::string why = monitor_.setJointState(stampOrNow(msg.header.stamp), msg.name, msg.position);
+    if (!why.empty()) ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "ehc_obstacle_node: /joint_states rejected: " << why);
   }
 
   void onOdom(const nav_msgs::Odometry& msg) {
@@ -131,90 +101,61 @@ class ObstacleNode {
     const Eigen::Quaterniond qn(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z);
     const double yaw = std::atan2(2.0 * (qn.w() * qn.z() + qn.x() * qn.y()),
                                   1.0 - 2.0 * (qn.y() * qn.y() + qn.z() * qn.z()));
-    const Eigen::Vector3d b(p.position.x, p.position.y, yaw);
-    if (!b.allFinite() || qn.norm() < 1e-6) {
-      ROS_ERROR_THROTTLE(2.0, "ehc_obstacle_node: odometry with NaN/Inf rejected");
-      return;
-    }
-    base_ = b;
-    odom_stamp_ = msg.header.stamp.isZero() ? ros::Time::now() : msg.header.stamp;
+    std::string why = qn.norm() < 1e-6 ? "zero orientation quaternion" : "";
+    if (why.empty()) why = monitor_.setBasePose(stampOrNow(msg.header.stamp), Eigen::Vector3d(p.position.x, p.position.y, yaw));
+    if (!why.empty()) ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "ehc_obstacle_node: odometry rejected: " << why);
   }
 
   void onExclusion(const ehc_msgs::ObstacleExclusion& msg) {
     if (msg.centres.size() != msg.radii.size()) {
-      ROS_ERROR_THROTTLE(2.0, "ehc_obstacle_node: exclusion list with %zu centres and %zu radii rejected",
+      ROS_ERROR_THROTTLE(kLogThrottle, "ehc_obstacle_node: exclusion list with %zu centres and %zu radii rejected",
                          msg.centres.size(), msg.radii.size());
       return;
     }
     if (!msg.header.frame_id.empty() && msg.header.frame_id != cfg_.world_frame) {
-      ROS_ERROR_THROTTLE(2.0, "ehc_obstacle_node: exclusion list in frame '%s' rejected (expected '%s')",
+      ROS_ERROR_THROTTLE(kLogThrottle, "ehc_obstacle_node: exclusion list in frame '%s' rejected (expected '%s')",
                          msg.header.frame_id.c_str(), cfg_.world_frame.c_str());
       return;
     }
     std::vector<ExclusionZone> zones;
     for (std::size_t i = 0; i < msg.centres.size(); ++i)
       zones.push_back({Eigen::Vector3d(msg.centres[i].x, msg.centres[i].y, msg.centres[i].z), msg.radii[i]});
-    try {
-      field_.setExclusionZones(zones);  // validates (finite centre, radius range)
-    } catch (const std::exception& e) {
-      ROS_ERROR_STREAM_THROTTLE(2.0, "ehc_obstacle_node: exclusion list rejected: " << e.what());
-      return;
-    }
-    exclusion_stamp_ = msg.header.stamp.isZero() ? ros::Time::now() : msg.header.stamp;
-  }
-
-  bool stateFresh(ros::Time* stamp) const {
-    if (joints_stamp_.isZero() || odom_stamp_.isZero()) return false;
-    const ros::Time now = ros::Time::now();
-    const ros::Time oldest = std::min(joints_stamp_, odom_stamp_);
-    *stamp = std::max(joints_stamp_, odom_stamp_);
-    return (now - oldest).toSec() <= cfg_.state_timeout;
+    const std::string why = monitor_.setExclusionZones(stampOrNow(msg.header.stamp), zones);
+    if (!why.empty()) ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "ehc_obstacle_node: exclusion list rejected: " << why);
   }
 
   void onCloud(const sensor_msgs::PointCloud2& msg) {
-    const ros::Time now = ros::Time::now();
-    if (!last_insert_.isZero() && now >= last_insert_ &&
-        (now - last_insert_).toSec() < 1.0 / cfg_.max_insert_rate_hz)
-      return;
-    last_insert_ = now;
+    const double now = ros::Time::now().toSec();
+    if (!monitor_.acceptCloud(now)) return;
     try {
       const geometry_msgs::TransformStamped tf = tf_.lookupTransform(
           cfg_.world_frame, msg.header.frame_id, msg.header.stamp, ros::Duration(cfg_.tf_timeout));
       const Eigen::Isometry3d T = tf2::transformToEigen(tf);
       const PointList pts = ros_conv::transformPoints(ros_conv::cloudToPoints(msg), T);
-      ros::Time stamp;
-      if (stateFresh(&stamp)) {
-        const auto poses = field_.linkPoses(model_, base_, q_);
-        field_.insertCloud(pts, T.translation(), &poses);
-      } else {
-        ROS_WARN_THROTTLE(5.0, "ehc_obstacle_node: no fresh robot state; cloud inserted without "
-                               "removing the robot's own points");
-        field_.insertCloud(pts, T.translation());
-      }
+      if (!monitor_.insertCloud(now, pts, T.translation()).self_filtered)
+        ROS_WARN_THROTTLE(kLogThrottle, "ehc_obstacle_node: no fresh robot state; cloud inserted without "
+                                        "removing the robot's own points");
     } catch (const std::exception& e) {
-      ROS_ERROR_STREAM_THROTTLE(2.0, "ehc_obstacle_node: cloud dropped: " << e.what());
+      ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "ehc_obstacle_node: cloud dropped: " << e.what());
     }
   }
 
   void onTimer(const ros::TimerEvent&) {
-    ros::Time stamp;
-    if (!stateFresh(&stamp)) {
-      ROS_ERROR_THROTTLE(5.0, "ehc_obstacle_node: robot state missing or older than %.2f s; "
-                              "no obstacle distances published", cfg_.state_timeout);
-      return;
-    }
-    if (!field_.exclusionZones().empty() && (ros::Time::now() - exclusion_stamp_).toSec() > cfg_.exclusion_timeout) {
-      ROS_WARN("ehc_obstacle_node: exclusion list older than %.2f s dropped: every obstacle counts again",
-               cfg_.exclusion_timeout);
-      field_.setExclusionZones({});
-    }
     try {
-      const auto ds = field_.distances(field_.linkPoses(model_, base_, q_));
+      const ObstacleReport r = monitor_.update(ros::Time::now().toSec());
+      if (r.exclusions_expired)
+        ROS_WARN("ehc_obstacle_node: exclusion list older than %.2f s dropped: every obstacle counts again",
+                 cfg_.monitor.exclusion_timeout);
+      if (r.status == ObstacleReport::Status::StateStale) {
+        ROS_ERROR_THROTTLE(kLogThrottle, "ehc_obstacle_node: robot state missing or older than %.2f s; "
+                                         "no obstacle distances published", cfg_.monitor.state_timeout);
+        return;
+      }
       ehc_msgs::ObstacleArray out;
-      out.header.stamp = stamp;
+      out.header.stamp = ros::Time(r.stamp);
       out.header.frame_id = cfg_.world_frame;
       out.influence_distance = cfg_.map.influence_distance;
-      for (const LinkObstacleDistance& d : ds) {
+      for (const LinkObstacleDistance& d : r.distances) {
         ehc_msgs::ObstacleDistance o;
         o.link = d.link;
         o.link_point.x = d.link_point.x();
@@ -231,16 +172,12 @@ class ObstacleNode {
       }
       pub_.publish(out);
     } catch (const std::exception& e) {
-      ROS_ERROR_STREAM_THROTTLE(2.0, "ehc_obstacle_node: distances failed: " << e.what());
+      ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "ehc_obstacle_node: distances failed: " << e.what());
     }
   }
 
   ObstacleNodeConfig cfg_;
-  ehc_control::WholeBodyModel model_;
-  ObstacleDistanceField field_;
-  Eigen::VectorXd q_;
-  Eigen::Vector3d base_ = Eigen::Vector3d::Zero();
-  ros::Time joints_stamp_, odom_stamp_, last_insert_, exclusion_stamp_;
+  ObstacleMonitor monitor_;
   tf2_ros::Buffer tf_;
   tf2_ros::TransformListener listener_;
   ros::Publisher pub_;

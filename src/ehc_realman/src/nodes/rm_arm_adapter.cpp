@@ -36,6 +36,8 @@
 
 namespace {
 
+constexpr double kLogThrottle = 1.0;  ///< s between repeats of a throttled log message
+
 using SteadyClock = std::chrono::steady_clock;
 
 double steadyNow() {
@@ -82,7 +84,7 @@ class RmArmAdapterNode {
     try {
       streamer_.setMeasured(msg->name, msg->position, steadyNow());
     } catch (const std::exception& e) {
-      ROS_ERROR_THROTTLE(1.0, "rm_arm_adapter: %s", e.what());
+      ROS_ERROR_THROTTLE(kLogThrottle, "rm_arm_adapter: %s", e.what());
     }
   }
 
@@ -91,7 +93,7 @@ class RmArmAdapterNode {
     try {
       streamer_.setVelocityCommand(msg->names, msg->velocities, steadyNow());
     } catch (const std::exception& e) {
-      ROS_ERROR_THROTTLE(1.0, "rm_arm_adapter: %s", e.what());
+      ROS_ERROR_THROTTLE(kLogThrottle, "rm_arm_adapter: %s", e.what());
     }
   }
 
@@ -140,7 +142,7 @@ class RmArmAdapterNode {
     try {
       publishGripper(ehc_realman::gripperRequestFromCommand(msg->data, config_.gripper));
     } catch (const std::exception& e) {
-      ROS_ERROR_THROTTLE(1.0, "rm_arm_adapter: %s", e.what());
+      ROS_ERROR_THROTTLE(kLogThrottle, "rm_arm_adapter: %s", e.what());
     }
   }
 
@@ -148,7 +150,7 @@ class RmArmAdapterNode {
     try {
       publishGripper(ehc_realman::gripperRequestFromWidth(msg->data, config_.gripper));
     } catch (const std::exception& e) {
-      ROS_ERROR_THROTTLE(1.0, "rm_arm_adapter: %s", e.what());
+      ROS_ERROR_THROTTLE(kLogThrottle, "rm_arm_adapter: %s", e.what());
     }
   }
 
@@ -175,12 +177,12 @@ class RmArmAdapterNode {
         msg.joint[static_cast<std::size_t>(i)] = static_cast<float>(frame->position[i]);
       joint_pos_pub_.publish(msg);
       if (frame->limit_clamped)
-        ROS_WARN_THROTTLE(1.0, "rm_arm_adapter: joint limit reached, motion clamped");
+        ROS_WARN_THROTTLE(kLogThrottle, "rm_arm_adapter: joint limit reached, motion clamped");
       if (frame->tracking_clamped)
-        ROS_WARN_THROTTLE(1.0, "rm_arm_adapter: arm lags the command by more than %.3f rad, "
+        ROS_WARN_THROTTLE(kLogThrottle, "rm_arm_adapter: arm lags the command by more than %.3f rad, "
                                "command clamped", config_.stream.max_tracking_error);
       if (frame->speed_clamped)
-        ROS_WARN_THROTTLE(5.0, "rm_arm_adapter: velocity command above the speed limits, scaled");
+        ROS_WARN_THROTTLE(kLogThrottle, "rm_arm_adapter: velocity command above the speed limits, scaled");
     }
   }
 

@@ -27,6 +27,8 @@
 
 namespace {
 
+constexpr double kLogThrottle = 1.0;  ///< s between repeats of a throttled log message
+
 diagnostic_msgs::KeyValue kv(const std::string& key, const std::string& value) {
   diagnostic_msgs::KeyValue k;
   k.key = key;
@@ -60,12 +62,12 @@ class Water2BaseBridgeNode {
   void onCmdVel(const geometry_msgs::Twist::ConstPtr& msg) {
     if (msg->linear.y != 0.0 || msg->angular.x != 0.0 || msg->angular.y != 0.0 ||
         msg->linear.z != 0.0)
-      ROS_WARN_THROTTLE(5.0, "water2_base_bridge: differential base: only linear.x and "
+      ROS_WARN_THROTTLE(kLogThrottle, "water2_base_bridge: differential base: only linear.x and "
                              "angular.z of /cmd_vel are used");
     try {
       bridge_.setCommand(msg->linear.x, msg->angular.z);
     } catch (const std::exception& e) {
-      ROS_ERROR_THROTTLE(1.0, "water2_base_bridge: /cmd_vel rejected: %s", e.what());
+      ROS_ERROR_THROTTLE(kLogThrottle, "water2_base_bridge: /cmd_vel rejected: %s", e.what());
     }
   }
 

@@ -1,10 +1,12 @@
 #pragma once
-// SimConfig: parameters of the simulator (time step, actuation noise, collision checking,
-// gripper, simulated camera; the camera intrinsics are ehc_control::PinholeCamera, loaded with
-// loadPinholeCamera(camera_file)), loaded from a YAML file (top-level key `sim`) with one loader per
-// struct. Paths inside the file are resolved against its folder. ROS-free.
+// SimConfig: parameters of the Bullet simulator — the settings every fake robot shares
+// (FakeRobotConfig: robot, time step, seed, lock-step / free-run, actuation noise) plus
+// collision checking, gripper and simulated camera (intrinsics: ehc_control::PinholeCamera from
+// loadPinholeCamera(camera_file)) — loaded from a YAML file (top-level key
+// `sim`) with one loader per struct. Paths inside the file are resolved against its folder.
+// The robot starts at the scene's robot_start (sim.robot_start is an error here). ROS-free.
 
-#include "ehc_sim/kinematic_fake_robot.h"
+#include "ehc_sim/fake_robot_config.h"
 
 #include <Eigen/Core>
 
@@ -52,16 +54,10 @@ struct SimulatedCameraConfig {
 
 struct SimConfig {
   std::string source_file;
-  std::string robot_file;   ///< robot.yaml
+  FakeRobotConfig fake_robot;  ///< robot file, dt, seed, stepping policy, noise
   std::string camera_file;  ///< camera_info YAML of the colour stream
   std::string scene_file;   ///< default scene (the node's _scene overrides it)
-  double dt = 0.01;               ///< s, control / lock-step period
   double max_physics_substep = 0.005;  ///< s; Bullet steps ceil(dt / this) times per step
-  unsigned seed = 1;
-  bool free_run = false;          ///< the node's _free_run overrides it
-  double state_republish_period = 1.0;  ///< wall s, lock-step: resend a state nobody answered
-  double command_timeout = 0.5;   ///< wall s, free-run: zero velocities without fresh commands
-  ActuationNoise noise;
   CollisionConfig collision;
   GripperConfig gripper;
   SimulatedCameraConfig camera;
@@ -75,7 +71,6 @@ struct SimConfig {
 SimConfig loadSimConfig(const std::string& path);
 SimConfig loadSimConfigString(const std::string& text, const std::string& origin);
 
-ActuationNoise loadActuationNoise(const ehc_control::ConfigNode& n);
 CollisionConfig loadCollisionConfig(const ehc_control::ConfigNode& n);
 GripperConfig loadGripperConfig(const ehc_control::ConfigNode& n);
 SimulatedCameraConfig loadSimulatedCameraConfig(const ehc_control::ConfigNode& n);

@@ -66,7 +66,7 @@ class SimWorld {
   /// Loads another scene and resets.
   void setScene(const SceneConfig& scene, unsigned seed);
 
-  /// Executes one control step of cfg.dt: `command` = [base twist (base frame); arm rates]
+  /// Executes one control step of cfg.fake_robot.dt: `command` = [base twist (base frame); arm rates]
   /// (KinematicFakeRobot order and checks; throws on a wrong size or NaN).
   const StepReport& step(const Eigen::VectorXd& command);
   /// Teleports the robot (tests, tools); objects are untouched. Does not advance time.
@@ -75,7 +75,7 @@ class SimWorld {
   void commandGripper(bool close) { gripper_.command(close); }
 
   // ------------------------------------------------------------------ state
-  double time() const { return static_cast<double>(step_count_) * cfg_.dt; }
+  double time() const { return static_cast<double>(step_count_) * cfg_.fake_robot.dt; }
   std::int64_t timeNs() const { return step_count_ * dt_ns_; }
   std::int64_t dtNs() const { return dt_ns_; }
   long stepCount() const { return step_count_; }

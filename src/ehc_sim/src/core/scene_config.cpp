@@ -1,6 +1,7 @@
 #include "ehc_sim/scene_config.h"
 
 #include "ehc_control/config_node.h"
+#include "ehc_sim/fake_robot_config.h"
 
 #include <cmath>
 #include <set>
@@ -147,11 +148,7 @@ SceneConfig loadScene(const ConfigNode& root) {
   SceneConfig c;
   c.source_file = root.file();
   c.name = s.get<std::string>("name", c.name);
-  if (s.has("robot_start")) {
-    const ConfigNode r = s.child("robot_start");
-    c.robot_start = Eigen::Vector3d(r.get<double>("x", 0.0), r.get<double>("y", 0.0),
-                                    r.get<double>("yaw", 0.0));
-  }
+  if (s.has("robot_start")) c.robot_start = loadBasePose(s.child("robot_start"));
   if (s.has("floor")) {
     const ConfigNode f = s.child("floor");
     c.floor_shade = f.get<int>("shade", c.floor_shade);

@@ -9,7 +9,6 @@
 namespace ehc_sim {
 
 using ehc_control::ConfigNode;
-using ehc_control::requirePositive;
 using ehc_control::requireRange;
 
 void CollisionConfig::validate() const {
@@ -41,32 +40,24 @@ void SimulatedCameraConfig::validate() const {
 
 void SimConfig::validate() const {
   const char* o = "SimConfig";
-  if (robot_file.empty()) throw std::invalid_argument("[SimConfig] sim.robot: no robot.yaml given");
+  fake_robot.validate();
   if (camera_file.empty()) throw std::invalid_argument("[SimConfig] sim.camera_info: no file given");
-  requireRange(o, "sim.dt", dt, 1e-4, 0.1);
-  if (std::abs(dt * 1e9 - std::round(dt * 1e9)) > 1e-3)
-    throw std::invalid_argument("[SimConfig] sim.dt must be a whole number of nanoseconds");
   requireRange(o, "sim.max_physics_substep", max_physics_substep, 1e-4, 0.02);
-  requirePositive(o, "sim.state_republish_period", state_republish_period);
-  requirePositive(o, "sim.command_timeout", command_timeout);
-  noise.validate();
   collision.validate();
   gripper.validate();
   camera.validate();
 }
 
 int SimConfig::substeps() const {
-  return std::max(1, static_cast<int>(std::ceil(dt / max_physics_substep - 1e-9)));
+  return std::max(1, static_cast<int>(std::ceil(fake_robot.dt / max_physics_substep - 1e-9)));
 }
 
 std::string SimConfig::summary() const {
   std::ostringstream os;
   os << "sim config " << source_file << "\n"
-     << "  robot " << robot_file << ", camera " << camera_file << ", scene " << scene_file << "\n"
-     << "  dt " << dt << " s (" << substeps() << " Bullet sub-steps), seed " << seed
-     << ", mode " << (free_run ? "free-run" : "lock-step") << "\n"
-     << "  noise " << (noise.enabled ? "on" : "off") << " (base-T " << noise.base_translation
-     << ", base-R " << noise.base_rotation << ", arm " << noise.arm << ")\n"
+     << fake_robot.summary()
+     << "  camera " << camera_file << ", scene " << scene_file << ", " << substeps()
+     << " Bullet sub-steps per step\n"
      << "  collision tolerance " << collision.tolerance << " m, " << collision.ignore_pairs.size()
      << " ignored pairs\n"
      << "  gripper speed " << gripper.speed << " m/s, lift " << gripper.lift_height << " m\n"
@@ -75,19 +66,6 @@ std::string SimConfig::summary() const {
      << camera.max_range << " m, depth noise " << camera.depth_noise_base << " + "
      << camera.depth_noise_quadratic << " z^2)\n";
   return os.str();
-}
-
-ActuationNoise loadActuationNoise(const ConfigNode& n) {
-  ActuationNoise a;
-  a.enabled = n.get<bool>("enabled", a.enabled);
-  a.base_translation = n.get<double>("base_translation", a.base_translation);
-  a.base_rotation = n.get<double>("base_rotation", a.base_rotation);
-  a.arm = n.get<double>("arm", a.arm);
-  for (const char* k : {"base_translation", "base_rotation", "arm"}) {
-    const double v = n.get<double>(k, 0.0);
-    if (v < 0.0 || v > 1.0) n.fail(k, "must be in [0, 1]");
-  }
-  return a;
 }
 
 CollisionConfig loadCollisionConfig(const ConfigNode& n) {
@@ -161,23 +139,15 @@ SimConfig loadSim(const ConfigNode& root) {
   const ConfigNode s = root.child("sim");
   SimConfig c;
   c.source_file = root.file();
-  c.robot_file = s.resolvePath(s.require<std::string>("robot"));
+  c.fake_robot = loadFakeRobotConfig(s);
+  if (s.has("robot_start"))
+    s.fail("robot_start", "is not used by the Bullet simulator: the robot starts at the scene's "
+                          "robot_start");
   c.camera_file = s.resolvePath(s.require<std::string>("camera_info"));
   if (s.has("scene")) c.scene_file = s.resolvePath(s.require<std::string>("scene"));
-  c.dt = s.get<double>("dt", c.dt);
-  if (!(c.dt >= 1e-4 && c.dt <= 0.1)) s.fail("dt", "must be in [0.0001, 0.1] s");
   c.max_physics_substep = s.get<double>("max_physics_substep", c.max_physics_substep);
   if (!(c.max_physics_substep >= 1e-4 && c.max_physics_substep <= 0.02))
     s.fail("max_physics_substep", "must be in [0.0001, 0.02] s");
-  const long seed = s.get<long>("seed", static_cast<long>(c.seed));
-  if (seed < 0 || seed > 4294967295L) s.fail("seed", "must be in [0, 2^32)");
-  c.seed = static_cast<unsigned>(seed);
-  c.free_run = s.get<bool>("free_run", c.free_run);
-  c.state_republish_period = s.get<double>("state_republish_period", c.state_republish_period);
-  if (!(c.state_republish_period > 0)) s.fail("state_republish_period", "must be > 0 s");
-  c.command_timeout = s.get<double>("command_timeout", c.command_timeout);
-  if (!(c.command_timeout > 0)) s.fail("command_timeout", "must be > 0 s");
-  c.noise = loadActuationNoise(s.childOrEmpty("noise"));
   c.collision = loadCollisionConfig(s.childOrEmpty("collision"));
   c.gripper = loadGripperConfig(s.childOrEmpty("gripper"));
   c.camera = loadSimulatedCameraConfig(s.childOrEmpty("camera"));

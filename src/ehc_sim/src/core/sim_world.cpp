@@ -138,7 +138,7 @@ SimWorld::SimWorld(const SimConfig& cfg, const ehc_control::RobotConfig& robot,
       scene_(scene),
       model_(makeModel(robot)),
       collision_model_(std::make_unique<ehc_control::RobotCollisionModel>(model_->urdfXml(), robot.arm_joints)),
-      robot_(robot, cfg.noise, cfg.seed),
+      robot_(robot, cfg.fake_robot.noise, cfg.fake_robot.seed),
       gripper_(cfg.gripper, collision_model_->fingers().empty()
                                 ? 0.035
                                 : collision_model_->fingers().front().upper),
@@ -151,13 +151,13 @@ SimWorld::SimWorld(const SimConfig& cfg, const ehc_control::RobotConfig& robot,
   for (const auto& f : collision_model_->fingers())
     if (std::abs(f.upper - gripper_.maxOpening()) > 1e-9)
       fail("the two finger joints must have the same travel");
-  dt_ns_ = static_cast<std::int64_t>(std::llround(cfg_.dt * 1e9));
+  dt_ns_ = cfg_.fake_robot.dtNs();
   for (const auto& [a, b] : cfg_.collision.ignore_pairs)
     for (const auto& l : {a, b})
       if (std::find(collision_model_->allLinks().begin(), collision_model_->allLinks().end(), l) ==
           collision_model_->allLinks().end())
         fail("sim.collision.ignore_pairs names link '" + l + "' which is not in the URDF");
-  reset(cfg_.seed);
+  reset(cfg_.fake_robot.seed);
 }
 
 SimWorld::~SimWorld() = default;
@@ -469,14 +469,14 @@ const StepReport& SimWorld::step(const Eigen::VectorXd& command) {
 
   const Eigen::Vector3d b0 = robot_.basePose();
   const Eigen::VectorXd q0 = robot_.armPositions();
-  robot_.step(command, cfg_.dt);  // validates the command
+  robot_.step(command, cfg_.fake_robot.dt);  // validates the command
   const Eigen::Vector3d b1 = robot_.basePose();
   const Eigen::VectorXd q1 = robot_.armPositions();
   const double dyaw = std::remainder(b1.z() - b0.z(), 2.0 * M_PI);
 
   report_ = StepReport();
   const int k = cfg_.substeps();
-  const double h = cfg_.dt / k;
+  const double h = cfg_.fake_robot.dt / k;
   const std::string& gripper_link = collision_model_->fingers().front().parent_link;
   for (int s = 1; s <= k; ++s) {
     const double a = static_cast<double>(s) / k;

@@ -1,13 +1,15 @@
 // ehc_sim_node: the Bullet-backed fake robot (ROS wrapper of ehc_sim::SimWorld,
-// SimulatedCamera and CommandGate).
+// SimulatedCamera and StepScheduler, the stepping policy it shares with ehc_kinematic_sim_node).
 //
 //   rosrun ehc_sim ehc_sim_node _config:=config/sim/bullet_sim.yaml
 //       [_scene:=config/scenes/table_three_objects.yaml] [_free_run:=true] [_seed:=N]
 //
 // Lock-step (default): publishes /clock and the state stamped t, waits for the
 // JointVelocityCommand stamped t and a /cmd_vel received since the last step, then advances
-// one step of sim.dt. Free-run: steps every sim.dt of wall time with the latest commands
-// (zeroed after sim.command_timeout without a fresh one). Sim time starts at 1 s.
+// one step of sim.dt (never on a timeout; a state nobody answered is resent every
+// sim.state_republish_period wall seconds). Free-run: steps every sim.dt of wall time with the
+// latest commands (zeroed after sim.command_timeout without a fresh one). Both policies:
+// ehc_sim::StepScheduler. Sim time starts at 1 s.
 //
 // Publishes /clock, /joint_states, /odom, /tf (odom -> base_link and every URDF link),
 // /camera/color/image_raw (mono8) + /camera/color/camera_info, /camera/depth/points,
@@ -15,13 +17,11 @@
 // Subscribes /cmd_vel, /arm/joint_velocity_cmd. Services /sim/reset (ehc_msgs/ResetScene),
 // /sim/gripper (std_srvs/SetBool: true = close, false = open).
 
+#include "lock_step_node.h"
 #include "sim_ros_conversions.h"
 
-#include "ehc_msgs/JointVelocityCommand.h"
 #include "ehc_msgs/ResetScene.h"
 
-#include <geometry_msgs/Twist.h>
-#include <ros/callback_queue.h>
 #include <ros/ros.h>
 #include <std_srvs/SetBool.h>
 #include <tf2_msgs/TFMessage.h>
@@ -29,6 +29,8 @@
 #include <memory>
 
 namespace {
+
+using ehc_sim::kLogThrottle;
 
 class SimNode {
  public:
@@ -40,12 +42,8 @@ class SimNode {
     std::string scene_file = cfg_.scene_file;
     pnh.param("scene", scene_file, scene_file);
     if (scene_file.empty()) throw std::invalid_argument("[ehc_sim_node] no scene: set sim.scene or _scene:=");
-    pnh.param("free_run", cfg_.free_run, cfg_.free_run);
-    int seed = static_cast<int>(cfg_.seed);
-    pnh.param("seed", seed, seed);
-    if (seed < 0) throw std::invalid_argument("[ehc_sim_node] _seed must be >= 0");
-    cfg_.seed = static_cast<unsigned>(seed);
-    const ehc_control::RobotConfig robot = ehc_control::loadRobotConfig(cfg_.robot_file);
+    ehc_sim::applyNodeOverrides(pnh, "ehc_sim_node", &cfg_.fake_robot);
+    const ehc_control::RobotConfig robot = ehc_control::loadRobotConfig(cfg_.fake_robot.robot_file);
     const ehc_sim::SceneConfig scene = ehc_sim::loadSceneConfig(scene_file);
     const ehc_control::PinholeCamera intrinsics = ehc_control::loadPinholeCamera(cfg_.camera_file);
     ROS_INFO_STREAM("[ehc_sim_node] start-up configuration\n"
@@ -53,13 +51,11 @@ class SimNode {
                     << scene.summary());
 
     world_ = std::make_unique<ehc_sim::SimWorld>(cfg_, robot, scene);
-    camera_ = std::make_unique<ehc_sim::SimulatedCamera>(intrinsics, cfg_.camera, cfg_.seed);
+    camera_ = std::make_unique<ehc_sim::SimulatedCamera>(intrinsics, cfg_.camera, cfg_.fake_robot.seed);
     camera_->setScene(world_->bodies(), scene.floor_shade);
-    gate_ = std::make_unique<ehc_sim::CommandGate>(robot);
     camera_frame_ = robot.camera_frame;
 
-    nh_.setCallbackQueue(&queue_);
-    const ros::TransportHints fast = ros::TransportHints().tcpNoDelay();
+    lock_step_ = std::make_unique<ehc_sim::LockStepNode>(nh_, "ehc_sim_node", robot, cfg_.fake_robot);
     clock_pub_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 10);
     joint_pub_ = nh_.advertise<sensor_msgs::JointState>("/joint_states", 10);
     odom_pub_ = nh_.advertise<nav_msgs::Odometry>("/odom", 10);
@@ -69,40 +65,20 @@ class SimNode {
     cloud_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("/camera/depth/points", 2);
     objects_pub_ = nh_.advertise<ehc_msgs::SimObjectPoses>("/sim/object_poses", 10);
     status_pub_ = nh_.advertise<ehc_msgs::SimStatus>("/sim/status", 10);
-    cmd_vel_sub_ = nh_.subscribe("/cmd_vel", 10, &SimNode::onCmdVel, this, fast);
-    arm_sub_ = nh_.subscribe("/arm/joint_velocity_cmd", 10, &SimNode::onArmCommand, this, fast);
     reset_srv_ = nh_.advertiseService("/sim/reset", &SimNode::onReset, this);
     gripper_srv_ = nh_.advertiseService("/sim/gripper", &SimNode::onGripper, this);
   }
 
   void run() {
     publishState(true);
-    ros::WallTime next_step = ros::WallTime::now() + ros::WallDuration(cfg_.dt);
-    while (ros::ok()) {
-      queue_.callAvailable(ros::WallDuration(cfg_.free_run ? 0.0005 : 0.002));
-      const ros::WallTime now = ros::WallTime::now();
-      if (!cfg_.free_run) {
-        if (gate_->ready()) {
-          step();
-        } else if (!answered_ && (now - last_publish_).toSec() > cfg_.state_republish_period) {
-          publishState(false);  // nobody answered (controller not up yet): send it again
-        }
-      } else if (now >= next_step) {
-        if ((now - last_base_cmd_).toSec() > cfg_.command_timeout ||
-            (now - last_arm_cmd_).toSec() > cfg_.command_timeout)
-          gate_->zero();
-        step();
-        next_step += ros::WallDuration(cfg_.dt);
-        if (next_step < now) next_step = now;  // do not try to catch up after a stall
-      }
-    }
+    lock_step_->run([this] { step(); }, [this] { publishState(false); });
   }
 
  private:
   void step() {
-    const ehc_sim::StepReport& r = world_->step(gate_->command());
+    const ehc_sim::StepReport& r = world_->step(lock_step_->scheduler().command());
     if (r.robot_world_collision || r.self_collision)
-      ROS_WARN_STREAM_THROTTLE(1.0, "[ehc_sim_node] collision: " << r.collisions.front().a << " | "
+      ROS_WARN_STREAM_THROTTLE(kLogThrottle, "[ehc_sim_node] collision: " << r.collisions.front().a << " | "
                                                                    << r.collisions.front().b);
     publishState(true);
   }
@@ -114,15 +90,11 @@ class SimNode {
     rosgraph_msgs::Clock clock;
     clock.clock = stamp;
     clock_pub_.publish(clock);
-    if (fresh) {
-      gate_->newState(static_cast<std::int64_t>(stamp.toNSec()));
-      answered_ = false;
-      publishCamera(t_ns, stamp);
-    }
+    if (fresh) publishCamera(t_ns, stamp);
     sensor_msgs::JointState js;
-    ehc_sim::fillJointState(*world_, stamp, &js);
+    ehc_sim::fillJointState(world_->robot(), stamp, &js);
     nav_msgs::Odometry odom;
-    ehc_sim::fillOdometry(*world_, stamp, &odom);
+    ehc_sim::fillOdometry(world_->robot(), stamp, &odom);
     tf2_msgs::TFMessage tf;
     ehc_sim::fillTransforms(*world_, stamp, &tf.transforms);
     tf_pub_.publish(tf);
@@ -131,10 +103,11 @@ class SimNode {
     ehc_sim::fillObjectPoses(*world_, stamp, &objects);
     objects_pub_.publish(objects);
     ehc_msgs::SimStatus status;
-    ehc_sim::fillStatus(*world_, *gate_, !cfg_.free_run, stamp, &status);
+    const ehc_sim::StepScheduler& scheduler = lock_step_->scheduler();
+    ehc_sim::fillStatus(*world_, scheduler.gate(), scheduler.lockStep(), stamp, &status);
     status_pub_.publish(status);
+    lock_step_->statePublished(stamp, fresh);
     joint_pub_.publish(js);  // last: the controller answers this one
-    last_publish_ = ros::WallTime::now();
   }
 
   void publishCamera(std::int64_t t_ns, const ros::Time& stamp) {
@@ -161,26 +134,6 @@ class SimNode {
     }
   }
 
-  void onCmdVel(const geometry_msgs::Twist::ConstPtr& m) {
-    const std::string why = gate_->onBaseTwist(m->linear.x, m->linear.y, m->angular.z);
-    answered_ = true;
-    last_base_cmd_ = ros::WallTime::now();
-    if (!why.empty())
-      ROS_WARN_STREAM_THROTTLE(1.0, "[ehc_sim_node] /cmd_vel rejected (base stopped): " << why << " ("
-                                        << gate_->counters().base_rejected << " rejected so far)");
-  }
-
-  void onArmCommand(const ehc_msgs::JointVelocityCommand::ConstPtr& m) {
-    const std::string why = gate_->onArmCommand(static_cast<std::int64_t>(m->header.stamp.toNSec()),
-                                                m->names, m->velocities, !cfg_.free_run);
-    answered_ = true;
-    if (why.empty()) last_arm_cmd_ = ros::WallTime::now();
-    if (!why.empty())
-      ROS_WARN_STREAM_THROTTLE(1.0, "[ehc_sim_node] /arm/joint_velocity_cmd rejected: " << why << " ("
-                                        << gate_->counters().arm_rejected << " rejected, "
-                                        << gate_->counters().arm_stale << " stale so far)");
-  }
-
   bool onReset(ehc_msgs::ResetScene::Request& req, ehc_msgs::ResetScene::Response& res) {
     try {
       if (!req.scene_file.empty()) {
@@ -191,8 +144,7 @@ class SimNode {
         world_->reset(req.seed);
       }
       camera_->reseed(req.seed);
-      gate_->zero();
-      gate_->resetCounters();
+      lock_step_->scheduler().reset();
       next_image_ns_ = next_cloud_ns_ = 0;
       res.success = true;
       res.message = "scene '" + world_->scene().name + "' reset with seed " + std::to_string(req.seed);
@@ -215,20 +167,16 @@ class SimNode {
   }
 
   ros::NodeHandle nh_;
-  ros::CallbackQueue queue_;
   ehc_sim::SimConfig cfg_;
   std::unique_ptr<ehc_sim::SimWorld> world_;
   std::unique_ptr<ehc_sim::SimulatedCamera> camera_;
-  std::unique_ptr<ehc_sim::CommandGate> gate_;
+  std::unique_ptr<ehc_sim::LockStepNode> lock_step_;  ///< callback queue, commands, stepping loop
   std::string camera_frame_;
   vpImage<unsigned char> image_;
   std::vector<Eigen::Vector3f> points_;
   std::int64_t next_image_ns_ = 0, next_cloud_ns_ = 0;
-  bool answered_ = false;
-  ros::WallTime last_publish_, last_base_cmd_, last_arm_cmd_;
   ros::Publisher clock_pub_, joint_pub_, odom_pub_, tf_pub_, image_pub_, info_pub_, cloud_pub_,
       objects_pub_, status_pub_;
-  ros::Subscriber cmd_vel_sub_, arm_sub_;
   ros::ServiceServer reset_srv_, gripper_srv_;
 };
 

@@ -1,6 +1,7 @@
 #pragma once
-// Message conversions of the simulator node (also used by bench_sim): SimWorld state ->
-// sensor_msgs / nav_msgs / tf / ehc_sim messages. Header-only, no logic beyond copying.
+// Message conversions of the simulator nodes (ehc_sim_node, ehc_kinematic_sim_node; also used
+// by bench_sim): KinematicFakeRobot / SimWorld state -> sensor_msgs / nav_msgs / tf / ehc_msgs
+// messages. Header-only, no logic beyond copying.
 
 #include "ehc_msgs/SimObjectPoses.h"
 #include "ehc_msgs/SimStatus.h"
@@ -58,34 +59,43 @@ inline geometry_msgs::Transform toTransform(const Eigen::Isometry3d& T) {
   return t;
 }
 
-inline void fillJointState(const SimWorld& w, const ros::Time& stamp, sensor_msgs::JointState* m) {
-  const auto& cfg = w.model().config();
+/// /joint_states: the arm joints, positions and executed velocities.
+inline void fillJointState(const KinematicFakeRobot& r, const ros::Time& stamp, sensor_msgs::JointState* m) {
+  const auto& cfg = r.robot();
   m->header.stamp = stamp;
   m->name = cfg.arm_joints;
-  const Eigen::VectorXd& q = w.robot().armPositions();
-  const Eigen::VectorXd v = w.robot().executedVelocity().tail(cfg.nArm());
+  const Eigen::VectorXd& q = r.armPositions();
+  const Eigen::VectorXd v = r.executedVelocity().tail(cfg.nArm());
   m->position.assign(q.data(), q.data() + q.size());
   m->velocity.assign(v.data(), v.data() + v.size());
   m->effort.clear();
 }
 
-inline void fillOdometry(const SimWorld& w, const ros::Time& stamp, nav_msgs::Odometry* m) {
-  const auto& cfg = w.model().config();
+/// /odom: odom -> base_link pose, executed twist in the base frame.
+inline void fillOdometry(const KinematicFakeRobot& r, const ros::Time& stamp, nav_msgs::Odometry* m) {
+  const auto& cfg = r.robot();
   m->header.stamp = stamp;
   m->header.frame_id = cfg.world_frame;
   m->child_frame_id = cfg.base_frame;
-  m->pose.pose = toPose(ehc_control::WholeBodyModel::baseTransform(w.robot().basePose()));
-  const Eigen::VectorXd& v = w.robot().executedVelocity();
+  m->pose.pose = toPose(ehc_control::WholeBodyModel::baseTransform(r.basePose()));
+  const Eigen::VectorXd& v = r.executedVelocity();
   const bool holo = cfg.base_type == ehc_control::BaseType::Holonomic;
   m->twist.twist.linear.x = v[0];
   m->twist.twist.linear.y = holo ? v[1] : 0.0;
   m->twist.twist.angular.z = v[cfg.nBase() - 1];
 }
 
+/// odom -> base_link (the robot's world and base frames).
+inline void fillBaseTransform(const KinematicFakeRobot& r, const ros::Time& stamp, geometry_msgs::TransformStamped* t) {
+  t->header.stamp = stamp;
+  t->header.frame_id = r.robot().world_frame;
+  t->child_frame_id = r.robot().base_frame;
+  t->transform = toTransform(ehc_control::WholeBodyModel::baseTransform(r.basePose()));
+}
+
 /// odom -> base_link, then every URDF link relative to its parent.
 inline void fillTransforms(const SimWorld& w, const ros::Time& stamp,
                            std::vector<geometry_msgs::TransformStamped>* out) {
-  const auto& cfg = w.model().config();
   const auto& links = w.collisionModel().allLinks();
   out->resize(links.size());
   std::size_t k = 0;
@@ -94,9 +104,8 @@ inline void fillTransforms(const SimWorld& w, const ros::Time& stamp,
     t.header.stamp = stamp;
     const std::string& parent = w.collisionModel().parentOf(link);
     if (parent.empty()) {
-      t.header.frame_id = cfg.world_frame;
-      t.child_frame_id = link;
-      t.transform = toTransform(ehc_control::WholeBodyModel::baseTransform(w.robot().basePose()));
+      fillBaseTransform(w.robot(), stamp, &t);
+      t.child_frame_id = link;  // the URDF root
     } else {
       t.header.frame_id = parent;
       t.child_frame_id = link;
@@ -174,11 +183,23 @@ inline void fillObjectPoses(const SimWorld& w, const ros::Time& stamp, ehc_msgs:
   }
 }
 
+/// The /sim/status fields every fake robot has: step, mode, command counters. The rest (the
+/// collisions and the gripper) stays empty (ehc_kinematic_sim_node has neither).
+inline void fillCommandStatus(const KinematicFakeRobot& robot, const CommandGate& gate, bool lock_step,
+                              std::int64_t steps, const ros::Time& stamp, ehc_msgs::SimStatus* m) {
+  m->header.stamp = stamp;
+  m->step = static_cast<uint64_t>(steps);
+  m->lock_step = lock_step;
+  m->base_commands_rejected = static_cast<uint64_t>(gate.counters().base_rejected);
+  m->arm_commands_rejected = static_cast<uint64_t>(gate.counters().arm_rejected);
+  m->arm_commands_stale = static_cast<uint64_t>(gate.counters().arm_stale);
+  m->commands_saturated = static_cast<uint64_t>(robot.saturatedCommands());
+  m->joint_limit_clamps = static_cast<uint64_t>(robot.jointLimitClamps());
+}
+
 inline void fillStatus(const SimWorld& w, const CommandGate& gate, bool lock_step,
                        const ros::Time& stamp, ehc_msgs::SimStatus* m) {
-  m->header.stamp = stamp;
-  m->step = static_cast<uint64_t>(w.stepCount());
-  m->lock_step = lock_step;
+  fillCommandStatus(w.robot(), gate, lock_step, static_cast<std::int64_t>(w.stepCount()), stamp, m);
   const StepReport& r = w.lastStep();
   m->robot_world_collision = r.robot_world_collision;
   m->self_collision = r.self_collision;
@@ -186,11 +207,6 @@ inline void fillStatus(const SimWorld& w, const CommandGate& gate, bool lock_ste
   m->self_collision_steps = static_cast<uint64_t>(w.counters().self_collision_steps);
   m->colliding_pairs.clear();
   for (const auto& c : r.collisions) m->colliding_pairs.push_back(c.a + "|" + c.b);
-  m->base_commands_rejected = static_cast<uint64_t>(gate.counters().base_rejected);
-  m->arm_commands_rejected = static_cast<uint64_t>(gate.counters().arm_rejected);
-  m->arm_commands_stale = static_cast<uint64_t>(gate.counters().arm_stale);
-  m->commands_saturated = static_cast<uint64_t>(w.robot().saturatedCommands());
-  m->joint_limit_clamps = static_cast<uint64_t>(w.robot().jointLimitClamps());
   const ParallelGripper& g = w.gripper();
   m->gripper_state = toString(g.state());
   m->gripper_opening = g.opening();

@@ -1,0 +1,101 @@
+#pragma once
+// ObstacleMonitor: the logic of ehc_obstacle_node around an ObstacleDistanceField, ROS-free and
+// unit-tested without a master. It holds the robot state (arm joints parsed by
+// ehc_control::armPositionsFromJointState, base pose) with its stamps, rate-limits cloud
+// insertions, removes the robot's own points while the state is fresh, expires the exclusion
+// list, and decides each cycle what to publish: the link-obstacle distances stamped with the
+// newest state, or nothing while the state is missing or stale (the controller's watchdog then
+// stops the robot). Times are seconds of one clock (the node passes ROS time); an input
+// without a stamp is the node's business (it passes the receipt time).
+
+#include "ehc_control/robot_config.h"
+#include "ehc_control/whole_body_model.h"
+#include "ehc_perception/obstacle_distance_field.h"
+
+#include <Eigen/Core>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace ehc_control {
+class ConfigNode;
+}
+
+namespace ehc_perception {
+
+struct ObstacleMonitorParams {
+  double state_timeout = 0.2;       ///< s: no distances with a joint state or odometry this old
+  double exclusion_timeout = 0.5;   ///< s: an older exclusion list is dropped
+  double max_insert_rate_hz = 5.0;  ///< clouds inserted at most this often
+  void validate() const;            ///< throws "[ObstacleMonitorParams] ..."
+  std::string summary() const;
+};
+
+/// Reads state_timeout, exclusion_timeout and max_insert_rate_hz of the obstacle node's `node`
+/// mapping (all optional).
+ObstacleMonitorParams loadObstacleMonitorParams(const ehc_control::ConfigNode& node);
+
+/// What ObstacleMonitor::update decided.
+struct ObstacleReport {
+  enum class Status {
+    Publish,      ///< publish `distances` stamped `stamp`
+    StateStale,   ///< joint state or odometry missing or older than state_timeout: publish nothing
+  };
+  Status status = Status::StateStale;
+  double stamp = 0.0;  ///< newest state stamp (Publish only)
+  std::vector<LinkObstacleDistance> distances;
+  bool exclusions_expired = false;  ///< the exclusion list was dropped in this update
+};
+const char* toString(ObstacleReport::Status s);
+
+class ObstacleMonitor {
+ public:
+  /// Builds the whole-body model and the distance field (map.links must be robot links).
+  /// Throws std::invalid_argument "[ObstacleMonitor] ..." otherwise.
+  ObstacleMonitor(const ehc_control::RobotConfig& robot, const ObstacleMapConfig& map,
+                  const ObstacleMonitorParams& params);
+
+  /// Joint state stamped `t`. Returns "" if accepted, else why not (state unchanged).
+  std::string setJointState(double t, const std::vector<std::string>& names,
+                            const std::vector<double>& positions);
+  /// Base pose (x, y, yaw) stamped `t`. Returns "" if accepted, else why not.
+  std::string setBasePose(double t, const Eigen::Vector3d& base_pose);
+  /// Exclusion list received at/stamped `t` (replaces the previous one; empty = none). Returns
+  /// "" if accepted, else why not (the previous list stays).
+  std::string setExclusionZones(double t, const std::vector<ExclusionZone>& zones);
+
+  /// Rate limit: true if a cloud arriving at `now` is to be inserted (and counts it as the
+  /// latest insertion), false if the previous one is younger than 1 / max_insert_rate_hz.
+  bool acceptCloud(double now);
+  struct CloudInsertion {
+    ObstacleDistanceField::InsertStats stats;
+    bool self_filtered = false;  ///< false: no fresh state, the robot's own points stayed in
+  };
+  /// Inserts a world-frame cloud seen from `sensor_origin` (world).
+  CloudInsertion insertCloud(double now, const PointList& points, const Eigen::Vector3d& sensor_origin);
+
+  /// The cycle at `now`: drops an expired exclusion list, computes the distances. Throws what
+  /// ObstacleDistanceField::distances throws.
+  ObstacleReport update(double now);
+
+  /// Both joint state and odometry received and the older one at most state_timeout old;
+  /// `stamp` (optional) receives the newer stamp.
+  bool stateFresh(double now, double* stamp = nullptr) const;
+
+  const ObstacleMonitorParams& params() const { return params_; }
+  const ehc_control::WholeBodyModel& model() const { return model_; }
+  const ObstacleDistanceField& field() const { return field_; }
+  /// The map, e.g. for static priors (ObstacleDistanceField::addOccupiedBox).
+  ObstacleDistanceField& field() { return field_; }
+
+ private:
+  ObstacleMonitorParams params_;
+  ehc_control::WholeBodyModel model_;
+  ObstacleDistanceField field_;
+  Eigen::VectorXd q_;
+  Eigen::Vector3d base_ = Eigen::Vector3d::Zero();
+  std::optional<double> t_joints_, t_base_, t_exclusions_, t_last_insert_;
+};
+
+}  // namespace ehc_perception

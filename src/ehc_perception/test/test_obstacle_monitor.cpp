@@ -1,0 +1,133 @@
+// ObstacleMonitor (the logic of ehc_obstacle_node), without a ROS master: nothing is published
+// while the joint state or odometry is missing, stale or rejected; the distances carry the
+// newest state stamp; exclusion lists expire; cloud insertions are rate-limited; the robot's own
+// points are removed only with a fresh state. Times are plain numbers: nothing is timed.
+
+#include "ehc_control/config_node.h"
+#include "ehc_perception/obstacle_monitor.h"
+#include "perception_test_helpers.h"
+
+#include <gtest/gtest.h>
+
+#include <limits>
+
+using namespace ehc_perception;
+
+namespace {
+
+const double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+struct Rig {
+  ehc_control::RobotConfig robot = ehc_control::loadRobotConfig(test::robotYaml());
+  ObstacleMonitor monitor{robot, ObstacleMapConfig(), ObstacleMonitorParams()};
+  std::vector<double> ready() const {
+    return std::vector<double>(robot.arm_ready.data(), robot.arm_ready.data() + robot.nArm());
+  }
+  /// Joint state and odometry (robot at the origin, arm ready) stamped `t`.
+  void state(double t) {
+    ASSERT_EQ(monitor.setJointState(t, robot.arm_joints, ready()), "");
+    ASSERT_EQ(monitor.setBasePose(t, Eigen::Vector3d::Zero()), "");
+  }
+  /// A small block 15 cm in front of the base cylinder (radius 0.25 m).
+  void addBlock() {
+    monitor.field().addOccupiedBox(Eigen::Vector3d(0.40, -0.03, 0.20), Eigen::Vector3d(0.46, 0.03, 0.26));
+  }
+};
+
+}  // namespace
+
+TEST(ObstacleMonitor, NothingIsPublishedWithoutAFreshState) {
+  Rig r;
+  r.addBlock();
+  EXPECT_EQ(r.monitor.update(10.0).status, ObstacleReport::Status::StateStale) << "no state yet";
+  ASSERT_EQ(r.monitor.setJointState(10.0, r.robot.arm_joints, r.ready()), "");
+  EXPECT_EQ(r.monitor.update(10.0).status, ObstacleReport::Status::StateStale) << "no odometry yet";
+  ASSERT_EQ(r.monitor.setBasePose(10.05, Eigen::Vector3d::Zero()), "");
+  const ObstacleReport fresh = r.monitor.update(10.1);
+  ASSERT_EQ(fresh.status, ObstacleReport::Status::Publish);
+  EXPECT_EQ(fresh.stamp, 10.05) << "stamped with the newest state";
+  ASSERT_FALSE(fresh.distances.empty());
+  EXPECT_EQ(fresh.distances.front().link, "base_link");
+  EXPECT_NEAR(fresh.distances.front().distance, 0.15, 0.03);
+  // The older of the two becomes stale: nothing.
+  EXPECT_EQ(r.monitor.update(10.2001).status, ObstacleReport::Status::StateStale);
+  EXPECT_STREQ(toString(ObstacleReport::Status::StateStale), "state_stale");
+  // Rejected inputs do not refresh the state.
+  EXPECT_NE(r.monitor.setJointState(10.2, r.robot.arm_joints, {0, 0, kNaN, 0, 0, 0}).find("NaN"), std::string::npos);
+  EXPECT_NE(r.monitor.setJointState(10.2, {"joint1"}, {0.0}).find("lacks arm joint"), std::string::npos);
+  EXPECT_NE(r.monitor.setJointState(10.2, r.robot.arm_joints, {0.0}).find("positions"), std::string::npos);
+  EXPECT_NE(r.monitor.setBasePose(10.2, Eigen::Vector3d(0, kNaN, 0)), "");
+  EXPECT_EQ(r.monitor.update(10.21).status, ObstacleReport::Status::StateStale);
+  r.state(10.2);
+  EXPECT_EQ(r.monitor.update(10.21).status, ObstacleReport::Status::Publish);
+}
+
+TEST(ObstacleMonitor, ExclusionListsHideObstaclesUntilTheyExpire) {
+  Rig r;
+  r.addBlock();
+  const ExclusionZone around_block{Eigen::Vector3d(0.43, 0.0, 0.23), 0.1};
+  ASSERT_EQ(r.monitor.setExclusionZones(1.0, {around_block}), "");
+  EXPECT_NE(r.monitor.setExclusionZones(1.1, {{Eigen::Vector3d(kNaN, 0, 0), 0.1}}), "");
+  EXPECT_EQ(r.monitor.field().exclusionZones().size(), 1u) << "a rejected list keeps the previous one";
+  r.state(1.4);
+  ObstacleReport rep = r.monitor.update(1.45);
+  ASSERT_EQ(rep.status, ObstacleReport::Status::Publish);
+  EXPECT_TRUE(rep.distances.empty()) << "the only obstacle is excluded";
+  EXPECT_FALSE(rep.exclusions_expired);
+  // 0.5 s after the list: dropped, the block counts again.
+  r.state(1.55);
+  rep = r.monitor.update(1.5501);
+  ASSERT_EQ(rep.status, ObstacleReport::Status::Publish);
+  EXPECT_TRUE(rep.exclusions_expired);
+  EXPECT_FALSE(rep.distances.empty());
+  EXPECT_TRUE(r.monitor.field().exclusionZones().empty());
+  rep = r.monitor.update(1.56);
+  EXPECT_FALSE(rep.exclusions_expired) << "reported once";
+}
+
+TEST(ObstacleMonitor, CloudInsertionsAreRateLimited) {
+  Rig r;  // 5 Hz
+  EXPECT_TRUE(r.monitor.acceptCloud(100.0));
+  EXPECT_FALSE(r.monitor.acceptCloud(100.1));
+  EXPECT_FALSE(r.monitor.acceptCloud(100.199));
+  EXPECT_TRUE(r.monitor.acceptCloud(100.2));
+  EXPECT_TRUE(r.monitor.acceptCloud(50.0)) << "clock jumped back (simulator reset)";
+  EXPECT_FALSE(r.monitor.acceptCloud(50.1));
+}
+
+TEST(ObstacleMonitor, OwnPointsAreRemovedOnlyWithAFreshState) {
+  Rig r;
+  // Points on the base cylinder, seen from 1 m in front.
+  PointList on_base;
+  for (double z = 0.1; z < 0.55; z += 0.05) on_base.emplace_back(0.25f, 0.0f, static_cast<float>(z));
+  const Eigen::Vector3d origin(1.0, 0.0, 0.5);
+  ObstacleMonitor::CloudInsertion ins = r.monitor.insertCloud(5.0, on_base, origin);
+  EXPECT_FALSE(ins.self_filtered);
+  EXPECT_EQ(ins.stats.robot, 0);
+  EXPECT_EQ(ins.stats.inserted, static_cast<int>(on_base.size()));
+  r.monitor.field().clear();
+  r.state(5.0);
+  ins = r.monitor.insertCloud(5.1, on_base, origin);
+  EXPECT_TRUE(ins.self_filtered);
+  EXPECT_EQ(ins.stats.robot, static_cast<int>(on_base.size()));
+  EXPECT_EQ(ins.stats.inserted, 0);
+}
+
+TEST(ObstacleMonitor, ParamsAndLinksAreValidated) {
+  const auto robot = ehc_control::loadRobotConfig(test::robotYaml());
+  ObstacleMapConfig map;
+  map.links.push_back("no_such_link");
+  EXPECT_THROW(ObstacleMonitor(robot, map, ObstacleMonitorParams()), std::invalid_argument);
+  try {
+    loadObstacleMonitorParams(ehc_control::ConfigNode::loadString("node: {max_insert_rate_hz: 0}\n", "obst.yaml",
+                                                                  "ObstacleNode").child("node"));
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("max_insert_rate_hz"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("obst.yaml"), std::string::npos) << e.what();
+  }
+  const ObstacleMonitorParams p = loadObstacleMonitorParams(
+      ehc_control::ConfigNode::loadString("node: {state_timeout: 0.3}\n", "obst.yaml", "ObstacleNode").child("node"));
+  EXPECT_EQ(p.state_timeout, 0.3);
+  EXPECT_EQ(p.exclusion_timeout, 0.5);
+}

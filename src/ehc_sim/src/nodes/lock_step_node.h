@@ -1,0 +1,87 @@
+#pragma once
+// The ROS side of the lock-step contract, shared by both simulator nodes (ehc_sim_node,
+// ehc_kinematic_sim_node): the _free_run / _seed overrides, the command subscriptions (with
+// logged rejections) and the loop that serves callbacks and does what ehc_sim::StepScheduler
+// decides. Header-only; the policy itself is the core's StepScheduler.
+
+#include "ehc_msgs/JointVelocityCommand.h"
+#include "ehc_sim/step_scheduler.h"
+
+#include <geometry_msgs/Twist.h>
+#include <ros/callback_queue.h>
+#include <ros/ros.h>
+
+#include <functional>
+#include <stdexcept>
+#include <string>
+
+namespace ehc_sim {
+
+/// s between repeats of a throttled log message, in both simulator nodes.
+constexpr double kLogThrottle = 1.0;
+
+/// Private parameters _free_run and _seed override the configuration file.
+inline void applyNodeOverrides(const ros::NodeHandle& pnh, const std::string& node, FakeRobotConfig* cfg) {
+  pnh.param("free_run", cfg->free_run, cfg->free_run);
+  int seed = static_cast<int>(cfg->seed);
+  pnh.param("seed", seed, seed);
+  if (seed < 0) throw std::invalid_argument("[" + node + "] _seed must be >= 0");
+  cfg->seed = static_cast<unsigned>(seed);
+}
+
+class LockStepNode {
+ public:
+  /// `node` names the node in log messages. Everything `nh` serves runs on queue(), from run().
+  LockStepNode(ros::NodeHandle& nh, const std::string& node, const ehc_control::RobotConfig& robot,
+               const FakeRobotConfig& config)
+      : node_(node), scheduler_(robot, config) {
+    nh.setCallbackQueue(&queue_);
+    const ros::TransportHints fast = ros::TransportHints().tcpNoDelay();
+    cmd_vel_sub_ = nh.subscribe("/cmd_vel", 10, &LockStepNode::onCmdVel, this, fast);
+    arm_sub_ = nh.subscribe("/arm/joint_velocity_cmd", 10, &LockStepNode::onArmCommand, this, fast);
+  }
+
+  /// To call by the node's publishState just before /joint_states (the message answered).
+  void statePublished(const ros::Time& stamp, bool fresh) {
+    scheduler_.statePublished(ros::WallTime::now().toSec(), static_cast<std::int64_t>(stamp.toNSec()), fresh);
+  }
+
+  /// Serves callbacks until shutdown; `step()` on StepAction::Step (it executes command() and
+  /// publishes the fresh state), `republish()` on StepAction::RepublishState.
+  void run(const std::function<void()>& step, const std::function<void()>& republish) {
+    while (ros::ok()) {
+      queue_.callAvailable(ros::WallDuration(scheduler_.callbackWait()));
+      switch (scheduler_.next(ros::WallTime::now().toSec())) {
+        case StepAction::Step: step(); break;
+        case StepAction::RepublishState: republish(); break;  // nobody answered
+        case StepAction::Wait: break;
+      }
+    }
+  }
+
+  StepScheduler& scheduler() { return scheduler_; }
+
+ private:
+  void onCmdVel(const geometry_msgs::Twist::ConstPtr& m) {
+    const std::string why = scheduler_.onBaseTwist(ros::WallTime::now().toSec(), m->linear.x, m->linear.y, m->angular.z);
+    if (!why.empty())
+      ROS_WARN_STREAM_THROTTLE(kLogThrottle, "[" << node_ << "] /cmd_vel rejected (base stopped): " << why << " ("
+                                                 << scheduler_.counters().base_rejected << " rejected so far)");
+  }
+
+  void onArmCommand(const ehc_msgs::JointVelocityCommand::ConstPtr& m) {
+    const std::string why = scheduler_.onArmCommand(
+        ros::WallTime::now().toSec(), static_cast<std::int64_t>(m->header.stamp.toNSec()), m->names, m->velocities);
+    if (!why.empty())
+      ROS_WARN_STREAM_THROTTLE(kLogThrottle, "[" << node_ << "] /arm/joint_velocity_cmd rejected: " << why << " ("
+                                                 << scheduler_.counters().arm_rejected << " rejected, "
+                                                 << scheduler_.counters().arm_stale << " stale so far)");
+  }
+
+  std::string node_;
+  ros::CallbackQueue queue_;
+  StepScheduler scheduler_;
+  ros::Subscriber cmd_vel_sub_, arm_sub_;
+};
+
+}  // namespace ehc_sim

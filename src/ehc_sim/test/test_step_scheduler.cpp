@@ -1,0 +1,146 @@
+// StepScheduler: the stepping policy both fake robots (ehc_sim_node, ehc_kinematic_sim_node)
+// share. Lock-step: a step only when the state is answered (never on a timeout, however much
+// wall time passes); an unanswered state is resent; NaN / wrongly sized commands are answers
+// that are counted and executed as zero. Free-run: one step per dt of wall time, stale
+// commands zeroed, no catching up. Wall times are plain numbers here: nothing is timed.
+
+#include "ehc_sim/step_scheduler.h"
+
+#include <gtest/gtest.h>
+
+#include <limits>
+
+using ehc_sim::StepAction;
+using ehc_sim::StepScheduler;
+
+namespace {
+
+ehc_control::RobotConfig robot() {
+  return ehc_control::loadRobotConfig(std::string(EHC_CONFIG_DIR) + "/robots/realman_rm65_water2/robot.yaml");
+}
+
+ehc_sim::FakeRobotConfig config(bool free_run) {
+  ehc_sim::FakeRobotConfig c;
+  c.robot_file = "robot.yaml";  // not read by the scheduler
+  c.dt = 0.01;
+  c.free_run = free_run;
+  c.state_republish_period = 1.0;
+  c.command_timeout = 0.5;
+  return c;
+}
+
+const std::vector<std::string> kNames = {"joint1", "joint2", "joint3", "joint4", "joint5", "joint6"};
+const std::vector<double> kRates = {0.1, -0.2, 0.3, -0.4, 0.5, -0.6};
+const double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr std::int64_t kT0 = 1'000'000'000;  // state stamps, ns
+constexpr std::int64_t kT1 = 1'010'000'000;
+
+}  // namespace
+
+TEST(StepScheduler, LockStepNeverAdvancesWithoutAnAnswer) {
+  StepScheduler s(robot(), config(false));
+  ASSERT_TRUE(s.lockStep());
+  s.statePublished(100.0, kT0, true);
+  EXPECT_EQ(s.next(100.5), StepAction::Wait);
+  // However long nobody answers: the state is resent, time never steps.
+  double last_publish = 100.0;
+  for (double wall = 100.0; wall < 1100.0; wall += 0.25) {
+    const StepAction a = s.next(wall);
+    ASSERT_NE(a, StepAction::Step) << "stepped without an answer at wall " << wall;
+    if (a == StepAction::RepublishState) {
+      EXPECT_GT(wall - last_publish, 1.0);
+      s.statePublished(wall, kT0, false);
+      last_publish = wall;
+    }
+  }
+  EXPECT_GT(last_publish, 1098.0) << "resent every state_republish_period";
+  // Half an answer (the twist): no step, and no more resending (somebody is there).
+  EXPECT_EQ(s.onBaseTwist(1100.0, 0.1, 0.0, 0.2), "");
+  EXPECT_EQ(s.next(1100.0), StepAction::Wait);
+  EXPECT_EQ(s.next(1200.0), StepAction::Wait);
+  // The arm command of another state is no answer either.
+  EXPECT_NE(s.onArmCommand(1200.0, kT1, kNames, kRates), "");
+  EXPECT_EQ(s.next(1200.0), StepAction::Wait);
+  EXPECT_EQ(s.counters().arm_stale, 1);
+  // The full answer: step with it.
+  EXPECT_EQ(s.onArmCommand(1200.0, kT0, kNames, kRates), "");
+  EXPECT_EQ(s.next(1200.0), StepAction::Step);
+  const Eigen::VectorXd c = s.command();
+  ASSERT_EQ(c.size(), 8);
+  EXPECT_DOUBLE_EQ(c[0], 0.1);
+  EXPECT_DOUBLE_EQ(c[1], 0.2);
+  for (int i = 0; i < 6; ++i) EXPECT_DOUBLE_EQ(c[2 + i], kRates[static_cast<std::size_t>(i)]);
+  // The next state needs its own answer.
+  s.statePublished(1200.0, kT1, true);
+  EXPECT_EQ(s.next(1200.0), StepAction::Wait);
+}
+
+TEST(StepScheduler, RejectedCommandsAreCountedAnswersExecutedAsZero) {
+  StepScheduler s(robot(), config(false));
+  s.statePublished(0.0, kT0, true);
+  std::vector<double> nan_rates = kRates;
+  nan_rates[3] = kNaN;
+  EXPECT_NE(s.onArmCommand(0.0, kT0, kNames, nan_rates), "");
+  EXPECT_EQ(s.onBaseTwist(0.0, 0.1, 0.0, 0.0), "");
+  ASSERT_EQ(s.next(0.0), StepAction::Step) << "a rejected command does not stall lock-step";
+  EXPECT_TRUE(s.command().tail(6).isZero());
+  EXPECT_DOUBLE_EQ(s.command()[0], 0.1);
+  EXPECT_EQ(s.counters().arm_rejected, 1);
+
+  s.statePublished(0.0, kT1, true);
+  EXPECT_NE(s.onArmCommand(0.0, kT1, kNames, std::vector<double>(5, 0.1)), "") << "wrong size";
+  EXPECT_NE(s.onBaseTwist(0.0, kNaN, 0.0, 0.0), "");
+  ASSERT_EQ(s.next(0.0), StepAction::Step);
+  EXPECT_TRUE(s.command().isZero());
+  EXPECT_EQ(s.counters().arm_rejected, 2);
+  EXPECT_EQ(s.counters().base_rejected, 1);
+
+  s.reset();
+  EXPECT_EQ(s.counters().arm_rejected, 0);
+  EXPECT_TRUE(s.command().isZero());
+}
+
+TEST(StepScheduler, PacingDelaysAnAnsweredStepButNeverMakesOne) {
+  ehc_sim::FakeRobotConfig c = config(false);
+  c.max_real_time_factor = 10.0;  // dt 10 ms -> at least 1 ms of wall time per step
+  StepScheduler s(robot(), c);
+  s.statePublished(5.0, kT0, true);
+  EXPECT_EQ(s.onBaseTwist(5.0, 0.0, 0.0, 0.0), "");
+  EXPECT_EQ(s.onArmCommand(5.0, kT0, kNames, kRates), "");
+  EXPECT_EQ(s.next(5.0005), StepAction::Wait);
+  EXPECT_EQ(s.next(5.0011), StepAction::Step);
+  EXPECT_LE(s.callbackWait(), 0.00025 + 1e-12) << "wakes up in time for the next step";
+  // Unanswered: paced or not, never a step.
+  s.statePublished(5.0011, kT1, true);
+  for (double wall = 5.0011; wall < 50.0; wall += 0.01) ASSERT_NE(s.next(wall), StepAction::Step);
+}
+
+TEST(StepScheduler, FreeRunStepsEveryPeriodAndZeroesStaleCommands) {
+  StepScheduler s(robot(), config(true));
+  ASSERT_FALSE(s.lockStep());
+  s.statePublished(10.0, kT0, true);
+  EXPECT_EQ(s.next(10.0), StepAction::Wait);  // first step one period later
+  EXPECT_EQ(s.next(10.005), StepAction::Wait);
+  // Any stamp is accepted in free-run.
+  EXPECT_EQ(s.onArmCommand(10.005, 42, kNames, kRates), "");
+  EXPECT_EQ(s.onBaseTwist(10.005, 0.2, 0.0, 0.0), "");
+  ASSERT_EQ(s.next(10.0101), StepAction::Step);
+  EXPECT_DOUBLE_EQ(s.command()[0], 0.2);
+  EXPECT_EQ(s.next(10.0102), StepAction::Wait);
+  ASSERT_EQ(s.next(10.0201), StepAction::Step);
+  EXPECT_DOUBLE_EQ(s.command()[0], 0.2) << "commands 15 ms old are fresh";
+  // After a stall of 1 s: zero commands (older than 0.5 s) and no catching up on the ~100
+  // missed periods (the schedule restarts at the current time).
+  ASSERT_EQ(s.next(11.03), StepAction::Step);
+  EXPECT_TRUE(s.command().isZero());
+  int steps = 0;
+  for (double wall = 11.031; wall < 11.0395; wall += 0.001) steps += s.next(wall) == StepAction::Step;
+  EXPECT_LE(steps, 1);
+  EXPECT_EQ(s.next(11.0501), StepAction::Step);
+}
+
+TEST(StepScheduler, ActionNames) {
+  EXPECT_STREQ(ehc_sim::toString(StepAction::Wait), "wait");
+  EXPECT_STREQ(ehc_sim::toString(StepAction::Step), "step");
+  EXPECT_STREQ(ehc_sim::toString(StepAction::RepublishState), "republish_state");
+}
