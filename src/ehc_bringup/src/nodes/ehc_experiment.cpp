@@ -8,6 +8,7 @@
 #include "ehc_bringup/reach_experiment.h"
 #include "ehc_bringup/reach_targets.h"
 #include "ehc_control/config_node.h"
+#include "ehc_control/control_cycle.h"
 
 #include <chrono>
 #include <fstream>
@@ -83,6 +84,11 @@ int main(int argc, char** argv) {
     const auto cfg = ehc_control::ConfigNode::loadFile(cfg_path, "ehc_experiment");
     ehc_control::QpControllerParams ctrl = ehc_control::loadQpControllerParams(cfg.childOrEmpty("controller"));
     const auto wparams = ehc_control::loadEhcWeightingParams(cfg.childOrEmpty("weighting"));
+    // The whole controller file is validated as the controller node reads it (the experiment
+    // uses the controller, weighting and proportional-servo sections); a misspelled key is an error.
+    ehc_control::loadControlCycleParams(cfg);
+    cfg.ignore("node");
+    cfg.rejectUnknownKeys();
     ehc_bringup::ReachExperimentParams ep;
     ep.servo = ehc_control::loadPoseServoParams(cfg.childOrEmpty("servo"));
     ep.noise.enabled = a.noise;

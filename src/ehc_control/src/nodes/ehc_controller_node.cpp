@@ -194,7 +194,9 @@ int main(int argc, char** argv) {
   try {
     std::string config;
     if (!pnh.getParam("config", config)) throw std::invalid_argument("missing parameter _config:=<controller.yaml>");
-    ControllerNode node(nh, pnh, ConfigNode::loadFile(config, "ControllerNode"));
+    const ConfigNode cfg = ConfigNode::loadFile(config, "ControllerNode");
+    ControllerNode node(nh, pnh, cfg);
+    cfg.rejectUnknownKeys();  // every loader has run: a key none of them read is a misspelling
     ros::spin();
   } catch (const std::exception& e) {
     ROS_FATAL_STREAM("[ehc_controller_node] " << e.what());
