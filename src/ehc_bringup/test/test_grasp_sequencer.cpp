@@ -724,6 +724,20 @@ TEST(GraspSequencerParams, LoadsYamlAndNamesFileAndField) {
   expectError("sequencer: {lift_height: .nan}\nobjects: [{name: a}]\n", "lift_height");
   expectError("sequencer: {lift_height: -0.1}\nobjects: [{name: a}]\n", "lift_height");
   expectError("sequencer: {}\n", "objects");
+  // Misspelled keys: the node calls rejectUnknownKeys() after its own and this loader.
+  const auto typo = ehc_control::ConfigNode::loadString(
+      "sequencer: {lift_hieght: 0.1, selection: {max_angel_deg: 20}}\nobjects: [{name: a, aproach: downward}]\n",
+      "seq.yaml", "GraspSequencerNode");
+  loadGraspSequencerParams(typo);
+  const std::vector<std::string> unknown = typo.unknownKeys();
+  EXPECT_EQ(unknown, (std::vector<std::string>{"sequencer.lift_hieght", "sequencer.selection.max_angel_deg",
+                                               "objects[0].aproach"}));
+  try {
+    typo.rejectUnknownKeys();
+    ADD_FAILURE() << "misspelled keys accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("did you mean 'sequencer.lift_height'"), std::string::npos) << e.what();
+  }
 }
 
 TEST(GraspSequencerParams, DemoAndTestConfigsLoad) {

@@ -119,6 +119,11 @@ TEST(SceneConfig, BadFilesNameFileAndField) {
   expectSceneError("nothing: 1\n", {"'scene'", "missing"});
   expectSceneError("scene:\n  objects:\n    - {name: a, size: [0.1, 0.1, 0.1], position: [1, 0, 0.01], mass: 1}\n",
                    {"below the floor"});
+  // Misspelled keys are errors, never silently ignored (a scene is the experiment's ground truth).
+  expectSceneError("scene:\n  objects:\n    - {name: a, size: [0.1, 0.1, 0.1], position: [1, 0, 0.05], mass: 1,"
+                   " frction: 0.5}\n",
+                   {"unknown field 'scene.objects[0].frction'", "did you mean 'scene.objects[0].friction'"});
+  expectSceneError("scene:\n  tabels: []\n", {"unknown field 'scene.tabels'", "did you mean 'scene.tables'"});
 }
 
 TEST(SceneConfig, MissingFileIsNamed) {
@@ -187,6 +192,7 @@ TEST(SimConfig, BadValuesNameField) {
   expectError("  camera: {depth_noise: {base: 1}}\n", "sim.camera.depth_noise.base");
   expectError("  collision: {ignore_pairs: [[a]]}\n", "sim.collision.ignore_pairs");
   expectError("  seed: -4\n", "sim.seed");
+  expectError("  camera: {ray_gird: [80, 60]}\n", "unknown field 'sim.camera.ray_gird'");
   try {
     loadSimConfigString("sim:\n  camera_info: c.yaml\n", "bad_sim.yaml");
     FAIL();

@@ -147,12 +147,8 @@ GraspSequencerParams loadGraspSequencerParams(const ehc_control::ConfigNode& roo
   p.selection.fallback_backoff_sideways = sel.get("fallback_backoff_sideways", p.selection.fallback_backoff_sideways);
 
   if (!root.has("objects")) root.fail("objects", "is required: a list of {name, approach}");
-  const YAML::Node list = root.yaml()["objects"];
-  if (!list.IsSequence()) root.fail("objects", "must be a list of {name, approach}");
-  for (std::size_t i = 0; i < list.size(); ++i) {
-    const std::string field = "objects[" + std::to_string(i) + "]";
-    if (!list[i].IsMap()) root.fail(field, "must be a mapping {name, approach}");
-    const ehc_control::ConfigNode o(list[i], root.file(), root.fieldName(field), root.owner());
+  for (std::size_t i = 0; i < root.listSize("objects"); ++i) {
+    const ehc_control::ConfigNode o = root.element("objects", i);
     GraspObjectSpec spec;
     spec.name = o.require<std::string>("name");
     const std::string a = o.get<std::string>("approach", "forward");
@@ -163,11 +159,7 @@ GraspSequencerParams loadGraspSequencerParams(const ehc_control::ConfigNode& roo
     }
     p.objects.push_back(spec);
   }
-  try {
-    p.validate();
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(std::string(e.what()) + " (" + root.file() + ")");
-  }
+  root.validate(p);
   return p;
 }
 

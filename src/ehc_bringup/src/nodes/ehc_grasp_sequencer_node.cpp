@@ -87,10 +87,8 @@ NodeParams loadNodeParams(const ehc_control::ConfigNode& root) {
   p.exit_when_done = n.get("exit_when_done", p.exit_when_done);
   for (const char* k : {"world_frame", "tcp_frame", "goal_topic", "status_topic", "gripper_service"})
     if (n.has(k) && n.get<std::string>(k, "").empty()) n.fail(k, "must not be empty");
-  const YAML::Node list = root.yaml()["objects"];
-  for (std::size_t i = 0; list && list.IsSequence() && i < list.size(); ++i) {
-    const ehc_control::ConfigNode o(list[i], root.file(), root.fieldName("objects[" + std::to_string(i) + "]"),
-                                    root.owner());
+  for (std::size_t i = 0; i < root.listSize("objects"); ++i) {
+    const ehc_control::ConfigNode o = root.element("objects", i);
     p.pose_topics.push_back(o.require<std::string>("pose_topic"));
     if (p.pose_topics.back().empty()) o.fail("pose_topic", "must not be empty");
   }
@@ -127,6 +125,7 @@ class SequencerNode {
     node_ = loadNodeParams(root);
     pnh.param("exit_when_done", node_.exit_when_done, node_.exit_when_done);
     const ehc_bringup::GraspSequencerParams sp = ehc_bringup::loadGraspSequencerParams(root);
+    root.rejectUnknownKeys();  // both loaders have run: a key neither read is a misspelling
     seq_ = std::make_unique<GraspSequencer>(sp);
     ROS_INFO_STREAM("ehc_grasp_sequencer_node (" << config << ")\n" << sp.summary() << "\n" << node_.summary());
     if (!trace_file_.empty()) {

@@ -74,7 +74,8 @@ class ConfigNode {
     try {
       params.validate();
     } catch (const std::invalid_argument& e) {
-      throw std::invalid_argument(std::string(e.what()) + " (in " + file_ + ", " + fieldName("") + ")");
+      throw std::invalid_argument(std::string(e.what()) + " (in " + file_ +
+                                  (field_.empty() ? std::string() : ", " + field_) + ")");
     }
   }
 

@@ -19,7 +19,7 @@ SupervisorParams loadSupervisorParams(const ConfigNode& n) {
   p.state_timeout = n.get("state_timeout", p.state_timeout);
   p.target_timeout = n.get("target_timeout", p.target_timeout);
   p.obstacle_timeout = n.get("obstacle_timeout", p.obstacle_timeout);
-  p.validate();
+  n.validate(p);  // errors name the file and the section
   return p;
 }
 

@@ -30,7 +30,7 @@ EhcWeightingParams loadEhcWeightingParams(const ConfigNode& n) {
   p.ray_step = n.get("ray_step", p.ray_step);
   p.omega_max = n.get("omega_max", p.omega_max);
   p.ray_origin = n.get<std::string>("ray_origin", p.ray_origin);
-  p.validate();
+  n.validate(p);  // errors name the file and the section
   return p;
 }
 

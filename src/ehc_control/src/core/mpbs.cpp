@@ -26,7 +26,7 @@ MpbsParams loadMpbsParams(const ConfigNode& n) {
   p.enabled = n.get("enabled", p.enabled);
   p.min_monitor_distance = n.get("min_monitor_distance", p.min_monitor_distance);
   p.target_centre = n.getVector("target_centre", p.target_centre, 3);
-  p.validate();
+  n.validate(p);  // errors name the file and the section
   return p;
 }
 

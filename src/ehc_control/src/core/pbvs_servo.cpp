@@ -52,7 +52,7 @@ PbvsServoParams loadPbvsServoParams(const ConfigNode& n) {
   p.max_linear = n.get("max_linear", p.max_linear);
   p.max_angular = n.get("max_angular", p.max_angular);
   p.unwind_roll = n.get("unwind_roll", p.unwind_roll);
-  p.validate();
+  n.validate(p);  // errors name the file and the section
   return p;
 }
 

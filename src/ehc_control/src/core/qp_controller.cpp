@@ -121,7 +121,7 @@ QpControllerParams loadQpControllerParams(const ConfigNode& n) {
   p.tsmm_switch_distance = n.get("tsmm_switch_distance", p.tsmm_switch_distance);
   p.arrival_position = n.get("arrival_position", p.arrival_position);
   p.arrival_orientation = n.get("arrival_orientation_deg", p.arrival_orientation * 180.0 / M_PI) * M_PI / 180.0;
-  p.validate();
+  n.validate(p);  // errors name the file and the section
   return p;
 }
 

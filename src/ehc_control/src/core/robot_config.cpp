@@ -133,11 +133,7 @@ RobotConfig loadRobotConfig(const std::string& path) {
     c.calibration.push_back(o);
   }
   root.rejectUnknownKeys();
-  try {
-    c.validate();
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(std::string(e.what()) + " (in " + path + ")");
-  }
+  root.validate(c);  // errors name the file
   return c;
 }
 

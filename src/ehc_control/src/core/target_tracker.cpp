@@ -23,7 +23,7 @@ TargetTrackerParams loadTargetTrackerParams(const ConfigNode& n) {
   const std::string camera = n.get<std::string>("camera", "");
   if (!camera.empty()) p.camera_file = n.resolvePath(camera);
   p.new_target_distance = n.get("new_target_distance", p.new_target_distance);
-  p.validate();
+  n.validate(p);  // errors name the file and the section
   return p;
 }
 

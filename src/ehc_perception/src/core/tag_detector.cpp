@@ -109,6 +109,7 @@ TagDetectorConfig loadTagDetectorConfig(const ehc_control::ConfigNode& n) {
       if (!std::isfinite(size)) n.fail("tag_sizes", "sizes must be finite");
       c.tag_sizes[id] = size;
     }
+    n.ignore("tag_sizes");  // parsed whole above
   }
   c.quad_decimate = n.get<double>("quad_decimate", c.quad_decimate);
   c.threads = n.get<int>("threads", c.threads);

@@ -30,6 +30,9 @@ int main(int argc, char** argv) {
     if (args.count("config")) {
       const auto root = ehc_control::ConfigNode::loadFile(args.at("config"), "TagDetector");
       cfg = loadTagDetectorConfig(root.childOrEmpty("tag_detector"));
+      root.ignore("node");  // the node sections are the ROS nodes'
+      root.ignore("target");
+      root.rejectUnknownKeys();
     } else if (!args.count("tag-size")) {
       throw std::invalid_argument("missing --tag-size (or --config)");
     }

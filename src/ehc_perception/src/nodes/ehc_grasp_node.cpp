@@ -57,6 +57,7 @@ GraspNodeConfig loadGraspNodeConfig(const std::string& path) {
   ehc_control::requirePositive("GraspNode", "node.target_gate", c.target_gate);
   ehc_control::requireRange("GraspNode", "node.tf_timeout", c.tf_timeout, 0.0, 5.0);
   c.generator = loadGraspGeneratorConfig(root.childOrEmpty("grasp_generator"));
+  root.rejectUnknownKeys();  // a key no loader read is a misspelling
   return c;
 }
 

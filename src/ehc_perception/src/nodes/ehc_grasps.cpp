@@ -34,6 +34,9 @@ int main(int argc, char** argv) {
     if (args.count("config")) {
       const auto root = ehc_control::ConfigNode::loadFile(args.at("config"), "GraspGenerator");
       cfg = loadGraspGeneratorConfig(root.childOrEmpty("grasp_generator"));
+      root.ignore("node");  // the node sections are the ROS nodes'
+      root.ignore("target");
+      root.rejectUnknownKeys();
     }
     if (args.count("top")) {
       const double k = cli::parseDouble("top", args.at("top"));

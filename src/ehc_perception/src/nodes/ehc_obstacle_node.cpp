@@ -70,6 +70,7 @@ ObstacleNodeConfig loadObstacleNodeConfig(const std::string& path) {
   ehc_control::requireRange("ObstacleNode", "node.tf_timeout", c.tf_timeout, 0.0, 5.0);
   c.monitor = loadObstacleMonitorParams(n);
   c.map = loadObstacleMapConfig(root.childOrEmpty("obstacle_map"));
+  root.rejectUnknownKeys();  // a key no loader read is a misspelling
   return c;
 }
 

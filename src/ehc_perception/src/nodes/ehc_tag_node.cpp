@@ -56,6 +56,7 @@ TagNodeConfig loadTagNodeConfig(const std::string& path) {
   if (c.world_frame.empty()) n.fail("world_frame", "must not be empty");
   c.detector = loadTagDetectorConfig(root.childOrEmpty("tag_detector"));
   c.target = loadTagTargetConfig(root.childOrEmpty("target"));
+  root.rejectUnknownKeys();  // a key no loader read is a misspelling
   return c;
 }
 

@@ -72,11 +72,7 @@ RmArmAdapterConfig loadRmArmAdapterConfig(const std::string& path) {
   c.gripper.pick_force = u16("pick_force", c.gripper.pick_force);
   c.status_rate_hz = a.get<double>("status_rate_hz", c.status_rate_hz);
   root.rejectUnknownKeys();
-  try {
-    c.validate();
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(std::string(e.what()) + " (in " + path + ")");
-  }
+  root.validate(c);  // errors name the file
   return c;
 }
 

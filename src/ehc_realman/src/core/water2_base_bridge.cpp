@@ -110,11 +110,7 @@ Water2BridgeConfig loadWater2BridgeConfig(const std::string& path) {
     c.max_angular_velocity = std::min(c.max_angular_velocity, robot.max_angular_velocity);
   }
   root.rejectUnknownKeys();
-  try {
-    c.validate();
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(std::string(e.what()) + " (in " + path + ")");
-  }
+  root.validate(c);  // errors name the file
   return c;
 }
 

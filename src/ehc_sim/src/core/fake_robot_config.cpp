@@ -102,20 +102,9 @@ FakeRobotConfig loadFakeRobotConfig(const ConfigNode& s) {
 
 FakeRobotConfig loadFakeRobotConfigFile(const std::string& path) {
   const ConfigNode root = ConfigNode::loadFile(path, "FakeRobotConfig");
-  for (const auto& kv : root.yaml()) {
-    const std::string key = kv.first.as<std::string>();
-    if (key == "robot") root.fail(key, "was moved to sim.robot");
-    if (key != "sim") root.fail(key, "is not a setting of the kinematic simulator (only 'sim')");
-  }
-  const ConfigNode sim = root.child("sim");
-  FakeRobotConfig c = loadFakeRobotConfig(sim);  // the former keys fail here, with their replacement
-  static const char* kKeys[] = {"robot", "dt", "seed", "free_run", "state_republish_period",
-                                "command_timeout", "max_real_time_factor", "noise", "robot_start"};
-  for (const auto& kv : sim.yaml()) {
-    const std::string key = kv.first.as<std::string>();
-    if (std::none_of(std::begin(kKeys), std::end(kKeys), [&](const char* k) { return key == k; }))
-      sim.fail(key, "is not a setting of the kinematic simulator (a Bullet simulator key, or a typo)");
-  }
+  if (root.has("robot")) root.fail("robot", "was moved to sim.robot");
+  FakeRobotConfig c = loadFakeRobotConfig(root.child("sim"));  // the former keys fail here, with their replacement
+  root.rejectUnknownKeys();  // a Bullet simulator key, or a typo
   return c;
 }
 

@@ -41,22 +41,6 @@ ShapeType shapeFromString(const ConfigNode& n, const std::string& key, const std
   n.fail(key, "must be 'box' or 'cylinder' (got '" + s + "')");
 }
 
-/// Element `i` of list `key` as a ConfigNode whose field names read "key[i].field".
-ConfigNode element(const ConfigNode& parent, const std::string& key, std::size_t i) {
-  const YAML::Node e = parent.yaml()[key][i];
-  const std::string field = parent.fieldName(key) + "[" + std::to_string(i) + "]";
-  if (!e.IsMap())
-    throw std::invalid_argument("[" + parent.owner() + "] " + parent.file() + ": field '" + field +
-                                "' must be a mapping");
-  return ConfigNode(e, parent.file(), field, parent.owner());
-}
-
-std::size_t listSize(const ConfigNode& parent, const std::string& key) {
-  if (!parent.has(key)) return 0;
-  if (!parent.yaml()[key].IsSequence()) parent.fail(key, "must be a list");
-  return parent.yaml()[key].size();
-}
-
 void checkRange(const ConfigNode& n, const std::string& key, double v, double lo, double hi) {
   if (!(v >= lo && v <= hi)) {
     std::ostringstream os;
@@ -156,13 +140,14 @@ SceneConfig loadScene(const ConfigNode& root) {
     c.floor_friction = f.get<double>("friction", c.floor_friction);
     checkRange(f, "friction", c.floor_friction, 0.0, 5.0);
   }
-  for (std::size_t i = 0; i < listSize(s, "tables"); ++i)
-    c.tables.push_back(loadTable(element(s, "tables", i)));
-  for (std::size_t i = 0; i < listSize(s, "objects"); ++i)
-    c.objects.push_back(loadBody(element(s, "objects", i), true, 200));
-  for (std::size_t i = 0; i < listSize(s, "obstacles"); ++i)
-    c.obstacles.push_back(loadBody(element(s, "obstacles", i), false, 90));
-  c.validate();
+  for (std::size_t i = 0; i < s.listSize("tables"); ++i)
+    c.tables.push_back(loadTable(s.element("tables", i)));
+  for (std::size_t i = 0; i < s.listSize("objects"); ++i)
+    c.objects.push_back(loadBody(s.element("objects", i), true, 200));
+  for (std::size_t i = 0; i < s.listSize("obstacles"); ++i)
+    c.obstacles.push_back(loadBody(s.element("obstacles", i), false, 90));
+  root.validate(c);
+  root.rejectUnknownKeys();
   return c;
 }
 }  // namespace

@@ -73,7 +73,7 @@ CollisionConfig loadCollisionConfig(const ConfigNode& n) {
   c.tolerance = n.get<double>("tolerance", c.tolerance);
   if (c.tolerance < 0.0 || c.tolerance > 0.05) n.fail("tolerance", "must be in [0, 0.05] m");
   c.floor_links = n.getStrings("floor_links", c.floor_links);
-  if (n.has("ignore_pairs")) {
+  if (n.has("ignore_pairs")) {  // [link_a, link_b] lists: read whole here
     const YAML::Node l = n.yaml()["ignore_pairs"];
     if (!l.IsSequence()) n.fail("ignore_pairs", "must be a list of [link_a, link_b] pairs");
     for (const auto& p : l) {
@@ -81,6 +81,7 @@ CollisionConfig loadCollisionConfig(const ConfigNode& n) {
         n.fail("ignore_pairs", "must be a list of [link_a, link_b] pairs");
       c.ignore_pairs.emplace_back(p[0].as<std::string>(), p[1].as<std::string>());
     }
+    n.ignore("ignore_pairs");
   }
   return c;
 }
@@ -151,7 +152,8 @@ SimConfig loadSim(const ConfigNode& root) {
   c.collision = loadCollisionConfig(s.childOrEmpty("collision"));
   c.gripper = loadGripperConfig(s.childOrEmpty("gripper"));
   c.camera = loadSimulatedCameraConfig(s.childOrEmpty("camera"));
-  c.validate();
+  root.validate(c);
+  root.rejectUnknownKeys();
   return c;
 }
 }  // namespace
