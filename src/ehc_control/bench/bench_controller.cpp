@@ -1,17 +1,39 @@
 // Benchmark: one EHC controller step (model update + dampers + QP build + solve) for the
 // RealMan robot (differential base + 6-DOF arm), with 0 and 10 obstacle pairs, over >= 10000
 // closed-loop steps to random targets. Prints JSON lines (median / p99 microseconds).
+//   bench_controller [--steps N] [--obstacles K]
+// --steps: closed-loop steps per run (default 20000); --obstacles: run only with K (0..10)
+// obstacle pairs instead of 0 and 10 (e.g. a short run under valgrind --tool=callgrind).
 
 #include "ehc_control/bench_util.h"
 #include "ehc_control/pose_servo.h"
 #include "ehc_control/qp_controller.h"
 
 #include <chrono>
+#include <cstdlib>
+#include <iostream>
 #include <random>
 
 using namespace ehc_control;
 
-int main() {
+int main(int argc, char** argv) {
+  int steps = 20000;
+  std::vector<int> obstacle_counts = {0, 10};
+  for (int i = 1; i < argc; ++i) {
+    const std::string k = argv[i];
+    if (i + 1 < argc && k == "--steps") {
+      steps = std::atoi(argv[++i]);
+    } else if (i + 1 < argc && k == "--obstacles") {
+      obstacle_counts = {std::atoi(argv[++i])};
+    } else {
+      std::cerr << "usage: bench_controller [--steps N] [--obstacles 0..10]\n";
+      return 2;
+    }
+  }
+  if (steps < 1 || obstacle_counts[0] < 0 || obstacle_counts[0] > 10) {
+    std::cerr << "bench_controller: --steps must be >= 1 and --obstacles 0..10\n";
+    return 2;
+  }
   const std::string robot = std::string(EHC_CONFIG_DIR) + "/robots/realman_rm65_water2/robot.yaml";
   const RobotConfig rc = loadRobotConfig(robot);
   auto model = std::make_shared<const WholeBodyModel>(rc);
@@ -19,16 +41,16 @@ int main() {
   auto weighting = std::make_shared<const EhcWeighting>(map, EhcWeightingParams{});
   const std::vector<std::string> links = {"link1", "link2", "link3", "link4", "link5",
                                           "link6", "gripper_base_link", "camera_link", "arm_base_link", "ee_link"};
-  for (int n_obstacles : {0, 10}) {
+  for (int n_obstacles : obstacle_counts) {
     EhcQpController ctrl(model, QpControllerParams{}, weighting);
     std::mt19937 rng(3);
     std::uniform_real_distribution<double> u(-1.0, 1.0);
     Eigen::Vector3d base = Eigen::Vector3d::Zero();
     Eigen::VectorXd q = rc.arm_ready;
     std::vector<double> us;
+    us.reserve(static_cast<std::size_t>(steps));
     long rows = 0, failed = 0;
     Eigen::Isometry3d target = Eigen::Isometry3d::Identity();
-    const int steps = 20000;
     for (int k = 0; k < steps; ++k) {
       if (k % 400 == 0) {  // a new target every 4 s
         target = Eigen::Isometry3d::Identity();

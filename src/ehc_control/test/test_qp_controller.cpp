@@ -10,6 +10,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 
 using namespace ehc_control;
 
@@ -27,7 +29,7 @@ std::shared_ptr<const EhcWeighting> weighting() {
 /// Runs the loop at 100 Hz; returns the time of arrival or -1.
 double run(EhcQpController& ctrl, test::KinematicSim& sim, const Eigen::Isometry3d& target, double limit_s,
            double* min_margin = nullptr, const std::function<std::vector<ObstaclePair>(const test::KinematicSim&)>& obstacles = nullptr,
-           double* min_distance = nullptr) {
+           double* min_distance = nullptr, const std::function<void(const ControllerCommand&)>& on_command = nullptr) {
   const WholeBodyModel& m = ctrl.model();
   const auto& rc = m.config();
   const Eigen::VectorXd vmax = rc.velocityLimits();
@@ -44,6 +46,7 @@ double run(EhcQpController& ctrl, test::KinematicSim& sim, const Eigen::Isometry
     EXPECT_TRUE(c.velocity.allFinite());
     EXPECT_TRUE((c.velocity.cwiseAbs().array() <= vmax.array() + 1e-12).all()) << c.velocity.transpose();
     EXPECT_EQ(c.qp_status, QpStatus::Ok) << c.failure;
+    if (on_command) on_command(c);
     if (!c.ok) return -1;
     sim.step(m, c.velocity, 0.01);
     if (min_margin)
@@ -264,4 +267,84 @@ TEST(EhcQpController, ManipulabilityFadeStopsNullSpaceDriftAtTheTarget) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("manipulability_fade_distance"), std::string::npos) << e.what();
   }
+}
+
+TEST(EhcQpController, TenObstaclePairsClosedLoopReproducesTheRecordedCommands) {
+  // Regression record: four targets in a row, ten link-obstacle pairs in every cycle (a point
+  // obstacle 0.15-0.24 m from each link origin along a fixed world direction, as in
+  // bench_controller), 100 Hz closed loop. The expected values were printed by this test
+  // (EHC_PRINT_RECORD=1) against the controller of commit 883b4fc, whose Jacobians come from
+  // one KDL chain solver per link; the controller now reads them from one pass over the tree.
+  // The tolerance is rounding-level: the two Jacobians agree to 1e-15, and a genuine change of
+  // the QP (a cost or constraint term, another solution) moves these sums by far more than
+  // 1e-6. The same record is met by the old controller with glibc's libm taking its non-FMA
+  // code paths (GLIBC_TUNABLES=glibc.cpu.hwcaps=-AVX2,-FMA), so it does not hang on the last
+  // bit of sin/cos.
+  auto model = std::make_shared<const WholeBodyModel>(test::realmanConfig());
+  const auto& rc = model->config();
+  EhcQpController ctrl(model, QpControllerParams{}, weighting());
+  test::KinematicSim sim{Eigen::Vector3d::Zero(), rc.arm_ready};
+  const std::vector<std::string> links = {"link1", "link2", "link3", "link4", "link5",
+                                          "link6", "gripper_base_link", "camera_link", "arm_base_link", "ee_link"};
+  auto obstacles = [&](const test::KinematicSim& s) {
+    std::vector<ObstaclePair> out;
+    for (std::size_t i = 0; i < links.size(); ++i) {
+      ObstaclePair o;
+      o.link = links[i];
+      o.link_point = model->fk(s.base, s.q, o.link).translation();
+      o.normal = Eigen::Vector3d(0.3 * static_cast<double>(i) - 1.0, 1.0, 0.5).normalized();
+      o.distance = 0.15 + 0.01 * static_cast<double>(i);
+      o.obstacle_point = o.link_point - o.distance * o.normal;
+      out.push_back(o);
+    }
+    return out;
+  };
+  const std::vector<Eigen::Isometry3d> targets = {
+      test::approachPose(1.2, 0.4, 0.8, Eigen::Vector3d(1, 0, -1)), test::approachPose(0.6, 1.3, 0.7, Eigen::Vector3d(0, 1, -1)),
+      test::approachPose(-0.4, 0.9, 0.9, Eigen::Vector3d(-1, 0, -0.3)), test::approachPose(0.5, -0.5, 0.75, Eigen::Vector3d(0, 0, -1))};
+  int cycles = 0, rows = 0;
+  Eigen::VectorXd sum_v = Eigen::VectorXd::Zero(model->nDof()), sum_abs_v = sum_v;
+  auto record = [&](const ControllerCommand& c) {
+    ++cycles;
+    rows += c.obstacle_rows;
+    sum_v += c.velocity;
+    sum_abs_v += c.velocity.cwiseAbs();
+  };
+  std::vector<long> arrival;  // cycle of arrival per target
+  for (const auto& target : targets) {
+    ctrl.reset();
+    arrival.push_back(std::lround(100.0 * run(ctrl, sim, target, 5.0, nullptr, obstacles, nullptr, record)));
+  }
+  Eigen::VectorXd state(3 + model->nArm());
+  state << sim.base, sim.q;
+  if (std::getenv("EHC_PRINT_RECORD")) {
+    std::printf("cycles %d rows %d arrival", cycles, rows);
+    for (long k : arrival) std::printf(" %ld", k);
+    auto print = [](const char* name, const Eigen::VectorXd& v) {
+      std::printf("\n%s", name);
+      for (int i = 0; i < v.size(); ++i) std::printf(" %.17g,", v[i]);
+    };
+    print("sum_v", sum_v);
+    print("sum_abs_v", sum_abs_v);
+    print("state", state);
+    std::printf("\n");
+  }
+  // Recorded with the controller of commit 883b4fc (see above).
+  const int expected_cycles = 1565, expected_rows = 15650;
+  const std::vector<long> expected_arrival = {348, 356, 365, 496};
+  Eigen::VectorXd expected_sum_v(8), expected_sum_abs_v(8), expected_state(9);
+  expected_sum_v << 297.25729592868572, 518.24238925961527, 9.0852727257247476, -118.62169007819794,
+      88.389332462228552, -0.015279225833302662, -93.84624103564596, -100.97830117638826;
+  expected_sum_abs_v << 314.72297344828064, 518.24238925961527, 315.52500810795618, 412.07222876559263,
+      434.56098057875516, 202.28317053014533, 249.85614632919396, 248.94118968352817;
+  expected_state << 0.25328440543168079, -0.088501091708551291, 5.1824238925961019, 0.090852727257246191,
+      -0.68621690078197861, -1.0161066753777122, -0.00015279225833402047, -1.4384624103564578,
+      -1.0097830117638829;
+  EXPECT_EQ(cycles, expected_cycles);
+  EXPECT_EQ(rows, expected_rows);
+  EXPECT_EQ(arrival, expected_arrival);
+  const double tol = 1e-8;
+  EXPECT_LE((sum_v - expected_sum_v).cwiseAbs().maxCoeff(), tol) << sum_v.transpose();
+  EXPECT_LE((sum_abs_v - expected_sum_abs_v).cwiseAbs().maxCoeff(), tol) << sum_abs_v.transpose();
+  EXPECT_LE((state - expected_state).cwiseAbs().maxCoeff(), tol) << state.transpose();
 }

@@ -17,12 +17,12 @@ using ehc_control::test::realmanConfig;
 
 namespace {
 
-/// World-frame twist [v; w] of `link` from central differences of FK along one DOF.
-Eigen::Matrix<double, 6, 1> numericColumn(const WholeBodyModel& m, const Eigen::Vector3d& base,
-                                          const Eigen::VectorXd& q, const std::string& link,
-                                          int dof, double h) {
-  Eigen::Vector3d bp = base, bm = base;
-  Eigen::VectorXd qp = q, qm = q;
+/// The two states of a central difference along one DOF: the base moves along its own x or y
+/// axis or turns; an arm joint moves.
+void perturb(const WholeBodyModel& m, const Eigen::Vector3d& base, const Eigen::VectorXd& q, int dof,
+             double h, Eigen::Vector3d* bp, Eigen::Vector3d* bm, Eigen::VectorXd* qp, Eigen::VectorXd* qm) {
+  *bp = *bm = base;
+  *qp = *qm = q;
   const int nb = m.nBase();
   const bool holo = m.baseType() == BaseType::Holonomic;
   const double c = std::cos(base.z()), s = std::sin(base.z());
@@ -30,25 +30,57 @@ Eigen::Matrix<double, 6, 1> numericColumn(const WholeBodyModel& m, const Eigen::
     const bool is_wz = dof == nb - 1;
     const bool is_vy = holo && dof == 1;
     if (is_wz) {
-      bp.z() += h;
-      bm.z() -= h;
+      bp->z() += h;
+      bm->z() -= h;
     } else if (is_vy) {  // move along the base y axis
-      bp.head<2>() += h * Eigen::Vector2d(-s, c);
-      bm.head<2>() -= h * Eigen::Vector2d(-s, c);
+      bp->head<2>() += h * Eigen::Vector2d(-s, c);
+      bm->head<2>() -= h * Eigen::Vector2d(-s, c);
     } else {  // v_x: move along the base x axis
-      bp.head<2>() += h * Eigen::Vector2d(c, s);
-      bm.head<2>() -= h * Eigen::Vector2d(c, s);
+      bp->head<2>() += h * Eigen::Vector2d(c, s);
+      bm->head<2>() -= h * Eigen::Vector2d(c, s);
     }
   } else {
-    qp[dof - nb] += h;
-    qm[dof - nb] -= h;
+    (*qp)[dof - nb] += h;
+    (*qm)[dof - nb] -= h;
   }
+}
+
+/// World-frame twist [v; w] of `link` from central differences of FK along one DOF.
+Eigen::Matrix<double, 6, 1> numericColumn(const WholeBodyModel& m, const Eigen::Vector3d& base,
+                                          const Eigen::VectorXd& q, const std::string& link,
+                                          int dof, double h) {
+  Eigen::Vector3d bp, bm;
+  Eigen::VectorXd qp, qm;
+  perturb(m, base, q, dof, h, &bp, &bm, &qp, &qm);
   const Eigen::Isometry3d Tp = m.fk(bp, qp, link), Tm = m.fk(bm, qm, link);
   Eigen::Matrix<double, 6, 1> col;
   col.head<3>() = (Tp.translation() - Tm.translation()) / (2 * h);
   const Eigen::AngleAxisd aa(Eigen::Matrix3d(Tp.linear() * Tm.linear().transpose()));
   col.tail<3>() = aa.axis() * aa.angle() / (2 * h);
   return col;
+}
+
+/// The manipulability gradient against central differences of manipulability() at 100
+/// random configurations.
+void checkManipulabilityGradient(const WholeBodyModel& model, unsigned seed) {
+  std::mt19937 rng(seed);
+  Eigen::VectorXd g_into;
+  for (int k = 0; k < 100; ++k) {
+    const Eigen::VectorXd q = randomArm(model.config(), rng);
+    double m = 0.0;
+    const Eigen::VectorXd g = model.manipulabilityGradient(q, &m);
+    EXPECT_NEAR(m, model.manipulability(q), 1e-12);
+    model.manipulabilityGradientFromJacobian(model.armJacobian(q, model.config().tcp_frame), g_into);
+    EXPECT_EQ(g_into, g);
+    const double h = 1e-6;
+    for (int i = 0; i < model.nArm(); ++i) {
+      Eigen::VectorXd qp = q, qm = q;
+      qp[i] += h;
+      qm[i] -= h;
+      const double num = (model.manipulability(qp) - model.manipulability(qm)) / (2 * h);
+      EXPECT_NEAR(g[i], num, 1e-6 + 1e-5 * std::abs(num)) << "sample " << k << " joint " << i;
+    }
+  }
 }
 
 /// Modified DH (Craig): T = RotX(alpha_{i-1}) TransX(a_{i-1}) RotZ(theta_i) TransZ(d_i).
@@ -108,6 +140,141 @@ INSTANTIATE_TEST_SUITE_P(BothBaseTypes, JacobianVsFiniteDifferences,
                          ::testing::Values(BaseType::Holonomic, BaseType::Differential),
                          [](const auto& info) { return toString(info.param); });
 
+namespace {
+
+/// A 4-DOF arm with what the RealMan arm lacks: a prismatic arm joint, a continuous joint, a
+/// non-unit axis, tilted joint origins and a movable joint that is no arm joint (a finger,
+/// held at 0).
+const char* kToyUrdf = R"(<robot name="toy">
+  <link name="base_link"/><link name="arm_base_link"/><link name="l1"/><link name="l2"/>
+  <link name="l3"/><link name="l4"/><link name="ee_link"/><link name="camera_color_optical_frame"/>
+  <link name="finger"/>
+  <joint name="mount" type="fixed"><parent link="base_link"/><child link="arm_base_link"/>
+    <origin xyz="0.1 0.05 0.5" rpy="0 0 0.3"/></joint>
+  <joint name="j1" type="revolute"><parent link="arm_base_link"/><child link="l1"/>
+    <origin xyz="0 0.02 0.2" rpy="0.1 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" velocity="2" effort="1"/></joint>
+  <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/>
+    <origin xyz="0.05 0 0.1" rpy="1.2 0.3 0"/><axis xyz="0 2 1"/>
+    <limit lower="-2" upper="2" velocity="2" effort="1"/></joint>
+  <joint name="j3" type="prismatic"><parent link="l2"/><child link="l3"/>
+    <origin xyz="0.3 0 0.01" rpy="0 0.2 0"/><axis xyz="1 0 0"/>
+    <limit lower="0" upper="0.3" velocity="0.5" effort="1"/></joint>
+  <joint name="j4" type="continuous"><parent link="l3"/><child link="l4"/>
+    <origin xyz="0 0.1 0" rpy="0 0 0.5"/><axis xyz="0 -1 0"/></joint>
+  <joint name="tcp_joint" type="fixed"><parent link="l4"/><child link="ee_link"/>
+    <origin xyz="0 0 0.12" rpy="0 0.4 0"/></joint>
+  <joint name="camera_mount_joint" type="fixed"><parent link="l4"/>
+    <child link="camera_color_optical_frame"/><origin xyz="0.07 0 0.03" rpy="0 -1.5 0"/></joint>
+  <joint name="finger_joint" type="prismatic"><parent link="l4"/><child link="finger"/>
+    <origin xyz="0 0.02 0.1"/><axis xyz="0 1 0"/>
+    <limit lower="0" upper="0.04" velocity="0.1" effort="1"/></joint>
+</robot>)";
+
+RobotConfig toyConfig(BaseType type) {
+  RobotConfig c;
+  c.urdf_path = "toy.urdf";  // not read: the XML is passed to the model
+  c.base_type = type;
+  c.arm_joints = {"j1", "j2", "j3", "j4"};
+  c.arm_lower = Eigen::Vector4d(-3, -2, 0, -6);
+  c.arm_upper = Eigen::Vector4d(3, 2, 0.3, 6);
+  c.arm_velocity = Eigen::Vector4d(2, 2, 0.5, 2);
+  c.arm_ready = Eigen::Vector4d(0, 0.5, 0.1, 0);
+  return c;
+}
+
+/// The one-pass kinematics (updateKinematics + the KinematicState Jacobians) against the
+/// per-link KDL chains (fk, jacobian, armJacobian) for every link, and the Jacobian of a point
+/// fixed to each link against finite differences of its FK position; returns the worst error.
+double checkOnePassKinematics(const WholeBodyModel& model, int samples, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-0.3, 0.3);
+  KinematicState state;
+  Matrix6Xd J, Ja, Jp;
+  double worst = 0.0;
+  for (int k = 0; k < samples; ++k) {
+    const Eigen::VectorXd q = randomArm(model.config(), rng);
+    const Eigen::Vector3d base = randomBase(rng);
+    model.updateKinematics(base, q, &state);
+    for (const std::string& link : model.linkNames()) {
+      const int i = model.linkIndex(link);
+      SCOPED_TRACE("link " + link + " sample " + std::to_string(k));
+      const Eigen::Isometry3d T = model.fk(base, q, link);
+      const double pose_err = (state.linkPose(i).matrix() - T.matrix()).cwiseAbs().maxCoeff();
+      EXPECT_LE(pose_err, 1e-12);
+      EXPECT_LE((state.linkPoseInBase(i).matrix() - model.linkPoseInBase(q, link).matrix()).cwiseAbs().maxCoeff(), 1e-12);
+      model.jacobian(state, i, &J, &Ja);
+      const Matrix6Xd J_kdl = model.jacobian(base, q, link);
+      const double jac_err = (J - J_kdl).cwiseAbs().maxCoeff();
+      EXPECT_LE(jac_err, 1e-12) << "\none pass\n" << J << "\nKDL\n" << J_kdl;
+      EXPECT_LE((Ja - model.armJacobian(q, link)).cwiseAbs().maxCoeff(), 1e-12);
+      // A point fixed to the link: linear rows against central differences of its position,
+      // angular rows are the link's.
+      const Eigen::Vector3d offset(u(rng), u(rng), u(rng)), p = T * offset;
+      model.pointJacobian(state, i, p, &Jp);
+      EXPECT_LE((Jp.bottomRows<3>() - J_kdl.bottomRows<3>()).cwiseAbs().maxCoeff(), 1e-12);
+      double point_err = 0.0;
+      for (int dof = 0; dof < model.nDof(); ++dof) {
+        const double h = 1e-6;
+        Eigen::Vector3d bp, bm;
+        Eigen::VectorXd qp, qm;
+        perturb(model, base, q, dof, h, &bp, &bm, &qp, &qm);
+        const Eigen::Vector3d num =
+            (model.fk(bp, qp, link) * offset - model.fk(bm, qm, link) * offset) / (2 * h);
+        point_err = std::max(point_err, (Jp.block<3, 1>(0, dof) - num).cwiseAbs().maxCoeff());
+      }
+      EXPECT_LE(point_err, 1e-6);
+      worst = std::max({worst, pose_err, jac_err});
+    }
+  }
+  return worst;
+}
+
+}  // namespace
+
+class OnePassKinematics : public ::testing::TestWithParam<BaseType> {};
+
+TEST_P(OnePassKinematics, RealmanEveryLinkMatchesKdlAndFiniteDifferences) {
+  const WholeBodyModel model(realmanConfig(GetParam()));
+  std::ostringstream worst;
+  worst << checkOnePassKinematics(model, 100, 7);
+  RecordProperty("worst_abs_error_vs_kdl", worst.str());
+}
+
+TEST_P(OnePassKinematics, PrismaticContinuousAndHeldJointsMatchKdlAndFiniteDifferences) {
+  const WholeBodyModel model(toyConfig(GetParam()), kToyUrdf);
+  ASSERT_EQ(model.linkNames().size(), 9u);
+  std::ostringstream worst;
+  worst << checkOnePassKinematics(model, 100, 8);
+  RecordProperty("worst_abs_error_vs_kdl", worst.str());
+}
+
+INSTANTIATE_TEST_SUITE_P(BothBaseTypes, OnePassKinematics,
+                         ::testing::Values(BaseType::Holonomic, BaseType::Differential),
+                         [](const auto& info) { return toString(info.param); });
+
+TEST(WholeBodyModel, LinkIndexResolvesEveryLinkAndRejectsUnknownOnes) {
+  const WholeBodyModel model(realmanConfig());
+  std::vector<bool> seen(model.linkNames().size(), false);
+  for (const std::string& link : model.linkNames()) {
+    const int i = model.linkIndex(link);
+    ASSERT_GE(i, 0);
+    ASSERT_LT(i, static_cast<int>(seen.size()));
+    EXPECT_FALSE(seen[static_cast<std::size_t>(i)]) << link;
+    seen[static_cast<std::size_t>(i)] = true;
+  }
+  try {
+    model.linkIndex("no_such_link");
+    FAIL() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("[WholeBodyModel] unknown link 'no_such_link'"), std::string::npos);
+  }
+  KinematicState state;
+  Eigen::VectorXd q = model.config().arm_ready;
+  q[1] = std::nan("");
+  EXPECT_THROW(model.updateKinematics(Eigen::Vector3d::Zero(), q, &state), std::invalid_argument);
+}
+
 TEST(WholeBodyModel, BaseColumnsMatchTheBaseType) {
   const WholeBodyModel holo(realmanConfig(BaseType::Holonomic));
   const WholeBodyModel diff(realmanConfig(BaseType::Differential));
@@ -164,25 +331,12 @@ TEST(WholeBodyModel, CameraLooksAlongTheApproachAxis) {
 }
 
 TEST(WholeBodyModel, ManipulabilityGradientMatchesFiniteDifferences) {
-  const WholeBodyModel model(realmanConfig());
-  std::mt19937 rng(3);
-  int checked = 0;
-  for (int k = 0; k < 100; ++k) {
-    const Eigen::VectorXd q = randomArm(model.config(), rng);
-    double m = 0.0;
-    const Eigen::VectorXd g = model.manipulabilityGradient(q, &m);
-    EXPECT_NEAR(m, model.manipulability(q), 1e-12);
-    const double h = 1e-6;
-    for (int i = 0; i < model.nArm(); ++i) {
-      Eigen::VectorXd qp = q, qm = q;
-      qp[i] += h;
-      qm[i] -= h;
-      const double num = (model.manipulability(qp) - model.manipulability(qm)) / (2 * h);
-      EXPECT_NEAR(g[i], num, 1e-6 + 1e-5 * std::abs(num)) << "sample " << k << " joint " << i;
-    }
-    ++checked;
-  }
-  EXPECT_EQ(checked, 100);
+  checkManipulabilityGradient(WholeBodyModel(realmanConfig()), 3);
+}
+
+TEST(WholeBodyModel, ManipulabilityGradientOfAFourJointArmMatchesFiniteDifferences) {
+  // nArm < 6: m = sqrt(det(J^T J)).
+  checkManipulabilityGradient(WholeBodyModel(toyConfig(BaseType::Differential), kToyUrdf), 5);
 }
 
 TEST(WholeBodyModel, ManipulabilityVanishesAtTheElbowSingularity) {

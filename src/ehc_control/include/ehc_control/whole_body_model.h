@@ -4,7 +4,10 @@
 // arm joint positions. Velocity vector = [base twist (base frame) ; arm joint rates]:
 //   holonomic:    [v_x, v_y, w_z, qd_1 .. qd_n]
 //   differential: [v_x, w_z, qd_1 .. qd_n]
-// ROS-free: urdfdom + kdl_parser + KDL + Eigen. Not thread-safe (solvers keep scratch state).
+// ROS-free: urdfdom + kdl_parser + KDL + Eigen. Not thread-safe (the KDL solvers behind the
+// name-based functions keep scratch state). Per control cycle, updateKinematics fills a
+// caller-owned KinematicState in one pass over the tree and the Jacobians of any link are read
+// from it (same values as the name-based functions, to rounding; no allocation once warm).
 
 #include "ehc_control/robot_config.h"
 
@@ -18,6 +21,32 @@
 namespace ehc_control {
 
 using Matrix6Xd = Eigen::Matrix<double, 6, Eigen::Dynamic>;
+
+class WholeBodyModel;
+
+/// Every link pose and every arm joint axis of one robot state, from one forward pass over the
+/// kinematic tree (WholeBodyModel::updateKinematics). The Jacobian of any link, or of a point
+/// fixed to a link, is then read from it without another FK pass (the KinematicState overloads
+/// of WholeBodyModel::jacobian). Storage is sized by the first update; later updates with the
+/// same model allocate nothing. Link indices come from WholeBodyModel::linkIndex.
+class KinematicState {
+ public:
+  /// World pose of the base frame (WholeBodyModel::baseTransform of the base pose).
+  const Eigen::Isometry3d& baseTransform() const { return world_T_base_; }
+  /// Pose of a link in the base frame.
+  const Eigen::Isometry3d& linkPoseInBase(int link) const {
+    return base_T_link_[static_cast<std::size_t>(link)];
+  }
+  /// Pose of a link in the world frame.
+  Eigen::Isometry3d linkPose(int link) const { return world_T_base_ * linkPoseInBase(link); }
+
+ private:
+  friend class WholeBodyModel;
+  Eigen::Isometry3d world_T_base_ = Eigen::Isometry3d::Identity();
+  std::vector<Eigen::Isometry3d> base_T_link_;  ///< per link index
+  Eigen::Matrix3Xd joint_axis_;                 ///< per arm joint: unit axis, base frame
+  Eigen::Matrix3Xd joint_point_;                ///< per arm joint: a point on its axis, base frame
+};
 
 class WholeBodyModel {
  public:
@@ -59,6 +88,23 @@ class WholeBodyModel {
                      const std::string& link, Eigen::Isometry3d* pose = nullptr,
                      Matrix6Xd* arm_jacobian = nullptr) const;
 
+  /// Index of `link` for the KinematicState functions: resolve names once, outside the
+  /// control loop. Throws "[WholeBodyModel] unknown link ..." like the name-based functions.
+  int linkIndex(const std::string& link) const;
+  /// One forward pass over the kinematic tree for (base pose, q): fills `state` with every
+  /// link pose and arm joint axis. Same checks (and exceptions) as fk().
+  void updateKinematics(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q,
+                        KinematicState* state) const;
+  /// jacobian(base_pose, q, link) of the state's configuration, written into `J` (resized only
+  /// when its size differs): 6 x nDof, rows [v; w] of the link origin in the world frame.
+  /// Optionally the arm Jacobian (6 x nArm, base frame, as armJacobian()).
+  void jacobian(const KinematicState& state, int link, Matrix6Xd* J,
+                Matrix6Xd* arm_jacobian = nullptr) const;
+  /// The same for a point fixed to `link`, given in world coordinates: rows [linear velocity
+  /// of the point; angular velocity of the link], world frame.
+  void pointJacobian(const KinematicState& state, int link, const Eigen::Vector3d& point_world,
+                     Matrix6Xd* J) const;
+
   /// Yoshikawa manipulability sqrt(det(J J^T)) of the arm at the TCP (J^T J if nArm < 6).
   double manipulability(const Eigen::VectorXd& q) const;
   /// Gradient d m / d q (size nArm): the manipulability Jacobian J_m. Analytic (kinematic
@@ -67,6 +113,9 @@ class WholeBodyModel {
   /// Same, from the TCP arm Jacobian (armJacobian(q, tcp frame)) already at hand.
   Eigen::VectorXd manipulabilityGradientFromJacobian(const Matrix6Xd& tcp_arm_jacobian,
                                                      double* m = nullptr) const;
+  /// Same, written into `gradient` (resized only when its size differs; no other allocation).
+  void manipulabilityGradientFromJacobian(const Matrix6Xd& tcp_arm_jacobian,
+                                          Eigen::VectorXd& gradient, double* m = nullptr) const;
 
   /// Whole-body inverse kinematics of the TCP (KDL ChainIkSolverPos_NR_JL over a virtual
   /// planar base x, y, yaw + the arm within its joint limits), from `attempts` random seeds.
@@ -84,6 +133,9 @@ class WholeBodyModel {
  private:
   struct Impl;
   void build();
+  /// Whole-body Jacobian of a point fixed to `link`, p_base in base coordinates.
+  void pointJacobianInBase(const KinematicState& state, int link, const Eigen::Vector3d& p_base,
+                           Matrix6Xd* J, Matrix6Xd* arm_jacobian) const;
 
   RobotConfig cfg_;
   std::string urdf_xml_;

@@ -133,12 +133,30 @@ Vector6d poseError(const Eigen::Isometry3d& tcp, const Eigen::Isometry3d& target
   return e;
 }
 
-/// Preallocated QP matrices and the warm-started ViSP solver.
+/// The warm-started ViSP solver and every per-cycle matrix, sized on first use: once warm,
+/// step() allocates nothing but the returned command (and what vpQuadProg does inside).
 struct EhcQpController::Solver {
   vpQuadProg qp;
   vpMatrix Q, A, C;
   vpColVector r, b, d, x;
   unsigned last_rows = 0;
+
+  KinematicState kinematics;          ///< one FK pass per cycle
+  int tcp_link = -1;                  ///< tree index of the TCP
+  Matrix6Xd J, J_arm, J_point;        ///< TCP (world, arm) and obstacle point Jacobians
+  Eigen::VectorXd Jm, h, c, lb, ub, x_eigen;
+  std::vector<char> held;             ///< per QP variable: left out of the problem (tsmm)
+  Eigen::MatrixXd row_a;              ///< obstacle damper rows, one per column
+  std::vector<double> row_b;
+  int n_rows = 0;
+  /// Obstacle pair links resolved to tree indices and stop distances once: the entry of the
+  /// pair at position k stays valid while the pair at k names the same link.
+  struct PairLink {
+    std::string name;
+    int index = -1;
+    double stop = 0.0;
+  };
+  std::vector<PairLink> pair_links;
 };
 
 EhcQpController::EhcQpController(std::shared_ptr<const WholeBodyModel> model,
@@ -153,6 +171,7 @@ EhcQpController::EhcQpController(std::shared_ptr<const WholeBodyModel> model,
   const RobotConfig& rc = model_->config();
   base_T_arm_ = model_->linkPoseInBase(rc.arm_ready, rc.arm_base_frame);
   vmax_ = rc.velocityLimits();
+  solver_->tcp_link = model_->linkIndex(rc.tcp_frame);
 }
 
 EhcQpController::~EhcQpController() = default;
@@ -204,11 +223,13 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
   if (!target.matrix().allFinite()) return fail(out, "non-finite target pose");
   if (!nu_e.allFinite()) return fail(out, "non-finite desired twist");
 
-  // --- model: TCP pose, whole-body Jacobian, manipulability gradient
-  Eigen::Isometry3d T_tcp;
-  Matrix6Xd J_arm;
-  const Matrix6Xd J = m.jacobian(base_pose, q, rc.tcp_frame, &T_tcp, &J_arm);
-  const Eigen::VectorXd Jm = m.manipulabilityGradientFromJacobian(J_arm);
+  // --- model: one FK pass; TCP pose, whole-body Jacobian, manipulability gradient
+  Solver& s = *solver_;
+  m.updateKinematics(base_pose, q, &s.kinematics);
+  const Eigen::Isometry3d T_tcp = s.kinematics.linkPose(s.tcp_link);
+  m.jacobian(s.kinematics, s.tcp_link, &s.J, &s.J_arm);
+  const Matrix6Xd& J = s.J;
+  m.manipulabilityGradientFromJacobian(s.J_arm, s.Jm);
 
   // --- errors and weighting
   const Vector6d e = poseError(T_tcp, target);
@@ -250,27 +271,32 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
     out.phase = ControlPhase::Arrived;
 
   // --- cost: Q diagonal, C
-  Eigen::VectorXd h(nx), c = Eigen::VectorXd::Zero(nx);
+  Eigen::VectorXd& h = s.h;
+  Eigen::VectorXd& c = s.c;
+  h.resize(nx);
+  c.setZero(nx);
   h.head(nb).setConstant(out.base_weight);
   h.segment(nb, na).setConstant(params_.arm_weight);
   h.tail(6).setConstant(1.0 / e_floor);
-  const Eigen::Vector3d tcp_in_base =
-      WholeBodyModel::baseTransform(base_pose).inverse() * T_tcp.translation();
+  const Eigen::Vector3d tcp_in_base = s.kinematics.linkPoseInBase(s.tcp_link).translation();
   c[nb - 1] = -params_.base_turn_gain * std::atan2(tcp_in_base.y(), tcp_in_base.x());
   const double fade = params_.manipulability_fade_distance > 0.0
                           ? std::min(1.0, out.position_error / params_.manipulability_fade_distance)
                           : 1.0;
-  c.segment(nb, na) = -params_.manipulability_gain * fade * Jm + params_.posture_gain * (q - rc.arm_ready);
+  c.segment(nb, na) = -params_.manipulability_gain * fade * s.Jm + params_.posture_gain * (q - rc.arm_ready);
 
   // --- bounds
-  Eigen::VectorXd ub(nx);
+  Eigen::VectorXd& ub = s.ub;
+  Eigen::VectorXd& lb = s.lb;
+  ub.resize(nx);
   ub.head(nd) = vmax_;
   ub.tail(6).setConstant(params_.slack_bound);
-  Eigen::VectorXd lb = -ub;
+  lb = -ub;
   // Held DOFs (tsmm stages) leave the problem: zero Jacobian column, no cost, no bound rows;
   // the separable optimum is then exactly 0. (Bounds lb = ub = 0 would make two opposite rows
   // active at once, a degenerate active set.)
-  std::vector<bool> held(static_cast<std::size_t>(nx), false);
+  std::vector<char>& held = s.held;
+  held.assign(static_cast<std::size_t>(nx), 0);
   for (int i = 0; i < nd; ++i) held[static_cast<std::size_t>(i)] = i < nb ? lock_base : lock_arm;
 
   // --- joint-position velocity dampers (arm joints within the influence angle). A damper
@@ -292,48 +318,52 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
   }
 
   // --- obstacle velocity dampers, one row per link-obstacle pair closer than d_i
-  struct Row {
-    Eigen::VectorXd a;
-    double b;
-  };
-  std::vector<Row> rows;
+  if (s.row_a.rows() != nx || s.row_a.cols() < static_cast<Eigen::Index>(obstacles.size()))
+    s.row_a.resize(nx, static_cast<Eigen::Index>(obstacles.size()));
+  s.row_b.resize(obstacles.size());
+  if (s.pair_links.size() < obstacles.size()) s.pair_links.resize(obstacles.size());
+  s.n_rows = 0;
   const double di = params_.obstacle_influence;
-  for (const ObstaclePair& o : obstacles) {
-    const double ds = params_.obstacleStop(o.link);
+  for (std::size_t k = 0; k < obstacles.size(); ++k) {
+    const ObstaclePair& o = obstacles[k];
     if (!(std::isfinite(o.distance) && o.link_point.allFinite() && o.normal.allFinite()))
       return fail(out, "non-finite obstacle pair for link '" + o.link + "'");
     if (o.distance >= di) continue;
-    if (!m.hasLink(o.link)) return fail(out, "obstacle pair for unknown link '" + o.link + "'");
+    Solver::PairLink& link = s.pair_links[k];
+    if (link.index < 0 || link.name != o.link) {
+      if (!m.hasLink(o.link)) return fail(out, "obstacle pair for unknown link '" + o.link + "'");
+      link.name = o.link;
+      link.index = m.linkIndex(o.link);
+      link.stop = params_.obstacleStop(o.link);
+    }
+    const double ds = link.stop;
     const double nn = o.normal.norm();
     if (nn < 1e-9) return fail(out, "obstacle pair with a zero normal for link '" + o.link + "'");
     const Eigen::Vector3d n = o.normal / nn;
-    Eigen::Isometry3d T_link;
-    const Matrix6Xd Jl = m.jacobian(base_pose, q, o.link, &T_link);
-    const Eigen::Vector3d rvec = o.link_point - T_link.translation();
-    // Linear velocity of the link point: v_o + w x r.
-    Eigen::MatrixXd Jp = Jl.topRows<3>();
-    for (int k = 0; k < nd; ++k) Jp.col(k) += Eigen::Vector3d(Jl.block<3, 1>(3, k)).cross(rvec);
+    // Linear velocity of the link point: rows 0-2 of its Jacobian.
+    m.pointJacobian(s.kinematics, link.index, o.link_point, &s.J_point);
     // d_dot = n^T J_p qd >= -xi (d - d_s) / (d_i - d_s)
-    Row r{Eigen::VectorXd::Zero(nx), params_.obstacle_damper_gain * (o.distance - ds) / (di - ds)};
-    r.a.head(nd) = -(n.transpose() * Jp).transpose();
-    const double norm = r.a.norm();
+    auto a = s.row_a.col(s.n_rows);
+    a.head(nd).noalias() = s.J_point.topRows<3>().transpose() * (-n);
+    a.tail(6).setZero();
+    double b = params_.obstacle_damper_gain * (o.distance - ds) / (di - ds);
+    const double norm = a.norm();
     ++out.obstacle_rows;
     if (norm < 1e-9) continue;  // the link point cannot move along n: nothing to constrain
-    r.a /= norm;
-    r.b /= norm;
+    a /= norm;
+    b /= norm;
     // Parallel rows (e.g. two links sharing an origin) are redundant: keep the tighter one.
     bool merged = false;
-    for (Row& e : rows)
-      if (e.a.dot(r.a) > 1.0 - 1e-6) {
-        e.b = std::min(e.b, r.b);
+    for (int r = 0; r < s.n_rows; ++r)
+      if (s.row_a.col(r).dot(a) > 1.0 - 1e-6) {
+        s.row_b[static_cast<std::size_t>(r)] = std::min(s.row_b[static_cast<std::size_t>(r)], b);
         merged = true;
         break;
       }
-    if (!merged) rows.push_back(r);
+    if (!merged) s.row_b[static_cast<std::size_t>(s.n_rows++)] = b;
   }
 
   // --- assemble for vpQuadProg: min |Qx - r|^2 with Q^T Q = H (diagonal), r = -Q^-T c
-  Solver& s = *solver_;
   s.Q.resize(static_cast<unsigned>(nx), static_cast<unsigned>(nx), true);
   s.r.resize(static_cast<unsigned>(nx), false);
   for (int i = 0; i < nx; ++i) {
@@ -355,8 +385,8 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
     s.b[static_cast<unsigned>(r)] = lock_arm && r >= 3 ? 0.0 : nu_e[r];
   }
   int n_held = 0;
-  for (bool h : held) n_held += h;
-  const unsigned n_in = static_cast<unsigned>(rows.size() + 2 * static_cast<std::size_t>(nx - n_held));
+  for (char hd : held) n_held += hd;
+  const unsigned n_in = static_cast<unsigned>(s.n_rows + 2 * (nx - n_held));
   s.C.resize(n_in, static_cast<unsigned>(nx), true);
   s.d.resize(n_in, false);
   unsigned row = 0;
@@ -367,10 +397,10 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
     s.C[row][static_cast<unsigned>(i)] = -1.0;
     s.d[row++] = -lb[i];
   }
-  for (const Row& r : rows) {
+  for (int r = 0; r < s.n_rows; ++r) {
     for (int k = 0; k < nx; ++k)
-      s.C[row][static_cast<unsigned>(k)] = held[static_cast<std::size_t>(k)] ? 0.0 : r.a[k];
-    s.d[row++] = r.b;
+      s.C[row][static_cast<unsigned>(k)] = held[static_cast<std::size_t>(k)] ? 0.0 : s.row_a(k, r);
+    s.d[row++] = s.row_b[static_cast<std::size_t>(r)];
   }
   if (n_in != s.last_rows) {  // warm start only while the constraint set keeps its shape
     s.qp.resetActiveSet();
@@ -391,7 +421,8 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
     s.qp.resetActiveSet();
     return fail(out, "QP infeasible");
   }
-  Eigen::VectorXd x(nx);
+  Eigen::VectorXd& x = s.x_eigen;
+  x.resize(nx);
   for (int i = 0; i < nx; ++i) x[i] = s.x[static_cast<unsigned>(i)];
   if (!x.allFinite()) {
     s.qp.resetActiveSet();

@@ -42,6 +42,21 @@ Eigen::Isometry3d toEigen(const KDL::Frame& f) {
   }
   return t;
 }
+
+/// Base columns of a world-frame whole-body Jacobian of a point at r (world, from the base
+/// origin): v_x (, v_y) move the point along the base axes, w_z turns it about the base z axis.
+void setBaseColumns(BaseType type, const Eigen::Matrix3d& world_R_base, const Eigen::Vector3d& r,
+                    Matrix6Xd* J) {
+  J->leftCols(type == BaseType::Holonomic ? 3 : 2).setZero();
+  J->block<3, 1>(0, 0) = world_R_base.col(0);  // v_x
+  int wz = 1;
+  if (type == BaseType::Holonomic) {
+    J->block<3, 1>(0, 1) = world_R_base.col(1);  // v_y
+    wz = 2;
+  }
+  J->block<3, 1>(0, wz) = Eigen::Vector3d::UnitZ().cross(r);  // w_z
+  (*J)(5, wz) = 1.0;
+}
 }  // namespace
 
 /// One kinematic chain from the base link to a link, with its joints mapped to arm indices.
@@ -54,10 +69,55 @@ struct LinkChain {
   mutable KDL::Jacobian J;
 };
 
+/// One link of the kinematic tree for the one-pass forward kinematics (updateKinematics).
+/// Its pose relative to the parent link: revolute  Trans(o) Rot(axis, q) Trans(-o) tip0,
+/// prismatic  Trans(axis q) tip0, fixed (or a movable joint that is no arm joint, held at 0)
+/// tip0, with tip0 the pose at q = 0 and o a point on the joint axis (KDL Joint::pose; o = 0
+/// unless revolute).
+struct TreeLink {
+  enum class Joint { Fixed, Revolute, Prismatic };
+  int parent = -1;     ///< tree index of the parent link; -1: the root (base frame)
+  Joint joint = Joint::Fixed;
+  int arm_index = -1;  ///< arm joint of a revolute/prismatic link
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();  ///< unit joint axis, parent frame
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();  ///< revolute: point o on the axis, parent frame
+  Eigen::Matrix3d tip_rotation = Eigen::Matrix3d::Identity();  ///< rotation of tip0
+  Eigen::Vector3d tip_offset = Eigen::Vector3d::Zero();        ///< translation of tip0 - o
+  std::vector<int> arm_joints;  ///< arm joints between the root and this link, root first
+};
+
+namespace {
+/// Pose of a tree link in its parent's frame for joint position q.
+Eigen::Isometry3d childPose(const TreeLink& l, double q) {
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  switch (l.joint) {
+    case TreeLink::Joint::Revolute: {
+      const Eigen::Matrix3d R = Eigen::AngleAxisd(q, l.axis).toRotationMatrix();
+      t.linear() = R * l.tip_rotation;
+      t.translation() = l.origin + R * l.tip_offset;
+      break;
+    }
+    case TreeLink::Joint::Prismatic:
+      t.linear() = l.tip_rotation;
+      t.translation() = l.tip_offset + q * l.axis;
+      break;
+    case TreeLink::Joint::Fixed:
+      t.linear() = l.tip_rotation;
+      t.translation() = l.tip_offset;
+      break;
+  }
+  return t;
+}
+}  // namespace
+
 struct WholeBodyModel::Impl {
   std::map<std::string, std::unique_ptr<LinkChain>> links;
   std::vector<bool> arm_revolute;
   const LinkChain* tcp = nullptr;
+  std::vector<TreeLink> tree;                ///< parents before children
+  std::map<std::string, int> tree_index;     ///< link name -> tree index
+
+  void buildTree(const KDL::Tree& kdl_tree, const std::map<std::string, int>& arm_idx);
 
   const LinkChain& chain(const std::string& link) const {
     const auto it = links.find(link);
@@ -160,6 +220,57 @@ void WholeBodyModel::build() {
          cfg_.tcp_frame + "' in order; the URDF chain has: " + chain_joints);
   }
   impl_->tcp = &tcp;
+  impl_->buildTree(tree, arm_idx);
+}
+
+void WholeBodyModel::Impl::buildTree(const KDL::Tree& kdl_tree, const std::map<std::string, int>& arm_idx) {
+  // Depth-first from the root: every link after its parent.
+  std::vector<std::pair<KDL::SegmentMap::const_iterator, int>> todo{{kdl_tree.getRootSegment(), -1}};
+  while (!todo.empty()) {
+    const auto [it, parent] = todo.back();
+    todo.pop_back();
+    TreeLink l;
+    l.parent = parent;
+    if (parent >= 0) {
+      const KDL::Segment& seg = GetTreeElementSegment(it->second);
+      const KDL::Joint& j = seg.getJoint();
+      const auto a = arm_idx.find(j.getName());
+      const bool movable = j.getType() != KDL::Joint::None && a != arm_idx.end();
+      const KDL::Frame tip0 = seg.pose(0.0);
+      for (int r = 0; r < 3; ++r) {
+        l.tip_offset[r] = tip0.p[r];
+        for (int c = 0; c < 3; ++c) l.tip_rotation(r, c) = tip0.M(r, c);
+      }
+      l.arm_joints = tree[static_cast<std::size_t>(parent)].arm_joints;
+      if (movable) {
+        const bool revolute = arm_revolute[static_cast<std::size_t>(a->second)];
+        l.joint = revolute ? TreeLink::Joint::Revolute : TreeLink::Joint::Prismatic;
+        l.arm_index = a->second;
+        l.arm_joints.push_back(a->second);
+        l.axis = Eigen::Vector3d(j.JointAxis()[0], j.JointAxis()[1], j.JointAxis()[2]);
+        if (!(l.axis.norm() > 0.0)) fail("joint '" + j.getName() + "' has a zero axis");
+        l.axis.normalize();
+        if (revolute) {
+          l.origin = Eigen::Vector3d(j.JointOrigin()[0], j.JointOrigin()[1], j.JointOrigin()[2]);
+          l.tip_offset -= l.origin;
+        }
+        // The pose model above is KDL's for unscaled joints without offset (kdl_parser's);
+        // refuse anything else rather than silently differ from the KDL chains.
+        const double q = 0.7;
+        const KDL::Frame f = seg.pose(q);
+        const Eigen::Isometry3d mine = childPose(l, q);
+        for (int r = 0; r < 3; ++r) {
+          bool same = std::abs(mine.translation()[r] - f.p[r]) < 1e-12;
+          for (int c = 0; c < 3; ++c) same &= std::abs(mine.linear()(r, c) - f.M(r, c)) < 1e-12;
+          if (!same) fail("joint '" + j.getName() + "': unsupported KDL joint (scale or offset)");
+        }
+      }
+    }
+    const int index = static_cast<int>(tree.size());
+    tree_index[it->first] = index;
+    tree.push_back(std::move(l));
+    for (const auto& child : GetTreeElementChildren(it->second)) todo.emplace_back(child, index);
+  }
 }
 
 std::vector<std::string> WholeBodyModel::dofNames() const {
@@ -237,21 +348,79 @@ Matrix6Xd WholeBodyModel::jacobian(const Eigen::Vector3d& base_pose, const Eigen
   const Eigen::Matrix3d R = Twb.linear();
   const Eigen::Vector3d r = R * Tbl.translation();  // base origin -> link origin, world
   const int nb = nBase();
-  Matrix6Xd J = Matrix6Xd::Zero(6, nDof());
-  // Base twist columns (base frame velocities mapped to the link origin, world frame).
-  J.block<3, 1>(0, 0) = R.col(0);  // v_x
-  int wz = 1;
-  if (baseType() == BaseType::Holonomic) {
-    J.block<3, 1>(0, 1) = R.col(1);  // v_y
-    wz = 2;
-  }
-  J.block<3, 1>(0, wz) = Eigen::Vector3d::UnitZ().cross(r);  // w_z
-  J(5, wz) = 1.0;
+  Matrix6Xd J(6, nDof());
+  setBaseColumns(baseType(), R, r, &J);  // base frame velocities mapped to the link origin
   J.block(0, nb, 3, nArm()) = R * Ja.topRows<3>();
   J.block(3, nb, 3, nArm()) = R * Ja.bottomRows<3>();
   if (pose) *pose = Twb * Tbl;
   if (arm_jacobian) *arm_jacobian = Ja;
   return J;
+}
+
+int WholeBodyModel::linkIndex(const std::string& link) const {
+  const auto it = impl_->tree_index.find(link);
+  if (it == impl_->tree_index.end()) fail("unknown link '" + link + "'");
+  return it->second;
+}
+
+void WholeBodyModel::updateKinematics(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q,
+                                      KinematicState* s) const {
+  checkArm(q);
+  s->world_T_base_ = baseTransform(base_pose);
+  const std::vector<TreeLink>& tree = impl_->tree;
+  s->base_T_link_.resize(tree.size());
+  s->joint_axis_.resize(3, nArm());
+  s->joint_point_.resize(3, nArm());
+  for (std::size_t i = 0; i < tree.size(); ++i) {
+    const TreeLink& l = tree[i];
+    Eigen::Isometry3d& T = s->base_T_link_[i];
+    if (l.parent < 0) {
+      T.setIdentity();
+      continue;
+    }
+    const Eigen::Isometry3d& P = s->base_T_link_[static_cast<std::size_t>(l.parent)];
+    T = P * childPose(l, l.arm_index >= 0 ? q[l.arm_index] : 0.0);
+    if (l.arm_index >= 0) {
+      s->joint_axis_.col(l.arm_index) = P.linear() * l.axis;
+      s->joint_point_.col(l.arm_index) = P * l.origin;
+    }
+  }
+}
+
+
+void WholeBodyModel::pointJacobianInBase(const KinematicState& s, int link, const Eigen::Vector3d& p,
+                                         Matrix6Xd* J, Matrix6Xd* arm_jacobian) const {
+  const int nb = nBase(), na = nArm();
+  if (J->cols() != nDof()) J->resize(6, nDof());
+  if (arm_jacobian) {
+    if (arm_jacobian->cols() != na) arm_jacobian->resize(6, na);
+    arm_jacobian->setZero();
+  }
+  const Eigen::Matrix3d& R = s.world_T_base_.linear();
+  setBaseColumns(baseType(), R, R * p, J);
+  J->rightCols(na).setZero();
+  for (const int i : impl_->tree[static_cast<std::size_t>(link)].arm_joints) {
+    const Eigen::Vector3d w = s.joint_axis_.col(i);
+    Eigen::Matrix<double, 6, 1> col;  // base frame
+    if (impl_->arm_revolute[static_cast<std::size_t>(i)]) {
+      col << w.cross(p - s.joint_point_.col(i)), w;
+    } else {
+      col << w, Eigen::Vector3d::Zero();
+    }
+    if (arm_jacobian) arm_jacobian->col(i) = col;
+    J->block<3, 1>(0, nb + i) = R * col.head<3>();
+    J->block<3, 1>(3, nb + i) = R * col.tail<3>();
+  }
+}
+
+void WholeBodyModel::jacobian(const KinematicState& s, int link, Matrix6Xd* J,
+                              Matrix6Xd* arm_jacobian) const {
+  pointJacobianInBase(s, link, s.linkPoseInBase(link).translation(), J, arm_jacobian);
+}
+
+void WholeBodyModel::pointJacobian(const KinematicState& s, int link, const Eigen::Vector3d& point_world,
+                                   Matrix6Xd* J) const {
+  pointJacobianInBase(s, link, s.world_T_base_.inverse() * point_world, J, nullptr);
 }
 
 double WholeBodyModel::manipulability(const Eigen::VectorXd& q) const {
@@ -266,37 +435,54 @@ Eigen::VectorXd WholeBodyModel::manipulabilityGradient(const Eigen::VectorXd& q,
 }
 
 Eigen::VectorXd WholeBodyModel::manipulabilityGradientFromJacobian(const Matrix6Xd& J, double* m_out) const {
+  Eigen::VectorXd g;
+  manipulabilityGradientFromJacobian(J, g, m_out);
+  return g;
+}
+
+void WholeBodyModel::manipulabilityGradientFromJacobian(const Matrix6Xd& J, Eigen::VectorXd& g,
+                                                        double* m_out) const {
   const int n = nArm();
   if (J.cols() != n) fail("manipulabilityGradientFromJacobian: expected a 6 x " + std::to_string(n) + " arm Jacobian");
+  // A = J J^T (n >= 6) or J^T J: at most 6 x 6, kept on the stack.
+  using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6>;
   const bool wide = n >= 6;
-  const Eigen::MatrixXd A = wide ? Eigen::MatrixXd(J * J.transpose()) : Eigen::MatrixXd(J.transpose() * J);
+  Small A(wide ? 6 : n, wide ? 6 : n);
+  if (wide)
+    A.noalias() = J * J.transpose();
+  else
+    A.noalias() = J.transpose() * J;
   const double m = std::sqrt(std::max(0.0, A.determinant()));
   if (m_out) *m_out = m;
-  Eigen::VectorXd g = Eigen::VectorXd::Zero(n);
-  if (!(m > 1e-12)) return g;
-  const Eigen::LDLT<Eigen::MatrixXd> Ainv(A);
+  if (g.size() != n) g.resize(n);
+  g.setZero();
+  if (!(m > 1e-12)) return;
+  const Eigen::LDLT<Small> Ainv(A);
   const auto& rev = impl_->arm_revolute;
-  Matrix6Xd H(6, n);
-  for (int b = 0; b < n; ++b) {
-    // H = dJ/dq_b (geometric Jacobian Hessian slice, base frame).
-    const Eigen::Vector3d zb = J.block<3, 1>(3, b);
-    for (int a = 0; a < n; ++a) {
-      Eigen::Matrix<double, 6, 1> h = Eigen::Matrix<double, 6, 1>::Zero();
-      if (b <= a) {
-        if (rev[static_cast<std::size_t>(b)]) {
-          h.head<3>() = zb.cross(J.block<3, 1>(0, a));
-          h.tail<3>() = zb.cross(J.block<3, 1>(3, a));
-        }
-      } else if (rev[static_cast<std::size_t>(a)]) {
-        h.head<3>() = J.block<3, 1>(3, a).cross(J.block<3, 1>(0, b));
+  // d m / d q_b = m tr(A^-1 dA_b) / 2 with dA_b = H_b J^T + J H_b^T (wide) or H_b^T J + J^T H_b,
+  // H_b = dJ/dq_b (geometric Jacobian Hessian slice, base frame). With A symmetric this is
+  // m <K, H_b> (sum of the entrywise products), K = A^-1 J (wide) or J A^-1: column a of K
+  // meets column a of every H_b, so K is formed one column at a time.
+  Small Ainv_dense;
+  if (!wide) Ainv_dense = Ainv.solve(Small::Identity(n, n));
+  for (int a = 0; a < n; ++a) {
+    Eigen::Matrix<double, 6, 1> k;
+    if (wide)
+      k = Ainv.solve(J.col(a));
+    else
+      k = J * Ainv_dense.col(a);
+    const Eigen::Vector3d va = J.block<3, 1>(0, a), wa = J.block<3, 1>(3, a);
+    for (int b = 0; b < n; ++b) {
+      if (b <= a) {  // column a of H_b: z_b x J_a (revolute b)
+        if (!rev[static_cast<std::size_t>(b)]) continue;
+        const Eigen::Vector3d zb = J.block<3, 1>(3, b);
+        g[b] += k.head<3>().dot(zb.cross(va)) + k.tail<3>().dot(zb.cross(wa));
+      } else if (rev[static_cast<std::size_t>(a)]) {  // [z_a x v_b; 0]
+        g[b] += k.head<3>().dot(wa.cross(J.block<3, 1>(0, b)));
       }
-      H.col(a) = h;
     }
-    // d m / d q_b = m * tr(A^-1 dA/2) with dA = H J^T + J H^T (wide) or H^T J + J^T H.
-    const Eigen::MatrixXd P = wide ? Eigen::MatrixXd(H * J.transpose()) : Eigen::MatrixXd(J.transpose() * H);
-    g[b] = m * Ainv.solve(P).trace();
   }
-  return g;
+  g *= m;
 }
 
 bool WholeBodyModel::inverseKinematics(const Eigen::Isometry3d& target, unsigned seed, int attempts,
