@@ -25,6 +25,7 @@ void FakeRobotConfig::validate() const {
   ehc_control::requireRange(o, "sim.max_real_time_factor", max_real_time_factor, 0.0, 1e6);
   if (!robot_start.allFinite()) throw std::invalid_argument("[FakeRobotConfig] sim.robot_start must be finite");
   noise.validate();
+  base_model.validate();
 }
 
 std::string FakeRobotConfig::summary() const {
@@ -96,6 +97,10 @@ FakeRobotConfig loadFakeRobotConfig(const ConfigNode& s) {
     s.fail("max_real_time_factor", "must be in [0, 1e6] (0 = no pacing)");
   c.noise = loadActuationNoise(s.childOrEmpty("noise"));
   if (s.has("robot_start")) c.robot_start = loadBasePose(s.child("robot_start"));
+  if (s.has("base_model")) c.base_model.type = baseModelTypeFromString(s.require<std::string>("base_model"));
+  // The Water2 parameters are read (and checked) whichever model is selected, so that a file
+  // can keep them next to base_model: ideal.
+  if (s.has("water2")) c.base_model.water2 = loadWater2BaseParams(s.child("water2"));
   s.validate(c);
   return c;
 }
@@ -110,7 +115,8 @@ FakeRobotConfig loadFakeRobotConfigFile(const std::string& path) {
   const ConfigNode sim = root.child("sim");
   FakeRobotConfig c = loadFakeRobotConfig(sim);  // the former keys fail here, with their replacement
   static const char* kKeys[] = {"robot", "dt", "seed", "free_run", "state_republish_period",
-                                "command_timeout", "max_real_time_factor", "noise", "robot_start"};
+                                "command_timeout", "max_real_time_factor", "noise", "robot_start",
+                                "base_model", "water2"};
   for (const auto& kv : sim.yaml()) {
     const std::string key = kv.first.as<std::string>();
     if (std::none_of(std::begin(kKeys), std::end(kKeys), [&](const char* k) { return key == k; }))
