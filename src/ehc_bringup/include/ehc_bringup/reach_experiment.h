@@ -25,6 +25,9 @@ struct ReachExperimentParams {
   double arrival_position = 0.01;   ///< m
   double arrival_orientation = 2.0 * M_PI / 180.0;  ///< rad
   ehc_sim::ActuationNoise noise;    ///< Table I; noise.enabled = false for --noise off
+  /// ideal (--base-model ideal) | water2: the controller is fed the base model's odometry
+  /// (KinematicFakeRobot::odometryPose); arrival is judged on the true pose.
+  ehc_sim::BaseModelConfig base_model;
   ehc_control::PoseServoParams servo;
   void validate() const;            ///< throws "[ReachExperiment] ..."
 };

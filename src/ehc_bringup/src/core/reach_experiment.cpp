@@ -22,6 +22,7 @@ void ReachExperimentParams::validate() const {
   if (!(distant_threshold > 0.0)) bad("distant_threshold must be > 0");
   if (!(arrival_position > 0.0 && arrival_orientation > 0.0)) bad("arrival tolerances must be > 0");
   noise.validate();
+  base_model.validate();
   servo.validate();
 }
 
@@ -85,7 +86,7 @@ ReachTrial ReachExperiment::reach(ehc_sim::KinematicFakeRobot& robot, ControlCyc
       if (!err.empty()) throw std::runtime_error("[ReachExperiment] control cycle rejected an input: " + err);
     };
     check(cycle.setJointState(sim_time_, rc.arm_joints, std::vector<double>(q.data(), q.data() + q.size())));
-    check(cycle.setBasePose(sim_time_, robot.basePose()));
+    check(cycle.setBasePose(sim_time_, robot.odometryPose()));  // water2: what /odom would say
     check(cycle.setTarget(sim_time_, target));
     const auto t0 = std::chrono::steady_clock::now();
     const ehc_control::ControlCycleOutput out = cycle.update(sim_time_);
@@ -127,7 +128,8 @@ ReachSummary ReachExperiment::run(const std::vector<std::vector<Eigen::Isometry3
   s.min_joint_limit_margin = 1e9;
   ControlCycle cycle(model_, weighting_, cycle_params_);
   for (std::size_t si = 0; si < sets.size(); ++si) {
-    ehc_sim::KinematicFakeRobot robot(model_->config(), params_.noise, seed + static_cast<unsigned>(si));
+    ehc_sim::KinematicFakeRobot robot(model_->config(), params_.noise, seed + static_cast<unsigned>(si),
+                                      params_.base_model);
     robot.reset(Eigen::Vector3d::Zero(), model_->config().arm_ready, seed + static_cast<unsigned>(si));
     for (std::size_t ti = 0; ti < sets[si].size(); ++ti) {
       trace_set_ = static_cast<int>(si);

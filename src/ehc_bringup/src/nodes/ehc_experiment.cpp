@@ -1,6 +1,7 @@
 // ehc_experiment: the paper's experiments, in-process (no ROS master needed).
 //   rosrun ehc_bringup ehc_experiment reach --robot robot.yaml --method ehc|neo_e|neo_c|all
 //       [--sets 10] [--points 50] [--seed S] [--targets targets.csv] [--noise on|off]
+//       [--base-model ideal|water2]
 //       [--config controller.yaml] [--map reachability_map.bin] --out DIR
 // Writes DIR/summary.json, DIR/table.md (paper Table II layout), DIR/trials.csv and
 // DIR/targets.csv; progress and ETA on stderr. Errors: stderr, exit code 2.
@@ -22,6 +23,8 @@ namespace {
 const char* kUsage =
     "usage: ehc_experiment reach --robot <robot.yaml> --method ehc|neo_e|neo_c|all --out DIR\n"
     "           [--sets 10] [--points 50] [--seed 1] [--targets targets.csv] [--noise on|off]\n"
+    "           [--base-model ideal|water2]   (water2: the Water2 chain of ehc_sim/base_model.h with\n"
+    "                                          its default parameters; the controller sees its odometry)\n"
     "           [--config controller.yaml] [--map reachability_map.bin] [--trace cycles.csv]\n"
     "           [--all-targets]   (keep generated targets no whole-body IK solution reaches)\n";
 
@@ -30,6 +33,7 @@ struct Args {
   int sets = 10, points = 50;
   unsigned seed = 1;
   bool noise = true;
+  ehc_sim::BaseModelType base_model = ehc_sim::BaseModelType::Ideal;
   bool all_targets = false;  ///< keep kinematically unreachable targets
 };
 
@@ -54,6 +58,7 @@ Args parse(int argc, char** argv) {
     else if (k == "--map") a.map = next();
     else if (k == "--trace") a.trace = next();
     else if (k == "--all-targets") a.all_targets = true;
+    else if (k == "--base-model") a.base_model = ehc_sim::baseModelTypeFromString(next());
     else if (k == "--noise") {
       const std::string v = next();
       if (v != "on" && v != "off") throw std::invalid_argument("--noise must be on or off");
@@ -92,6 +97,7 @@ int main(int argc, char** argv) {
     ehc_bringup::ReachExperimentParams ep;
     ep.servo = ehc_control::loadPoseServoParams(cfg.childOrEmpty("servo"));
     ep.noise.enabled = a.noise;
+    ep.base_model.type = a.base_model;
     ep.arrival_position = ctrl.arrival_position;
     ep.arrival_orientation = ctrl.arrival_orientation;
 
@@ -126,7 +132,7 @@ int main(int argc, char** argv) {
 
     std::cerr << robot_cfg.summary() << map->summary() << "\n" << ctrl.summary() << "\n"
               << "[ehc_experiment] " << sets.size() << " sets, noise " << (a.noise ? "on" : "off")
-              << ", seed " << a.seed << ", methods:";
+              << ", seed " << a.seed << ", base model " << ep.base_model.summary() << ", methods:";
     for (const auto& m : methods) std::cerr << " " << m;
     std::cerr << std::endl;
 
@@ -160,6 +166,9 @@ int main(int argc, char** argv) {
                         (a.targets_csv.empty() ? (a.all_targets ? std::string("unreachable targets kept")
                                                                 : std::to_string(unreachable_redrawn) + " unreachable draws redrawn (whole-body IK)")
                                                : "targets from " + a.targets_csv) +
+                        (a.base_model == ehc_sim::BaseModelType::Ideal
+                             ? std::string()
+                             : ", base model " + ep.base_model.summary() + " (the controller sees its odometry)") +
                         ". Speeds: mean |v| (m/s) / |w| (rad/s) / sum |qd_arm| (rad/s) of the commanded velocity; distant = position error > 0.5 m.";
     ehc_bringup::writeReachResults(a.out, summaries, trials, notes);
     std::vector<Eigen::Isometry3d> flat;

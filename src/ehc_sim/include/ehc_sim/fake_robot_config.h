@@ -2,7 +2,7 @@
 // FakeRobotConfig: the settings both fake robots share — the Bullet simulator (ehc_sim_node,
 // part of SimConfig) and the kinematic one (ehc_kinematic_sim_node): robot file, control step,
 // noise seed, stepping policy (lock-step or free-run, see StepScheduler), Table I actuation
-// noise and the robot's start pose. One loader reads them from the `sim` mapping of either
+// noise, the base model (ideal | water2, base_model.h) and the robot's start pose. One loader reads them from the `sim` mapping of either
 // simulator's YAML file, so both files use the same keys:
 //
 //   sim:
@@ -14,6 +14,8 @@
 //     command_timeout: 0.5         # wall s, free-run: zero commands older than this
 //     max_real_time_factor: 0      # lock-step pacing: at most this many sim s per wall s (0 = none)
 //     noise: {enabled: true, base_translation: 0.05, base_rotation: 0.05, arm: 0.002}
+//     base_model: ideal            # ideal | water2 (the Water2 chain, base_model.h)
+//     water2: {command_latency: 0.05, ...}  # Water2BaseParams (optional; any subset)
 //     robot_start: {x: 0, y: 0, yaw: 0}  # kinematic simulator only (Bullet: the scene's)
 //
 // Keys of the kinematic simulator's former schema (lockstep, lockstep_timeout_wall, noise as a
@@ -45,16 +47,18 @@ struct FakeRobotConfig {
   /// other inputs (targets) come on wall-clock timers.
   double max_real_time_factor = 0.0;
   ActuationNoise noise;
+  BaseModelConfig base_model;  ///< ideal (default: today's base) | water2
   Eigen::Vector3d robot_start = Eigen::Vector3d::Zero();  ///< base x, y, yaw in odom
 
   /// dt in nanoseconds (exact: validate() requires whole nanoseconds).
   std::int64_t dtNs() const;
   void validate() const;  ///< throws "[FakeRobotConfig] ..."
-  /// Two lines: robot, dt, seed, mode, noise (and the start pose).
+  /// Three lines: robot, dt, seed, mode, noise, base model (and the start pose).
   std::string summary() const;
 };
 
-/// Reads the shared keys of a simulator's `sim` mapping (see the file comment).
+/// Reads the shared keys of a simulator's `sim` mapping (see the file comment). `water2` is read
+/// and checked whichever base_model is selected.
 FakeRobotConfig loadFakeRobotConfig(const ehc_control::ConfigNode& sim);
 /// Reads a kinematic simulator file: only the keys above, under `sim` (anything else, e.g. a
 /// Bullet simulator key, is an error naming the file and the field).

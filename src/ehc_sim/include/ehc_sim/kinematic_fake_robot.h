@@ -1,12 +1,17 @@
 #pragma once
 // KinematicFakeRobot: integrates base + arm velocity commands with Gaussian actuation noise
 // (paper Table I), saturates at the velocity limits and clamps at the joint limits. The
-// differential base moves as a unicycle. ROS-free; the Bullet simulator builds on it.
+// differential base moves as a unicycle. The base model (base_model.h) decides how the base
+// executes its command and what the odometry reports: `ideal` (at once; odometry = true pose)
+// or `water2` (latency, 0.5 s hold, acceleration limits, lag, gain error, ~2 Hz odometry with
+// error). ROS-free; the Bullet simulator builds on it.
 
 #include "ehc_control/robot_config.h"
+#include "ehc_sim/base_model.h"
 
 #include <Eigen/Core>
 
+#include <optional>
 #include <random>
 
 namespace ehc_sim {
@@ -28,8 +33,9 @@ struct ActuationNoise {
 
 class KinematicFakeRobot {
  public:
+  /// Throws "[KinematicFakeRobot] ..." for the water2 base model on a holonomic base.
   KinematicFakeRobot(const ehc_control::RobotConfig& robot, const ActuationNoise& noise,
-                     unsigned seed);
+                     unsigned seed, const BaseModelConfig& base_model = BaseModelConfig());
 
   /// Puts the robot at a base pose (x, y, yaw) and arm configuration; reseeds the noise.
   void reset(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q, unsigned seed);
@@ -37,10 +43,21 @@ class KinematicFakeRobot {
   /// Executes `command` = [base twist (base frame); arm joint rates] for `dt` seconds.
   /// Commands beyond the velocity limits are saturated (counted). A base command inside the
   /// deadband and an exactly zero arm command are executed as standing still (no noise). Throws
-  /// "[KinematicFakeRobot] ..." on a wrong size, NaN/Inf or dt <= 0.
+  /// "[KinematicFakeRobot] ..." on a wrong size, NaN/Inf or dt <= 0. Water2: the base command is
+  /// this step's /cmd_vel into the Water2 chain (the bridge scales it keeping the turn radius).
   void step(const Eigen::VectorXd& command, double dt);
 
+  /// The true base pose (x, y, yaw) in the world (= odom at time 0).
   const Eigen::Vector3d& basePose() const { return base_; }
+  /// What /odom reports (the controller's base pose): ideal = basePose(); water2 = the bridge's
+  /// estimate from the ~2 Hz status.
+  Eigen::Vector3d odometryPose() const;
+  /// The /odom twist (v_x, v_y, w_z), base frame: ideal = the executed base velocity; water2 =
+  /// the bridge's last sent twist (while in force).
+  Eigen::Vector3d odometryTwist() const;
+  const BaseModelConfig& baseModel() const { return base_model_; }
+  /// The Water2 chain (nullptr for the ideal base).
+  const Water2BaseModel* water2() const { return water2_ ? &*water2_ : nullptr; }
   const Eigen::VectorXd& armPositions() const { return q_; }
   /// Velocity actually executed in the last step (after saturation, noise, joint limits).
   const Eigen::VectorXd& executedVelocity() const { return executed_; }
@@ -54,6 +71,8 @@ class KinematicFakeRobot {
  private:
   ehc_control::RobotConfig robot_;
   ActuationNoise noise_;
+  BaseModelConfig base_model_;
+  std::optional<Water2BaseModel> water2_;
   Eigen::VectorXd vmax_;
   std::mt19937_64 rng_;
   std::normal_distribution<double> gauss_{0.0, 1.0};

@@ -25,6 +25,7 @@ void FakeRobotConfig::validate() const {
   ehc_control::requireRange(o, "sim.max_real_time_factor", max_real_time_factor, 0.0, 1e6);
   if (!robot_start.allFinite()) throw std::invalid_argument("[FakeRobotConfig] sim.robot_start must be finite");
   noise.validate();
+  base_model.validate();
 }
 
 std::string FakeRobotConfig::summary() const {
@@ -96,6 +97,10 @@ FakeRobotConfig loadFakeRobotConfig(const ConfigNode& s) {
     s.fail("max_real_time_factor", "must be in [0, 1e6] (0 = no pacing)");
   c.noise = loadActuationNoise(s.childOrEmpty("noise"));
   if (s.has("robot_start")) c.robot_start = loadBasePose(s.child("robot_start"));
+  if (s.has("base_model")) c.base_model.type = baseModelTypeFromString(s.require<std::string>("base_model"));
+  // The Water2 parameters are read (and checked) whichever model is selected, so that a file
+  // can keep them next to base_model: ideal.
+  if (s.has("water2")) c.base_model.water2 = loadWater2BaseParams(s.child("water2"));
   s.validate(c);
   return c;
 }

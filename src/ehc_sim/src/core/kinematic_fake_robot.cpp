@@ -1,5 +1,6 @@
 #include "ehc_sim/kinematic_fake_robot.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -22,10 +23,21 @@ void ActuationNoise::validate() const {
 }
 
 KinematicFakeRobot::KinematicFakeRobot(const ehc_control::RobotConfig& robot,
-                                       const ActuationNoise& noise, unsigned seed)
-    : robot_(robot), noise_(noise), vmax_(robot.velocityLimits()) {
+                                       const ActuationNoise& noise, unsigned seed,
+                                       const BaseModelConfig& base_model)
+    : robot_(robot), noise_(noise), base_model_(base_model), vmax_(robot.velocityLimits()) {
   robot_.validate();
   noise_.validate();
+  base_model_.validate();
+  if (base_model_.type == BaseModelType::Water2) {
+    if (robot_.base_type == ehc_control::BaseType::Holonomic)
+      fail("base model water2 needs a differential base (the Water2 is one)");
+    // The bridge's bounds, tightened by the robot's base limits (as Water2BridgeConfig's robot_file).
+    Water2BaseParams p = base_model_.water2;
+    p.max_linear_velocity = std::min(p.max_linear_velocity, vmax_[0]);
+    p.max_angular_velocity = std::min(p.max_angular_velocity, vmax_[robot_.nBase() - 1]);
+    water2_.emplace(p);
+  }
   reset(Eigen::Vector3d::Zero(), robot_.arm_ready, seed);
 }
 
@@ -35,6 +47,7 @@ void KinematicFakeRobot::reset(const Eigen::Vector3d& base_pose, const Eigen::Ve
   if (q.size() != robot_.nArm() || !q.allFinite())
     fail("reset: need " + std::to_string(robot_.nArm()) + " finite arm joint positions");
   base_ = base_pose;
+  if (water2_) water2_->reset(base_pose);
   q_ = q.cwiseMax(robot_.arm_lower).cwiseMin(robot_.arm_upper);
   executed_ = Eigen::VectorXd::Zero(nDof());
   rng_.seed(seed);
@@ -56,9 +69,21 @@ void KinematicFakeRobot::step(const Eigen::VectorXd& command, double dt) {
 
   const int nb = robot_.nBase();
   const bool holonomic = robot_.base_type == ehc_control::BaseType::Holonomic;
-  const bool base_moves = std::abs(v[0]) >= noise_.base_deadband_linear ||
-                          (holonomic && std::abs(v[1]) >= noise_.base_deadband_linear) ||
-                          std::abs(v[nb - 1]) >= noise_.base_deadband_angular;
+  bool base_moves;
+  if (water2_) {
+    // The unsaturated command goes to the bridge, which scales it keeping the turn radius; the
+    // wheels execute what the chain makes of it (nb == 2: the Water2 is differential).
+    water2_->command(command[0], command[nb - 1], time_);
+    const Eigen::Vector2d wheel = water2_->advance(time_, dt, noise_.base_deadband_linear,
+                                                   noise_.base_deadband_angular);
+    v[0] = wheel[0];
+    v[nb - 1] = wheel[1];
+    base_moves = !wheel.isZero(0.0);
+  } else {
+    base_moves = std::abs(v[0]) >= noise_.base_deadband_linear ||
+                 (holonomic && std::abs(v[1]) >= noise_.base_deadband_linear) ||
+                 std::abs(v[nb - 1]) >= noise_.base_deadband_angular;
+  }
   const bool arm_moves = !v.tail(robot_.nArm()).isZero(0.0);
   if (!base_moves) v.head(nb).setZero();
   if (noise_.enabled && base_moves) {
@@ -94,6 +119,20 @@ void KinematicFakeRobot::step(const Eigen::VectorXd& command, double dt) {
   q_ = q_clamped;
   executed_ = v;
   time_ += dt;
+  if (water2_) water2_->observe(base_, time_, rng_, gauss_);
+}
+
+Eigen::Vector3d KinematicFakeRobot::odometryPose() const {
+  return water2_ ? water2_->odometry(time_).pose : base_;
+}
+
+Eigen::Vector3d KinematicFakeRobot::odometryTwist() const {
+  const int nb = robot_.nBase();
+  if (water2_) {
+    const BaseOdometryEstimate o = water2_->odometry(time_);
+    return Eigen::Vector3d(o.linear, 0.0, o.angular);
+  }
+  return Eigen::Vector3d(executed_[0], nb == 3 ? executed_[1] : 0.0, executed_[nb - 1]);
 }
 
 }  // namespace ehc_sim

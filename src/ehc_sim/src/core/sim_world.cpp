@@ -138,7 +138,7 @@ SimWorld::SimWorld(const SimConfig& cfg, const ehc_control::RobotConfig& robot,
       scene_(scene),
       model_(makeModel(robot)),
       collision_model_(std::make_unique<ehc_control::RobotCollisionModel>(model_->urdfXml(), robot.arm_joints)),
-      robot_(robot, cfg.fake_robot.noise, cfg.fake_robot.seed),
+      robot_(robot, cfg.fake_robot.noise, cfg.fake_robot.seed, cfg.fake_robot.base_model),
       gripper_(cfg.gripper, collision_model_->fingers().empty()
                                 ? 0.035
                                 : collision_model_->fingers().front().upper),

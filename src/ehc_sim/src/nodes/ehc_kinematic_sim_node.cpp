@@ -6,7 +6,8 @@
 //       [_robot:=robot.yaml] [_free_run:=true] [_seed:=N]
 //
 // Same contract, configuration schema (ehc_sim::FakeRobotConfig: sim.robot, dt, seed,
-// free_run, state_republish_period, command_timeout, noise, robot_start) and stepping policy
+// free_run, state_republish_period, command_timeout, noise, base_model, water2, robot_start) and
+// stepping policy
 // (ehc_sim::StepScheduler around ehc_sim::CommandGate) as ehc_sim_node. Lock-step (default):
 // publishes /clock and the state stamped t, waits for the JointVelocityCommand stamped t and a
 // /cmd_vel received since the last step, then advances one step of sim.dt; sim time never
@@ -15,7 +16,8 @@
 // /sim/status and executed as zero for its group. Free-run: steps every sim.dt of wall time.
 // Sim time starts at 1 s.
 //
-// Publishes /clock, /joint_states, /odom, /tf (odom -> base_link), /sim/status (step, mode and
+// Publishes /clock, /joint_states, /odom and /tf (odom -> base_link) from the base model's
+// odometry (water2: the ~2 Hz status dead-reckoned, as the Water2 bridge), /sim/status (step, mode and
 // command counters; no collision or gripper fields). Subscribes /cmd_vel,
 // /arm/joint_velocity_cmd.
 
@@ -45,7 +47,7 @@ class KinematicSimNode {
     ROS_INFO_STREAM("[ehc_kinematic_sim_node] start-up configuration (" << config_file << ")\n"
                     << cfg_.summary() << robot.summary());
 
-    robot_ = std::make_unique<ehc_sim::KinematicFakeRobot>(robot, cfg_.noise, cfg_.seed);
+    robot_ = std::make_unique<ehc_sim::KinematicFakeRobot>(robot, cfg_.noise, cfg_.seed, cfg_.base_model);
     robot_->reset(cfg_.robot_start, robot.arm_ready, cfg_.seed);
     lock_step_ = std::make_unique<ehc_sim::LockStepNode>(nh_, "ehc_kinematic_sim_node", robot, cfg_);
     clock_pub_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 10);

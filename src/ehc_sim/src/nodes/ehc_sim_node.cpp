@@ -11,7 +11,8 @@
 // latest commands (zeroed after sim.command_timeout without a fresh one). Both policies:
 // ehc_sim::StepScheduler. Sim time starts at 1 s.
 //
-// Publishes /clock, /joint_states, /odom, /tf (odom -> base_link and every URDF link),
+// Publishes /clock, /joint_states, /odom, /tf (odom -> base_link and every URDF link; /odom and
+// odom -> base_link from the base model's odometry: sim.base_model water2 = the Water2 bridge's),
 // /camera/color/image_raw (mono8) + /camera/color/camera_info, /camera/depth/points,
 // /sim/object_poses (ground truth, metrics only), /sim/status.
 // Subscribes /cmd_vel, /arm/joint_velocity_cmd. Services /sim/reset (ehc_msgs/ResetScene),

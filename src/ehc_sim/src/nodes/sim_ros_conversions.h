@@ -71,26 +71,27 @@ inline void fillJointState(const KinematicFakeRobot& r, const ros::Time& stamp, 
   m->effort.clear();
 }
 
-/// /odom: odom -> base_link pose, executed twist in the base frame.
+/// /odom: odom -> base_link pose and twist (base frame) as the base model's odometry reports
+/// them (ideal: the true pose and the executed twist; water2: the bridge's estimate).
 inline void fillOdometry(const KinematicFakeRobot& r, const ros::Time& stamp, nav_msgs::Odometry* m) {
   const auto& cfg = r.robot();
   m->header.stamp = stamp;
   m->header.frame_id = cfg.world_frame;
   m->child_frame_id = cfg.base_frame;
-  m->pose.pose = toPose(ehc_control::WholeBodyModel::baseTransform(r.basePose()));
-  const Eigen::VectorXd& v = r.executedVelocity();
-  const bool holo = cfg.base_type == ehc_control::BaseType::Holonomic;
+  m->pose.pose = toPose(ehc_control::WholeBodyModel::baseTransform(r.odometryPose()));
+  const Eigen::Vector3d v = r.odometryTwist();
   m->twist.twist.linear.x = v[0];
-  m->twist.twist.linear.y = holo ? v[1] : 0.0;
-  m->twist.twist.angular.z = v[cfg.nBase() - 1];
+  m->twist.twist.linear.y = v[1];
+  m->twist.twist.angular.z = v[2];
 }
 
-/// odom -> base_link (the robot's world and base frames).
+/// odom -> base_link (the robot's world and base frames), from the odometry as /odom (on the
+/// robot the bridge publishes this tf from its estimate).
 inline void fillBaseTransform(const KinematicFakeRobot& r, const ros::Time& stamp, geometry_msgs::TransformStamped* t) {
   t->header.stamp = stamp;
   t->header.frame_id = r.robot().world_frame;
   t->child_frame_id = r.robot().base_frame;
-  t->transform = toTransform(ehc_control::WholeBodyModel::baseTransform(r.basePose()));
+  t->transform = toTransform(ehc_control::WholeBodyModel::baseTransform(r.odometryPose()));
 }
 
 /// odom -> base_link, then every URDF link relative to its parent.

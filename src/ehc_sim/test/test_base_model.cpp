@@ -1,0 +1,264 @@
+// Base models: the Water2 chain's step response on sim time (latency, 0.5 s hold then stop
+// without renewal, acceleration-limited ramp, gain, the bridge's zero after silence), its
+// odometry (status rate, dead reckoning between statuses, bounded error), the ideal model
+// unchanged, and the configuration (files document the struct's defaults; unknown keys fail).
+
+#include "ehc_control/config_node.h"
+#include "ehc_sim/base_model.h"
+#include "ehc_sim/fake_robot_config.h"
+#include "ehc_sim/kinematic_fake_robot.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+using ehc_sim::ActuationNoise;
+using ehc_sim::BaseModelConfig;
+using ehc_sim::BaseModelType;
+using ehc_sim::KinematicFakeRobot;
+using ehc_sim::Water2BaseModel;
+using ehc_sim::Water2BaseParams;
+
+namespace {
+constexpr double kDt = 0.01;
+
+ehc_control::RobotConfig robot() {
+  return ehc_control::loadRobotConfig(std::string(EHC_CONFIG_DIR) + "/robots/realman_rm65_water2/robot.yaml");
+}
+ActuationNoise off() {
+  ActuationNoise n;
+  n.enabled = false;
+  return n;
+}
+/// Water2 without localisation error: the status pose is the true pose.
+BaseModelConfig water2(double localisation_sigma = 0.0) {
+  BaseModelConfig c;
+  c.type = BaseModelType::Water2;
+  c.water2.localisation_position_sigma = localisation_sigma;
+  c.water2.localisation_heading_sigma = localisation_sigma;
+  return c;
+}
+Eigen::VectorXd baseCommand(int n, double v, double w) {
+  Eigen::VectorXd c = Eigen::VectorXd::Zero(n);
+  c[0] = v;
+  c[1] = w;
+  return c;
+}
+}  // namespace
+
+// The controller commands 0.4 m/s from t = 0 on, every step (as in lock-step).
+TEST(Water2Base, StepResponseLatencyRampGainAndStop) {
+  const Water2BaseParams p;  // the documented defaults
+  KinematicFakeRobot r(robot(), off(), 1, water2());
+  const Eigen::VectorXd go = baseCommand(r.nDof(), 0.4, 0.0);
+  // The bridge sends at t = 0; the wheels act from t = command_latency (0.05 s) on.
+  const int first_moving = static_cast<int>(std::lround(p.command_latency / kDt));
+  double prev = 0.0, max_step = 0.0;
+  int k = 0;
+  for (; k < 300; ++k) {  // 3 s
+    r.step(go, kDt);
+    const double v = r.executedVelocity()[0];
+    if (k < first_moving) {
+      EXPECT_EQ(v, 0.0) << "step " << k << ": before the command arrived";
+    } else if (k == first_moving) {
+      EXPECT_GT(v, 0.0) << "the command acts after the latency";
+    }
+    max_step = std::max(max_step, std::abs(v - prev));
+    prev = v;
+    // Acceleration-limited: the speed can only have grown at a_max since it started.
+    EXPECT_LE(v, std::max(0.0, p.linear_acceleration * ((k + 1) * kDt - p.command_latency)) + 1e-9) << "step " << k;
+  }
+  EXPECT_LE(max_step, p.linear_acceleration * kDt + 1e-12);
+  EXPECT_NEAR(prev, p.linear_gain * 0.4, 1e-6) << "steady state = gain x command";
+  EXPECT_EQ(r.executedVelocity()[1], 0.0);
+
+  // The controller commands zero: the wheels decelerate (acceleration-limited) to exactly 0.
+  const Eigen::VectorXd stop = baseCommand(r.nDof(), 0.0, 0.0);
+  const double t_stop = r.time();
+  double stopped_at = -1.0;
+  for (int j = 0; j < 200; ++j, ++k) {
+    r.step(stop, kDt);
+    const double v = r.executedVelocity()[0];
+    if (v != 0.0) {
+      EXPECT_LE(std::abs(v - prev), p.linear_acceleration * kDt + 1e-12);
+    } else {  // static friction: a wheel told to stop stops below its deadband
+      EXPECT_LT(std::abs(prev), p.linear_acceleration * kDt + ActuationNoise().base_deadband_linear);
+    }
+    prev = v;
+    if (v == 0.0 && stopped_at < 0) stopped_at = r.time() - t_stop;
+  }
+  EXPECT_EQ(prev, 0.0);
+  // Not before latency + v / a_max, and well within 0.5 s + that (the zero renews at once).
+  EXPECT_GE(stopped_at, p.command_latency + (p.linear_gain * 0.4 - 0.005) / p.linear_acceleration - 1e-9);
+  EXPECT_LE(stopped_at, p.command_latency + 2.0 * p.linear_gain * 0.4 / p.linear_acceleration);
+}
+
+// A single joy_control (no renewal) is executed for exactly its 0.5 s lifetime, then the base
+// stops by itself; a renewal extends it.
+TEST(Water2Base, HoldsAJoyControlForItsLifetimeThenStops) {
+  Water2BaseParams p;
+  p.linear_acceleration = 100.0;  // isolate the hold from the ramp
+  p.time_constant = 0.0;
+  Water2BaseModel base(p);
+  base.joyControl(0.3, 0.0, 0.0);
+  const auto inForce = [&](double t) {
+    base.advance(t, kDt, 0.005, 0.01);
+    return base.commandInForce()[0];
+  };
+  for (int k = 0; k < 100; ++k) {
+    const double t = k * kDt;
+    const double u = inForce(t);
+    if (t < p.command_latency - 1e-9 || t >= p.command_latency + p.command_lifetime - 1e-9)
+      EXPECT_EQ(u, 0.0) << "t = " << t;
+    else
+      EXPECT_EQ(u, 0.3) << "t = " << t;
+    EXPECT_EQ(base.wheelVelocity()[0], p.linear_gain * u) << "t = " << t;
+  }
+  EXPECT_EQ(base.joyControls(), 1);  // the bridge sent nothing: no /cmd_vel came in
+
+  // Renewed at 1.2 s: in force from 1.25 to 1.75 s.
+  base.joyControl(0.2, 0.1, 1.2);
+  EXPECT_EQ(inForce(1.24), 0.0);
+  EXPECT_EQ(inForce(1.25), 0.2);
+  EXPECT_EQ(base.commandInForce()[1], 0.1);
+  base.joyControl(0.2, 0.1, 1.6);  // renewal before expiry: held until 2.15 s
+  EXPECT_EQ(inForce(1.9), 0.2);
+  EXPECT_EQ(inForce(2.14), 0.2);
+  EXPECT_EQ(inForce(2.15), 0.0);
+}
+
+// Through the bridge: commands are resent at 20 Hz while fresh, scaled keeping the turn radius,
+// and zero is sent once /cmd_vel stops for 0.2 s, so the base stops before its own 0.5 s hold.
+TEST(Water2Base, BridgeResendsAt20HzScalesAndSendsZeroAfterSilence) {
+  Water2BaseParams p;
+  p.linear_acceleration = 100.0;
+  p.time_constant = 0.0;
+  Water2BaseModel base(p);
+  for (int k = 0; k < 100; ++k) {  // 1 s of /cmd_vel at 100 Hz, twice the bounds
+    EXPECT_TRUE(base.command(1.0, 1.0, k * kDt));
+    base.advance(k * kDt, kDt, 0.005, 0.01);
+  }
+  EXPECT_EQ(base.joyControls(), 20) << "20 Hz resend";
+  EXPECT_NEAR(base.commandInForce()[0], 0.5, 1e-12);  // scaled as a whole: w / v kept
+  EXPECT_NEAR(base.commandInForce()[1], 0.5, 1e-12);
+  double zero_at = -1.0;
+  for (int k = 100; k < 200; ++k) {  // silence
+    base.advance(k * kDt, kDt, 0.005, 0.01);
+    if (zero_at < 0 && base.commandInForce()[0] == 0.0) zero_at = k * kDt;
+  }
+  // Last /cmd_vel at 0.99 s; the bridge's zero at the first step > 0.99 + 0.2, executed 0.05 s later.
+  EXPECT_NEAR(zero_at, 0.99 + p.bridge_command_timeout + kDt + p.command_latency, 1e-9);
+  EXPECT_LT(zero_at, 0.99 + p.command_latency + p.command_lifetime);
+}
+
+// /odom: a new status every 0.5 s (received 0.05 s after sampling), dead-reckoned with the last
+// sent twist in between; its error from the true pose stays bounded over a long drive (it does
+// not grow with the distance: the status is the base's map pose), with noise and localisation
+// error on.
+TEST(Water2Base, OdometryRateAndBoundedDrift) {
+  const Water2BaseParams p;
+  {
+    KinematicFakeRobot r(robot(), off(), 1, water2());
+    const Eigen::VectorXd go = baseCommand(r.nDof(), 0.3, 0.2);
+    long statuses = 0;
+    for (int k = 1; k <= 300; ++k) {
+      r.step(go, kDt);
+      if (r.water2()->statuses() != statuses) {
+        statuses = r.water2()->statuses();
+        // Received at sample + status_latency.
+        EXPECT_NEAR(r.time(), statuses * p.status_period + p.status_latency, 1e-9);
+      }
+    }
+    EXPECT_EQ(r.water2()->statuses(), static_cast<long>(std::floor((3.0 - p.status_latency) / p.status_period)));
+    // Between statuses /odom moves with the last sent twist (0.3 m/s, 0.2 rad/s), not the wheels.
+    const Eigen::Vector3d twist = r.odometryTwist();
+    EXPECT_NEAR(twist[0], 0.3, 1e-12);
+    EXPECT_NEAR(twist[2], 0.2, 1e-12);
+  }
+  // Long drive, default model (noise, localisation error on): bounded error.
+  KinematicFakeRobot r(robot(), ActuationNoise{}, 3, BaseModelConfig{BaseModelType::Water2, p});
+  const double v = 0.4, w = 0.3;
+  // Bound: the bridge extrapolates the commanded twist from a pose sampled status_latency
+  // earlier, while the base lags it by latency + time constant, loses v^2 / 2a while it
+  // accelerates and runs at gain x command; plus Table I noise over one status horizon and
+  // 4 sigma of localisation error. None of it grows with the distance travelled.
+  const double horizon = p.status_period + p.status_latency;
+  const double bound = v * (p.command_latency + p.time_constant + p.status_latency) +
+                       v * v / (2.0 * p.linear_acceleration) + v * (1.0 - p.linear_gain) * horizon +
+                       4.0 * 0.05 * kDt * std::sqrt(horizon / kDt) + 4.0 * std::sqrt(2.0) * p.localisation_position_sigma;
+  double worst = 0.0, travelled = 0.0;
+  Eigen::Vector3d prev = r.basePose();
+  for (int k = 0; k < 6000; ++k) {  // 60 s
+    const double s = k * kDt;
+    r.step(baseCommand(r.nDof(), v * std::cos(0.2 * s), w * std::sin(0.1 * s)), kDt);
+    travelled += (r.basePose() - prev).head<2>().norm();
+    prev = r.basePose();
+    worst = std::max(worst, (r.odometryPose() - r.basePose()).head<2>().norm());
+  }
+  EXPECT_GT(travelled, 5.0);
+  EXPECT_LT(worst, bound) << "travelled " << travelled << " m";
+  EXPECT_GT(worst, 0.5 * v * v / (2.0 * p.linear_acceleration)) << "the start-up lag shows in /odom";
+}
+
+TEST(Water2Base, IdealOdometryIsTheTruePose) {
+  KinematicFakeRobot a(robot(), ActuationNoise{}, 5), b(robot(), ActuationNoise{}, 5, BaseModelConfig{});
+  for (int k = 0; k < 200; ++k) {
+    const Eigen::VectorXd c = baseCommand(a.nDof(), 0.3, -0.2);
+    a.step(c, kDt);
+    b.step(c, kDt);
+    EXPECT_EQ(a.odometryPose(), a.basePose());
+    EXPECT_EQ(a.basePose(), b.basePose());
+    EXPECT_EQ(a.odometryTwist()[0], a.executedVelocity()[0]);
+  }
+  EXPECT_EQ(a.water2(), nullptr);
+}
+
+TEST(Water2Base, HolonomicBaseIsRejected) {
+  auto rc = robot();
+  rc.base_type = ehc_control::BaseType::Holonomic;
+  EXPECT_THROW(KinematicFakeRobot(rc, off(), 1, water2()), std::invalid_argument);
+}
+
+TEST(Water2Base, ConfigFilesDocumentTheDefaultsAndUnknownKeysFail) {
+  const ehc_sim::FakeRobotConfig k =
+      ehc_sim::loadFakeRobotConfigFile(std::string(EHC_CONFIG_DIR) + "/sim/kinematic_sim.yaml");
+  EXPECT_EQ(k.base_model.type, BaseModelType::Ideal);
+  const Water2BaseParams d;
+  for (const Water2BaseParams& f : {k.base_model.water2}) {
+    EXPECT_EQ(f.max_linear_velocity, d.max_linear_velocity);
+    EXPECT_EQ(f.max_angular_velocity, d.max_angular_velocity);
+    EXPECT_EQ(f.resend_rate, d.resend_rate);
+    EXPECT_EQ(f.bridge_command_timeout, d.bridge_command_timeout);
+    EXPECT_EQ(f.status_period, d.status_period);
+    EXPECT_EQ(f.max_extrapolation, d.max_extrapolation);
+    EXPECT_EQ(f.command_lifetime, d.command_lifetime);
+    EXPECT_EQ(f.command_latency, d.command_latency);
+    EXPECT_EQ(f.status_latency, d.status_latency);
+    EXPECT_EQ(f.linear_acceleration, d.linear_acceleration);
+    EXPECT_EQ(f.angular_acceleration, d.angular_acceleration);
+    EXPECT_EQ(f.time_constant, d.time_constant);
+    EXPECT_EQ(f.linear_gain, d.linear_gain);
+    EXPECT_EQ(f.angular_gain, d.angular_gain);
+    EXPECT_EQ(f.localisation_position_sigma, d.localisation_position_sigma);
+    EXPECT_EQ(f.localisation_heading_sigma, d.localisation_heading_sigma);
+    EXPECT_EQ(f.localisation_correlation_time, d.localisation_correlation_time);
+  }
+  const std::string robot_file = std::string(EHC_CONFIG_DIR) + "/robots/realman_rm65_water2/robot.yaml";
+  auto load = [&](const std::string& extra) {
+    const auto root = ehc_control::ConfigNode::loadString("sim:\n  robot: " + robot_file + "\n" + extra,
+                                                          "test.yaml", "FakeRobotConfig");
+    return ehc_sim::loadFakeRobotConfig(root.child("sim"));
+  };
+  const auto w = load("  base_model: water2\n  water2: {command_latency: 0.1}\n");
+  EXPECT_EQ(w.base_model.type, BaseModelType::Water2);
+  EXPECT_EQ(w.base_model.water2.command_latency, 0.1);
+  EXPECT_EQ(w.base_model.water2.status_period, 0.5);
+  try {
+    load("  base_model: water2\n  water2: {comand_latency: 0.1}\n");
+    FAIL() << "an unknown water2 key must fail";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("comand_latency"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(load("  base_model: water3\n"), std::invalid_argument);
+  EXPECT_THROW(load("  base_model: water2\n  water2: {status_period: 1.5}\n"), std::invalid_argument);
+}
