@@ -1,7 +1,8 @@
 // ObstacleMonitor (the logic of ehc_obstacle_node), without a ROS master: nothing is published
 // while the joint state or odometry is missing, stale or rejected; the distances carry the
 // newest state stamp; exclusion lists expire; cloud insertions are rate-limited; the robot's own
-// points are removed only with a fresh state. Times are plain numbers: nothing is timed.
+// points are removed only with a fresh state; the work per cloud is bounded (voxel decimation,
+// point budget) for a full 640x480 D435 frame. Times are plain numbers: nothing is timed.
 
 #include "ehc_control/config_node.h"
 #include "ehc_perception/obstacle_monitor.h"
@@ -130,4 +131,64 @@ TEST(ObstacleMonitor, ParamsAndLinksAreValidated) {
       ehc_control::ConfigNode::loadString("node: {state_timeout: 0.3}\n", "obst.yaml", "ObstacleNode").child("node"));
   EXPECT_EQ(p.state_timeout, 0.3);
   EXPECT_EQ(p.exclusion_timeout, 0.5);
+}
+
+namespace {
+/// A full 640x480 D435 frame (pinhole, fx = fy = 615) of a wall 1.5 m in front of a camera at
+/// (0, 0, 1) looking along +x, in the world frame: 307 200 points.
+PointList fullD435Wall() {
+  PointList pts;
+  pts.reserve(640 * 480);
+  for (int v = 0; v < 480; ++v)
+    for (int u = 0; u < 640; ++u) {
+      const float depth = 1.5f;
+      const float right = (u - 320.0f) / 615.0f * depth, down = (v - 240.0f) / 615.0f * depth;
+      pts.emplace_back(depth, -right, 1.0f - down);
+    }
+  return pts;
+}
+}  // namespace
+
+TEST(ObstacleMonitor, AFullD435FrameIsBoundedByVoxelDecimationAndThePointBudget) {
+  Rig r;
+  const PointList frame = fullD435Wall();
+  ASSERT_EQ(frame.size(), 307200u);
+  const ObstacleMonitorParams& p = r.monitor.params();
+  // Voxel step: one point per 2 cm voxel; the wall (1.56 x 1.17 m at 1.5 m) has about 4 600.
+  int after_voxel = 0;
+  const PointList bounded = r.monitor.boundCloud(frame, &after_voxel);
+  EXPECT_GT(after_voxel, 3000);
+  EXPECT_LT(after_voxel, 10000);
+  EXPECT_LE(static_cast<int>(bounded.size()), p.max_cloud_points);
+  EXPECT_EQ(static_cast<int>(bounded.size()), std::min(after_voxel, p.max_cloud_points));
+  // Deterministic, and every kept point is one of the frame's.
+  EXPECT_EQ(r.monitor.boundCloud(frame), bounded);
+  // The insertion inserts the bounded cloud only, and the wall is in the map.
+  r.state(1.0);
+  const ObstacleMonitor::CloudInsertion ins = r.monitor.insertCloud(1.0, frame, Eigen::Vector3d(0.0, 0.0, 1.0));
+  EXPECT_EQ(ins.received, 307200);
+  EXPECT_EQ(ins.after_voxel, after_voxel);
+  EXPECT_EQ(ins.stats.input, static_cast<int>(bounded.size()));
+  EXPECT_GT(r.monitor.field().occupiedLeafCount(), static_cast<std::size_t>(bounded.size() / 2));
+  // A budget smaller than the decimated cloud: an even stride, at most the budget.
+  ObstacleMonitorParams small;
+  small.max_cloud_points = 100;
+  ObstacleMonitor tight(r.robot, ObstacleMapConfig(), small);
+  EXPECT_EQ(tight.boundCloud(frame).size(), 100u);
+  // Non-finite points never count; voxel decimation off keeps every finite point (up to the budget).
+  ObstacleMonitorParams off;
+  off.cloud_voxel = 0.0;
+  off.max_cloud_points = 1000000;
+  ObstacleMonitor raw(r.robot, ObstacleMapConfig(), off);
+  PointList with_nan = {Eigen::Vector3f(1, 0, 1), Eigen::Vector3f(std::nanf(""), 0, 1), Eigen::Vector3f(1, 0, 1)};
+  EXPECT_EQ(raw.boundCloud(with_nan).size(), 2u);
+  EXPECT_EQ(r.monitor.boundCloud(with_nan).size(), 1u);  // the same voxel twice
+  // Parameters: the budget must be positive and is read from the node mapping.
+  EXPECT_THROW(loadObstacleMonitorParams(ehc_control::ConfigNode::loadString("node: {max_cloud_points: 0}\n",
+                                                                             "obst.yaml", "ObstacleNode").child("node")),
+               std::invalid_argument);
+  const ObstacleMonitorParams q = loadObstacleMonitorParams(ehc_control::ConfigNode::loadString(
+      "node: {cloud_voxel: 0.05, max_cloud_points: 500}\n", "obst.yaml", "ObstacleNode").child("node"));
+  EXPECT_EQ(q.cloud_voxel, 0.05);
+  EXPECT_EQ(q.max_cloud_points, 500);
 }

@@ -7,6 +7,7 @@
 #include <visp3/core/vpMatrix.h>
 #include <visp3/core/vpQuadProg.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <sstream>
@@ -64,6 +65,8 @@ void QpControllerParams::validate() const {
       throw std::invalid_argument("[QpControllerParams] obstacle_influence must be > obstacle_stop_links." + link);
   }
   requireRange(kOwner, "obstacle_damper_gain", obstacle_damper_gain, 1e-3, 100.0);
+  requireRange(kOwner, "max_obstacle_rows", max_obstacle_rows, 0, 1000);
+  requireRange(kOwner, "max_solve_time", max_solve_time, 1e-6, 1.0);
   requireRange(kOwner, "tsmm_switch_distance", tsmm_switch_distance, 0.0, 5.0);
   requireRange(kOwner, "arrival_position", arrival_position, 1e-5, 1.0);
   requireRange(kOwner, "arrival_orientation", arrival_orientation, 1e-5, M_PI);
@@ -82,7 +85,8 @@ std::string QpControllerParams::summary() const {
      << " rad, gain " << joint_damper_gain << "; obstacle dampers: d_i " << obstacle_influence
      << " m, d_s " << obstacle_stop << " m";
   for (const auto& [link, d] : obstacle_stop_links) os << " (" << link << " " << d << " m)";
-  os << ", gain " << obstacle_damper_gain
+  os << ", gain " << obstacle_damper_gain << ", at most " << max_obstacle_rows << " rows (nearest first)"
+     << "; QP budget " << max_solve_time * 1e3 << " ms"
      << "; tsmm switch " << tsmm_switch_distance << " m; arrival " << arrival_position << " m / "
      << arrival_orientation * 180.0 / M_PI << " deg";
   return os.str();
@@ -118,6 +122,8 @@ QpControllerParams loadQpControllerParams(const ConfigNode& n) {
     for (const auto& kv : links.yaml()) p.obstacle_stop_links[kv.first.as<std::string>()] = links.require<double>(kv.first.as<std::string>());
   }
   p.obstacle_damper_gain = n.get("obstacle_damper_gain", p.obstacle_damper_gain);
+  p.max_obstacle_rows = n.get("max_obstacle_rows", p.max_obstacle_rows);
+  p.max_solve_time = n.get("max_solve_time", p.max_solve_time);
   p.tsmm_switch_distance = n.get("tsmm_switch_distance", p.tsmm_switch_distance);
   p.arrival_position = n.get("arrival_position", p.arrival_position);
   p.arrival_orientation = n.get("arrival_orientation_deg", p.arrival_orientation * 180.0 / M_PI) * M_PI / 180.0;
@@ -186,6 +192,34 @@ ControllerCommand EhcQpController::fail(ControllerCommand c, const std::string& 
   c.qp_status = QpStatus::Failed;
   c.failure = why;
   return c;
+}
+
+std::vector<const ObstaclePair*> EhcQpController::nearestObstaclePairs(const std::vector<ObstaclePair>& obstacles,
+                                                                       std::string* bad_pair) const {
+  std::vector<const ObstaclePair*> in_range;
+  for (const ObstaclePair& o : obstacles) {
+    if (!(std::isfinite(o.distance) && o.link_point.allFinite() && o.normal.allFinite())) {
+      *bad_pair = "non-finite obstacle pair for link '" + o.link + "'";
+      return {};
+    }
+    if (o.distance >= params_.obstacle_influence) continue;
+    if (!model_->hasLink(o.link)) {
+      *bad_pair = "obstacle pair for unknown link '" + o.link + "'";
+      return {};
+    }
+    if (o.normal.norm() < 1e-9) {
+      *bad_pair = "obstacle pair with a zero normal for link '" + o.link + "'";
+      return {};
+    }
+    in_range.push_back(&o);
+  }
+  const std::size_t keep = std::min(in_range.size(), static_cast<std::size_t>(params_.max_obstacle_rows));
+  // Nearest first: smallest margin to the link's stop distance; ties keep the input order.
+  auto margin = [this](const ObstaclePair* o) { return o->distance - params_.obstacleStop(o->link); };
+  std::stable_sort(in_range.begin(), in_range.end(),
+                   [&](const ObstaclePair* a, const ObstaclePair* b) { return margin(a) < margin(b); });
+  in_range.resize(keep);
+  return in_range;
 }
 
 ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q,
@@ -298,15 +332,13 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
   };
   std::vector<Row> rows;
   const double di = params_.obstacle_influence;
-  for (const ObstaclePair& o : obstacles) {
+  std::string bad_pair;
+  const std::vector<const ObstaclePair*> nearest = nearestObstaclePairs(obstacles, &bad_pair);
+  if (!bad_pair.empty()) return fail(out, bad_pair);
+  for (const ObstaclePair* op : nearest) {
+    const ObstaclePair& o = *op;
     const double ds = params_.obstacleStop(o.link);
-    if (!(std::isfinite(o.distance) && o.link_point.allFinite() && o.normal.allFinite()))
-      return fail(out, "non-finite obstacle pair for link '" + o.link + "'");
-    if (o.distance >= di) continue;
-    if (!m.hasLink(o.link)) return fail(out, "obstacle pair for unknown link '" + o.link + "'");
-    const double nn = o.normal.norm();
-    if (nn < 1e-9) return fail(out, "obstacle pair with a zero normal for link '" + o.link + "'");
-    const Eigen::Vector3d n = o.normal / nn;
+    const Eigen::Vector3d n = o.normal.normalized();
     Eigen::Isometry3d T_link;
     const Matrix6Xd Jl = m.jacobian(base_pose, q, o.link, &T_link);
     const Eigen::Vector3d rvec = o.link_point - T_link.translation();
@@ -387,6 +419,12 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
     return fail(out, std::string("vpQuadProg: ") + ex.what());
   }
   out.solve_time_us = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count();
+  if (out.solve_time_us > params_.max_solve_time * 1e6) {
+    std::ostringstream os;
+    os << "QP took " << out.solve_time_us * 1e-3 << " ms, over max_solve_time " << params_.max_solve_time * 1e3
+       << " ms (" << n_in << " inequality rows)";
+    return fail(out, os.str());
+  }
   if (!solved) {
     s.qp.resetActiveSet();
     return fail(out, "QP infeasible");

@@ -28,12 +28,18 @@ struct ObstacleMonitorParams {
   double state_timeout = 0.2;       ///< s: no distances with a joint state or odometry this old
   double exclusion_timeout = 0.5;   ///< s: an older exclusion list is dropped
   double max_insert_rate_hz = 5.0;  ///< clouds inserted at most this often
+  /// Work per cloud is bounded, whatever the camera sends (a full 640x480 D435 frame is 307 200
+  /// points; the rays of each inserted point cost up to max_range / resolution voxel updates):
+  /// m, one point per voxel of this edge is kept (the first, in cloud order); 0 = off.
+  double cloud_voxel = 0.02;
+  /// then at most this many points are inserted (an even stride over the decimated points).
+  int max_cloud_points = 3000;
   void validate() const;            ///< throws "[ObstacleMonitorParams] ..."
   std::string summary() const;
 };
 
-/// Reads state_timeout, exclusion_timeout and max_insert_rate_hz of the obstacle node's `node`
-/// mapping (all optional).
+/// Reads state_timeout, exclusion_timeout, max_insert_rate_hz, cloud_voxel and
+/// max_cloud_points of the obstacle node's `node` mapping (all optional).
 ObstacleMonitorParams loadObstacleMonitorParams(const ehc_control::ConfigNode& node);
 
 /// What ObstacleMonitor::update decided.
@@ -69,11 +75,18 @@ class ObstacleMonitor {
   /// latest insertion), false if the previous one is younger than 1 / max_insert_rate_hz.
   bool acceptCloud(double now);
   struct CloudInsertion {
-    ObstacleDistanceField::InsertStats stats;
+    ObstacleDistanceField::InsertStats stats;  ///< of the bounded cloud (stats.input = kept)
+    int received = 0;            ///< points in the cloud given
+    int after_voxel = 0;         ///< finite points left by the voxel decimation (cloud_voxel)
     bool self_filtered = false;  ///< false: no fresh state, the robot's own points stayed in
   };
-  /// Inserts a world-frame cloud seen from `sensor_origin` (world).
+  /// Inserts a world-frame cloud seen from `sensor_origin` (world): bounded first (boundCloud),
+  /// then the robot's own points removed (fresh state only) and the rest ray-cast into the map.
   CloudInsertion insertCloud(double now, const PointList& points, const Eigen::Vector3d& sensor_origin);
+  /// The bounded cloud insertCloud inserts: non-finite points dropped, one point per
+  /// cloud_voxel voxel (the first), then at most max_cloud_points (even stride, order kept).
+  /// `after_voxel` (optional) receives the count after the voxel step.
+  PointList boundCloud(const PointList& points, int* after_voxel = nullptr) const;
 
   /// The cycle at `now`: drops an expired exclusion list, computes the distances. Throws what
   /// ObstacleDistanceField::distances throws.

@@ -5,8 +5,9 @@
 // runs the timer and publishes.
 //   rosrun ehc_perception ehc_obstacle_node _config:=config/perception/obstacle_node.yaml
 // Clouds (at most max_insert_rate_hz) are transformed into the world frame with tf2 at their
-// stamp and inserted with rays from the sensor origin; the robot's own points are removed
-// using the latest state. A timer publishes the distances of every link closer than the
+// stamp, bounded (one point per cloud_voxel voxel, then at most max_cloud_points: the work per
+// cloud does not grow with the camera's resolution) and inserted with rays from the sensor
+// origin; the robot's own points are removed using the latest state. A timer publishes the distances of every link closer than the
 // influence distance while the state (/joint_states + /odom) is fresh; with a stale state
 // nothing is published and an error is logged (the controller's watchdog then stops).
 // Exclusion spheres (ehc_msgs/ObstacleExclusion on exclusion_topic, e.g. the object being
