@@ -133,25 +133,10 @@ TEST(ObstacleMonitor, ParamsAndLinksAreValidated) {
   EXPECT_EQ(p.exclusion_timeout, 0.5);
 }
 
-namespace {
-/// A full 640x480 D435 frame (pinhole, fx = fy = 615) of a wall 1.5 m in front of a camera at
-/// (0, 0, 1) looking along +x, in the world frame: 307 200 points.
-PointList fullD435Wall() {
-  PointList pts;
-  pts.reserve(640 * 480);
-  for (int v = 0; v < 480; ++v)
-    for (int u = 0; u < 640; ++u) {
-      const float depth = 1.5f;
-      const float right = (u - 320.0f) / 615.0f * depth, down = (v - 240.0f) / 615.0f * depth;
-      pts.emplace_back(depth, -right, 1.0f - down);
-    }
-  return pts;
-}
-}  // namespace
 
 TEST(ObstacleMonitor, AFullD435FrameIsBoundedByVoxelDecimationAndThePointBudget) {
   Rig r;
-  const PointList frame = fullD435Wall();
+  const PointList frame = test::fullD435Wall();
   ASSERT_EQ(frame.size(), 307200u);
   const ObstacleMonitorParams& p = r.monitor.params();
   // Voxel step: one point per 2 cm voxel; the wall (1.56 x 1.17 m at 1.5 m) has about 4 600.
@@ -191,4 +176,34 @@ TEST(ObstacleMonitor, AFullD435FrameIsBoundedByVoxelDecimationAndThePointBudget)
       "node: {cloud_voxel: 0.05, max_cloud_points: 500}\n", "obst.yaml", "ObstacleNode").child("node"));
   EXPECT_EQ(q.cloud_voxel, 0.05);
   EXPECT_EQ(q.max_cloud_points, 500);
+}
+
+TEST(ObstacleMonitor, AQueuedCloudIsRayCastInBoundedChunksPerUpdate) {
+  Rig r;
+  r.state(1.0);
+  const PointList frame = test::fullD435Wall();
+  const ObstacleMonitor::CloudInsertion q = r.monitor.queueCloud(1.0, frame, Eigen::Vector3d(0.0, 0.0, 1.0));
+  const int budget = r.monitor.params().points_per_update;
+  EXPECT_EQ(q.queued, r.monitor.params().max_cloud_points);
+  EXPECT_EQ(q.replaced, 0);
+  EXPECT_TRUE(q.self_filtered);
+  EXPECT_EQ(r.monitor.field().occupiedLeafCount(), 0u);  // queued, nothing cast yet
+  // Each update casts at most points_per_update; the distances are computed every time.
+  int updates = 0;
+  while (r.monitor.queuedPoints() > 0) {
+    const ObstacleReport rep = r.monitor.update(1.0 + 0.02 * ++updates);
+    EXPECT_LE(rep.inserted.input, budget);
+    EXPECT_EQ(rep.status, ObstacleReport::Status::Publish);
+    r.state(1.0 + 0.02 * updates);
+    ASSERT_LT(updates, 1000);
+  }
+  EXPECT_EQ(updates, (q.queued + budget - 1) / budget);
+  EXPECT_GT(r.monitor.field().occupiedLeafCount(), static_cast<std::size_t>(q.queued / 2));
+  EXPECT_EQ(r.monitor.update(2.0).inserted.input, 0);  // nothing left
+  // A newer cloud replaces an unfinished one.
+  r.monitor.queueCloud(2.0, frame, Eigen::Vector3d(0.0, 0.0, 1.0));
+  r.monitor.update(2.0);
+  const ObstacleMonitor::CloudInsertion q2 = r.monitor.queueCloud(2.0, frame, Eigen::Vector3d(0.0, 0.0, 1.0));
+  EXPECT_EQ(q2.replaced, q.queued - budget);
+  EXPECT_THROW(r.monitor.queueCloud(2.0, frame, Eigen::Vector3d(std::nan(""), 0.0, 1.0)), std::invalid_argument);
 }

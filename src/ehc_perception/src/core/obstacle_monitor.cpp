@@ -19,6 +19,7 @@ void ObstacleMonitorParams::validate() const {
   ehc_control::requireRange(o, "node.max_insert_rate_hz", max_insert_rate_hz, 0.01, 100.0);
   ehc_control::requireRange(o, "node.cloud_voxel", cloud_voxel, 0.0, 1.0);
   ehc_control::requireRange(o, "node.max_cloud_points", max_cloud_points, 1, 1000000);
+  ehc_control::requireRange(o, "node.points_per_update", points_per_update, 1, 1000000);
 }
 
 std::string ObstacleMonitorParams::summary() const {
@@ -26,7 +27,7 @@ std::string ObstacleMonitorParams::summary() const {
   os << "state timeout " << state_timeout << " s, exclusion timeout " << exclusion_timeout
      << " s, clouds inserted at <= " << max_insert_rate_hz << " Hz, decimated to one point per "
      << cloud_voxel << " m voxel" << (cloud_voxel > 0.0 ? "" : " (off)") << ", at most " << max_cloud_points
-     << " points per cloud";
+     << " points per cloud, ray-cast " << points_per_update << " per update";
   return os.str();
 }
 
@@ -37,6 +38,7 @@ ObstacleMonitorParams loadObstacleMonitorParams(const ehc_control::ConfigNode& n
   p.max_insert_rate_hz = n.get("max_insert_rate_hz", p.max_insert_rate_hz);
   p.cloud_voxel = n.get("cloud_voxel", p.cloud_voxel);
   p.max_cloud_points = n.get("max_cloud_points", p.max_cloud_points);
+  p.points_per_update = n.get("points_per_update", p.points_per_update);
   n.validate(p);
   return p;
 }
@@ -125,19 +127,37 @@ PointList ObstacleMonitor::boundCloud(const PointList& points, int* after_voxel)
   return strided;
 }
 
-ObstacleMonitor::CloudInsertion ObstacleMonitor::insertCloud(double now, const PointList& points,
-                                                             const Eigen::Vector3d& sensor_origin) {
+ObstacleMonitor::CloudInsertion ObstacleMonitor::queueCloud(double now, const PointList& points,
+                                                            const Eigen::Vector3d& sensor_origin) {
+  if (!sensor_origin.allFinite()) throw std::invalid_argument("[ObstacleMonitor] sensor origin is not finite");
   CloudInsertion r;
   r.received = static_cast<int>(points.size());
-  const PointList bounded = boundCloud(points, &r.after_voxel);
+  r.replaced = static_cast<int>(queuedPoints());
+  queue_.points = boundCloud(points, &r.after_voxel);
+  queue_.next = 0;
+  queue_.origin = sensor_origin;
+  r.queued = static_cast<int>(queue_.points.size());
   r.self_filtered = stateFresh(now);
-  if (r.self_filtered) {
-    const auto poses = field_.linkPoses(model_, base_, q_);
-    r.stats = field_.insertCloud(bounded, sensor_origin, &poses);
-  } else {
-    r.stats = field_.insertCloud(bounded, sensor_origin);
-  }
+  // The robot as it is when the cloud arrives: it moves while the cloud is inserted.
+  if (r.self_filtered) queue_.link_poses = field_.linkPoses(model_, base_, q_);
+  else queue_.link_poses.reset();
   return r;
+}
+
+ObstacleMonitor::CloudInsertion ObstacleMonitor::insertCloud(double now, const PointList& points,
+                                                             const Eigen::Vector3d& sensor_origin) {
+  CloudInsertion r = queueCloud(now, points, sensor_origin);
+  r.stats = insertQueued(queuedPoints());
+  return r;
+}
+
+ObstacleDistanceField::InsertStats ObstacleMonitor::insertQueued(std::size_t max_points) {
+  const std::size_t n = std::min(max_points, queuedPoints());
+  if (n == 0) return {};
+  const auto first = queue_.points.begin() + static_cast<std::ptrdiff_t>(queue_.next);
+  const PointList chunk(first, first + static_cast<std::ptrdiff_t>(n));
+  queue_.next += n;
+  return field_.insertCloud(chunk, queue_.origin, queue_.link_poses ? &*queue_.link_poses : nullptr);
 }
 
 bool ObstacleMonitor::stateFresh(double now, double* stamp) const {
@@ -148,6 +168,7 @@ bool ObstacleMonitor::stateFresh(double now, double* stamp) const {
 
 ObstacleReport ObstacleMonitor::update(double now) {
   ObstacleReport r;
+  r.inserted = insertQueued(static_cast<std::size_t>(params_.points_per_update));
   if (!stateFresh(now, &r.stamp)) {
     r.status = ObstacleReport::Status::StateStale;
     r.stamp = 0.0;
