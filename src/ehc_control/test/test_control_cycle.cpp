@@ -251,14 +251,23 @@ TEST(ControlCycle, ObstacleRowsAreBoundedWhateverTheListLength) {
 
 TEST(ControlCycle, ASolveOverItsTimeBudgetGivesAZeroCommandAndSaysWhy) {
   ControlCycleParams p = cycleParams();
-  p.controller.max_solve_time = 1e-6;  // 1 us: no build + solve fits
+  p.watchdog.max_solve_time = 0.05;
   Loop loop(p);
   const Eigen::Isometry3d target = approachPose(1.5, 0.0, 0.8, Eigen::Vector3d(1, 0, -1));
+  // A fake clock: this cycle "takes" 60 ms (the state stays fresh: 0.06 s < 0.2 s).
+  double started = loop.now();
+  loop.cycle.setClock([&] { return started + 0.06; });
   const ControlCycleOutput out = loop.step(&target);
   EXPECT_EQ(out.status.phase, ControlPhase::QpFailed);
   EXPECT_EQ(out.status.qp_status, QpStatus::Failed);
   EXPECT_NE(out.status.reason.find("max_solve_time"), std::string::npos) << out.status.reason;
   EXPECT_TRUE(isZero(out.velocity));
+  // 40 ms: within the budget, sent.
+  started = loop.now();
+  loop.cycle.setClock([&] { return started + 0.04; });
+  const ControlCycleOutput ok = loop.step(&target);
+  EXPECT_EQ(ok.status.phase, ControlPhase::Tracking) << ok.status.reason;
+  EXPECT_FALSE(isZero(ok.velocity));
 }
 
 TEST(ControlCycle, StoppedIsAZeroCommandWithTheInputAges) {

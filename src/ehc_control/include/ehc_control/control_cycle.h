@@ -100,10 +100,11 @@ class ControlCycle {
   /// Link-obstacle pairs (world); used while younger than watchdog.obstacle_timeout.
   std::string setObstacles(double t, const std::vector<ObstaclePair>& obstacles);
 
-  /// One control cycle at time `now`. With a clock (setClock), the watchdog is checked again
-  /// at the clock's time after the QP solve: a command computed from a state, target or
-  /// obstacle list that went stale during the cycle is replaced by zeros (phase and reason of
-  /// that check, prefixed "after the ... s cycle").
+  /// One control cycle at time `now`. With a clock (setClock), the cycle's duration and the
+  /// watchdog are checked again at the clock's time after the QP solve: a cycle longer than
+  /// watchdog.max_solve_time gives zeros and QP_FAILED; a command computed from a state, target
+  /// or obstacle list that went stale during the cycle is replaced by zeros (phase and reason
+  /// of that check, prefixed "after the ... s cycle").
   ControlCycleOutput update(double now);
   /// The time source of the after-solve check (the node: ROS time; tests: a fake clock). An
   /// empty function: no after-solve check (time stands still during a cycle, e.g. lock-step).

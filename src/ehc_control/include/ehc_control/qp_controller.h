@@ -15,9 +15,9 @@
 //                        neo_c w_base = constant
 //                        tsmm  base only (arm held) until the TCP is within d of the target
 //                              horizontally, then arm only (base held).
-// A failed, infeasible, non-finite or over-budget (max_solve_time) solve gives a zero command
-// and qp_status QP_FAILED; the command never contains NaN/Inf and never exceeds a velocity
-// limit. The obstacle rows are bounded (max_obstacle_rows, nearest pairs first). ROS-free.
+// A failed, infeasible or non-finite solve gives a zero command and qp_status QP_FAILED (the
+// time budget: ControlCycle, watchdog.max_solve_time); the command never contains NaN/Inf and
+// never exceeds a velocity limit. The obstacle rows are bounded (max_obstacle_rows, nearest pairs first). ROS-free.
 
 #include "ehc_control/control_status.h"
 #include "ehc_control/ehc_weighting.h"
@@ -76,10 +76,6 @@ struct QpControllerParams {
   /// the nearest (smallest distance - d_s) are kept, the rest dropped for this cycle. Bounds
   /// the build (one link Jacobian per row) and the solve whatever the obstacle node sends.
   int max_obstacle_rows = 24;
-  /// s: a QP build + solve that took longer (steady clock) is a failure: zero command,
-  /// QP_FAILED, reason "QP took ... ms, over max_solve_time ...". (vpQuadProg has no iteration
-  /// cap; with the rows bounded an overrun means a starved CPU, and its command is late.)
-  double max_solve_time = 0.05;
   double tsmm_switch_distance = 0.2;   ///< m: tsmm switches to the arm stage here
   double arrival_position = 0.01;      ///< m
   double arrival_orientation = 2.0 * M_PI / 180.0;  ///< rad

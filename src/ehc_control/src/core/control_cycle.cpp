@@ -175,8 +175,8 @@ ControlCycleOutput ControlCycle::update(double now) {
       st.qp_status = c.qp_status;
       static_cast<QpStepFigures&>(st) = c;
       if (c.ok) out.velocity = c.velocity;
-      // The solve took time: a command computed from a state (or target, or obstacles) that
-      // went stale meanwhile is not sent.
+      // The solve took time: a cycle over its budget, or a command computed from a state (or
+      // target, or obstacles) that went stale meanwhile, is not sent.
       if (clock_) {
         const double after = clock_();
         const SupervisorDecision late = supervisor_->check(after);
@@ -189,6 +189,14 @@ ControlCycleOutput ControlCycle::update(double now) {
           st.state_age = supervisor_->stateAge(after);
           st.target_age = supervisor_->targetAge(after);
           st.obstacles_age = supervisor_->obstaclesAge(after);
+        } else if (after - now > params_.watchdog.max_solve_time) {
+          out.velocity.setZero();
+          st.phase = ControlPhase::QpFailed;
+          st.qp_status = QpStatus::Failed;
+          std::ostringstream os;
+          os << "cycle took " << (after - now) * 1e3 << " ms (QP " << c.solve_time_us * 1e-3
+             << " ms), over max_solve_time " << params_.watchdog.max_solve_time * 1e3 << " ms";
+          st.reason = os.str();
         }
       }
     }

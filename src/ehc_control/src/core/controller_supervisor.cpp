@@ -13,6 +13,7 @@ void SupervisorParams::validate() const {
   requireRange("SupervisorParams", "state_timeout", state_timeout, 1e-3, 10.0);
   requireRange("SupervisorParams", "target_timeout", target_timeout, 1e-3, 60.0);
   requireRange("SupervisorParams", "obstacle_timeout", obstacle_timeout, 1e-3, 60.0);
+  requireRange("SupervisorParams", "max_solve_time", max_solve_time, 1e-6, 1.0);
 }
 
 std::string SupervisorParams::summary() const {
@@ -20,7 +21,7 @@ std::string SupervisorParams::summary() const {
   os << "watchdog: state " << state_timeout << " s, target " << target_timeout << " s, obstacles "
      << obstacle_timeout << " s (" << (require_obstacles ? "required: missing or stale -> OBSTACLES_STALE"
                                                          : "optional: tracks without when stale")
-     << "), receipt times on this node's clock";
+     << "), receipt times on this node's clock; cycle budget " << max_solve_time * 1e3 << " ms";
   return os.str();
 }
 
@@ -37,6 +38,7 @@ SupervisorParams loadSupervisorParams(const ConfigNode& n) {
   p.target_timeout = n.get("target_timeout", p.target_timeout);
   p.obstacle_timeout = n.get("obstacle_timeout", p.obstacle_timeout);
   p.require_obstacles = n.get("require_obstacles", p.require_obstacles);
+  p.max_solve_time = n.get("max_solve_time", p.max_solve_time);
   p.validate();
   return p;
 }

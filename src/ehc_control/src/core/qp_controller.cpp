@@ -66,7 +66,6 @@ void QpControllerParams::validate() const {
   }
   requireRange(kOwner, "obstacle_damper_gain", obstacle_damper_gain, 1e-3, 100.0);
   requireRange(kOwner, "max_obstacle_rows", max_obstacle_rows, 0, 1000);
-  requireRange(kOwner, "max_solve_time", max_solve_time, 1e-6, 1.0);
   requireRange(kOwner, "tsmm_switch_distance", tsmm_switch_distance, 0.0, 5.0);
   requireRange(kOwner, "arrival_position", arrival_position, 1e-5, 1.0);
   requireRange(kOwner, "arrival_orientation", arrival_orientation, 1e-5, M_PI);
@@ -86,7 +85,6 @@ std::string QpControllerParams::summary() const {
      << " m, d_s " << obstacle_stop << " m";
   for (const auto& [link, d] : obstacle_stop_links) os << " (" << link << " " << d << " m)";
   os << ", gain " << obstacle_damper_gain << ", at most " << max_obstacle_rows << " rows (nearest first)"
-     << "; QP budget " << max_solve_time * 1e3 << " ms"
      << "; tsmm switch " << tsmm_switch_distance << " m; arrival " << arrival_position << " m / "
      << arrival_orientation * 180.0 / M_PI << " deg";
   return os.str();
@@ -123,7 +121,6 @@ QpControllerParams loadQpControllerParams(const ConfigNode& n) {
   }
   p.obstacle_damper_gain = n.get("obstacle_damper_gain", p.obstacle_damper_gain);
   p.max_obstacle_rows = n.get("max_obstacle_rows", p.max_obstacle_rows);
-  p.max_solve_time = n.get("max_solve_time", p.max_solve_time);
   p.tsmm_switch_distance = n.get("tsmm_switch_distance", p.tsmm_switch_distance);
   p.arrival_position = n.get("arrival_position", p.arrival_position);
   p.arrival_orientation = n.get("arrival_orientation_deg", p.arrival_orientation * 180.0 / M_PI) * M_PI / 180.0;
@@ -419,12 +416,6 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
     return fail(out, std::string("vpQuadProg: ") + ex.what());
   }
   out.solve_time_us = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count();
-  if (out.solve_time_us > params_.max_solve_time * 1e6) {
-    std::ostringstream os;
-    os << "QP took " << out.solve_time_us * 1e-3 << " ms, over max_solve_time " << params_.max_solve_time * 1e3
-       << " ms (" << n_in << " inequality rows)";
-    return fail(out, os.str());
-  }
   if (!solved) {
     s.qp.resetActiveSet();
     return fail(out, "QP infeasible");
