@@ -2,7 +2,9 @@
 // (proportional, PBVS, PBVS + MPBS); the watchdog (stale state -> STOPPED, no target -> IDLE,
 // old target -> TARGET_LOST, a fresh one resumes) with zero commands; rejected inputs; TfM
 // bookkeeping with the watched centre; a new target restarts the QP (TSMM stage); parameter
-// loading from the shipped controller.yaml and the configuration checks.
+// loading from the shipped controller.yaml and the configuration checks. Issue 16: required
+// obstacles (OBSTACLES_STALE), no command from a state that went stale during the solve (fake
+// clock), bounded obstacle rows (200 / 1000 pairs), the solve-time budget.
 
 #include "ehc_control/config_node.h"
 #include "ehc_control/control_cycle.h"
@@ -144,6 +146,140 @@ TEST(ControlCycle, StaleJointStateStopsWithZeroCommand) {
   // A fresh joint state resumes.
   loop.feedState(t);
   EXPECT_EQ(loop.cycle.update(t).status.phase, ControlPhase::Tracking);
+}
+
+/// `n` link-obstacle pairs within the influence distance around the arm, deterministic.
+std::vector<ObstaclePair> manyPairs(const ControlCycle& cycle, int n) {
+  const std::vector<std::string> links = {"link2", "link3", "link4", "link5", "link6"};
+  std::vector<ObstaclePair> pairs;
+  for (int i = 0; i < n; ++i) {
+    ObstaclePair o;
+    o.link = links[static_cast<std::size_t>(i) % links.size()];
+    const double a = 0.37 * i;
+    o.normal = Eigen::Vector3d(std::cos(a), std::sin(a), 0.3).normalized();
+    o.link_point = cycle.model().fk(Eigen::Vector3d::Zero(), cycle.model().config().arm_ready, o.link).translation();
+    o.distance = 0.10 + 0.15 * ((i * 7919) % 1000) / 1000.0;  // 0.10 .. 0.25 m, all < d_i 0.3
+    o.obstacle_point = o.link_point - o.distance * o.normal;
+    pairs.push_back(o);
+  }
+  return pairs;
+}
+
+TEST(ControlCycle, RequiredObstaclesMissingOrStaleStopWithObstaclesStale) {
+  ControlCycleParams p = cycleParams();
+  p.watchdog.require_obstacles = true;
+  Loop loop(p);
+  const Eigen::Isometry3d target = approachPose(1.5, 0.0, 0.8, Eigen::Vector3d(1, 0, -1));
+  // No obstacle list yet: stopped (not tracking blind), and the status says why.
+  ControlCycleOutput out = loop.step(&target);
+  EXPECT_EQ(out.status.phase, ControlPhase::ObstaclesStale);
+  EXPECT_NE(out.status.reason.find("no obstacle list"), std::string::npos) << out.status.reason;
+  EXPECT_TRUE(isZero(out.velocity));
+  EXPECT_EQ(out.status.obstacles_age, -1.0);
+  // A fresh list (empty: nothing near) lets it track.
+  const double t_list = loop.now();
+  ASSERT_EQ(loop.cycle.setObstacles(t_list, {}), "");
+  out = loop.step(&target);
+  EXPECT_EQ(out.status.phase, ControlPhase::Tracking) << out.status.reason;
+  EXPECT_FALSE(isZero(out.velocity));
+  // The obstacle node stalls or dies: state and target keep coming, the list ages past
+  // obstacle_timeout (0.5 s) -> stopped with zero commands.
+  ControlCycleOutput last;
+  while (loop.now() - t_list <= p.watchdog.obstacle_timeout) {
+    last = loop.step(&target);
+    EXPECT_EQ(last.status.phase, ControlPhase::Tracking);
+  }
+  out = loop.step(&target);
+  EXPECT_EQ(out.status.phase, ControlPhase::ObstaclesStale);
+  EXPECT_NE(out.status.reason.find("obstacle list is"), std::string::npos) << out.status.reason;
+  EXPECT_GT(out.status.obstacles_age, p.watchdog.obstacle_timeout);
+  EXPECT_TRUE(isZero(out.velocity));
+  // A fresh list resumes.
+  ASSERT_EQ(loop.cycle.setObstacles(loop.now(), {}), "");
+  EXPECT_EQ(loop.step(&target).status.phase, ControlPhase::Tracking);
+  // Not required (the default): the same stale list is dropped and the cycle tracks.
+  Loop optional(cycleParams());
+  ASSERT_EQ(optional.cycle.setObstacles(0.0, {}), "");
+  for (int i = 0; i < 80; ++i) EXPECT_EQ(optional.step(&target).status.phase, ControlPhase::Tracking);
+}
+
+TEST(ControlCycle, ACommandIsNeverComputedFromAStateOlderThanTheStateTimeout) {
+  Loop loop(cycleParams());
+  const Eigen::Isometry3d target = approachPose(1.5, 0.0, 0.8, Eigen::Vector3d(1, 0, -1));
+  // A fake clock: the solve "takes" `solve` seconds.
+  double solve = 0.001;
+  double started = 0.0;
+  loop.cycle.setClock([&] { return started + solve; });
+  started = loop.now();
+  ControlCycleOutput out = loop.step(&target);
+  EXPECT_EQ(out.status.phase, ControlPhase::Tracking) << out.status.reason;
+  EXPECT_FALSE(isZero(out.velocity));
+  // State stamped at the cycle start, fresh when the cycle starts (0.15 s < 0.2 s) but 0.35 s
+  // old when the solve ends: the command is not sent (before: sent, from a 0.35 s old state).
+  const double t_state = loop.now();
+  loop.feedState(t_state);
+  ASSERT_EQ(loop.cycle.setTarget(t_state + 0.15, target), "");
+  started = t_state + 0.15;
+  solve = 0.2;
+  out = loop.cycle.update(started);
+  EXPECT_EQ(out.status.phase, ControlPhase::Stopped);
+  EXPECT_NE(out.status.reason.find("after the"), std::string::npos) << out.status.reason;
+  EXPECT_NE(out.status.reason.find("joint state is"), std::string::npos) << out.status.reason;
+  EXPECT_TRUE(isZero(out.velocity));
+  EXPECT_NEAR(out.status.state_age, 0.35, 1e-9);  // the true age, at the end of the cycle
+  // A quick solve with the same inputs is sent.
+  solve = 0.01;
+  out = loop.cycle.update(started);
+  EXPECT_EQ(out.status.phase, ControlPhase::Tracking) << out.status.reason;
+  EXPECT_FALSE(isZero(out.velocity));
+  EXPECT_NEAR(out.status.state_age, 0.15, 1e-9);
+}
+
+TEST(ControlCycle, ObstacleRowsAreBoundedWhateverTheListLength) {
+  ControlCycleParams p = cycleParams();
+  p.controller.max_obstacle_rows = 12;
+  Loop loop(p);
+  const Eigen::Isometry3d target = approachPose(1.5, 0.0, 0.8, Eigen::Vector3d(1, 0, -1));
+  for (int n : {200, 1000}) {
+    ASSERT_EQ(loop.cycle.setObstacles(loop.now(), manyPairs(loop.cycle, n)), "");
+    const ControlCycleOutput out = loop.step(&target);
+    EXPECT_EQ(out.status.obstacle_rows, 12) << n << " pairs";
+    EXPECT_TRUE(out.velocity.allFinite());
+    EXPECT_NE(out.status.qp_status, QpStatus::NotRun);
+  }
+}
+
+TEST(ControlCycle, ASolveOverItsTimeBudgetGivesAZeroCommandAndSaysWhy) {
+  ControlCycleParams p = cycleParams();
+  p.watchdog.max_solve_time = 0.05;
+  Loop loop(p);
+  const Eigen::Isometry3d target = approachPose(1.5, 0.0, 0.8, Eigen::Vector3d(1, 0, -1));
+  // A fake clock: this cycle "takes" 60 ms (the state stays fresh: 0.06 s < 0.2 s).
+  double started = loop.now();
+  loop.cycle.setClock([&] { return started + 0.06; });
+  const ControlCycleOutput out = loop.step(&target);
+  EXPECT_EQ(out.status.phase, ControlPhase::QpFailed);
+  EXPECT_EQ(out.status.qp_status, QpStatus::Failed);
+  EXPECT_NE(out.status.reason.find("max_solve_time"), std::string::npos) << out.status.reason;
+  EXPECT_TRUE(isZero(out.velocity));
+  // 40 ms: within the budget, sent.
+  started = loop.now();
+  loop.cycle.setClock([&] { return started + 0.04; });
+  const ControlCycleOutput ok = loop.step(&target);
+  EXPECT_EQ(ok.status.phase, ControlPhase::Tracking) << ok.status.reason;
+  EXPECT_FALSE(isZero(ok.velocity));
+}
+
+TEST(ControlCycle, StoppedIsAZeroCommandWithTheInputAges) {
+  Loop loop(cycleParams());
+  const Eigen::Isometry3d target = approachPose(1.5, 0.0, 0.8, Eigen::Vector3d(1, 0, -1));
+  loop.step(&target);
+  const ControlCycleOutput out = loop.cycle.stopped(0.5, "watchdog");
+  EXPECT_EQ(out.status.phase, ControlPhase::Stopped);
+  EXPECT_EQ(out.status.reason, "watchdog");
+  EXPECT_TRUE(isZero(out.velocity));
+  EXPECT_NEAR(out.status.state_age, 0.5, 1e-12);
+  EXPECT_NEAR(out.status.target_age, 0.5, 1e-12);
 }
 
 TEST(ControlCycle, OldTargetIsLostWithZeroCommandsAndAFreshOneResumes) {

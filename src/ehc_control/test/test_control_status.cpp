@@ -39,9 +39,10 @@ void expectSameStrings(const std::vector<E>& values, const std::set<std::string>
 TEST(ControlStatus, PhaseStringsAreTheMessageConstants) {
   expectSameStrings(controlPhases(),
                     {Msg::PHASE_IDLE, Msg::PHASE_TRACKING, Msg::PHASE_ARRIVED, Msg::PHASE_TSMM_BASE,
-                     Msg::PHASE_TSMM_ARM, Msg::PHASE_STOPPED, Msg::PHASE_TARGET_LOST, Msg::PHASE_QP_FAILED},
+                     Msg::PHASE_TSMM_ARM, Msg::PHASE_STOPPED, Msg::PHASE_TARGET_LOST, Msg::PHASE_QP_FAILED,
+                     Msg::PHASE_OBSTACLES_STALE},
                     controlPhaseFromString);
-  EXPECT_EQ(controlPhases().size(), 8u);
+  EXPECT_EQ(controlPhases().size(), 9u);
   // Value by value.
   EXPECT_EQ(toString(ControlPhase::Idle), Msg::PHASE_IDLE);
   EXPECT_EQ(toString(ControlPhase::Tracking), Msg::PHASE_TRACKING);
@@ -51,6 +52,7 @@ TEST(ControlStatus, PhaseStringsAreTheMessageConstants) {
   EXPECT_EQ(toString(ControlPhase::Stopped), Msg::PHASE_STOPPED);
   EXPECT_EQ(toString(ControlPhase::TargetLost), Msg::PHASE_TARGET_LOST);
   EXPECT_EQ(toString(ControlPhase::QpFailed), Msg::PHASE_QP_FAILED);
+  EXPECT_EQ(toString(ControlPhase::ObstaclesStale), Msg::PHASE_OBSTACLES_STALE);
 }
 
 TEST(ControlStatus, QpStatusStringsAreTheMessageConstants) {

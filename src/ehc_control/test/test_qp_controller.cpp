@@ -348,3 +348,40 @@ TEST(EhcQpController, TenObstaclePairsClosedLoopReproducesTheRecordedCommands) {
   EXPECT_LE((sum_abs_v - expected_sum_abs_v).cwiseAbs().maxCoeff(), tol) << sum_abs_v.transpose();
   EXPECT_LE((state - expected_state).cwiseAbs().maxCoeff(), tol) << state.transpose();
 }
+
+TEST(EhcQpController, ObstacleRowsAreTheNearestPairsUpToTheBound) {
+  auto model = std::make_shared<const WholeBodyModel>(test::realmanConfig());
+  QpControllerParams p;
+  p.mode = ControlMode::NeoC;
+  p.max_obstacle_rows = 3;
+  p.obstacle_stop_links["link6"] = 0.01;
+  EhcQpController ctrl(model, p, nullptr);
+  std::vector<ObstaclePair> pairs;
+  // distance - d_s: link2 0.20, link3 0.05, link4 0.25, link5 0.35 (beyond d_i: never), link6 0.03,
+  // link2 0.10.
+  const std::vector<std::pair<std::string, double>> spec = {{"link2", 0.25}, {"link3", 0.10}, {"link4", 0.30},
+                                                            {"link5", 0.40}, {"link6", 0.04}, {"link2", 0.15}};
+  for (const auto& [link, d] : spec) {
+    ObstaclePair o;
+    o.link = link;
+    o.distance = d;
+    o.normal = Eigen::Vector3d::UnitX();
+    pairs.push_back(o);
+  }
+  std::string bad;
+  const std::vector<const ObstaclePair*> rows = ctrl.nearestObstaclePairs(pairs, &bad);
+  EXPECT_EQ(bad, "");
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_EQ(rows[0], &pairs[4]);  // link6, margin 0.03
+  EXPECT_EQ(rows[1], &pairs[1]);  // link3, margin 0.05
+  EXPECT_EQ(rows[2], &pairs[5]);  // link2, margin 0.10
+  // 1000 pairs: still 3 rows; a bad pair anywhere is reported.
+  std::vector<ObstaclePair> many(1000, pairs[1]);
+  EXPECT_EQ(ctrl.nearestObstaclePairs(many, &bad).size(), 3u);
+  many[999].normal.setZero();
+  EXPECT_TRUE(ctrl.nearestObstaclePairs(many, &bad).empty());
+  EXPECT_NE(bad.find("zero normal"), std::string::npos) << bad;
+  // Parameters: a negative bound is rejected.
+  p.max_obstacle_rows = -1;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+}

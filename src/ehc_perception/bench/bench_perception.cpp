@@ -4,11 +4,14 @@
 //  - perception.grasps_scene: table scene (RANSAC plane + clusters + grasps on one object)
 //  - perception.obstacle_distances_2cm: every robot link vs a 2 cm OctoMap of a table scene
 //  - perception.octomap_insert_cloud: ray insertion of a 20 000-point depth cloud
+//  - perception.obstacle_monitor_bound_d435 / _insert_d435: ObstacleMonitor bounding (voxel +
+//    budget) and inserting a full 640x480 D435 frame (307 200 points, wall 1.5 m ahead)
 #include "ehc_control/bench_util.h"
 #include "ehc_control/whole_body_model.h"
 #include "ehc_control/pinhole_camera.h"
 #include "ehc_perception/grasp_generator.h"
 #include "ehc_perception/obstacle_distance_field.h"
+#include "ehc_perception/obstacle_monitor.h"
 #include "ehc_perception/tag_detector.h"
 #include "ehc_perception/tag_image_renderer.h"
 #include "../test/perception_test_helpers.h"
@@ -127,6 +130,17 @@ int main() {
     ehc_control::benchReport("perception.octomap_insert_cloud", 20, [&](int) {
       field2.insertCloud(cloud, Eigen::Vector3d(0.3, 0.0, 1.2));
     }, "\"points\":20000,\"range_m\":1.3");
+
+    // A full D435 frame through ObstacleMonitor (the node's path): bounded, then inserted.
+    const PointList frame = fullD435Wall();
+    ObstacleMonitor monitor(model.config(), cfg, ObstacleMonitorParams());
+    std::size_t kept = 0;
+    ehc_control::benchReport("perception.obstacle_monitor_bound_d435", 20, [&](int) {
+      kept = monitor.boundCloud(frame).size();
+    }, "\"points\":307200");
+    ehc_control::benchReport("perception.obstacle_monitor_insert_d435", 20, [&](int) {
+      monitor.insertCloud(0.0, frame, Eigen::Vector3d(0.0, 0.0, 1.0));
+    }, "\"points\":307200,\"inserted\":" + std::to_string(kept));
   }
   return sink == 12345.678 ? 1 : 0;
 }

@@ -159,4 +159,18 @@ inline Eigen::Isometry3d facingTag(double x, double y, double z, double rx, doub
   return T;
 }
 
+/// A full 640x480 D435 frame (pinhole, fx = fy = 615) of a wall 1.5 m in front of a camera at
+/// (0, 0, 1) looking along +x, in the world frame: 307 200 points.
+inline PointList fullD435Wall() {
+  PointList pts;
+  pts.reserve(640 * 480);
+  for (int v = 0; v < 480; ++v)
+    for (int u = 0; u < 640; ++u) {
+      const float depth = 1.5f;
+      const float right = (u - 320.0f) / 615.0f * depth, down = (v - 240.0f) / 615.0f * depth;
+      pts.emplace_back(depth, -right, 1.0f - down);
+    }
+  return pts;
+}
+
 }  // namespace ehc_perception::test

@@ -1,7 +1,8 @@
 // ObstacleMonitor (the logic of ehc_obstacle_node), without a ROS master: nothing is published
 // while the joint state or odometry is missing, stale or rejected; the distances carry the
 // newest state stamp; exclusion lists expire; cloud insertions are rate-limited; the robot's own
-// points are removed only with a fresh state. Times are plain numbers: nothing is timed.
+// points are removed only with a fresh state; the work per cloud is bounded (voxel decimation,
+// point budget) for a full 640x480 D435 frame. Times are plain numbers: nothing is timed.
 
 #include "ehc_control/config_node.h"
 #include "ehc_perception/obstacle_monitor.h"
@@ -130,4 +131,79 @@ TEST(ObstacleMonitor, ParamsAndLinksAreValidated) {
       ehc_control::ConfigNode::loadString("node: {state_timeout: 0.3}\n", "obst.yaml", "ObstacleNode").child("node"));
   EXPECT_EQ(p.state_timeout, 0.3);
   EXPECT_EQ(p.exclusion_timeout, 0.5);
+}
+
+
+TEST(ObstacleMonitor, AFullD435FrameIsBoundedByVoxelDecimationAndThePointBudget) {
+  Rig r;
+  const PointList frame = test::fullD435Wall();
+  ASSERT_EQ(frame.size(), 307200u);
+  const ObstacleMonitorParams& p = r.monitor.params();
+  // Voxel step: one point per 2 cm voxel; the wall (1.56 x 1.17 m at 1.5 m) has about 4 600.
+  int after_voxel = 0;
+  const PointList bounded = r.monitor.boundCloud(frame, &after_voxel);
+  EXPECT_GT(after_voxel, 3000);
+  EXPECT_LT(after_voxel, 10000);
+  EXPECT_LE(static_cast<int>(bounded.size()), p.max_cloud_points);
+  EXPECT_EQ(static_cast<int>(bounded.size()), std::min(after_voxel, p.max_cloud_points));
+  // Deterministic, and every kept point is one of the frame's.
+  EXPECT_EQ(r.monitor.boundCloud(frame), bounded);
+  // The insertion inserts the bounded cloud only, and the wall is in the map.
+  r.state(1.0);
+  const ObstacleMonitor::CloudInsertion ins = r.monitor.insertCloud(1.0, frame, Eigen::Vector3d(0.0, 0.0, 1.0));
+  EXPECT_EQ(ins.received, 307200);
+  EXPECT_EQ(ins.after_voxel, after_voxel);
+  EXPECT_EQ(ins.stats.input, static_cast<int>(bounded.size()));
+  EXPECT_GT(r.monitor.field().occupiedLeafCount(), static_cast<std::size_t>(bounded.size() / 2));
+  // A budget smaller than the decimated cloud: an even stride, at most the budget.
+  ObstacleMonitorParams small;
+  small.max_cloud_points = 100;
+  ObstacleMonitor tight(r.robot, ObstacleMapConfig(), small);
+  EXPECT_EQ(tight.boundCloud(frame).size(), 100u);
+  // Non-finite points never count; voxel decimation off keeps every finite point (up to the budget).
+  ObstacleMonitorParams off;
+  off.cloud_voxel = 0.0;
+  off.max_cloud_points = 1000000;
+  ObstacleMonitor raw(r.robot, ObstacleMapConfig(), off);
+  PointList with_nan = {Eigen::Vector3f(1, 0, 1), Eigen::Vector3f(std::nanf(""), 0, 1), Eigen::Vector3f(1, 0, 1)};
+  EXPECT_EQ(raw.boundCloud(with_nan).size(), 2u);
+  EXPECT_EQ(r.monitor.boundCloud(with_nan).size(), 1u);  // the same voxel twice
+  // Parameters: the budget must be positive and is read from the node mapping.
+  EXPECT_THROW(loadObstacleMonitorParams(ehc_control::ConfigNode::loadString("node: {max_cloud_points: 0}\n",
+                                                                             "obst.yaml", "ObstacleNode").child("node")),
+               std::invalid_argument);
+  const ObstacleMonitorParams q = loadObstacleMonitorParams(ehc_control::ConfigNode::loadString(
+      "node: {cloud_voxel: 0.05, max_cloud_points: 500}\n", "obst.yaml", "ObstacleNode").child("node"));
+  EXPECT_EQ(q.cloud_voxel, 0.05);
+  EXPECT_EQ(q.max_cloud_points, 500);
+}
+
+TEST(ObstacleMonitor, AQueuedCloudIsRayCastInBoundedChunksPerUpdate) {
+  Rig r;
+  r.state(1.0);
+  const PointList frame = test::fullD435Wall();
+  const ObstacleMonitor::CloudInsertion q = r.monitor.queueCloud(1.0, frame, Eigen::Vector3d(0.0, 0.0, 1.0));
+  const int budget = r.monitor.params().points_per_update;
+  EXPECT_EQ(q.queued, r.monitor.params().max_cloud_points);
+  EXPECT_EQ(q.replaced, 0);
+  EXPECT_TRUE(q.self_filtered);
+  EXPECT_EQ(r.monitor.field().occupiedLeafCount(), 0u);  // queued, nothing cast yet
+  // Each update casts at most points_per_update; the distances are computed every time.
+  int updates = 0;
+  while (r.monitor.queuedPoints() > 0) {
+    const ObstacleReport rep = r.monitor.update(1.0 + 0.02 * ++updates);
+    EXPECT_LE(rep.inserted.input, budget);
+    EXPECT_EQ(rep.status, ObstacleReport::Status::Publish);
+    r.state(1.0 + 0.02 * updates);
+    ASSERT_LT(updates, 1000);
+  }
+  EXPECT_EQ(updates, (q.queued + budget - 1) / budget);
+  EXPECT_GT(r.monitor.field().occupiedLeafCount(), static_cast<std::size_t>(q.queued / 2));
+  EXPECT_EQ(r.monitor.update(2.0).inserted.input, 0);  // nothing left
+  // A newer cloud replaces an unfinished one.
+  r.monitor.queueCloud(2.0, frame, Eigen::Vector3d(0.0, 0.0, 1.0));
+  r.monitor.update(2.0);
+  const ObstacleMonitor::CloudInsertion q2 = r.monitor.queueCloud(2.0, frame, Eigen::Vector3d(0.0, 0.0, 1.0));
+  EXPECT_EQ(q2.replaced, q.queued - budget);
+  EXPECT_THROW(r.monitor.queueCloud(2.0, frame, Eigen::Vector3d(std::nan(""), 0.0, 1.0)), std::invalid_argument);
 }

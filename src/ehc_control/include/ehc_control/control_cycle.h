@@ -22,6 +22,7 @@
 
 #include <Eigen/Geometry>
 
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -63,6 +64,8 @@ struct ControlCycleStatus : QpStepFigures {
   bool target_in_fov = false;             ///< target centre in the image this cycle
   double tfm = 0.0;                       ///< TfM since the target (centre) was set
   double target_age = -1.0;               ///< s since the last good target pose; -1: none
+  double state_age = -1.0;                ///< s since the older of joint state / odometry; -1: none
+  double obstacles_age = -1.0;            ///< s since the last good obstacle list; -1: none
   bool controller_error = false;          ///< a core error (exception) stopped this cycle
 };
 
@@ -97,8 +100,19 @@ class ControlCycle {
   /// Link-obstacle pairs (world); used while younger than watchdog.obstacle_timeout.
   std::string setObstacles(double t, const std::vector<ObstaclePair>& obstacles);
 
-  /// One control cycle at time `now`.
+  /// One control cycle at time `now`. With a clock (setClock), the cycle's duration and the
+  /// watchdog are checked again at the clock's time after the QP solve: a cycle longer than
+  /// watchdog.max_solve_time gives zeros and QP_FAILED; a command computed from a state, target
+  /// or obstacle list that went stale during the cycle is replaced by zeros (phase and reason
+  /// of that check, prefixed "after the ... s cycle").
   ControlCycleOutput update(double now);
+  /// The time source of the after-solve check (the node: ROS time; tests: a fake clock). An
+  /// empty function: no after-solve check (time stands still during a cycle, e.g. lock-step).
+  using Clock = std::function<double()>;
+  void setClock(Clock clock) { clock_ = std::move(clock); }
+  /// A zero command with phase STOPPED, `reason`, and the inputs' ages at `now`: what the
+  /// node's watchdog publishes when no cycle ran (e.g. lock-step without state).
+  ControlCycleOutput stopped(double now, const std::string& reason) const;
 
   /// Multi-line start-up summary of the robot, map, controller, servo, roll joint, tracking and
   /// watchdog.
@@ -124,6 +138,8 @@ class ControlCycle {
  private:
   /// Loads the weighting of the model's reachability map.
   ControlCycle(const std::shared_ptr<const WholeBodyModel>& model, const ControlCycleParams& params);
+  /// Zero command, mode and input ages at `now` (phase Idle, no reason).
+  ControlCycleOutput zeroOutput(double now) const;
   /// Servo + QP for the supervisor's current state and target.
   ControllerCommand step(double now);
 
@@ -140,6 +156,7 @@ class ControlCycle {
   Eigen::Isometry3d last_target_ = Eigen::Isometry3d::Identity();
   Eigen::Vector3d centre_ = Eigen::Vector3d::Zero();
   std::optional<double> t_centre_;
+  Clock clock_;
 };
 
 }  // namespace ehc_control

@@ -17,7 +17,10 @@ enum class ControlPhase {
   TsmmArm,     ///< TSMM_ARM: tsmm stage 2, the arm works, the base is held
   Stopped,     ///< STOPPED: stale or invalid state, controller error (zero command)
   TargetLost,  ///< TARGET_LOST: target older than watchdog.target_timeout (zero command)
-  QpFailed,    ///< QP_FAILED: infeasible or non-finite solve (zero command)
+  QpFailed,    ///< QP_FAILED: infeasible, non-finite or over-budget solve (zero command)
+  ObstaclesStale,  ///< OBSTACLES_STALE: obstacle sensing required (watchdog.require_obstacles)
+                   ///< and the obstacle list missing or older than watchdog.obstacle_timeout
+                   ///< (zero command)
 };
 
 enum class QpStatus {

@@ -2,8 +2,11 @@
 // ControllerSupervisor: the safety logic around the QP (ROS-free, unit-tested):
 // validates every input (size, finiteness), remembers the last good robot state, target and
 // obstacles with their receipt times, and decides each cycle whether the controller may run or
-// must stop (stale joint state, odometry or target; no target yet). The node only converts
-// messages and publishes what the supervisor and the QP decide.
+// must stop (stale joint state, odometry or target; no target yet; with require_obstacles, a
+// missing or stale obstacle list). The node only converts messages and publishes what the
+// supervisor and the QP decide. Times are seconds of the CONSUMING node's clock (receipt
+// times): a sender's clock offset cannot stretch a timeout. An input from the future (a clock
+// that jumped back) counts as stale too.
 
 #include "ehc_control/qp_controller.h"
 
@@ -20,14 +23,24 @@ class ConfigNode;
 struct SupervisorParams {
   double state_timeout = 0.2;      ///< s: joint state / odometry older than this stops the robot
   double target_timeout = 0.2;     ///< s: target older than this stops the robot (TARGET_LOST)
-  double obstacle_timeout = 0.5;   ///< s: older obstacle lists are dropped (controller continues)
+  double obstacle_timeout = 0.5;   ///< s: older obstacle lists are dropped
+  /// Obstacle sensing is configured (an obstacle node runs): a missing obstacle list, or one
+  /// older than obstacle_timeout, stops the robot (OBSTACLES_STALE) instead of tracking blind.
+  /// false: the controller tracks without obstacle dampers when no fresh list is in.
+  bool require_obstacles = false;
+  /// s: a cycle (servo + QP build + solve) that took longer on the cycle's clock
+  /// (ControlCycle::setClock; the node: ROS time) gives a zero command, QP_FAILED, "... over
+  /// max_solve_time". vpQuadProg has no iteration cap; with the rows bounded an overrun means a
+  /// starved CPU, and the command would be late. Without a clock (offline runs) not checked.
+  double max_solve_time = 0.05;
   void validate() const;           ///< throws "[SupervisorParams] ..."
+  std::string summary() const;
 };
 SupervisorParams loadSupervisorParams(const ConfigNode& node);
 
 struct SupervisorDecision {
   bool run = false;
-  ControlPhase phase = ControlPhase::Tracking;  ///< when !run: Stopped | Idle | TargetLost
+  ControlPhase phase = ControlPhase::Tracking;  ///< when !run: Stopped | ObstaclesStale | Idle | TargetLost
   std::string reason;  ///< human-readable, empty when run
 };
 
@@ -44,6 +57,8 @@ class ControllerSupervisor {
   std::string setObstacles(double t, const std::vector<ObstaclePair>& obstacles);
   void clearTarget();
 
+  /// In this order: joint state / odometry missing or stale -> Stopped; obstacles required and
+  /// missing or stale -> ObstaclesStale; no target -> Idle; stale target -> TargetLost; else run.
   SupervisorDecision check(double now) const;
 
   const Eigen::VectorXd& q() const { return q_; }
@@ -54,8 +69,13 @@ class ControllerSupervisor {
   /// serving that pose while the age is within target_timeout, then stops (TARGET_LOST);
   /// a fresh pose resumes it.
   double targetAge(double now) const { return t_target_ ? now - *t_target_ : -1.0; }
+  /// Seconds since the older of the last good joint state and odometry (-1 if either is missing).
+  double stateAge(double now) const;
+  /// Seconds since the last good obstacle list (-1 if none).
+  double obstaclesAge(double now) const { return t_obstacles_ ? now - *t_obstacles_ : -1.0; }
   /// Obstacles if fresh, else empty.
   std::vector<ObstaclePair> obstacles(double now) const;
+  const SupervisorParams& params() const { return params_; }
   double jointStateTime() const { return t_joints_.value_or(-1.0); }
   long rejected() const { return rejected_; }
 

@@ -15,8 +15,9 @@
 //                        neo_c w_base = constant
 //                        tsmm  base only (arm held) until the TCP is within d of the target
 //                              horizontally, then arm only (base held).
-// A failed, infeasible or non-finite solve gives a zero command and qp_status QP_FAILED; the
-// command never contains NaN/Inf and never exceeds a velocity limit. ROS-free.
+// A failed, infeasible or non-finite solve gives a zero command and qp_status QP_FAILED (the
+// time budget: ControlCycle, watchdog.max_solve_time); the command never contains NaN/Inf and
+// never exceeds a velocity limit. The obstacle rows are bounded (max_obstacle_rows, nearest pairs first). ROS-free.
 
 #include "ehc_control/control_status.h"
 #include "ehc_control/ehc_weighting.h"
@@ -71,6 +72,10 @@ struct QpControllerParams {
     return it == obstacle_stop_links.end() ? obstacle_stop : it->second;
   }
   double obstacle_damper_gain = 1.0;   ///< xi of the obstacle dampers, 1/s
+  /// At most this many obstacle damper rows per QP: of the pairs within obstacle_influence,
+  /// the nearest (smallest distance - d_s) are kept, the rest dropped for this cycle. Bounds
+  /// the build (one link Jacobian per row) and the solve whatever the obstacle node sends.
+  int max_obstacle_rows = 24;
   double tsmm_switch_distance = 0.2;   ///< m: tsmm switches to the arm stage here
   double arrival_position = 0.01;      ///< m
   double arrival_orientation = 2.0 * M_PI / 180.0;  ///< rad
@@ -142,6 +147,12 @@ class EhcQpController {
   const QpControllerParams& params() const { return params_; }
   void setMode(ControlMode m);
   const WholeBodyModel& model() const { return *model_; }
+
+  /// The obstacle pairs step() turns into rows: those within obstacle_influence, nearest
+  /// (distance - d_s) first, at most max_obstacle_rows. A non-finite, zero-normal or
+  /// unknown-link pair sets `bad_pair` (the reason) and returns none.
+  std::vector<const ObstaclePair*> nearestObstaclePairs(const std::vector<ObstaclePair>& obstacles,
+                                                        std::string* bad_pair) const;
 
  private:
   struct Solver;

@@ -130,12 +130,27 @@ Eigen::Vector3d ControlCycle::watchedCentre(double now) const {
   return mpbs_->targetCentre(supervisor_->target());
 }
 
-ControlCycleOutput ControlCycle::update(double now) {
+ControlCycleOutput ControlCycle::zeroOutput(double now) const {
   ControlCycleOutput out;
   out.velocity = Eigen::VectorXd::Zero(model_->nDof());
   ControlCycleStatus& st = out.status;
   st.mode = controller_->params().mode;
   st.target_age = supervisor_->targetAge(now);
+  st.state_age = supervisor_->stateAge(now);
+  st.obstacles_age = supervisor_->obstaclesAge(now);
+  return out;
+}
+
+ControlCycleOutput ControlCycle::stopped(double now, const std::string& reason) const {
+  ControlCycleOutput out = zeroOutput(now);
+  out.status.phase = ControlPhase::Stopped;
+  out.status.reason = reason;
+  return out;
+}
+
+ControlCycleOutput ControlCycle::update(double now) {
+  ControlCycleOutput out = zeroOutput(now);
+  ControlCycleStatus& st = out.status;
   const SupervisorDecision d = supervisor_->check(now);
   try {
     // TfM: every cycle with a target (served or lost), camera pose from the kinematics.
@@ -160,6 +175,30 @@ ControlCycleOutput ControlCycle::update(double now) {
       st.qp_status = c.qp_status;
       static_cast<QpStepFigures&>(st) = c;
       if (c.ok) out.velocity = c.velocity;
+      // The solve took time: a cycle over its budget, or a command computed from a state (or
+      // target, or obstacles) that went stale meanwhile, is not sent.
+      if (clock_) {
+        const double after = clock_();
+        const SupervisorDecision late = supervisor_->check(after);
+        if (!late.run) {
+          out.velocity.setZero();
+          st.phase = late.phase;
+          std::ostringstream os;
+          os << "after the " << after - now << " s cycle (QP " << c.solve_time_us * 1e-3 << " ms): " << late.reason;
+          st.reason = os.str();
+          st.state_age = supervisor_->stateAge(after);
+          st.target_age = supervisor_->targetAge(after);
+          st.obstacles_age = supervisor_->obstaclesAge(after);
+        } else if (after - now > params_.watchdog.max_solve_time) {
+          out.velocity.setZero();
+          st.phase = ControlPhase::QpFailed;
+          st.qp_status = QpStatus::Failed;
+          std::ostringstream os;
+          os << "cycle took " << (after - now) * 1e3 << " ms (QP " << c.solve_time_us * 1e-3
+             << " ms), over max_solve_time " << params_.watchdog.max_solve_time * 1e3 << " ms";
+          st.reason = os.str();
+        }
+      }
     }
   } catch (const std::exception& e) {  // core errors: stop safely, say why
     out.velocity.setZero();
@@ -215,8 +254,7 @@ std::string ControlCycle::summary() const {
   os << "\n  roll joint "
      << (roll_index_ >= 0 ? rc.arm_joints[static_cast<std::size_t>(roll_index_)] : std::string("none")) << "\n  "
      << params_.tracking.summary() << ", " << tracker_->camera().summary() << ", centre timeout "
-     << params_.centre_timeout << " s\n  watchdog: state " << params_.watchdog.state_timeout << " s, target "
-     << params_.watchdog.target_timeout << " s, obstacles " << params_.watchdog.obstacle_timeout << " s";
+     << params_.centre_timeout << " s\n  " << params_.watchdog.summary();
   return os.str();
 }
 

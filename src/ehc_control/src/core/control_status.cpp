@@ -7,7 +7,7 @@ namespace ehc_control {
 namespace {
 
 // The one string map of each enum.
-constexpr EnumNames<ControlPhase, 8> kPhaseNames = {{
+constexpr EnumNames<ControlPhase, 9> kPhaseNames = {{
     {ControlPhase::Idle, "IDLE"},
     {ControlPhase::Tracking, "TRACKING"},
     {ControlPhase::Arrived, "ARRIVED"},
@@ -16,6 +16,7 @@ constexpr EnumNames<ControlPhase, 8> kPhaseNames = {{
     {ControlPhase::Stopped, "STOPPED"},
     {ControlPhase::TargetLost, "TARGET_LOST"},
     {ControlPhase::QpFailed, "QP_FAILED"},
+    {ControlPhase::ObstaclesStale, "OBSTACLES_STALE"},
 }};
 constexpr EnumNames<QpStatus, 3> kQpStatusNames = {{
     {QpStatus::Ok, "OK"},

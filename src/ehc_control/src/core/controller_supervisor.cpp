@@ -3,6 +3,7 @@
 #include "ehc_control/config_node.h"
 #include "ehc_control/joint_state.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -12,13 +13,32 @@ void SupervisorParams::validate() const {
   requireRange("SupervisorParams", "state_timeout", state_timeout, 1e-3, 10.0);
   requireRange("SupervisorParams", "target_timeout", target_timeout, 1e-3, 60.0);
   requireRange("SupervisorParams", "obstacle_timeout", obstacle_timeout, 1e-3, 60.0);
+  requireRange("SupervisorParams", "max_solve_time", max_solve_time, 1e-6, 1.0);
 }
+
+std::string SupervisorParams::summary() const {
+  std::ostringstream os;
+  os << "watchdog: state " << state_timeout << " s, target " << target_timeout << " s, obstacles "
+     << obstacle_timeout << " s (" << (require_obstacles ? "required: missing or stale -> OBSTACLES_STALE"
+                                                         : "optional: tracks without when stale")
+     << "), receipt times on this node's clock; cycle budget " << max_solve_time * 1e3 << " ms";
+  return os.str();
+}
+
+namespace {
+/// Missing, older than `timeout`, or from the future by more than `timeout` (a clock jump).
+bool isStale(const std::optional<double>& t, double now, double timeout) {
+  return !t || now - *t > timeout || now - *t < -timeout;
+}
+}  // namespace
 
 SupervisorParams loadSupervisorParams(const ConfigNode& n) {
   SupervisorParams p;
   p.state_timeout = n.get("state_timeout", p.state_timeout);
   p.target_timeout = n.get("target_timeout", p.target_timeout);
   p.obstacle_timeout = n.get("obstacle_timeout", p.obstacle_timeout);
+  p.require_obstacles = n.get("require_obstacles", p.require_obstacles);
+  p.max_solve_time = n.get("max_solve_time", p.max_solve_time);
   n.validate(p);  // errors name the file and the section
   return p;
 }
@@ -81,9 +101,7 @@ void ControllerSupervisor::clearTarget() { t_target_.reset(); }
 
 SupervisorDecision ControllerSupervisor::check(double now) const {
   SupervisorDecision d;
-  auto stale = [&](const std::optional<double>& t, double timeout) {
-    return !t || now - *t > timeout || now - *t < -timeout;
-  };
+  auto stale = [&](const std::optional<double>& t, double timeout) { return isStale(t, now, timeout); };
   std::ostringstream why;
   if (!t_joints_) why << "no joint state yet; ";
   else if (stale(t_joints_, params_.state_timeout)) why << "joint state is " << now - *t_joints_ << " s old; ";
@@ -92,6 +110,15 @@ SupervisorDecision ControllerSupervisor::check(double now) const {
   if (!why.str().empty()) {
     d.phase = ControlPhase::Stopped;
     d.reason = why.str().substr(0, why.str().size() - 2);
+    return d;
+  }
+  if (params_.require_obstacles && stale(t_obstacles_, params_.obstacle_timeout)) {
+    d.phase = ControlPhase::ObstaclesStale;
+    std::ostringstream os;
+    if (!t_obstacles_) os << "no obstacle list yet";
+    else os << "obstacle list is " << now - *t_obstacles_ << " s old";
+    os << " (obstacle sensing required, timeout " << params_.obstacle_timeout << " s)";
+    d.reason = os.str();
     return d;
   }
   if (!t_target_) {
@@ -110,8 +137,13 @@ SupervisorDecision ControllerSupervisor::check(double now) const {
   return d;
 }
 
+double ControllerSupervisor::stateAge(double now) const {
+  if (!t_joints_ || !t_base_) return -1.0;
+  return now - std::min(*t_joints_, *t_base_);
+}
+
 std::vector<ObstaclePair> ControllerSupervisor::obstacles(double now) const {
-  if (!t_obstacles_ || now - *t_obstacles_ > params_.obstacle_timeout) return {};
+  if (isStale(t_obstacles_, now, params_.obstacle_timeout)) return {};
   return obstacles_;
 }
 

@@ -7,6 +7,7 @@
 #include <visp3/core/vpMatrix.h>
 #include <visp3/core/vpQuadProg.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <sstream>
@@ -64,6 +65,7 @@ void QpControllerParams::validate() const {
       throw std::invalid_argument("[QpControllerParams] obstacle_influence must be > obstacle_stop_links." + link);
   }
   requireRange(kOwner, "obstacle_damper_gain", obstacle_damper_gain, 1e-3, 100.0);
+  requireRange(kOwner, "max_obstacle_rows", max_obstacle_rows, 0, 1000);
   requireRange(kOwner, "tsmm_switch_distance", tsmm_switch_distance, 0.0, 5.0);
   requireRange(kOwner, "arrival_position", arrival_position, 1e-5, 1.0);
   requireRange(kOwner, "arrival_orientation", arrival_orientation, 1e-5, M_PI);
@@ -82,7 +84,7 @@ std::string QpControllerParams::summary() const {
      << " rad, gain " << joint_damper_gain << "; obstacle dampers: d_i " << obstacle_influence
      << " m, d_s " << obstacle_stop << " m";
   for (const auto& [link, d] : obstacle_stop_links) os << " (" << link << " " << d << " m)";
-  os << ", gain " << obstacle_damper_gain
+  os << ", gain " << obstacle_damper_gain << ", at most " << max_obstacle_rows << " rows (nearest first)"
      << "; tsmm switch " << tsmm_switch_distance << " m; arrival " << arrival_position << " m / "
      << arrival_orientation * 180.0 / M_PI << " deg";
   return os.str();
@@ -118,6 +120,7 @@ QpControllerParams loadQpControllerParams(const ConfigNode& n) {
     for (const auto& kv : links.yaml()) p.obstacle_stop_links[kv.first.as<std::string>()] = links.require<double>(kv.first.as<std::string>());
   }
   p.obstacle_damper_gain = n.get("obstacle_damper_gain", p.obstacle_damper_gain);
+  p.max_obstacle_rows = n.get("max_obstacle_rows", p.max_obstacle_rows);
   p.tsmm_switch_distance = n.get("tsmm_switch_distance", p.tsmm_switch_distance);
   p.arrival_position = n.get("arrival_position", p.arrival_position);
   p.arrival_orientation = n.get("arrival_orientation_deg", p.arrival_orientation * 180.0 / M_PI) * M_PI / 180.0;
@@ -205,6 +208,34 @@ ControllerCommand EhcQpController::fail(ControllerCommand c, const std::string& 
   c.qp_status = QpStatus::Failed;
   c.failure = why;
   return c;
+}
+
+std::vector<const ObstaclePair*> EhcQpController::nearestObstaclePairs(const std::vector<ObstaclePair>& obstacles,
+                                                                       std::string* bad_pair) const {
+  std::vector<const ObstaclePair*> in_range;
+  for (const ObstaclePair& o : obstacles) {
+    if (!(std::isfinite(o.distance) && o.link_point.allFinite() && o.normal.allFinite())) {
+      *bad_pair = "non-finite obstacle pair for link '" + o.link + "'";
+      return {};
+    }
+    if (o.distance >= params_.obstacle_influence) continue;
+    if (!model_->hasLink(o.link)) {
+      *bad_pair = "obstacle pair for unknown link '" + o.link + "'";
+      return {};
+    }
+    if (o.normal.norm() < 1e-9) {
+      *bad_pair = "obstacle pair with a zero normal for link '" + o.link + "'";
+      return {};
+    }
+    in_range.push_back(&o);
+  }
+  const std::size_t keep = std::min(in_range.size(), static_cast<std::size_t>(params_.max_obstacle_rows));
+  // Nearest first: smallest margin to the link's stop distance; ties keep the input order.
+  auto margin = [this](const ObstaclePair* o) { return o->distance - params_.obstacleStop(o->link); };
+  std::stable_sort(in_range.begin(), in_range.end(),
+                   [&](const ObstaclePair* a, const ObstaclePair* b) { return margin(a) < margin(b); });
+  in_range.resize(keep);
+  return in_range;
 }
 
 ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q,
@@ -324,22 +355,19 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
   if (s.pair_links.size() < obstacles.size()) s.pair_links.resize(obstacles.size());
   s.n_rows = 0;
   const double di = params_.obstacle_influence;
-  for (std::size_t k = 0; k < obstacles.size(); ++k) {
-    const ObstaclePair& o = obstacles[k];
-    if (!(std::isfinite(o.distance) && o.link_point.allFinite() && o.normal.allFinite()))
-      return fail(out, "non-finite obstacle pair for link '" + o.link + "'");
-    if (o.distance >= di) continue;
-    Solver::PairLink& link = s.pair_links[k];
+  std::string bad_pair;
+  const std::vector<const ObstaclePair*> nearest = nearestObstaclePairs(obstacles, &bad_pair);
+  if (!bad_pair.empty()) return fail(out, bad_pair);
+  for (std::size_t k = 0; k < nearest.size(); ++k) {
+    const ObstaclePair& o = *nearest[k];
+    Solver::PairLink& link = s.pair_links[k];  // link index and d_s, cached per row
     if (link.index < 0 || link.name != o.link) {
-      if (!m.hasLink(o.link)) return fail(out, "obstacle pair for unknown link '" + o.link + "'");
       link.name = o.link;
       link.index = m.linkIndex(o.link);
       link.stop = params_.obstacleStop(o.link);
     }
     const double ds = link.stop;
-    const double nn = o.normal.norm();
-    if (nn < 1e-9) return fail(out, "obstacle pair with a zero normal for link '" + o.link + "'");
-    const Eigen::Vector3d n = o.normal / nn;
+    const Eigen::Vector3d n = o.normal.normalized();
     // Linear velocity of the link point: rows 0-2 of its Jacobian.
     m.pointJacobian(s.kinematics, link.index, o.link_point, &s.J_point);
     // d_dot = n^T J_p qd >= -xi (d - d_s) / (d_i - d_s)

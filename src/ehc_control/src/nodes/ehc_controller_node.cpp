@@ -7,6 +7,14 @@
 // it is not the goal's, e.g. the object behind a pre-grasp goal). Publishes /cmd_vel,
 // /arm/joint_velocity_cmd (stamp = joint state stamp), /ehc/status. One cycle per joint state once
 // odometry of the same stamp is in (node.trigger: state, lock-step sim) or on a timer (real robot).
+// Every input's age is its RECEIPT time on this node's ROS clock (a sender's clock offset cannot
+// stretch a timeout; header stamps only pair joint state and odometry in lock-step and stamp
+// the answers). Watchdogs, so zeros go out even when no cycle runs:
+//   - lock-step: a ROS-time timer publishes zeros (STOPPED) when no cycle ran for
+//     watchdog.state_timeout (state lost while /clock runs);
+//   - every mode: a wall-clock timer publishes zeros when no cycle ran for node.wall_timeout
+//     wall seconds (ROS time stands still: a dead simulator stops /clock as well).
+// In timer mode the timer cycle itself stops within the timeout + one cycle period.
 
 #include "ehc_msgs/ControllerStatus.h"
 #include "ehc_msgs/JointVelocityCommand.h"
@@ -22,6 +30,7 @@
 #include <sensor_msgs/JointState.h>
 
 #include <cmath>
+#include <sstream>
 
 namespace {
 
@@ -32,6 +41,9 @@ constexpr double kLogThrottle = 1.0;  ///< s between repeats of one log message
 struct NodeParams {
   std::string trigger = "state";  ///< state | timer
   double rate = 100.0;            ///< Hz, timer trigger
+  /// wall s: no control cycle for this long on the wall clock -> zeros (STOPPED). Catches what
+  /// the ROS-time watchdogs cannot: ROS time standing still (sim time of a dead simulator).
+  double wall_timeout = 0.5;
 };
 
 NodeParams loadNodeParams(const ConfigNode& n) {
@@ -39,7 +51,9 @@ NodeParams loadNodeParams(const ConfigNode& n) {
   p.trigger = n.get<std::string>("trigger", p.trigger);
   if (p.trigger != "state" && p.trigger != "timer") n.fail("trigger", "must be 'state' or 'timer'");
   p.rate = n.get("rate", p.rate);
+  p.wall_timeout = n.get("wall_timeout", p.wall_timeout);
   requireRange("ControllerNode", "node.rate", p.rate, 1.0, 1000.0);
+  requireRange("ControllerNode", "node.wall_timeout", p.wall_timeout, 0.01, 10.0);
   return p;
 }
 
@@ -52,6 +66,8 @@ ControlCycleParams loadParams(const ConfigNode& cfg, ros::NodeHandle& pnh) {
   if (pnh.getParam("servo", s)) p.servo_type = servoTypeFromString(s);
   if (pnh.hasParam("mpbs")) pnh.getParam("mpbs", p.mpbs.enabled);
   if (pnh.hasParam("target_timeout")) pnh.getParam("target_timeout", p.watchdog.target_timeout);
+  if (pnh.hasParam("require_obstacles")) pnh.getParam("require_obstacles", p.watchdog.require_obstacles);
+  p.validate();
   return p;
 }
 
@@ -64,7 +80,10 @@ class ControllerNode {
       : cycle_(loadParams(cfg, pnh)), node_(loadNodeParams(cfg.childOrEmpty("node"))),
         world_frame_(cycle_.model().config().world_frame) {
     ROS_INFO_STREAM("ehc_controller_node\n" << cycle_.summary() << "\n  trigger " << node_.trigger
-                                            << (node_.trigger == "timer" ? " at " + std::to_string(node_.rate) + " Hz" : ""));
+                                            << (node_.trigger == "timer" ? " at " + std::to_string(node_.rate) + " Hz" : "")
+                                            << ", wall-clock watchdog " << node_.wall_timeout << " s");
+    // After the solve the watchdog is checked again on the ROS clock (ControlCycle::update).
+    cycle_.setClock([] { return ros::Time::now().toSec(); });
     cmd_vel_ = nh.advertise<geometry_msgs::Twist>("cmd_vel", 1);
     arm_cmd_ = nh.advertise<ehc_msgs::JointVelocityCommand>("arm/joint_velocity_cmd", 1);
     status_ = nh.advertise<ehc_msgs::ControllerStatus>("ehc/status", 10);
@@ -73,8 +92,27 @@ class ControllerNode {
     subs_.push_back(nh.subscribe("ehc/target_pose", 10, &ControllerNode::onTarget, this));
     subs_.push_back(nh.subscribe("ehc/target_centre", 10, &ControllerNode::onTargetCentre, this));
     subs_.push_back(nh.subscribe("ehc/obstacles", 10, &ControllerNode::onObstacles, this));
+    const double state_timeout = cycle_.params().watchdog.state_timeout;
     if (node_.trigger == "timer")
       timer_ = nh.createTimer(ros::Duration(1.0 / node_.rate), [this](const ros::TimerEvent&) { cycle(ros::Time::now()); });
+    else  // lock-step: no state, no cycle; this timer (ROS time) stops the robot instead
+      timer_ = nh.createTimer(ros::Duration(state_timeout / 10.0), [this, state_timeout](const ros::TimerEvent&) {
+        const ros::Time now = ros::Time::now();
+        const double idle = (now - last_cycle_).toSec();
+        if (last_cycle_.isZero() || (idle <= state_timeout && idle >= -state_timeout)) return;
+        std::ostringstream why;
+        why << "no control cycle for " << idle << " s (lock-step: no joint state + odometry pair)";
+        publish(cycle_.stopped(now.toSec(), why.str()), now, false);
+      });
+    wall_timer_ = nh.createWallTimer(ros::WallDuration(node_.wall_timeout / 10.0), [this](const ros::WallTimerEvent&) {
+      const double idle = (ros::WallTime::now() - last_cycle_wall_).toSec();
+      if (last_cycle_wall_.isZero() || idle <= node_.wall_timeout) return;
+      std::ostringstream why;
+      why << "no control cycle for " << idle << " wall s (ROS time " << ros::Time::now().toSec()
+          << " stands still? simulator dead?)";
+      const ros::Time now = ros::Time::now();
+      publish(cycle_.stopped(now.toSec(), why.str()), now, false);
+    });
   }
 
  private:
@@ -83,7 +121,7 @@ class ControllerNode {
   }
 
   void onJoints(const sensor_msgs::JointState& m) {
-    const std::string err = cycle_.setJointState(m.header.stamp.toSec(), m.name, m.position);
+    const std::string err = cycle_.setJointState(ros::Time::now().toSec(), m.name, m.position);  // receipt time
     if (!err.empty()) ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "[ehc_controller_node] rejected /joint_states: " << err);
     if (node_.trigger == "state") {
       pending_ = m.header.stamp;
@@ -94,7 +132,7 @@ class ControllerNode {
     const auto& p = m.pose.pose;
     const double yaw = std::atan2(2.0 * (p.orientation.w * p.orientation.z + p.orientation.x * p.orientation.y),
                                   1.0 - 2.0 * (p.orientation.y * p.orientation.y + p.orientation.z * p.orientation.z));
-    const std::string err = cycle_.setBasePose(m.header.stamp.toSec(), Eigen::Vector3d(p.position.x, p.position.y, yaw));
+    const std::string err = cycle_.setBasePose(ros::Time::now().toSec(), Eigen::Vector3d(p.position.x, p.position.y, yaw));  // receipt time
     if (!err.empty()) ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "[ehc_controller_node] rejected /odom: " << err);
     odom_stamp_ = m.header.stamp;
     if (node_.trigger == "state") tryCycle();
@@ -133,14 +171,26 @@ class ControllerNode {
   }
 
   void cycle(const ros::Time& stamp) {
-    const ControlCycleOutput out = cycle_.update(ros::Time::now().toSec());
+    last_cycle_ = ros::Time::now();
+    last_cycle_wall_ = ros::WallTime::now();
+    answered_ = stamp;
+    publish(cycle_.update(last_cycle_.toSec()), stamp, true);
+  }
+
+  /// Publishes one cycle's (or a watchdog's) command and status. `stamp`: the joint state
+  /// answered (lock-step) or the cycle time; a watchdog's arm command carries the last answered
+  /// stamp (a lock-step simulator takes it for stale, not for an answer to a newer state).
+  void publish(const ControlCycleOutput& out, const ros::Time& stamp, bool from_cycle) {
     const ControlCycleStatus& s = out.status;
+    if (!from_cycle)
+      ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "[ehc_controller_node] watchdog: " << s.reason << " -> zero command");
     if (!out.event.empty()) ROS_INFO_STREAM("[ehc_controller_node] " << out.event);
     if (s.controller_error)
       ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "[ehc_controller_node] " << s.reason << " -> zero command");
     else if (s.phase == ControlPhase::QpFailed)
       ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "[ehc_controller_node] QP_FAILED: " << s.reason << " -> zero command");
-    else if (s.phase == ControlPhase::Stopped || s.phase == ControlPhase::TargetLost)
+    else if (from_cycle && (s.phase == ControlPhase::Stopped || s.phase == ControlPhase::TargetLost ||
+                            s.phase == ControlPhase::ObstaclesStale))
       ROS_WARN_STREAM_THROTTLE(kLogThrottle, "[ehc_controller_node] " << s.phase << ": " << s.reason << " -> zero command");
 
     ehc_msgs::ControllerStatus st;
@@ -161,6 +211,8 @@ class ControllerNode {
     st.solve_time_us = s.solve_time_us;
     st.obstacle_rows = static_cast<uint32_t>(s.obstacle_rows);
     st.target_age = s.target_age;
+    st.state_age = s.state_age;
+    st.obstacles_age = s.obstacles_age;
 
     const Eigen::VectorXd& v = out.velocity;
     const int nb = cycle_.model().nBase();
@@ -169,7 +221,7 @@ class ControllerNode {
     if (nb == 3) tw.linear.y = v[1];
     tw.angular.z = v[nb - 1];
     ehc_msgs::JointVelocityCommand ac;
-    ac.header.stamp = stamp;
+    ac.header.stamp = from_cycle ? stamp : answered_;
     ac.names = cycle_.model().config().arm_joints;
     ac.velocities.assign(v.data() + nb, v.data() + v.size());
     cmd_vel_.publish(tw);
@@ -182,8 +234,11 @@ class ControllerNode {
   std::string world_frame_;
   ros::Publisher cmd_vel_, arm_cmd_, status_;
   std::vector<ros::Subscriber> subs_;
-  ros::Timer timer_;
+  ros::Timer timer_;            ///< timer trigger: the cycle; lock-step: the ROS-time watchdog
+  ros::WallTimer wall_timer_;   ///< wall-clock watchdog (every mode)
   ros::Time pending_, odom_stamp_;
+  ros::Time last_cycle_, answered_;  ///< ROS time of the last cycle; the stamp it answered
+  ros::WallTime last_cycle_wall_;
 };
 
 }  // namespace

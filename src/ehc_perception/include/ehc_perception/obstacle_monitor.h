@@ -28,12 +28,22 @@ struct ObstacleMonitorParams {
   double state_timeout = 0.2;       ///< s: no distances with a joint state or odometry this old
   double exclusion_timeout = 0.5;   ///< s: an older exclusion list is dropped
   double max_insert_rate_hz = 5.0;  ///< clouds inserted at most this often
+  /// Work per cloud is bounded, whatever the camera sends (a full 640x480 D435 frame is 307 200
+  /// points; the rays of each inserted point cost up to max_range / resolution voxel updates):
+  /// m, one point per voxel of this edge is kept (the first, in cloud order); 0 = off.
+  double cloud_voxel = 0.02;
+  /// then at most this many points are inserted (an even stride over the decimated points).
+  int max_cloud_points = 3000;
+  /// A queued cloud (queueCloud: the node) is ray-cast this many points per update(), i.e. per
+  /// publish cycle, so no cycle stalls on a whole cloud and the distances keep their rate
+  /// (3000 points at 300 per 50 Hz cycle: one cloud per 0.2 s = max_insert_rate_hz 5).
+  int points_per_update = 300;
   void validate() const;            ///< throws "[ObstacleMonitorParams] ..."
   std::string summary() const;
 };
 
-/// Reads state_timeout, exclusion_timeout and max_insert_rate_hz of the obstacle node's `node`
-/// mapping (all optional).
+/// Reads state_timeout, exclusion_timeout, max_insert_rate_hz, cloud_voxel and
+/// max_cloud_points of the obstacle node's `node` mapping (all optional).
 ObstacleMonitorParams loadObstacleMonitorParams(const ehc_control::ConfigNode& node);
 
 /// What ObstacleMonitor::update decided.
@@ -46,6 +56,7 @@ struct ObstacleReport {
   double stamp = 0.0;  ///< newest state stamp (Publish only)
   std::vector<LinkObstacleDistance> distances;
   bool exclusions_expired = false;  ///< the exclusion list was dropped in this update
+  ObstacleDistanceField::InsertStats inserted;  ///< queued cloud points ray-cast in this update
 };
 const char* toString(ObstacleReport::Status s);
 
@@ -69,14 +80,30 @@ class ObstacleMonitor {
   /// latest insertion), false if the previous one is younger than 1 / max_insert_rate_hz.
   bool acceptCloud(double now);
   struct CloudInsertion {
-    ObstacleDistanceField::InsertStats stats;
-    bool self_filtered = false;  ///< false: no fresh state, the robot's own points stayed in
+    ObstacleDistanceField::InsertStats stats;  ///< insertCloud: of the bounded cloud (stats.input = kept)
+    int received = 0;            ///< points in the cloud given
+    int after_voxel = 0;         ///< finite points left by the voxel decimation (cloud_voxel)
+    int queued = 0;              ///< points of the bounded cloud (<= max_cloud_points)
+    int replaced = 0;            ///< points of an unfinished queued cloud this one replaced
+    bool self_filtered = false;  ///< false: no fresh state, the robot's own points stay in
   };
-  /// Inserts a world-frame cloud seen from `sensor_origin` (world).
+  /// Queues a world-frame cloud seen from `sensor_origin` (world), bounded (boundCloud), with
+  /// the robot's link poses at `now` (fresh state only) for removing its own points; update()
+  /// ray-casts points_per_update of it per call. A newer cloud replaces an unfinished one.
+  CloudInsertion queueCloud(double now, const PointList& points, const Eigen::Vector3d& sensor_origin);
+  /// queueCloud, then the whole bounded cloud at once (stats filled).
   CloudInsertion insertCloud(double now, const PointList& points, const Eigen::Vector3d& sensor_origin);
+  /// Ray-casts up to `max_points` of the queued cloud; returns what they did.
+  ObstacleDistanceField::InsertStats insertQueued(std::size_t max_points);
+  /// Points of the queued cloud not inserted yet.
+  std::size_t queuedPoints() const { return queue_.points.size() - queue_.next; }
+  /// The bounded cloud insertCloud inserts: non-finite points dropped, one point per
+  /// cloud_voxel voxel (the first), then at most max_cloud_points (even stride, order kept).
+  /// `after_voxel` (optional) receives the count after the voxel step.
+  PointList boundCloud(const PointList& points, int* after_voxel = nullptr) const;
 
-  /// The cycle at `now`: drops an expired exclusion list, computes the distances. Throws what
-  /// ObstacleDistanceField::distances throws.
+  /// The cycle at `now`: ray-casts points_per_update queued points, drops an expired exclusion
+  /// list, computes the distances. Throws what ObstacleDistanceField::distances throws.
   ObstacleReport update(double now);
 
   /// Both joint state and odometry received and the older one at most state_timeout old;
@@ -96,6 +123,12 @@ class ObstacleMonitor {
   Eigen::VectorXd q_;
   Eigen::Vector3d base_ = Eigen::Vector3d::Zero();
   std::optional<double> t_joints_, t_base_, t_exclusions_, t_last_insert_;
+  struct QueuedCloud {
+    PointList points;
+    std::size_t next = 0;
+    Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+    std::optional<std::vector<Eigen::Isometry3d>> link_poses;  ///< none: no fresh state
+  } queue_;
 };
 
 }  // namespace ehc_perception

@@ -5,8 +5,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <sstream>
 #include <stdexcept>
+#include <unordered_set>
 
 namespace ehc_perception {
 
@@ -15,12 +17,17 @@ void ObstacleMonitorParams::validate() const {
   ehc_control::requirePositive(o, "node.state_timeout", state_timeout);
   ehc_control::requireRange(o, "node.exclusion_timeout", exclusion_timeout, 0.01, 10.0);
   ehc_control::requireRange(o, "node.max_insert_rate_hz", max_insert_rate_hz, 0.01, 100.0);
+  ehc_control::requireRange(o, "node.cloud_voxel", cloud_voxel, 0.0, 1.0);
+  ehc_control::requireRange(o, "node.max_cloud_points", max_cloud_points, 1, 1000000);
+  ehc_control::requireRange(o, "node.points_per_update", points_per_update, 1, 1000000);
 }
 
 std::string ObstacleMonitorParams::summary() const {
   std::ostringstream os;
   os << "state timeout " << state_timeout << " s, exclusion timeout " << exclusion_timeout
-     << " s, clouds inserted at <= " << max_insert_rate_hz << " Hz";
+     << " s, clouds inserted at <= " << max_insert_rate_hz << " Hz, decimated to one point per "
+     << cloud_voxel << " m voxel" << (cloud_voxel > 0.0 ? "" : " (off)") << ", at most " << max_cloud_points
+     << " points per cloud, ray-cast " << points_per_update << " per update";
   return os.str();
 }
 
@@ -29,6 +36,9 @@ ObstacleMonitorParams loadObstacleMonitorParams(const ehc_control::ConfigNode& n
   p.state_timeout = n.get("state_timeout", p.state_timeout);
   p.exclusion_timeout = n.get("exclusion_timeout", p.exclusion_timeout);
   p.max_insert_rate_hz = n.get("max_insert_rate_hz", p.max_insert_rate_hz);
+  p.cloud_voxel = n.get("cloud_voxel", p.cloud_voxel);
+  p.max_cloud_points = n.get("max_cloud_points", p.max_cloud_points);
+  p.points_per_update = n.get("points_per_update", p.points_per_update);
   n.validate(p);
   return p;
 }
@@ -85,17 +95,69 @@ bool ObstacleMonitor::acceptCloud(double now) {
   return true;
 }
 
+PointList ObstacleMonitor::boundCloud(const PointList& points, int* after_voxel) const {
+  PointList kept;
+  kept.reserve(std::min(points.size(), static_cast<std::size_t>(1) << 16));
+  if (params_.cloud_voxel > 0.0) {
+    // Voxel keys packed in 3 x 21 bits (+-1 048 576 voxels per axis: 20 km at 2 cm); points
+    // beyond that are not obstacles of a mobile manipulator and are dropped.
+    const float inv = static_cast<float>(1.0 / params_.cloud_voxel);
+    constexpr std::int64_t kHalf = 1 << 20;
+    std::unordered_set<std::uint64_t> seen;
+    seen.reserve(1 << 14);
+    for (const Eigen::Vector3f& p : points) {
+      if (!p.allFinite()) continue;
+      const Eigen::Vector3f v = (p * inv).array().floor();
+      if ((v.array().abs() >= static_cast<float>(kHalf)).any()) continue;
+      const std::uint64_t key = (static_cast<std::uint64_t>(static_cast<std::int64_t>(v.x()) + kHalf) << 42) |
+                                (static_cast<std::uint64_t>(static_cast<std::int64_t>(v.y()) + kHalf) << 21) |
+                                static_cast<std::uint64_t>(static_cast<std::int64_t>(v.z()) + kHalf);
+      if (seen.insert(key).second) kept.push_back(p);
+    }
+  } else {
+    for (const Eigen::Vector3f& p : points)
+      if (p.allFinite()) kept.push_back(p);
+  }
+  if (after_voxel) *after_voxel = static_cast<int>(kept.size());
+  const std::size_t budget = static_cast<std::size_t>(params_.max_cloud_points);
+  if (kept.size() <= budget) return kept;
+  PointList strided;
+  strided.reserve(budget);
+  for (std::size_t i = 0; i < budget; ++i) strided.push_back(kept[i * kept.size() / budget]);
+  return strided;
+}
+
+ObstacleMonitor::CloudInsertion ObstacleMonitor::queueCloud(double now, const PointList& points,
+                                                            const Eigen::Vector3d& sensor_origin) {
+  if (!sensor_origin.allFinite()) throw std::invalid_argument("[ObstacleMonitor] sensor origin is not finite");
+  CloudInsertion r;
+  r.received = static_cast<int>(points.size());
+  r.replaced = static_cast<int>(queuedPoints());
+  queue_.points = boundCloud(points, &r.after_voxel);
+  queue_.next = 0;
+  queue_.origin = sensor_origin;
+  r.queued = static_cast<int>(queue_.points.size());
+  r.self_filtered = stateFresh(now);
+  // The robot as it is when the cloud arrives: it moves while the cloud is inserted.
+  if (r.self_filtered) queue_.link_poses = field_.linkPoses(model_, base_, q_);
+  else queue_.link_poses.reset();
+  return r;
+}
+
 ObstacleMonitor::CloudInsertion ObstacleMonitor::insertCloud(double now, const PointList& points,
                                                              const Eigen::Vector3d& sensor_origin) {
-  CloudInsertion r;
-  r.self_filtered = stateFresh(now);
-  if (r.self_filtered) {
-    const auto poses = field_.linkPoses(model_, base_, q_);
-    r.stats = field_.insertCloud(points, sensor_origin, &poses);
-  } else {
-    r.stats = field_.insertCloud(points, sensor_origin);
-  }
+  CloudInsertion r = queueCloud(now, points, sensor_origin);
+  r.stats = insertQueued(queuedPoints());
   return r;
+}
+
+ObstacleDistanceField::InsertStats ObstacleMonitor::insertQueued(std::size_t max_points) {
+  const std::size_t n = std::min(max_points, queuedPoints());
+  if (n == 0) return {};
+  const auto first = queue_.points.begin() + static_cast<std::ptrdiff_t>(queue_.next);
+  const PointList chunk(first, first + static_cast<std::ptrdiff_t>(n));
+  queue_.next += n;
+  return field_.insertCloud(chunk, queue_.origin, queue_.link_poses ? &*queue_.link_poses : nullptr);
 }
 
 bool ObstacleMonitor::stateFresh(double now, double* stamp) const {
@@ -106,6 +168,7 @@ bool ObstacleMonitor::stateFresh(double now, double* stamp) const {
 
 ObstacleReport ObstacleMonitor::update(double now) {
   ObstacleReport r;
+  r.inserted = insertQueued(static_cast<std::size_t>(params_.points_per_update));
   if (!stateFresh(now, &r.stamp)) {
     r.status = ObstacleReport::Status::StateStale;
     r.stamp = 0.0;

@@ -5,8 +5,10 @@
 // runs the timer and publishes.
 //   rosrun ehc_perception ehc_obstacle_node _config:=config/perception/obstacle_node.yaml
 // Clouds (at most max_insert_rate_hz) are transformed into the world frame with tf2 at their
-// stamp and inserted with rays from the sensor origin; the robot's own points are removed
-// using the latest state. A timer publishes the distances of every link closer than the
+// stamp, bounded (one point per cloud_voxel voxel, then at most max_cloud_points: the work per
+// cloud does not grow with the camera's resolution) and queued with the robot's pose; each
+// timer cycle ray-casts points_per_update of them from the sensor origin (no cycle stalls on a
+// whole cloud, so the distances keep publish_rate_hz), the robot's own points removed. A timer publishes the distances of every link closer than the
 // influence distance while the state (/joint_states + /odom) is fresh; with a stale state
 // nothing is published and an error is logged (the controller's watchdog then stops).
 // Exclusion spheres (ehc_msgs/ObstacleExclusion on exclusion_topic, e.g. the object being
@@ -133,7 +135,7 @@ class ObstacleNode {
           cfg_.world_frame, msg.header.frame_id, msg.header.stamp, ros::Duration(cfg_.tf_timeout));
       const Eigen::Isometry3d T = tf2::transformToEigen(tf);
       const PointList pts = ros_conv::transformPoints(ros_conv::cloudToPoints(msg), T);
-      if (!monitor_.insertCloud(now, pts, T.translation()).self_filtered)
+      if (!monitor_.queueCloud(now, pts, T.translation()).self_filtered)
         ROS_WARN_THROTTLE(kLogThrottle, "ehc_obstacle_node: no fresh robot state; cloud inserted without "
                                         "removing the robot's own points");
     } catch (const std::exception& e) {
