@@ -11,6 +11,7 @@ PACKAGES=(
   libstd-msgs-dev libstd-srvs-dev libsensor-msgs-dev libgeometry-msgs-dev libnav-msgs-dev
   libvisualization-msgs-dev libdiagnostic-msgs-dev
   libtf2-dev libtf2-ros-dev libtf2-eigen-dev libtf2-geometry-msgs-dev
+  ros-robot-state-publisher  # run_realman.sh: arm / camera tf on the real robot
   # kinematics
   libeigen3-dev liborocos-kdl-dev libkdl-parser-dev liburdf-dev liburdfdom-dev liburdfdom-tools
   libyaml-cpp-dev

@@ -163,6 +163,26 @@ TEST(WholeBodyModel, CameraLooksAlongTheApproachAxis) {
   EXPECT_NEAR(std::hypot(d.x(), d.y()), 0.07, 1e-9);
 }
 
+// Issue 16: the D435 image was upside down in the ready pose. Optical frame: z forward, x right,
+// y down. In the ready pose (base at the origin, facing +x) the image's down (y) points to the
+// floor and its right (x) to the robot's right (-y), both in robot.yaml (calibration) and in
+// the bare URDF (what robot_state_publisher publishes on the real robot).
+TEST(WholeBodyModel, CameraImageIsUprightInTheReadyPose) {
+  RobotConfig uncalibrated = realmanConfig();
+  uncalibrated.calibration.clear();
+  for (const RobotConfig& rc : {realmanConfig(), uncalibrated}) {
+    const WholeBodyModel model(rc);
+    const Eigen::Isometry3d Tc =
+        model.fk(Eigen::Vector3d::Zero(), rc.arm_ready, "camera_color_optical_frame");
+    EXPECT_LT(Tc.linear().col(1).z(), -0.9) << "image down must point to the floor";
+    EXPECT_LT(Tc.linear().col(0).y(), -0.99) << "image right must be the robot's right";
+    EXPECT_GT(Tc.linear().col(2).x(), 0.9) << "looking ahead";
+    // The camera sits above the gripper (on the flange's +x side, which points up here).
+    const Eigen::Isometry3d Te = model.fk(Eigen::Vector3d::Zero(), rc.arm_ready, "ee_link");
+    EXPECT_GT(Tc.translation().z(), Te.translation().z());
+  }
+}
+
 TEST(WholeBodyModel, ManipulabilityGradientMatchesFiniteDifferences) {
   const WholeBodyModel model(realmanConfig());
   std::mt19937 rng(3);

@@ -6,6 +6,9 @@
 #
 # COMPONENT: arm | base | perception | controller | robot (= arm base) | all (default)
 #   arm         rm_arm_adapter       /arm/joint_velocity_cmd -> /rm_driver/JointPos
+#               robot_state_publisher /joint_states + URDF -> tf base_link -> ... -> camera
+#                                    (Debian ros-robot-state-publisher; the tag, grasp and
+#                                    obstacle nodes need the camera's tf)
 #   base        water2_base_bridge   /cmd_vel -> Water2 joy_control, robot_status -> /odom + tf
 #   perception  ehc_tag_node, ehc_grasp_node, ehc_obstacle_node (camera-facing nodes)
 #   controller  ehc_controller_node  /cmd_vel + /arm/joint_velocity_cmd
@@ -14,6 +17,7 @@
 # Environment (defaults in brackets):
 #   EHC_WS             workspace root                         [three levels above this script]
 #   ROBOT_YAML         robot description      [config/robots/realman_rm65_water2/robot.yaml]
+#   ROBOT_URDF         URDF for robot_state_publisher [robot.urdf next to ROBOT_YAML]
 #   ARM_CONFIG         rm_arm_adapter YAML            [config/realman/rm_arm_adapter.yaml]
 #   BASE_CONFIG        water2_base_bridge YAML        [config/realman/water2_base_bridge.yaml]
 #   WATER2_HOST/PORT   Water2 API address (override BASE_CONFIG)           [from BASE_CONFIG]
@@ -23,6 +27,9 @@
 #   LOG_DIR            one log file per node                        [$HOME/.ros/ehc_realman]
 #   ROS_MASTER_URI, ROS_IP  as usual (the master runs on the robot computer)
 #
+# Parameters never leak from an earlier run: before a node starts, its private namespace on the
+# parameter server (/<node name>, e.g. /ehc_controller_node) is deleted, so that it gets exactly
+# this run's overrides (an earlier CONTROLLER_MODE=tsmm does not stay in force).
 # Every node is started in the background; Ctrl-C (or any node exiting) stops all the nodes
 # this script started, by their process ids. Exit code: 0 on Ctrl-C, 1 if a node died, 2 on a
 # usage or set-up error.
@@ -68,6 +75,7 @@ TAG_CONFIG="${TAG_CONFIG:-config/perception/tag_node.yaml}"
 GRASP_CONFIG="${GRASP_CONFIG:-config/perception/grasp_node.yaml}"
 OBSTACLE_CONFIG="${OBSTACLE_CONFIG:-config/perception/obstacle_node.yaml}"
 LOG_DIR="${LOG_DIR:-${HOME:-/tmp}/.ros/ehc_realman}"
+ROBOT_URDF="${ROBOT_URDF:-$(dirname "$ROBOT_YAML")/robot.urdf}"
 
 # ---------------------------------------------------------------- the node list
 # Each entry: "package executable arg..." (arguments in rosrun form).
@@ -76,7 +84,11 @@ NODES=()
 for c in arm base perception controller; do
   [[ " ${COMPONENTS[*]} " == *" $c "* ]] || continue
   case "$c" in
-    arm) NODES+=("ehc_realman rm_arm_adapter _config:=$ARM_CONFIG") ;;
+    arm)
+      NODES+=("ehc_realman rm_arm_adapter _config:=$ARM_CONFIG")
+      # tf of the arm, gripper and camera from the driver's /joint_states (robot_description is
+      # set from ROBOT_URDF just before it starts).
+      NODES+=("robot_state_publisher robot_state_publisher") ;;
     base)
       n="ehc_realman water2_base_bridge _config:=$BASE_CONFIG"
       [ -n "${WATER2_HOST:-}" ] && n+=" _host:=$WATER2_HOST"
@@ -111,6 +123,10 @@ for n in "${NODES[@]}"; do
   done
 done
 [ -f "$ROBOT_YAML" ] || { echo "run_realman.sh: robot description not found: $ROBOT_YAML" >&2; problems=1; }
+if [[ " ${COMPONENTS[*]} " == *" arm "* ]] && [ ! -f "$ROBOT_URDF" ]; then
+  echo "run_realman.sh: URDF not found: $ROBOT_URDF (set ROBOT_URDF)" >&2
+  problems=1
+fi
 if [[ " ${COMPONENTS[*]} " == *" controller "* ]] && [ -f "$CONTROLLER_CONFIG" ] &&
    ! grep -Eq '^[[:space:]]+trigger:[[:space:]]*timer([[:space:]]|$)' "$CONTROLLER_CONFIG"; then
   # trigger: state waits for a simulator's matching /joint_states + /odom stamps: it never runs here.
@@ -155,8 +171,20 @@ stop_all() {
 trap 'echo; echo "run_realman.sh: stopping"; stop_all; exit 0' INT TERM
 trap 'stop_all' EXIT
 
+# Node names: each executable's ros::init name (no __name remaps here), under ROS_NAMESPACE.
+node_ns() { local ns="${ROS_NAMESPACE:-}"; ns="${ns#/}"; ns="${ns%/}"; echo "${ns:+/$ns}/$1"; }
 for n in "${NODES[@]}"; do
   read -r pkg exe args <<<"$n"
+  ns="$(node_ns "$exe")"
+  if rosparam list "$ns" 2>/dev/null | grep -q .; then
+    rosparam delete "$ns" || { echo "run_realman.sh: cannot delete the parameters $ns" >&2; exit 2; }
+  fi
+  if [ "$exe" = robot_state_publisher ]; then
+    # robot_state_publisher reads robot_description in its own namespace (searchParam), the
+    # usual global /robot_description; set on every run, so it is never an earlier run's.
+    rosparam set -t "$ROBOT_URDF" "${ns%/*}/robot_description" ||
+      { echo "run_realman.sh: cannot load $ROBOT_URDF" >&2; exit 2; }
+  fi
   log="$LOG_DIR/$exe.log"
   # shellcheck disable=SC2086
   rosrun "$pkg" "$exe" $args >"$log" 2>&1 &
