@@ -21,6 +21,8 @@ PACKAGES=(
   libpcl-dev libfcl-dev liboctomap-dev libbullet-dev
   # tests and result plots
   googletest libgtest-dev python3-yaml python3-numpy python3-matplotlib
+  # rostopic pub / echo of the messages the nodes use (README "Running a node")
+  python3-geometry-msgs python3-sensor-msgs python3-nav-msgs
 )
 
 missing=()
