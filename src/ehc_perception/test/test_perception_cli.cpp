@@ -89,6 +89,20 @@ TEST(DetectTagsCli, BadInputsExitWithCode2AndAClearError) {
   r = run(bin + " --image /tmp/ehc_cli_tag.png --camera " + cameraYaml());
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.out.find("--tag-size"), std::string::npos) << r.out;
+  // Issue 16: image sizes read from the file are checked before the decoder allocates them
+  // (a PNG header claiming 100000 x 100000 pixels, a PGM claiming 90000 x 90000).
+  {
+    const unsigned char png[] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n', 0, 0, 0, 13, 'I', 'H', 'D', 'R',
+                                 0, 1, 0x86, 0xa0, 0, 1, 0x86, 0xa0, 8, 0, 0, 0, 0, 0, 0, 0, 0};
+    std::ofstream("/tmp/ehc_cli_huge.png", std::ios::binary)
+        .write(reinterpret_cast<const char*>(png), sizeof(png));
+    std::ofstream("/tmp/ehc_cli_huge.pgm") << "P5\n# comment\n90000 90000\n255\n";
+  }
+  for (const char* huge : {"/tmp/ehc_cli_huge.png", "/tmp/ehc_cli_huge.pgm"}) {
+    r = run(bin + " --image " + huge + " --camera " + cameraYaml() + " --tag-size 0.05");
+    EXPECT_EQ(r.code, 2) << r.out;
+    EXPECT_NE(r.out.find("pixels (more than"), std::string::npos) << r.out;
+  }
   r = run(bin + " --image /tmp/ehc_cli_tag.png --camera " + cameraYaml() + " --tag-size 5cm");
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.out.find("--tag-size: '5cm' is not a number"), std::string::npos) << r.out;
