@@ -183,6 +183,29 @@ TEST(WholeBodyModel, CameraImageIsUprightInTheReadyPose) {
   }
 }
 
+// robot_state_publisher on the real robot publishes calibratedUrdfXml() (run_realman.sh): the
+// bare URDF with robot.yaml's calibration gives the same frames as the calibrated model.
+TEST(WholeBodyModel, CalibratedUrdfCarriesTheCalibration) {
+  RobotConfig rc = realmanConfig();
+  for (auto& c : rc.calibration) {  // a calibration that differs from the URDF's values
+    c.xyz += Eigen::Vector3d(0.011, -0.007, 0.005);
+    c.rpy += Eigen::Vector3d(0.03, -0.02, 0.05);
+  }
+  const WholeBodyModel calibrated(rc);
+  RobotConfig bare = rc;
+  bare.calibration.clear();
+  const WholeBodyModel from_xml(bare, calibrated.calibratedUrdfXml());
+  const WholeBodyModel plain(bare);
+  for (const char* link : {"ee_link", "camera_color_optical_frame"}) {
+    const Eigen::Isometry3d a = calibrated.linkPoseInBase(rc.arm_ready, link);
+    const Eigen::Isometry3d b = from_xml.linkPoseInBase(rc.arm_ready, link);
+    EXPECT_LT((a.translation() - b.translation()).norm(), 1e-5) << link;
+    EXPECT_LT(Eigen::AngleAxisd(a.linear().transpose() * b.linear()).angle(), 1e-5) << link;
+    EXPECT_GT((a.translation() - plain.linkPoseInBase(rc.arm_ready, link).translation()).norm(), 1e-3)
+        << "the calibration must differ from the URDF for this test to mean anything";
+  }
+}
+
 TEST(WholeBodyModel, ManipulabilityGradientMatchesFiniteDifferences) {
   const WholeBodyModel model(realmanConfig());
   std::mt19937 rng(3);

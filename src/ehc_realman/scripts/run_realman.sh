@@ -17,7 +17,6 @@
 # Environment (defaults in brackets):
 #   EHC_WS             workspace root                         [three levels above this script]
 #   ROBOT_YAML         robot description      [config/robots/realman_rm65_water2/robot.yaml]
-#   ROBOT_URDF         URDF for robot_state_publisher [robot.urdf next to ROBOT_YAML]
 #   ARM_CONFIG         rm_arm_adapter YAML            [config/realman/rm_arm_adapter.yaml]
 #   BASE_CONFIG        water2_base_bridge YAML        [config/realman/water2_base_bridge.yaml]
 #   WATER2_HOST/PORT   Water2 API address (override BASE_CONFIG)           [from BASE_CONFIG]
@@ -75,7 +74,6 @@ TAG_CONFIG="${TAG_CONFIG:-config/perception/tag_node.yaml}"
 GRASP_CONFIG="${GRASP_CONFIG:-config/perception/grasp_node.yaml}"
 OBSTACLE_CONFIG="${OBSTACLE_CONFIG:-config/perception/obstacle_node.yaml}"
 LOG_DIR="${LOG_DIR:-${HOME:-/tmp}/.ros/ehc_realman}"
-ROBOT_URDF="${ROBOT_URDF:-$(dirname "$ROBOT_YAML")/robot.urdf}"
 
 # ---------------------------------------------------------------- the node list
 # Each entry: "package executable arg..." (arguments in rosrun form).
@@ -86,8 +84,9 @@ for c in arm base perception controller; do
   case "$c" in
     arm)
       NODES+=("ehc_realman rm_arm_adapter _config:=$ARM_CONFIG")
-      # tf of the arm, gripper and camera from the driver's /joint_states (robot_description is
-      # set from ROBOT_URDF just before it starts).
+      # tf of the arm, gripper and camera from the driver's /joint_states. robot_description is
+      # ROBOT_YAML's URDF with its calibration applied (ehc_kinematics --urdf), set just before
+      # it starts: the tf is the robot the controller computes with.
       NODES+=("robot_state_publisher robot_state_publisher") ;;
     base)
       n="ehc_realman water2_base_bridge _config:=$BASE_CONFIG"
@@ -123,10 +122,6 @@ for n in "${NODES[@]}"; do
   done
 done
 [ -f "$ROBOT_YAML" ] || { echo "run_realman.sh: robot description not found: $ROBOT_YAML" >&2; problems=1; }
-if [[ " ${COMPONENTS[*]} " == *" arm "* ]] && [ ! -f "$ROBOT_URDF" ]; then
-  echo "run_realman.sh: URDF not found: $ROBOT_URDF (set ROBOT_URDF)" >&2
-  problems=1
-fi
 if [[ " ${COMPONENTS[*]} " == *" controller "* ]] && [ -f "$CONTROLLER_CONFIG" ] &&
    ! grep -Eq '^[[:space:]]+trigger:[[:space:]]*timer([[:space:]]|$)' "$CONTROLLER_CONFIG"; then
   # trigger: state waits for a simulator's matching /joint_states + /odom stamps: it never runs here.
@@ -182,8 +177,10 @@ for n in "${NODES[@]}"; do
   if [ "$exe" = robot_state_publisher ]; then
     # robot_state_publisher reads robot_description in its own namespace (searchParam), the
     # usual global /robot_description; set on every run, so it is never an earlier run's.
-    rosparam set -t "$ROBOT_URDF" "${ns%/*}/robot_description" ||
-      { echo "run_realman.sh: cannot load $ROBOT_URDF" >&2; exit 2; }
+    urdf="$LOG_DIR/robot_description.urdf"
+    rosrun ehc_control ehc_kinematics --robot "$ROBOT_YAML" --urdf >"$urdf" &&
+      rosparam set -t "$urdf" "${ns%/*}/robot_description" ||
+      { echo "run_realman.sh: cannot set robot_description from $ROBOT_YAML" >&2; exit 2; }
   fi
   log="$LOG_DIR/$exe.log"
   # shellcheck disable=SC2086

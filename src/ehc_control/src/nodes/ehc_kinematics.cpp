@@ -1,9 +1,12 @@
 // ehc_kinematics: scripting CLI over WholeBodyModel (ROS-free, runs without a master).
 //   rosrun ehc_control ehc_kinematics --robot robot.yaml --q j1,...,jn [--base x,y,yaw]
 //                                     [--link NAME] [--summary]
+//   rosrun ehc_control ehc_kinematics --robot robot.yaml --urdf
 // Prints one JSON object {"joint_names", "base_type", "T", "J", "manipulability"} (T and J of
 // --link, default the TCP, world frame). --q ready uses the ready pose of robot.yaml.
-// --summary prints a human-readable kinematic summary instead. Errors: stderr, exit code 2.
+// --summary prints a human-readable kinematic summary instead. --urdf prints the URDF with
+// robot.yaml's calibration applied (robot_description for robot_state_publisher, run_realman.sh).
+// Errors: stderr, exit code 2.
 
 #include "ehc_control/command_line.h"
 #include "ehc_control/whole_body_model.h"
@@ -19,7 +22,8 @@ namespace {
 
 const char* kUsage =
     "usage: ehc_kinematics --robot <robot.yaml> --q <j1,...,jn | ready> [--base x,y,yaw]\n"
-    "                      [--link NAME] [--summary]\n";
+    "                      [--link NAME] [--summary]\n"
+    "       ehc_kinematics --robot <robot.yaml> --urdf   (the calibrated URDF)\n";
 
 struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
@@ -62,12 +66,16 @@ void printSummary(const ehc_control::WholeBodyModel& model, const Eigen::Vector3
 int main(int argc, char** argv) {
   try {
     const ehc_control::CommandLine cli(argc, argv, {"robot", "q", "base", "link"},
-                                       {"summary", "help"});
+                                       {"summary", "urdf", "help"});
     if (cli.has("help")) {
       std::cout << kUsage;
       return 0;
     }
     const std::string robot = cli.text("robot");
+    if (cli.has("urdf")) {
+      std::cout << ehc_control::WholeBodyModel(ehc_control::loadRobotConfig(robot)).calibratedUrdfXml();
+      return 0;
+    }
     const bool summary = cli.has("summary");
     if (!summary) cli.text("q");  // "--q is required"
     const std::string q_arg = cli.text("q", "");
