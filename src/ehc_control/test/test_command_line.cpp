@@ -4,6 +4,7 @@
 // (test_ehc_tools_cli, test_perception_cli, test_experiment_cli) run the binaries.
 
 #include "ehc_control/command_line.h"
+#include "test_helpers.h"
 
 #include <gtest/gtest.h>
 
@@ -11,6 +12,7 @@
 #include <vector>
 
 using ehc_control::CommandLine;
+using ehc_control::test::errorOf;
 
 namespace {
 CommandLine parse(std::vector<const char*> words) {
@@ -19,16 +21,6 @@ CommandLine parse(std::vector<const char*> words) {
                      {"samples", "resolution", "base", "mode", "out"}, {"help", "summary"});
 }
 
-/// The message of the std::invalid_argument `f` throws ("" if none).
-template <typename F>
-std::string error(F f) {
-  try {
-    f();
-  } catch (const std::invalid_argument& e) {
-    return e.what();
-  }
-  return "";
-}
 }  // namespace
 
 TEST(CommandLine, ParsesOptionsSwitchesAndDefaults) {
@@ -63,7 +55,7 @@ TEST(CommandLine, UnparsableValuesNameTheFlag) {
       {{"--base", "0,0,0,"}, "--base"},       {{"--mode", "Scene"}, "--mode"},
   };
   for (const auto& c : cases) {
-    const std::string what = error([&] {
+    const std::string what = errorOf([&] {
       const auto cli = parse(c.words);
       cli.integer("samples", 1, 1, 2000000000L);
       cli.real("resolution", 0.1);
@@ -76,15 +68,15 @@ TEST(CommandLine, UnparsableValuesNameTheFlag) {
 }
 
 TEST(CommandLine, UnknownRepeatedAndIncompleteFlagsAreErrors) {
-  EXPECT_NE(error([] { parse({"--sample", "5"}); }).find("--sample: unknown flag"),
+  EXPECT_NE(errorOf([] { parse({"--sample", "5"}); }).find("--sample: unknown flag"),
             std::string::npos);
-  EXPECT_NE(error([] { parse({"--samples", "5", "--samples", "6"}); }).find("given twice"),
+  EXPECT_NE(errorOf([] { parse({"--samples", "5", "--samples", "6"}); }).find("given twice"),
             std::string::npos);
-  EXPECT_NE(error([] { parse({"--samples"}); }).find("--samples: needs a value"),
+  EXPECT_NE(errorOf([] { parse({"--samples"}); }).find("--samples: needs a value"),
             std::string::npos);
-  EXPECT_NE(error([] { parse({"samples"}); }).find("unexpected argument 'samples'"),
+  EXPECT_NE(errorOf([] { parse({"samples"}); }).find("unexpected argument 'samples'"),
             std::string::npos);
-  EXPECT_NE(error([] { parse({}).text("out"); }).find("--out: is required"), std::string::npos);
+  EXPECT_NE(errorOf([] { parse({}).text("out"); }).find("--out: is required"), std::string::npos);
 }
 
 TEST(CommandLine, FirstWordCanBeACommand) {
