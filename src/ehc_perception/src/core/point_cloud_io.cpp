@@ -52,10 +52,10 @@ long checkHeader(const std::string& path) {
     point_bytes += std::max(1L, sizes[k]) * (k < counts.size() ? std::max(1L, counts[k]) : 1L);
   point_bytes = std::max(1L, point_bytes);
   // Bytes the data section needs at least: binary = the raw points; ascii >= 2 characters
-  // ("0 " / "0\n") per value; binary_compressed: LZF expands at most ~100x.
+  // ("0 " / "0\n") per value but the file's last; binary_compressed: LZF expands at most ~100x.
   const double needed = data == "binary"  ? static_cast<double>(points) * point_bytes
                         : data == "ascii" ? 2.0 * static_cast<double>(points) *
-                                                std::max<std::size_t>(1, sizes.size())
+                                                    std::max<std::size_t>(1, sizes.size()) - 1.0
                                           : static_cast<double>(points) * point_bytes / 100.0;
   if (needed > data_bytes)
     fail("header claims " + std::to_string(points) + " points but the file holds only " +
