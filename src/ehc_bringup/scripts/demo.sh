@@ -12,7 +12,8 @@
 #
 # Environment (defaults in brackets):
 #   EHC_DEVEL          devel space to source                          [devel]
-#   OUT                output folder                                  [results/demo]
+#   OUT                output folder; relative paths are relative to the workspace root
+#                      (absolute paths are used as given)             [results/demo]
 #   EHC_DEMO_PORT      ROS master port                                [a free port from 11411 up]
 #   CONTROLLER_CONFIG  controller YAML                                [config/demo/controller.yaml]
 #   MODE               controller mode ehc | neo_e | neo_c | tsmm     [ehc]
@@ -30,6 +31,9 @@ set -o pipefail
 export PATH="/usr/bin:/bin:$PATH"  # the catkin-aware python3 first
 cd "$(dirname "$0")/../../.." || exit 2
 WS="$(pwd)"
+# Every path below is absolute from here on (an absolute OUT used to become "$WS//abs/path").
+OUT="${OUT:-results/demo}"
+case "$OUT" in /*) ;; *) OUT="$WS/$OUT" ;; esac
 EHC_DEVEL="${EHC_DEVEL:-devel}"
 if [ ! -f "$EHC_DEVEL/setup.bash" ]; then
   echo "demo.sh: $EHC_DEVEL/setup.bash not found: build first (make build)" >&2
@@ -38,7 +42,6 @@ fi
 # shellcheck disable=SC1090,SC1091
 source "$EHC_DEVEL/setup.bash"
 
-OUT="${OUT:-results/demo}"
 CONTROLLER_CONFIG="${CONTROLLER_CONFIG:-config/demo/controller.yaml}"
 MODE="${MODE:-ehc}"
 SEQUENCER_CONFIG="${SEQUENCER_CONFIG:-config/demo/grasp_sequencer.yaml}"
@@ -61,7 +64,7 @@ done
 mkdir -p "$OUT/logs"
 rm -f "$OUT/summary.json" "$OUT/trace.csv" "$OUT/demo.png" "$OUT"/logs/*.log
 # Private master and ROS_HOME: never touches another ROS system on this machine.
-export ROS_HOME="$WS/$OUT/ros_home"
+export ROS_HOME="$OUT/ros_home"
 export ROS_LOG_DIR="$ROS_HOME/log"
 mkdir -p "$ROS_LOG_DIR"
 free_port() {
@@ -101,6 +104,18 @@ stop_all() {
 trap 'echo; echo "demo.sh: interrupted, stopping every process it started"; stop_all; exit 130' INT TERM
 trap 'stop_all' EXIT
 
+# Parameters never leak from an earlier run on the same master (e.g. an earlier MPBS=true when
+# this run leaves MPBS unset): each node's private namespace is deleted before it starts, so it
+# gets exactly the overrides of this run.
+clear_private_params() {  # clear_private_params NODE_NAME...
+  local ns
+  for ns in "$@"; do
+    if rosparam list "/$ns" 2>/dev/null | grep -q .; then
+      rosparam delete "/$ns" >/dev/null 2>&1 || { echo "demo.sh: cannot delete /$ns" >&2; exit 2; }
+    fi
+  done
+}
+
 start() {  # start NAME COMMAND...
   local name="$1"
   shift
@@ -118,6 +133,10 @@ for _ in $(seq 100); do
   sleep 0.1
 done
 rosparam get /use_sim_time >/dev/null 2>&1 || { echo "demo.sh: the ROS master did not start (port $PORT)" >&2; exit 2; }
+TAG_NODES=()
+for o in "${OBJECTS[@]}"; do TAG_NODES+=("ehc_tag_$o"); done
+clear_private_params ehc_sim_node "${TAG_NODES[@]}" ehc_grasp_node ehc_obstacle_node \
+  ehc_controller_node ehc_grasp_sequencer_node
 
 # shellcheck disable=SC2086
 start sim rosrun ${SIM_PREFIX:+--prefix "$SIM_PREFIX"} ehc_sim ehc_sim_node _config:="$SIM_CONFIG" _scene:="$SCENE" _seed:="$SEED"
@@ -129,9 +148,13 @@ start grasp rosrun ehc_perception ehc_grasp_node _config:=config/perception/gras
   /ehc/target_pose:=/ehc/sequencer/object_pose
 [ "${OBSTACLES:-1}" = 1 ] &&
   start obstacles rosrun ehc_perception ehc_obstacle_node _config:=config/demo/obstacle_node.yaml
-start controller rosrun ehc_control ehc_controller_node _config:="$CONTROLLER_CONFIG" _mode:="$MODE" "${MPBS_ARG[@]}"
+# Without the obstacle node the controller must not wait for obstacle lists (OBSTACLES_STALE).
+OBSTACLE_ARG=()
+[ "${OBSTACLES:-1}" = 1 ] || OBSTACLE_ARG=(_require_obstacles:=false)
+start controller rosrun ehc_control ehc_controller_node _config:="$CONTROLLER_CONFIG" _mode:="$MODE" "${MPBS_ARG[@]}" \
+  "${OBSTACLE_ARG[@]}"
 start sequencer rosrun ehc_bringup ehc_grasp_sequencer_node _config:="$SEQUENCER_CONFIG" \
-  _summary:="$WS/$OUT/summary.json" _trace:="$WS/$OUT/trace.csv"
+  _summary:="$OUT/summary.json" _trace:="$OUT/trace.csv"
 SEQ_PID=${PIDS[-1]}
 
 # Progress: the sequencer's "[grasp]" lines, without the ROS log prefix.

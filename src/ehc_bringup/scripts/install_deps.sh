@@ -11,6 +11,7 @@ PACKAGES=(
   libstd-msgs-dev libstd-srvs-dev libsensor-msgs-dev libgeometry-msgs-dev libnav-msgs-dev
   libvisualization-msgs-dev libdiagnostic-msgs-dev
   libtf2-dev libtf2-ros-dev libtf2-eigen-dev libtf2-geometry-msgs-dev
+  ros-robot-state-publisher  # run_realman.sh: arm / camera tf on the real robot
   # kinematics
   libeigen3-dev liborocos-kdl-dev libkdl-parser-dev liburdf-dev liburdfdom-dev liburdfdom-tools
   libyaml-cpp-dev
@@ -20,6 +21,8 @@ PACKAGES=(
   libpcl-dev libfcl-dev liboctomap-dev libbullet-dev
   # tests and result plots
   googletest libgtest-dev python3-yaml python3-numpy python3-matplotlib
+  # rostopic pub / echo of the messages the nodes use (README "Running a node")
+  python3-geometry-msgs python3-sensor-msgs python3-nav-msgs
 )
 
 missing=()

@@ -1,6 +1,7 @@
 // ConfigNode: unknown keys are errors (with the nearest known key), list elements and sections
 // read by another program.
 #include "ehc_control/config_node.h"
+#include "test_helpers.h"
 
 #include <gtest/gtest.h>
 
@@ -10,14 +11,7 @@ using ehc_control::ConfigNode;
 
 namespace {
 
-std::string errorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const std::invalid_argument& e) {
-    return e.what();
-  }
-  return "";
-}
+using ehc_control::test::errorOf;
 
 }  // namespace
 

@@ -1,9 +1,12 @@
 // ehc_kinematics CLI: JSON output for a valid call, exit code 2 + stderr for bad calls.
+// ehc_reachability CLI: unparsable values are start-up errors naming the flag.
 
 #include <gtest/gtest.h>
 
 #include <array>
 #include <cstdio>
+#include <fstream>
+#include <iterator>
 #include <string>
 #include <sys/wait.h>
 
@@ -14,8 +17,8 @@ struct Result {
   std::string out;
 };
 
-Result run(const std::string& args) {
-  const std::string cmd = std::string(EHC_KINEMATICS_BIN) + " " + args + " 2>/tmp/ehc_kin_err.txt";
+Result run(const std::string& args, const std::string& bin = EHC_KINEMATICS_BIN) {
+  const std::string cmd = bin + " " + args + " 2>/tmp/ehc_kin_err.txt";
   FILE* p = popen(cmd.c_str(), "r");
   std::string out;
   std::array<char, 4096> buf{};
@@ -59,4 +62,34 @@ TEST(EhcKinematicsCli, ErrorsExitWithCode2) {
   EXPECT_EQ(run(kRobot + " --q ready --base 0,0").code, 2);         // bad base
   EXPECT_EQ(run(kRobot + " --q nan,0,0,0,0,0").code, 2);            // NaN
   EXPECT_EQ(run(kRobot + " --q ready --bogus").code, 2);            // unknown flag
+}
+
+std::string lastStderr() {
+  std::ifstream in("/tmp/ehc_kin_err.txt");
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+TEST(EhcKinematicsCli, UnparsableValuesNameTheFlag) {
+  EXPECT_EQ(run(kRobot + " --q ready --base 0,0,0x").code, 2);
+  EXPECT_NE(lastStderr().find("--base: '0x' is not a number"), std::string::npos) << lastStderr();
+  EXPECT_EQ(run(kRobot + " --q ready --q ready").code, 2);
+  EXPECT_NE(lastStderr().find("--q: given twice"), std::string::npos) << lastStderr();
+}
+
+// Issue 16 defect 7: `--samples 1e6` ran one sample, wrote a one-voxel map and exited 0.
+TEST(EhcReachabilityCli, UnparsableValuesAreStartUpErrorsNamingTheFlag) {
+  const std::string out = " --out /tmp/ehc_cli_map.bin";
+  std::remove("/tmp/ehc_cli_map.bin");
+  for (const std::string& bad : {std::string("--samples 1e6"), std::string("--samples 10k"),
+                                 std::string("--samples -5"), std::string("--seed 1.5"),
+                                 std::string("--resolution 5cm"), std::string("--direction-bins x")}) {
+    const std::string args = kRobot + out + (bad.rfind("--samples", 0) == 0 ? "" : " --samples 10") +
+                             " " + bad;
+    EXPECT_EQ(run(args, EHC_REACHABILITY_BIN).code, 2) << bad;
+    const std::string flag = bad.substr(0, bad.find(' '));
+    EXPECT_NE(lastStderr().find(flag + ":"), std::string::npos) << bad << ": " << lastStderr();
+  }
+  EXPECT_FALSE(std::ifstream("/tmp/ehc_cli_map.bin").good()) << "no map written";
+  EXPECT_EQ(run(kRobot + out, EHC_REACHABILITY_BIN).code, 2);
+  EXPECT_NE(lastStderr().find("--samples: is required"), std::string::npos) << lastStderr();
 }

@@ -6,6 +6,11 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/resource.h>
+
+#include <cstdlib>
+#include <iostream>
+
 #include <fstream>
 
 using namespace ehc_control;
@@ -68,6 +73,42 @@ TEST(ReachabilityMap, BadFilesFailClearly) {
   RobotConfig other = test::realmanConfig();
   other.name = "other_robot";
   EXPECT_THROW(shippedMap()->checkCompatible(other), std::invalid_argument);
+}
+
+// Issue 16 defect 7: a header claiming 2000^3 voxels allocated 7.9 GB before it was rejected.
+// The load runs in a child process whose address space is capped at +512 MB over its current
+// size: it must fail with the size named, not with an allocation failure.
+[[noreturn]] void loadWithCappedMemory(const std::string& path) {
+  long pages = 0;
+  std::ifstream("/proc/self/statm") >> pages;
+  const rlim_t cap = static_cast<rlim_t>(pages) * 4096 + (512ul << 20);
+  rlimit lim{};
+  lim.rlim_cur = cap;
+  lim.rlim_max = cap;
+  setrlimit(RLIMIT_AS, &lim);
+  try {
+    ReachabilityMap::load(path);
+  } catch (const std::invalid_argument& e) {
+    std::cerr << e.what() << std::endl;
+    std::exit(std::string(e.what()).find("8000000000 voxels") != std::string::npos ? 0 : 3);
+  } catch (const std::exception& e) {
+    std::cerr << "unexpected: " << e.what() << std::endl;
+    std::exit(4);
+  }
+  std::exit(5);
+}
+
+TEST(ReachabilityMap, HugeHeaderIsRejectedBeforeAllocating) {
+  std::ifstream in(test::realmanConfig().reachability_map_path, std::ios::binary);
+  std::string all((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto dims = all.find("\ndims ");
+  ASSERT_NE(dims, std::string::npos);
+  const auto eol = all.find('\n', dims + 1);
+  all = all.substr(0, dims) + "\ndims 2000 2000 2000" + all.substr(eol);
+  std::ofstream("/tmp/ehc_huge_map.bin", std::ios::binary) << all;
+  ::testing::FLAGS_gtest_death_test_style = "threadsafe";
+  EXPECT_EXIT(loadWithCappedMemory("/tmp/ehc_huge_map.bin"), ::testing::ExitedWithCode(0),
+              "8000000000 voxels");
 }
 
 TEST(EhcWeighting, DeepInsideTheReachableSetTheArmLeads) {

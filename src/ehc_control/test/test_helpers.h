@@ -5,9 +5,21 @@
 
 #include <cmath>
 #include <random>
+#include <stdexcept>
 #include <string>
 
 namespace ehc_control::test {
+
+/// The message of the std::invalid_argument `f` throws ("" if it throws none).
+template <class F>
+std::string errorOf(F f) {
+  try {
+    f();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
 
 inline std::string realmanYaml() {
   return std::string(EHC_CONFIG_DIR) + "/robots/realman_rm65_water2/robot.yaml";

@@ -23,17 +23,7 @@ std::string writeTemp(const std::string& name, const std::string& text) {
   return path;
 }
 
-/// The message of the std::invalid_argument `f` throws ("" and a test failure if none).
-template <class F>
-std::string errorOf(F f) {
-  try {
-    f();
-  } catch (const std::invalid_argument& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "no std::invalid_argument thrown";
-  return "";
-}
+using ehc_control::test::errorOf;
 
 TEST(PinholeCamera, LoadsTheD435Intrinsics) {
   const PinholeCamera c = loadPinholeCamera(realmanCameraYaml());

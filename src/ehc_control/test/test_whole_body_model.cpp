@@ -330,6 +330,49 @@ TEST(WholeBodyModel, CameraLooksAlongTheApproachAxis) {
   EXPECT_NEAR(std::hypot(d.x(), d.y()), 0.07, 1e-9);
 }
 
+// Issue 16 (pending): the D435 image is upside down in the ready pose. Optical frame: z forward,
+// x right, y down. Upright: in the ready pose (base at the origin, facing +x) the image's down
+// (y) points to the floor and its right (x) to the robot's right (-y). Disabled until the tag
+// detector resolves the planar-pose ambiguity the upright mount exposes (robot.urdf).
+TEST(WholeBodyModel, DISABLED_CameraImageIsUprightInTheReadyPose) {
+  RobotConfig uncalibrated = realmanConfig();
+  uncalibrated.calibration.clear();
+  for (const RobotConfig& rc : {realmanConfig(), uncalibrated}) {
+    const WholeBodyModel model(rc);
+    const Eigen::Isometry3d Tc =
+        model.fk(Eigen::Vector3d::Zero(), rc.arm_ready, "camera_color_optical_frame");
+    EXPECT_LT(Tc.linear().col(1).z(), -0.9) << "image down must point to the floor";
+    EXPECT_LT(Tc.linear().col(0).y(), -0.99) << "image right must be the robot's right";
+    EXPECT_GT(Tc.linear().col(2).x(), 0.9) << "looking ahead";
+    // The camera sits above the gripper (on the flange's +x side, which points up here).
+    const Eigen::Isometry3d Te = model.fk(Eigen::Vector3d::Zero(), rc.arm_ready, "ee_link");
+    EXPECT_GT(Tc.translation().z(), Te.translation().z());
+  }
+}
+
+// robot_state_publisher on the real robot publishes calibratedUrdfXml() (run_realman.sh): the
+// bare URDF with robot.yaml's calibration gives the same frames as the calibrated model.
+TEST(WholeBodyModel, CalibratedUrdfCarriesTheCalibration) {
+  RobotConfig rc = realmanConfig();
+  for (auto& c : rc.calibration) {  // a calibration that differs from the URDF's values
+    c.xyz += Eigen::Vector3d(0.011, -0.007, 0.005);
+    c.rpy += Eigen::Vector3d(0.03, -0.02, 0.05);
+  }
+  const WholeBodyModel calibrated(rc);
+  RobotConfig bare = rc;
+  bare.calibration.clear();
+  const WholeBodyModel from_xml(bare, calibrated.calibratedUrdfXml());
+  const WholeBodyModel plain(bare);
+  for (const char* link : {"ee_link", "camera_color_optical_frame"}) {
+    const Eigen::Isometry3d a = calibrated.linkPoseInBase(rc.arm_ready, link);
+    const Eigen::Isometry3d b = from_xml.linkPoseInBase(rc.arm_ready, link);
+    EXPECT_LT((a.translation() - b.translation()).norm(), 1e-5) << link;
+    EXPECT_LT(Eigen::AngleAxisd(a.linear().transpose() * b.linear()).angle(), 1e-5) << link;
+    EXPECT_GT((a.translation() - plain.linkPoseInBase(rc.arm_ready, link).translation()).norm(), 1e-3)
+        << "the calibration must differ from the URDF for this test to mean anything";
+  }
+}
+
 TEST(WholeBodyModel, ManipulabilityGradientMatchesFiniteDifferences) {
   checkManipulabilityGradient(WholeBodyModel(realmanConfig()), 3);
 }

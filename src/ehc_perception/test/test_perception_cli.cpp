@@ -89,6 +89,26 @@ TEST(DetectTagsCli, BadInputsExitWithCode2AndAClearError) {
   r = run(bin + " --image /tmp/ehc_cli_tag.png --camera " + cameraYaml());
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.out.find("--tag-size"), std::string::npos) << r.out;
+  // Issue 16: image sizes read from the file are checked before the decoder allocates them
+  // (a PNG header claiming 100000 x 100000 pixels, a PGM claiming 90000 x 90000).
+  {
+    const unsigned char png[] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n', 0, 0, 0, 13, 'I', 'H', 'D', 'R',
+                                 0, 1, 0x86, 0xa0, 0, 1, 0x86, 0xa0, 8, 0, 0, 0, 0, 0, 0, 0, 0};
+    std::ofstream("/tmp/ehc_cli_huge.png", std::ios::binary)
+        .write(reinterpret_cast<const char*>(png), sizeof(png));
+    std::ofstream("/tmp/ehc_cli_huge.pgm") << "P5\n# comment\n90000 90000\n255\n";
+  }
+  for (const char* huge : {"/tmp/ehc_cli_huge.png", "/tmp/ehc_cli_huge.pgm"}) {
+    r = run(bin + " --image " + huge + " --camera " + cameraYaml() + " --tag-size 0.05");
+    EXPECT_EQ(r.code, 2) << r.out;
+    EXPECT_NE(r.out.find("pixels (more than"), std::string::npos) << r.out;
+  }
+  r = run(bin + " --image /tmp/ehc_cli_tag.png --camera " + cameraYaml() + " --tag-size 5cm");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("--tag-size: '5cm' is not a number"), std::string::npos) << r.out;
+  r = run(bin + " --image /tmp/ehc_cli_tag.png --camera " + cameraYaml() + " --tag-size 0.05 --tagsize 1");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("--tagsize: unknown flag"), std::string::npos) << r.out;
   r = run(bin + " --image /tmp/ehc_cli_tag.png --camera " + cameraYaml() + " --tag-size 0.05 --family 99x1");
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.out.find("unknown tag family"), std::string::npos) << r.out;
@@ -142,12 +162,27 @@ TEST(GraspsCli, NoGraspAndBadInputs) {
   EXPECT_NE(r.out.find("[PointCloudIO] cannot read '/nonexistent.pcd'"), std::string::npos) << r.out;
   r = run(bin + " --cloud /tmp/ehc_cli_empty.pcd");
   EXPECT_EQ(r.code, 2);
-  EXPECT_NE(r.out.find("missing --out"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("--out: is required"), std::string::npos) << r.out;
   r = run(bin + " --cloud /tmp/ehc_cli_empty.pcd --out /tmp/x.json --viewpoint 1,2");
   EXPECT_EQ(r.code, 2);
-  EXPECT_NE(r.out.find("--viewpoint expects x,y,z"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("--viewpoint: expects x,y,z"), std::string::npos) << r.out;
   r = run(bin + " --cloud /tmp/ehc_cli_empty.pcd --out /tmp/x.json --top 0");
   EXPECT_EQ(r.code, 2);
+  // Issue 16 defect 7: unparsable values name the flag.
+  for (const std::string& bad : {std::string("--top 5.5"), std::string("--top 1e3"),
+                                 std::string("--viewpoint 0,0,x"), std::string("--up 0,0,1,"),
+                                 std::string("--mode objects"), std::string("--topp 3")}) {
+    r = run(bin + " --cloud /tmp/ehc_cli_empty.pcd --out /tmp/x.json " + bad);
+    EXPECT_EQ(r.code, 2) << bad;
+    EXPECT_NE(r.out.find(bad.substr(0, bad.find(' ')) + ":"), std::string::npos) << bad << ": " << r.out;
+  }
+  // A header claiming far more points than the file holds is refused before PCL allocates.
+  std::ofstream("/tmp/ehc_cli_huge.pcd")
+      << "VERSION .7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 1000000000\n"
+         "HEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 1000000000\nDATA binary\n0123456789ab";
+  r = run(bin + " --cloud /tmp/ehc_cli_huge.pcd --out /tmp/x.json");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("header claims 1000000000 points"), std::string::npos) << r.out;
   std::ofstream("/tmp/ehc_cli_bad_grasps.yaml") << "grasp_generator: {voxel_size: 7}\n";
   r = run(bin + " --cloud /tmp/ehc_cli_empty.pcd --out /tmp/x.json --config /tmp/ehc_cli_bad_grasps.yaml");
   EXPECT_EQ(r.code, 2);

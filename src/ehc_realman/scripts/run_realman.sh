@@ -6,6 +6,9 @@
 #
 # COMPONENT: arm | base | perception | controller | robot (= arm base) | all (default)
 #   arm         rm_arm_adapter       /arm/joint_velocity_cmd -> /rm_driver/JointPos
+#               robot_state_publisher /joint_states + URDF -> tf base_link -> ... -> camera
+#                                    (Debian ros-robot-state-publisher; the tag, grasp and
+#                                    obstacle nodes need the camera's tf)
 #   base        water2_base_bridge   /cmd_vel -> Water2 joy_control, robot_status -> /odom + tf
 #   perception  ehc_tag_node, ehc_grasp_node, ehc_obstacle_node (camera-facing nodes)
 #   controller  ehc_controller_node  /cmd_vel + /arm/joint_velocity_cmd
@@ -17,12 +20,16 @@
 #   ARM_CONFIG         rm_arm_adapter YAML            [config/realman/rm_arm_adapter.yaml]
 #   BASE_CONFIG        water2_base_bridge YAML        [config/realman/water2_base_bridge.yaml]
 #   WATER2_HOST/PORT   Water2 API address (override BASE_CONFIG)           [from BASE_CONFIG]
+#   REQUIRE_OBSTACLES  0: controller runs without /ehc/obstacles (no obstacle sensing)  [1]
 #   CONTROLLER_CONFIG  controller YAML (node.trigger: timer)  [config/realman/controller.yaml]
 #   CONTROLLER_MODE    ehc | neo_e | neo_c | tsmm          [the YAML's controller.mode]
 #   TAG_CONFIG, GRASP_CONFIG, OBSTACLE_CONFIG  perception YAMLs       [config/perception/*.yaml]
 #   LOG_DIR            one log file per node                        [$HOME/.ros/ehc_realman]
 #   ROS_MASTER_URI, ROS_IP  as usual (the master runs on the robot computer)
 #
+# Parameters never leak from an earlier run: before a node starts, its private namespace on the
+# parameter server (/<node name>, e.g. /ehc_controller_node) is deleted, so that it gets exactly
+# this run's overrides (an earlier CONTROLLER_MODE=tsmm does not stay in force).
 # Every node is started in the background; Ctrl-C (or any node exiting) stops all the nodes
 # this script started, by their process ids. Exit code: 0 on Ctrl-C, 1 if a node died, 2 on a
 # usage or set-up error.
@@ -76,7 +83,12 @@ NODES=()
 for c in arm base perception controller; do
   [[ " ${COMPONENTS[*]} " == *" $c "* ]] || continue
   case "$c" in
-    arm) NODES+=("ehc_realman rm_arm_adapter _config:=$ARM_CONFIG") ;;
+    arm)
+      NODES+=("ehc_realman rm_arm_adapter _config:=$ARM_CONFIG")
+      # tf of the arm, gripper and camera from the driver's /joint_states. robot_description is
+      # ROBOT_YAML's URDF with its calibration applied (ehc_kinematics --urdf), set just before
+      # it starts: the tf is the robot the controller computes with.
+      NODES+=("robot_state_publisher robot_state_publisher") ;;
     base)
       n="ehc_realman water2_base_bridge _config:=$BASE_CONFIG"
       [ -n "${WATER2_HOST:-}" ] && n+=" _host:=$WATER2_HOST"
@@ -90,6 +102,9 @@ for c in arm base perception controller; do
       # The real robot has no lock-step simulator: CONTROLLER_CONFIG must set node.trigger: timer.
       n="ehc_control ehc_controller_node _config:=$CONTROLLER_CONFIG _robot:=$ROBOT_YAML"
       [ -n "${CONTROLLER_MODE:-}" ] && n+=" _mode:=$CONTROLLER_MODE"
+      # REQUIRE_OBSTACLES=0: run without obstacle sensing (the controller otherwise stops with
+      # OBSTACLES_STALE until /ehc/obstacles arrives; never do this next to people).
+      [ "${REQUIRE_OBSTACLES:-1}" = 0 ] && n+=" _require_obstacles:=false"
       NODES+=("$n") ;;
   esac
 done
@@ -155,8 +170,22 @@ stop_all() {
 trap 'echo; echo "run_realman.sh: stopping"; stop_all; exit 0' INT TERM
 trap 'stop_all' EXIT
 
+# Node names: each executable's ros::init name (no __name remaps here), under ROS_NAMESPACE.
+node_ns() { local ns="${ROS_NAMESPACE:-}"; ns="${ns#/}"; ns="${ns%/}"; echo "${ns:+/$ns}/$1"; }
 for n in "${NODES[@]}"; do
   read -r pkg exe args <<<"$n"
+  ns="$(node_ns "$exe")"
+  if rosparam list "$ns" 2>/dev/null | grep -q .; then
+    rosparam delete "$ns" || { echo "run_realman.sh: cannot delete the parameters $ns" >&2; exit 2; }
+  fi
+  if [ "$exe" = robot_state_publisher ]; then
+    # robot_state_publisher reads robot_description in its own namespace (searchParam), the
+    # usual global /robot_description; set on every run, so it is never an earlier run's.
+    urdf="$LOG_DIR/robot_description.urdf"
+    rosrun ehc_control ehc_kinematics --robot "$ROBOT_YAML" --urdf >"$urdf" &&
+      rosparam set -t "$urdf" "${ns%/*}/robot_description" ||
+      { echo "run_realman.sh: cannot set robot_description from $ROBOT_YAML" >&2; exit 2; }
+  fi
   log="$LOG_DIR/$exe.log"
   # shellcheck disable=SC2086
   rosrun "$pkg" "$exe" $args >"$log" 2>&1 &

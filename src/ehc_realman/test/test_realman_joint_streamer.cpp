@@ -196,6 +196,54 @@ TEST(JointPositionStreamer, LaggingArmDoesNotWindUp) {
   EXPECT_GT(h.streamer->counters().tracking_clamped, 0u);
 }
 
+// Issue 16 defect 6: a 0.1 s glitch of +1 rad on joint1's measured state while commanding
+// -0.2 rad/s drove the set-point 0.28 rad the other way (the tracking clamp chased the glitch).
+TEST(JointPositionStreamer, MeasuredStateGlitchNeverMovesTheSetPointAgainstTheCommand) {
+  Harness h;
+  h.make();
+  Eigen::VectorXd v = Eigen::VectorXd::Zero(6);
+  v[0] = -0.2;
+  for (int k = 0; k < 20; ++k) h.tick(v);  // streaming, tracked perfectly
+  const double before = h.previous[0];
+  double highest = before;
+  const Eigen::VectorXd true_position = h.measured;
+  for (int k = 0; k < 10; ++k) {  // 0.1 s at 100 Hz: joint1 reads +1 rad off
+    h.measured = true_position;
+    h.measured[0] += 1.0;
+    const auto f = h.tick(v, /*track=*/false);
+    ASSERT_TRUE(f);
+    highest = std::max(highest, f->position[0]);
+    EXPECT_LE(f->position[0], before + 1e-12) << "set-point moved against the command";
+    for (int i = 1; i < 6; ++i) EXPECT_NEAR(f->position[i], true_position[i], 1e-12);
+  }
+  EXPECT_LE(highest - before, 1e-12);
+  h.measured = h.previous;  // the glitch ends; the arm is where it was commanded
+  for (int k = 0; k < 50; ++k) h.tick(v);
+  EXPECT_LT(h.previous[0], before - 0.09) << "commanded motion resumes after the glitch";
+}
+
+// The measured state only bounds the set-point's distance: a step toward the measured position
+// is always allowed, a step away from it stops at max_tracking_error.
+TEST(JointPositionStreamer, SetPointFarFromMeasuredMayOnlyApproachIt) {
+  Harness h;
+  h.make();
+  Eigen::VectorXd v = Eigen::VectorXd::Zero(6);
+  v[1] = 0.5;
+  for (int k = 0; k < 5; ++k) h.tick(v);
+  const double start = h.previous[1];
+  h.measured[1] = start + 0.6;  // measured jumps far ahead of the command direction
+  for (int k = 0; k < 10; ++k) {
+    const auto f = h.tick(v, /*track=*/false);
+    ASSERT_TRUE(f);
+  }
+  EXPECT_NEAR(h.previous[1], start + 10 * 0.5 / h.config.rate_hz, 1e-9)
+      << "moving toward the measured position is unrestricted";
+  v[1] = -0.5;
+  const double held = h.previous[1];
+  for (int k = 0; k < 10; ++k) h.tick(v, /*track=*/false);
+  EXPECT_NEAR(h.previous[1], held, 1e-12) << "moving away is held (error > max_tracking_error)";
+}
+
 TEST(JointPositionStreamer, CommandTimeoutHoldsThenStops) {
   Harness h;
   h.make();

@@ -1,12 +1,20 @@
 // rostest: scripts/run_realman.sh (components arm + base) against a fake Water2 server on
 // 127.0.0.1: the nodes come up with rosrun, /odom flows, the adapter listens; SIGINT to the
 // script stops every node it started; --dry-run lists the rosrun commands.
+// Issue 16: private parameters of an earlier run (e.g. _mode:=tsmm) are deleted before a node
+// starts; robot_state_publisher (started with the arm) publishes base_link -> ... -> camera tf
+// from /joint_states, matching the controller's kinematic model (URDF + robot.yaml).
 
 #include "water2_fake_server.h"
 
 #include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
+#include <sensor_msgs/JointState.h>
 #include <std_msgs/Float64.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_listener.h>
+
+#include "ehc_control/whole_body_model.h"
 
 #include <gtest/gtest.h>
 
@@ -79,6 +87,20 @@ TEST(RunRealmanScript, StartsTheRobotNodesAndStopsThemOnCtrlC) {
                         [&](const nav_msgs::Odometry::ConstPtr&) { ++odom; }));
   ros::Publisher width = nh.advertise<std_msgs::Float64>("/arm/gripper/width", 1);
 
+  // Leftovers of an earlier run on this master (issue 16 defect 8: an earlier
+  // CONTROLLER_MODE=tsmm stayed in force): the script deletes each node's private namespace.
+  ros::param::set("/rm_arm_adapter/left_by_an_earlier_run", 1);
+  ros::param::set("/water2_base_bridge/left_by_an_earlier_run", 1);
+  ros::param::set("/robot_state_publisher/left_by_an_earlier_run", 1);
+  ros::param::set("/rm_arm_adapter_other/kept", 1);  // a namespace that only shares the prefix
+
+  tf2_ros::Buffer tf_buffer;
+  tf2_ros::TransformListener tf_listener(tf_buffer);
+  ros::Publisher joint_states = nh.advertise<sensor_msgs::JointState>("/joint_states", 10);
+  const ehc_control::RobotConfig robot = ehc_control::loadRobotConfig(
+      std::string(EHC_CONFIG_DIR) + "/robots/realman_rm65_water2/robot.yaml");
+  const ehc_control::WholeBodyModel model(robot);
+
   const std::string log_dir = ::testing::TempDir() + "/run_realman_logs";
   const pid_t pid = ::fork();
   if (pid == 0) {
@@ -94,6 +116,33 @@ TEST(RunRealmanScript, StartsTheRobotNodesAndStopsThemOnCtrlC) {
   EXPECT_TRUE(waitFor([&] { return width.getNumSubscribers() > 0; }, 30.0))
       << "rm_arm_adapter is up";
   EXPECT_GE(server.connections(), 1);
+  for (const char* stale : {"/rm_arm_adapter/left_by_an_earlier_run",
+                            "/water2_base_bridge/left_by_an_earlier_run",
+                            "/robot_state_publisher/left_by_an_earlier_run"})
+    EXPECT_FALSE(ros::param::has(stale)) << stale << " survived into this run";
+  EXPECT_TRUE(ros::param::has("/rm_arm_adapter_other/kept"));
+
+  // robot_state_publisher: the driver's /joint_states (stand-in: this test) -> arm tf.
+  sensor_msgs::JointState js;
+  js.name = robot.arm_joints;
+  js.position.assign(robot.arm_ready.data(), robot.arm_ready.data() + robot.arm_ready.size());
+  js.name.insert(js.name.end(), {"left_finger_joint", "right_finger_joint"});
+  js.position.insert(js.position.end(), {0.02, 0.02});
+  const bool tf_up = waitFor([&] {
+    js.header.stamp = ros::Time::now();
+    joint_states.publish(js);
+    return tf_buffer.canTransform(robot.base_frame, robot.camera_frame, ros::Time(0));
+  }, 30.0);
+  EXPECT_TRUE(tf_up) << "no tf " << robot.base_frame << " -> " << robot.camera_frame;
+  if (tf_up) {
+    const auto t = tf_buffer.lookupTransform(robot.base_frame, robot.camera_frame, ros::Time(0));
+    const Eigen::Isometry3d expected = model.linkPoseInBase(robot.arm_ready, robot.camera_frame);
+    const auto& tr = t.transform.translation;
+    const auto& r = t.transform.rotation;
+    EXPECT_LT((Eigen::Vector3d(tr.x, tr.y, tr.z) - expected.translation()).norm(), 1e-4);
+    EXPECT_LT(Eigen::Quaterniond(r.w, r.x, r.y, r.z).angularDistance(
+                  Eigen::Quaterniond(expected.linear())), 1e-4);
+  }
 
   ::kill(pid, SIGINT);  // Ctrl-C
   int status = 0;

@@ -8,6 +8,7 @@
 
 #include "ehc_bringup/reach_experiment.h"
 #include "ehc_bringup/reach_targets.h"
+#include "ehc_control/command_line.h"
 #include "ehc_control/config_node.h"
 #include "ehc_control/control_cycle.h"
 
@@ -41,33 +42,24 @@ Args parse(int argc, char** argv) {
   Args a;
   if (argc < 2) throw std::invalid_argument("missing command (reach)");
   a.command = argv[1];
-  for (int i = 2; i < argc; ++i) {
-    const std::string k = argv[i];
-    auto next = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::invalid_argument(k + " needs a value");
-      return argv[++i];
-    };
-    if (k == "--robot") a.robot = next();
-    else if (k == "--method") a.method = next();
-    else if (k == "--out") a.out = next();
-    else if (k == "--sets") a.sets = std::stoi(next());
-    else if (k == "--points") a.points = std::stoi(next());
-    else if (k == "--seed") a.seed = static_cast<unsigned>(std::stoul(next()));
-    else if (k == "--targets") a.targets_csv = next();
-    else if (k == "--config") a.config = next();
-    else if (k == "--map") a.map = next();
-    else if (k == "--trace") a.trace = next();
-    else if (k == "--all-targets") a.all_targets = true;
-    else if (k == "--base-model") a.base_model = ehc_sim::baseModelTypeFromString(next());
-    else if (k == "--noise") {
-      const std::string v = next();
-      if (v != "on" && v != "off") throw std::invalid_argument("--noise must be on or off");
-      a.noise = v == "on";
-    } else throw std::invalid_argument("unknown argument '" + k + "'");
-  }
   if (a.command != "reach") throw std::invalid_argument("unknown command '" + a.command + "' (reach)");
-  if (a.robot.empty() || a.out.empty()) throw std::invalid_argument("--robot and --out are required");
-  if (a.sets < 1 || a.points < 1) throw std::invalid_argument("--sets and --points must be >= 1");
+  const ehc_control::CommandLine cli(argc, argv,
+                                     {"robot", "method", "out", "sets", "points", "seed", "targets",
+                                      "config", "map", "trace", "noise", "base-model"},
+                                     {"all-targets"}, /*first=*/2);
+  a.robot = cli.text("robot");
+  a.out = cli.text("out");
+  a.method = cli.text("method", a.method);
+  a.sets = static_cast<int>(cli.integer("sets", a.sets, 1, 1000000));
+  a.points = static_cast<int>(cli.integer("points", a.points, 1, 1000000));
+  a.seed = static_cast<unsigned>(cli.integer("seed", a.seed, 0, 4294967295L));
+  a.targets_csv = cli.text("targets", "");
+  a.config = cli.text("config", "");
+  a.map = cli.text("map", "");
+  a.trace = cli.text("trace", "");
+  a.all_targets = cli.has("all-targets");
+  a.noise = cli.choice("noise", {"on", "off"}, "on") == "on";
+  a.base_model = ehc_sim::baseModelTypeFromString(cli.choice("base-model", {"ideal", "water2"}, "ideal"));
   return a;
 }
 

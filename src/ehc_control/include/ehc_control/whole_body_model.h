@@ -70,6 +70,9 @@ class WholeBodyModel {
   std::vector<std::string> linkNames() const;
   bool hasLink(const std::string& link) const;
   const std::string& urdfXml() const { return urdf_xml_; }
+  /// The URDF with robot.yaml's calibration (tcp / camera fixed joints) applied: the robot this
+  /// model computes with, for robot_state_publisher on the real robot (`ehc_kinematics --urdf`).
+  std::string calibratedUrdfXml() const;
 
   /// World pose of the base frame for base pose (x, y, yaw).
   static Eigen::Isometry3d baseTransform(const Eigen::Vector3d& base_pose);

@@ -186,6 +186,16 @@ ReachabilityMap ReachabilityMap::load(const std::string& path) {
       m.direction_bins_ < 1 || m.direction_bins_ > 255 || !m.origin_.allFinite())
     fail("'" + path + "': invalid header values");
   const std::size_t voxels = static_cast<std::size_t>(m.dims_.x()) * m.dims_.y() * m.dims_.z();
+  // The header's size is checked against the bytes the file holds before anything is allocated
+  // (a header claiming 2000^3 voxels must not allocate 8 GB to find out).
+  const std::streamoff data_start = in.tellg();
+  in.seekg(0, std::ios::end);
+  const std::streamoff data_bytes = in.tellg() - data_start;
+  in.seekg(data_start);
+  if (data_start < 0 || data_bytes < 0 || !in ||
+      static_cast<std::size_t>(data_bytes) != voxels)
+    fail("'" + path + "' is truncated or oversized: the header claims " + std::to_string(voxels) +
+         " voxels but the file holds " + std::to_string(data_bytes) + " bytes of voxel data");
   m.reached_.resize(voxels);
   in.read(reinterpret_cast<char*>(m.reached_.data()), static_cast<std::streamsize>(voxels));
   if (static_cast<std::size_t>(in.gcount()) != voxels) fail("'" + path + "' is truncated (voxel data)");

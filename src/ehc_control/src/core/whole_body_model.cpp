@@ -7,6 +7,7 @@
 #include <kdl/chainjnttojacsolver.hpp>
 #include <kdl/tree.hpp>
 #include <kdl_parser/kdl_parser.hpp>
+#include <tinyxml.h>
 #include <urdf_parser/urdf_parser.h>
 
 #include <Eigen/Cholesky>
@@ -14,7 +15,9 @@
 
 #include <cmath>
 #include <fstream>
+#include <iomanip>
 #include <map>
+#include <memory>
 #include <random>
 #include <sstream>
 #include <stdexcept>
@@ -146,11 +149,12 @@ WholeBodyModel::~WholeBodyModel() = default;
 WholeBodyModel::WholeBodyModel(WholeBodyModel&&) noexcept = default;
 WholeBodyModel& WholeBodyModel::operator=(WholeBodyModel&&) noexcept = default;
 
-void WholeBodyModel::build() {
-  const urdf::ModelInterfaceSharedPtr model = urdf::parseURDF(urdf_xml_);
-  if (!model) fail("URDF of '" + cfg_.urdf_path + "' could not be parsed (see the message above)");
-
-  for (const FrameOverride& o : cfg_.calibration) {
+namespace {
+/// The URDF with the calibration of `cfg` applied to its fixed joints (the one place it is done).
+urdf::ModelInterfaceSharedPtr parseCalibrated(const RobotConfig& cfg, const std::string& xml) {
+  const urdf::ModelInterfaceSharedPtr model = urdf::parseURDF(xml);
+  if (!model) fail("URDF of '" + cfg.urdf_path + "' could not be parsed (see the message above)");
+  for (const FrameOverride& o : cfg.calibration) {
     const auto it = model->joints_.find(o.joint);
     if (it == model->joints_.end()) fail("calibration joint '" + o.joint + "' is not in the URDF");
     if (it->second->type != urdf::Joint::FIXED)
@@ -159,6 +163,41 @@ void WholeBodyModel::build() {
     p.position = urdf::Vector3(o.xyz.x(), o.xyz.y(), o.xyz.z());
     p.rotation.setFromRPY(o.rpy.x(), o.rpy.y(), o.rpy.z());
   }
+  return model;
+}
+}  // namespace
+
+std::string WholeBodyModel::calibratedUrdfXml() const {
+  parseCalibrated(cfg_, urdf_xml_);  // the checks (joints exist, are fixed)
+  // The original text with the <origin> of each calibrated joint replaced (full precision;
+  // urdfdom's exporter rounds to 6 digits, which would make limits and frames drift).
+  TiXmlDocument doc;
+  doc.Parse(urdf_xml_.c_str());
+  if (doc.Error()) fail("URDF of '" + cfg_.urdf_path + "' could not be parsed: " + doc.ErrorDesc());
+  TiXmlElement* robot = doc.RootElement();
+  auto triple = [](const Eigen::Vector3d& v) {
+    std::ostringstream os;
+    os << std::setprecision(17) << v.x() << " " << v.y() << " " << v.z();
+    return os.str();
+  };
+  for (const FrameOverride& o : cfg_.calibration) {
+    TiXmlElement* joint = robot ? robot->FirstChildElement("joint") : nullptr;
+    while (joint && (!joint->Attribute("name") || o.joint != joint->Attribute("name")))
+      joint = joint->NextSiblingElement("joint");
+    if (!joint) fail("calibration joint '" + o.joint + "' is not in the URDF");
+    TiXmlElement* origin = joint->FirstChildElement("origin");
+    if (!origin) origin = joint->InsertEndChild(TiXmlElement("origin"))->ToElement();
+    origin->SetAttribute("xyz", triple(o.xyz));
+    origin->SetAttribute("rpy", triple(o.rpy));
+  }
+  TiXmlPrinter printer;
+  printer.SetIndent("  ");
+  doc.Accept(&printer);
+  return printer.Str();
+}
+
+void WholeBodyModel::build() {
+  const urdf::ModelInterfaceSharedPtr model = parseCalibrated(cfg_, urdf_xml_);
 
   const std::string root = model->getRoot() ? model->getRoot()->name : "";
   if (root != cfg_.base_frame)

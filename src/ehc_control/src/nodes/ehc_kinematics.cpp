@@ -1,10 +1,14 @@
 // ehc_kinematics: scripting CLI over WholeBodyModel (ROS-free, runs without a master).
 //   rosrun ehc_control ehc_kinematics --robot robot.yaml --q j1,...,jn [--base x,y,yaw]
 //                                     [--link NAME] [--summary]
+//   rosrun ehc_control ehc_kinematics --robot robot.yaml --urdf
 // Prints one JSON object {"joint_names", "base_type", "T", "J", "manipulability"} (T and J of
 // --link, default the TCP, world frame). --q ready uses the ready pose of robot.yaml.
-// --summary prints a human-readable kinematic summary instead. Errors: stderr, exit code 2.
+// --summary prints a human-readable kinematic summary instead. --urdf prints the URDF with
+// robot.yaml's calibration applied (robot_description for robot_state_publisher, run_realman.sh).
+// Errors: stderr, exit code 2.
 
+#include "ehc_control/command_line.h"
 #include "ehc_control/whole_body_model.h"
 
 #include <cstdio>
@@ -18,27 +22,12 @@ namespace {
 
 const char* kUsage =
     "usage: ehc_kinematics --robot <robot.yaml> --q <j1,...,jn | ready> [--base x,y,yaw]\n"
-    "                      [--link NAME] [--summary]\n";
+    "                      [--link NAME] [--summary]\n"
+    "       ehc_kinematics --robot <robot.yaml> --urdf   (the calibrated URDF)\n";
 
 struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
-
-std::vector<double> parseList(const std::string& flag, const std::string& s) {
-  std::vector<double> out;
-  std::stringstream ss(s);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
-    try {
-      std::size_t used = 0;
-      out.push_back(std::stod(item, &used));
-      if (used != item.size()) throw std::invalid_argument(item);
-    } catch (const std::exception&) {
-      throw UsageError(flag + ": '" + item + "' is not a number");
-    }
-  }
-  return out;
-}
 
 void printMatrix(std::ostream& os, const Eigen::MatrixXd& m) {
   os << "[";
@@ -76,24 +65,21 @@ void printSummary(const ehc_control::WholeBodyModel& model, const Eigen::Vector3
 
 int main(int argc, char** argv) {
   try {
-    std::string robot, q_arg, base_arg = "0,0,0", link;
-    bool summary = false;
-    for (int i = 1; i < argc; ++i) {
-      const std::string a = argv[i];
-      auto next = [&]() -> std::string {
-        if (i + 1 >= argc) throw UsageError(a + " needs a value");
-        return argv[++i];
-      };
-      if (a == "--robot") robot = next();
-      else if (a == "--q") q_arg = next();
-      else if (a == "--base") base_arg = next();
-      else if (a == "--link") link = next();
-      else if (a == "--summary") summary = true;
-      else if (a == "-h" || a == "--help") { std::cout << kUsage; return 0; }
-      else throw UsageError("unknown argument '" + a + "'");
+    const ehc_control::CommandLine cli(argc, argv, {"robot", "q", "base", "link"},
+                                       {"summary", "urdf", "help"});
+    if (cli.has("help")) {
+      std::cout << kUsage;
+      return 0;
     }
-    if (robot.empty()) throw UsageError("--robot is required");
-    if (q_arg.empty() && !summary) throw UsageError("--q is required");
+    const std::string robot = cli.text("robot");
+    if (cli.has("urdf")) {
+      std::cout << ehc_control::WholeBodyModel(ehc_control::loadRobotConfig(robot)).calibratedUrdfXml();
+      return 0;
+    }
+    const bool summary = cli.has("summary");
+    if (!summary) cli.text("q");  // "--q is required"
+    const std::string q_arg = cli.text("q", "");
+    std::string link = cli.text("link", "");
 
     const ehc_control::RobotConfig cfg = ehc_control::loadRobotConfig(robot);
     const ehc_control::WholeBodyModel model(cfg);
@@ -101,15 +87,13 @@ int main(int argc, char** argv) {
 
     Eigen::VectorXd q = cfg.arm_ready;
     if (!q_arg.empty() && q_arg != "ready") {
-      const std::vector<double> v = parseList("--q", q_arg);
+      const std::vector<double> v = ehc_control::CommandLine::parseReals("--q", q_arg);
       if (static_cast<int>(v.size()) != model.nArm())
         throw UsageError("--q needs " + std::to_string(model.nArm()) + " values, got " +
                          std::to_string(v.size()));
       q = Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<int>(v.size()));
     }
-    const std::vector<double> b = parseList("--base", base_arg);
-    if (b.size() != 3) throw UsageError("--base needs 3 values x,y,yaw");
-    const Eigen::Vector3d base(b[0], b[1], b[2]);
+    const Eigen::Vector3d base = cli.vector3("base", Eigen::Vector3d::Zero());  // x, y, yaw
 
     if (summary) {
       printSummary(model, base, q);

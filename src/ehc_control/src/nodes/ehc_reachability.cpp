@@ -3,6 +3,7 @@
 //       [--seed S] [--resolution 0.05] [--direction-bins 32]
 // Progress and ETA on stderr; a summary line on stdout. Errors: stderr, exit code 2.
 
+#include "ehc_control/command_line.h"
 #include "ehc_control/reachability_map.h"
 
 #include <chrono>
@@ -15,27 +16,21 @@ int main(int argc, char** argv) {
       "usage: ehc_reachability --robot <robot.yaml> --samples N --out <file> [--seed S]\n"
       "                        [--resolution m] [--direction-bins B (default 6)]\n";
   try {
-    std::string robot, out;
-    long samples = 0;
-    unsigned seed = 1;
-    ehc_control::ReachabilityMapParams params;
-    for (int i = 1; i < argc; ++i) {
-      const std::string a = argv[i];
-      auto next = [&]() -> std::string {
-        if (i + 1 >= argc) throw std::invalid_argument(a + " needs a value");
-        return argv[++i];
-      };
-      if (a == "--robot") robot = next();
-      else if (a == "--samples") samples = std::stol(next());
-      else if (a == "--out") out = next();
-      else if (a == "--seed") seed = static_cast<unsigned>(std::stoul(next()));
-      else if (a == "--resolution") params.resolution = std::stod(next());
-      else if (a == "--direction-bins") params.direction_bins = std::stoi(next());
-      else if (a == "-h" || a == "--help") { std::cout << usage; return 0; }
-      else throw std::invalid_argument("unknown argument '" + a + "'");
+    const ehc_control::CommandLine cli(
+        argc, argv, {"robot", "samples", "out", "seed", "resolution", "direction-bins"}, {"help"});
+    if (cli.has("help")) {
+      std::cout << usage;
+      return 0;
     }
-    if (robot.empty() || out.empty() || samples <= 0)
-      throw std::invalid_argument("--robot, --samples (> 0) and --out are required");
+    const std::string robot = cli.text("robot");
+    const std::string out = cli.text("out");
+    const long samples = cli.integer("samples", 0, 1, 1000000000L);
+    if (!cli.has("samples")) cli.text("samples");  // "--samples is required"
+    const auto seed = static_cast<unsigned>(cli.integer("seed", 1, 0, 4294967295L));
+    ehc_control::ReachabilityMapParams params;
+    params.resolution = cli.real("resolution", params.resolution);
+    params.direction_bins = static_cast<int>(
+        cli.integer("direction-bins", params.direction_bins, 1, 1000000));
     const ehc_control::WholeBodyModel model(ehc_control::loadRobotConfig(robot));
     const auto t0 = std::chrono::steady_clock::now();
     double last_print = -1.0;

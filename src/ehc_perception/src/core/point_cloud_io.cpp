@@ -5,21 +5,29 @@
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 
+#include <algorithm>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
+#include <vector>
 
 namespace ehc_perception {
 
 namespace {
 /// Reads the PCD header far enough to reject files PCL's reader would crash on (it does not
-/// validate a header without FIELDS / DATA lines). Returns the POINTS count.
+/// validate a header without FIELDS / DATA lines) and point counts the file cannot hold (PCL
+/// allocates POINTS x point size before reading: a header claiming 10^9 points must be refused
+/// before that allocation). Returns the POINTS count.
 long checkHeader(const std::string& path) {
-  std::ifstream f(path);
+  std::ifstream f(path, std::ios::binary);
   if (!f.good()) throw std::invalid_argument("[PointCloudIO] cannot read '" + path + "': no such file");
-  std::string line;
-  bool fields = false, data = false;
+  auto fail = [&](const std::string& what) -> void {
+    throw std::invalid_argument("[PointCloudIO] cannot read '" + path + "': " + what);
+  };
+  std::string line, data;
+  bool fields = false;
   long points = -1;
+  std::vector<long> sizes, counts;
   for (int n = 0; n < 20 && std::getline(f, line); ++n) {
     std::istringstream ls(line);
     std::string key;
@@ -27,14 +35,31 @@ long checkHeader(const std::string& path) {
     if (key.empty() || key[0] == '#') continue;
     if (key == "FIELDS") fields = true;
     if (key == "POINTS") ls >> points;
+    for (long v; key == "SIZE" && ls >> v;) sizes.push_back(v);
+    for (long v; key == "COUNT" && ls >> v;) counts.push_back(v);
     if (key == "DATA") {
-      data = true;
+      ls >> data;
       break;
     }
   }
-  if (!fields || !data || points < 0)
-    throw std::invalid_argument("[PointCloudIO] cannot read '" + path +
-                                "': not a PCD file (header needs FIELDS, POINTS and DATA)");
+  if (!fields || data.empty() || points < 0)
+    fail("not a PCD file (header needs FIELDS, POINTS and DATA)");
+  const std::streamoff data_start = f.tellg();
+  f.seekg(0, std::ios::end);
+  const double data_bytes = static_cast<double>(f.tellg() - data_start);
+  long point_bytes = 0;
+  for (std::size_t k = 0; k < sizes.size(); ++k)
+    point_bytes += std::max(1L, sizes[k]) * (k < counts.size() ? std::max(1L, counts[k]) : 1L);
+  point_bytes = std::max(1L, point_bytes);
+  // Bytes the data section needs at least: binary = the raw points; ascii >= 2 characters
+  // ("0 " / "0\n") per value but the file's last; binary_compressed: LZF expands at most ~100x.
+  const double needed = data == "binary"  ? static_cast<double>(points) * point_bytes
+                        : data == "ascii" ? 2.0 * static_cast<double>(points) *
+                                                    std::max<std::size_t>(1, sizes.size()) - 1.0
+                                          : static_cast<double>(points) * point_bytes / 100.0;
+  if (needed > data_bytes)
+    fail("header claims " + std::to_string(points) + " points but the file holds only " +
+         std::to_string(static_cast<long>(data_bytes)) + " bytes of " + data + " data");
   return points;
 }
 }  // namespace

@@ -10,6 +10,8 @@
 #include <visp3/io/vpImageIo.h>
 
 #include <cmath>
+#include <vector>
+#include <fstream>
 #include <cstring>
 #include <sstream>
 #include <stdexcept>
@@ -205,8 +207,61 @@ std::vector<TagDetection> TagDetector::detect(const vpImage<unsigned char>& I) {
   return out;
 }
 
+namespace {
+constexpr double kMaxImagePixels = 50e6;  ///< far above any camera's frame (D435: 2 Mpx)
+
+/// Width x height a PNG, PNM (P2/P5/P3/P6) or JPEG file declares in its header; 0 if the format
+/// is not one of these (the reader then decides). Read before the decoder allocates the image.
+double declaredPixels(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  std::vector<unsigned char> h(64 * 1024);
+  f.read(reinterpret_cast<char*>(h.data()), static_cast<std::streamsize>(h.size()));
+  h.resize(static_cast<std::size_t>(f.gcount()));
+  auto be = [&](std::size_t at, int bytes) {
+    double v = 0;
+    for (int k = 0; k < bytes; ++k) v = v * 256 + h[at + static_cast<std::size_t>(k)];
+    return v;
+  };
+  if (h.size() >= 24 && h[0] == 0x89 && h[1] == 'P' && h[2] == 'N' && h[3] == 'G')
+    return be(16, 4) * be(20, 4);  // IHDR width, height
+  if (h.size() >= 2 && h[0] == 'P' && std::string("2356").find(static_cast<char>(h[1])) != std::string::npos) {
+    std::string text(h.begin() + 2, h.end());
+    std::istringstream ss(text);
+    std::string word;
+    std::vector<double> dims;
+    while (dims.size() < 2 && ss >> word) {
+      if (word[0] == '#') {
+        std::getline(ss, word);
+        continue;
+      }
+      try {
+        dims.push_back(std::stod(word));
+      } catch (const std::exception&) {
+        return 0;
+      }
+    }
+    return dims.size() == 2 ? dims[0] * dims[1] : 0;
+  }
+  if (h.size() >= 4 && h[0] == 0xFF && h[1] == 0xD8) {  // JPEG: walk the markers to a SOFn
+    std::size_t at = 2;
+    while (at + 9 < h.size() && h[at] == 0xFF) {
+      const unsigned char m = h[at + 1];
+      if (m >= 0xC0 && m <= 0xCF && m != 0xC4 && m != 0xC8 && m != 0xCC)
+        return be(at + 5, 2) * be(at + 7, 2);  // SOFn: height, width
+      at += 2 + static_cast<std::size_t>(be(at + 2, 2));
+    }
+  }
+  return 0;
+}
+}  // namespace
+
 vpImage<unsigned char> loadGrayImage(const std::string& path) {
   vpImage<unsigned char> I;
+  const double pixels = declaredPixels(path);
+  if (pixels > kMaxImagePixels)
+    fail("cannot read image '" + path + "': its header declares " +
+         std::to_string(static_cast<long long>(pixels)) + " pixels (more than " +
+         std::to_string(static_cast<long long>(kMaxImagePixels)) + ")");
   try {
     vpImageIo::read(I, path);
   } catch (const std::exception& e) {

@@ -2,7 +2,7 @@
 //   ehc_detect_tags --image <png|pgm|jpg> --camera <camera_info yaml> --tag-size <m>
 //                   [--family 36h11] [--config <yaml with a tag_detector section>]
 // Prints [{"id":…, "T_cam_tag":[[4x4]], "corners":[[u,v]…], …}]. Errors: stderr, exit 2.
-#include "cli_args.h"
+#include "ehc_control/command_line.h"
 #include "ehc_control/config_node.h"
 #include "ehc_perception/perception_json.h"
 #include "ehc_perception/tag_detector.h"
@@ -19,31 +19,32 @@ const char* kUsage =
 int main(int argc, char** argv) {
   using namespace ehc_perception;
   try {
-    const auto args = cli::parseArgs(argc, argv, {"help"});
-    if (args.count("help")) {
+    const ehc_control::CommandLine cli(
+        argc, argv, {"image", "camera", "tag-size", "family", "config"}, {"help"});
+    if (cli.has("help")) {
       std::cout << kUsage;
       return 0;
     }
-    for (const char* k : {"image", "camera"})
-      if (!args.count(k)) throw std::invalid_argument(std::string("missing --") + k);
+    const std::string image_path = cli.text("image");
+    const std::string camera_path = cli.text("camera");
     TagDetectorConfig cfg;
-    if (args.count("config")) {
-      const auto root = ehc_control::ConfigNode::loadFile(args.at("config"), "TagDetector");
+    if (cli.has("config")) {
+      const auto root = ehc_control::ConfigNode::loadFile(cli.text("config"), "TagDetector");
       cfg = loadTagDetectorConfig(root.childOrEmpty("tag_detector"));
       root.ignore("node");  // the node sections are the ROS nodes'
       root.ignore("target");
       root.rejectUnknownKeys();
-    } else if (!args.count("tag-size")) {
+    } else if (!cli.has("tag-size")) {
       throw std::invalid_argument("missing --tag-size (or --config)");
     }
-    if (args.count("tag-size")) {
-      cfg.default_tag_size = cli::parseDouble("tag-size", args.at("tag-size"));
+    if (cli.has("tag-size")) {
+      cfg.default_tag_size = cli.real("tag-size", cfg.default_tag_size);
       cfg.tag_sizes.clear();
     }
-    if (args.count("family")) cfg.family = args.at("family");
-    const ehc_control::PinholeCamera cam = ehc_control::loadPinholeCamera(args.at("camera"));
+    cfg.family = cli.text("family", cfg.family);
+    const ehc_control::PinholeCamera cam = ehc_control::loadPinholeCamera(camera_path);
     TagDetector detector(cfg, cam);
-    const vpImage<unsigned char> image = loadGrayImage(args.at("image"));
+    const vpImage<unsigned char> image = loadGrayImage(image_path);
     std::cout << tagDetectionsToJson(detector.detect(image)) << std::endl;
     return 0;
   } catch (const std::exception& e) {

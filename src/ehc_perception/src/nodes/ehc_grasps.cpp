@@ -4,7 +4,7 @@
 //              --out grasps.json
 // Exit 0: grasps written. Exit 3: no grasp ("[]" written, reason on stderr).
 // Exit 2: bad arguments, unreadable cloud or config.
-#include "cli_args.h"
+#include "ehc_control/command_line.h"
 #include "ehc_control/config_node.h"
 #include "ehc_perception/grasp_generator.h"
 #include "ehc_perception/perception_json.h"
@@ -23,44 +23,37 @@ const char* kUsage =
 int main(int argc, char** argv) {
   using namespace ehc_perception;
   try {
-    const auto args = cli::parseArgs(argc, argv, {"help"});
-    if (args.count("help")) {
+    const ehc_control::CommandLine cli(
+        argc, argv, {"cloud", "out", "viewpoint", "top", "up", "mode", "config"}, {"help"});
+    if (cli.has("help")) {
       std::cout << kUsage;
       return 0;
     }
-    for (const char* k : {"cloud", "out"})
-      if (!args.count(k)) throw std::invalid_argument(std::string("missing --") + k);
+    const std::string cloud_path = cli.text("cloud");
+    const std::string out_path = cli.text("out");
     GraspGeneratorConfig cfg;
-    if (args.count("config")) {
-      const auto root = ehc_control::ConfigNode::loadFile(args.at("config"), "GraspGenerator");
+    if (cli.has("config")) {
+      const auto root = ehc_control::ConfigNode::loadFile(cli.text("config"), "GraspGenerator");
       cfg = loadGraspGeneratorConfig(root.childOrEmpty("grasp_generator"));
       root.ignore("node");  // the node sections are the ROS nodes'
       root.ignore("target");
       root.rejectUnknownKeys();
     }
-    if (args.count("top")) {
-      const double k = cli::parseDouble("top", args.at("top"));
-      if (k < 1 || k != static_cast<int>(k)) throw std::invalid_argument("--top must be >= 1");
-      cfg.top_k = static_cast<int>(k);
-    }
-    if (args.count("up")) cfg.up = cli::parseVector3("up", args.at("up"));
-    const Eigen::Vector3d viewpoint = args.count("viewpoint")
-                                          ? cli::parseVector3("viewpoint", args.at("viewpoint"))
-                                          : Eigen::Vector3d::Zero();
-    const std::string mode = args.count("mode") ? args.at("mode") : "scene";
-    if (mode != "scene" && mode != "object")
-      throw std::invalid_argument("--mode must be scene or object");
+    cfg.top_k = static_cast<int>(cli.integer("top", cfg.top_k, 1, 1000000));
+    cfg.up = cli.vector3("up", cfg.up);
+    const Eigen::Vector3d viewpoint = cli.vector3("viewpoint", Eigen::Vector3d::Zero());
+    const std::string mode = cli.choice("mode", {"scene", "object"}, "scene");
     const GraspGenerator gen(cfg);
-    const PointList cloud = loadPcd(args.at("cloud"));
+    const PointList cloud = loadPcd(cloud_path);
     const GraspResult res = mode == "scene" ? gen.generateFromScene(cloud, viewpoint)
                                             : gen.generate(cloud, viewpoint);
-    std::ofstream out(args.at("out"));
-    if (!out) throw std::invalid_argument("cannot write '" + args.at("out") + "'");
+    std::ofstream out(out_path);
+    if (!out) throw std::invalid_argument("cannot write '" + out_path + "'");
     out << graspsToJson(res.grasps) << "\n";
     out.close();
     std::cerr << "ehc_grasps: " << res.input_points << " points, " << res.objects
               << " object(s), support plane " << (res.support_plane_found ? "yes" : "no") << ", "
-              << res.grasps.size() << " grasp(s) -> " << args.at("out") << "\n";
+              << res.grasps.size() << " grasp(s) -> " << out_path << "\n";
     if (res.grasps.empty()) {
       std::cerr << "ehc_grasps: no grasp: " << res.reason << "\n";
       return 3;

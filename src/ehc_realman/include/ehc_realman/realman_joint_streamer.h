@@ -5,8 +5,11 @@
 // Every frame: q_next = q_last + v * dt (dt = 1 / rate_hz), where
 //   - v is the latest command, scaled down uniformly (direction kept) so that no joint exceeds
 //     speed_scale * min(robot velocity limit, driver speed limit);
-//   - the commanded position is kept within max_tracking_error of the latest measured
-//     /joint_states position (no wind-up when the arm lags or is blocked);
+//   - the set-point integrates from its own last value, never from the measured state; the
+//     latest measured /joint_states position only shortens a commanded step that would take the
+//     set-point further than max_tracking_error from it (no wind-up when the arm lags or is
+//     blocked). That clamp never moves the set-point against the command, so a glitch in the
+//     measured state holds the set-point instead of turning into motion;
 //   - joint limits (robot.yaml, shrunk by limit_margin) are never crossed outwards;
 //   - the step from the previous frame never exceeds min(max_step_deg, v_max * dt) per joint
 //     (the driver ignores frames more than 10 deg apart).

@@ -1,6 +1,7 @@
 #include "ehc_realman/realman_joint_streamer.h"
 
 #include "ehc_control/config_node.h"
+#include "ehc_control/joint_state.h"
 
 #include <algorithm>
 #include <cctype>
@@ -93,24 +94,12 @@ void JointPositionStreamer::fail(const std::string& what) const {
 
 void JointPositionStreamer::setMeasured(const std::vector<std::string>& names,
                                         const std::vector<double>& positions, double now) {
-  if (names.size() != positions.size()) {
+  Eigen::VectorXd q;  // the one joint-state parser (ehc_control/joint_state.h)
+  const std::string why =
+      ehc_control::armPositionsFromJointState(limits_.names, names, positions, &q);
+  if (!why.empty()) {
     ++counters_.rejected_states;
-    fail("joint state has " + std::to_string(names.size()) + " names but " +
-         std::to_string(positions.size()) + " positions");
-  }
-  Eigen::VectorXd q(lower_.size());
-  for (std::size_t j = 0; j < limits_.names.size(); ++j) {
-    const auto it = std::find(names.begin(), names.end(), limits_.names[j]);
-    if (it == names.end()) {
-      ++counters_.rejected_states;
-      fail("joint state lacks joint '" + limits_.names[j] + "'");
-    }
-    const double v = positions[static_cast<std::size_t>(it - names.begin())];
-    if (!std::isfinite(v)) {
-      ++counters_.rejected_states;
-      fail("joint state of '" + limits_.names[j] + "' is not finite");
-    }
-    q[static_cast<Eigen::Index>(j)] = v;
+    fail(why);
   }
   measured_ = q;
   measured_time_ = now;
@@ -203,10 +192,17 @@ std::optional<JointFrame> JointPositionStreamer::step(double now) {
   frame.speed_clamped = s < 1.0;
   Eigen::VectorXd target = last_frame_ + s * command_ * dt;
 
-  // No wind-up: stay within max_tracking_error of the measured position.
+  // No wind-up: the set-point integrates from its own last value; the measured position only
+  // shortens a commanded step that would take the set-point further than max_tracking_error from
+  // it. The clamp never moves the set-point against (or beyond) the commanded step, so a
+  // measured-state glitch (or an arm pushed away) holds the set-point instead of dragging it
+  // after the measurement.
   const Eigen::VectorXd lo_track = measured_.array() - config_.max_tracking_error;
   const Eigen::VectorXd hi_track = measured_.array() + config_.max_tracking_error;
-  const Eigen::VectorXd tracked = target.cwiseMax(lo_track).cwiseMin(hi_track);
+  const Eigen::VectorXd tracked = target.cwiseMax(lo_track)
+                                      .cwiseMin(hi_track)
+                                      .cwiseMax(last_frame_.cwiseMin(target))
+                                      .cwiseMin(last_frame_.cwiseMax(target));
   frame.tracking_clamped = (tracked - target).cwiseAbs().maxCoeff() > 0.0;
   target = tracked;
 

@@ -1,0 +1,39 @@
+// ehc_experiment CLI (issue 16 defect 7): unparsable values, unknown and repeated flags are
+// start-up errors naming the flag (exit code 2, nothing written).
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <string>
+#include <sys/wait.h>
+
+namespace {
+struct Result {
+  int code;
+  std::string out;
+};
+Result run(const std::string& args) {
+  FILE* p = popen((std::string(EHC_EXPERIMENT_BIN) + " " + args + " 2>&1").c_str(), "r");
+  std::string out;
+  std::array<char, 4096> buf{};
+  while (fgets(buf.data(), buf.size(), p)) out += buf.data();
+  return {WEXITSTATUS(pclose(p)), out};
+}
+}  // namespace
+
+TEST(ExperimentCli, UnparsableValuesAreStartUpErrorsNamingTheFlag) {
+  const std::string base = std::string("reach --robot ") + EHC_CONFIG_DIR +
+                           "/robots/realman_rm65_water2/robot.yaml --out /tmp/ehc_cli_exp ";
+  for (const std::string& bad :
+       {std::string("--sets 1e1"), std::string("--points 5x"), std::string("--seed -1"),
+        std::string("--sets 0"), std::string("--noise maybe"), std::string("--set 3")}) {
+    const Result r = run(base + bad);
+    EXPECT_EQ(r.code, 2) << bad << ": " << r.out;
+    EXPECT_NE(r.out.find(bad.substr(0, bad.find(' ')) + ":"), std::string::npos)
+        << bad << ": " << r.out;
+  }
+  const Result twice = run(base + "--sets 2 --sets 3");
+  EXPECT_EQ(twice.code, 2);
+  EXPECT_NE(twice.out.find("--sets: given twice"), std::string::npos) << twice.out;
+}
