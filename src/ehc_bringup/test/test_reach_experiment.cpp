@@ -75,8 +75,114 @@ TEST(ReachExperiment, DmcgEhcBaseMovesLessThanNeoEOnceTheArmCanReach) {
   RecordProperty("neo_e_close_base_r", std::to_string(neo.close.base_r));
   std::printf("close (< 0.5 m) base speeds: ehc %.4f m/s %.4f rad/s, neo_e %.4f m/s %.4f rad/s\n",
               ehc.close.base_t, ehc.close.base_r, neo.close.base_t, neo.close.base_r);
-  // Margin: both base speeds at least 15 % lower (measured on this seeded set: 28 % and 26 %;
-  // the paper's Table II shows 8 % and 25 %).
-  EXPECT_LT(ehc.close.base_t, 0.85 * neo.close.base_t);
+  // Margin: base translation at least 5 % lower, rotation at least 15 % lower (measured on this
+  // seeded set: 10 % and 22 %; the paper's Table II shows 8 % and 25 %). Until the base-turn
+  // term was unwound at the +-pi jump of atan2 (controller.base_turn_unwinding, every method),
+  // NEO(e)'s base sometimes turned the wrong way near the target and the translation margin
+  // measured 28 %: part of that was the jump, not EHC's weighting.
+  EXPECT_LT(ehc.close.base_t, 0.95 * neo.close.base_t);
   EXPECT_LT(ehc.close.base_r, 0.85 * neo.close.base_r);
+}
+
+namespace {
+/// The first `points` targets of set 0 of `ehc_experiment reach --seed 1` (generator seed 1000,
+/// unreachable draws redrawn), run with noise seed 1 as that command runs them.
+std::vector<std::vector<Eigen::Isometry3d>> experimentSet0(const ExpSetup& s, int points) {
+  auto reachable = [&](const Eigen::Isometry3d& T) { return s.model->inverseKinematics(T, 1, 30); };
+  return {ReachTargetGenerator{}.generate(points, 1000, Eigen::Vector2d::Zero(), reachable)};
+}
+ReachSummary runSet0(const ExpSetup& s, ehc_control::QpControllerParams c, ehc_control::ControlMode mode,
+                     const std::vector<std::vector<Eigen::Isometry3d>>& sets, std::vector<ReachTrial>* trials,
+                     ReachProtocol protocol = ReachProtocol::Sequence) {
+  c.mode = mode;
+  ReachExperimentParams p = s.params;
+  p.protocol = protocol;
+  ReachExperiment e(s.model, c, s.weighting, p);
+  return e.run(sets, 1, trials);
+}
+void expectCausesAccountedFor(const ReachSummary& s, const std::vector<ReachTrial>& trials) {
+  int counted = 0;
+  for (const auto& [cause, n] : s.failures) {
+    EXPECT_NE(cause, ReachFailure::None);
+    counted += n;
+  }
+  EXPECT_EQ(counted, s.failed) << s.method;
+  for (const ReachTrial& t : trials) {
+    if (t.method != s.method) continue;
+    EXPECT_EQ(t.reached, t.failure == ReachFailure::None) << s.method << " target " << t.index;
+    const bool pinned = t.failure == ReachFailure::JointLimit || t.failure == ReachFailure::RollWinding;
+    EXPECT_EQ(pinned, !t.failure_joint.empty()) << s.method << " target " << t.index;
+  }
+}
+}  // namespace
+
+TEST(ReachExperiment, FailureCausesHaveOneStringMap) {
+  for (const ReachFailure f : reachFailures()) EXPECT_EQ(reachFailureFromString(toString(f)), f);
+  EXPECT_EQ(reachProtocolFromString("reset"), ReachProtocol::Reset);
+  EXPECT_EQ(toString(ReachProtocol::Sequence), "sequence");
+  EXPECT_THROW(reachFailureFromString("bad luck"), std::invalid_argument);
+  EXPECT_THROW(reachProtocolFromString("random"), std::invalid_argument);
+}
+
+TEST(ReachExperiment, NoJointLimitTrapsBackToBackEveryMethod) {
+  // Reduced Exp-1 (20 targets back to back, noise on). Before the unwound base-turn bearing
+  // and the joint-limit centring, NEO(c) left joint1 pinned at its limit on two of these
+  // targets (every later target inherits the posture); with them every method reaches at
+  // least 19 of 20, and every failure, before or after, carries a cause.
+  ExpSetup s = makeSetup(1);
+  const auto sets = experimentSet0(s, 20);
+  ehc_control::QpControllerParams before = s.ctrl;
+  before.base_turn_unwinding = false;
+  before.limit_centring_gain = 0.0;
+  std::vector<ReachTrial> trials_before;
+  const ReachSummary b = runSet0(s, before, ehc_control::ControlMode::NeoC, sets, &trials_before);
+  EXPECT_GE(b.failed, 2);
+  EXPECT_GE(b.pinned_joints.count("joint1"), 1u);
+  expectCausesAccountedFor(b, trials_before);
+
+  ASSERT_GT(s.ctrl.limit_centring_gain, 0.0);  // controller.yaml switches it on
+  ASSERT_TRUE(s.ctrl.base_turn_unwinding);
+  for (const auto mode : {ehc_control::ControlMode::Ehc, ehc_control::ControlMode::NeoE, ehc_control::ControlMode::NeoC}) {
+    std::vector<ReachTrial> trials;
+    const ReachSummary a = runSet0(s, s.ctrl, mode, sets, &trials);
+    std::printf("%s: %d of %d failed, mean %.2f s\n", a.method.c_str(), a.failed, a.targets, a.mean_time_s);
+    EXPECT_LE(a.failed, 1) << a.method;
+    expectCausesAccountedFor(a, trials);
+  }
+}
+
+TEST(ReachExperiment, ResetProtocolStartsEveryTargetFromTheReadyPose) {
+  ExpSetup s = makeSetup(1);
+  const auto sets = std::vector<std::vector<Eigen::Isometry3d>>{relativeToPrevious(experimentSet0(s, 4)[0])};
+  std::vector<ReachTrial> trials;
+  const ReachSummary r = runSet0(s, s.ctrl, ehc_control::ControlMode::NeoE, sets, &trials, ReachProtocol::Reset);
+  EXPECT_EQ(r.targets, 4);
+  // Every target is 1.5-4 m from the origin, where the robot starts each time.
+  for (const auto& t : sets[0]) {
+    EXPECT_GE(t.translation().head<2>().norm(), 1.5 - 1e-9);
+    EXPECT_LE(t.translation().head<2>().norm(), 4.0 + 1e-9);
+  }
+  expectCausesAccountedFor(r, trials);
+}
+
+TEST(ReachExperiment, RunsOnTheSevenDofTestArm) {
+  // The controller and the failure bookkeeping on a redundant (7-DOF) arm on the differential
+  // base: src/ehc_control/test/robots/arm7_differential (iiwa 14 kinematics).
+  const auto rc = ehc_control::loadRobotConfig(std::string(EHC_CONTROL_TEST_DIR) + "/robots/arm7_differential/robot.yaml");
+  ExpSetup s = makeSetup(1);
+  s.model = std::make_shared<const ehc_control::WholeBodyModel>(rc);
+  const auto cfg = ehc_control::ConfigNode::loadFile(std::string(EHC_CONFIG_DIR) + "/control/controller.yaml", "test");
+  auto map = std::make_shared<const ehc_control::ReachabilityMap>(ehc_control::ReachabilityMap::load(rc.reachability_map_path));
+  map->checkCompatible(rc);
+  s.weighting = std::make_shared<const ehc_control::EhcWeighting>(map, ehc_control::loadEhcWeightingParams(cfg.child("weighting")));
+  EXPECT_EQ(ehc_control::armYawJoint(*s.model), 0);
+  const auto sets = experimentSet0(s, 5);
+  std::vector<ReachTrial> trials;
+  const ReachSummary r = runSet0(s, s.ctrl, ehc_control::ControlMode::Ehc, sets, &trials);
+  std::printf("7-DOF ehc: %d of %d failed, mean %.2f s\n", r.failed, r.targets, r.mean_time_s);
+  EXPECT_EQ(r.targets, 5);
+  EXPECT_EQ(r.qp_failures, 0);
+  EXPECT_GT(r.min_joint_limit_margin, 0.0);
+  EXPECT_LE(r.failed, 2);
+  expectCausesAccountedFor(r, trials);
 }

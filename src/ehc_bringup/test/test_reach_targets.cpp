@@ -71,3 +71,16 @@ TEST(ReachTargets, ReachabilityFilterRedrawsRejectedTargets) {
   EXPECT_THROW(g.generate(1, 9, Eigen::Vector2d::Zero(), [](const Eigen::Isometry3d&) { return false; }),
                std::invalid_argument);
 }
+
+TEST(ReachTargets, RelativeToPreviousKeepsEachApproachFromTheStart) {
+  const auto seq = ReachTargetGenerator{}.generate(6, 9);
+  const auto rel = relativeToPrevious(seq);
+  ASSERT_EQ(rel.size(), seq.size());
+  Eigen::Vector2d prev = Eigen::Vector2d::Zero();
+  for (std::size_t i = 0; i < seq.size(); ++i) {
+    EXPECT_TRUE(rel[i].translation().head<2>().isApprox(seq[i].translation().head<2>() - prev, 1e-12));
+    EXPECT_DOUBLE_EQ(rel[i].translation().z(), seq[i].translation().z());
+    EXPECT_TRUE(rel[i].linear().isApprox(seq[i].linear(), 1e-15));
+    prev = seq[i].translation().head<2>();
+  }
+}

@@ -11,12 +11,35 @@
 #include <Eigen/Geometry>
 
 #include <functional>
+#include <map>
 #include <ostream>
 #include <memory>
 #include <string>
 #include <vector>
 
 namespace ehc_bringup {
+
+/// How the targets of a set follow each other: back to back (each starts where the last one
+/// ended), or each from the ready pose at the origin (the NEO reference protocol).
+enum class ReachProtocol { Sequence, Reset };
+std::string toString(ReachProtocol p);
+ReachProtocol reachProtocolFromString(const std::string& s);  ///< throws "[ReachExperiment] ..."
+
+/// Why a target was not reached within the time limit (classified at the end of the trial,
+/// first match in this order).
+enum class ReachFailure {
+  None,                ///< reached
+  Unreachable,         ///< no whole-body IK solution (kinematically unreachable)
+  Converging,          ///< the error still fell over the last progress window: out of time
+  RollWinding,         ///< the TCP roll joint is pinned at a limit (wound up)
+  JointLimit,          ///< another arm joint is pinned at a limit (ReachTrial::failure_joint)
+  Singular,            ///< arm manipulability below singular_manipulability
+  BaseStuck,           ///< TCP beyond the arm's reach and the base does not move
+  Stalled,             ///< none of the above: a local minimum away from limits and singularities
+};
+std::string toString(ReachFailure f);
+ReachFailure reachFailureFromString(const std::string& s);  ///< throws "[ReachExperiment] ..."
+std::vector<ReachFailure> reachFailures();                  ///< every value, in order
 
 struct ReachExperimentParams {
   double control_rate = 100.0;      ///< Hz
@@ -29,6 +52,15 @@ struct ReachExperimentParams {
   /// (KinematicFakeRobot::odometryPose); arrival is judged on the true pose.
   ehc_sim::BaseModelConfig base_model;
   ehc_control::PoseServoParams servo;
+  ReachProtocol protocol = ReachProtocol::Sequence;
+  // Failure classification (ReachFailure) of a target not reached in time:
+  double progress_window = 3.0;        ///< s: the error is compared with its value this long before
+  double progress_position = 0.005;    ///< m: a smaller drop over the window is no progress
+  double progress_orientation = 1.0 * M_PI / 180.0;  ///< rad: idem
+  double pinned_margin = 0.15;         ///< rad: a joint this close to a limit is pinned
+  double singular_manipulability = 0.01;  ///< fraction of the ready pose's manipulability
+  double base_reach = 0.8;             ///< m: position error beyond which only the base can help
+  double base_stuck_distance = 0.02;   ///< m: base travel over the window below which it is stuck
   void validate() const;            ///< throws "[ReachExperiment] ..."
 };
 
@@ -46,6 +78,8 @@ struct ReachTrial {
   double final_position_error = 0.0, final_orientation_error = 0.0;
   long qp_failures = 0;
   double min_joint_limit_margin = 0.0;  ///< rad, smallest distance to a joint limit seen
+  ReachFailure failure = ReachFailure::None;
+  std::string failure_joint;            ///< the pinned joint (RollWinding, JointLimit), else ""
 };
 
 struct ReachSummary {
@@ -58,6 +92,8 @@ struct ReachSummary {
   double controller_median_us = 0.0, controller_p99_us = 0.0;
   double min_joint_limit_margin = 0.0;
   double wall_time_s = 0.0;
+  std::map<ReachFailure, int> failures;          ///< count per cause (failed targets only)
+  std::map<std::string, int> pinned_joints;      ///< count per joint (RollWinding, JointLimit)
 };
 
 class ReachExperiment {
@@ -69,7 +105,9 @@ class ReachExperiment {
                   std::shared_ptr<const ehc_control::EhcWeighting> weighting,
                   const ReachExperimentParams& params);
 
-  /// Runs every set from the ready pose at the origin; set s uses noise seed `seed + s`.
+  /// Runs every set from the ready pose at the origin; set s uses noise seed `seed + s`. With
+  /// ReachProtocol::Reset every target starts from the ready pose at the origin, and targets
+  /// are taken relative to the previous one (relativeToPrevious, reach_targets.h) by the caller.
   ReachSummary run(const std::vector<std::vector<Eigen::Isometry3d>>& sets, unsigned seed,
                    std::vector<ReachTrial>* trials = nullptr, const Progress& progress = nullptr);
 
@@ -79,6 +117,12 @@ class ReachExperiment {
 
   /// Drives `robot` to one target (at most the time limit) through `cycle` (built by run() from
   /// the constructor's arguments), accumulating speeds and the update() timings.
+  /// Classifies a failed trial from the state at its end (`base`, `q`), the target, and the
+  /// position/orientation error and base position one progress window earlier.
+  void classifyFailure(ReachTrial& t, const Eigen::Vector3d& base, const Eigen::VectorXd& q,
+                       const Eigen::Isometry3d& target, double position_error_before,
+                       double orientation_error_before, const Eigen::Vector3d& base_before) const;
+
   ReachTrial reach(ehc_sim::KinematicFakeRobot& robot, ehc_control::ControlCycle& cycle,
                    const Eigen::Isometry3d& target, SpeedMeans& distant, SpeedMeans& close,
                    std::vector<double>& step_us);
@@ -92,6 +136,8 @@ class ReachExperiment {
   std::ostream* trace_ = nullptr;
   double sim_time_ = 0.0;  ///< s, advanced by one control period per cycle
   int trace_set_ = 0, trace_index_ = 0;
+  int roll_joint_ = -1;             ///< findRollJoint
+  double ready_manipulability_ = 0.0;
 };
 
 /// Writes summary.json, table.md (paper Table II layout) and trials.csv into `dir`.

@@ -31,6 +31,12 @@ struct ReachTargetGenerator {
                                           int* rejected = nullptr) const;
 };
 
+/// The targets of a back-to-back sequence (each drawn relative to the previous one, the first
+/// relative to `start_xy`) shifted horizontally so that each is relative to `start_xy`: the
+/// same approaches, each from the start (ReachProtocol::Reset). Orientation and height kept.
+std::vector<Eigen::Isometry3d> relativeToPrevious(const std::vector<Eigen::Isometry3d>& targets,
+                                                  const Eigen::Vector2d& start_xy = Eigen::Vector2d::Zero());
+
 /// Reads rows `x y z qx qy qz qw` (space or comma separated; '#' starts a comment).
 /// Throws "[ReachTargets] <file>:<line>: ..." on malformed rows or non-unit quaternions.
 std::vector<Eigen::Isometry3d> readReachTargetsCsv(const std::string& path);

@@ -1,6 +1,7 @@
 #include "ehc_bringup/reach_experiment.h"
 
 #include "ehc_control/bench_util.h"
+#include "ehc_control/enum_names.h"
 
 #include <chrono>
 #include <cmath>
@@ -15,12 +16,44 @@ namespace ehc_bringup {
 using ehc_control::ControlCycle;
 using ehc_control::Vector6d;
 
+namespace {
+const char* kOwner = "ReachExperiment";
+constexpr ehc_control::EnumNames<ReachProtocol, 2> kProtocolNames = {{
+    {ReachProtocol::Sequence, "sequence"},
+    {ReachProtocol::Reset, "reset"},
+}};
+constexpr ehc_control::EnumNames<ReachFailure, 8> kFailureNames = {{
+    {ReachFailure::None, "none"},
+    {ReachFailure::Unreachable, "unreachable"},
+    {ReachFailure::Converging, "converging"},
+    {ReachFailure::RollWinding, "roll_winding"},
+    {ReachFailure::JointLimit, "joint_limit"},
+    {ReachFailure::Singular, "singular"},
+    {ReachFailure::BaseStuck, "base_stuck"},
+    {ReachFailure::Stalled, "stalled"},
+}};
+}  // namespace
+
+std::string toString(ReachProtocol p) { return ehc_control::enumName(kProtocolNames, p, kOwner); }
+ReachProtocol reachProtocolFromString(const std::string& s) {
+  return ehc_control::enumValue(kProtocolNames, s, kOwner, "protocol");
+}
+std::string toString(ReachFailure f) { return ehc_control::enumName(kFailureNames, f, kOwner); }
+ReachFailure reachFailureFromString(const std::string& s) {
+  return ehc_control::enumValue(kFailureNames, s, kOwner, "failure cause");
+}
+std::vector<ReachFailure> reachFailures() { return ehc_control::enumValues(kFailureNames); }
+
 void ReachExperimentParams::validate() const {
   auto bad = [](const std::string& w) { throw std::invalid_argument("[ReachExperiment] " + w); };
   if (!(control_rate >= 1.0 && control_rate <= 10000.0)) bad("control_rate must be in [1, 10000] Hz");
   if (!(time_limit > 0.0)) bad("time_limit must be > 0");
   if (!(distant_threshold > 0.0)) bad("distant_threshold must be > 0");
   if (!(arrival_position > 0.0 && arrival_orientation > 0.0)) bad("arrival tolerances must be > 0");
+  if (!(progress_window > 0.0 && progress_position > 0.0 && progress_orientation > 0.0))
+    bad("progress_window, progress_position and progress_orientation must be > 0");
+  if (!(pinned_margin > 0.0 && singular_manipulability >= 0.0 && base_reach > 0.0 && base_stuck_distance > 0.0))
+    bad("pinned_margin, base_reach and base_stuck_distance must be > 0, singular_manipulability >= 0");
   noise.validate();
   base_model.validate();
   servo.validate();
@@ -37,6 +70,8 @@ ReachExperiment::ReachExperiment(std::shared_ptr<const ehc_control::WholeBodyMod
   cycle_params_.controller = controller_;
   cycle_params_.servo_type = ehc_control::ServoType::Proportional;
   cycle_params_.servo = params_.servo;
+  roll_joint_ = ehc_control::findRollJoint(*model_);
+  ready_manipulability_ = model_->manipulability(model_->config().arm_ready);
 }
 
 namespace {
@@ -60,6 +95,36 @@ double limitMargin(const ehc_control::RobotConfig& rc, const Eigen::VectorXd& q)
 }
 }  // namespace
 
+void ReachExperiment::classifyFailure(ReachTrial& t, const Eigen::Vector3d& base, const Eigen::VectorXd& q,
+                                      const Eigen::Isometry3d& target, double position_error_before,
+                                      double orientation_error_before, const Eigen::Vector3d& base_before) const {
+  const auto& rc = model_->config();
+  t.failure_joint.clear();
+  // The joint closest to a limit, if pinned.
+  int pinned = -1;
+  double pinned_margin = params_.pinned_margin;
+  for (int i = 0; i < q.size(); ++i) {
+    const double m = std::min(q[i] - rc.arm_lower[i], rc.arm_upper[i] - q[i]);
+    if (m < pinned_margin) {
+      pinned_margin = m;
+      pinned = i;
+    }
+  }
+  if (!model_->inverseKinematics(target, 1, 30)) t.failure = ReachFailure::Unreachable;
+  else if (position_error_before - t.final_position_error > params_.progress_position ||
+           orientation_error_before - t.final_orientation_error > params_.progress_orientation)
+    t.failure = ReachFailure::Converging;
+  else if (pinned >= 0) t.failure = pinned == roll_joint_ ? ReachFailure::RollWinding : ReachFailure::JointLimit;
+  else if (model_->manipulability(q) < params_.singular_manipulability * ready_manipulability_)
+    t.failure = ReachFailure::Singular;
+  else if (t.final_position_error > params_.base_reach &&
+           (base - base_before).head<2>().norm() < params_.base_stuck_distance)
+    t.failure = ReachFailure::BaseStuck;
+  else t.failure = ReachFailure::Stalled;
+  if (t.failure == ReachFailure::RollWinding || t.failure == ReachFailure::JointLimit)
+    t.failure_joint = rc.arm_joints[static_cast<std::size_t>(pinned)];
+}
+
 ReachTrial ReachExperiment::reach(ehc_sim::KinematicFakeRobot& robot, ControlCycle& cycle,
                                   const Eigen::Isometry3d& target, SpeedMeans& distant,
                                   SpeedMeans& close, std::vector<double>& step_us) {
@@ -68,14 +133,27 @@ ReachTrial ReachExperiment::reach(ehc_sim::KinematicFakeRobot& robot, ControlCyc
   const int max_steps = static_cast<int>(std::ceil(params_.time_limit * params_.control_rate));
   ReachTrial t;
   t.min_joint_limit_margin = limitMargin(rc, robot.armPositions());
+  // Errors and base position per cycle, for the failure classification at the end.
+  const int window = std::max(1, static_cast<int>(std::lround(params_.progress_window * params_.control_rate)));
+  std::vector<Eigen::Vector3d> history(static_cast<std::size_t>(window), Eigen::Vector3d::Zero());
+  std::vector<Eigen::Vector2d> base_history(static_cast<std::size_t>(window), Eigen::Vector2d::Zero());
   for (int k = 0; k <= max_steps; ++k) {
     const Eigen::Isometry3d tcp = model_->fk(robot.basePose(), robot.armPositions(), rc.tcp_frame);
     const Vector6d e = ehc_control::poseError(tcp, target);
     t.final_position_error = e.head<3>().norm();
     t.final_orientation_error = e.tail<3>().norm();
+    const std::size_t slot = static_cast<std::size_t>(k % window);
+    if (k == max_steps) {
+      const std::size_t before = k >= window ? slot : 0;  // the entry written `window` cycles ago
+      classifyFailure(t, robot.basePose(), robot.armPositions(), target, history[before].x(), history[before].y(),
+                      Eigen::Vector3d(base_history[before].x(), base_history[before].y(), 0.0));
+    }
+    history[slot] = Eigen::Vector3d(t.final_position_error, t.final_orientation_error, 0.0);
+    base_history[slot] = robot.basePose().head<2>();
     if (t.final_position_error < params_.arrival_position &&
         t.final_orientation_error < params_.arrival_orientation) {
       t.reached = true;
+      t.failure = ReachFailure::None;
       t.time_s = k * dt;
       return t;
     }
@@ -128,10 +206,12 @@ ReachSummary ReachExperiment::run(const std::vector<std::vector<Eigen::Isometry3
   s.min_joint_limit_margin = 1e9;
   ControlCycle cycle(model_, weighting_, cycle_params_);
   for (std::size_t si = 0; si < sets.size(); ++si) {
-    ehc_sim::KinematicFakeRobot robot(model_->config(), params_.noise, seed + static_cast<unsigned>(si),
-                                      params_.base_model);
-    robot.reset(Eigen::Vector3d::Zero(), model_->config().arm_ready, seed + static_cast<unsigned>(si));
+    const unsigned set_seed = seed + static_cast<unsigned>(si);
+    ehc_sim::KinematicFakeRobot robot(model_->config(), params_.noise, set_seed, params_.base_model);
+    robot.reset(Eigen::Vector3d::Zero(), model_->config().arm_ready, set_seed);
     for (std::size_t ti = 0; ti < sets[si].size(); ++ti) {
+      if (params_.protocol == ReachProtocol::Reset && ti > 0)  // a fresh noise stream per target
+        robot.reset(Eigen::Vector3d::Zero(), model_->config().arm_ready, set_seed * 1000u + static_cast<unsigned>(ti));
       trace_set_ = static_cast<int>(si);
       trace_index_ = static_cast<int>(ti);
       ReachTrial t = reach(robot, cycle, sets[si][ti], distant, close, step_us);
@@ -139,8 +219,13 @@ ReachSummary ReachExperiment::run(const std::vector<std::vector<Eigen::Isometry3
       t.set = static_cast<int>(si);
       t.index = static_cast<int>(ti);
       ++s.targets;
-      if (t.reached) time_sum += t.time_s;
-      else ++s.failed;
+      if (t.reached) {
+        time_sum += t.time_s;
+      } else {
+        ++s.failed;
+        ++s.failures[t.failure];
+        if (!t.failure_joint.empty()) ++s.pinned_joints[t.failure_joint];
+      }
       s.qp_failures += t.qp_failures;
       s.min_joint_limit_margin = std::min(s.min_joint_limit_margin, t.min_joint_limit_margin);
       if (trials) trials->push_back(t);
@@ -173,7 +258,21 @@ std::string summaryJson(const ReachSummary& s) {
      << ",\"qp_failures\":" << s.qp_failures << ",\"min_joint_limit_margin_rad\":"
      << s.min_joint_limit_margin << ",\"controller_step_median_us\":" << s.controller_median_us
      << ",\"controller_step_p99_us\":" << s.controller_p99_us << ",\"wall_time_s\":"
-     << s.wall_time_s << "}";
+     << s.wall_time_s << ",\"failure_causes\":{";
+  bool first = true;
+  for (const ReachFailure f : reachFailures()) {
+    if (f == ReachFailure::None) continue;
+    const auto it = s.failures.find(f);
+    os << (first ? "" : ",") << "\"" << toString(f) << "\":" << (it == s.failures.end() ? 0 : it->second);
+    first = false;
+  }
+  os << "},\"pinned_joints\":{";
+  first = true;
+  for (const auto& [joint, n] : s.pinned_joints) {
+    os << (first ? "" : ",") << "\"" << joint << "\":" << n;
+    first = false;
+  }
+  os << "}}";
   return os.str();
 }
 
@@ -205,16 +304,35 @@ void writeReachResults(const std::string& dir, const std::vector<ReachSummary>& 
         << std::setprecision(3) << s.distant.base_t << "/" << s.distant.base_r << "/" << s.distant.arm
         << " | " << s.close.base_t << "/" << s.close.base_r << "/" << s.close.arm << " | " << s.failed
         << " |\n";
+    // Failure causes (ReachFailure), per method.
+    f << "\n| Method | Failed |";
+    for (const ReachFailure c : reachFailures())
+      if (c != ReachFailure::None) f << " " << toString(c) << " |";
+    f << " pinned joints |\n|---|---|";
+    for (const ReachFailure c : reachFailures())
+      if (c != ReachFailure::None) f << "---|";
+    f << "---|\n";
+    for (const auto& s : summaries) {
+      f << "| " << s.method << " | " << s.failed << " |";
+      for (const ReachFailure c : reachFailures()) {
+        if (c == ReachFailure::None) continue;
+        const auto it = s.failures.find(c);
+        f << " " << (it == s.failures.end() ? 0 : it->second) << " |";
+      }
+      std::string joints;
+      for (const auto& [joint, n] : s.pinned_joints) joints += (joints.empty() ? "" : ", ") + joint + " " + std::to_string(n);
+      f << " " << (joints.empty() ? "-" : joints) << " |\n";
+    }
     if (!notes.empty()) f << "\n" << notes << "\n";
   }
   {
     std::ofstream f = open("trials.csv");
     f << "method,set,index,reached,time_s,final_position_error_m,final_orientation_error_rad,qp_failures,"
-         "min_joint_limit_margin_rad\n";
+         "min_joint_limit_margin_rad,failure,failure_joint\n";
     for (const auto& t : trials)
       f << t.method << "," << t.set << "," << t.index << "," << (t.reached ? 1 : 0) << "," << t.time_s << ","
         << t.final_position_error << "," << t.final_orientation_error << "," << t.qp_failures << ","
-        << t.min_joint_limit_margin << "\n";
+        << t.min_joint_limit_margin << "," << toString(t.failure) << "," << t.failure_joint << "\n";
   }
 }
 

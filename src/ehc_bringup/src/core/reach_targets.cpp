@@ -117,4 +117,18 @@ void writeReachTargetsCsv(const std::string& path, const std::vector<Eigen::Isom
   }
 }
 
+std::vector<Eigen::Isometry3d> relativeToPrevious(const std::vector<Eigen::Isometry3d>& targets,
+                                                  const Eigen::Vector2d& start_xy) {
+  std::vector<Eigen::Isometry3d> out;
+  out.reserve(targets.size());
+  Eigen::Vector2d previous = start_xy;
+  for (const Eigen::Isometry3d& t : targets) {
+    Eigen::Isometry3d r = t;
+    r.translation().head<2>() += start_xy - previous;
+    previous = t.translation().head<2>();
+    out.push_back(r);
+  }
+  return out;
+}
+
 }  // namespace ehc_bringup

@@ -1,7 +1,7 @@
 // ehc_experiment: the paper's experiments, in-process (no ROS master needed).
 //   rosrun ehc_bringup ehc_experiment reach --robot robot.yaml --method ehc|neo_e|neo_c|all
 //       [--sets 10] [--points 50] [--seed S] [--targets targets.csv] [--noise on|off]
-//       [--base-model ideal|water2]
+//       [--base-model ideal|water2] [--protocol sequence|reset]
 //       [--config controller.yaml] [--map reachability_map.bin] --out DIR
 // Writes DIR/summary.json, DIR/table.md (paper Table II layout), DIR/trials.csv and
 // DIR/targets.csv; progress and ETA on stderr. Errors: stderr, exit code 2.
@@ -27,6 +27,7 @@ const char* kUsage =
     "           [--base-model ideal|water2]   (water2: the Water2 chain of ehc_sim/base_model.h with\n"
     "                                          its default parameters; the controller sees its odometry)\n"
     "           [--config controller.yaml] [--map reachability_map.bin] [--trace cycles.csv]\n"
+    "           [--protocol sequence|reset]   (reset: every target from the ready pose at the origin)\n"
     "           [--all-targets]   (keep generated targets no whole-body IK solution reaches)\n";
 
 struct Args {
@@ -36,6 +37,7 @@ struct Args {
   bool noise = true;
   ehc_sim::BaseModelType base_model = ehc_sim::BaseModelType::Ideal;
   bool all_targets = false;  ///< keep kinematically unreachable targets
+  ehc_bringup::ReachProtocol protocol = ehc_bringup::ReachProtocol::Sequence;
 };
 
 Args parse(int argc, char** argv) {
@@ -90,6 +92,7 @@ int main(int argc, char** argv) {
     ep.servo = ehc_control::loadPoseServoParams(cfg.childOrEmpty("servo"));
     ep.noise.enabled = a.noise;
     ep.base_model.type = a.base_model;
+    ep.protocol = a.protocol;
     ep.arrival_position = ctrl.arrival_position;
     ep.arrival_orientation = ctrl.arrival_orientation;
 
@@ -118,13 +121,18 @@ int main(int argc, char** argv) {
         unreachable_redrawn += rejected;
       }
     }
+    // The reset protocol runs the same approaches, each from the origin.
+    std::vector<std::vector<Eigen::Isometry3d>> run_sets = sets;
+    if (a.protocol == ehc_bringup::ReachProtocol::Reset)
+      for (auto& set : run_sets) set = ehc_bringup::relativeToPrevious(set);
     std::vector<std::string> methods;
     if (a.method == "all") methods = {"neo_c", "neo_e", "ehc"};
     else methods = {a.method};
 
     std::cerr << robot_cfg.summary() << map->summary() << "\n" << ctrl.summary() << "\n"
               << "[ehc_experiment] " << sets.size() << " sets, noise " << (a.noise ? "on" : "off")
-              << ", seed " << a.seed << ", base model " << ep.base_model.summary() << ", methods:";
+              << ", seed " << a.seed << ", base model " << ep.base_model.summary() << ", protocol "
+              << ehc_bringup::toString(a.protocol) << ", methods:";
     for (const auto& m : methods) std::cerr << " " << m;
     std::cerr << std::endl;
 
@@ -149,11 +157,11 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "[ehc_experiment] %-6s %4d/%d targets  failed %3d  mean %.2f s  elapsed %.0f s  ETA %.0f s\n",
                      m.c_str(), done, total, s.failed, s.mean_time_s, el, eta);
       };
-      summaries.push_back(exp.run(sets, a.seed, &trials, progress));
+      summaries.push_back(exp.run(run_sets, a.seed, &trials, progress));
       std::cout << ehc_bringup::summaryJson(summaries.back()) << std::endl;
     }
     std::string notes = "Exp-1 (random reaching), " + std::to_string(summaries[0].targets) +
-                        " targets, noise " + (a.noise ? "on (Table I)" : "off") + ", seed " +
+                        " targets, protocol " + ehc_bringup::toString(a.protocol) + ", noise " + (a.noise ? "on (Table I)" : "off") + ", seed " +
                         std::to_string(a.seed) + ", " +
                         (a.targets_csv.empty() ? (a.all_targets ? std::string("unreachable targets kept")
                                                                 : std::to_string(unreachable_redrawn) + " unreachable draws redrawn (whole-body IK)")
@@ -164,7 +172,7 @@ int main(int argc, char** argv) {
                         ". Speeds: mean |v| (m/s) / |w| (rad/s) / sum |qd_arm| (rad/s) of the commanded velocity; distant = position error > 0.5 m.";
     ehc_bringup::writeReachResults(a.out, summaries, trials, notes);
     std::vector<Eigen::Isometry3d> flat;
-    for (const auto& s : sets) flat.insert(flat.end(), s.begin(), s.end());
+    for (const auto& s : run_sets) flat.insert(flat.end(), s.begin(), s.end());
     ehc_bringup::writeReachTargetsCsv(a.out + "/targets.csv", flat);
     std::cerr << "[ehc_experiment] results in " << a.out << "/ (summary.json, table.md, trials.csv, targets.csv)\n";
     return 0;

@@ -8,7 +8,10 @@
 //        A_in x <= b_in                      (joint-position and obstacle velocity dampers)
 //        x- <= x <= x+                       (velocity limits, slack bound)
 //   Q = blkdiag(w_base I, w_arm I, 1/max(|e|, e_min) I_6)
-//   C = [0 .. -k_eps atan2(y_e, x_e) (w_z column); -k_m J_m + k_p (q - q_ready); 0]
+//   C = [0 .. -k_eps b (w_z column); -k_m J_m + k_p (q - q_ready) + dV_lim/dq; 0]
+//   b: TCP bearing atan2(y_e, x_e) in the base frame, on the 2 pi branch nearest the winding of
+//      the arm's yaw joint (q_yaw - q_yaw,ready), so that turning towards the TCP unwinds it
+//   V_lim: joint-limit centring potential (JointLimitCentring)
 //
 // Modes (one parameter): ehc  w_base = w_min + (w_max - w_min) sig(omega)
 //                        neo_e w_base = w_arm / |e|        (NEO: base weight 1/|e|)
@@ -49,6 +52,10 @@ struct QpControllerParams {
   double min_error = 0.01;             ///< |e| floor in 1/|e| terms (slack and neo_e)
   double slack_bound = 10.0;           ///< |delta_i| bound
   double base_turn_gain = 0.5;         ///< k_eps: turn the base toward the TCP
+  /// Take the TCP bearing of the turn term on the branch of the arm yaw joint's winding
+  /// (unwoundBearing); false: plain atan2 (paper, NEO), which near +-pi turns the base the way
+  /// that winds the yaw joint further into its limit.
+  bool base_turn_unwinding = true;
   double manipulability_gain = 1.0;    ///< k_m: weight of -J_m in C
   /// m; > 0: k_m fades linearly to 0 as the TCP comes within this distance of the target.
   /// Near a stretched pose the manipulability gradient is large and, with the 1/|e| slack
@@ -59,6 +66,11 @@ struct QpControllerParams {
   /// performance tasks"): a weak pull of the arm towards its ready posture,
   /// C_arm += k_p (q - q_ready), which keeps the joints away from their limits.
   double posture_gain = 0.001;
+  /// Joint-limit centring (JointLimitCentring, joint_limit_centring.h): C_arm += dV/dq of a
+  /// potential that is 0 at joint_influence and has slope limit_centring_gain at joint_stop,
+  /// so that joints leave the damper zone while the task (or the base) allows it, instead of
+  /// being pinned there by their damper. 0 = off.
+  double limit_centring_gain = 0.1;
   double joint_influence = 0.9;        ///< rad: joint damper becomes active
   double joint_stop = 0.1;             ///< rad: closest allowed approach to a joint limit
   double joint_damper_gain = 1.0;      ///< xi of the joint dampers, 1/s
@@ -115,6 +127,13 @@ struct ControllerCommand : QpStepFigures {
   int joint_damper_rows = 0;
 };
 
+/// Index of the arm joint whose axis is the base's vertical axis at the ready pose (the arm's
+/// yaw, e.g. joint1 of the RM65-B), -1 if none.
+int armYawJoint(const WholeBodyModel& model);
+/// `bearing` (rad) shifted by multiples of 2 pi into (winding - pi, winding + pi]: the branch
+/// of the TCP bearing that continues the arm yaw joint's winding.
+double unwoundBearing(double bearing, double winding);
+
 /// Pose error of the TCP to the target: [t* - t; theta u of R* R^T], world frame.
 Vector6d poseError(const Eigen::Isometry3d& tcp, const Eigen::Isometry3d& target);
 
@@ -164,6 +183,9 @@ class EhcQpController {
   Eigen::Isometry3d base_T_arm_;
   Eigen::VectorXd vmax_;
   bool tsmm_arm_stage_ = false;
+  /// Arm joint turning about the base's vertical axis (e.g. joint1), -1 if none: the base-turn
+  /// term takes the TCP bearing on the branch of this joint's winding (see step()).
+  int yaw_joint_ = -1;
   std::unique_ptr<Solver> solver_;
 };
 

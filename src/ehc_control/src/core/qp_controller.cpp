@@ -1,6 +1,7 @@
 #include "ehc_control/qp_controller.h"
 
 #include "ehc_control/config_node.h"
+#include "ehc_control/joint_limit_centring.h"
 
 #include <visp3/core/vpColVector.h>
 #include <visp3/core/vpException.h>
@@ -50,6 +51,7 @@ void QpControllerParams::validate() const {
   requireRange(kOwner, "manipulability_gain", manipulability_gain, 0.0, 100.0);
   requireRange(kOwner, "manipulability_fade_distance", manipulability_fade_distance, 0.0, 5.0);
   requireRange(kOwner, "posture_gain", posture_gain, 0.0, 100.0);
+  requireRange(kOwner, "limit_centring_gain", limit_centring_gain, 0.0, 100.0);
   requireRange(kOwner, "joint_stop", joint_stop, 0.0, 1.0);
   requireRange(kOwner, "joint_influence", joint_influence, 0.0, 3.0);
   if (joint_influence <= joint_stop)
@@ -76,10 +78,10 @@ std::string QpControllerParams::summary() const {
   os << "controller: mode " << toString(mode) << ", w_arm " << arm_weight << ", ehc base weight ["
      << ehc_base_weight_min << ", " << ehc_base_weight_max << "], neo_c base weight "
      << neo_c_base_weight << ", |e| floor " << min_error << ", slack bound " << slack_bound
-     << ", k_eps " << base_turn_gain << ", k_m " << manipulability_gain
+     << ", k_eps " << base_turn_gain << (base_turn_unwinding ? " (unwound)" : "") << ", k_m " << manipulability_gain
      << (manipulability_fade_distance > 0.0 ? " (fading within " + std::to_string(manipulability_fade_distance) + " m)" : std::string())
      << ", k_p "
-     << posture_gain << "\n"
+     << posture_gain << ", limit centring " << limit_centring_gain << "\n"
      << "  joint dampers: influence " << joint_influence << " rad, stop " << joint_stop
      << " rad, gain " << joint_damper_gain << "; obstacle dampers: d_i " << obstacle_influence
      << " m, d_s " << obstacle_stop << " m";
@@ -107,9 +109,11 @@ QpControllerParams loadQpControllerParams(const ConfigNode& n) {
   p.min_error = n.get("min_error", p.min_error);
   p.slack_bound = n.get("slack_bound", p.slack_bound);
   p.base_turn_gain = n.get("base_turn_gain", p.base_turn_gain);
+  p.base_turn_unwinding = n.get("base_turn_unwinding", p.base_turn_unwinding);
   p.manipulability_gain = n.get("manipulability_gain", p.manipulability_gain);
   p.manipulability_fade_distance = n.get("manipulability_fade_distance", p.manipulability_fade_distance);
   p.posture_gain = n.get("posture_gain", p.posture_gain);
+  p.limit_centring_gain = n.get("limit_centring_gain", p.limit_centring_gain);
   p.joint_influence = n.get("joint_influence", p.joint_influence);
   p.joint_stop = n.get("joint_stop", p.joint_stop);
   p.joint_damper_gain = n.get("joint_damper_gain", p.joint_damper_gain);
@@ -175,9 +179,26 @@ EhcQpController::EhcQpController(std::shared_ptr<const WholeBodyModel> model,
   base_T_arm_ = model_->linkPoseInBase(rc.arm_ready, rc.arm_base_frame);
   vmax_ = rc.velocityLimits();
   solver_->tcp_link = model_->linkIndex(rc.tcp_frame);
+  yaw_joint_ = armYawJoint(*model_);
 }
 
 EhcQpController::~EhcQpController() = default;
+
+int armYawJoint(const WholeBodyModel& model) {
+  const RobotConfig& rc = model.config();
+  const Matrix6Xd J = model.armJacobian(rc.arm_ready, rc.tcp_frame);
+  for (int i = 0; i < model.nArm(); ++i) {
+    const Eigen::Vector3d axis = J.block<3, 1>(3, i);
+    if (axis.norm() > 0.5 && std::abs(axis.normalized().z()) > 1.0 - 1e-6) return i;
+  }
+  return -1;
+}
+
+double unwoundBearing(double bearing, double winding) {
+  while (bearing - winding > M_PI) bearing -= 2.0 * M_PI;
+  while (bearing - winding < -M_PI) bearing += 2.0 * M_PI;
+  return bearing;
+}
 
 void EhcQpController::reset() {
   solver_->qp.resetActiveSet();
@@ -310,11 +331,16 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
   h.segment(nb, na).setConstant(params_.arm_weight);
   h.tail(6).setConstant(1.0 / e_floor);
   const Eigen::Vector3d tcp_in_base = s.kinematics.linkPoseInBase(s.tcp_link).translation();
-  c[nb - 1] = -params_.base_turn_gain * std::atan2(tcp_in_base.y(), tcp_in_base.x());
+  double bearing = std::atan2(tcp_in_base.y(), tcp_in_base.x());
+  if (params_.base_turn_unwinding && yaw_joint_ >= 0) bearing = unwoundBearing(bearing, q[yaw_joint_] - rc.arm_ready[yaw_joint_]);
+  c[nb - 1] = -params_.base_turn_gain * bearing;
   const double fade = params_.manipulability_fade_distance > 0.0
                           ? std::min(1.0, out.position_error / params_.manipulability_fade_distance)
                           : 1.0;
   c.segment(nb, na) = -params_.manipulability_gain * fade * s.Jm + params_.posture_gain * (q - rc.arm_ready);
+  if (params_.limit_centring_gain > 0.0)
+    c.segment(nb, na) += JointLimitCentring{params_.limit_centring_gain, params_.joint_influence, params_.joint_stop}
+                             .gradient(q, rc.arm_lower, rc.arm_upper);
 
   // --- bounds
   Eigen::VectorXd& ub = s.ub;
