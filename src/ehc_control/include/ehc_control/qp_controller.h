@@ -14,7 +14,11 @@
 //                        neo_e w_base = w_arm / |e|        (NEO: base weight 1/|e|)
 //                        neo_c w_base = constant
 //                        tsmm  base only (arm held) until the TCP is within d of the target
-//                              horizontally, then arm only (base held).
+//                              horizontally, then arm only (base held, command exactly 0) for
+//                              as long as the target stays within d (horizontally) of where it
+//                              was at the switch: the base stands at its grasping position
+//                              while the goal moves (pre-grasp, grasp, lift, perception updates);
+//                              a target farther away drives the base again (paper: TSMM).
 // A failed, infeasible or non-finite solve gives a zero command and qp_status QP_FAILED; the
 // command never contains NaN/Inf and never exceeds a velocity limit. ROS-free.
 
@@ -137,7 +141,7 @@ class EhcQpController {
                    const Eigen::Vector3d& target_world) const;
   bool hasWeighting() const { return static_cast<bool>(weighting_); }
 
-  /// New target: clears the warm start and the TSMM stage.
+  /// New target: clears the warm start (the TSMM stage follows the target in step(), see above).
   void reset();
   const QpControllerParams& params() const { return params_; }
   void setMode(ControlMode m);
@@ -153,6 +157,7 @@ class EhcQpController {
   Eigen::Isometry3d base_T_arm_;
   Eigen::VectorXd vmax_;
   bool tsmm_arm_stage_ = false;
+  Eigen::Vector3d tsmm_stage_target_ = Eigen::Vector3d::Zero();  ///< target position at the arm-stage switch
   std::unique_ptr<Solver> solver_;
 };
 
