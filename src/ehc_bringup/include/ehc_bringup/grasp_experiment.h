@@ -47,6 +47,7 @@ struct GraspExperimentParams {
   int jobs = 1;                ///< runs in parallel (threads, one pipeline each)
   double distant_threshold = 0.5;  ///< m: cycles with |e| above are "distant"
   double trace_period = 0.1;   ///< s of sim time between trace samples (plots)
+  bool timing = true;          ///< wall seconds per pipeline stage (counters; never in the results' logic)
   void validate() const;       ///< throws "[GraspExperiment] ..."
 };
 
@@ -122,6 +123,8 @@ class GraspExperiment {
 /// Writes DIR/table.md, trials.csv, summary.json, trace.csv.
 void writeGraspResults(const std::string& dir, const GraspExperimentParams& params,
                        const GraspExperimentResult& result, const std::string& notes);
+/// Wall seconds per pipeline stage and per sim second, one line (`make bench`, stderr).
+std::string pipelineStageCosts(const PipelineCounters& c, double sim_time_s);
 /// One JSON object per method summary.
 std::string graspSummaryJson(const GraspMethodSummary& s);
 

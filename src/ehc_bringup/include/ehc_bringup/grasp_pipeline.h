@@ -4,7 +4,10 @@
 //
 //   SimWorld (Bullet)            ehc_sim_node
 //   SimulatedCamera              ehc_sim_node: image / depth cloud when due (StreamClock), only
-//                                the streams perception consumes
+//                                what perception consumes: the image and the grasps only while
+//                                GraspSequencer::wantsPerception() (until the grasp is locked),
+//                                the cloud only when the grasp generator or the obstacle map
+//                                takes it (their rate limits)
 //   TagDetector + findTargetInWorld   ehc_tag_node (one detection per image serves every object)
 //   GraspGenerator + generateForTarget ehc_grasp_node (RateLimiter at max_rate_hz; target = the
 //                                sequencer's object pose)

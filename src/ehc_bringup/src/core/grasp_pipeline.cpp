@@ -130,7 +130,8 @@ double GraspPipeline::time() const { return world_->time() + kSimClockOffset; }
 
 void GraspPipeline::perceive(double t) {
   const std::int64_t t_ns = world_->timeNs();
-  if (clocks_->image.due(t_ns)) {
+  const bool consumed = sequencer_->wantsPerception();
+  if (clocks_->image.due(t_ns) && consumed) {
     vpImage<unsigned char> image;
     std::vector<ehc_perception::TagDetection> detections;
     {
@@ -152,7 +153,7 @@ void GraspPipeline::perceive(double t) {
   }
   // The depth cloud is rendered only when the grasp generator or the obstacle map takes it.
   if (!clocks_->cloud.due(t_ns)) return;
-  const bool want_grasps = clocks_->grasp.accept(t);
+  const bool want_grasps = consumed && clocks_->grasp.accept(t);
   const bool want_obstacles = monitor_ && monitor_->acceptCloud(t);
   if (!want_grasps && !want_obstacles) return;
   std::vector<Eigen::Vector3f> cam_points;

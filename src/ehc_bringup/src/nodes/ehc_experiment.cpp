@@ -149,6 +149,8 @@ int runGrasp(int argc, char** argv) {
         << res.sim_time_s / std::max(1e-9, wall) << "; wall figures depend on the machine's load).";
   ehc_bringup::writeGraspResults(out, p, res, notes.str());
   for (const auto& s : res.summaries) std::cout << ehc_bringup::graspSummaryJson(s) << std::endl;
+  std::cerr << "[ehc_experiment] pipeline stage cost: " << ehc_bringup::pipelineStageCosts(res.counters, res.sim_time_s)
+            << std::endl;
   std::cerr << "[ehc_experiment] results in " << out << "/ (table.md, trials.csv, summary.json, trace.csv)\n";
   return 0;
 }
