@@ -2,6 +2,7 @@
 #   make demo   - the main job: headless simulated run (see README)
 #   make test   - every gtest + rostest, closing line "N passed, N failed"
 #   make bench  - benchmarks, one JSON object per line
+#   make experiments - paper Exp-1..3 in-process -> results/experiments/REPORT.md
 SHELL := /bin/bash
 .SHELLFLAGS := -eo pipefail -c
 export PATH := /usr/bin:/bin:/usr/sbin:/sbin:$(PATH)
@@ -9,7 +10,7 @@ export PATH := /usr/bin:/bin:/usr/sbin:/sbin:$(PATH)
 JOBS ?= 2
 CATKIN := catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCMAKE_BUILD_TYPE=Release -j$(JOBS)
 
-.PHONY: all deps build demo test bench clean
+.PHONY: all deps build demo test bench experiments clean
 
 all: build
 
@@ -27,6 +28,9 @@ test: deps
 
 bench: build
 	src/ehc_bringup/scripts/bench.sh
+
+experiments: build
+	src/ehc_bringup/scripts/experiments.sh
 
 clean:
 	rm -rf build devel install

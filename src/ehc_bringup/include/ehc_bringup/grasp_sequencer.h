@@ -180,6 +180,11 @@ class GraspSequencer {
   const GraspSequencerParams& params() const { return params_; }
   /// Locked grasp of the current object (PRE_GRASP onwards).
   const std::optional<GraspChoice>& lockedGrasp() const { return locked_; }
+  /// Whether perceived poses and grasp candidates can change what the sequencer does: until the
+  /// current object's grasp is locked. From the lock until the next object starts they would only
+  /// refresh the remembered poses of later objects (the in-process pipeline then skips the image
+  /// and the grasp generation: it renders only what perception consumes).
+  bool wantsPerception() const { return !done() && !locked_; }
   /// Centre of the object being grasped, if any and up to LIFT: the origin of its perceived
   /// (filtered) pose, frozen where it was at the grasp lock. That pose is the tag node's target,
   /// which sits at the object centre (its grasp_offset), so this is MpbsServo::targetCentre of

@@ -70,6 +70,11 @@ struct SpeedMeans {
   long cycles = 0;
 };
 
+/// Adds one commanded velocity [base twist; arm rates] (nb base DOFs) to the sums.
+void accumulateSpeed(SpeedMeans& s, const Eigen::VectorXd& v, int nb);
+/// The sums divided by the cycle count (unchanged without cycles).
+SpeedMeans meanSpeed(const SpeedMeans& sums);
+
 struct ReachTrial {
   std::string method;
   int set = 0, index = 0;

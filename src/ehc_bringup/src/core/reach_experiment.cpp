@@ -74,14 +74,13 @@ ReachExperiment::ReachExperiment(std::shared_ptr<const ehc_control::WholeBodyMod
   ready_manipulability_ = model_->manipulability(model_->config().arm_ready);
 }
 
-namespace {
-void accumulate(SpeedMeans& s, const Eigen::VectorXd& v, int nb) {
+void accumulateSpeed(SpeedMeans& s, const Eigen::VectorXd& v, int nb) {
   s.base_t += nb == 3 ? std::hypot(v[0], v[1]) : std::abs(v[0]);
   s.base_r += std::abs(v[nb - 1]);
   s.arm += v.tail(v.size() - nb).cwiseAbs().sum();
   ++s.cycles;
 }
-SpeedMeans mean(const SpeedMeans& s) {
+SpeedMeans meanSpeed(const SpeedMeans& s) {
   SpeedMeans m = s;
   if (s.cycles > 0) {
     m.base_t /= static_cast<double>(s.cycles);
@@ -90,6 +89,8 @@ SpeedMeans mean(const SpeedMeans& s) {
   }
   return m;
 }
+
+namespace {
 double limitMargin(const ehc_control::RobotConfig& rc, const Eigen::VectorXd& q) {
   return std::min((q - rc.arm_lower).minCoeff(), (rc.arm_upper - q).minCoeff());
 }
@@ -183,7 +184,7 @@ ReachTrial ReachExperiment::reach(ehc_sim::KinematicFakeRobot& robot, ControlCyc
       for (int i = 0; i < out.velocity.size(); ++i) o << "," << out.velocity[i];
       o << "\n";
     }
-    accumulate(t.final_position_error > params_.distant_threshold ? distant : close, out.velocity,
+    accumulateSpeed(t.final_position_error > params_.distant_threshold ? distant : close, out.velocity,
                model_->nBase());
     robot.step(out.velocity, dt);
     t.min_joint_limit_margin = std::min(t.min_joint_limit_margin, limitMargin(rc, robot.armPositions()));
@@ -237,8 +238,8 @@ ReachSummary ReachExperiment::run(const std::vector<std::vector<Eigen::Isometry3
     }
   }
   s.mean_time_s = s.targets > s.failed ? time_sum / (s.targets - s.failed) : 0.0;
-  s.distant = mean(distant);
-  s.close = mean(close);
+  s.distant = meanSpeed(distant);
+  s.close = meanSpeed(close);
   s.cycles = distant.cycles + close.cycles;
   const ehc_control::BenchStats st = ehc_control::benchStats(step_us);
   s.controller_median_us = st.median_us;

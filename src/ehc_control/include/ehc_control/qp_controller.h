@@ -17,7 +17,11 @@
 //                        neo_e w_base = w_arm / |e|        (NEO: base weight 1/|e|)
 //                        neo_c w_base = constant
 //                        tsmm  base only (arm held) until the TCP is within d of the target
-//                              horizontally, then arm only (base held).
+//                              horizontally, then arm only (base held, command exactly 0) for
+//                              as long as the target stays within d (horizontally) of where it
+//                              was at the switch: the base stands at its grasping position
+//                              while the goal moves (pre-grasp, grasp, lift, perception updates);
+//                              a target farther away drives the base again (paper: TSMM).
 // A failed, infeasible or non-finite solve gives a zero command and qp_status QP_FAILED (the
 // time budget: ControlCycle, watchdog.max_solve_time); the command never contains NaN/Inf and
 // never exceeds a velocity limit. The obstacle rows are bounded (max_obstacle_rows, nearest pairs first). ROS-free.
@@ -161,7 +165,7 @@ class EhcQpController {
                    const Eigen::Vector3d& target_world) const;
   bool hasWeighting() const { return static_cast<bool>(weighting_); }
 
-  /// New target: clears the warm start and the TSMM stage.
+  /// New target: clears the warm start (the TSMM stage follows the target in step(), see above).
   void reset();
   const QpControllerParams& params() const { return params_; }
   void setMode(ControlMode m);
@@ -186,6 +190,7 @@ class EhcQpController {
   /// Arm joint turning about the base's vertical axis (e.g. joint1), -1 if none: the base-turn
   /// term takes the TCP bearing on the branch of this joint's winding (see step()).
   int yaw_joint_ = -1;
+  Eigen::Vector3d tsmm_stage_target_ = Eigen::Vector3d::Zero();  ///< target position at the arm-stage switch
   std::unique_ptr<Solver> solver_;
 };
 

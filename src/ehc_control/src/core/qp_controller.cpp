@@ -203,7 +203,8 @@ double unwoundBearing(double bearing, double winding) {
 void EhcQpController::reset() {
   solver_->qp.resetActiveSet();
   solver_->last_rows = 0;
-  tsmm_arm_stage_ = false;
+  // The tsmm stage is not reset here (a new goal near the grasping position keeps the base
+  // standing); step() leaves the arm stage for a target farther than d from the switch point.
 }
 
 void EhcQpController::setMode(ControlMode m) {
@@ -211,6 +212,7 @@ void EhcQpController::setMode(ControlMode m) {
     throw std::invalid_argument("[EhcQpController] mode ehc needs a reachability map (EhcWeighting)");
   params_.mode = m;
   reset();
+  tsmm_arm_stage_ = false;
 }
 
 EhcWeight EhcQpController::weight(const Eigen::Vector3d& base_pose, const Eigen::Vector3d& tcp_world,
@@ -311,7 +313,13 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
       break;
     case ControlMode::Tsmm: {
       const double horizontal = e.head<2>().norm();
-      if (!tsmm_arm_stage_ && horizontal <= params_.tsmm_switch_distance) tsmm_arm_stage_ = true;
+      if (tsmm_arm_stage_ &&
+          (target.translation() - tsmm_stage_target_).head<2>().norm() > params_.tsmm_switch_distance)
+        tsmm_arm_stage_ = false;  // a target away from the grasping position: the base drives again
+      if (!tsmm_arm_stage_ && horizontal <= params_.tsmm_switch_distance) {
+        tsmm_arm_stage_ = true;
+        tsmm_stage_target_ = target.translation();
+      }
       out.base_weight = params_.arm_weight;
       lock_arm = !tsmm_arm_stage_;
       lock_base = tsmm_arm_stage_;

@@ -166,6 +166,25 @@ class GraspGenerator {
   GraspGeneratorConfig config_;
 };
 
+/// How grasps are aimed at the perceived target object (ehc_grasp_node's `node` section; the
+/// in-process experiment pipeline reads the same fields of the same file).
+struct GraspTargetingParams {
+  double max_rate_hz = 2.0;     ///< clouds processed per second at most
+  double target_timeout = 2.0;  ///< s; an older target is ignored (grasps for every object)
+  double target_gate = 0.15;    ///< m; no grasps if the nearest object is farther from the target
+  void validate() const;        ///< throws std::invalid_argument "[GraspTargeting] ..."
+  std::string summary() const;
+};
+/// Reads max_rate_hz, target_timeout and target_gate of a `node` mapping (all optional).
+GraspTargetingParams loadGraspTargetingParams(const ehc_control::ConfigNode& node);
+
+/// generateFromScene near `target` (every object without one), then the gate: if the nearest
+/// object's centroid is farther than `target_gate` from the target there are no grasps (the
+/// reason says how far). What ehc_grasp_node and the in-process pipeline do with each cloud.
+GraspResult generateForTarget(const GraspGenerator& generator, const PointList& scene,
+                              const Eigen::Vector3d& viewpoint, const Eigen::Vector3d* target,
+                              double target_gate);
+
 /// PCD files (PCL). loadPcd reads x, y, z of any point type; throws std::invalid_argument
 /// "[PointCloudIO] cannot read '<path>' ..." on a missing or malformed file.
 PointList loadPcd(const std::string& path);

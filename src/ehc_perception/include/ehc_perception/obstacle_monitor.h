@@ -11,6 +11,7 @@
 #include "ehc_control/robot_config.h"
 #include "ehc_control/whole_body_model.h"
 #include "ehc_perception/obstacle_distance_field.h"
+#include "ehc_perception/rate_limiter.h"
 
 #include <Eigen/Core>
 
@@ -122,7 +123,8 @@ class ObstacleMonitor {
   ObstacleDistanceField field_;
   Eigen::VectorXd q_;
   Eigen::Vector3d base_ = Eigen::Vector3d::Zero();
-  std::optional<double> t_joints_, t_base_, t_exclusions_, t_last_insert_;
+  std::optional<double> t_joints_, t_base_, t_exclusions_;
+  RateLimiter insert_limiter_{5.0};  ///< max_insert_rate_hz (set in the constructor)
   struct QueuedCloud {
     PointList points;
     std::size_t next = 0;

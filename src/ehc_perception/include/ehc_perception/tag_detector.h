@@ -95,6 +95,11 @@ TagTargetConfig loadTagTargetConfig(const ehc_control::ConfigNode& node);
 /// the detections.
 bool findTarget(const std::vector<TagDetection>& detections, const TagTargetConfig& target,
                 Eigen::Isometry3d* T_cam_target);
+/// The target in the world: T_world_cam * findTarget's T_cam_target (ehc_tag_node with tf at the
+/// image stamp, the in-process pipeline with the simulated camera pose). false if the tag is not
+/// among the detections; throws std::runtime_error "[TagTarget] ..." for a non-finite result.
+bool findTargetInWorld(const std::vector<TagDetection>& detections, const TagTargetConfig& target,
+                       const Eigen::Isometry3d& T_world_cam, Eigen::Isometry3d* T_world_target);
 
 /// Roll-pitch-yaw (fixed axes X, Y, Z as in URDF) to a rotation matrix.
 Eigen::Matrix3d rpyToMatrix(const Eigen::Vector3d& rpy);

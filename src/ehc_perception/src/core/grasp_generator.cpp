@@ -867,4 +867,38 @@ GraspResult GraspGenerator::generateFromScene(const PointList& scene,
   return res;
 }
 
+void GraspTargetingParams::validate() const {
+  ehc_control::requireRange("GraspTargeting", "max_rate_hz", max_rate_hz, 0.01, 100.0);
+  ehc_control::requireRange("GraspTargeting", "target_timeout", target_timeout, 0.0, 1e6);
+  ehc_control::requirePositive("GraspTargeting", "target_gate", target_gate);
+}
+
+std::string GraspTargetingParams::summary() const {
+  std::ostringstream os;
+  os << "grasp targeting: max " << max_rate_hz << " Hz, target timeout " << target_timeout << " s, gate "
+     << target_gate << " m";
+  return os.str();
+}
+
+GraspTargetingParams loadGraspTargetingParams(const ehc_control::ConfigNode& n) {
+  GraspTargetingParams p;
+  p.max_rate_hz = n.get("max_rate_hz", p.max_rate_hz);
+  p.target_timeout = n.get("target_timeout", p.target_timeout);
+  p.target_gate = n.get("target_gate", p.target_gate);
+  n.validate(p);
+  return p;
+}
+
+GraspResult generateForTarget(const GraspGenerator& generator, const PointList& scene,
+                              const Eigen::Vector3d& viewpoint, const Eigen::Vector3d* target,
+                              double target_gate) {
+  GraspResult res = generator.generateFromScene(scene, viewpoint, target);
+  if (target && !res.centroids.empty() && (res.centroids.front() - *target).norm() > target_gate) {
+    res.reason = "nearest object is " + std::to_string((res.centroids.front() - *target).norm()) +
+                 " m from the target (gate " + std::to_string(target_gate) + " m)";
+    res.grasps.clear();
+  }
+  return res;
+}
+
 }  // namespace ehc_perception

@@ -58,6 +58,7 @@ ObstacleMonitor::ObstacleMonitor(const ehc_control::RobotConfig& robot, const Ob
       field_(map, ehc_control::RobotCollisionModel(model_.urdfXml(), model_.config().arm_joints, map.links)),
       q_(Eigen::VectorXd::Constant(model_.nArm(), std::nan(""))) {
   params_.validate();
+  insert_limiter_ = RateLimiter(params_.max_insert_rate_hz);
   for (const auto& l : field_.robot().links())
     if (!model_.hasLink(l.name))
       throw std::invalid_argument("[ObstacleMonitor] link '" + l.name + "' is not in the robot model");
@@ -88,11 +89,7 @@ std::string ObstacleMonitor::setExclusionZones(double t, const std::vector<Exclu
 }
 
 bool ObstacleMonitor::acceptCloud(double now) {
-  // A clock that jumped back (simulator reset) accepts the cloud.
-  if (t_last_insert_ && now >= *t_last_insert_ && now - *t_last_insert_ < 1.0 / params_.max_insert_rate_hz)
-    return false;
-  t_last_insert_ = now;
-  return true;
+  return insert_limiter_.accept(now);  // a clock that jumped back (simulator reset) accepts the cloud
 }
 
 PointList ObstacleMonitor::boundCloud(const PointList& points, int* after_voxel) const {

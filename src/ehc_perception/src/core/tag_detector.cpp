@@ -328,4 +328,14 @@ bool findTarget(const std::vector<TagDetection>& detections, const TagTargetConf
   return false;
 }
 
+bool findTargetInWorld(const std::vector<TagDetection>& detections, const TagTargetConfig& target,
+                       const Eigen::Isometry3d& T_world_cam, Eigen::Isometry3d* T_world_target) {
+  Eigen::Isometry3d T_cam_target;
+  if (!findTarget(detections, target, &T_cam_target)) return false;
+  const Eigen::Isometry3d T_world = T_world_cam * T_cam_target;
+  if (!T_world.matrix().allFinite()) throw std::runtime_error("[TagTarget] target pose is not finite");
+  if (T_world_target) *T_world_target = T_world;
+  return true;
+}
+
 }  // namespace ehc_perception

@@ -8,6 +8,7 @@
 #include "ehc_msgs/GraspCandidates.h"
 #include "ehc_control/config_node.h"
 #include "ehc_perception/grasp_generator.h"
+#include "ehc_perception/rate_limiter.h"
 #include "ros_conversions.h"
 
 #include <geometry_msgs/PoseStamped.h>
@@ -25,18 +26,14 @@ struct GraspNodeConfig {
   std::string target_topic = "/ehc/target_pose";  ///< "" = no target: every object
   std::string output_topic = "/ehc/grasp_candidates";
   std::string world_frame = "odom";
-  double max_rate_hz = 2.0;      ///< clouds processed per second at most
-  double target_timeout = 2.0;   ///< s; an older target is ignored
-  double target_gate = 0.15;     ///< m; no grasps if the nearest object is farther
+  GraspTargetingParams targeting;  ///< max rate, target timeout and gate
   double tf_timeout = 0.1;       ///< s
   GraspGeneratorConfig generator;
 
   std::string summary() const {
     return "ehc_grasp_node: " + cloud_topic + " -> " + output_topic + " in '" + world_frame +
-           "', max " + std::to_string(max_rate_hz) + " Hz, target " +
-           (target_topic.empty() ? std::string("<none>") : target_topic) + " (timeout " +
-           std::to_string(target_timeout) + " s, gate " + std::to_string(target_gate) +
-           " m)\n  " + generator.summary();
+           "', target " + (target_topic.empty() ? std::string("<none>") : target_topic) + ", " +
+           targeting.summary() + "\n  " + generator.summary();
   }
 };
 
@@ -48,13 +45,8 @@ GraspNodeConfig loadGraspNodeConfig(const std::string& path) {
   c.target_topic = n.get("target_topic", c.target_topic);
   c.output_topic = n.get("output_topic", c.output_topic);
   c.world_frame = n.get("world_frame", c.world_frame);
-  c.max_rate_hz = n.get("max_rate_hz", c.max_rate_hz);
-  c.target_timeout = n.get("target_timeout", c.target_timeout);
-  c.target_gate = n.get("target_gate", c.target_gate);
+  c.targeting = loadGraspTargetingParams(n);
   c.tf_timeout = n.get("tf_timeout", c.tf_timeout);
-  ehc_control::requireRange("GraspNode", "node.max_rate_hz", c.max_rate_hz, 0.01, 100.0);
-  ehc_control::requireRange("GraspNode", "node.target_timeout", c.target_timeout, 0.0, 1e6);
-  ehc_control::requirePositive("GraspNode", "node.target_gate", c.target_gate);
   ehc_control::requireRange("GraspNode", "node.tf_timeout", c.tf_timeout, 0.0, 5.0);
   c.generator = loadGraspGeneratorConfig(root.childOrEmpty("grasp_generator"));
   root.rejectUnknownKeys();  // a key no loader read is a misspelling
@@ -64,7 +56,7 @@ GraspNodeConfig loadGraspNodeConfig(const std::string& path) {
 class GraspNode {
  public:
   GraspNode(ros::NodeHandle& nh, const GraspNodeConfig& cfg)
-      : cfg_(cfg), gen_(cfg.generator), listener_(tf_) {
+      : cfg_(cfg), gen_(cfg.generator), listener_(tf_), limiter_(cfg.targeting.max_rate_hz) {
     pub_ = nh.advertise<ehc_msgs::GraspCandidates>(cfg_.output_topic, 2);
     cloud_sub_ = nh.subscribe(cfg_.cloud_topic, 1, &GraspNode::onCloud, this);
     if (!cfg_.target_topic.empty())
@@ -86,21 +78,15 @@ class GraspNode {
 
   void onCloud(const sensor_msgs::PointCloud2& msg) {
     const ros::Time now = ros::Time::now();
-    if (!last_.isZero() && now >= last_ && (now - last_).toSec() < 1.0 / cfg_.max_rate_hz) return;
-    last_ = now;
+    if (!limiter_.accept(now.toSec())) return;
     try {
       const geometry_msgs::TransformStamped tf = tf_.lookupTransform(
           cfg_.world_frame, msg.header.frame_id, msg.header.stamp, ros::Duration(cfg_.tf_timeout));
       const Eigen::Isometry3d T = tf2::transformToEigen(tf);
       const PointList pts = ros_conv::transformPoints(ros_conv::cloudToPoints(msg), T);
-      const bool fresh = have_target_ && (now - target_stamp_).toSec() <= cfg_.target_timeout;
-      GraspResult res = gen_.generateFromScene(pts, T.translation(), fresh ? &target_ : nullptr);
-      if (fresh && !res.centroids.empty() && (res.centroids.front() - target_).norm() > cfg_.target_gate) {
-        res.reason = "nearest object is " +
-                     std::to_string((res.centroids.front() - target_).norm()) +
-                     " m from the target (gate " + std::to_string(cfg_.target_gate) + " m)";
-        res.grasps.clear();
-      }
+      const bool fresh = have_target_ && (now - target_stamp_).toSec() <= cfg_.targeting.target_timeout;
+      const GraspResult res = generateForTarget(gen_, pts, T.translation(), fresh ? &target_ : nullptr,
+                                                cfg_.targeting.target_gate);
       ehc_msgs::GraspCandidates out;
       out.header.stamp = msg.header.stamp;
       out.header.frame_id = cfg_.world_frame;
@@ -123,7 +109,7 @@ class GraspNode {
   tf2_ros::TransformListener listener_;
   ros::Publisher pub_;
   ros::Subscriber cloud_sub_, target_sub_;
-  ros::Time last_;
+  RateLimiter limiter_;  ///< targeting.max_rate_hz on ROS time
   bool have_target_ = false;
   Eigen::Vector3d target_ = Eigen::Vector3d::Zero();
   ros::Time target_stamp_;

@@ -102,8 +102,7 @@ class TagNode {
     try {
       ros_conv::imageToGray(msg, &gray_);
       const std::vector<TagDetection> dets = detector_->detect(gray_);
-      Eigen::Isometry3d T_cam_target;
-      if (!findTarget(dets, cfg_.target, &T_cam_target)) {
+      if (!findTarget(dets, cfg_.target, nullptr)) {
         ROS_DEBUG_THROTTLE(kLogThrottle, "ehc_tag_node: target tag %d not seen (%zu tags)",
                            cfg_.target.tag_id, dets.size());
         return;
@@ -111,8 +110,8 @@ class TagNode {
       const std::string cam_frame = cfg_.camera_frame.empty() ? msg.header.frame_id : cfg_.camera_frame;
       const geometry_msgs::TransformStamped tf = tf_.lookupTransform(
           cfg_.world_frame, cam_frame, msg.header.stamp, ros::Duration(cfg_.tf_timeout));
-      const Eigen::Isometry3d T_world = tf2::transformToEigen(tf) * T_cam_target;
-      if (!T_world.matrix().allFinite()) throw std::runtime_error("target pose is not finite");
+      Eigen::Isometry3d T_world;
+      findTargetInWorld(dets, cfg_.target, tf2::transformToEigen(tf), &T_world);
       geometry_msgs::PoseStamped out;
       out.header.stamp = msg.header.stamp;
       out.header.frame_id = cfg_.world_frame;

@@ -13,6 +13,8 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include <cmath>
+#include <cstdint>
 #include <memory>
 #include <random>
 #include <vector>
@@ -26,6 +28,26 @@ class SimWorld;
 /// The printed AprilTag 36h11 pattern `id` (white border included: 10 x 10 cells), each cell
 /// `pixels_per_cell` pixels wide. Throws "[SimulatedCamera] ..." on a bad id.
 vpImage<unsigned char> makeTagTexture(int id, int pixels_per_cell);
+
+/// When a camera stream (image or depth cloud) is due on sim time: every 1/rate_hz, on the grid
+/// of whole periods (a stream at 15 Hz samples at 0, 66.7, 133.3 ms ...); rate 0 = never.
+/// ehc_sim_node and the in-process experiment pipeline render only when due.
+class StreamClock {
+ public:
+  explicit StreamClock(double rate_hz = 0.0) : rate_hz_(rate_hz) {}
+  /// True if a sample is due at t_ns (then the next one is one period later).
+  bool due(std::int64_t t_ns) {
+    if (rate_hz_ <= 0.0 || t_ns < next_ns_) return false;
+    const auto period = static_cast<std::int64_t>(std::llround(1e9 / rate_hz_));
+    next_ns_ = (t_ns / period + 1) * period;
+    return true;
+  }
+  void reset() { next_ns_ = 0; }
+
+ private:
+  double rate_hz_;
+  std::int64_t next_ns_ = 0;
+};
 
 class SimulatedCamera {
  public:

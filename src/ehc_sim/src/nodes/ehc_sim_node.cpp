@@ -55,6 +55,8 @@ class SimNode {
     camera_ = std::make_unique<ehc_sim::SimulatedCamera>(intrinsics, cfg_.camera, cfg_.fake_robot.seed);
     camera_->setScene(world_->bodies(), scene.floor_shade);
     camera_frame_ = robot.camera_frame;
+    image_clock_ = ehc_sim::StreamClock(cfg_.camera.image_rate);
+    cloud_clock_ = ehc_sim::StreamClock(cfg_.camera.cloud_rate);
 
     lock_step_ = std::make_unique<ehc_sim::LockStepNode>(nh_, "ehc_sim_node", robot, cfg_.fake_robot);
     clock_pub_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 10);
@@ -112,13 +114,7 @@ class SimNode {
   }
 
   void publishCamera(std::int64_t t_ns, const ros::Time& stamp) {
-    auto due = [&](double rate, std::int64_t* next) {
-      if (rate <= 0.0 || t_ns < *next) return false;
-      const auto period = static_cast<std::int64_t>(std::llround(1e9 / rate));
-      *next = (t_ns / period + 1) * period;
-      return true;
-    };
-    if (due(cfg_.camera.image_rate, &next_image_ns_)) {
+    if (image_clock_.due(t_ns)) {
       camera_->render(*world_, &image_);
       sensor_msgs::Image img;
       ehc_sim::fillImage(image_, camera_frame_, stamp, &img);
@@ -127,7 +123,7 @@ class SimNode {
       image_pub_.publish(img);
       info_pub_.publish(info);
     }
-    if (due(cfg_.camera.cloud_rate, &next_cloud_ns_)) {
+    if (cloud_clock_.due(t_ns)) {
       camera_->cloud(*world_, &points_);
       sensor_msgs::PointCloud2 cloud;
       ehc_sim::fillCloud(points_, camera_frame_, stamp, &cloud);
@@ -146,7 +142,8 @@ class SimNode {
       }
       camera_->reseed(req.seed);
       lock_step_->scheduler().reset();
-      next_image_ns_ = next_cloud_ns_ = 0;
+      image_clock_.reset();
+      cloud_clock_.reset();
       res.success = true;
       res.message = "scene '" + world_->scene().name + "' reset with seed " + std::to_string(req.seed);
       ROS_INFO_STREAM("[ehc_sim_node] " << res.message);
@@ -175,7 +172,7 @@ class SimNode {
   std::string camera_frame_;
   vpImage<unsigned char> image_;
   std::vector<Eigen::Vector3f> points_;
-  std::int64_t next_image_ns_ = 0, next_cloud_ns_ = 0;
+  ehc_sim::StreamClock image_clock_, cloud_clock_;  ///< camera.image_rate / cloud_rate on sim time
   ros::Publisher clock_pub_, joint_pub_, odom_pub_, tf_pub_, image_pub_, info_pub_, cloud_pub_,
       objects_pub_, status_pub_;
   ros::ServiceServer reset_srv_, gripper_srv_;

@@ -1,0 +1,131 @@
+#pragma once
+// GraspExperiment: paper Exp-2 (Table III: grasp three objects on a table in sequence) and Exp-3
+// (Table IV: one object, forward / downward / sideways grasps, TfM with and without MPBS) as
+// deterministic in-process protocols on GraspPipeline (issue 14 items 2-5). No ROS master.
+//
+// Exp-2 (`table`): config/scenes/table_three_objects.yaml, the demo's sequencer (front, middle,
+//   back; 30 s per object), one run per (method, set). Exp-3 (`poses`):
+//   config/scenes/single_object.yaml, config/demo/grasp_single_<approach>.yaml, one run per
+//   (method, set, index, approach). Every run starts from the scene's start pose.
+// Sets: run seed = seed * 1000 + set * 10 + index (noise of Table I, camera noise) and a seeded
+//   jitter of every object's placement: uniform in +-jitter_xy (x, y) and +-jitter_yaw_deg (yaw),
+//   drawn from the same run seed; so no two sets repeat one run.
+// Methods: tsmm, neo_c, neo_e (MPBS off: the baselines' plain PBVS to the goal), ehc (MPBS on);
+//   Exp-3: neo_nompbs (neo_e, MPBS off), ehc_nompbs (ehc, MPBS off), ehc (MPBS on).
+
+#include "ehc_bringup/grasp_pipeline.h"
+#include "ehc_bringup/reach_experiment.h"
+
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace ehc_bringup {
+
+enum class GraspProtocol { Table, Poses };  ///< Exp-2, Exp-3
+
+struct GraspMethod {
+  std::string name;
+  ehc_control::ControlMode mode = ehc_control::ControlMode::Ehc;
+  bool mpbs = true;
+};
+/// tsmm | neo_c | neo_e | ehc | neo_nompbs | ehc_nompbs; throws "[GraspExperiment] ..." otherwise.
+GraspMethod graspMethod(const std::string& name);
+/// The methods of a protocol ("all": every one, in the paper's table order).
+std::vector<std::string> graspMethodNames(GraspProtocol protocol, const std::string& method);
+
+struct GraspExperimentParams {
+  GraspProtocol protocol = GraspProtocol::Table;
+  std::string config_dir = "config";
+  std::string scene;           ///< "" = the protocol's scene
+  int sets = 15;
+  int per_set = 5;             ///< Exp-3: grasps per approach per set
+  unsigned seed = 1;
+  double jitter_xy = 0.01;     ///< m, object placement jitter (uniform +-)
+  double jitter_yaw_deg = 3.0; ///< deg
+  int jobs = 1;                ///< runs in parallel (threads, one pipeline each)
+  double distant_threshold = 0.5;  ///< m: cycles with |e| above are "distant"
+  double trace_period = 0.1;   ///< s of sim time between trace samples (plots)
+  bool timing = true;          ///< wall seconds per pipeline stage (counters; never in the results' logic)
+  void validate() const;       ///< throws "[GraspExperiment] ..."
+};
+
+/// One grasp (one row of trials.csv).
+struct GraspTrial {
+  std::string method;
+  int set = 0, index = 0;
+  unsigned seed = 0;
+  std::string object, approach;
+  bool success = false;
+  double time_s = 0.0;
+  double tfm = 0.0, tfm_until_switch = 0.0, controller_tfm = 0.0;
+  std::string failed_phase, reason;
+  long contact_steps = 0;            ///< sim steps with a robot-scene or self collision
+  long joint_limit_violations = 0;   ///< arm joint samples outside the limits
+  double min_obstacle_distance = -1; ///< m, smallest perceived link-obstacle distance; -1: none within influence
+};
+
+/// ‖TCP - object‖ (ground truth) and speeds, sampled every trace_period of an object's attempt.
+struct GraspTraceSample {
+  std::string method;
+  int set = 0, index = 0;
+  std::string object;
+  double t = 0.0;  ///< s since the object's attempt began
+  double distance = 0.0, base_speed = 0.0, base_turn = 0.0, arm_speed = 0.0;
+};
+
+struct GraspMethodSummary {
+  std::string method;
+  int grasps = 0, successes = 0;
+  double mean_time_s = 0.0;           ///< over successful grasps
+  SpeedMeans distant, close;          ///< mean |commanded speed| (Exp-1's definition)
+  std::map<std::string, std::pair<double, int>> tfm;  ///< approach -> (mean TfM, grasps)
+  long contact_steps = 0, joint_limit_violations = 0;
+  double min_obstacle_distance = -1.0;
+  double sim_time_s = 0.0, wall_time_s = 0.0;
+};
+
+struct GraspExperimentResult {
+  std::vector<GraspMethodSummary> summaries;
+  std::vector<GraspTrial> trials;
+  std::vector<GraspTraceSample> trace;
+  PipelineCounters counters;          ///< summed over every run
+  double sim_time_s = 0.0;
+};
+
+class GraspExperiment {
+ public:
+  /// progress(done, total, text) after every run (from the calling thread's view: serialised).
+  using Progress = std::function<void(int done, int total, const std::string& text)>;
+
+  GraspExperiment(const GraspExperimentParams& params, std::vector<std::string> methods);
+  GraspExperimentResult run(const Progress& progress = nullptr) const;
+
+  /// The pipeline configuration of one run (scene jittered with `seed`) — for tests and tools.
+  GraspPipelineConfig runConfig(const std::string& method, const std::string& approach, unsigned seed) const;
+
+ private:
+  struct RunSpec {
+    std::string method, approach;
+    int set = 0, index = 0;
+    unsigned seed = 0;
+  };
+  struct RunOutput;
+  RunOutput runOne(const RunSpec& spec) const;
+
+  GraspExperimentParams params_;
+  std::vector<std::string> methods_;
+  std::map<std::string, GraspPipelineConfig> base_;  ///< per approach ("" for Exp-2)
+};
+
+/// Paper figures (DESIGN.md section 10, paper Tables III / IV) printed beside the measured ones.
+/// Writes DIR/table.md, trials.csv, summary.json, trace.csv.
+void writeGraspResults(const std::string& dir, const GraspExperimentParams& params,
+                       const GraspExperimentResult& result, const std::string& notes);
+/// Wall seconds per pipeline stage and per sim second, one line (`make bench`, stderr).
+std::string pipelineStageCosts(const PipelineCounters& c, double sim_time_s);
+/// One JSON object per method summary.
+std::string graspSummaryJson(const GraspMethodSummary& s);
+
+}  // namespace ehc_bringup

@@ -1,0 +1,149 @@
+#pragma once
+// GraspPipeline: the grasping pipeline of `make demo` in-process, without a ROS master (issue 14
+// item 1; DESIGN.md section 9). The cores the nodes wrap, stepped in lock-step on sim time:
+//
+//   SimWorld (Bullet)            ehc_sim_node
+//   SimulatedCamera              ehc_sim_node: image / depth cloud when due (StreamClock), only
+//                                what perception consumes: the image and the grasps only while
+//                                GraspSequencer::wantsPerception() (until the grasp is locked),
+//                                the cloud only when the grasp generator or the obstacle map
+//                                takes it (their rate limits)
+//   TagDetector + findTargetInWorld   ehc_tag_node (one detection per image serves every object)
+//   GraspGenerator + generateForTarget ehc_grasp_node (RateLimiter at max_rate_hz; target = the
+//                                sequencer's object pose)
+//   ObstacleMonitor              ehc_obstacle_node (insert rate, exclusions, distances at its
+//                                publish rate)
+//   GraspSequencer               ehc_grasp_sequencer_node
+//   ControlCycle                 ehc_controller_node
+//
+// One cycle at sim time t (= world time + 1 s, as ehc_sim_node's clock): sensors due at t ->
+// perception -> obstacle distances -> ControlCycle::update(t) -> GraspSequencer::update (goal,
+// watched centre, exclusions, gripper for the next cycle) -> SimWorld::step(command). No wall
+// clock anywhere: the same configuration and seed give the same run, bit for bit. Perception has
+// no transport latency here (the ROS path delivers an image's pose a few ms of wall time later,
+// usually before the next state): see the ROS-agreement notes in the experiment's table.
+
+#include "ehc_bringup/grasp_sequencer.h"
+#include "ehc_control/control_cycle.h"
+#include "ehc_perception/grasp_generator.h"
+#include "ehc_perception/obstacle_monitor.h"
+#include "ehc_perception/tag_detector.h"
+#include "ehc_sim/scene_config.h"
+#include "ehc_sim/sim_config.h"
+
+#include <Eigen/Core>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace ehc_sim {
+class SimWorld;
+class SimulatedCamera;
+}  // namespace ehc_sim
+
+namespace ehc_bringup {
+
+/// The files the pipeline reads: those demo.sh gives its nodes (paths as given, relative to the
+/// working directory or absolute).
+struct GraspPipelineFiles {
+  std::string sim;                ///< bullet_sim.yaml (ehc_sim_node)
+  std::string scene;              ///< scene YAML; "" = the sim file's
+  std::string controller;         ///< controller.yaml (ehc_controller_node)
+  std::string sequencer;          ///< grasp_sequencer.yaml (objects, in order)
+  std::vector<std::string> tags;  ///< one tag node file per sequencer object (detector + target)
+  std::string grasp;              ///< grasp_node.yaml (generator + targeting)
+  std::string obstacles;          ///< obstacle_node.yaml; "" = no obstacle distances (OBSTACLES=0)
+  /// The demo's files under `config_dir` (config/): sim/bullet_sim.yaml, demo/controller.yaml,
+  /// demo/<sequencer>, demo/tag_<object>.yaml, perception/grasp_node.yaml, demo/obstacle_node.yaml.
+  static GraspPipelineFiles demo(const std::string& config_dir, const std::string& scene,
+                                 const std::string& sequencer, const std::vector<std::string>& tag_objects);
+};
+
+struct GraspPipelineConfig {
+  ehc_sim::SimConfig sim;
+  ehc_sim::SceneConfig scene;
+  ehc_control::ControlCycleParams cycle;
+  GraspSequencerParams sequencer;
+  ehc_perception::TagDetectorConfig detector;              ///< the tag nodes' (identical) detector
+  std::vector<ehc_perception::TagTargetConfig> tag_targets; ///< per sequencer object
+  ehc_perception::GraspGeneratorConfig generator;
+  ehc_perception::GraspTargetingParams targeting;
+  bool obstacles = true;
+  ehc_perception::ObstacleMonitorParams monitor;
+  ehc_perception::ObstacleMapConfig map;
+  double obstacle_rate_hz = 50.0;  ///< ehc_obstacle_node's publish_rate_hz
+  std::string summary() const;
+};
+/// Loads every file with the nodes' loaders (unknown keys: errors, as in the nodes). Throws
+/// std::invalid_argument naming the file and field.
+GraspPipelineConfig loadGraspPipelineConfig(const GraspPipelineFiles& files);
+
+/// What one cycle did (for metrics and traces).
+struct PipelineCycle {
+  double t = 0.0;                        ///< sim time of the state, s
+  std::size_t object = 0;                ///< sequencer's current object (before the update)
+  GraspPhase phase = GraspPhase::WaitTarget;  ///< sequencer phase after the update
+  ehc_control::ControlCycleStatus status;
+  Eigen::VectorXd command;               ///< [base twist; arm rates] sent to the sim
+  double min_obstacle_distance = -1.0;   ///< m, smallest link-obstacle distance reported this cycle; -1: none
+  bool collision = false;                ///< the sim step found a robot-world or self collision
+  int joint_limit_violations = 0;        ///< arm joints outside their limits after the step
+};
+
+/// Work done so far (counts, and wall seconds per stage for `make bench`).
+struct PipelineCounters {
+  long cycles = 0, images = 0, clouds = 0, tag_detections = 0, grasp_runs = 0, obstacle_updates = 0;
+  long collision_steps = 0, joint_limit_violations = 0;
+  double wall_render = 0.0, wall_tags = 0.0, wall_grasps = 0.0, wall_obstacles = 0.0,
+         wall_control = 0.0, wall_sequencer = 0.0, wall_physics = 0.0;
+};
+
+class GraspPipeline {
+ public:
+  /// Builds the world (scene of `cfg`, noise seed `seed`) and every core.
+  GraspPipeline(const GraspPipelineConfig& cfg, unsigned seed);
+  ~GraspPipeline();
+  GraspPipeline(const GraspPipeline&) = delete;
+  GraspPipeline& operator=(const GraspPipeline&) = delete;
+
+  /// One lock-step cycle (see the header comment).
+  const PipelineCycle& step();
+  /// Steps until the sequencer is done or `sim_time_limit` s of sim time have passed; returns
+  /// whether it is done.
+  bool runUntilDone(double sim_time_limit);
+
+  bool done() const { return sequencer_->done(); }
+  double time() const;  ///< sim time of the current state, s
+  const GraspSequencer& sequencer() const { return *sequencer_; }
+  const ehc_sim::SimWorld& world() const { return *world_; }
+  const ehc_control::ControlCycle& cycle() const { return *cycle_; }
+  const PipelineCounters& counters() const { return counters_; }
+  const PipelineCycle& last() const { return last_; }
+  /// Measure wall time per stage (counters().wall_*); off by default (no clock reads).
+  void setTiming(bool on) { timing_ = on; }
+
+ private:
+  void perceive(double t);
+  void updateObstacles(double t);
+
+  GraspPipelineConfig cfg_;
+  std::unique_ptr<ehc_sim::SimWorld> world_;
+  std::unique_ptr<ehc_sim::SimulatedCamera> camera_;
+  std::unique_ptr<ehc_control::ControlCycle> cycle_;
+  std::unique_ptr<GraspSequencer> sequencer_;
+  std::unique_ptr<ehc_perception::TagDetector> detector_;
+  std::unique_ptr<ehc_perception::GraspGenerator> generator_;
+  std::unique_ptr<ehc_perception::ObstacleMonitor> monitor_;
+  struct Clocks;
+  std::unique_ptr<Clocks> clocks_;
+  std::optional<Eigen::Vector3d> grasp_target_;  ///< the sequencer's object pose (grasp node target)
+  double grasp_target_t_ = -1.0;
+  bool excluding_ = false;
+  std::vector<std::string> arm_names_;
+  PipelineCycle last_;
+  PipelineCounters counters_;
+  bool timing_ = false;
+};
+
+}  // namespace ehc_bringup

@@ -1,0 +1,444 @@
+#include "ehc_bringup/grasp_experiment.h"
+
+#include "ehc_sim/sim_world.h"
+
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <mutex>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+#include <thread>
+
+namespace ehc_bringup {
+
+namespace {
+
+struct PaperRow {
+  const char* method;
+  const char* time;
+  const char* distant;
+  const char* close;
+  const char* success;
+};
+// Paper Table III (real robot, 15 sets x 3 objects).
+const PaperRow kPaperTable3[] = {
+    {"tsmm", "34.89", "NAN", "NAN", "80.0"},
+    {"neo_c", "30.03", "8.776/0.578/1.971", "1.294/0.335/0.345", "11.1"},
+    {"neo_e", "27.80", "8.709/0.517/2.284", "1.270/0.416/0.638", "51.1"},
+    {"ehc", "13.54", "8.826/0.908/2.594", "1.259/0.162/1.369", "95.6"},
+};
+// Paper Table IV: TfM % forward / downward / sideways.
+struct PaperTfm {
+  const char* method;
+  const char* forward;
+  const char* downward;
+  const char* sideways;
+};
+const PaperTfm kPaperTable4[] = {
+    {"neo_nompbs", "100.0", "31.6", "38.7"},
+    {"ehc_nompbs", "100.0", "34.3", "36.2"},
+    {"ehc", "100.0", "100.0", "100.0"},
+};
+
+[[noreturn]] void bad(const std::string& what) { throw std::invalid_argument("[GraspExperiment] " + what); }
+
+const char* kApproaches[] = {"forward", "downward", "sideways"};
+
+}  // namespace
+
+GraspMethod graspMethod(const std::string& name) {
+  using ehc_control::ControlMode;
+  if (name == "tsmm") return {name, ControlMode::Tsmm, false};
+  if (name == "neo_c") return {name, ControlMode::NeoC, false};
+  if (name == "neo_e") return {name, ControlMode::NeoE, false};
+  if (name == "ehc") return {name, ControlMode::Ehc, true};
+  if (name == "neo_nompbs") return {name, ControlMode::NeoE, false};
+  if (name == "ehc_nompbs") return {name, ControlMode::Ehc, false};
+  bad("unknown method '" + name + "' (tsmm, neo_c, neo_e, ehc, neo_nompbs, ehc_nompbs)");
+}
+
+std::vector<std::string> graspMethodNames(GraspProtocol protocol, const std::string& method) {
+  const std::vector<std::string> all = protocol == GraspProtocol::Table
+                                           ? std::vector<std::string>{"tsmm", "neo_c", "neo_e", "ehc"}
+                                           : std::vector<std::string>{"neo_nompbs", "ehc_nompbs", "ehc"};
+  if (method == "all") return all;
+  if (std::find(all.begin(), all.end(), method) == all.end()) {
+    std::string list;
+    for (const auto& m : all) list += (list.empty() ? "" : "|") + m;
+    bad("method '" + method + "' is not one of this protocol's: " + list + "|all");
+  }
+  return {method};
+}
+
+void GraspExperimentParams::validate() const {
+  if (sets < 1) bad("sets must be >= 1");
+  if (per_set < 1) bad("per_set must be >= 1");
+  if (jobs < 1) bad("jobs must be >= 1");
+  if (!(jitter_xy >= 0.0 && jitter_xy <= 0.05)) bad("jitter_xy must be in [0, 0.05] m");
+  if (!(jitter_yaw_deg >= 0.0 && jitter_yaw_deg <= 15.0)) bad("jitter_yaw_deg must be in [0, 15] deg");
+  if (!(distant_threshold > 0.0)) bad("distant_threshold must be > 0");
+  if (!(trace_period > 0.0)) bad("trace_period must be > 0");
+}
+
+struct GraspExperiment::RunOutput {
+  std::vector<GraspTrial> trials;
+  std::vector<GraspTraceSample> trace;
+  SpeedMeans distant, close;  ///< sums
+  PipelineCounters counters;
+  double sim_time_s = 0.0;
+};
+
+GraspExperiment::GraspExperiment(const GraspExperimentParams& params, std::vector<std::string> methods)
+    : params_(params), methods_(std::move(methods)) {
+  params_.validate();
+  if (methods_.empty()) bad("no method");
+  for (const auto& m : methods_) graspMethod(m);
+  const std::string& dir = params_.config_dir;
+  if (params_.protocol == GraspProtocol::Table) {
+    const std::string scene = params_.scene.empty() ? dir + "/scenes/table_three_objects.yaml" : params_.scene;
+    base_[""] = loadGraspPipelineConfig(
+        GraspPipelineFiles::demo(dir, scene, dir + "/demo/grasp_sequencer.yaml", {"front", "middle", "back"}));
+  } else {
+    const std::string scene = params_.scene.empty() ? dir + "/scenes/single_object.yaml" : params_.scene;
+    for (const char* a : kApproaches)
+      base_[a] = loadGraspPipelineConfig(GraspPipelineFiles::demo(
+          dir, scene, dir + "/demo/grasp_single_" + std::string(a) + ".yaml", {"target"}));
+  }
+}
+
+GraspPipelineConfig GraspExperiment::runConfig(const std::string& method, const std::string& approach,
+                                               unsigned seed) const {
+  const auto it = base_.find(approach);
+  if (it == base_.end()) bad("no configuration for approach '" + approach + "'");
+  GraspPipelineConfig c = it->second;
+  const GraspMethod m = graspMethod(method);
+  c.cycle.controller.mode = m.mode;
+  c.cycle.mpbs.enabled = m.mpbs;
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (auto& o : c.scene.objects) {
+    o.position.x() += params_.jitter_xy * u(rng);
+    o.position.y() += params_.jitter_xy * u(rng);
+    o.rpy.z() += params_.jitter_yaw_deg * M_PI / 180.0 * u(rng);
+  }
+  c.scene.validate();
+  return c;
+}
+
+GraspExperiment::RunOutput GraspExperiment::runOne(const RunSpec& spec) const {
+  const GraspPipelineConfig cfg = runConfig(spec.method, spec.approach, spec.seed);
+  GraspPipeline pipe(cfg, spec.seed);
+  pipe.setTiming(params_.timing);
+  RunOutput out;
+  const int nb = pipe.cycle().model().nBase();
+  const std::size_t n_objects = cfg.sequencer.objects.size();
+  std::vector<long> contacts(n_objects, 0), limits(n_objects, 0);
+  std::vector<double> min_dist(n_objects, -1.0);
+  std::vector<double> t0(n_objects, -1.0);
+  std::vector<double> next_sample(n_objects, 0.0);
+  // Per object: WAIT_TARGET .. LIFT (30 s each) + release + retreat, with margin.
+  const double limit = static_cast<double>(n_objects) *
+                       (cfg.sequencer.object_time_limit + cfg.sequencer.release_timeout +
+                        cfg.sequencer.retreat_timeout + cfg.sequencer.gripper_timeout + 2.0);
+  const double t_end = pipe.time() + limit;
+  while (!pipe.done() && pipe.time() < t_end) {
+    const PipelineCycle& c = pipe.step();
+    const std::size_t k = std::min(c.object, n_objects - 1);
+    contacts[k] += c.collision;
+    limits[k] += c.joint_limit_violations;
+    if (c.min_obstacle_distance >= 0.0 && (min_dist[k] < 0.0 || c.min_obstacle_distance < min_dist[k]))
+      min_dist[k] = c.min_obstacle_distance;
+    const bool working = c.phase != GraspPhase::Release && c.phase != GraspPhase::Retreat &&
+                         c.phase != GraspPhase::Done;
+    if (t0[k] < 0.0) t0[k] = c.t;
+    if (working && c.status.qp_status == ehc_control::QpStatus::Ok)
+      accumulateSpeed(c.status.position_error > params_.distant_threshold ? out.distant : out.close, c.command, nb);
+    if (working && c.t - t0[k] >= next_sample[k] - 1e-9) {
+      next_sample[k] += params_.trace_period;
+      GraspTraceSample s;
+      s.method = spec.method;
+      s.set = spec.set;
+      s.index = spec.index;
+      s.object = cfg.sequencer.objects[k].name;
+      s.t = c.t - t0[k];
+      s.distance = (pipe.world().linkPose(pipe.cycle().model().config().tcp_frame).translation() -
+                    pipe.world().objectPose(static_cast<int>(k)).translation())
+                       .norm();
+      s.base_speed = nb == 3 ? std::hypot(c.command[0], c.command[1]) : std::abs(c.command[0]);
+      s.base_turn = std::abs(c.command[nb - 1]);
+      s.arm_speed = c.command.tail(c.command.size() - nb).cwiseAbs().sum();
+      out.trace.push_back(s);
+    }
+  }
+  const auto& results = pipe.sequencer().results();
+  for (std::size_t i = 0; i < n_objects; ++i) {
+    GraspTrial t;
+    t.method = spec.method;
+    t.set = spec.set;
+    t.index = spec.index;
+    t.seed = spec.seed;
+    t.object = cfg.sequencer.objects[i].name;
+    t.approach = toString(cfg.sequencer.objects[i].approach);
+    if (i < results.size()) {
+      const GraspResult& r = results[i];
+      t.success = r.success;
+      t.time_s = r.time_s;
+      t.tfm = r.tfm;
+      t.tfm_until_switch = r.tfm_until_switch;
+      t.controller_tfm = r.controller_tfm;
+      t.failed_phase = r.failed_phase;
+      t.reason = r.reason;
+    } else {
+      t.failed_phase = toString(pipe.sequencer().phase());
+      t.reason = "run ended (sim time limit " + std::to_string(limit) + " s) before this object was handled";
+    }
+    t.contact_steps = contacts[i];
+    t.joint_limit_violations = limits[i];
+    t.min_obstacle_distance = min_dist[i];
+    out.trials.push_back(t);
+  }
+  out.counters = pipe.counters();
+  out.sim_time_s = pipe.time() - 1.0;
+  return out;
+}
+
+GraspExperimentResult GraspExperiment::run(const Progress& progress) const {
+  std::vector<RunSpec> specs;
+  for (const auto& m : methods_)
+    for (int s = 0; s < params_.sets; ++s) {
+      if (params_.protocol == GraspProtocol::Table) {
+        specs.push_back({m, "", s, 0, params_.seed * 1000u + static_cast<unsigned>(s) * 10u});
+      } else {
+        for (int k = 0; k < params_.per_set; ++k)
+          for (const char* a : kApproaches)
+            specs.push_back({m, a, s, k, params_.seed * 1000u + static_cast<unsigned>(s) * 10u + static_cast<unsigned>(k)});
+      }
+    }
+  std::vector<RunOutput> outputs(specs.size());
+  std::vector<double> wall(specs.size(), 0.0);
+  std::atomic<std::size_t> next{0};
+  std::mutex mutex;
+  int done = 0;
+  std::exception_ptr error;
+  auto worker = [&] {
+    for (;;) {
+      const std::size_t i = next++;
+      if (i >= specs.size()) return;
+      try {
+        const auto w0 = std::chrono::steady_clock::now();
+        outputs[i] = runOne(specs[i]);
+        wall[i] = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(mutex);
+        if (!error) error = std::current_exception();
+        next = specs.size();
+        return;
+      }
+      std::lock_guard<std::mutex> lock(mutex);
+      ++done;
+      if (progress) {
+        int ok = 0;
+        for (const auto& t : outputs[i].trials) ok += t.success;
+        std::ostringstream os;
+        os << specs[i].method << " set " << specs[i].set
+           << (specs[i].approach.empty() ? "" : " " + specs[i].approach + " #" + std::to_string(specs[i].index))
+           << ": " << ok << "/" << outputs[i].trials.size() << " grasped, sim " << std::fixed << std::setprecision(1)
+           << outputs[i].sim_time_s << " s in " << wall[i] << " s wall";
+        progress(done, static_cast<int>(specs.size()), os.str());
+      }
+    }
+  };
+  const int jobs = std::min<int>(params_.jobs, static_cast<int>(specs.size()));
+  std::vector<std::thread> threads;
+  for (int j = 1; j < jobs; ++j) threads.emplace_back(worker);
+  worker();
+  for (auto& t : threads) t.join();
+  if (error) std::rethrow_exception(error);
+
+  // Assemble in spec order: the result does not depend on the job count.
+  GraspExperimentResult res;
+  for (const auto& m : methods_) {
+    GraspMethodSummary s;
+    s.method = m;
+    SpeedMeans distant, close;
+    double time_sum = 0.0;
+    std::map<std::string, std::pair<double, int>> tfm;
+    for (std::size_t i = 0; i < specs.size(); ++i) {
+      if (specs[i].method != m) continue;
+      const RunOutput& o = outputs[i];
+      for (const auto& t : o.trials) {
+        ++s.grasps;
+        if (t.success) {
+          ++s.successes;
+          time_sum += t.time_s;
+        }
+        auto& e = tfm[t.approach];
+        e.first += t.tfm;
+        ++e.second;
+        s.contact_steps += t.contact_steps;
+        s.joint_limit_violations += t.joint_limit_violations;
+        if (t.min_obstacle_distance >= 0.0 && (s.min_obstacle_distance < 0.0 || t.min_obstacle_distance < s.min_obstacle_distance))
+          s.min_obstacle_distance = t.min_obstacle_distance;
+        res.trials.push_back(t);
+      }
+      for (SpeedMeans* p : {&distant, &close}) {
+        const SpeedMeans& add = p == &distant ? o.distant : o.close;
+        p->base_t += add.base_t;
+        p->base_r += add.base_r;
+        p->arm += add.arm;
+        p->cycles += add.cycles;
+      }
+      res.trace.insert(res.trace.end(), o.trace.begin(), o.trace.end());
+      s.sim_time_s += o.sim_time_s;
+      s.wall_time_s += wall[i];
+      const PipelineCounters& c = o.counters;
+      PipelineCounters& r = res.counters;
+      r.cycles += c.cycles; r.images += c.images; r.clouds += c.clouds; r.tag_detections += c.tag_detections;
+      r.grasp_runs += c.grasp_runs; r.obstacle_updates += c.obstacle_updates;
+      r.collision_steps += c.collision_steps; r.joint_limit_violations += c.joint_limit_violations;
+      r.wall_render += c.wall_render; r.wall_tags += c.wall_tags; r.wall_grasps += c.wall_grasps;
+      r.wall_obstacles += c.wall_obstacles; r.wall_control += c.wall_control; r.wall_sequencer += c.wall_sequencer;
+      r.wall_physics += c.wall_physics;
+    }
+    for (auto& e : tfm) e.second.first /= std::max(1, e.second.second);
+    s.tfm = tfm;
+    s.mean_time_s = s.successes ? time_sum / s.successes : 0.0;
+    s.distant = meanSpeed(distant);
+    s.close = meanSpeed(close);
+    res.sim_time_s += s.sim_time_s;
+    res.summaries.push_back(s);
+  }
+  return res;
+}
+
+std::string pipelineStageCosts(const PipelineCounters& c, double sim_time_s) {
+  std::ostringstream os;
+  os << std::fixed << std::setprecision(3);
+  const double per = sim_time_s > 0.0 ? 1.0 / sim_time_s : 0.0;
+  const double total = c.wall_render + c.wall_tags + c.wall_grasps + c.wall_obstacles + c.wall_control +
+                       c.wall_sequencer + c.wall_physics;
+  os << "{\"sim_time_s\":" << sim_time_s << ",\"cycles\":" << c.cycles << ",\"images\":" << c.images
+     << ",\"clouds\":" << c.clouds << ",\"grasp_runs\":" << c.grasp_runs << ",\"obstacle_updates\":" << c.obstacle_updates
+     << ",\"wall_s_per_sim_s\":{\"render\":" << c.wall_render * per << ",\"tags\":" << c.wall_tags * per
+     << ",\"grasps\":" << c.wall_grasps * per << ",\"obstacles\":" << c.wall_obstacles * per
+     << ",\"control\":" << c.wall_control * per << ",\"sequencer\":" << c.wall_sequencer * per
+     << ",\"physics\":" << c.wall_physics * per << ",\"total\":" << total * per << "}}";
+  return os.str();
+}
+
+std::string graspSummaryJson(const GraspMethodSummary& s) {
+  std::ostringstream os;
+  os << std::setprecision(10);
+  os << "{\"method\":\"" << s.method << "\",\"grasps\":" << s.grasps << ",\"successes\":" << s.successes
+     << ",\"success_rate\":" << (s.grasps ? 100.0 * s.successes / s.grasps : 0.0)
+     << ",\"mean_time_s\":" << s.mean_time_s << ",\"distant\":{\"base_t\":" << s.distant.base_t
+     << ",\"base_r\":" << s.distant.base_r << ",\"arm\":" << s.distant.arm << ",\"cycles\":" << s.distant.cycles
+     << "},\"close\":{\"base_t\":" << s.close.base_t << ",\"base_r\":" << s.close.base_r << ",\"arm\":" << s.close.arm
+     << ",\"cycles\":" << s.close.cycles << "},\"tfm\":{";
+  bool first = true;
+  for (const auto& e : s.tfm) {
+    os << (first ? "" : ",") << "\"" << e.first << "\":" << 100.0 * e.second.first;
+    first = false;
+  }
+  os << "},\"contact_steps\":" << s.contact_steps << ",\"joint_limit_violations\":" << s.joint_limit_violations
+     << ",\"min_obstacle_distance\":" << s.min_obstacle_distance << ",\"sim_time_s\":" << s.sim_time_s << "}";
+  return os.str();
+}
+
+void writeGraspResults(const std::string& dir, const GraspExperimentParams& params,
+                       const GraspExperimentResult& result, const std::string& notes) {
+  ::mkdir(dir.c_str(), 0755);
+  auto open = [&](const std::string& name) {
+    std::ofstream f(dir + "/" + name);
+    if (!f) throw std::runtime_error("[GraspExperiment] cannot write " + dir + "/" + name);
+    return f;
+  };
+  {
+    std::ofstream f = open("summary.json");
+    f << "{\"protocol\":\"" << (params.protocol == GraspProtocol::Table ? "grasp" : "poses") << "\",\"sets\":"
+      << params.sets << ",\"per_set\":" << params.per_set << ",\"seed\":" << params.seed
+      << ",\"jitter_xy\":" << params.jitter_xy << ",\"jitter_yaw_deg\":" << params.jitter_yaw_deg
+      << ",\"sim_time_s\":" << result.sim_time_s << ",\"methods\":[";
+    for (std::size_t i = 0; i < result.summaries.size(); ++i)
+      f << (i ? ",\n " : "") << graspSummaryJson(result.summaries[i]);
+    f << "]}\n";
+  }
+  {
+    std::ofstream f = open("table.md");
+    f << std::fixed;
+    auto pct = [](int a, int b) { return b ? 100.0 * a / b : 0.0; };
+    auto mm = [](double d) {
+      std::ostringstream os;
+      if (d < 0.0) os << "none < influence";
+      else os << std::fixed << std::setprecision(3) << d;
+      return os.str();
+    };
+    if (params.protocol == GraspProtocol::Table) {
+      f << "Table III (Exp-2): sequentially grasping three objects. Measured (in-process sim) | paper (real robot)\n\n"
+        << "| Method | Time(s) | Distant(Base-T/Base-R/Arm) | Close(Base-T/Base-R/Arm) | Success Rate (%) "
+           "| paper Time(s) | paper Distant | paper Close | paper Success (%) |\n|---|---|---|---|---|---|---|---|---|\n";
+      for (const auto& s : result.summaries) {
+        const PaperRow* p = nullptr;
+        for (const auto& r : kPaperTable3)
+          if (s.method == r.method) p = &r;
+        f << "| " << s.method << " | " << std::setprecision(2) << s.mean_time_s << " | " << std::setprecision(3)
+          << s.distant.base_t << "/" << s.distant.base_r << "/" << s.distant.arm << " | " << s.close.base_t << "/"
+          << s.close.base_r << "/" << s.close.arm << " | " << std::setprecision(1) << pct(s.successes, s.grasps)
+          << " (" << s.successes << "/" << s.grasps << ") | " << (p ? p->time : "") << " | " << (p ? p->distant : "")
+          << " | " << (p ? p->close : "") << " | " << (p ? p->success : "") << " |\n";
+      }
+    } else {
+      f << "Table IV (Exp-3): grasping one object with different poses, TfM (%). Measured (in-process sim) | paper\n\n"
+        << "| Method | Forward | Downward | Sideways | Success (%) | paper Forward | paper Downward | paper Sideways |\n"
+           "|---|---|---|---|---|---|---|---|\n";
+      for (const auto& s : result.summaries) {
+        const PaperTfm* p = nullptr;
+        for (const auto& r : kPaperTable4)
+          if (s.method == r.method) p = &r;
+        f << "| " << s.method;
+        for (const char* a : kApproaches) {
+          const auto it = s.tfm.find(a);
+          f << " | " << std::setprecision(1) << (it == s.tfm.end() ? 0.0 : 100.0 * it->second.first);
+        }
+        f << " | " << pct(s.successes, s.grasps) << " (" << s.successes << "/" << s.grasps << ") | "
+          << (p ? p->forward : "") << " | " << (p ? p->downward : "") << " | " << (p ? p->sideways : "") << " |\n";
+      }
+    }
+    f << "\nSafety (not in the paper; must be zero / above the stop distance in every run):\n\n"
+      << "| Method | sim steps with robot-scene contact (Bullet) | joint-limit violations | min robot-obstacle distance (m, perceived) | sim time (s) |\n"
+         "|---|---|---|---|---|\n";
+    for (const auto& s : result.summaries)
+      f << "| " << s.method << " | " << s.contact_steps << " | " << s.joint_limit_violations << " | "
+        << mm(s.min_obstacle_distance) << " | " << std::setprecision(1) << s.sim_time_s << " |\n";
+    if (!notes.empty()) f << "\n" << notes << "\n";
+  }
+  {
+    std::ofstream f = open("trials.csv");
+    f << "method,set,index,seed,object,approach,success,time_s,tfm,tfm_until_switch,controller_tfm,failed_phase,"
+         "reason,contact_steps,joint_limit_violations,min_obstacle_distance_m\n";
+    for (const auto& t : result.trials) {
+      std::string reason = t.reason;
+      std::replace(reason.begin(), reason.end(), '"', '\'');
+      f << t.method << "," << t.set << "," << t.index << "," << t.seed << "," << t.object << "," << t.approach << ","
+        << (t.success ? 1 : 0) << "," << t.time_s << "," << t.tfm << "," << t.tfm_until_switch << ","
+        << t.controller_tfm << "," << t.failed_phase << ",\"" << reason << "\"," << t.contact_steps << ","
+        << t.joint_limit_violations << "," << t.min_obstacle_distance << "\n";
+    }
+  }
+  {
+    std::ofstream f = open("trace.csv");
+    f << "method,set,index,object,t,distance,base_speed,base_turn,arm_speed\n" << std::setprecision(5);
+    for (const auto& s : result.trace)
+      f << s.method << "," << s.set << "," << s.index << "," << s.object << "," << s.t << "," << s.distance << ","
+        << s.base_speed << "," << s.base_turn << "," << s.arm_speed << "\n";
+  }
+}
+
+}  // namespace ehc_bringup

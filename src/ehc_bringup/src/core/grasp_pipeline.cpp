@@ -1,0 +1,285 @@
+#include "ehc_bringup/grasp_pipeline.h"
+
+#include "ehc_control/config_node.h"
+#include "ehc_perception/rate_limiter.h"
+#include "ehc_sim/sim_world.h"
+#include "ehc_sim/simulated_camera.h"
+
+#include <chrono>
+#include <sstream>
+#include <stdexcept>
+
+namespace ehc_bringup {
+
+namespace {
+
+/// Adds the wall seconds of its lifetime to `*sink` when timing is on (no clock read otherwise).
+class StageTimer {
+ public:
+  StageTimer(bool on, double* sink) : sink_(on ? sink : nullptr) {
+    if (sink_) t0_ = std::chrono::steady_clock::now();
+  }
+  ~StageTimer() {
+    if (sink_) *sink_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
+  }
+
+ private:
+  double* sink_;
+  std::chrono::steady_clock::time_point t0_;
+};
+
+constexpr double kSimClockOffset = 1.0;  ///< s: ehc_sim_node's clock starts at 1 s
+
+}  // namespace
+
+GraspPipelineFiles GraspPipelineFiles::demo(const std::string& config_dir, const std::string& scene,
+                                            const std::string& sequencer, const std::vector<std::string>& tag_objects) {
+  GraspPipelineFiles f;
+  f.sim = config_dir + "/sim/bullet_sim.yaml";
+  f.scene = scene;
+  f.controller = config_dir + "/demo/controller.yaml";
+  f.sequencer = sequencer;
+  for (const auto& o : tag_objects) f.tags.push_back(config_dir + "/demo/tag_" + o + ".yaml");
+  f.grasp = config_dir + "/perception/grasp_node.yaml";
+  f.obstacles = config_dir + "/demo/obstacle_node.yaml";
+  return f;
+}
+
+GraspPipelineConfig loadGraspPipelineConfig(const GraspPipelineFiles& files) {
+  GraspPipelineConfig c;
+  c.sim = ehc_sim::loadSimConfig(files.sim);
+  const std::string scene = files.scene.empty() ? c.sim.scene_file : files.scene;
+  if (scene.empty()) throw std::invalid_argument("[GraspPipeline] no scene: the sim file names none and none was given");
+  c.scene = ehc_sim::loadSceneConfig(scene);
+  {
+    const auto root = ehc_control::ConfigNode::loadFile(files.controller, "GraspPipeline");
+    c.cycle = ehc_control::loadControlCycleParams(root);
+    root.ignore("node");
+    root.rejectUnknownKeys();
+  }
+  c.sequencer = loadGraspSequencerParams(ehc_control::ConfigNode::loadFile(files.sequencer, "GraspPipeline"));
+  if (files.tags.size() != c.sequencer.objects.size())
+    throw std::invalid_argument("[GraspPipeline] " + std::to_string(files.tags.size()) + " tag file(s) for " +
+                                std::to_string(c.sequencer.objects.size()) + " sequencer object(s) in " + files.sequencer);
+  for (std::size_t i = 0; i < files.tags.size(); ++i) {
+    const auto root = ehc_control::ConfigNode::loadFile(files.tags[i], "GraspPipeline");
+    const auto detector = ehc_perception::loadTagDetectorConfig(root.childOrEmpty("tag_detector"));
+    if (i == 0) c.detector = detector;
+    else if (detector.summary() != c.detector.summary())
+      throw std::invalid_argument("[GraspPipeline] " + files.tags[i] + ": tag_detector differs from " + files.tags[0] +
+                                  "'s (one detection serves every object in-process)");
+    c.tag_targets.push_back(ehc_perception::loadTagTargetConfig(root.childOrEmpty("target")));
+  }
+  {
+    const auto root = ehc_control::ConfigNode::loadFile(files.grasp, "GraspPipeline");
+    c.targeting = ehc_perception::loadGraspTargetingParams(root.childOrEmpty("node"));
+    c.generator = ehc_perception::loadGraspGeneratorConfig(root.childOrEmpty("grasp_generator"));
+  }
+  c.obstacles = !files.obstacles.empty();
+  if (c.obstacles) {
+    const auto root = ehc_control::ConfigNode::loadFile(files.obstacles, "GraspPipeline");
+    const auto n = root.child("node");
+    c.monitor = ehc_perception::loadObstacleMonitorParams(n);
+    c.obstacle_rate_hz = n.get("publish_rate_hz", c.obstacle_rate_hz);
+    ehc_control::requireRange("GraspPipeline", "node.publish_rate_hz", c.obstacle_rate_hz, 0.1, 1000.0);
+    c.map = ehc_perception::loadObstacleMapConfig(root.childOrEmpty("obstacle_map"));
+  }
+  return c;
+}
+
+std::string GraspPipelineConfig::summary() const {
+  std::ostringstream os;
+  os << "GraspPipeline (in-process): scene '" << scene.name << "', " << sequencer.objects.size()
+     << " object(s), controller mode " << ehc_control::toString(cycle.controller.mode) << ", servo "
+     << ehc_control::toString(cycle.servo_type) << (cycle.mpbs.enabled ? " + MPBS" : "") << ", image "
+     << sim.camera.image_rate << " Hz, cloud " << sim.camera.cloud_rate << " Hz, "
+     << targeting.summary() << ", obstacles "
+     << (obstacles ? "on (" + std::to_string(obstacle_rate_hz) + " Hz)" : std::string("off"));
+  return os.str();
+}
+
+struct GraspPipeline::Clocks {
+  ehc_sim::StreamClock image, cloud, obstacles;
+  ehc_perception::RateLimiter grasp;
+};
+
+GraspPipeline::GraspPipeline(const GraspPipelineConfig& cfg, unsigned seed) : cfg_(cfg) {
+  cfg_.sim.fake_robot.seed = seed;
+  const ehc_control::RobotConfig robot = ehc_control::loadRobotConfig(cfg_.sim.fake_robot.robot_file);
+  const ehc_control::PinholeCamera intrinsics = ehc_control::loadPinholeCamera(cfg_.sim.camera_file);
+  world_ = std::make_unique<ehc_sim::SimWorld>(cfg_.sim, robot, cfg_.scene);
+  camera_ = std::make_unique<ehc_sim::SimulatedCamera>(intrinsics, cfg_.sim.camera, seed);
+  camera_->setScene(world_->bodies(), cfg_.scene.floor_shade);
+  cycle_ = std::make_unique<ehc_control::ControlCycle>(cfg_.cycle);
+  sequencer_ = std::make_unique<GraspSequencer>(cfg_.sequencer);
+  if (!sequencer_->setCamera(intrinsics)) throw std::invalid_argument("[GraspPipeline] invalid camera intrinsics");
+  detector_ = std::make_unique<ehc_perception::TagDetector>(cfg_.detector, intrinsics);
+  generator_ = std::make_unique<ehc_perception::GraspGenerator>(cfg_.generator);
+  if (cfg_.obstacles) monitor_ = std::make_unique<ehc_perception::ObstacleMonitor>(robot, cfg_.map, cfg_.monitor);
+  const bool perceive_tags = !cfg_.tag_targets.empty();
+  clocks_ = std::make_unique<Clocks>(Clocks{ehc_sim::StreamClock(perceive_tags ? cfg_.sim.camera.image_rate : 0.0),
+                                            ehc_sim::StreamClock(cfg_.sim.camera.cloud_rate),
+                                            ehc_sim::StreamClock(cfg_.obstacles ? cfg_.obstacle_rate_hz : 0.0),
+                                            ehc_perception::RateLimiter(cfg_.targeting.max_rate_hz)});
+  arm_names_ = robot.arm_joints;
+}
+
+GraspPipeline::~GraspPipeline() = default;
+
+double GraspPipeline::time() const { return world_->time() + kSimClockOffset; }
+
+void GraspPipeline::perceive(double t) {
+  const std::int64_t t_ns = world_->timeNs();
+  const bool consumed = sequencer_->wantsPerception();
+  if (clocks_->image.due(t_ns) && consumed) {
+    vpImage<unsigned char> image;
+    std::vector<ehc_perception::TagDetection> detections;
+    {
+      StageTimer timer(timing_, &counters_.wall_render);
+      camera_->render(*world_, &image);
+    }
+    ++counters_.images;
+    {
+      StageTimer timer(timing_, &counters_.wall_tags);
+      detections = detector_->detect(image);
+    }
+    const Eigen::Isometry3d T_world_cam = world_->cameraPose();
+    for (std::size_t i = 0; i < cfg_.tag_targets.size(); ++i) {
+      Eigen::Isometry3d T_world;
+      if (!ehc_perception::findTargetInWorld(detections, cfg_.tag_targets[i], T_world_cam, &T_world)) continue;
+      ++counters_.tag_detections;
+      sequencer_->setObjectPose(i, t, T_world);
+    }
+  }
+  // The depth cloud is rendered only when the grasp generator or the obstacle map takes it.
+  if (!clocks_->cloud.due(t_ns)) return;
+  const bool want_grasps = consumed && clocks_->grasp.accept(t);
+  const bool want_obstacles = monitor_ && monitor_->acceptCloud(t);
+  if (!want_grasps && !want_obstacles) return;
+  std::vector<Eigen::Vector3f> cam_points;
+  {
+    StageTimer timer(timing_, &counters_.wall_render);
+    camera_->cloud(*world_, &cam_points);
+  }
+  ++counters_.clouds;
+  const Eigen::Isometry3d T_world_cam = world_->cameraPose();
+  const Eigen::Isometry3f T = T_world_cam.cast<float>();
+  ehc_perception::PointList points;
+  points.reserve(cam_points.size());
+  for (const auto& p : cam_points) points.push_back(T * p);
+  if (want_grasps) {
+    StageTimer timer(timing_, &counters_.wall_grasps);
+    const bool fresh = grasp_target_ && t - grasp_target_t_ <= cfg_.targeting.target_timeout;
+    const ehc_perception::GraspResult res = ehc_perception::generateForTarget(
+        *generator_, points, T_world_cam.translation(), fresh ? &*grasp_target_ : nullptr, cfg_.targeting.target_gate);
+    std::vector<GraspCandidate> candidates;
+    for (const auto& g : res.grasps) candidates.push_back({g.pose, g.width, g.score});
+    sequencer_->setGraspCandidates(t, candidates);
+    ++counters_.grasp_runs;
+  }
+  if (want_obstacles) {
+    StageTimer timer(timing_, &counters_.wall_obstacles);
+    monitor_->insertCloud(t, points, T_world_cam.translation());
+  }
+}
+
+void GraspPipeline::updateObstacles(double t) {
+  if (!monitor_) return;
+  StageTimer timer(timing_, &counters_.wall_obstacles);
+  const ehc_sim::KinematicFakeRobot& robot = world_->robot();
+  const Eigen::VectorXd& q = robot.armPositions();
+  monitor_->setJointState(t, arm_names_, std::vector<double>(q.data(), q.data() + q.size()));
+  monitor_->setBasePose(t, robot.basePose());
+  if (!clocks_->obstacles.due(world_->timeNs())) return;
+  const ehc_perception::ObstacleReport r = monitor_->update(t);
+  ++counters_.obstacle_updates;
+  if (r.status != ehc_perception::ObstacleReport::Status::Publish) return;
+  std::vector<ehc_control::ObstaclePair> pairs;
+  pairs.reserve(r.distances.size());
+  for (const auto& d : r.distances) {
+    pairs.push_back({d.link, d.link_point, d.obstacle_point, d.normal, d.distance});
+    if (last_.min_obstacle_distance < 0.0 || d.distance < last_.min_obstacle_distance)
+      last_.min_obstacle_distance = d.distance;
+  }
+  const std::string err = cycle_->setObstacles(r.stamp, pairs);
+  if (!err.empty()) throw std::runtime_error("[GraspPipeline] obstacles rejected by the controller: " + err);
+}
+
+const PipelineCycle& GraspPipeline::step() {
+  const double t = time();
+  last_ = PipelineCycle{};
+  last_.t = t;
+  last_.object = sequencer_->currentObject();
+  perceive(t);
+  updateObstacles(t);
+
+  // Controller (ehc_controller_node answering the state stamped t).
+  ehc_control::ControlCycleOutput out;
+  {
+    StageTimer timer(timing_, &counters_.wall_control);
+    const ehc_sim::KinematicFakeRobot& robot = world_->robot();
+    const Eigen::VectorXd& q = robot.armPositions();
+    std::string err = cycle_->setJointState(t, arm_names_, std::vector<double>(q.data(), q.data() + q.size()));
+    if (err.empty()) err = cycle_->setBasePose(t, robot.basePose());
+    if (!err.empty()) throw std::runtime_error("[GraspPipeline] state rejected by the controller: " + err);
+    out = cycle_->update(t);
+  }
+
+  // Sequencer (ehc_grasp_sequencer_node on the status of t): goal etc. for the next cycle.
+  {
+    StageTimer timer(timing_, &counters_.wall_sequencer);
+    SequencerInput in;
+    in.t = t;
+    in.controller_phase = ehc_control::toString(out.status.phase);
+    in.target_in_fov = out.status.target_in_fov;
+    in.sig = out.status.sig;
+    in.gripper_state = ehc_sim::toString(world_->gripper().state());
+    in.grasp_succeeded = world_->gripper().graspSucceeded();
+    in.tcp = world_->linkPose(cycle_->model().config().tcp_frame);
+    in.camera = world_->cameraPose();
+    const SequencerOutput s = sequencer_->update(in);
+    if (s.object_pose) {
+      grasp_target_ = s.object_pose->translation();
+      grasp_target_t_ = t;
+    }
+    if (s.goal) {
+      const std::string err = cycle_->setTarget(t, *s.goal);
+      if (!err.empty()) throw std::runtime_error("[GraspPipeline] goal rejected by the controller: " + err);
+    }
+    if (const auto c = sequencer_->objectCentre()) cycle_->setWatchedCentre(t, *c);
+    if (monitor_ && (!s.exclusions.empty() || excluding_)) {
+      excluding_ = !s.exclusions.empty();
+      std::vector<ehc_perception::ExclusionZone> zones;
+      for (const auto& z : s.exclusions) zones.push_back({z.centre, z.radius});
+      const std::string err = monitor_->setExclusionZones(t, zones);
+      if (!err.empty()) throw std::runtime_error("[GraspPipeline] exclusion zones rejected: " + err);
+    }
+    if (s.gripper_command) world_->commandGripper(*s.gripper_command);
+    last_.phase = sequencer_->phase();
+  }
+
+  // Simulator step with the controller's command.
+  {
+    StageTimer timer(timing_, &counters_.wall_physics);
+    const ehc_sim::StepReport& r = world_->step(out.velocity);
+    last_.collision = r.robot_world_collision || r.self_collision;
+  }
+  const ehc_control::RobotConfig& rc = cycle_->model().config();
+  const Eigen::VectorXd& q = world_->robot().armPositions();
+  for (int i = 0; i < q.size(); ++i)
+    if (q[i] < rc.arm_lower[i] || q[i] > rc.arm_upper[i]) ++last_.joint_limit_violations;
+  last_.status = out.status;
+  last_.command = out.velocity;
+  ++counters_.cycles;
+  counters_.collision_steps += last_.collision;
+  counters_.joint_limit_violations += last_.joint_limit_violations;
+  return last_;
+}
+
+bool GraspPipeline::runUntilDone(double sim_time_limit) {
+  const double t_end = time() + sim_time_limit;
+  while (!done() && time() < t_end) step();
+  return done();
+}
+
+}  // namespace ehc_bringup

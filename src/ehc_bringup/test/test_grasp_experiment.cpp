@@ -1,0 +1,124 @@
+// GraspExperiment / GraspPipeline (issue 14): one set of every method of Exp-2 and Exp-3 runs
+// in-process to the end and reports every grasp; the same seed gives bit-identical results
+// (one set run twice, summaries and trials compared as text); a different seed jitters the
+// objects. No ROS master, no wall clock in the pipeline.
+#include "ehc_bringup/grasp_experiment.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+using namespace ehc_bringup;
+
+namespace {
+
+GraspExperimentParams params(GraspProtocol protocol) {
+  GraspExperimentParams p;
+  p.protocol = protocol;
+  p.config_dir = EHC_CONFIG_DIR;
+  p.sets = 1;
+  p.per_set = 1;
+  p.seed = 7;
+  p.jobs = 2;
+  return p;
+}
+
+std::string trialsText(const GraspExperimentResult& r) {
+  std::ostringstream os;
+  os.precision(17);
+  for (const auto& t : r.trials)
+    os << t.method << " " << t.object << " " << t.success << " " << t.time_s << " " << t.tfm << " " << t.failed_phase
+       << " " << t.reason << " " << t.contact_steps << " " << t.min_obstacle_distance << "\n";
+  return os.str();
+}
+
+std::string summariesText(const GraspExperimentResult& r) {
+  std::string s;
+  for (const auto& m : r.summaries) s += graspSummaryJson(m) + "\n";
+  return s;
+}
+
+std::string readFile(const std::string& path) {
+  std::ifstream f(path);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+}  // namespace
+
+TEST(GraspExperiment, MethodNamesPerProtocol) {
+  EXPECT_EQ(graspMethodNames(GraspProtocol::Table, "all"), (std::vector<std::string>{"tsmm", "neo_c", "neo_e", "ehc"}));
+  EXPECT_EQ(graspMethodNames(GraspProtocol::Poses, "all"), (std::vector<std::string>{"neo_nompbs", "ehc_nompbs", "ehc"}));
+  EXPECT_THROW(graspMethodNames(GraspProtocol::Poses, "tsmm"), std::invalid_argument);
+  EXPECT_FALSE(graspMethod("ehc_nompbs").mpbs);
+  EXPECT_TRUE(graspMethod("ehc").mpbs);
+}
+
+TEST(GraspExperiment, SetsJitterTheObjectsBySeed) {
+  const GraspExperiment exp(params(GraspProtocol::Table), {"ehc"});
+  const auto a = exp.runConfig("ehc", "", 7000), b = exp.runConfig("ehc", "", 7000), c = exp.runConfig("ehc", "", 7010);
+  ASSERT_EQ(a.scene.objects.size(), 3u);
+  for (std::size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(a.scene.objects[i].position, b.scene.objects[i].position);
+    EXPECT_NE(a.scene.objects[i].position, c.scene.objects[i].position);
+    EXPECT_LE((a.scene.objects[i].position - c.scene.objects[i].position).head<2>().cwiseAbs().maxCoeff(), 0.02 + 1e-12);
+  }
+}
+
+TEST(GraspExperiment, Exp2OneSetOfEveryMethodAndTheSameSeedGivesTheSameResult) {
+  const GraspExperimentParams p = params(GraspProtocol::Table);
+  const GraspExperiment exp(p, graspMethodNames(GraspProtocol::Table, "all"));
+  int progress_calls = 0;
+  const GraspExperimentResult r = exp.run([&](int, int, const std::string&) { ++progress_calls; });
+  EXPECT_EQ(progress_calls, 4);
+  ASSERT_EQ(r.summaries.size(), 4u);
+  ASSERT_EQ(r.trials.size(), 12u);  // 4 methods x 3 objects, every one reported
+  for (const auto& t : r.trials) {
+    EXPECT_TRUE(t.success || !t.failed_phase.empty()) << t.method << " " << t.object;
+    EXPECT_EQ(t.joint_limit_violations, 0) << t.method << " " << t.object;
+  }
+  for (const auto& s : r.summaries) RecordProperty(s.method, graspSummaryJson(s));
+  EXPECT_GT(r.counters.tag_detections, 0);
+  EXPECT_GT(r.counters.grasp_runs, 0);
+  EXPECT_GT(r.counters.obstacle_updates, 0);
+
+  // The same set of one method again, alone and on one job: bit-identical.
+  GraspExperimentParams once = p;
+  once.jobs = 1;
+  const GraspExperimentResult again = GraspExperiment(once, {"ehc"}).run();
+  GraspExperimentResult ehc_only;
+  ehc_only.summaries = {r.summaries.back()};
+  for (const auto& t : r.trials)
+    if (t.method == "ehc") ehc_only.trials.push_back(t);
+  ehc_only.summaries.back().wall_time_s = 0.0;
+  EXPECT_EQ(summariesText(again), summariesText(ehc_only));
+  EXPECT_EQ(trialsText(again), trialsText(ehc_only));
+
+  const std::string dir = ::testing::TempDir() + "/ehc_exp2_test";
+  writeGraspResults(dir, p, r, "test");
+  const std::string table = readFile(dir + "/table.md");
+  EXPECT_NE(table.find("| tsmm |"), std::string::npos) << table;
+  EXPECT_NE(table.find("95.6"), std::string::npos) << table;  // the paper's EHC figure beside
+  EXPECT_NE(readFile(dir + "/trials.csv").find("ehc,0,0,7000,back,"), std::string::npos);
+  EXPECT_NE(readFile(dir + "/summary.json").find("\"method\":\"neo_e\""), std::string::npos);
+}
+
+TEST(GraspExperiment, Exp3OneSetOfEveryMethodReportsTfmPerApproach) {
+  const GraspExperimentParams p = params(GraspProtocol::Poses);
+  const GraspExperiment exp(p, graspMethodNames(GraspProtocol::Poses, "all"));
+  const GraspExperimentResult r = exp.run();
+  ASSERT_EQ(r.summaries.size(), 3u);
+  ASSERT_EQ(r.trials.size(), 9u);  // 3 methods x 3 approaches x 1
+  for (const auto& s : r.summaries) {
+    RecordProperty(s.method, graspSummaryJson(s));
+    EXPECT_EQ(s.tfm.size(), 3u) << s.method;
+    for (const auto& e : s.tfm) {
+      EXPECT_GE(e.second.first, 0.0);
+      EXPECT_LE(e.second.first, 1.0);
+    }
+  }
+  for (const auto& t : r.trials) EXPECT_EQ(t.joint_limit_violations, 0) << t.method << " " << t.approach;
+}
