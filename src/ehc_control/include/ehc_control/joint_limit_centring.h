@@ -24,6 +24,9 @@ struct JointLimitCentring {
   double potential(const Eigen::VectorXd& q, const Eigen::VectorXd& lower, const Eigen::VectorXd& upper) const;
   /// dV/dq (size of q).
   Eigen::VectorXd gradient(const Eigen::VectorXd& q, const Eigen::VectorXd& lower, const Eigen::VectorXd& upper) const;
+  /// out += dV/dq, in place (the QP's cost vector; no allocation in the control cycle).
+  void addGradient(const Eigen::VectorXd& q, const Eigen::VectorXd& lower, const Eigen::VectorXd& upper,
+                   Eigen::Ref<Eigen::VectorXd> out) const;
 };
 
 }  // namespace ehc_control

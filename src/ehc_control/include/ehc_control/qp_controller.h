@@ -176,6 +176,10 @@ class EhcQpController {
   /// unknown-link pair sets `bad_pair` (the reason) and returns none.
   std::vector<const ObstaclePair*> nearestObstaclePairs(const std::vector<ObstaclePair>& obstacles,
                                                         std::string* bad_pair) const;
+  /// The same into a caller-owned list (step() reuses one: no allocation per cycle). `ranked`
+  /// holds (distance - d_s, pair) of the chosen pairs, nearest first.
+  void nearestObstaclePairs(const std::vector<ObstaclePair>& obstacles,
+                            std::vector<std::pair<double, const ObstaclePair*>>* ranked, std::string* bad_pair) const;
 
  private:
   struct Solver;

@@ -25,15 +25,20 @@ double JointLimitCentring::potential(const Eigen::VectorXd& q, const Eigen::Vect
 Eigen::VectorXd JointLimitCentring::gradient(const Eigen::VectorXd& q, const Eigen::VectorXd& lower,
                                              const Eigen::VectorXd& upper) const {
   Eigen::VectorXd g = Eigen::VectorXd::Zero(q.size());
-  if (gain <= 0.0) return g;
+  addGradient(q, lower, upper, g);
+  return g;
+}
+
+void JointLimitCentring::addGradient(const Eigen::VectorXd& q, const Eigen::VectorXd& lower,
+                                     const Eigen::VectorXd& upper, Eigen::Ref<Eigen::VectorXd> out) const {
+  if (gain <= 0.0) return;
   for (int i = 0; i < q.size(); ++i) {
     const double ul = proximity(q[i] - lower[i], influence, stop), uu = proximity(upper[i] - q[i], influence, stop);
     // d/dq of (rho - s) u^3 / 3: du/dq = -1/(rho - s) for the lower side (margin q - lower),
     // +1/(rho - s) for the upper side; zero where u is clamped at 1 (beyond the stop) is
     // replaced by the value at the stop so that the push does not vanish there.
-    g[i] = gain * (uu * uu - ul * ul);
+    out[i] += gain * (uu * uu - ul * ul);
   }
-  return g;
 }
 
 }  // namespace ehc_control

@@ -156,6 +156,7 @@ struct EhcQpController::Solver {
   Eigen::MatrixXd row_a;              ///< obstacle damper rows, one per column
   std::vector<double> row_b;
   int n_rows = 0;
+  std::vector<std::pair<double, const ObstaclePair*>> nearest;  ///< this cycle's obstacle pairs, nearest first
   /// Obstacle pair links resolved to tree indices and stop distances once: the entry of the
   /// pair at position k stays valid while the pair at k names the same link.
   struct PairLink {
@@ -233,32 +234,45 @@ ControllerCommand EhcQpController::fail(ControllerCommand c, const std::string& 
   return c;
 }
 
-std::vector<const ObstaclePair*> EhcQpController::nearestObstaclePairs(const std::vector<ObstaclePair>& obstacles,
-                                                                       std::string* bad_pair) const {
-  std::vector<const ObstaclePair*> in_range;
+void EhcQpController::nearestObstaclePairs(const std::vector<ObstaclePair>& obstacles,
+                                           std::vector<std::pair<double, const ObstaclePair*>>* ranked,
+                                           std::string* bad_pair) const {
+  ranked->clear();
   for (const ObstaclePair& o : obstacles) {
     if (!(std::isfinite(o.distance) && o.link_point.allFinite() && o.normal.allFinite())) {
       *bad_pair = "non-finite obstacle pair for link '" + o.link + "'";
-      return {};
+      ranked->clear();
+      return;
     }
     if (o.distance >= params_.obstacle_influence) continue;
     if (!model_->hasLink(o.link)) {
       *bad_pair = "obstacle pair for unknown link '" + o.link + "'";
-      return {};
+      ranked->clear();
+      return;
     }
     if (o.normal.norm() < 1e-9) {
       *bad_pair = "obstacle pair with a zero normal for link '" + o.link + "'";
-      return {};
+      ranked->clear();
+      return;
     }
-    in_range.push_back(&o);
+    // Margin to the link's stop distance, looked up once per pair (not per comparison).
+    ranked->emplace_back(o.distance - params_.obstacleStop(o.link), &o);
   }
-  const std::size_t keep = std::min(in_range.size(), static_cast<std::size_t>(params_.max_obstacle_rows));
-  // Nearest first: smallest margin to the link's stop distance; ties keep the input order.
-  auto margin = [this](const ObstaclePair* o) { return o->distance - params_.obstacleStop(o->link); };
-  std::stable_sort(in_range.begin(), in_range.end(),
-                   [&](const ObstaclePair* a, const ObstaclePair* b) { return margin(a) < margin(b); });
-  in_range.resize(keep);
-  return in_range;
+  const std::size_t keep = std::min(ranked->size(), static_cast<std::size_t>(params_.max_obstacle_rows));
+  // Nearest first: smallest margin; ties keep the input order.
+  std::stable_sort(ranked->begin(), ranked->end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  ranked->resize(keep);
+}
+
+std::vector<const ObstaclePair*> EhcQpController::nearestObstaclePairs(const std::vector<ObstaclePair>& obstacles,
+                                                                       std::string* bad_pair) const {
+  std::vector<std::pair<double, const ObstaclePair*>> ranked;
+  nearestObstaclePairs(obstacles, &ranked, bad_pair);
+  std::vector<const ObstaclePair*> out;
+  out.reserve(ranked.size());
+  for (const auto& r : ranked) out.push_back(r.second);
+  return out;
 }
 
 ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q,
@@ -347,8 +361,8 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
                           : 1.0;
   c.segment(nb, na) = -params_.manipulability_gain * fade * s.Jm + params_.posture_gain * (q - rc.arm_ready);
   if (params_.limit_centring_gain > 0.0)
-    c.segment(nb, na) += JointLimitCentring{params_.limit_centring_gain, params_.joint_influence, params_.joint_stop}
-                             .gradient(q, rc.arm_lower, rc.arm_upper);
+    JointLimitCentring{params_.limit_centring_gain, params_.joint_influence, params_.joint_stop}
+        .addGradient(q, rc.arm_lower, rc.arm_upper, c.segment(nb, na));
 
   // --- bounds
   Eigen::VectorXd& ub = s.ub;
@@ -383,17 +397,18 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
   }
 
   // --- obstacle velocity dampers, one row per link-obstacle pair closer than d_i
-  if (s.row_a.rows() != nx || s.row_a.cols() < static_cast<Eigen::Index>(obstacles.size()))
-    s.row_a.resize(nx, static_cast<Eigen::Index>(obstacles.size()));
-  s.row_b.resize(obstacles.size());
-  if (s.pair_links.size() < obstacles.size()) s.pair_links.resize(obstacles.size());
+  std::string bad_pair;
+  nearestObstaclePairs(obstacles, &s.nearest, &bad_pair);
+  if (!bad_pair.empty()) return fail(out, bad_pair);
+  const std::size_t n_pairs = s.nearest.size();  // <= max_obstacle_rows: buffers grow only
+  if (s.row_a.rows() != nx || s.row_a.cols() < static_cast<Eigen::Index>(n_pairs))
+    s.row_a.resize(nx, static_cast<Eigen::Index>(std::max<std::size_t>(n_pairs, 1)));
+  if (s.row_b.size() < n_pairs) s.row_b.resize(n_pairs);
+  if (s.pair_links.size() < n_pairs) s.pair_links.resize(n_pairs);
   s.n_rows = 0;
   const double di = params_.obstacle_influence;
-  std::string bad_pair;
-  const std::vector<const ObstaclePair*> nearest = nearestObstaclePairs(obstacles, &bad_pair);
-  if (!bad_pair.empty()) return fail(out, bad_pair);
-  for (std::size_t k = 0; k < nearest.size(); ++k) {
-    const ObstaclePair& o = *nearest[k];
+  for (std::size_t k = 0; k < n_pairs; ++k) {
+    const ObstaclePair& o = *s.nearest[k].second;
     Solver::PairLink& link = s.pair_links[k];  // link index and d_s, cached per row
     if (link.index < 0 || link.name != o.link) {
       link.name = o.link;
