@@ -13,7 +13,7 @@
 //   - lock-step: a ROS-time timer publishes zeros (STOPPED) when no cycle ran for
 //     watchdog.state_timeout (state lost while /clock runs);
 //   - every mode: a wall-clock timer publishes zeros when no cycle ran for node.wall_timeout
-//     wall seconds (ROS time stands still: a dead simulator stops /clock as well).
+//     wall seconds while ROS time stood still as long (a dead simulator stops /clock as well).
 // In timer mode the timer cycle itself stops within the timeout + one cycle period.
 
 #include "ehc_msgs/ControllerStatus.h"
@@ -105,8 +105,18 @@ class ControllerNode {
         publish(cycle_.stopped(now.toSec(), why.str()), now, false);
       });
     wall_timer_ = nh.createWallTimer(ros::WallDuration(node_.wall_timeout / 10.0), [this](const ros::WallTimerEvent&) {
-      const double idle = (ros::WallTime::now() - last_cycle_wall_).toSec();
-      if (last_cycle_wall_.isZero() || idle <= node_.wall_timeout) return;
+      // Only while ROS time stands still: when it runs (however slowly, e.g. a lock-step
+      // simulator under load) the ROS-time watchdogs above decide, on ROS time.
+      const ros::WallTime wall = ros::WallTime::now();
+      const ros::Time ros_now = ros::Time::now();
+      if (ros_now != last_ros_time_) {
+        last_ros_time_ = ros_now;
+        last_ros_advance_wall_ = wall;
+        return;
+      }
+      const double idle = (wall - last_cycle_wall_).toSec();
+      const double frozen = (wall - last_ros_advance_wall_).toSec();
+      if (last_cycle_wall_.isZero() || idle <= node_.wall_timeout || frozen <= node_.wall_timeout) return;
       std::ostringstream why;
       why << "no control cycle for " << idle << " wall s (ROS time " << ros::Time::now().toSec()
           << " stands still? simulator dead?)";
@@ -239,6 +249,8 @@ class ControllerNode {
   ros::Time pending_, odom_stamp_;
   ros::Time last_cycle_, answered_;  ///< ROS time of the last cycle; the stamp it answered
   ros::WallTime last_cycle_wall_;
+  ros::Time last_ros_time_;               ///< ROS time seen by the wall-clock watchdog
+  ros::WallTime last_ros_advance_wall_;   ///< wall time at which ROS time last moved
 };
 
 }  // namespace
