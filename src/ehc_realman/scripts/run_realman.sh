@@ -4,7 +4,8 @@
 #
 #   run_realman.sh [--dry-run] [COMPONENT...]
 #
-# COMPONENT: arm | base | perception | controller | robot (= arm base) | all (default)
+# COMPONENT: arm | base | perception | controller | sequencer | robot (= arm base)
+#            | all (= arm base perception controller, the default)
 #   arm         rm_arm_adapter       /arm/joint_velocity_cmd -> /rm_driver/JointPos
 #               robot_state_publisher /joint_states + URDF -> tf base_link -> ... -> camera
 #                                    (Debian ros-robot-state-publisher; the tag, grasp and
@@ -12,6 +13,9 @@
 #   base        water2_base_bridge   /cmd_vel -> Water2 joy_control, robot_status -> /odom + tf
 #   perception  ehc_tag_node, ehc_grasp_node, ehc_obstacle_node (camera-facing nodes)
 #   controller  ehc_controller_node  /cmd_vel + /arm/joint_velocity_cmd
+#   sequencer   ehc_grasp_sequencer_node (the grasping task: targets, gripper through
+#               /arm/gripper/set); never in `all`. It exits when every object is handled: the
+#               script then stops every node and exits 0 (1 if the sequencer failed).
 # The vendor rm_driver and the D435 driver are not started here (see REALMAN.md).
 #
 # Environment (defaults in brackets):
@@ -24,6 +28,10 @@
 #   CONTROLLER_CONFIG  controller YAML (node.trigger: timer)  [config/realman/controller.yaml]
 #   CONTROLLER_MODE    ehc | neo_e | neo_c | tsmm          [the YAML's controller.mode]
 #   TAG_CONFIG, GRASP_CONFIG, OBSTACLE_CONFIG  perception YAMLs       [config/perception/*.yaml]
+#                      TAG_CONFIG may list several files (space-separated): one tag node each,
+#                      named ehc_tag_<file name without .yaml> (e.g. one per object)
+#   SEQUENCER_CONFIG   grasp sequencer YAML        [config/realman/rehearsal_grasp_sequencer.yaml]
+#   SEQUENCER_SUMMARY  the sequencer's JSON summary          [$LOG_DIR/grasp_summary.json]
 #   LOG_DIR            one log file per node                        [$HOME/.ros/ehc_realman]
 #   ROS_MASTER_URI, ROS_IP  as usual (the master runs on the robot computer)
 #
@@ -31,8 +39,8 @@
 # parameter server (/<node name>, e.g. /ehc_controller_node) is deleted, so that it gets exactly
 # this run's overrides (an earlier CONTROLLER_MODE=tsmm does not stay in force).
 # Every node is started in the background; Ctrl-C (or any node exiting) stops all the nodes
-# this script started, by their process ids. Exit code: 0 on Ctrl-C, 1 if a node died, 2 on a
-# usage or set-up error.
+# this script started, by their process ids. Exit code: 0 on Ctrl-C or when the sequencer
+# completed, 1 if a node died (or the sequencer failed), 2 on a usage or set-up error.
 set -o pipefail
 
 usage() { awk 'NR == 1 { next } /^#/ { sub(/^# ?/, ""); print; next } { exit }' "$0"; }
@@ -43,7 +51,7 @@ for arg in "$@"; do
   case "$arg" in
     --dry-run) DRY_RUN=1 ;;
     -h|--help) usage; exit 0 ;;
-    arm|base|perception|controller) COMPONENTS+=("$arg") ;;
+    arm|base|perception|controller|sequencer) COMPONENTS+=("$arg") ;;
     robot) COMPONENTS+=(arm base) ;;
     all) COMPONENTS+=(arm base perception controller) ;;
     *) echo "run_realman.sh: unknown argument '$arg'" >&2; usage >&2; exit 2 ;;
@@ -75,12 +83,14 @@ TAG_CONFIG="${TAG_CONFIG:-config/perception/tag_node.yaml}"
 GRASP_CONFIG="${GRASP_CONFIG:-config/perception/grasp_node.yaml}"
 OBSTACLE_CONFIG="${OBSTACLE_CONFIG:-config/perception/obstacle_node.yaml}"
 LOG_DIR="${LOG_DIR:-${HOME:-/tmp}/.ros/ehc_realman}"
+SEQUENCER_CONFIG="${SEQUENCER_CONFIG:-config/realman/rehearsal_grasp_sequencer.yaml}"
+SEQUENCER_SUMMARY="${SEQUENCER_SUMMARY:-$LOG_DIR/grasp_summary.json}"
 
 # ---------------------------------------------------------------- the node list
 # Each entry: "package executable arg..." (arguments in rosrun form).
 # Fixed start order whatever the argument order: drivers' adapters first, controller last.
 NODES=()
-for c in arm base perception controller; do
+for c in arm base perception controller sequencer; do
   [[ " ${COMPONENTS[*]} " == *" $c "* ]] || continue
   case "$c" in
     arm)
@@ -95,7 +105,15 @@ for c in arm base perception controller; do
       [ -n "${WATER2_PORT:-}" ] && n+=" _port:=$WATER2_PORT"
       NODES+=("$n") ;;
     perception)
-      NODES+=("ehc_perception ehc_tag_node _config:=$TAG_CONFIG")
+      read -r -a tag_configs <<<"$TAG_CONFIG"
+      if [ ${#tag_configs[@]} -eq 1 ]; then
+        NODES+=("ehc_perception ehc_tag_node _config:=$TAG_CONFIG")
+      else
+        for t in "${tag_configs[@]}"; do
+          t_name="$(basename "$t" .yaml)"
+          NODES+=("ehc_perception ehc_tag_node _config:=$t __name:=ehc_${t_name#ehc_}")
+        done
+      fi
       NODES+=("ehc_perception ehc_grasp_node _config:=$GRASP_CONFIG")
       NODES+=("ehc_perception ehc_obstacle_node _config:=$OBSTACLE_CONFIG") ;;
     controller)
@@ -106,6 +124,8 @@ for c in arm base perception controller; do
       # OBSTACLES_STALE until /ehc/obstacles arrives; never do this next to people).
       [ "${REQUIRE_OBSTACLES:-1}" = 0 ] && n+=" _require_obstacles:=false"
       NODES+=("$n") ;;
+    sequencer)
+      NODES+=("ehc_bringup ehc_grasp_sequencer_node _config:=$SEQUENCER_CONFIG _summary:=$SEQUENCER_SUMMARY") ;;
   esac
 done
 
@@ -170,11 +190,19 @@ stop_all() {
 trap 'echo; echo "run_realman.sh: stopping"; stop_all; exit 0' INT TERM
 trap 'stop_all' EXIT
 
-# Node names: each executable's ros::init name (no __name remaps here), under ROS_NAMESPACE.
+# Node names: the __name:= remap if any, else the executable's ros::init name, under ROS_NAMESPACE.
 node_ns() { local ns="${ROS_NAMESPACE:-}"; ns="${ns#/}"; ns="${ns%/}"; echo "${ns:+/$ns}/$1"; }
+node_name() {  # node_name EXE ARGS...
+  local name="$1" a
+  shift
+  for a in "$@"; do case "$a" in __name:=*) name="${a#__name:=}" ;; esac; done
+  echo "$name"
+}
 for n in "${NODES[@]}"; do
   read -r pkg exe args <<<"$n"
-  ns="$(node_ns "$exe")"
+  # shellcheck disable=SC2086
+  name="$(node_name "$exe" $args)"
+  ns="$(node_ns "$name")"
   if rosparam list "$ns" 2>/dev/null | grep -q .; then
     rosparam delete "$ns" || { echo "run_realman.sh: cannot delete the parameters $ns" >&2; exit 2; }
   fi
@@ -186,12 +214,12 @@ for n in "${NODES[@]}"; do
       rosparam set -t "$urdf" "${ns%/*}/robot_description" ||
       { echo "run_realman.sh: cannot set robot_description from $ROBOT_YAML" >&2; exit 2; }
   fi
-  log="$LOG_DIR/$exe.log"
+  log="$LOG_DIR/$name.log"
   # shellcheck disable=SC2086
   rosrun "$pkg" "$exe" $args >"$log" 2>&1 &
   PIDS+=($!)
-  NAMES+=("$exe")
-  echo "started $exe (pid $!, log $log): rosrun $n"
+  NAMES+=("$name")
+  echo "started $name (pid $!, log $log): rosrun $n"
 done
 
 # Any node exiting is an error: stop everything (the robot must not run half-controlled).
@@ -200,6 +228,12 @@ while :; do
     if ! kill -0 "${PIDS[$i]}" 2>/dev/null; then
       wait "${PIDS[$i]}"
       rc=$?
+      if [ "${NAMES[$i]}" = ehc_grasp_sequencer_node ]; then
+        # The task's end, not a fault: every object handled (summary in SEQUENCER_SUMMARY).
+        echo "run_realman.sh: the grasp sequencer finished (code $rc, summary $SEQUENCER_SUMMARY); stopping the others."
+        stop_all
+        exit $(( rc == 0 ? 0 : 1 ))
+      fi
       echo "run_realman.sh: ${NAMES[$i]} exited (code $rc); stopping the others." >&2
       echo "  last lines of $LOG_DIR/${NAMES[$i]}.log:" >&2
       tail -n 5 "$LOG_DIR/${NAMES[$i]}.log" >&2

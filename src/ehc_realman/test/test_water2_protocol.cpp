@@ -124,3 +124,51 @@ TEST(Water2BridgeConfig, RejectsUnsafeValuesNamingTheField) {
   expect_fail("  port: 70000\n", "port");
   expect_fail("  command_timeout: slow\n", "command_timeout");
 }
+
+// The base's side (hardware stand-in, fake server): requests formatted by the bridge's client
+// side come out of the splitter whole, back to back or cut anywhere, and the base's replies
+// parse on the client side.
+TEST(Water2Protocol, BaseSideSplitsAndParsesWhatTheClientSends) {
+  const std::string stream = "garbage" + joyControlRequest(0.25, -0.5) + robotStatusRequest() +
+                             joyControlRequest(-0.1, 0.0) + "\n" + "/api/unknown?x=1\n";
+  for (std::size_t cut = 0; cut <= stream.size(); ++cut) {
+    Water2RequestSplitter splitter;
+    std::vector<std::string> out;
+    std::string r;
+    splitter.feed(stream.data(), cut);
+    while (splitter.next(r)) out.push_back(r);
+    splitter.feed(stream.data() + cut, stream.size() - cut);
+    while (splitter.next(r)) out.push_back(r);
+    ASSERT_EQ(out.size(), 4u) << "cut at " << cut;
+    const Water2Request joy = parseWater2Request(out[0]);
+    EXPECT_TRUE(joy.joy);
+    EXPECT_EQ(joy.command, "/api/joy_control");
+    EXPECT_DOUBLE_EQ(joy.linear, 0.25);
+    EXPECT_DOUBLE_EQ(joy.angular, -0.5);
+    EXPECT_EQ(parseWater2Request(out[1]).command, "/api/robot_status");
+    EXPECT_FALSE(parseWater2Request(out[1]).joy);
+    EXPECT_DOUBLE_EQ(parseWater2Request(out[2]).linear, -0.1);
+    EXPECT_EQ(parseWater2Request(out[3]).command, "/api/unknown");
+  }
+  // A joy_control cut inside its last number waits for the rest.
+  Water2RequestSplitter splitter;
+  const std::string joy = joyControlRequest(0.25, -0.5);
+  splitter.feed(joy.data(), joy.size() - 2);
+  std::string r;
+  EXPECT_FALSE(splitter.next(r));
+  EXPECT_FALSE(parseWater2Request("/api/joy_control?angular_velocity=nan&linear_velocity=0.1").joy);
+  EXPECT_FALSE(parseWater2Request("/api/joy_control?angular_velocity=0.1&linear_velocity=0.1x").joy);
+
+  const Water2Reply status = parseWater2Reply(
+      water2ResponseJson("/api/robot_status", "OK", "", Water2Pose{1.5, -2.0, 0.25}));
+  EXPECT_TRUE(status.ok());
+  EXPECT_EQ(status.command, "/api/robot_status");
+  ASSERT_TRUE(status.pose.has_value());
+  EXPECT_DOUBLE_EQ(status.pose->x, 1.5);
+  EXPECT_DOUBLE_EQ(status.pose->y, -2.0);
+  EXPECT_DOUBLE_EQ(status.pose->theta, 0.25);
+  const Water2Reply error = parseWater2Reply(water2ResponseJson("/api/joy_control", "ESTOP", "say \"stop\""));
+  EXPECT_FALSE(error.ok());
+  EXPECT_EQ(error.error_message, "say \"stop\"");
+  EXPECT_FALSE(error.pose.has_value());
+}

@@ -8,6 +8,8 @@
 
 #include "wall_clock.h"
 
+#include "ehc_realman/water2_protocol.h"
+
 #include <arpa/inet.h>
 #include <netinet/in.h>
 #include <poll.h>
@@ -19,7 +21,7 @@
 #include <cmath>
 #include <cstdio>
 #include <mutex>
-#include <regex>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -106,7 +108,6 @@ class FakeWater2Server {
  private:
   void loop() {
     double last = now();
-    std::string in;
     while (running_) {
       pollfd fds[2] = {{listen_fd_, POLLIN, 0}, {client_fd_, POLLIN, 0}};
       ::poll(fds, client_fd_ >= 0 ? 2 : 1, 5);
@@ -119,7 +120,7 @@ class FakeWater2Server {
           if (client_fd_ >= 0) ::close(client_fd_);
           client_fd_ = fd;
           ++connections_;
-          in.clear();
+          splitter_.clear();
         }
       }
       if (client_fd_ >= 0 && (fds[1].revents & (POLLIN | POLLHUP | POLLERR))) {
@@ -130,40 +131,10 @@ class FakeWater2Server {
           client_fd_ = -1;
           continue;
         }
-        in.append(buf, static_cast<std::size_t>(n));
-        for (const std::string& r : splitRequests(in)) handle(r, t);
+        splitter_.feed(buf, static_cast<std::size_t>(n));
+        std::string r;
+        while (splitter_.next(r)) handle(r, t);
       }
-    }
-  }
-
-  /// Requests start with "/api/"; the vendor protocol has no terminator, so a request is
-  /// complete when the next one starts or when it matches its full fixed format.
-  static std::vector<std::string> splitRequests(std::string& in) {
-    static const std::regex complete_joy(
-        R"(/api/joy_control\?angular_velocity=-?\d+\.\d{4}&linear_velocity=-?\d+\.\d{4}\s*)");
-    std::vector<std::string> out;
-    for (;;) {
-      const auto start = in.find("/api/");
-      if (start == std::string::npos) {
-        in.clear();
-        return out;
-      }
-      const auto next = in.find("/api/", start + 5);
-      std::string r = in.substr(start, next == std::string::npos ? std::string::npos : next - start);
-      if (next == std::string::npos) {
-        const bool whole = std::regex_match(r, complete_joy) ||
-                           r.find("/api/robot_status") == 0 ||
-                           (!r.empty() && r.back() == '\n');
-        if (!whole) {
-          in.erase(0, start);
-          return out;
-        }
-        in.clear();
-      } else {
-        in.erase(0, next);
-      }
-      while (!r.empty() && std::isspace(static_cast<unsigned char>(r.back()))) r.pop_back();
-      out.push_back(r);
     }
   }
 
@@ -176,21 +147,16 @@ class FakeWater2Server {
   }
 
   void handle(const std::string& text, double t) {
+    const ehc_realman::Water2Request parsed = ehc_realman::parseWater2Request(text);
     Request r;
     r.time = t;
-    r.text = text;
+    r.text = parsed.text;
     r.connection = connections_;
-    const std::string command = text.substr(0, text.find('?'));
-    if (command == "/api/joy_control") {
-      double w = NAN, v = NAN;
-      if (std::sscanf(text.c_str(), "/api/joy_control?angular_velocity=%lf&linear_velocity=%lf",
-                      &w, &v) == 2) {
-        r.joy = true;
-        r.linear = v;
-        r.angular = w;
-      }
-    }
-    std::string pose_json;
+    r.joy = parsed.joy;
+    r.linear = parsed.linear;
+    r.angular = parsed.angular;
+    const std::string& command = parsed.command;
+    ehc_realman::Water2Pose pose;
     {
       std::lock_guard<std::mutex> lock(mutex_);
       requests_.push_back(r);
@@ -199,23 +165,19 @@ class FakeWater2Server {
         joy_w_ = r.angular;
         joy_time_ = t;
       }
-      char buf[160];
-      std::snprintf(buf, sizeof(buf), R"({"x":%.6f,"y":%.6f,"theta":%.6f})", x_, y_, theta_);
-      pose_json = buf;
+      pose = ehc_realman::Water2Pose{x_, y_, theta_};
     }
-    reply(command, pose_json);
+    reply(command, pose);
   }
 
-  void reply(const std::string& command, const std::string& pose_json) {
+  void reply(const std::string& command, const ehc_realman::Water2Pose& pose) {
     std::string out;
     const std::string head = R"({"type":"response","command":")" + command + R"(","uuid":"",)";
     switch (mode_.load()) {
       case ReplyMode::Normal:
-        out = head + R"("status":"OK","error_message":"")";
-        if (command == "/api/robot_status")
-          out += R"(,"results":{"move_status":"idle","charge_state":false,"power_percent":87,)"
-                 R"("current_pose":)" + pose_json + "}";
-        out += "}";
+        out = ehc_realman::water2ResponseJson(
+            command, "OK", "", command == "/api/robot_status" ? std::optional<ehc_realman::Water2Pose>(pose)
+                                                              : std::nullopt);
         break;
       case ReplyMode::Garbage: out = "HTTP/1.1 500 oops\r\n\r\n<html>not json</html>\n"; break;
       case ReplyMode::Truncated: out = head + R"("status":"O)"; break;
@@ -248,6 +210,7 @@ class FakeWater2Server {
   std::atomic<ReplyMode> mode_{ReplyMode::Normal};
   std::atomic<int> connections_{0};
   std::thread thread_;
+  ehc_realman::Water2RequestSplitter splitter_;
   mutable std::mutex mutex_;
   std::vector<Request> requests_;
   double x_ = 0.0, y_ = 0.0, theta_ = 0.0;

@@ -252,4 +252,102 @@ bool JsonObjectSplitter::next(std::string& object) {
   return true;
 }
 
+// ---------------------------------------------------------------- the base's side
+Water2Request parseWater2Request(const std::string& text) {
+  Water2Request r;
+  r.text = text;
+  while (!r.text.empty() && std::isspace(static_cast<unsigned char>(r.text.back()))) r.text.pop_back();
+  r.command = r.text.substr(0, r.text.find('?'));
+  if (r.command == "/api/joy_control") {
+    double w = NAN, v = NAN;
+    char tail = 0;
+    if (std::sscanf(r.text.c_str(), "/api/joy_control?angular_velocity=%lf&linear_velocity=%lf%c", &w, &v,
+                    &tail) == 2 &&
+        std::isfinite(w) && std::isfinite(v)) {
+      r.joy = true;
+      r.linear = v;
+      r.angular = w;
+    }
+  }
+  return r;
+}
+
+namespace {
+/// A complete request without a terminator: its full fixed format.
+bool completeWithoutTerminator(const std::string& r) {
+  if (r == "/api/robot_status") return true;
+  double w = 0.0, v = 0.0;
+  int end = 0;
+  if (std::sscanf(r.c_str(), "/api/joy_control?angular_velocity=%lf&linear_velocity=%lf%n", &w, &v, &end) != 2)
+    return false;
+  const auto decimals = [&](std::size_t from) {  // 4 decimals after the last '.' before `from`
+    const std::size_t dot = r.rfind('.', from);
+    return dot != std::string::npos && from - dot == 5;
+  };
+  return static_cast<std::size_t>(end) == r.size() && decimals(r.size()) && decimals(r.find('&'));
+}
+}  // namespace
+
+void Water2RequestSplitter::feed(const char* data, std::size_t size) {
+  buffer_.append(data, size);
+  split();
+  if (buffer_.size() > max_request_bytes_) buffer_.clear();  // no request is that long
+}
+
+void Water2RequestSplitter::split() {
+  for (;;) {
+    const auto start = buffer_.find("/api/");
+    if (start == std::string::npos) {
+      // Keep a possible beginning of "/api/" at the end.
+      buffer_.erase(0, buffer_.size() > 4 ? buffer_.size() - 4 : 0);
+      return;
+    }
+    const auto next = buffer_.find("/api/", start + 5);
+    std::string r = buffer_.substr(start, next == std::string::npos ? std::string::npos : next - start);
+    if (next == std::string::npos) {
+      std::string trimmed = r;
+      while (!trimmed.empty() && std::isspace(static_cast<unsigned char>(trimmed.back()))) trimmed.pop_back();
+      if (!completeWithoutTerminator(trimmed) && (r.empty() || r.back() != '\n')) {
+        buffer_.erase(0, start);
+        return;
+      }
+      buffer_.clear();
+    } else {
+      buffer_.erase(0, next);
+    }
+    while (!r.empty() && std::isspace(static_cast<unsigned char>(r.back()))) r.pop_back();
+    ready_.push_back(r);
+  }
+}
+
+bool Water2RequestSplitter::next(std::string& request) {
+  if (ready_.empty()) return false;
+  request = std::move(ready_.front());
+  ready_.pop_front();
+  return true;
+}
+
+std::string water2ResponseJson(const std::string& command, const std::string& status,
+                               const std::string& error_message, const std::optional<Water2Pose>& pose) {
+  const auto quoted = [](const std::string& s) {
+    std::string out = "\"";
+    for (const char c : s) {
+      if (c == '"' || c == '\\') out += '\\';
+      if (static_cast<unsigned char>(c) >= 0x20) out += c;
+    }
+    return out + "\"";
+  };
+  std::string out = R"({"type":"response","command":)" + quoted(command) + R"(,"uuid":"","status":)" +
+                    quoted(status) + R"(,"error_message":)" + quoted(error_message);
+  if (pose) {
+    char buf[192];
+    std::snprintf(buf, sizeof(buf),
+                  R"(,"results":{"move_status":"idle","charge_state":false,"power_percent":87,)"
+                  R"("current_pose":{"x":%.6f,"y":%.6f,"theta":%.6f}})",
+                  pose->x, pose->y, pose->theta);
+    out += buf;
+  }
+  return out + "}";
+}
+
 }  // namespace ehc_realman

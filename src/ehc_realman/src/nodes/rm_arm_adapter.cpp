@@ -9,6 +9,8 @@
 // Subscribes: /joint_states (sensor_msgs/JointState), /arm/joint_velocity_cmd,
 //   /arm/emergency_stop (std_msgs/Bool, true latches), /arm/emergency_stop_reset (std_msgs/Empty),
 //   /arm/gripper/command (std_msgs/String: open|close|pick), /arm/gripper/width (std_msgs/Float64, m)
+// Service: /arm/gripper/set (std_srvs/SetBool: true = "pick", false = "open"; the grasp
+//   sequencer's gripper_service)
 // Publishes: /rm_driver/JointPos, /rm_driver/Emergency_Stop (latched), /rm_driver/Gripper_Set,
 //   /rm_driver/Gripper_Pick, /arm/adapter_status (diagnostic_msgs/DiagnosticStatus)
 
@@ -27,6 +29,7 @@
 #include <std_msgs/Empty.h>
 #include <std_msgs/Float64.h>
 #include <std_msgs/String.h>
+#include <std_srvs/SetBool.h>
 
 #include <atomic>
 #include <chrono>
@@ -68,6 +71,7 @@ class RmArmAdapterNode {
     subs_.push_back(nh.subscribe("/arm/emergency_stop_reset", 10, &RmArmAdapterNode::onReset, this));
     subs_.push_back(nh.subscribe("/arm/gripper/command", 10, &RmArmAdapterNode::onGripperCommand, this));
     subs_.push_back(nh.subscribe("/arm/gripper/width", 10, &RmArmAdapterNode::onGripperWidth, this));
+    gripper_srv_ = nh.advertiseService("/arm/gripper/set", &RmArmAdapterNode::onGripperSet, this);
     status_timer_ = nh.createSteadyTimer(ros::WallDuration(1.0 / config_.status_rate_hz),
                                          [this](const ros::SteadyTimerEvent&) { publishStatus(); });
     stream_thread_ = std::thread([this] { streamLoop(); });
@@ -154,6 +158,20 @@ class RmArmAdapterNode {
     }
   }
 
+  /// The grasp sequencer's gripper service: close = "pick" (grip with force), open = "open".
+  bool onGripperSet(std_srvs::SetBool::Request& req, std_srvs::SetBool::Response& res) {
+    try {
+      publishGripper(ehc_realman::gripperRequestFromCommand(req.data ? "pick" : "open", config_.gripper));
+      res.success = true;
+      res.message = req.data ? "pick" : "open";
+    } catch (const std::exception& e) {
+      res.success = false;
+      res.message = e.what();
+      ROS_ERROR_THROTTLE(kLogThrottle, "rm_arm_adapter: %s", e.what());
+    }
+    return true;
+  }
+
   /// Fixed-period loop on the steady clock (sleep_until keeps the period free of drift).
   void streamLoop() {
     const auto period = std::chrono::duration_cast<SteadyClock::duration>(
@@ -223,6 +241,7 @@ class RmArmAdapterNode {
   ehc_realman::JointPositionStreamer streamer_;
   ros::Publisher joint_pos_pub_, estop_pub_, gripper_set_pub_, gripper_pick_pub_, status_pub_;
   std::vector<ros::Subscriber> subs_;
+  ros::ServiceServer gripper_srv_;
   ros::SteadyTimer status_timer_;
   std::atomic<bool> running_{true};
   std::thread stream_thread_;

@@ -116,6 +116,14 @@ class Water2BaseModel {
   /// call it directly to see the base without the bridge). Executed from sent + latency.
   void joyControl(double linear, double angular, double sent);
 
+  /// A joy_control the base receives over its own API at `now` (the hardware stand-in: the real
+  /// water2_base_bridge sends it over TCP, so its latency is real). From the first one on the
+  /// modelled bridge is out of the chain: command() must not be called, advance() sends nothing.
+  void joyControlReceived(double linear, double angular, double now);
+  bool bridgeBypassed() const { return bridge_bypassed_; }
+  /// What robot_status reports now: the true pose plus the current localisation error.
+  Eigen::Vector3d statusPose(const Eigen::Vector3d& true_pose) const;
+
   /// Wheel velocity (v, w) over [now, now + dt): sends what the bridge has due at `now`, takes
   /// the joy_control in force (zero once its lifetime is over; zero inside the deadband) and
   /// moves the velocity loop towards gain x command, acceleration-limited. A wheel that is
@@ -154,6 +162,7 @@ class Water2BaseModel {
   Eigen::Vector3d localisation_error_ = Eigen::Vector3d::Zero();
   double next_status_sample_ = 0.0;  ///< s
   long joy_controls_ = 0, statuses_ = 0;
+  bool bridge_bypassed_ = false;  ///< joy_controls come from outside (joyControlReceived)
 };
 
 }  // namespace ehc_sim

@@ -47,6 +47,13 @@ class KinematicFakeRobot {
   /// this step's /cmd_vel into the Water2 chain (the bridge scales it keeping the turn radius).
   void step(const Eigen::VectorXd& command, double dt);
 
+  /// Water2 only (throws otherwise): a joy_control the base receives over its API now (the
+  /// hardware stand-in's Water2ApiServer). From then on step()'s base command must be zero: the
+  /// base executes only what arrives here (Water2BaseModel::joyControlReceived).
+  void joyControlReceived(double linear, double angular);
+  /// Water2 only: what the base's robot_status reports now (map pose = true pose + error).
+  Eigen::Vector3d statusPose() const;
+
   /// The true base pose (x, y, yaw) in the world (= odom at time 0).
   const Eigen::Vector3d& basePose() const { return base_; }
   /// What /odom reports (the controller's base pose): ideal = basePose(); water2 = the bridge's

@@ -71,6 +71,8 @@ class SimWorld {
   const StepReport& step(const Eigen::VectorXd& command);
   /// Teleports the robot (tests, tools); objects are untouched. Does not advance time.
   void setRobotState(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q);
+  /// The Water2 base's own API (hardware stand-in): KinematicFakeRobot::joyControlReceived.
+  void baseJoyControlReceived(double linear, double angular) { robot_.joyControlReceived(linear, angular); }
   /// Open (false) / close (true) the gripper.
   void commandGripper(bool close) { gripper_.command(close); }
 

@@ -134,9 +134,24 @@ void Water2BaseModel::joyControl(double linear, double angular, double sent) {
   ++joy_controls_;
 }
 
+void Water2BaseModel::joyControlReceived(double linear, double angular, double now) {
+  if (!std::isfinite(linear) || !std::isfinite(angular))
+    throw std::invalid_argument("[Water2BaseModel] joy_control velocities must be finite");
+  bridge_bypassed_ = true;
+  commands_in_flight_.push_back({now, Eigen::Vector3d(linear, angular, 0.0)});
+  ++joy_controls_;
+}
+
+Eigen::Vector3d Water2BaseModel::statusPose(const Eigen::Vector3d& true_pose) const {
+  Eigen::Vector3d reported = true_pose + localisation_error_;
+  reported.z() = std::remainder(reported.z(), 2.0 * M_PI);
+  return reported;
+}
+
 Eigen::Vector2d Water2BaseModel::advance(double now, double dt, double deadband_linear,
                                          double deadband_angular) {
-  if (const auto twist = bridge_.due(now)) joyControl(twist->linear, twist->angular, now);
+  if (!bridge_bypassed_)
+    if (const auto twist = bridge_.due(now)) joyControl(twist->linear, twist->angular, now);
   while (!commands_in_flight_.empty() && commands_in_flight_.front().at <= now + kEps) {
     held_ = commands_in_flight_.front().value.head<2>();
     held_until_ = commands_in_flight_.front().at + params_.command_lifetime;
@@ -168,8 +183,7 @@ void Water2BaseModel::observe(const Eigen::Vector3d& true_pose, double now, std:
                                 params_.localisation_heading_sigma);
     for (int i = 0; i < 3; ++i)
       if (sigma[i] > 0.0) localisation_error_[i] = a * localisation_error_[i] + b * sigma[i] * gauss(rng);
-    Eigen::Vector3d reported = true_pose + localisation_error_;
-    reported.z() = std::remainder(reported.z(), 2.0 * M_PI);
+    const Eigen::Vector3d reported = statusPose(true_pose);
     statuses_in_flight_.push_back({next_status_sample_ + params_.status_latency, reported});
     next_status_sample_ += params_.status_period;
   }

@@ -73,7 +73,12 @@ void KinematicFakeRobot::step(const Eigen::VectorXd& command, double dt) {
   if (water2_) {
     // The unsaturated command goes to the bridge, which scales it keeping the turn radius; the
     // wheels execute what the chain makes of it (nb == 2: the Water2 is differential).
-    water2_->command(command[0], command[nb - 1], time_);
+    if (water2_->bridgeBypassed()) {
+      if (command[0] != 0.0 || command[nb - 1] != 0.0)
+        fail("the base takes joy_controls over its API (joyControlReceived): the step's base command must be zero");
+    } else {
+      water2_->command(command[0], command[nb - 1], time_);
+    }
     const Eigen::Vector2d wheel = water2_->advance(time_, dt, noise_.base_deadband_linear,
                                                    noise_.base_deadband_angular);
     v[0] = wheel[0];
@@ -120,6 +125,16 @@ void KinematicFakeRobot::step(const Eigen::VectorXd& command, double dt) {
   executed_ = v;
   time_ += dt;
   if (water2_) water2_->observe(base_, time_, rng_, gauss_);
+}
+
+void KinematicFakeRobot::joyControlReceived(double linear, double angular) {
+  if (!water2_) fail("joy_control needs the water2 base model (sim.base_model: water2)");
+  water2_->joyControlReceived(linear, angular, time_);
+}
+
+Eigen::Vector3d KinematicFakeRobot::statusPose() const {
+  if (!water2_) fail("robot_status needs the water2 base model (sim.base_model: water2)");
+  return water2_->statusPose(base_);
 }
 
 Eigen::Vector3d KinematicFakeRobot::odometryPose() const {
