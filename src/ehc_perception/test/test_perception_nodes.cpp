@@ -157,20 +157,24 @@ class PerceptionNodes : public ::testing::Test {
     cloud_ = xyzCloud<float>(pts);
   }
 
-  void publishAll(bool state_valid) {
+  /// `state_stamp_offset` (s) is added to the stamps of /joint_states and /odom (a sender's
+  /// clock offset); `state` false publishes no state at all.
+  void publishAll(bool state_valid, double state_stamp_offset = 0.0, bool state = true) {
     const ros::Time now = ros::Time::now();
     image_.header.stamp = info_.header.stamp = cloud_.header.stamp = now;
     info_pub_.publish(info_);
     image_pub_.publish(image_);
     cloud_pub_.publish(cloud_);
+    if (!state) return;
+    const ros::Time state_stamp = now + ros::Duration(state_stamp_offset);
     sensor_msgs::JointState js;
-    js.header.stamp = now;
+    js.header.stamp = state_stamp;
     js.name = {"joint1", "joint2", "joint3", "joint4", "joint5", "joint6"};
     js.position = {0.0, 0.5, -1.9, 0.0, -0.5, 0.0};
     if (!state_valid) js.position[2] = std::nan("");
     joints_pub_.publish(js);
     nav_msgs::Odometry od;
-    od.header.stamp = now;
+    od.header.stamp = state_stamp;
     od.header.frame_id = "odom";
     od.pose.pose.position.x = -0.5;
     od.pose.pose.orientation.w = 1.0;
@@ -178,11 +182,12 @@ class PerceptionNodes : public ::testing::Test {
   }
 
   /// Publishes at 20 Hz until `done()` or the deadline (seconds); true if done.
-  bool spinUntil(const std::function<bool()>& done, double seconds, bool state_valid = true) {
+  bool spinUntil(const std::function<bool()>& done, double seconds, bool state_valid = true,
+                 double state_stamp_offset = 0.0, bool state = true) {
     const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(seconds);
     ros::WallRate rate(20.0);
     while (ros::ok() && ros::WallTime::now() < end) {
-      publishAll(state_valid);
+      publishAll(state_valid, state_stamp_offset, state);
       ros::spinOnce();
       if (done()) return true;
       rate.sleep();
@@ -281,6 +286,27 @@ TEST_F(PerceptionNodes, ObstacleNodePublishesDistancesAndStopsOnABadState) {
   obstacles_.clear();
   spinUntil([] { return false; }, 1.0, /*state_valid=*/false);
   EXPECT_TRUE(obstacles_.empty()) << obstacles_.size() << " messages with a NaN state";
+}
+
+// Issue 16: the obstacle node judges the state's freshness by receipt time on its own clock
+// (like the controller's watchdogs), not by header stamps. A state stamped 10 s in the past (a
+// sender's clock offset) but arriving now is fresh: distances are published (by stamps: stale,
+// nothing). A state stamped 10 s in the future that stops arriving goes stale after the
+// timeout (by stamps it would count as fresh for 10 s more).
+TEST_F(PerceptionNodes, ObstacleNodeJudgesStateFreshnessByReceiptTime) {
+  auto anyPublished = [&] { return !obstacles_.empty(); };
+  obstacles_.clear();
+  ASSERT_TRUE(spinUntil(anyPublished, 40.0, true, /*state_stamp_offset=*/-10.0))
+      << "a live state stamped 10 s in the past was judged stale: no /ehc/obstacles";
+
+  obstacles_.clear();
+  ASSERT_TRUE(spinUntil(anyPublished, 10.0, true, +10.0)) << "a live state stamped in the future: no /ehc/obstacles";
+  // The state stops (clouds go on): after the state timeout (0.2 s) nothing more is published.
+  spinUntil([] { return false; }, 1.0, true, 0.0, /*state=*/false);
+  obstacles_.clear();
+  spinUntil([] { return false; }, 1.0, true, 0.0, /*state=*/false);
+  EXPECT_TRUE(obstacles_.empty()) << obstacles_.size()
+                                  << " /ehc/obstacles messages 1-2 s after the last (future-stamped) state";
 }
 
 // Malformed clouds (issue 16): both cloud nodes reject each with a logged reason before

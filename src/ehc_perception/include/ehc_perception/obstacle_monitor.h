@@ -5,8 +5,9 @@
 // insertions, removes the robot's own points while the state is fresh, expires the exclusion
 // list, and decides each cycle what to publish: the link-obstacle distances stamped with the
 // newest state, or nothing while the state is missing or stale (the controller's watchdog then
-// stops the robot). Times are seconds of one clock (the node passes ROS time); an input
-// without a stamp is the node's business (it passes the receipt time).
+// stops the robot). Times are seconds of one clock: the node passes each input's receipt time
+// on its own ROS clock, never a header stamp (a sender's clock offset must not make a dead state
+// look fresh), as the controller's watchdogs do.
 
 #include "ehc_control/robot_config.h"
 #include "ehc_control/whole_body_model.h"
@@ -54,7 +55,7 @@ struct ObstacleReport {
     StateStale,   ///< joint state or odometry missing or older than state_timeout: publish nothing
   };
   Status status = Status::StateStale;
-  double stamp = 0.0;  ///< newest state stamp (Publish only)
+  double stamp = 0.0;  ///< newest state time (the node: its receipt time) (Publish only)
   std::vector<LinkObstacleDistance> distances;
   bool exclusions_expired = false;  ///< the exclusion list was dropped in this update
   ObstacleDistanceField::InsertStats inserted;  ///< queued cloud points ray-cast in this update

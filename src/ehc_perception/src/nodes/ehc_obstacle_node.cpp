@@ -9,7 +9,8 @@
 // cloud does not grow with the camera's resolution) and queued with the robot's pose; each
 // timer cycle ray-casts points_per_update of them from the sensor origin (no cycle stalls on a
 // whole cloud, so the distances keep publish_rate_hz), the robot's own points removed. A timer publishes the distances of every link closer than the
-// influence distance while the state (/joint_states + /odom) is fresh; with a stale state
+// influence distance while the state (/joint_states + /odom) is fresh (judged by receipt time on
+// this node's clock, not by header stamps); with a stale state
 // nothing is published and an error is logged (the controller's watchdog then stops).
 // Exclusion spheres (ehc_msgs/ObstacleExclusion on exclusion_topic, e.g. the object being
 // grasped, sent by the grasp sequencer) are ignored by the distance queries while the list is
@@ -91,11 +92,14 @@ class ObstacleNode {
   }
 
  private:
-  /// A message's stamp in seconds; an unstamped message counts as received now.
-  static double stampOrNow(const ros::Time& stamp) { return (stamp.isZero() ? ros::Time::now() : stamp).toSec(); }
+  /// Freshness is judged by receipt time on this node's clock (ROS time: /clock in lock-step,
+  /// the wall clock on the robot), as the controller's watchdogs do, never by header stamps: a
+  /// sender's clock offset (another machine, a driver's own clock) must not make a dead state
+  /// look fresh or a live one stale.
+  static double receiptTime() { return ros::Time::now().toSec(); }
 
   void onJoints(const sensor_msgs::JointState& msg) {
-    const std::string why = monitor_.setJointState(stampOrNow(msg.header.stamp), msg.name, msg.position);
+    const std::string why = monitor_.setJointState(receiptTime(), msg.name, msg.position);
     if (!why.empty()) ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "ehc_obstacle_node: /joint_states rejected: " << why);
   }
 
@@ -105,7 +109,7 @@ class ObstacleNode {
     const double yaw = std::atan2(2.0 * (qn.w() * qn.z() + qn.x() * qn.y()),
                                   1.0 - 2.0 * (qn.y() * qn.y() + qn.z() * qn.z()));
     std::string why = qn.norm() < 1e-6 ? "zero orientation quaternion" : "";
-    if (why.empty()) why = monitor_.setBasePose(stampOrNow(msg.header.stamp), Eigen::Vector3d(p.position.x, p.position.y, yaw));
+    if (why.empty()) why = monitor_.setBasePose(receiptTime(), Eigen::Vector3d(p.position.x, p.position.y, yaw));
     if (!why.empty()) ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "ehc_obstacle_node: odometry rejected: " << why);
   }
 
@@ -123,7 +127,7 @@ class ObstacleNode {
     std::vector<ExclusionZone> zones;
     for (std::size_t i = 0; i < msg.centres.size(); ++i)
       zones.push_back({Eigen::Vector3d(msg.centres[i].x, msg.centres[i].y, msg.centres[i].z), msg.radii[i]});
-    const std::string why = monitor_.setExclusionZones(stampOrNow(msg.header.stamp), zones);
+    const std::string why = monitor_.setExclusionZones(receiptTime(), zones);
     if (!why.empty()) ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "ehc_obstacle_node: exclusion list rejected: " << why);
   }
 
