@@ -8,6 +8,7 @@
 //
 //   rosrun ehc_sim ehc_hardware_standin_node _config:=config/realman/hardware_standin.yaml
 //       [_scene:=config/scenes/table_three_objects.yaml] [_port:=31001] [_seed:=N]
+// (_free_run is accepted and meaningless here: the hardware never waits for anyone.)
 //
 // _port 0 (default): an ephemeral port; the port in use is set as the private parameter
 // ~water2_port (read it before pointing the bridge at it: WATER2_PORT=... run_realman.sh).
@@ -17,6 +18,7 @@
 // /camera/depth/points. As the simulator (metrics and the sequencer's grasp result only):
 // /sim/status, /sim/object_poses. Not published here (the real nodes do it): /odom, /tf.
 
+#include "sim_camera_streams.h"
 #include "sim_ros_conversions.h"
 
 #include "ehc_sim/hardware_stand_in.h"
@@ -33,38 +35,18 @@
 
 namespace {
 
-constexpr double kLogThrottle = 1.0;  ///< s between repeats of a throttled log message
+using ehc_sim::kLogThrottle;
 constexpr double kMaxServeWait = 0.002;  ///< s the loop blocks on the Water2 socket per turn
 
 class HardwareStandInNode {
  public:
-  HardwareStandInNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) {
-    std::string config_file;
-    if (!pnh.getParam("config", config_file))
-      throw std::invalid_argument("[ehc_hardware_standin_node] parameter _config:=<sim.yaml> is required");
-    cfg_ = ehc_sim::loadSimConfig(config_file);
-    std::string scene_file = cfg_.scene_file;
-    pnh.param("scene", scene_file, scene_file);
-    if (scene_file.empty()) throw std::invalid_argument("[ehc_hardware_standin_node] no scene: set sim.scene or _scene:=");
-    int seed = static_cast<int>(cfg_.fake_robot.seed);
-    pnh.param("seed", seed, seed);
-    if (seed < 0) throw std::invalid_argument("[ehc_hardware_standin_node] _seed must be >= 0");
-    cfg_.fake_robot.seed = static_cast<unsigned>(seed);
+  HardwareStandInNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : setup_(pnh, "ehc_hardware_standin_node") {
     int port = 0;
     pnh.param("port", port, port);
-    const ehc_control::RobotConfig robot = ehc_control::loadRobotConfig(cfg_.fake_robot.robot_file);
-    const ehc_sim::SceneConfig scene = ehc_sim::loadSceneConfig(scene_file);
-    const ehc_control::PinholeCamera intrinsics = ehc_control::loadPinholeCamera(cfg_.camera_file);
-    ROS_INFO_STREAM("[ehc_hardware_standin_node] start-up configuration\n"
-                    << cfg_.summary() << robot.summary() << "\n" << scene.summary());
-
-    world_ = std::make_unique<ehc_sim::SimWorld>(cfg_, robot, scene);
+    const ehc_control::RobotConfig& robot = setup_.robot;
+    world_ = std::make_unique<ehc_sim::SimWorld>(setup_.cfg, robot, setup_.scene);
     stand_in_ = std::make_unique<ehc_sim::HardwareStandIn>(*world_);
-    camera_ = std::make_unique<ehc_sim::SimulatedCamera>(intrinsics, cfg_.camera, cfg_.fake_robot.seed);
-    camera_->setScene(world_->bodies(), scene.floor_shade);
-    camera_frame_ = robot.camera_frame;
-    image_clock_ = ehc_sim::StreamClock(cfg_.camera.image_rate);
-    cloud_clock_ = ehc_sim::StreamClock(cfg_.camera.cloud_rate);
+    camera_ = std::make_unique<ehc_sim::SimCameraStreams>(nh, setup_, *world_);
     gate_ = std::make_unique<ehc_sim::CommandGate>(robot);  // /sim/status command fields: none here
     server_ = std::make_unique<ehc_sim::Water2ApiServer>(port);
     pnh.setParam("water2_port", server_->port());
@@ -72,9 +54,6 @@ class HardwareStandInNode {
              server_->port());
 
     joint_pub_ = nh.advertise<sensor_msgs::JointState>("/joint_states", 10);
-    image_pub_ = nh.advertise<sensor_msgs::Image>("/camera/color/image_raw", 2);
-    info_pub_ = nh.advertise<sensor_msgs::CameraInfo>("/camera/color/camera_info", 2);
-    cloud_pub_ = nh.advertise<sensor_msgs::PointCloud2>("/camera/depth/points", 2);
     objects_pub_ = nh.advertise<ehc_msgs::SimObjectPoses>("/sim/object_poses", 10);
     status_pub_ = nh.advertise<ehc_msgs::SimStatus>("/sim/status", 10);
     const ros::TransportHints fast = ros::TransportHints().tcpNoDelay();
@@ -129,21 +108,7 @@ class HardwareStandInNode {
   void publish() {
     const ros::Time stamp = ros::Time::now();
     const std::int64_t t_ns = world_->timeNs();
-    if (image_clock_.due(t_ns)) {
-      camera_->render(*world_, &image_);
-      sensor_msgs::Image img;
-      ehc_sim::fillImage(image_, camera_frame_, stamp, &img);
-      sensor_msgs::CameraInfo info;
-      ehc_sim::fillCameraInfo(camera_->intrinsics(), camera_frame_, stamp, &info);
-      image_pub_.publish(img);
-      info_pub_.publish(info);
-    }
-    if (cloud_clock_.due(t_ns)) {
-      camera_->cloud(*world_, &points_);
-      sensor_msgs::PointCloud2 cloud;
-      ehc_sim::fillCloud(points_, camera_frame_, stamp, &cloud);
-      cloud_pub_.publish(cloud);
-    }
+    camera_->publishDue(*world_, t_ns, stamp);
     sensor_msgs::JointState js;
     ehc_sim::fillJointState(world_->robot(), stamp, &js);
     joint_pub_.publish(js);
@@ -155,17 +120,13 @@ class HardwareStandInNode {
     status_pub_.publish(status);
   }
 
-  ehc_sim::SimConfig cfg_;
+  ehc_sim::BulletNodeSetup setup_;
   std::unique_ptr<ehc_sim::SimWorld> world_;
   std::unique_ptr<ehc_sim::HardwareStandIn> stand_in_;
-  std::unique_ptr<ehc_sim::SimulatedCamera> camera_;
+  std::unique_ptr<ehc_sim::SimCameraStreams> camera_;  ///< camera rates on the world's time
   std::unique_ptr<ehc_sim::CommandGate> gate_;
   std::unique_ptr<ehc_sim::Water2ApiServer> server_;
-  std::string camera_frame_;
-  vpImage<unsigned char> image_;
-  std::vector<Eigen::Vector3f> points_;
-  ehc_sim::StreamClock image_clock_, cloud_clock_;  ///< camera rates on the world's time
-  ros::Publisher joint_pub_, image_pub_, info_pub_, cloud_pub_, objects_pub_, status_pub_;
+  ros::Publisher joint_pub_, objects_pub_, status_pub_;
   std::vector<ros::Subscriber> subs_;
 };
 

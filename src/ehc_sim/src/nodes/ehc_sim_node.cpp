@@ -19,6 +19,7 @@
 // /sim/gripper (std_srvs/SetBool: true = close, false = open).
 
 #include "lock_step_node.h"
+#include "sim_camera_streams.h"
 #include "sim_ros_conversions.h"
 
 #include "ehc_msgs/ResetScene.h"
@@ -35,37 +36,16 @@ using ehc_sim::kLogThrottle;
 
 class SimNode {
  public:
-  SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
-    std::string config_file;
-    if (!pnh.getParam("config", config_file))
-      throw std::invalid_argument("[ehc_sim_node] parameter _config:=<sim.yaml> is required");
-    cfg_ = ehc_sim::loadSimConfig(config_file);
-    std::string scene_file = cfg_.scene_file;
-    pnh.param("scene", scene_file, scene_file);
-    if (scene_file.empty()) throw std::invalid_argument("[ehc_sim_node] no scene: set sim.scene or _scene:=");
-    ehc_sim::applyNodeOverrides(pnh, "ehc_sim_node", &cfg_.fake_robot);
-    const ehc_control::RobotConfig robot = ehc_control::loadRobotConfig(cfg_.fake_robot.robot_file);
-    const ehc_sim::SceneConfig scene = ehc_sim::loadSceneConfig(scene_file);
-    const ehc_control::PinholeCamera intrinsics = ehc_control::loadPinholeCamera(cfg_.camera_file);
-    ROS_INFO_STREAM("[ehc_sim_node] start-up configuration\n"
-                    << cfg_.summary() << robot.summary() << "\n"
-                    << scene.summary());
+  SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh), setup_(pnh, "ehc_sim_node") {
+    const ehc_control::RobotConfig& robot = setup_.robot;
+    world_ = std::make_unique<ehc_sim::SimWorld>(setup_.cfg, robot, setup_.scene);
+    camera_ = std::make_unique<ehc_sim::SimCameraStreams>(nh_, setup_, *world_);
 
-    world_ = std::make_unique<ehc_sim::SimWorld>(cfg_, robot, scene);
-    camera_ = std::make_unique<ehc_sim::SimulatedCamera>(intrinsics, cfg_.camera, cfg_.fake_robot.seed);
-    camera_->setScene(world_->bodies(), scene.floor_shade);
-    camera_frame_ = robot.camera_frame;
-    image_clock_ = ehc_sim::StreamClock(cfg_.camera.image_rate);
-    cloud_clock_ = ehc_sim::StreamClock(cfg_.camera.cloud_rate);
-
-    lock_step_ = std::make_unique<ehc_sim::LockStepNode>(nh_, "ehc_sim_node", robot, cfg_.fake_robot);
+    lock_step_ = std::make_unique<ehc_sim::LockStepNode>(nh_, "ehc_sim_node", robot, setup_.cfg.fake_robot);
     clock_pub_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 10);
     joint_pub_ = nh_.advertise<sensor_msgs::JointState>("/joint_states", 10);
     odom_pub_ = nh_.advertise<nav_msgs::Odometry>("/odom", 10);
     tf_pub_ = nh_.advertise<tf2_msgs::TFMessage>("/tf", 100);
-    image_pub_ = nh_.advertise<sensor_msgs::Image>("/camera/color/image_raw", 2);
-    info_pub_ = nh_.advertise<sensor_msgs::CameraInfo>("/camera/color/camera_info", 2);
-    cloud_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("/camera/depth/points", 2);
     objects_pub_ = nh_.advertise<ehc_msgs::SimObjectPoses>("/sim/object_poses", 10);
     status_pub_ = nh_.advertise<ehc_msgs::SimStatus>("/sim/status", 10);
     reset_srv_ = nh_.advertiseService("/sim/reset", &SimNode::onReset, this);
@@ -93,7 +73,7 @@ class SimNode {
     rosgraph_msgs::Clock clock;
     clock.clock = stamp;
     clock_pub_.publish(clock);
-    if (fresh) publishCamera(t_ns, stamp);
+    if (fresh) camera_->publishDue(*world_, t_ns, stamp);
     sensor_msgs::JointState js;
     ehc_sim::fillJointState(world_->robot(), stamp, &js);
     nav_msgs::Odometry odom;
@@ -113,37 +93,17 @@ class SimNode {
     joint_pub_.publish(js);  // last: the controller answers this one
   }
 
-  void publishCamera(std::int64_t t_ns, const ros::Time& stamp) {
-    if (image_clock_.due(t_ns)) {
-      camera_->render(*world_, &image_);
-      sensor_msgs::Image img;
-      ehc_sim::fillImage(image_, camera_frame_, stamp, &img);
-      sensor_msgs::CameraInfo info;
-      ehc_sim::fillCameraInfo(camera_->intrinsics(), camera_frame_, stamp, &info);
-      image_pub_.publish(img);
-      info_pub_.publish(info);
-    }
-    if (cloud_clock_.due(t_ns)) {
-      camera_->cloud(*world_, &points_);
-      sensor_msgs::PointCloud2 cloud;
-      ehc_sim::fillCloud(points_, camera_frame_, stamp, &cloud);
-      cloud_pub_.publish(cloud);
-    }
-  }
-
   bool onReset(ehc_msgs::ResetScene::Request& req, ehc_msgs::ResetScene::Response& res) {
     try {
       if (!req.scene_file.empty()) {
         const ehc_sim::SceneConfig scene = ehc_sim::loadSceneConfig(req.scene_file);
         world_->setScene(scene, req.seed);
-        camera_->setScene(world_->bodies(), scene.floor_shade);
+        camera_->reset(*world_, &scene, req.seed);
       } else {
         world_->reset(req.seed);
+        camera_->reset(*world_, nullptr, req.seed);
       }
-      camera_->reseed(req.seed);
       lock_step_->scheduler().reset();
-      image_clock_.reset();
-      cloud_clock_.reset();
       res.success = true;
       res.message = "scene '" + world_->scene().name + "' reset with seed " + std::to_string(req.seed);
       ROS_INFO_STREAM("[ehc_sim_node] " << res.message);
@@ -165,16 +125,11 @@ class SimNode {
   }
 
   ros::NodeHandle nh_;
-  ehc_sim::SimConfig cfg_;
+  ehc_sim::BulletNodeSetup setup_;
   std::unique_ptr<ehc_sim::SimWorld> world_;
-  std::unique_ptr<ehc_sim::SimulatedCamera> camera_;
+  std::unique_ptr<ehc_sim::SimCameraStreams> camera_;  ///< camera.image_rate / cloud_rate on sim time
   std::unique_ptr<ehc_sim::LockStepNode> lock_step_;  ///< callback queue, commands, stepping loop
-  std::string camera_frame_;
-  vpImage<unsigned char> image_;
-  std::vector<Eigen::Vector3f> points_;
-  ehc_sim::StreamClock image_clock_, cloud_clock_;  ///< camera.image_rate / cloud_rate on sim time
-  ros::Publisher clock_pub_, joint_pub_, odom_pub_, tf_pub_, image_pub_, info_pub_, cloud_pub_,
-      objects_pub_, status_pub_;
+  ros::Publisher clock_pub_, joint_pub_, odom_pub_, tf_pub_, objects_pub_, status_pub_;
   ros::ServiceServer reset_srv_, gripper_srv_;
 };
 
