@@ -140,8 +140,13 @@ class ControllerNode {
   }
   void onOdom(const nav_msgs::Odometry& m) {
     const auto& p = m.pose.pose;
-    const double yaw = std::atan2(2.0 * (p.orientation.w * p.orientation.z + p.orientation.x * p.orientation.y),
-                                  1.0 - 2.0 * (p.orientation.y * p.orientation.y + p.orientation.z * p.orientation.z));
+    const Eigen::Quaterniond qn(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z);
+    // A non-unit (e.g. all-zero) quaternion is bad input, as for the target: the yaw atan2
+    // would still give a number (0 for a zero quaternion) and the robot would move on it.
+    const double yaw = std::abs(qn.norm() - 1.0) > 1e-3 || !std::isfinite(qn.norm())
+                           ? std::nan("")
+                           : std::atan2(2.0 * (p.orientation.w * p.orientation.z + p.orientation.x * p.orientation.y),
+                                        1.0 - 2.0 * (p.orientation.y * p.orientation.y + p.orientation.z * p.orientation.z));
     const std::string err = cycle_.setBasePose(ros::Time::now().toSec(), Eigen::Vector3d(p.position.x, p.position.y, yaw));  // receipt time
     if (!err.empty()) ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "[ehc_controller_node] rejected /odom: " << err);
     odom_stamp_ = m.header.stamp;
