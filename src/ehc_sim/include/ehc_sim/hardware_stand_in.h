@@ -12,8 +12,10 @@
 //     acceleration limits, gain error, actuation noise); robot_status reports the map pose with
 //     its localisation error. sim.base_model must be water2.
 //   - Time: advanceTo(wall) steps the world by sim.dt until it has caught up with the wall clock
-//     (the hardware does not wait for anyone); after a stall longer than max_catch_up_steps
-//     steps the rest is skipped (counted: the world then lags the wall clock by that much).
+//     (the hardware does not wait for anyone), in one burst after a stall (a physics step is
+//     ~30 us: a 1 s stall costs a few ms); after a stall longer than max_catch_up_steps steps
+//     (default 1 s at dt 0.01) the rest is skipped (counted: the world then lags the wall
+//     clock by that much, while the bridge dead-reckons on the wall clock).
 // ROS-free.
 
 #include "ehc_realman/water2_protocol.h"
@@ -42,7 +44,7 @@ class HardwareStandIn {
   static constexpr int kGripperOpenPosition = 500;  ///< Gripper_Set position at or above: open
 
   /// `world` must outlive this and use sim.base_model water2 (throws "[HardwareStandIn] ...").
-  explicit HardwareStandIn(SimWorld& world, int max_catch_up_steps = 10);
+  explicit HardwareStandIn(SimWorld& world, int max_catch_up_steps = 100);
 
   /// Steps the world until its time has caught up with `wall_s` (s, any monotonic origin; the
   /// first call only sets the origin). Returns the number of steps done.
