@@ -13,7 +13,8 @@ breaks one input for a few seconds, followed by a probe with healthy inputs agai
 
 Counted, per case:
   crash   a node process exited (it is restarted for the next case);
-  hang    after the case a node gives no sign of life within 5 s of healthy input
+  hang    after the case a node gives no sign of life within 5 s of healthy input (a node
+          restarted after being killed on purpose: within 60 s, its start-up)
           (controller: /ehc/status, obstacle node: /ehc/obstacles, adapter: /arm/adapter_status;
           the tag and grasp nodes: their process is alive);
   unsafe  any non-finite value in /cmd_vel, /arm/joint_velocity_cmd, /rm_driver/JointPos or
@@ -45,6 +46,7 @@ WS = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
 MUST_STOP_GRACE = 0.3
 OBSTACLE_STOP_GRACE = 0.6
 PROBE_TIMEOUT = 5.0    # s of healthy input within which every node must show life again
+STARTUP_TIMEOUT = 60.0  # s for a node restarted after the case (killed on purpose): its start-up
 
 
 def free_port():
@@ -239,16 +241,17 @@ class Campaign:
                 return t - t0
         return None
 
-    def alive_after(self, t0):
-        """Every node shows life within PROBE_TIMEOUT of healthy input from t0."""
+    def alive_after(self, t0, restarted=()):
+        """Every node shows life within PROBE_TIMEOUT of healthy input from t0 (a node restarted
+        after the case: within STARTUP_TIMEOUT, its start-up is not a hang)."""
         need = {"controller": "status", "obstacle": "obstacles", "adapter": "adapter_status"}
-        end = t0 + PROBE_TIMEOUT
-        while time.monotonic() < end:
-            seen = {n for n, k in need.items() if self.window(t0, end, {k})}
-            if len(seen) == len(need):
-                return []
+        ends = {n: t0 + (STARTUP_TIMEOUT if n in restarted else PROBE_TIMEOUT) for n in need}
+        while time.monotonic() < max(ends.values()):
+            late = [n for n, k in need.items() if not self.window(t0, ends[n], {k})]
+            if not late or all(time.monotonic() > ends[n] for n in late):
+                return late
             time.sleep(0.1)
-        return [n for n, k in need.items() if not self.window(t0, end, {k})]
+        return [n for n, k in need.items() if not self.window(t0, ends[n], {k})]
 
     # ------------------------------------------------------------ cases
     def run_case(self, case):
@@ -274,9 +277,10 @@ class Campaign:
         unsafe = self.unsafe_in(t0, t1, must, case.get("grace", MUST_STOP_GRACE))
         latency = self.first_zero_after(t0) if case.get("must_stop") else None
         crashed = [n for n in self.dead() if n not in case.get("killed", [])]
-        for n in self.dead():
+        restarted = self.dead()
+        for n in restarted:
             self.start(n)
-        hung = self.alive_after(t1) if not crashed else []
+        hung = self.alive_after(t1, restarted) if not crashed else []
         result = {"case": name, "target": case["target"], "crashes": crashed, "hangs": hung,
                   "unsafe": sorted(set(unsafe)), "unsafe_count": len(unsafe),
                   "stop_latency_s": latency}
