@@ -16,6 +16,13 @@ period (0.5 s) later at the start of the approach and again at the lock; the seq
 rule decides in steps of stall_time (1 s). One stall step plus two grasp periods: 2.0 s. The
 ROS path is not bit-reproducible (perception runs outside the lock-step handshake), hence a
 tolerance and not equality. No wall-clock assertion; the .test time-limit only guards a hang.
+
+Measured (seed 1, loaded machine): ehc and tsmm agree on every object (|dt| <= 0.73 s; tsmm
+fails the back object in GRASP on both paths). neo_c and neo_e do not: their back grasp (at the
+edge of the arm's reach) succeeded on one path and failed on the other, and neo_e's middle grasp
+differed by 2.45 s. Their outcome on that object hinges on where the base stops, which the
+perception timing shifts: a per-run comparison of them measures that sensitivity, not the
+pipelines. Hence make test runs ehc and tsmm; methods:="neo_c neo_e" reproduces the rest.
 """
 import csv
 import json
