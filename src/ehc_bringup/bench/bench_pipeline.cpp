@@ -1,34 +1,51 @@
-// bench_pipeline: cost of the in-process grasping pipeline (issue 14 item 6). Runs one Exp-3 set
-// (ehc: forward, downward, sideways grasps of config/scenes/single_object.yaml) on one thread and
-// prints one JSON line: sim seconds, process CPU seconds (load-independent: the real-time factor
-// on one core), wall seconds (depends on the machine's load), and wall seconds per sim second of
-// every stage (render, tags, grasps, obstacles, control, sequencer, physics).
+// bench_pipeline: cost of the in-process grasping pipeline (issue 14 item 6). Runs one Exp-2 set
+// (ehc: front, middle, back of config/scenes/table_three_objects.yaml) and one Exp-3 set (ehc:
+// forward, downward, sideways grasps of config/scenes/single_object.yaml), each on one thread, and
+// prints one JSON line per set: sim seconds, process CPU seconds (load-independent: the real-time
+// factor on one core), wall seconds and the 1-minute load average (wall figures depend on the
+// machine's load), and wall seconds per sim second of every stage (render, tags, grasps,
+// obstacles, control, sequencer, physics; pipelineStageCosts). The camera renders only what
+// perception consumes, at its rate (GraspPipeline::perceive): the counts of images and clouds
+// are in the stage line.
 #include "ehc_bringup/grasp_experiment.h"
 
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <ctime>
+
+namespace {
+
+void bench(const char* name, ehc_bringup::GraspProtocol protocol) {
+  ehc_bringup::GraspExperimentParams p;
+  p.protocol = protocol;
+  p.config_dir = EHC_CONFIG_DIR;
+  p.sets = 1;
+  p.per_set = 1;
+  p.jobs = 1;
+  const ehc_bringup::GraspExperiment exp(p, {"ehc"});
+  const std::clock_t c0 = std::clock();
+  const auto w0 = std::chrono::steady_clock::now();
+  const ehc_bringup::GraspExperimentResult r = exp.run();
+  const double cpu = static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
+  double load[1] = {0.0};
+  if (getloadavg(load, 1) != 1) load[0] = -1.0;
+  int ok = 0;
+  for (const auto& t : r.trials) ok += t.success;
+  std::printf("{\"bench\":\"%s\",\"grasps\":%zu,\"successes\":%d,\"sim_s\":%.2f,\"cpu_s\":%.2f,\"wall_s\":%.2f,"
+              "\"load_1min\":%.2f,\"cpu_real_time_factor\":%.2f,\"wall_real_time_factor\":%.2f,\"stages\":%s}\n",
+              name, r.trials.size(), ok, r.sim_time_s, cpu, wall, load[0], r.sim_time_s / std::max(1e-9, cpu),
+              r.sim_time_s / std::max(1e-9, wall), ehc_bringup::pipelineStageCosts(r.counters, r.sim_time_s).c_str());
+  std::fflush(stdout);
+}
+
+}  // namespace
 
 int main() {
   try {
-    ehc_bringup::GraspExperimentParams p;
-    p.protocol = ehc_bringup::GraspProtocol::Poses;
-    p.config_dir = EHC_CONFIG_DIR;
-    p.sets = 1;
-    p.per_set = 1;
-    p.jobs = 1;
-    const ehc_bringup::GraspExperiment exp(p, {"ehc"});
-    const std::clock_t c0 = std::clock();
-    const auto w0 = std::chrono::steady_clock::now();
-    const ehc_bringup::GraspExperimentResult r = exp.run();
-    const double cpu = static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
-    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
-    int ok = 0;
-    for (const auto& t : r.trials) ok += t.success;
-    std::printf("{\"bench\":\"grasp_pipeline_exp3_set\",\"grasps\":%zu,\"successes\":%d,\"sim_s\":%.2f,\"cpu_s\":%.2f,"
-                "\"wall_s\":%.2f,\"cpu_real_time_factor\":%.2f,\"stages\":%s}\n",
-                r.trials.size(), ok, r.sim_time_s, cpu, wall, r.sim_time_s / std::max(1e-9, cpu),
-                ehc_bringup::pipelineStageCosts(r.counters, r.sim_time_s).c_str());
+    bench("grasp_pipeline_exp2_set", ehc_bringup::GraspProtocol::Table);
+    bench("grasp_pipeline_exp3_set", ehc_bringup::GraspProtocol::Poses);
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_pipeline: %s\n", e.what());

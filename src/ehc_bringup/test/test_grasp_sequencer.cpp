@@ -560,7 +560,15 @@ TEST(GraspSequencer, TsmmStagesAppearAsControllerPhases) {
   h.follow = false;
   h.controller_phase = "TSMM_BASE";
   h.run(0.5);
+  // The base stage's goal is the object itself (d is measured from the TCP to the object), not
+  // the pre-grasp 0.1 m before it.
+  ASSERT_EQ(h.seq.phase(), GraspPhase::Approach);
+  ASSERT_TRUE(h.last_goal && h.seq.objectCentre());
+  EXPECT_TRUE(h.last_goal->translation().isApprox(*h.seq.objectCentre(), 1e-12));
   h.controller_phase = "TSMM_ARM";
+  h.step();
+  ASSERT_TRUE(h.last_goal);
+  EXPECT_NEAR((h.last_goal->translation() - *h.seq.objectCentre()).norm(), p.pregrasp_distance, 0.05);
   h.follow = true;
   h.runUntilDone();
   ASSERT_EQ(h.seq.results().size(), 1u);

@@ -11,66 +11,28 @@ TfM >= 95 % (TfM: the approach at a distance, until the arm takes over; see gras
 than with MPBS (the direction of the difference, no made-up number). No wall-clock assertion:
 the .test time-limit only guards against a hang.
 """
-import json
 import os
-import subprocess
 import sys
-import tempfile
 import unittest
 
 import rospy
 import rostest
 
-WS = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from demo_run import results_dir, run_demo  # noqa: E402
 
 
 def run_scenario(orientation, mpbs, out):
-    env = dict(os.environ)
-    # The pipeline gets its own master: never the rostest master of this test.
-    for k in ("ROS_MASTER_URI", "ROS_HOME", "ROS_LOG_DIR"):
-        env.pop(k, None)
-    env.update({
-        "EHC_DEVEL": os.environ.get("EHC_DEVEL", os.path.relpath(devel_space(), WS)),
-        "OUT": out,
-        "SCENE": "config/scenes/single_object.yaml",
-        "SEQUENCER_CONFIG": "config/demo/grasp_single_%s.yaml" % orientation,
-        "TAG_OBJECTS": "target",
-        "MPBS": "true" if mpbs else "false",
-        "EHC_DEMO_PORT": str(free_port()),
-    })
-    p = subprocess.run([os.path.join(WS, "src/ehc_bringup/scripts/demo.sh")], cwd=WS, env=env,
-                       stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True)
-    sys.stdout.write(p.stdout)
-    summary = os.path.join(WS, out, "summary.json")
-    if not os.path.exists(summary):
-        raise AssertionError("no summary (exit %d):\n%s" % (p.returncode, p.stdout[-3000:]))
-    with open(summary) as f:
-        return json.load(f), p.stdout
-
-
-def devel_space():
-    # CMAKE_PREFIX_PATH's first entry is this workspace's devel space (setup.bash sourced).
-    for d in os.environ.get("CMAKE_PREFIX_PATH", "").split(":"):
-        if d and os.path.exists(os.path.join(d, "setup.bash")) and d.startswith(WS):
-            return d
-    return os.path.join(WS, "devel")
-
-
-def free_port():
-    import socket
-    s = socket.socket()
-    s.bind(("127.0.0.1", 0))
-    port = s.getsockname()[1]
-    s.close()
-    return port
+    return run_demo({"SCENE": "config/scenes/single_object.yaml",
+                     "SEQUENCER_CONFIG": "config/demo/grasp_single_%s.yaml" % orientation,
+                     "TAG_OBJECTS": "target",
+                     "MPBS": "true" if mpbs else "false"}, out)
 
 
 class GraspSingle(unittest.TestCase):
     def test_grasp_with_and_without_mpbs(self):
         orientation = rospy.get_param("~orientation")
-        base = os.path.relpath(tempfile.mkdtemp(prefix="grasp_%s_" % orientation, dir=os.path.join(WS, "results"))
-                               if os.path.isdir(os.path.join(WS, "results")) else
-                               tempfile.mkdtemp(prefix="grasp_%s_" % orientation), WS)
+        base = results_dir("grasp_%s_" % orientation)
         with_mpbs, log1 = run_scenario(orientation, True, os.path.join(base, "mpbs"))
         without, log2 = run_scenario(orientation, False, os.path.join(base, "pbvs"))
         a, b = with_mpbs["objects"][0], without["objects"][0]

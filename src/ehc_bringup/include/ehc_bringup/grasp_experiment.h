@@ -51,6 +51,21 @@ struct GraspExperimentParams {
   void validate() const;       ///< throws "[GraspExperiment] ..."
 };
 
+/// A perceived robot-obstacle pair of a grasp (or a method) for the safety table: its distance,
+/// the link and its stop distance d_s, the scene body nearest to the perceived obstacle point
+/// (ground truth: "table_top", an object's name, "floor"), the sequencer phase.
+struct ObstacleExtreme {
+  double distance = -1.0;  ///< m; -1: no pair within the influence distance
+  double stop = 0.0;       ///< m, d_s of the link
+  std::string link, body, phase;
+  double margin() const { return distance - stop; }
+  /// Takes `d` if it is smaller in distance (by_margin false) or in distance - d_s (true), or the first.
+  void take(const ObstacleExtreme& d, bool by_margin) {
+    if (d.distance < 0.0) return;
+    if (distance < 0.0 || (by_margin ? d.margin() < margin() : d.distance < distance)) *this = d;
+  }
+};
+
 /// One grasp (one row of trials.csv).
 struct GraspTrial {
   std::string method;
@@ -63,7 +78,8 @@ struct GraspTrial {
   std::string failed_phase, reason;
   long contact_steps = 0;            ///< sim steps with a robot-scene or self collision
   long joint_limit_violations = 0;   ///< arm joint samples outside the limits
-  double min_obstacle_distance = -1; ///< m, smallest perceived link-obstacle distance; -1: none within influence
+  ObstacleExtreme nearest;           ///< the smallest perceived link-obstacle distance
+  ObstacleExtreme tightest;          ///< the smallest margin distance - d_s (< 0: closer than d_s)
 };
 
 /// ‖TCP - object‖ (ground truth) and speeds, sampled every trace_period of an object's attempt.
@@ -82,7 +98,7 @@ struct GraspMethodSummary {
   SpeedMeans distant, close;          ///< mean |commanded speed| (Exp-1's definition)
   std::map<std::string, std::pair<double, int>> tfm;  ///< approach -> (mean TfM, grasps)
   long contact_steps = 0, joint_limit_violations = 0;
-  double min_obstacle_distance = -1.0;
+  ObstacleExtreme nearest, tightest;  ///< over every grasp of the method
   double sim_time_s = 0.0, wall_time_s = 0.0;
 };
 

@@ -79,6 +79,15 @@ struct GraspPipelineConfig {
 /// std::invalid_argument naming the file and field.
 GraspPipelineConfig loadGraspPipelineConfig(const GraspPipelineFiles& files);
 
+/// One perceived link-obstacle pair as the controller received it (safety metrics).
+struct ObstaclePairRecord {
+  double distance = -1.0;  ///< m; -1: no pair this cycle
+  double stop = 0.0;       ///< m, d_s of the link
+  std::string link;
+  Eigen::Vector3d obstacle_point = Eigen::Vector3d::Zero();  ///< world
+  double margin() const { return distance - stop; }
+};
+
 /// What one cycle did (for metrics and traces).
 struct PipelineCycle {
   double t = 0.0;                        ///< sim time of the state, s
@@ -86,7 +95,9 @@ struct PipelineCycle {
   GraspPhase phase = GraspPhase::WaitTarget;  ///< sequencer phase after the update
   ehc_control::ControlCycleStatus status;
   Eigen::VectorXd command;               ///< [base twist; arm rates] sent to the sim
-  double min_obstacle_distance = -1.0;   ///< m, smallest link-obstacle distance reported this cycle; -1: none
+  /// The link-obstacle pair reported this cycle with the smallest distance, and the one with the
+  /// smallest margin distance - d_s (d_s: the link's stop distance, controller obstacle_stop[_links]).
+  ObstaclePairRecord nearest_obstacle, tightest_obstacle;
   bool collision = false;                ///< the sim step found a robot-world or self collision
   int joint_limit_violations = 0;        ///< arm joints outside their limits after the step
 };

@@ -12,7 +12,14 @@
 //                grasp candidates update; the controller's MPBS watches the object centre), so
 //                the hand arrives from the approach side instead of cutting across the object;
 //                base + arm drive. Ends when the TCP is within pregrasp_switch_distance of the
-//                grasp position (tsmm: the controller's base stage happens here)
+//                grasp position. tsmm (paper, section IV-D: "the robot first moves to a position
+//                d away from the target object's position, measured from the end-effector"):
+//                while the controller reports TSMM_BASE the goal is the object centre itself
+//                (with the grasp's orientation, which the base stage does not servo), so the
+//                controller's tsmm_switch_distance d (0.2 m, horizontal) is measured from the
+//                TCP to the object, not to the pre-grasp 0.1 m before it; from TSMM_ARM on the
+//                goal is the pre-grasp again (0.1 m from the grasp, well within d of the switch
+//                point: the base stays stopped) and the arm alone does the rest
 //   PRE_GRASP    the grasp is locked in the world frame (the object is static until touched, and
 //                the tag may leave the view at close range); goal = pre-grasp pose, tight tolerance
 //   GRASP        goal = grasp pose; ends within grasp tolerance (or stalled near it, see
@@ -200,6 +207,9 @@ class GraspSequencer {
                     SequencerOutput* out);
   std::optional<GraspChoice> currentChoice(const SequencerInput& in) const;
   Eigen::Isometry3d preGrasp(const Eigen::Isometry3d& grasp) const;
+  /// APPROACH goal: the pre-grasp of `grasp`; the object centre while the controller is in the
+  /// tsmm base stage (see the header comment).
+  Eigen::Isometry3d approachGoal(const SequencerInput& in, const Eigen::Isometry3d& grasp) const;
   bool within(const SequencerInput& in, const Eigen::Isometry3d& goal, double pos, double ori_deg) const;
   std::string label() const;
   std::array<ehc_control::TargetTracker*, 3> tfmWindows();  ///< the three TfM trackers

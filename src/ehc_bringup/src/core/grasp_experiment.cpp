@@ -47,6 +47,23 @@ const PaperTfm kPaperTable4[] = {
     {"ehc", "100.0", "100.0", "100.0"},
 };
 
+/// Name of the scene body (table part, object, obstacle) or "floor" nearest to `p`, by the
+/// distance to its bounding box at its current pose (ground truth; names a perceived obstacle
+/// point for the safety table).
+std::string nearestSceneBody(const ehc_sim::SimWorld& world, const Eigen::Vector3d& p) {
+  std::string best = "floor";
+  double best_d = std::abs(p.z());
+  for (std::size_t i = 0; i < world.bodies().size(); ++i) {
+    const Eigen::Vector3d local = world.bodyPose(static_cast<int>(i)).inverse() * p;
+    const double d = (local.cwiseAbs() - world.bodies()[i].halfExtents()).cwiseMax(0.0).norm();
+    if (d < best_d) {
+      best_d = d;
+      best = world.bodies()[i].name;
+    }
+  }
+  return best;
+}
+
 [[noreturn]] void bad(const std::string& what) { throw std::invalid_argument("[GraspExperiment] " + what); }
 
 const char* kApproaches[] = {"forward", "downward", "sideways"};
@@ -140,7 +157,7 @@ GraspExperiment::RunOutput GraspExperiment::runOne(const RunSpec& spec) const {
   const int nb = pipe.cycle().model().nBase();
   const std::size_t n_objects = cfg.sequencer.objects.size();
   std::vector<long> contacts(n_objects, 0), limits(n_objects, 0);
-  std::vector<double> min_dist(n_objects, -1.0);
+  std::vector<ObstacleExtreme> nearest(n_objects), tightest(n_objects);
   std::vector<double> t0(n_objects, -1.0);
   std::vector<double> next_sample(n_objects, 0.0);
   // Per object: WAIT_TARGET .. LIFT (30 s each) + release + retreat, with margin.
@@ -153,8 +170,22 @@ GraspExperiment::RunOutput GraspExperiment::runOne(const RunSpec& spec) const {
     const std::size_t k = std::min(c.object, n_objects - 1);
     contacts[k] += c.collision;
     limits[k] += c.joint_limit_violations;
-    if (c.min_obstacle_distance >= 0.0 && (min_dist[k] < 0.0 || c.min_obstacle_distance < min_dist[k]))
-      min_dist[k] = c.min_obstacle_distance;
+    auto extreme = [&](const ObstaclePairRecord& r) {
+      ObstacleExtreme e;
+      if (r.distance < 0.0) return e;
+      e.distance = r.distance;
+      e.stop = r.stop;
+      e.link = r.link;
+      e.body = nearestSceneBody(pipe.world(), r.obstacle_point);
+      e.phase = toString(c.phase);
+      return e;
+    };
+    if (c.nearest_obstacle.distance >= 0.0) {
+      if (nearest[k].distance < 0.0 || c.nearest_obstacle.distance < nearest[k].distance)
+        nearest[k] = extreme(c.nearest_obstacle);
+      if (tightest[k].distance < 0.0 || c.tightest_obstacle.margin() < tightest[k].margin())
+        tightest[k] = extreme(c.tightest_obstacle);
+    }
     const bool working = c.phase != GraspPhase::Release && c.phase != GraspPhase::Retreat &&
                          c.phase != GraspPhase::Done;
     if (t0[k] < 0.0) t0[k] = c.t;
@@ -201,7 +232,8 @@ GraspExperiment::RunOutput GraspExperiment::runOne(const RunSpec& spec) const {
     }
     t.contact_steps = contacts[i];
     t.joint_limit_violations = limits[i];
-    t.min_obstacle_distance = min_dist[i];
+    t.nearest = nearest[i];
+    t.tightest = tightest[i];
     out.trials.push_back(t);
   }
   out.counters = pipe.counters();
@@ -284,8 +316,8 @@ GraspExperimentResult GraspExperiment::run(const Progress& progress) const {
         ++e.second;
         s.contact_steps += t.contact_steps;
         s.joint_limit_violations += t.joint_limit_violations;
-        if (t.min_obstacle_distance >= 0.0 && (s.min_obstacle_distance < 0.0 || t.min_obstacle_distance < s.min_obstacle_distance))
-          s.min_obstacle_distance = t.min_obstacle_distance;
+        s.nearest.take(t.nearest, false);
+        s.tightest.take(t.tightest, true);
         res.trials.push_back(t);
       }
       for (SpeedMeans* p : {&distant, &close}) {
@@ -333,10 +365,22 @@ std::string pipelineStageCosts(const PipelineCounters& c, double sim_time_s) {
   return os.str();
 }
 
+namespace {
+std::string obstacleJson(const ObstacleExtreme& e) {
+  std::ostringstream os;
+  os << std::setprecision(6) << "{\"distance\":" << e.distance << ",\"stop\":" << e.stop << ",\"margin\":"
+     << (e.distance < 0.0 ? 0.0 : e.margin()) << ",\"link\":\"" << e.link << "\",\"body\":\"" << e.body
+     << "\",\"phase\":\"" << e.phase << "\"}";
+  return os.str();
+}
+}  // namespace
+
 std::string graspSummaryJson(const GraspMethodSummary& s) {
   std::ostringstream os;
   os << std::setprecision(10);
-  os << "{\"method\":\"" << s.method << "\",\"grasps\":" << s.grasps << ",\"successes\":" << s.successes
+  const GraspMethod m = graspMethod(s.method);
+  os << "{\"method\":\"" << s.method << "\",\"mode\":\"" << ehc_control::toString(m.mode)
+     << "\",\"mpbs\":" << (m.mpbs ? "true" : "false") << ",\"grasps\":" << s.grasps << ",\"successes\":" << s.successes
      << ",\"success_rate\":" << (s.grasps ? 100.0 * s.successes / s.grasps : 0.0)
      << ",\"mean_time_s\":" << s.mean_time_s << ",\"distant\":{\"base_t\":" << s.distant.base_t
      << ",\"base_r\":" << s.distant.base_r << ",\"arm\":" << s.distant.arm << ",\"cycles\":" << s.distant.cycles
@@ -348,7 +392,8 @@ std::string graspSummaryJson(const GraspMethodSummary& s) {
     first = false;
   }
   os << "},\"contact_steps\":" << s.contact_steps << ",\"joint_limit_violations\":" << s.joint_limit_violations
-     << ",\"min_obstacle_distance\":" << s.min_obstacle_distance << ",\"sim_time_s\":" << s.sim_time_s << "}";
+     << ",\"min_obstacle\":" << obstacleJson(s.nearest) << ",\"min_obstacle_margin\":" << obstacleJson(s.tightest)
+     << ",\"sim_time_s\":" << s.sim_time_s << "}";
   return os.str();
 }
 
@@ -374,10 +419,13 @@ void writeGraspResults(const std::string& dir, const GraspExperimentParams& para
     std::ofstream f = open("table.md");
     f << std::fixed;
     auto pct = [](int a, int b) { return b ? 100.0 * a / b : 0.0; };
-    auto mm = [](double d) {
+    auto where = [](const ObstacleExtreme& d, bool margin) {
       std::ostringstream os;
-      if (d < 0.0) os << "none < influence";
-      else os << std::fixed << std::setprecision(3) << d;
+      if (d.distance < 0.0) return std::string("none within the influence distance");
+      os << std::fixed << std::setprecision(1);
+      if (margin) os << d.margin() * 1000.0 << " (" << d.link << " - " << d.body << ", " << d.phase << "; d "
+                     << d.distance * 1000.0 << ", d_s " << d.stop * 1000.0 << ")";
+      else os << d.distance * 1000.0 << " (" << d.link << " - " << d.body << ", " << d.phase << ")";
       return os.str();
     };
     if (params.protocol == GraspProtocol::Table) {
@@ -411,25 +459,35 @@ void writeGraspResults(const std::string& dir, const GraspExperimentParams& para
           << (p ? p->forward : "") << " | " << (p ? p->downward : "") << " | " << (p ? p->sideways : "") << " |\n";
       }
     }
-    f << "\nSafety (not in the paper; must be zero / above the stop distance in every run):\n\n"
-      << "| Method | sim steps with robot-scene contact (Bullet) | joint-limit violations | min robot-obstacle distance (m, perceived) | sim time (s) |\n"
-         "|---|---|---|---|---|\n";
+    f << "\nSafety (not in the paper; contacts and violations must be zero, every perceived distance at "
+         "least its link's stop distance d_s):\n\n"
+      << "| Method | sim steps with robot-scene contact (Bullet) | joint-limit violations "
+         "| min perceived robot-obstacle distance d, mm (link - nearest scene body, phase) "
+         "| min margin d - d_s, mm (link - body, phase; d, d_s) | sim time (s) |\n"
+         "|---|---|---|---|---|---|\n";
     for (const auto& s : result.summaries)
       f << "| " << s.method << " | " << s.contact_steps << " | " << s.joint_limit_violations << " | "
-        << mm(s.min_obstacle_distance) << " | " << std::setprecision(1) << s.sim_time_s << " |\n";
+        << where(s.nearest, false) << " | " << where(s.tightest, true) << " | " << std::setprecision(1) << s.sim_time_s
+        << " |\n";
+    f << "\nPerceived distances are those the controller received (ehc_obstacle_node's: octomap of the depth "
+         "clouds, robot points filtered, the grasped object's sphere excluded from the descent to the end of the "
+         "retreat); the scene body is the ground-truth body nearest to the perceived obstacle point.\n";
     if (!notes.empty()) f << "\n" << notes << "\n";
   }
   {
     std::ofstream f = open("trials.csv");
     f << "method,set,index,seed,object,approach,success,time_s,tfm,tfm_until_switch,controller_tfm,failed_phase,"
-         "reason,contact_steps,joint_limit_violations,min_obstacle_distance_m\n";
+         "reason,contact_steps,joint_limit_violations,min_obstacle_distance_m,min_obstacle_link,min_obstacle_body,"
+         "min_obstacle_phase,min_margin_m,min_margin_link,min_margin_body,min_margin_phase\n";
     for (const auto& t : result.trials) {
       std::string reason = t.reason;
       std::replace(reason.begin(), reason.end(), '"', '\'');
       f << t.method << "," << t.set << "," << t.index << "," << t.seed << "," << t.object << "," << t.approach << ","
         << (t.success ? 1 : 0) << "," << t.time_s << "," << t.tfm << "," << t.tfm_until_switch << ","
         << t.controller_tfm << "," << t.failed_phase << ",\"" << reason << "\"," << t.contact_steps << ","
-        << t.joint_limit_violations << "," << t.min_obstacle_distance << "\n";
+        << t.joint_limit_violations << "," << t.nearest.distance << "," << t.nearest.link << "," << t.nearest.body
+        << "," << t.nearest.phase << "," << (t.tightest.distance < 0.0 ? 0.0 : t.tightest.margin()) << ","
+        << t.tightest.link << "," << t.tightest.body << "," << t.tightest.phase << "\n";
     }
   }
   {

@@ -1,6 +1,7 @@
 #include "ehc_bringup/grasp_sequencer.h"
 
 #include "ehc_control/config_node.h"
+#include "ehc_control/control_status.h"
 
 #include <algorithm>
 #include <array>
@@ -287,6 +288,15 @@ Eigen::Isometry3d GraspSequencer::preGrasp(const Eigen::Isometry3d& grasp) const
   return T;
 }
 
+Eigen::Isometry3d GraspSequencer::approachGoal(const SequencerInput& in, const Eigen::Isometry3d& grasp) const {
+  const std::optional<Eigen::Vector3d> centre = objectCentre();
+  if (!centre || in.controller_phase != ehc_control::toString(ehc_control::ControlPhase::TsmmBase))
+    return preGrasp(grasp);
+  Eigen::Isometry3d T = grasp;  // the base stage drives the TCP position only
+  T.translation() = *centre;
+  return T;
+}
+
 bool GraspSequencer::within(const SequencerInput& in, const Eigen::Isometry3d& goal, double pos,
                             double ori_deg) const {
   if (!in.tcp || !isValidPose(*in.tcp)) return false;
@@ -402,7 +412,7 @@ SequencerOutput GraspSequencer::update(const SequencerInput& in) {
       if (!choice) break;  // require_candidate and none yet
       enter(GraspPhase::Approach, t, &out,
             choice->from_candidate ? "grasp candidate" : "tag grasp (no candidate yet)");
-      out.goal = preGrasp(choice->pose);
+      out.goal = approachGoal(in, choice->pose);
       break;
     }
     case GraspPhase::Approach: {
@@ -412,7 +422,7 @@ SequencerOutput GraspSequencer::update(const SequencerInput& in) {
       }
       const auto choice = currentChoice(in);
       if (!choice) break;
-      out.goal = preGrasp(choice->pose);
+      out.goal = approachGoal(in, choice->pose);
       if (within(in, choice->pose, params_.pregrasp_switch_distance, 180.0)) {
         locked_object_centre_ = *objectCentre();  // frozen from here (before locked_ is set)
         locked_ = choice;

@@ -423,6 +423,10 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
     auto a = s.row_a.col(s.n_rows);
     a.head(nd).noalias() = s.J_point.topRows<3>().transpose() * (-n);
     a.tail(6).setZero();
+    // Held DOFs (tsmm stages) cannot move the point: a pair only they move (the base link in
+    // the arm stage) leaves no row (a zero row made vpQuadProg's active set rank-deficient).
+    for (int i = 0; i < nd; ++i)
+      if (held[static_cast<std::size_t>(i)]) a[i] = 0.0;
     double b = params_.obstacle_damper_gain * (o.distance - ds) / (di - ds);
     const double norm = a.norm();
     ++out.obstacle_rows;

@@ -1,0 +1,88 @@
+#!/usr/bin/python3
+"""Issue 14 item 7: the in-process pipeline (ehc_experiment grasp, GraspPipeline) and the ROS
+pipeline (scripts/demo.sh: the same cores as nodes, lock-step sim time) agree, run by rostest.
+
+For each method in ~methods (space-separated; default "ehc tsmm") one Exp-2 set runs through both
+paths on the same scene (config/scenes/table_three_objects.yaml, no placement jitter: the ROS
+path reads the scene file as it is) with the same noise seed (run seed = ~seed * 1000, as
+ehc_experiment's set 0; demo.sh SEED) and the same MPBS setting (from the in-process summary).
+
+Asserted per object: success agrees, and for objects both grasped the times agree within
+TIME_TOLERANCE_S. Why that tolerance: the two paths differ only in when perception results
+arrive. In-process an image's tag pose and the grasp candidates are used in the cycle the image
+is taken; over ROS they arrive after the nodes' processing (wall time during which the lock-step
+sim may go on for a few cycles) and the grasp node runs at 2 Hz, so a candidate can be one grasp
+period (0.5 s) later at the start of the approach and again at the lock; the sequencer's stall
+rule decides in steps of stall_time (1 s). One stall step plus two grasp periods: 2.0 s. The
+ROS path is not bit-reproducible (perception runs outside the lock-step handshake), hence a
+tolerance and not equality. No wall-clock assertion; the .test time-limit only guards a hang.
+
+Measured (seed 1, loaded machine): ehc and tsmm agree on every object (|dt| <= 0.73 s; tsmm
+fails the back object in GRASP on both paths). neo_c and neo_e do not: their back grasp (at the
+edge of the arm's reach) succeeded on one path and failed on the other, and neo_e's middle grasp
+differed by 2.45 s. Their outcome on that object hinges on where the base stops, which the
+perception timing shifts: a per-run comparison of them measures that sensitivity, not the
+pipelines. Hence make test runs ehc and tsmm; methods:="neo_c neo_e" reproduces the rest.
+"""
+import csv
+import json
+import os
+import subprocess
+import sys
+import unittest
+
+import rospy
+import rostest
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from demo_run import WS, devel_space, results_dir, run_demo  # noqa: E402
+
+TIME_TOLERANCE_S = 2.0
+
+
+def run_in_process(method, seed, out):
+    exe = os.path.join(devel_space(), "lib", "ehc_bringup", "ehc_experiment")
+    p = subprocess.run([exe, "grasp", "--method", method, "--sets", "1", "--seed", str(seed), "--jobs", "1",
+                        "--jitter-xy", "0", "--jitter-yaw", "0", "--out", out], cwd=WS,
+                       stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True)
+    sys.stdout.write(p.stdout[-3000:])
+    if p.returncode != 0:
+        raise AssertionError("ehc_experiment exited %d:\n%s" % (p.returncode, p.stdout[-3000:]))
+    with open(os.path.join(WS, out, "summary.json")) as f:
+        summary = json.load(f)["methods"][0]
+    with open(os.path.join(WS, out, "trials.csv")) as f:
+        trials = {r["object"]: r for r in csv.DictReader(f)}
+    return summary, trials
+
+
+class GraspAgreement(unittest.TestCase):
+    def test_in_process_and_ros_agree(self):
+        methods = rospy.get_param("~methods", "ehc tsmm").split()
+        seed = int(rospy.get_param("~seed", 1))
+        base = results_dir("grasp_agreement_")
+        lines, problems = [], []
+        for m in methods:
+            summary, inproc = run_in_process(m, seed, os.path.join(base, m + "_in_process"))
+            ros, log = run_demo({"MODE": summary["mode"], "MPBS": "true" if summary["mpbs"] else "false",
+                                 "SEED": str(seed * 1000)}, os.path.join(base, m + "_ros"))
+            self.assertEqual(ros["mpbs"], summary["mpbs"])
+            self.assertEqual([o["name"] for o in ros["objects"]], list(inproc.keys()))
+            for o in ros["objects"]:
+                i = inproc[o["name"]]
+                ok_in = i["success"] == "1"
+                t_in = float(i["time_s"])
+                lines.append("%-6s %-6s in-process %-7s %6.2f s (%s) | ROS %-7s %6.2f s (%s)" % (
+                    m, o["name"], ok_in, t_in, i["failed_phase"] or "-", o["success"], o["time_s"],
+                    o["failed_phase"] or "-"))
+                if ok_in != o["success"]:
+                    problems.append("%s %s: success in-process %s, ROS %s" % (m, o["name"], ok_in, o["success"]))
+                elif ok_in and abs(t_in - o["time_s"]) > TIME_TOLERANCE_S:
+                    problems.append("%s %s: time in-process %.2f s, ROS %.2f s (tolerance %.1f s)"
+                                    % (m, o["name"], t_in, o["time_s"], TIME_TOLERANCE_S))
+        print("\n".join(["[agreement] " + l for l in lines]))
+        self.assertEqual(problems, [], "\n".join(problems + lines))
+
+
+if __name__ == "__main__":
+    rospy.init_node("test_grasp_agreement")
+    rostest.rosrun("ehc_bringup", "test_grasp_agreement", GraspAgreement, sys.argv)
