@@ -190,8 +190,9 @@ int main(int argc, char** argv) {
     } else {
       const ehc_bringup::ReachTargetGenerator gen;
       // Targets no whole-body IK solution reaches (e.g. a horizontal approach 0.3 m above the
-      // floor for a 0.61 m arm on a 0.6 m base) are redrawn unless --all-targets.
-      auto reachable = [&](const Eigen::Isometry3d& T) { return model->inverseKinematics(T, 1, 30); };
+      // floor for a 0.61 m arm on a 0.6 m base), or only with a joint inside the controller's
+      // joint stop, are redrawn unless --all-targets.
+      auto reachable = [&](const Eigen::Isometry3d& T) { return ehc_bringup::kinematicallyReachable(*model, T, ctrl.joint_stop); };
       for (int s = 0; s < a.sets; ++s) {
         int rejected = 0;
         sets.push_back(gen.generate(a.points, a.seed * 1000u + static_cast<unsigned>(s), Eigen::Vector2d::Zero(),
@@ -242,7 +243,7 @@ int main(int argc, char** argv) {
                         " targets, protocol " + ehc_bringup::toString(a.protocol) + ", noise " + (a.noise ? "on (Table I)" : "off") + ", seed " +
                         std::to_string(a.seed) + ", " +
                         (a.targets_csv.empty() ? (a.all_targets ? std::string("unreachable targets kept")
-                                                                : std::to_string(unreachable_redrawn) + " unreachable draws redrawn (whole-body IK)")
+                                                                : std::to_string(unreachable_redrawn) + " unreachable draws redrawn (whole-body IK with every joint " + std::to_string(ctrl.joint_stop).substr(0, 4) + " rad inside its limits)")
                                                : "targets from " + a.targets_csv) +
                         (a.base_model == ehc_sim::BaseModelType::Ideal
                              ? std::string()
