@@ -10,7 +10,9 @@
 //   Q = blkdiag(w_base I, w_arm I, 1/max(|e|, e_min) I_6)
 //   C = [0 .. -k_eps b (w_z column); -k_m J_m + k_p (q - q_ready) + dV_lim/dq; 0]
 //   b: TCP bearing atan2(y_e, x_e) in the base frame, on the 2 pi branch nearest the winding of
-//      the arm's yaw joint (q_yaw - q_yaw,ready), so that turning towards the TCP unwinds it
+//      the arm's yaw joint (q_yaw - q_yaw,ready), so that turning towards the TCP unwinds it;
+//      with the TCP over the shoulder (> 90 deg from the yaw joint's direction) on the previous
+//      cycle's branch (no 2 pi flips from noise at the branch border)
 //   V_lim: joint-limit centring potential (JointLimitCentring)
 //
 // Modes (one parameter): ehc  w_base = w_min + (w_max - w_min) sig(omega)
@@ -202,6 +204,8 @@ class EhcQpController {
   /// Arm joint turning about the base's vertical axis (e.g. joint1), -1 if none: the base-turn
   /// term takes the TCP bearing on the branch of this joint's winding (see step()).
   int yaw_joint_ = -1;
+  double last_bearing_ = 0.0;  ///< the turn term's unwound TCP bearing of the previous step
+  bool have_bearing_ = false;
   Eigen::Vector3d tsmm_stage_target_ = Eigen::Vector3d::Zero();  ///< target position at the arm-stage switch
   std::unique_ptr<Solver> solver_;
   std::unique_ptr<WristFlip> flip_;

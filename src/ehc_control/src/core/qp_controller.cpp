@@ -371,7 +371,19 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
   h.tail(6).setConstant(1.0 / e_floor);
   const Eigen::Vector3d tcp_in_base = s.kinematics.linkPoseInBase(s.tcp_link).translation();
   double bearing = std::atan2(tcp_in_base.y(), tcp_in_base.x());
-  if (params_.base_turn_unwinding && yaw_joint_ >= 0) bearing = unwoundBearing(bearing, q[yaw_joint_] - rc.arm_ready[yaw_joint_]);
+  if (params_.base_turn_unwinding && yaw_joint_ >= 0) {
+    // The branch of the yaw joint's winding, while the TCP lies on the side the yaw joint
+    // points to. Reaching over the shoulder (the TCP more than 90 deg from that direction)
+    // the winding's branch border (TCP opposite the yaw joint) is near, and sensor noise would
+    // flip the bearing by 2 pi and the base turn with it, cycle to cycle (Exp-1 traces: the
+    // base chattering between -1.0 and +0.3 rad/s for 20 s, TCP 2-7 cm short): there the
+    // bearing continues the previous cycle's branch instead.
+    const double winding = q[yaw_joint_] - rc.arm_ready[yaw_joint_];
+    const double relative = std::remainder(bearing - winding, 2.0 * M_PI);
+    bearing = unwoundBearing(bearing, have_bearing_ && std::abs(relative) > 0.5 * M_PI ? last_bearing_ : winding);
+    last_bearing_ = bearing;
+    have_bearing_ = true;
+  }
   c[nb - 1] = -params_.base_turn_gain * bearing;
   const double fade = params_.manipulability_fade_distance > 0.0
                           ? std::min(1.0, out.position_error / params_.manipulability_fade_distance)
