@@ -37,3 +37,22 @@ TEST(ExperimentCli, UnparsableValuesAreStartUpErrorsNamingTheFlag) {
   EXPECT_EQ(twice.code, 2);
   EXPECT_NE(twice.out.find("--sets: given twice"), std::string::npos) << twice.out;
 }
+
+TEST(ExperimentCli, ReachTakesTheProtocolAndTheBaseModel) {
+  // --protocol was lost from the reach flags in a merge (every run was the sequence protocol).
+  const std::string out = "/tmp/ehc_cli_exp_protocol";
+  const std::string base = std::string("reach --robot ") + EHC_CONFIG_DIR +
+                           "/robots/realman_rm65_water2/robot.yaml --method neo_e --sets 1 --points 1 --out " + out + " ";
+  const Result reset = run(base + "--protocol reset --base-model water2");
+  ASSERT_EQ(reset.code, 0) << reset.out;
+  FILE* f = std::fopen((out + "/table.md").c_str(), "r");
+  ASSERT_NE(f, nullptr);
+  std::string table;
+  std::array<char, 4096> buf{};
+  while (std::fgets(buf.data(), buf.size(), f)) table += buf.data();
+  std::fclose(f);
+  EXPECT_NE(table.find("protocol reset"), std::string::npos) << table;
+  const Result bad = run(base + "--protocol random");
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.out.find("--protocol:"), std::string::npos) << bad.out;
+}

@@ -64,6 +64,13 @@ struct ReachExperimentParams {
   void validate() const;            ///< throws "[ReachExperiment] ..."
 };
 
+/// The runner's definition of a kinematically reachable target: a whole-body IK solution (30
+/// seeded attempts) with every arm joint at least `joint_stop` from its limits, the closest the
+/// controller's joint dampers let a joint come (QpControllerParams::joint_stop). Targets
+/// reachable only inside that last stretch of a joint's range are redrawn by the generator
+/// and classified ReachFailure::Unreachable.
+bool kinematicallyReachable(const ehc_control::WholeBodyModel& model, const Eigen::Isometry3d& target, double joint_stop);
+
 /// Mean absolute speeds: base translation (m/s), base rotation (rad/s), arm (sum of |qd_i|).
 struct SpeedMeans {
   double base_t = 0.0, base_r = 0.0, arm = 0.0;

@@ -111,7 +111,7 @@ void ReachExperiment::classifyFailure(ReachTrial& t, const Eigen::Vector3d& base
       pinned = i;
     }
   }
-  if (!model_->inverseKinematics(target, 1, 30)) t.failure = ReachFailure::Unreachable;
+  if (!kinematicallyReachable(*model_, target, controller_.joint_stop)) t.failure = ReachFailure::Unreachable;
   else if (position_error_before - t.final_position_error > params_.progress_position ||
            orientation_error_before - t.final_orientation_error > params_.progress_orientation)
     t.failure = ReachFailure::Converging;
@@ -191,6 +191,10 @@ ReachTrial ReachExperiment::reach(ehc_sim::KinematicFakeRobot& robot, ControlCyc
   }
   t.time_s = params_.time_limit;
   return t;
+}
+
+bool kinematicallyReachable(const ehc_control::WholeBodyModel& model, const Eigen::Isometry3d& target, double joint_stop) {
+  return model.inverseKinematics(target, 1, 30, nullptr, nullptr, joint_stop);
 }
 
 ReachSummary ReachExperiment::run(const std::vector<std::vector<Eigen::Isometry3d>>& sets,

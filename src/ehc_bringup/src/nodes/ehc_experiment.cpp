@@ -60,7 +60,7 @@ Args parse(int argc, char** argv) {
   if (a.command != "reach") throw std::invalid_argument("unknown command '" + a.command + "' (reach, grasp, poses)");
   const ehc_control::CommandLine cli(argc, argv,
                                      {"robot", "method", "out", "sets", "points", "seed", "targets",
-                                      "config", "map", "trace", "noise", "base-model"},
+                                      "config", "map", "trace", "noise", "base-model", "protocol"},
                                      {"all-targets"}, /*first=*/2);
   a.robot = cli.text("robot");
   a.out = cli.text("out");
@@ -75,6 +75,7 @@ Args parse(int argc, char** argv) {
   a.all_targets = cli.has("all-targets");
   a.noise = cli.choice("noise", {"on", "off"}, "on") == "on";
   a.base_model = ehc_sim::baseModelTypeFromString(cli.choice("base-model", {"ideal", "water2"}, "ideal"));
+  a.protocol = ehc_bringup::reachProtocolFromString(cli.choice("protocol", {"sequence", "reset"}, "sequence"));
   return a;
 }
 
@@ -193,8 +194,9 @@ int main(int argc, char** argv) {
     } else {
       const ehc_bringup::ReachTargetGenerator gen;
       // Targets no whole-body IK solution reaches (e.g. a horizontal approach 0.3 m above the
-      // floor for a 0.61 m arm on a 0.6 m base) are redrawn unless --all-targets.
-      auto reachable = [&](const Eigen::Isometry3d& T) { return model->inverseKinematics(T, 1, 30); };
+      // floor for a 0.61 m arm on a 0.6 m base), or only with a joint inside the controller's
+      // joint stop, are redrawn unless --all-targets.
+      auto reachable = [&](const Eigen::Isometry3d& T) { return ehc_bringup::kinematicallyReachable(*model, T, ctrl.joint_stop); };
       for (int s = 0; s < a.sets; ++s) {
         int rejected = 0;
         sets.push_back(gen.generate(a.points, a.seed * 1000u + static_cast<unsigned>(s), Eigen::Vector2d::Zero(),
@@ -245,7 +247,7 @@ int main(int argc, char** argv) {
                         " targets, protocol " + ehc_bringup::toString(a.protocol) + ", noise " + (a.noise ? "on (Table I)" : "off") + ", seed " +
                         std::to_string(a.seed) + ", " +
                         (a.targets_csv.empty() ? (a.all_targets ? std::string("unreachable targets kept")
-                                                                : std::to_string(unreachable_redrawn) + " unreachable draws redrawn (whole-body IK)")
+                                                                : std::to_string(unreachable_redrawn) + " unreachable draws redrawn (whole-body IK with every joint " + std::to_string(ctrl.joint_stop).substr(0, 4) + " rad inside its limits)")
                                                : "targets from " + a.targets_csv) +
                         (a.base_model == ehc_sim::BaseModelType::Ideal
                              ? std::string()

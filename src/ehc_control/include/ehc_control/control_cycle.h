@@ -67,6 +67,7 @@ struct ControlCycleStatus : QpStepFigures {
   double state_age = -1.0;                ///< s since the older of joint state / odometry; -1: none
   double obstacles_age = -1.0;            ///< s since the last good obstacle list; -1: none
   bool controller_error = false;          ///< a core error (exception) stopped this cycle
+  bool wrist_flip = false;                ///< the QP step prescribed a wrist flip (WristFlip)
 };
 
 struct ControlCycleOutput {

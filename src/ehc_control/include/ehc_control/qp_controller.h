@@ -10,7 +10,9 @@
 //   Q = blkdiag(w_base I, w_arm I, 1/max(|e|, e_min) I_6)
 //   C = [0 .. -k_eps b (w_z column); -k_m J_m + k_p (q - q_ready) + dV_lim/dq; 0]
 //   b: TCP bearing atan2(y_e, x_e) in the base frame, on the 2 pi branch nearest the winding of
-//      the arm's yaw joint (q_yaw - q_yaw,ready), so that turning towards the TCP unwinds it
+//      the arm's yaw joint (q_yaw - q_yaw,ready), so that turning towards the TCP unwinds it;
+//      with the TCP over the shoulder (> 90 deg from the yaw joint's direction) on the previous
+//      cycle's branch (no 2 pi flips from noise at the branch border)
 //   V_lim: joint-limit centring potential (JointLimitCentring)
 //
 // Modes (one parameter): ehc  w_base = w_min + (w_max - w_min) sig(omega)
@@ -29,6 +31,7 @@
 #include "ehc_control/control_status.h"
 #include "ehc_control/ehc_weighting.h"
 #include "ehc_control/whole_body_model.h"
+#include "ehc_control/wrist_flip.h"
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -75,6 +78,10 @@ struct QpControllerParams {
   /// so that joints leave the damper zone while the task (or the base) allows it, instead of
   /// being pinned there by their damper. 0 = off.
   double limit_centring_gain = 0.1;
+  /// Section `wrist_flip`: the joint-limit escape above the QP (WristFlip, wrist_flip.h): a
+  /// spherical-wrist roll joint nearing its limit moves to the other wrist branch (same TCP
+  /// pose) while the base and the other joints keep the TCP position task.
+  WristFlipParams wrist_flip;
   double joint_influence = 0.9;        ///< rad: joint damper becomes active
   double joint_stop = 0.1;             ///< rad: closest allowed approach to a joint limit
   double joint_damper_gain = 1.0;      ///< xi of the joint dampers, 1/s
@@ -129,6 +136,8 @@ struct ControllerCommand : QpStepFigures {
   ControlPhase phase = ControlPhase::Tracking;  ///< Tracking | Arrived | TsmmBase | TsmmArm
   std::string failure;                          ///< reason when qp_status == QpStatus::Failed
   int joint_damper_rows = 0;
+  bool wrist_flip = false;                      ///< the arm's wrist rates were prescribed (WristFlip)
+  std::string event;                            ///< log-worthy, e.g. a wrist flip started; else ""
 };
 
 /// Index of the arm joint whose axis is the base's vertical axis at the ready pose (the arm's
@@ -170,6 +179,7 @@ class EhcQpController {
   const QpControllerParams& params() const { return params_; }
   void setMode(ControlMode m);
   const WholeBodyModel& model() const { return *model_; }
+  const WristFlip& wristFlip() const { return *flip_; }
 
   /// The obstacle pairs step() turns into rows: those within obstacle_influence, nearest
   /// (distance - d_s) first, at most max_obstacle_rows. A non-finite, zero-normal or
@@ -194,8 +204,11 @@ class EhcQpController {
   /// Arm joint turning about the base's vertical axis (e.g. joint1), -1 if none: the base-turn
   /// term takes the TCP bearing on the branch of this joint's winding (see step()).
   int yaw_joint_ = -1;
+  double last_bearing_ = 0.0;  ///< the turn term's unwound TCP bearing of the previous step
+  bool have_bearing_ = false;
   Eigen::Vector3d tsmm_stage_target_ = Eigen::Vector3d::Zero();  ///< target position at the arm-stage switch
   std::unique_ptr<Solver> solver_;
+  std::unique_ptr<WristFlip> flip_;
 };
 
 }  // namespace ehc_control

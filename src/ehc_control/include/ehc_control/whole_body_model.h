@@ -123,9 +123,11 @@ class WholeBodyModel {
   /// Whole-body inverse kinematics of the TCP (KDL ChainIkSolverPos_NR_JL over a virtual
   /// planar base x, y, yaw + the arm within its joint limits), from `attempts` random seeds.
   /// Used to tell kinematically unreachable targets from controller failures. Returns true and
-  /// the solution when the TCP reaches `target` within 1 mm / 0.5 deg.
+  /// the solution when the TCP reaches `target` within 1 mm / 0.5 deg. `limit_margin` (rad)
+  /// shrinks every arm joint range at both ends (e.g. the controller's joint stop).
   bool inverseKinematics(const Eigen::Isometry3d& target, unsigned seed, int attempts,
-                         Eigen::Vector3d* base_pose = nullptr, Eigen::VectorXd* q = nullptr) const;
+                         Eigen::Vector3d* base_pose = nullptr, Eigen::VectorXd* q = nullptr,
+                         double limit_margin = 0.0) const;
 
   /// Throws unless q has nArm finite entries / base pose is finite.
   void checkArm(const Eigen::VectorXd& q) const;

@@ -173,8 +173,10 @@ ControlCycleOutput ControlCycle::update(double now) {
       st.phase = c.ok ? c.phase : ControlPhase::QpFailed;
       st.reason = c.failure;
       st.qp_status = c.qp_status;
+      st.wrist_flip = c.wrist_flip;
       static_cast<QpStepFigures&>(st) = c;
       if (c.ok) out.velocity = c.velocity;
+      if (!c.event.empty()) out.event += (out.event.empty() ? "" : "; ") + c.event;
       // The solve took time: a cycle over its budget, or a command computed from a state (or
       // target, or obstacles) that went stale meanwhile, is not sent.
       if (clock_) {

@@ -52,6 +52,7 @@ void QpControllerParams::validate() const {
   requireRange(kOwner, "manipulability_fade_distance", manipulability_fade_distance, 0.0, 5.0);
   requireRange(kOwner, "posture_gain", posture_gain, 0.0, 100.0);
   requireRange(kOwner, "limit_centring_gain", limit_centring_gain, 0.0, 100.0);
+  wrist_flip.validate();
   requireRange(kOwner, "joint_stop", joint_stop, 0.0, 1.0);
   requireRange(kOwner, "joint_influence", joint_influence, 0.0, 3.0);
   if (joint_influence <= joint_stop)
@@ -81,7 +82,7 @@ std::string QpControllerParams::summary() const {
      << ", k_eps " << base_turn_gain << (base_turn_unwinding ? " (unwound)" : "") << ", k_m " << manipulability_gain
      << (manipulability_fade_distance > 0.0 ? " (fading within " + std::to_string(manipulability_fade_distance) + " m)" : std::string())
      << ", k_p "
-     << posture_gain << ", limit centring " << limit_centring_gain << "\n"
+     << posture_gain << ", limit centring " << limit_centring_gain << "; " << wrist_flip.summary() << "\n"
      << "  joint dampers: influence " << joint_influence << " rad, stop " << joint_stop
      << " rad, gain " << joint_damper_gain << "; obstacle dampers: d_i " << obstacle_influence
      << " m, d_s " << obstacle_stop << " m";
@@ -114,6 +115,13 @@ QpControllerParams loadQpControllerParams(const ConfigNode& n) {
   p.manipulability_fade_distance = n.get("manipulability_fade_distance", p.manipulability_fade_distance);
   p.posture_gain = n.get("posture_gain", p.posture_gain);
   p.limit_centring_gain = n.get("limit_centring_gain", p.limit_centring_gain);
+  {
+    const ConfigNode flip = n.childOrEmpty("wrist_flip");
+    p.wrist_flip.margin = flip.get("margin", p.wrist_flip.margin);
+    p.wrist_flip.speed = flip.get("speed", p.wrist_flip.speed);
+    p.wrist_flip.gain = flip.get("gain", p.wrist_flip.gain);
+    p.wrist_flip.tolerance = flip.get("tolerance", p.wrist_flip.tolerance);
+  }
   p.joint_influence = n.get("joint_influence", p.joint_influence);
   p.joint_stop = n.get("joint_stop", p.joint_stop);
   p.joint_damper_gain = n.get("joint_damper_gain", p.joint_damper_gain);
@@ -152,7 +160,10 @@ struct EhcQpController::Solver {
   int tcp_link = -1;                  ///< tree index of the TCP
   Matrix6Xd J, J_arm, J_point;        ///< TCP (world, arm) and obstacle point Jacobians
   Eigen::VectorXd Jm, h, c, lb, ub, x_eigen;
-  std::vector<char> held;             ///< per QP variable: left out of the problem (tsmm)
+  std::vector<char> held;             ///< per QP variable: left out of the problem (tsmm, wrist flip)
+  Eigen::VectorXd fixed;              ///< per QP variable: the value of a held one (0, or a wrist flip rate)
+  Eigen::VectorXd last_arm_rates;     ///< arm rates of this command (0 unless it succeeded)
+  Eigen::VectorXd prev_arm_rates;     ///< arm rates of the previous command
   Eigen::MatrixXd row_a;              ///< obstacle damper rows, one per column
   std::vector<double> row_b;
   int n_rows = 0;
@@ -181,6 +192,8 @@ EhcQpController::EhcQpController(std::shared_ptr<const WholeBodyModel> model,
   vmax_ = rc.velocityLimits();
   solver_->tcp_link = model_->linkIndex(rc.tcp_frame);
   yaw_joint_ = armYawJoint(*model_);
+  flip_ = std::make_unique<WristFlip>(*model_, params_.wrist_flip);
+  solver_->last_arm_rates = Eigen::VectorXd::Zero(model_->nArm());
 }
 
 EhcQpController::~EhcQpController() = default;
@@ -231,6 +244,7 @@ ControllerCommand EhcQpController::fail(ControllerCommand c, const std::string& 
   c.ok = false;
   c.qp_status = QpStatus::Failed;
   c.failure = why;
+  flip_->cancel();  // a flip resumes only from a fresh decision
   return c;
 }
 
@@ -293,6 +307,9 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
 
   // --- model: one FK pass; TCP pose, whole-body Jacobian, manipulability gradient
   Solver& s = *solver_;
+  // The previous command's arm rates (for WristFlip); zero unless this step succeeds.
+  s.prev_arm_rates.swap(s.last_arm_rates);
+  s.last_arm_rates.setZero(na);
   m.updateKinematics(base_pose, q, &s.kinematics);
   const Eigen::Isometry3d T_tcp = s.kinematics.linkPose(s.tcp_link);
   m.jacobian(s.kinematics, s.tcp_link, &s.J, &s.J_arm);
@@ -354,7 +371,19 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
   h.tail(6).setConstant(1.0 / e_floor);
   const Eigen::Vector3d tcp_in_base = s.kinematics.linkPoseInBase(s.tcp_link).translation();
   double bearing = std::atan2(tcp_in_base.y(), tcp_in_base.x());
-  if (params_.base_turn_unwinding && yaw_joint_ >= 0) bearing = unwoundBearing(bearing, q[yaw_joint_] - rc.arm_ready[yaw_joint_]);
+  if (params_.base_turn_unwinding && yaw_joint_ >= 0) {
+    // The branch of the yaw joint's winding, while the TCP lies on the side the yaw joint
+    // points to. Reaching over the shoulder (the TCP more than 90 deg from that direction)
+    // the winding's branch border (TCP opposite the yaw joint) is near, and sensor noise would
+    // flip the bearing by 2 pi and the base turn with it, cycle to cycle (Exp-1 traces: the
+    // base chattering between -1.0 and +0.3 rad/s for 20 s, TCP 2-7 cm short): there the
+    // bearing continues the previous cycle's branch instead.
+    const double winding = q[yaw_joint_] - rc.arm_ready[yaw_joint_];
+    const double relative = std::remainder(bearing - winding, 2.0 * M_PI);
+    bearing = unwoundBearing(bearing, have_bearing_ && std::abs(relative) > 0.5 * M_PI ? last_bearing_ : winding);
+    last_bearing_ = bearing;
+    have_bearing_ = true;
+  }
   c[nb - 1] = -params_.base_turn_gain * bearing;
   const double fade = params_.manipulability_fade_distance > 0.0
                           ? std::min(1.0, out.position_error / params_.manipulability_fade_distance)
@@ -444,6 +473,21 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
     if (!merged) s.row_b[static_cast<std::size_t>(s.n_rows++)] = b;
   }
 
+  // --- wrist flip (WristFlip): the triple's rates are prescribed (held at the flip rate, within
+  // the bounds and dampers), the orientation rows go to the slack; not when arrived, with the
+  // arm held, or with an obstacle within influence (the flip sweeps the hand).
+  const bool flip = flip_->update(q, s.prev_arm_rates, !lock_arm && out.phase != ControlPhase::Arrived && n_pairs == 0);
+  s.fixed.setZero(nx);
+  if (flip) {
+    for (int k = 0; k < 3; ++k) {
+      const int i = nb + flip_->first() + k;
+      held[static_cast<std::size_t>(i)] = 1;
+      s.fixed[i] = std::clamp(flip_->rates()[k], lb[i], ub[i]);
+    }
+    out.wrist_flip = true;
+    out.event = flip_->event();
+  }
+
   // --- assemble for vpQuadProg: min |Qx - r|^2 with Q^T Q = H (diagonal), r = -Q^-T c
   s.Q.resize(static_cast<unsigned>(nx), static_cast<unsigned>(nx), true);
   s.r.resize(static_cast<unsigned>(nx), false);
@@ -457,13 +501,17 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
   s.A.resize(6, static_cast<unsigned>(nx), true);
   s.b.resize(6, false);
   for (int r = 0; r < 6; ++r) {
-    for (int k = 0; k < nd; ++k)
-      s.A[static_cast<unsigned>(r)][static_cast<unsigned>(k)] =
-          held[static_cast<std::size_t>(k)] || (lock_arm && r >= 3) ? 0.0 : J(r, k);
-    s.A[static_cast<unsigned>(r)][static_cast<unsigned>(nd + r)] = 1.0;
     // The tsmm base stage only brings the TCP to the target position (orientation comes with
-    // the arm stage): its orientation rows are left to the slack.
-    s.b[static_cast<unsigned>(r)] = lock_arm && r >= 3 ? 0.0 : nu_e[r];
+    // the arm stage), and so does a wrist flip: their orientation rows are left to the slack.
+    const bool released = (lock_arm || flip) && r >= 3;
+    double br = released ? 0.0 : nu_e[r];
+    for (int k = 0; k < nd; ++k) {
+      const bool hk = held[static_cast<std::size_t>(k)];
+      if (hk && !released) br -= J(r, k) * s.fixed[k];  // a prescribed rate's share of the task
+      s.A[static_cast<unsigned>(r)][static_cast<unsigned>(k)] = hk || released ? 0.0 : J(r, k);
+    }
+    s.A[static_cast<unsigned>(r)][static_cast<unsigned>(nd + r)] = 1.0;
+    s.b[static_cast<unsigned>(r)] = br;
   }
   int n_held = 0;
   for (char hd : held) n_held += hd;
@@ -479,9 +527,13 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
     s.d[row++] = -lb[i];
   }
   for (int r = 0; r < s.n_rows; ++r) {
-    for (int k = 0; k < nx; ++k)
-      s.C[row][static_cast<unsigned>(k)] = held[static_cast<std::size_t>(k)] ? 0.0 : s.row_a(k, r);
-    s.d[row++] = s.row_b[static_cast<std::size_t>(r)];
+    double dr = s.row_b[static_cast<std::size_t>(r)];
+    for (int k = 0; k < nx; ++k) {
+      const bool hk = held[static_cast<std::size_t>(k)];
+      if (hk) dr -= s.row_a(k, r) * s.fixed[k];
+      s.C[row][static_cast<unsigned>(k)] = hk ? 0.0 : s.row_a(k, r);
+    }
+    s.d[row++] = dr;
   }
   if (n_in != s.last_rows) {  // warm start only while the constraint set keeps its shape
     s.qp.resetActiveSet();
@@ -511,14 +563,18 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
   }
   // The solver meets the bounds to its tolerance; clamp so limits are never exceeded.
   const double tol = 1e-4;
-  if (((x - ub).array() > tol).any() || ((lb - x).array() > tol).any()) {
+  bool violates = false;  // held variables are not in the problem (their value is set below)
+  for (int i = 0; i < nx; ++i)
+    violates = violates || (!held[static_cast<std::size_t>(i)] && (x[i] - ub[i] > tol || lb[i] - x[i] > tol));
+  if (violates) {
     s.qp.resetActiveSet();
     return fail(out, "QP solution violates the velocity bounds");
   }
   x = x.cwiseMax(lb).cwiseMin(ub);
   for (int i = 0; i < nx; ++i)
-    if (held[static_cast<std::size_t>(i)]) x[i] = 0.0;
+    if (held[static_cast<std::size_t>(i)]) x[i] = s.fixed[i];
   out.velocity = x.head(nd);
+  s.last_arm_rates = out.velocity.segment(nb, na);
   out.slack = x.tail<6>();
   out.ok = true;
   out.qp_status = QpStatus::Ok;

@@ -525,8 +525,10 @@ void WholeBodyModel::manipulabilityGradientFromJacobian(const Matrix6Xd& J, Eige
 }
 
 bool WholeBodyModel::inverseKinematics(const Eigen::Isometry3d& target, unsigned seed, int attempts,
-                                       Eigen::Vector3d* base_out, Eigen::VectorXd* q_out) const {
+                                       Eigen::Vector3d* base_out, Eigen::VectorXd* q_out, double limit_margin) const {
   if (!target.matrix().allFinite()) fail("inverseKinematics: target is not finite");
+  if (!(limit_margin >= 0.0) || ((cfg_.arm_upper - cfg_.arm_lower).array() <= 2.0 * limit_margin).any())
+    fail("inverseKinematics: limit margin must be >= 0 and leave every joint a range");
   // Virtual planar base (prismatic x, prismatic y, revolute yaw) followed by the TCP chain.
   KDL::Chain chain;
   chain.addSegment(KDL::Segment(KDL::Joint("virtual_x", KDL::Joint::TransX)));
@@ -543,8 +545,8 @@ bool WholeBodyModel::inverseKinematics(const Eigen::Isometry3d& target, unsigned
   lo(2) = -4.0 * M_PI;
   hi(2) = 4.0 * M_PI;
   for (int i = 0; i < nArm(); ++i) {
-    lo(3 + static_cast<unsigned>(i)) = cfg_.arm_lower[i];
-    hi(3 + static_cast<unsigned>(i)) = cfg_.arm_upper[i];
+    lo(3 + static_cast<unsigned>(i)) = cfg_.arm_lower[i] + limit_margin;
+    hi(3 + static_cast<unsigned>(i)) = cfg_.arm_upper[i] - limit_margin;
   }
   KDL::ChainFkSolverPos_recursive fk(chain);
   KDL::ChainIkSolverVel_pinv ikv(chain);
