@@ -195,6 +195,7 @@ GraspExperiment::RunOutput GraspExperiment::runOne(const RunSpec& spec) const {
       t.controller_tfm = r.controller_tfm;
       t.failed_phase = r.failed_phase;
       t.reason = r.reason;
+      t.close_offset = r.close_offset;
     } else {
       t.failed_phase = toString(pipe.sequencer().phase());
       t.reason = "run ended (sim time limit " + std::to_string(limit) + " s) before this object was handled";
@@ -422,13 +423,13 @@ void writeGraspResults(const std::string& dir, const GraspExperimentParams& para
   {
     std::ofstream f = open("trials.csv");
     f << "method,set,index,seed,object,approach,success,time_s,tfm,tfm_until_switch,controller_tfm,failed_phase,"
-         "reason,contact_steps,joint_limit_violations,min_obstacle_distance_m\n";
+         "reason,close_offset_m,contact_steps,joint_limit_violations,min_obstacle_distance_m\n";
     for (const auto& t : result.trials) {
       std::string reason = t.reason;
       std::replace(reason.begin(), reason.end(), '"', '\'');
       f << t.method << "," << t.set << "," << t.index << "," << t.seed << "," << t.object << "," << t.approach << ","
         << (t.success ? 1 : 0) << "," << t.time_s << "," << t.tfm << "," << t.tfm_until_switch << ","
-        << t.controller_tfm << "," << t.failed_phase << ",\"" << reason << "\"," << t.contact_steps << ","
+        << t.controller_tfm << "," << t.failed_phase << ",\"" << reason << "\"," << t.close_offset << "," << t.contact_steps << ","
         << t.joint_limit_violations << "," << t.min_obstacle_distance << "\n";
     }
   }
