@@ -15,7 +15,6 @@
 #include <geometry_msgs/PoseStamped.h>
 #include <ros/ros.h>
 #include <message_filters/subscriber.h>
-#include <tf2_ros/message_filter.h>
 #include <tf2_ros/transform_listener.h>
 
 #include <memory>
@@ -84,10 +83,7 @@ class TagNode {
     image_filter_.registerFailureCallback(
         [](const sensor_msgs::ImageConstPtr& m, tf2_ros::filter_failure_reasons::FilterFailureReason why) {
           ROS_WARN_STREAM_THROTTLE(kLogThrottle, "ehc_tag_node: image at " << m->header.stamp << " dropped before its camera pose arrived ("
-                                                       << (why == tf2_ros::filter_failure_reasons::Unknown        ? "queue full"
-                                                           : why == tf2_ros::filter_failure_reasons::OutTheBack ? "older than the tf cache"
-                                                                                                                : "no frame_id")
-                                                       << ")");
+                                                       << ros_conv::filterFailureText(why) << ")");
         });
     if (cfg_.camera_file.empty())
       info_sub_ = nh.subscribe(cfg_.camera_info_topic, 2, &TagNode::onInfo, this);
