@@ -64,6 +64,8 @@ def main():
             o["name"], "SUCCESS" if o["success"] else "FAILED", o["time_s"], 100.0 * o["tfm"],
             100.0 * o.get("tfm_until_switch", 0.0), 100.0 * o.get("tfm_until_close", 0.0), o["approach"],
             "perception candidate" if o["grasp_from_candidate"] else "tag target")
+        if o.get("close_offset_m", -1.0) >= 0.0:
+            line += "  closed %.1f mm from the grasp" % (1000.0 * o["close_offset_m"])
         if not o["success"]:
             line += "  [%s: %s]" % (o["failed_phase"], o["reason"])
         print(line)

@@ -246,10 +246,16 @@ TEST(GraspSequencer, PoseFilterSmoothsPerception) {
 }
 
 TEST(GraspSequencer, AStallNearTheGraspClosesThereAndAFarStallWaits) {
-  for (const double short_by : {0.015, 0.03}) {
+  // Grasp tolerance 4 mm, stall factor 2.5 (10 mm), max_close_offset 8 mm: a stall 7 mm short
+  // closes there; 9 mm (within the factor, beyond max_close_offset) and 30 mm wait, and the
+  // time limit fails the object saying how far the TCP stalled (issue 18: no grasp closes more
+  // than max_close_offset short of its planned pose).
+  for (const double short_by : {0.007, 0.009, 0.03}) {
     GraspSequencerParams p = twoObjects();
     p.objects.resize(1);
     p.object_time_limit = 5.0;
+    p.grasp_position_tolerance = 0.004;
+    p.max_close_offset = 0.008;
     Harness h(p);
     h.perceive = forwardTarget();
     while (h.seq.phase() != GraspPhase::Grasp && h.t < 20) h.step();
@@ -261,15 +267,19 @@ TEST(GraspSequencer, AStallNearTheGraspClosesThereAndAFarStallWaits) {
     h.run(0.9);
     EXPECT_EQ(h.seq.phase(), GraspPhase::Grasp) << "not stalled long enough yet";
     h.run(0.3);
-    if (short_by < p.stall_tolerance_factor * p.grasp_position_tolerance) {
+    if (short_by <= p.max_close_offset) {
       EXPECT_EQ(h.seq.phase(), GraspPhase::Close) << short_by;
-      EXPECT_TRUE(hasEvent(h.events, "stalled 1.5 cm from the grasp: closing there"));
+      EXPECT_TRUE(hasEvent(h.events, "stalled 0.7 cm from the grasp: closing there"));
     } else {
       EXPECT_EQ(h.seq.phase(), GraspPhase::Grasp) << short_by;
       h.run(5.0);
       ASSERT_EQ(h.seq.results().size(), 1u);
       EXPECT_FALSE(h.seq.results()[0].success);
       EXPECT_EQ(h.seq.results()[0].failed_phase, "GRASP");
+      EXPECT_LT(h.seq.results()[0].close_offset, 0.0) << "never closed";
+      EXPECT_NE(h.seq.results()[0].reason.find(short_by < 0.01 ? "TCP 0.9 cm from the grasp" : "TCP 3.0 cm from the grasp"),
+                std::string::npos)
+          << h.seq.results()[0].reason;
     }
   }
   // stall_time 0: off.
@@ -278,6 +288,9 @@ TEST(GraspSequencer, AStallNearTheGraspClosesThereAndAFarStallWaits) {
   EXPECT_NO_THROW(off.validate());
   off.stall_tolerance_factor = 0.5;
   EXPECT_THROW(off.validate(), std::invalid_argument);
+  GraspSequencerParams bad = twoObjects();
+  bad.max_close_offset = 0.0;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
 }
 
 TEST(GraspSequencer, StalePerceptionBeforeTheLockSearchesAgain) {

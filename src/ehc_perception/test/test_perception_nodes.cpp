@@ -23,6 +23,7 @@
 #include <sensor_msgs/point_cloud2_iterator.h>
 #include <tf2_eigen/tf2_eigen.h>
 #include <tf2_ros/static_transform_broadcaster.h>
+#include <tf2_ros/transform_broadcaster.h>
 
 #include <cmath>
 #include <functional>
@@ -230,6 +231,39 @@ TEST_F(PerceptionNodes, TagNodePublishesTheTargetInOdom) {
   EXPECT_LT((T.translation() - truth.translation()).norm(), 0.005)
       << T.translation().transpose() << " vs " << truth.translation().transpose();
   EXPECT_LT(Eigen::AngleAxisd(T.linear().transpose() * truth.linear()).angle(), 2.0 * M_PI / 180);
+}
+
+TEST_F(PerceptionNodes, TagNodeWaitsForTheCameraPoseOfALateImage) {
+  // Issue 18: under load the camera pose (tf) at an image's stamp can reach the tag node after
+  // the image, later than its tf_timeout (0.05 s): the image used to be dropped. Here an image in
+  // a frame with no pose yet; its pose follows 0.5 s later; the target must come, at that stamp.
+  ASSERT_TRUE(spinUntil([&] { return !targets_.empty(); }, 30.0)) << "the tag node does not run";
+  const char* late_frame = "late_camera";
+  sensor_msgs::Image image = image_;
+  const ros::Time stamp = ros::Time::now();
+  image.header.stamp = stamp;
+  image.header.frame_id = late_frame;
+  image_pub_.publish(image);
+  const ros::WallTime t0 = ros::WallTime::now();
+  while (ros::WallTime::now() - t0 < ros::WallDuration(0.5)) {
+    ros::spinOnce();
+    ros::WallDuration(0.01).sleep();
+  }
+  for (const auto& m : targets_) EXPECT_NE(m.header.stamp, stamp) << "a target without a camera pose";
+  geometry_msgs::TransformStamped tf = tf2::eigenToTransform(worldFromCamera());
+  tf.header.frame_id = "odom";
+  tf.child_frame_id = late_frame;
+  tf.header.stamp = stamp;
+  tf2_ros::TransformBroadcaster broadcaster;
+  const ros::WallTime t1 = ros::WallTime::now();
+  bool got = false;
+  while (!got && ros::WallTime::now() - t1 < ros::WallDuration(10.0)) {
+    broadcaster.sendTransform(tf);  // until the node's listener is connected
+    ros::spinOnce();
+    for (const auto& m : targets_) got = got || m.header.stamp == stamp;
+    ros::WallDuration(0.05).sleep();
+  }
+  ASSERT_TRUE(got) << "the late image was dropped instead of waiting for its camera pose";
 }
 
 TEST_F(PerceptionNodes, GraspNodePublishesGraspsOnTheObjectNearTheTarget) {

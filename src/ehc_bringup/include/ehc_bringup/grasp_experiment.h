@@ -76,6 +76,7 @@ struct GraspTrial {
   double time_s = 0.0;
   double tfm = 0.0, tfm_until_switch = 0.0, controller_tfm = 0.0;
   std::string failed_phase, reason;
+  double close_offset = -1.0;        ///< m, GraspResult::close_offset
   long contact_steps = 0;            ///< sim steps with a robot-scene or self collision
   long joint_limit_violations = 0;   ///< arm joint samples outside the limits
   ObstacleExtreme nearest;           ///< the smallest perceived link-obstacle distance

@@ -100,6 +100,7 @@ struct PipelineCycle {
   ObstaclePairRecord nearest_obstacle, tightest_obstacle;
   bool collision = false;                ///< the sim step found a robot-world or self collision
   int joint_limit_violations = 0;        ///< arm joints outside their limits after the step
+  std::vector<std::string> events;       ///< the sequencer's progress lines of this cycle
 };
 
 /// Work done so far (counts, and wall seconds per stage for `make bench`).

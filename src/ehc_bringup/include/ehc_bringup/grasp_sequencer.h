@@ -23,7 +23,7 @@
 //   PRE_GRASP    the grasp is locked in the world frame (the object is static until touched, and
 //                the tag may leave the view at close range); goal = pre-grasp pose, tight tolerance
 //   GRASP        goal = grasp pose; ends within grasp tolerance (or stalled near it, see
-//                stall_time; PRE_GRASP likewise)
+//                stall_time, never farther than max_close_offset; PRE_GRASP likewise)
 //   CLOSE        gripper close command once; HOLDING -> LIFT, CLOSED_EMPTY -> failure
 //   LIFT         goal = grasp pose raised by lift_height; the simulator's grasp result decides:
 //                grasp_succeeded -> success, the object dropped -> failure
@@ -100,6 +100,10 @@ struct GraspSequencerParams {
   /// (the object time limit ends it). stall_time 0: off.
   double stall_time = 1.0;                ///< s
   double stall_tolerance_factor = 2.5;
+  /// m: the gripper never closes farther than this from the locked grasp position, stalled or
+  /// not (issue 18: a grasp closed 2.4 cm short closed on nothing). A stall in GRASP beyond it
+  /// keeps waiting; the object time limit then fails it and says how far the TCP stalled.
+  double max_close_offset = 0.01;
   /// TfM counts the approach until sig(w) reaches this (the arm takes over), see above.
   /// (0, 1]; 1 = until the pre-grasp switch.
   double tfm_handover_sig = 0.5;
@@ -158,6 +162,9 @@ struct GraspResult {
   std::string failed_phase;       ///< "" on success
   std::string reason;             ///< "" on success
   bool used_candidate = false;    ///< grasp from perception candidates (else the tag fallback)
+  /// m, TCP position to the locked grasp position when the gripper was commanded to close;
+  /// -1: it never closed. Above grasp_position_tolerance only after a stall (see stall_time).
+  double close_offset = -1.0;
   std::string approach;           ///< wanted approach direction
   std::vector<std::pair<std::string, double>> phase_times;  ///< phase -> s spent
   std::vector<std::pair<std::string, long>> controller_phases;  ///< controller phase -> cycles

@@ -226,6 +226,7 @@ GraspExperiment::RunOutput GraspExperiment::runOne(const RunSpec& spec) const {
       t.controller_tfm = r.controller_tfm;
       t.failed_phase = r.failed_phase;
       t.reason = r.reason;
+      t.close_offset = r.close_offset;
     } else {
       t.failed_phase = toString(pipe.sequencer().phase());
       t.reason = "run ended (sim time limit " + std::to_string(limit) + " s) before this object was handled";
@@ -477,14 +478,14 @@ void writeGraspResults(const std::string& dir, const GraspExperimentParams& para
   {
     std::ofstream f = open("trials.csv");
     f << "method,set,index,seed,object,approach,success,time_s,tfm,tfm_until_switch,controller_tfm,failed_phase,"
-         "reason,contact_steps,joint_limit_violations,min_obstacle_distance_m,min_obstacle_link,min_obstacle_body,"
+         "reason,close_offset_m,contact_steps,joint_limit_violations,min_obstacle_distance_m,min_obstacle_link,min_obstacle_body,"
          "min_obstacle_phase,min_margin_m,min_margin_link,min_margin_body,min_margin_phase\n";
     for (const auto& t : result.trials) {
       std::string reason = t.reason;
       std::replace(reason.begin(), reason.end(), '"', '\'');
       f << t.method << "," << t.set << "," << t.index << "," << t.seed << "," << t.object << "," << t.approach << ","
         << (t.success ? 1 : 0) << "," << t.time_s << "," << t.tfm << "," << t.tfm_until_switch << ","
-        << t.controller_tfm << "," << t.failed_phase << ",\"" << reason << "\"," << t.contact_steps << ","
+        << t.controller_tfm << "," << t.failed_phase << ",\"" << reason << "\"," << t.close_offset << "," << t.contact_steps << ","
         << t.joint_limit_violations << "," << t.nearest.distance << "," << t.nearest.link << "," << t.nearest.body
         << "," << t.nearest.phase << "," << (t.tightest.distance < 0.0 ? 0.0 : t.tightest.margin()) << ","
         << t.tightest.link << "," << t.tightest.body << "," << t.tightest.phase << "\n";

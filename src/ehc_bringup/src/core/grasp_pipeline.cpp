@@ -256,6 +256,7 @@ const PipelineCycle& GraspPipeline::step() {
       if (!err.empty()) throw std::runtime_error("[GraspPipeline] exclusion zones rejected: " + err);
     }
     if (s.gripper_command) world_->commandGripper(*s.gripper_command);
+    last_.events = s.events;
     last_.phase = sequencer_->phase();
   }
 

@@ -60,6 +60,8 @@ void GraspSequencerParams::validate() const {
   check(std::isfinite(stall_time) && stall_time >= 0.0 && stall_time <= 30.0, "stall_time must be in [0, 30] s");
   check(std::isfinite(stall_tolerance_factor) && stall_tolerance_factor >= 1.0 && stall_tolerance_factor <= 10.0,
         "stall_tolerance_factor must be in [1, 10]");
+  check(std::isfinite(max_close_offset) && max_close_offset > 0.0 && max_close_offset <= 0.05,
+        "max_close_offset must be in (0, 0.05] m");
   check(std::isfinite(tfm_handover_sig) && tfm_handover_sig > 0.0 && tfm_handover_sig <= 1.0,
         "tfm_handover_sig must be in (0, 1]");
   positive(pregrasp_position_tolerance, "pregrasp_position_tolerance");
@@ -91,7 +93,8 @@ std::string GraspSequencerParams::summary() const {
     << " m, pose filter gain " << pose_filter_gain << ", pre-grasp " << pregrasp_distance << " m"
     << "\n  pre-grasp from " << pregrasp_switch_distance << " m; tolerances: pre-grasp " << pregrasp_position_tolerance << " m/" << pregrasp_orientation_tolerance_deg
     << " deg, grasp " << grasp_position_tolerance << " m/" << grasp_orientation_tolerance_deg << " deg"
-    << " (stalled for " << stall_time << " s: x" << stall_tolerance_factor << ")"
+    << " (stalled for " << stall_time << " s: x" << stall_tolerance_factor << "; the gripper closes within "
+    << max_close_offset << " m)"
     << "; TfM until sig(w) >= " << tfm_handover_sig << " or the pre-grasp switch"
     << "\n  gripper timeout " << gripper_timeout << " s, lift " << lift_height << " m, release timeout "
     << release_timeout << " s, retreat " << retreat_distance << " m back + " << retreat_raise << " m up (tol "
@@ -121,6 +124,7 @@ GraspSequencerParams loadGraspSequencerParams(const ehc_control::ConfigNode& roo
   p.pregrasp_switch_distance = s.get("pregrasp_switch_distance", p.pregrasp_switch_distance);
   p.stall_time = s.get("stall_time", p.stall_time);
   p.stall_tolerance_factor = s.get("stall_tolerance_factor", p.stall_tolerance_factor);
+  p.max_close_offset = s.get("max_close_offset", p.max_close_offset);
   p.tfm_handover_sig = s.get("tfm_handover_sig", p.tfm_handover_sig);
   p.pregrasp_position_tolerance = s.get("pregrasp_position_tolerance", p.pregrasp_position_tolerance);
   p.pregrasp_orientation_tolerance_deg = s.get("pregrasp_orientation_tolerance_deg", p.pregrasp_orientation_tolerance_deg);
@@ -390,6 +394,12 @@ SequencerOutput GraspSequencer::update(const SequencerInput& in) {
   if (phase_ <= GraspPhase::Lift && in_object > params_.object_time_limit) {
     std::ostringstream s;
     s << "time limit " << params_.object_time_limit << " s in " << toString(phase_);
+    if (locked_ && in.tcp && isValidPose(*in.tcp) && (phase_ == GraspPhase::PreGrasp || phase_ == GraspPhase::Grasp)) {
+      const Eigen::Isometry3d goal = phase_ == GraspPhase::Grasp ? locked_->pose : preGrasp(locked_->pose);
+      s << " (TCP " << num((in.tcp->translation() - goal.translation()).norm() * 100.0, 1) << " cm from the "
+        << (phase_ == GraspPhase::Grasp ? "grasp" : "pre-grasp") << ", " << num(t - best_distance_t_, 1)
+        << " s since it last came closer)";
+    }
     finishObject(t, false, s.str(), in, &out);
     return out;
   }
@@ -448,13 +458,16 @@ SequencerOutput GraspSequencer::update(const SequencerInput& in) {
     case GraspPhase::Grasp: {
       out.goal = locked_->pose;
       const bool there = within(in, locked_->pose, params_.grasp_position_tolerance, params_.grasp_orientation_tolerance_deg);
-      if (there || nearEnoughWhenStalled(in, locked_->pose, params_.grasp_position_tolerance,
-                                         params_.grasp_orientation_tolerance_deg)) {
+      const double stall_tolerance =
+          std::min(params_.stall_tolerance_factor * params_.grasp_position_tolerance, params_.max_close_offset) /
+          params_.stall_tolerance_factor;
+      if (there || nearEnoughWhenStalled(in, locked_->pose, stall_tolerance, params_.grasp_orientation_tolerance_deg)) {
         enter(GraspPhase::Close, t, &out,
               there ? "" : "stalled " + num((in.tcp->translation() - locked_->pose.translation()).norm() * 100.0, 1) +
                                " cm from the grasp: closing there");
         counting_tfm_ = false;
         out.gripper_command = true;
+        cur_.close_offset = (in.tcp->translation() - locked_->pose.translation()).norm();
         centre_in_tcp_ = in.tcp->inverse() * locked_object_centre_;  // within() checked the TCP
       }
       break;
@@ -569,7 +582,8 @@ std::string graspResultsToJson(const std::vector<GraspResult>& results, const st
       << ", \"tfm_until_close\": " << num(r.tfm_until_close, 4) << ", \"controller_tfm\": " << num(r.controller_tfm, 4)
       << ", \"approach\": " << jsonString(r.approach) << ", \"grasp_from_candidate\": "
       << (r.used_candidate ? "true" : "false") << ", \"failed_phase\": " << jsonString(r.failed_phase)
-      << ", \"reason\": " << jsonString(r.reason) << ", \"phase_times\": {";
+      << ", \"reason\": " << jsonString(r.reason) << ", \"close_offset_m\": " << num(r.close_offset, 4)
+      << ", \"phase_times\": {";
     for (std::size_t k = 0; k < r.phase_times.size(); ++k)
       s << (k ? ", " : "") << jsonString(r.phase_times[k].first) << ": " << num(r.phase_times[k].second, 2);
     s << "}, \"controller_phase_cycles\": {";
@@ -588,6 +602,7 @@ std::string graspResultLine(const GraspResult& r) {
     << std::setw(5) << 100.0 * r.tfm << " % (" << std::setw(5) << 100.0 * r.tfm_until_switch
     << " % to the pre-grasp switch)  grasp " << (r.used_candidate ? "perception candidate" : "tag fallback")
     << " (" << r.approach << ")";
+  if (r.close_offset >= 0.0) s << "  closed " << std::setprecision(1) << 1000.0 * r.close_offset << " mm from the grasp";
   if (!r.success) s << "  [" << r.failed_phase << ": " << r.reason << "]";
   return s.str();
 }

@@ -4,7 +4,9 @@
 // cloud stamp), the support plane removed and the objects clustered; grasps are generated
 // for the object nearest the latest /ehc/target_pose (or every object without a fresh
 // target) and published best first (ehc_msgs/GraspCandidates, world frame). A cloud
-// without a usable grasp publishes an empty candidate list (reason in the log).
+// without a usable grasp publishes an empty candidate list (reason in the log). Clouds wait in
+// a tf2_ros::MessageFilter until the camera pose at their stamp is known (as in ehc_tag_node,
+// issue 18: a lookup with a timeout on lock-step sim time dropped clouds under CPU load).
 #include "ehc_msgs/GraspCandidates.h"
 #include "ehc_control/config_node.h"
 #include "ehc_perception/grasp_generator.h"
@@ -13,6 +15,7 @@
 
 #include <geometry_msgs/PoseStamped.h>
 #include <ros/ros.h>
+#include <message_filters/subscriber.h>
 #include <tf2_ros/transform_listener.h>
 
 namespace {
@@ -27,13 +30,15 @@ struct GraspNodeConfig {
   std::string output_topic = "/ehc/grasp_candidates";
   std::string world_frame = "odom";
   GraspTargetingParams targeting;  ///< max rate, target timeout and gate
-  double tf_timeout = 0.1;       ///< s
+  double tf_timeout = 0.1;       ///< s, lookup once the filter passed the cloud (the pose is there)
+  int cloud_queue = 3;           ///< clouds waiting for their camera pose (the oldest is dropped)
   GraspGeneratorConfig generator;
 
   std::string summary() const {
     return "ehc_grasp_node: " + cloud_topic + " -> " + output_topic + " in '" + world_frame +
            "', target " + (target_topic.empty() ? std::string("<none>") : target_topic) + ", " +
-           targeting.summary() + "\n  " + generator.summary();
+           targeting.summary() + ", " + std::to_string(cloud_queue) + " clouds wait for their camera pose\n  " +
+           generator.summary();
   }
 };
 
@@ -48,6 +53,8 @@ GraspNodeConfig loadGraspNodeConfig(const std::string& path) {
   c.targeting = loadGraspTargetingParams(n);
   c.tf_timeout = n.get("tf_timeout", c.tf_timeout);
   ehc_control::requireRange("GraspNode", "node.tf_timeout", c.tf_timeout, 0.0, 5.0);
+  c.cloud_queue = n.get("cloud_queue", c.cloud_queue);
+  ehc_control::requireRange("GraspNode", "node.cloud_queue", c.cloud_queue, 1, 100);
   c.generator = loadGraspGeneratorConfig(root.childOrEmpty("grasp_generator"));
   root.rejectUnknownKeys();  // a key no loader read is a misspelling
   return c;
@@ -56,9 +63,19 @@ GraspNodeConfig loadGraspNodeConfig(const std::string& path) {
 class GraspNode {
  public:
   GraspNode(ros::NodeHandle& nh, const GraspNodeConfig& cfg)
-      : cfg_(cfg), gen_(cfg.generator), listener_(tf_), limiter_(cfg.targeting.max_rate_hz) {
+      : cfg_(cfg),
+        gen_(cfg.generator),
+        listener_(tf_),
+        cloud_sub_(nh, cfg_.cloud_topic, static_cast<std::uint32_t>(cfg_.cloud_queue)),
+        cloud_filter_(cloud_sub_, tf_, cfg_.world_frame, static_cast<std::uint32_t>(cfg_.cloud_queue), nh),
+        limiter_(cfg.targeting.max_rate_hz) {
     pub_ = nh.advertise<ehc_msgs::GraspCandidates>(cfg_.output_topic, 2);
-    cloud_sub_ = nh.subscribe(cfg_.cloud_topic, 1, &GraspNode::onCloud, this);
+    cloud_filter_.registerCallback(&GraspNode::onCloud, this);
+    cloud_filter_.registerFailureCallback(
+        [](const sensor_msgs::PointCloud2ConstPtr& m, tf2_ros::filter_failure_reasons::FilterFailureReason why) {
+          ROS_DEBUG_STREAM_THROTTLE(kLogThrottle, "ehc_grasp_node: cloud at " << m->header.stamp << " dropped before its camera pose arrived ("
+                                                        << ros_conv::filterFailureText(why) << ")");
+        });
     if (!cfg_.target_topic.empty())
       target_sub_ = nh.subscribe(cfg_.target_topic, 5, &GraspNode::onTarget, this);
   }
@@ -76,7 +93,8 @@ class GraspNode {
     have_target_ = true;
   }
 
-  void onCloud(const sensor_msgs::PointCloud2& msg) {
+  void onCloud(const sensor_msgs::PointCloud2ConstPtr& cloud) {
+    const sensor_msgs::PointCloud2& msg = *cloud;
     const ros::Time now = ros::Time::now();
     if (!limiter_.accept(now.toSec())) return;
     try {
@@ -107,8 +125,10 @@ class GraspNode {
   GraspGenerator gen_;
   tf2_ros::Buffer tf_;
   tf2_ros::TransformListener listener_;
+  message_filters::Subscriber<sensor_msgs::PointCloud2> cloud_sub_;
+  tf2_ros::MessageFilter<sensor_msgs::PointCloud2> cloud_filter_;  ///< passes a cloud once its camera pose is known
   ros::Publisher pub_;
-  ros::Subscriber cloud_sub_, target_sub_;
+  ros::Subscriber target_sub_;
   RateLimiter limiter_;  ///< targeting.max_rate_hz on ROS time
   bool have_target_ = false;
   Eigen::Vector3d target_ = Eigen::Vector3d::Zero();

@@ -3,12 +3,18 @@
 // The pose of the configured tag, with its grasp offset, is transformed into the world frame
 // (odom) with tf2 at the image time stamp and published as geometry_msgs/PoseStamped. Nothing
 // is published for an image without the target (the controller's watchdog handles that).
+// Images wait in a tf2_ros::MessageFilter until the camera pose at their stamp is known
+// (issue 18): with a lock-step simulator under CPU load the /tf of an image's stamp can reach
+// the listener after the image, later than any fixed timeout on sim time, and a lookup with a
+// timeout dropped such images ("extrapolation into the future": the back object's tag was
+// never detected). Only a full queue (image_queue, newest kept) drops an image now.
 #include "ehc_control/config_node.h"
 #include "ehc_perception/tag_detector.h"
 #include "ros_conversions.h"
 
 #include <geometry_msgs/PoseStamped.h>
 #include <ros/ros.h>
+#include <message_filters/subscriber.h>
 #include <tf2_ros/transform_listener.h>
 
 #include <memory>
@@ -27,7 +33,8 @@ struct TagNodeConfig {
   std::string world_frame = "odom";
   std::string camera_frame;  ///< "" = the image's header.frame_id
   std::string camera_file;   ///< optional camera_info YAML; "" = use the camera_info topic
-  double tf_timeout = 0.05;  ///< s
+  double tf_timeout = 0.05;  ///< s, lookup of a camera_frame other than the image's (see above)
+  int image_queue = 5;       ///< images waiting for their camera pose (the oldest is dropped)
   TagDetectorConfig detector;
   TagTargetConfig target;
 
@@ -36,7 +43,8 @@ struct TagNodeConfig {
            (camera_file.empty() ? camera_info_topic : camera_file) + " -> " + target_topic +
            " in '" + world_frame + "' (camera frame '" +
            (camera_frame.empty() ? "<image header>" : camera_frame) + "', tf timeout " +
-           std::to_string(tf_timeout) + " s)\n  " + detector.summary() + "\n  " + target.summary();
+           std::to_string(tf_timeout) + " s, " + std::to_string(image_queue) +
+           " images wait for their camera pose)\n  " + detector.summary() + "\n  " + target.summary();
   }
 };
 
@@ -53,6 +61,8 @@ TagNodeConfig loadTagNodeConfig(const std::string& path) {
   if (!c.camera_file.empty()) c.camera_file = root.resolvePath(c.camera_file);
   c.tf_timeout = n.get("tf_timeout", c.tf_timeout);
   ehc_control::requireRange("TagNode", "node.tf_timeout", c.tf_timeout, 0.0, 5.0);
+  c.image_queue = n.get("image_queue", c.image_queue);
+  ehc_control::requireRange("TagNode", "node.image_queue", c.image_queue, 1, 100);
   if (c.world_frame.empty()) n.fail("world_frame", "must not be empty");
   c.detector = loadTagDetectorConfig(root.childOrEmpty("tag_detector"));
   c.target = loadTagTargetConfig(root.childOrEmpty("target"));
@@ -62,10 +72,19 @@ TagNodeConfig loadTagNodeConfig(const std::string& path) {
 
 class TagNode {
  public:
-  TagNode(ros::NodeHandle& nh, const TagNodeConfig& cfg) : cfg_(cfg), listener_(tf_) {
+  TagNode(ros::NodeHandle& nh, const TagNodeConfig& cfg)
+      : cfg_(cfg),
+        listener_(tf_),
+        image_sub_(nh, cfg_.image_topic, static_cast<std::uint32_t>(cfg_.image_queue)),
+        image_filter_(image_sub_, tf_, cfg_.world_frame, static_cast<std::uint32_t>(cfg_.image_queue), nh) {
     if (!cfg_.camera_file.empty()) build(ehc_control::loadPinholeCamera(cfg_.camera_file));
     pub_ = nh.advertise<geometry_msgs::PoseStamped>(cfg_.target_topic, 10);
-    image_sub_ = nh.subscribe(cfg_.image_topic, 2, &TagNode::onImage, this);
+    image_filter_.registerCallback(&TagNode::onImage, this);
+    image_filter_.registerFailureCallback(
+        [](const sensor_msgs::ImageConstPtr& m, tf2_ros::filter_failure_reasons::FilterFailureReason why) {
+          ROS_WARN_STREAM_THROTTLE(kLogThrottle, "ehc_tag_node: image at " << m->header.stamp << " dropped before its camera pose arrived ("
+                                                       << ros_conv::filterFailureText(why) << ")");
+        });
     if (cfg_.camera_file.empty())
       info_sub_ = nh.subscribe(cfg_.camera_info_topic, 2, &TagNode::onInfo, this);
   }
@@ -94,7 +113,8 @@ class TagNode {
     }
   }
 
-  void onImage(const sensor_msgs::Image& msg) {
+  void onImage(const sensor_msgs::ImageConstPtr& image) {
+    const sensor_msgs::Image& msg = *image;
     if (!detector_) {
       ROS_WARN_THROTTLE(kLogThrottle, "ehc_tag_node: no camera_info yet, image ignored");
       return;
@@ -127,8 +147,10 @@ class TagNode {
   tf2_ros::TransformListener listener_;
   std::unique_ptr<TagDetector> detector_;
   vpImage<unsigned char> gray_;
+  message_filters::Subscriber<sensor_msgs::Image> image_sub_;
+  tf2_ros::MessageFilter<sensor_msgs::Image> image_filter_;  ///< passes an image once its camera pose is known
   ros::Publisher pub_;
-  ros::Subscriber image_sub_, info_sub_;
+  ros::Subscriber info_sub_;
 };
 
 }  // namespace
