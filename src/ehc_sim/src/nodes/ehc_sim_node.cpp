@@ -46,7 +46,7 @@ class SimNode {
     ehc_sim::applyNodeOverrides(pnh, "ehc_sim_node", &cfg_.fake_robot);
     const ehc_control::RobotConfig robot = ehc_control::loadRobotConfig(cfg_.fake_robot.robot_file);
     const ehc_sim::SceneConfig scene = ehc_sim::loadSceneConfig(scene_file);
-    const ehc_control::PinholeCamera intrinsics = ehc_control::loadPinholeCamera(cfg_.camera_file);
+    const ehc_control::PinholeCamera intrinsics = ehc_control::loadPinholeCamera(ehc_sim::simCameraFile(cfg_, robot));
     ROS_INFO_STREAM("[ehc_sim_node] start-up configuration\n"
                     << cfg_.summary() << robot.summary() << "\n"
                     << scene.summary());
