@@ -31,7 +31,7 @@ bench: build
 	src/ehc_bringup/scripts/bench.sh
 
 experiments: build
-	src/ehc_bringup/scripts/experiments.sh
+	ROBOT="$(ROBOT)" src/ehc_bringup/scripts/experiments.sh
 
 clean:
 	rm -rf build devel install
