@@ -60,7 +60,7 @@ Args parse(int argc, char** argv) {
   if (a.command != "reach") throw std::invalid_argument("unknown command '" + a.command + "' (reach, grasp, poses)");
   const ehc_control::CommandLine cli(argc, argv,
                                      {"robot", "method", "out", "sets", "points", "seed", "targets",
-                                      "config", "map", "trace", "noise", "base-model"},
+                                      "config", "map", "trace", "noise", "base-model", "protocol"},
                                      {"all-targets"}, /*first=*/2);
   a.robot = ehc_control::resolveRobotFile(cli.text("robot"));  // a robot name or a robot.yaml
   a.out = cli.text("out");
@@ -75,6 +75,7 @@ Args parse(int argc, char** argv) {
   a.all_targets = cli.has("all-targets");
   a.noise = cli.choice("noise", {"on", "off"}, "on") == "on";
   a.base_model = ehc_sim::baseModelTypeFromString(cli.choice("base-model", {"ideal", "water2"}, "ideal"));
+  a.protocol = ehc_bringup::reachProtocolFromString(cli.choice("protocol", {"sequence", "reset"}, "sequence"));
   return a;
 }
 
