@@ -167,7 +167,7 @@ OBSTACLE_ARG=()
 [ "${OBSTACLES:-1}" = 1 ] || OBSTACLE_ARG=(_require_obstacles:=false)
 start controller rosrun ehc_control ehc_controller_node _config:="$CONTROLLER_CONFIG" _mode:="$MODE" "${MPBS_ARG[@]}" \
   "${OBSTACLE_ARG[@]}" "${ROBOT_ARG[@]}"
-start sequencer rosrun ehc_bringup ehc_grasp_sequencer_node _config:="$SEQUENCER_CONFIG" \
+start sequencer rosrun ehc_bringup ehc_grasp_sequencer_node _config:="$SEQUENCER_CONFIG" "${ROBOT_ARG[@]}" \
   _summary:="$OUT/summary.json" _trace:="$OUT/trace.csv"
 SEQ_PID=${PIDS[-1]}
 
