@@ -20,8 +20,9 @@ deps:
 build: deps
 	$(CATKIN)
 
+# make demo ROBOT=kuka_iiwa14_kmr: another robot (config/robots/<name>/ or a robot.yaml path)
 demo: build
-	src/ehc_bringup/scripts/demo.sh
+	ROBOT="$(ROBOT)" src/ehc_bringup/scripts/demo.sh
 
 test: deps
 	JOBS=$(JOBS) test/run_tests.sh
@@ -30,7 +31,7 @@ bench: build
 	src/ehc_bringup/scripts/bench.sh
 
 experiments: build
-	src/ehc_bringup/scripts/experiments.sh
+	ROBOT="$(ROBOT)" src/ehc_bringup/scripts/experiments.sh
 
 clean:
 	rm -rf build devel install

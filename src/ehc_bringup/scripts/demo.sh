@@ -20,6 +20,8 @@
 #   SEQUENCER_CONFIG   grasp sequencer YAML                           [config/demo/grasp_sequencer.yaml]
 #   SIM_CONFIG         simulator YAML                                 [config/sim/bullet_sim.yaml]
 #   SCENE              scene YAML                                     [config/scenes/table_three_objects.yaml]
+#   ROBOT              robot name (config/robots/<name>/) or robot.yaml path for the simulator,
+#                      the controller and the obstacle node           [the configs' own: realman_rm65_water2]
 #   SEED               simulator noise seed                           [1]
 #   WALL_LIMIT         wall-clock guard for the whole run, s           [600]
 #   TAG_OBJECTS        objects with a tag node config/demo/tag_<name>.yaml  [front middle back]
@@ -48,6 +50,17 @@ SEQUENCER_CONFIG="${SEQUENCER_CONFIG:-config/demo/grasp_sequencer.yaml}"
 SIM_CONFIG="${SIM_CONFIG:-config/sim/bullet_sim.yaml}"
 SCENE="${SCENE:-config/scenes/table_three_objects.yaml}"
 SEED="${SEED:-1}"
+# One robot switch: every node that models the robot gets _robot:= (a name or a robot.yaml).
+ROBOT_ARG=()
+if [ -n "${ROBOT:-}" ]; then
+  case "$ROBOT" in
+    */*|*.yaml) [ -f "$ROBOT" ] || { echo "demo.sh: robot file not found: $ROBOT" >&2; exit 2; }
+                ROBOT_ARG=(_robot:="$(cd "$(dirname "$ROBOT")" && pwd)/$(basename "$ROBOT")") ;;
+    *) [ -f "config/robots/$ROBOT/robot.yaml" ] || {
+         echo "demo.sh: unknown robot '$ROBOT' (robots: $(ls config/robots | tr '\n' ' '))" >&2; exit 2; }
+       ROBOT_ARG=(_robot:="$ROBOT") ;;
+  esac
+fi
 WALL_LIMIT="${WALL_LIMIT:-600}"
 # One tag node per object: config/demo/tag_<object>.yaml (the sequencer config lists the same).
 read -r -a OBJECTS <<<"${TAG_OBJECTS:-front middle back}"
@@ -124,7 +137,7 @@ start() {  # start NAME COMMAND...
   NAMES+=("$name")
 }
 
-echo "== EHC-MM demo: grasp ${#OBJECTS[@]} object(s) with the EHC controller (scene $SCENE, mode $MODE${MPBS:+, MPBS $MPBS}, seed $SEED)"
+echo "== EHC-MM demo: grasp ${#OBJECTS[@]} object(s) with the EHC controller (${ROBOT:+robot $ROBOT, }scene $SCENE, mode $MODE${MPBS:+, MPBS $MPBS}, seed $SEED)"
 echo "   master $ROS_MASTER_URI, logs in $OUT/logs/"
 t0=$(date +%s.%N)
 start rosmaster rosmaster --core -p "$PORT"
@@ -139,7 +152,8 @@ clear_private_params ehc_sim_node "${TAG_NODES[@]}" ehc_grasp_node ehc_obstacle_
   ehc_controller_node ehc_grasp_sequencer_node
 
 # shellcheck disable=SC2086
-start sim rosrun ${SIM_PREFIX:+--prefix "$SIM_PREFIX"} ehc_sim ehc_sim_node _config:="$SIM_CONFIG" _scene:="$SCENE" _seed:="$SEED"
+start sim rosrun ${SIM_PREFIX:+--prefix "$SIM_PREFIX"} ehc_sim ehc_sim_node _config:="$SIM_CONFIG" _scene:="$SCENE" _seed:="$SEED" \
+  "${ROBOT_ARG[@]}"
 for o in "${OBJECTS[@]}"; do
   start "tag_$o" rosrun ehc_perception ehc_tag_node _config:="config/demo/tag_$o.yaml" __name:="ehc_tag_$o"
 done
@@ -147,13 +161,13 @@ done
 start grasp rosrun ehc_perception ehc_grasp_node _config:=config/perception/grasp_node.yaml \
   /ehc/target_pose:=/ehc/sequencer/object_pose
 [ "${OBSTACLES:-1}" = 1 ] &&
-  start obstacles rosrun ehc_perception ehc_obstacle_node _config:=config/demo/obstacle_node.yaml
+  start obstacles rosrun ehc_perception ehc_obstacle_node _config:=config/demo/obstacle_node.yaml "${ROBOT_ARG[@]}"
 # Without the obstacle node the controller must not wait for obstacle lists (OBSTACLES_STALE).
 OBSTACLE_ARG=()
 [ "${OBSTACLES:-1}" = 1 ] || OBSTACLE_ARG=(_require_obstacles:=false)
 start controller rosrun ehc_control ehc_controller_node _config:="$CONTROLLER_CONFIG" _mode:="$MODE" "${MPBS_ARG[@]}" \
-  "${OBSTACLE_ARG[@]}"
-start sequencer rosrun ehc_bringup ehc_grasp_sequencer_node _config:="$SEQUENCER_CONFIG" \
+  "${OBSTACLE_ARG[@]}" "${ROBOT_ARG[@]}"
+start sequencer rosrun ehc_bringup ehc_grasp_sequencer_node _config:="$SEQUENCER_CONFIG" "${ROBOT_ARG[@]}" \
   _summary:="$OUT/summary.json" _trace:="$OUT/trace.csv"
 SEQ_PID=${PIDS[-1]}
 

@@ -6,7 +6,8 @@
 # then PNG plots (experiment_plots.py) and $OUT/REPORT.md with every table and plot.
 # Environment (defaults in brackets): EHC_DEVEL [devel], OUT [results/experiments], SEED [1],
 #   JOBS [2] (parallel runs of Exp-2/3), EXP1_SETS [10], EXP1_POINTS [50], SETS [15] (Exp-2/3),
-#   PER_SET [5] (Exp-3 grasps per approach per set). Progress and ETA on stderr.
+#   PER_SET [5] (Exp-3 grasps per approach per set), ROBOT [realman_rm65_water2] (every protocol;
+#   make experiments ROBOT=kuka_iiwa14_kmr). Progress and ETA on stderr.
 set -eo pipefail
 export PATH="/usr/bin:/bin:$PATH"
 cd "$(dirname "$0")/../../.." || exit 2
@@ -19,16 +20,16 @@ SEED="${SEED:-1}"
 JOBS="${JOBS:-2}"
 SETS="${SETS:-15}"
 PER_SET="${PER_SET:-5}"
-ROBOT=config/robots/realman_rm65_water2/robot.yaml
+ROBOT="${ROBOT:-realman_rm65_water2}"   # robot name (config/robots/<name>/) or robot.yaml: every protocol
 mkdir -p "$OUT"
 t0=$(date +%s)
 echo "== Exp-1 (random reaching)" >&2
 rosrun ehc_bringup ehc_experiment reach --robot "$ROBOT" --method all --sets "${EXP1_SETS:-10}" \
   --points "${EXP1_POINTS:-50}" --seed "$SEED" --out "$OUT/exp1" >/dev/null
 echo "== Exp-2 (three objects in sequence)" >&2
-rosrun ehc_bringup ehc_experiment grasp --method all --sets "$SETS" --seed "$SEED" --jobs "$JOBS" --out "$OUT/exp2" >/dev/null
+rosrun ehc_bringup ehc_experiment grasp --robot "$ROBOT" --method all --sets "$SETS" --seed "$SEED" --jobs "$JOBS" --out "$OUT/exp2" >/dev/null
 echo "== Exp-3 (grasp orientations, TfM)" >&2
-rosrun ehc_bringup ehc_experiment poses --method all --sets "$SETS" --per-set "$PER_SET" --seed "$SEED" --jobs "$JOBS" \
+rosrun ehc_bringup ehc_experiment poses --robot "$ROBOT" --method all --sets "$SETS" --per-set "$PER_SET" --seed "$SEED" --jobs "$JOBS" \
   --out "$OUT/exp3" >/dev/null
 for e in exp2 exp3; do /usr/bin/python3 src/ehc_bringup/scripts/experiment_plots.py "$OUT/$e"; done
 wall=$(( $(date +%s) - t0 ))

@@ -411,8 +411,12 @@ TEST(ControlCycle, LoadsTheShippedControllerYamlAndChecksTheConfiguration) {
   EXPECT_EQ(p.watchdog.target_timeout, 0.2);
   EXPECT_EQ(p.controller.mode, ControlMode::Ehc);
   EXPECT_NE(p.robot_file.find("robots/realman_rm65_water2/robot.yaml"), std::string::npos) << p.robot_file;
-  EXPECT_NE(p.tracking.camera_file.find("camera.yaml"), std::string::npos);
+  EXPECT_TRUE(p.tracking.camera_file.empty());  // robot-specific: robot.yaml's robot.camera_info
   const ControlCycle cycle(p);
+  EXPECT_NE(cycle.params().tracking.camera_file.find("realman_rm65_water2/camera.yaml"), std::string::npos);
+  // Per-link stop distances come from robot.yaml (controller.yaml names no link).
+  EXPECT_EQ(cycle.controller().params().obstacleStop("ee_link"), 0.01);
+  EXPECT_EQ(cycle.controller().params().obstacleStop("link2"), p.controller.obstacle_stop);
   EXPECT_TRUE(cycle.controller().hasWeighting());
   EXPECT_GE(cycle.rollJointIndex(), 0);
   const Eigen::VectorXd& ready = cycle.model().config().arm_ready;
@@ -435,7 +439,17 @@ TEST(ControlCycle, LoadsTheShippedControllerYamlAndChecksTheConfiguration) {
     return loadControlCycleParams(ConfigNode::loadString(yaml, "/cfg/controller.yaml", "ControllerNode"));
   };
   EXPECT_EQ(load("servo: {type: proportional}\n").servo_type, ServoType::Proportional);
-  EXPECT_EQ(load("{}\n").robot_file, "/cfg/../robots/realman_rm65_water2/robot.yaml");
+  EXPECT_EQ(load("{}\n").robot_file, resolveRobotFile("realman_rm65_water2"));
+  EXPECT_EQ(load("robot: my/robot.yaml\n").robot_file, "/cfg/my/robot.yaml");  // a path: relative to the file
+  EXPECT_EQ(load("robot: kuka_iiwa14_kmr\n").robot_file, robotsDirectory() + "/kuka_iiwa14_kmr/robot.yaml");
+  for (const char* bad : {"robot: no_such_robot\n", "controller: {obstacle_stop_links: {ee_link: 0.01}}\n"}) {
+    try {
+      load(bad);
+      ADD_FAILURE() << bad << " accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("/cfg/controller.yaml"), std::string::npos) << e.what();
+    }
+  }
   try {
     load("servo: {type: visp}\n");
     ADD_FAILURE() << "bad servo type accepted";

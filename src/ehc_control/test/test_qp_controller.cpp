@@ -17,6 +17,14 @@ using namespace ehc_control;
 
 namespace {
 
+/// The RealMan without robot.yaml's per-link obstacle stop distances: these tests set
+/// QpControllerParams::obstacle_stop_links themselves (the generic obstacle_stop otherwise).
+RobotConfig realmanWithoutStopDistances() {
+  RobotConfig c = test::realmanConfig();
+  c.obstacle_stop_distances.clear();
+  return c;
+}
+
 using test::approachPose;
 
 std::shared_ptr<const EhcWeighting> weighting() {
@@ -60,7 +68,7 @@ double run(EhcQpController& ctrl, test::KinematicSim& sim, const Eigen::Isometry
 class Convergence : public ::testing::TestWithParam<ControlMode> {};
 
 TEST_P(Convergence, ReachesTargetsFromSeveralStarts) {
-  auto model = std::make_shared<const WholeBodyModel>(test::realmanConfig());
+  auto model = std::make_shared<const WholeBodyModel>(realmanWithoutStopDistances());
   QpControllerParams p;
   p.mode = GetParam();
   EhcQpController ctrl(model, p, weighting());
@@ -82,7 +90,7 @@ INSTANTIATE_TEST_SUITE_P(AllModes, Convergence,
                          [](const auto& info) { return toString(info.param); });
 
 TEST(EhcQpController, JointDampersKeepJointsInsideLimitsOverALongRandomRun) {
-  auto model = std::make_shared<const WholeBodyModel>(test::realmanConfig());
+  auto model = std::make_shared<const WholeBodyModel>(realmanWithoutStopDistances());
   EhcQpController ctrl(model, QpControllerParams{}, weighting());
   test::KinematicSim sim{Eigen::Vector3d::Zero(), model->config().arm_ready};
   std::mt19937 rng(4);
@@ -100,7 +108,7 @@ TEST(EhcQpController, JointDampersKeepJointsInsideLimitsOverALongRandomRun) {
 }
 
 TEST(EhcQpController, ObstacleInThePathIsNeverApproachedCloserThanDs) {
-  auto model = std::make_shared<const WholeBodyModel>(test::realmanConfig());
+  auto model = std::make_shared<const WholeBodyModel>(realmanWithoutStopDistances());
   QpControllerParams p;
   EhcQpController ctrl(model, p, weighting());
   test::KinematicSim sim{Eigen::Vector3d::Zero(), model->config().arm_ready};
@@ -131,7 +139,7 @@ TEST(EhcQpController, ObstacleInThePathIsNeverApproachedCloserThanDs) {
 }
 
 TEST(EhcQpController, BadInputGivesZeroCommandAndQpFailed) {
-  auto model = std::make_shared<const WholeBodyModel>(test::realmanConfig());
+  auto model = std::make_shared<const WholeBodyModel>(realmanWithoutStopDistances());
   EhcQpController ctrl(model, QpControllerParams{}, weighting());
   const Eigen::VectorXd q = model->config().arm_ready;
   Eigen::Isometry3d target = approachPose(1, 0, 0.8, Eigen::Vector3d(0, 0, -1));
@@ -151,7 +159,7 @@ TEST(EhcQpController, BadInputGivesZeroCommandAndQpFailed) {
 }
 
 TEST(EhcQpController, InfeasibleConstraintsGiveZeroCommandAndQpFailed) {
-  auto model = std::make_shared<const WholeBodyModel>(test::realmanConfig());
+  auto model = std::make_shared<const WholeBodyModel>(realmanWithoutStopDistances());
   EhcQpController ctrl(model, QpControllerParams{}, weighting());
   const Eigen::VectorXd q = model->config().arm_ready;
   const Eigen::Vector3d p = model->fk(Eigen::Vector3d::Zero(), q, "ee_link").translation();
@@ -185,7 +193,7 @@ TEST(QpControllerParams, ValidationAndLoading) {
   }
   const auto ok = ConfigNode::loadFile(std::string(EHC_CONFIG_DIR) + "/control/controller.yaml", "Test");
   EXPECT_EQ(loadQpControllerParams(ok.child("controller")).mode, ControlMode::Ehc);
-  EXPECT_THROW(EhcQpController(std::make_shared<const WholeBodyModel>(test::realmanConfig()), QpControllerParams{}, nullptr),
+  EXPECT_THROW(EhcQpController(std::make_shared<const WholeBodyModel>(realmanWithoutStopDistances()), QpControllerParams{}, nullptr),
                std::invalid_argument);  // ehc needs a map
 }
 
@@ -193,7 +201,7 @@ TEST(EhcQpController, PerLinkStopDistanceLetsTheHandNearTheTable) {
   // A table top 3 cm below the target TCP position. With the default d_s = 5 cm the TCP is held
   // 5 cm above it and never arrives; with d_s = 1 cm for the TCP link it arrives, and never goes
   // below 1 cm.
-  auto model = std::make_shared<const WholeBodyModel>(test::realmanConfig());
+  auto model = std::make_shared<const WholeBodyModel>(realmanWithoutStopDistances());
   const double table_z = 0.77;
   const Eigen::Isometry3d target = approachPose(1.3, 0.2, table_z + 0.03, Eigen::Vector3d(1, 0, -0.2));
   auto table = [&](const test::KinematicSim& s) {
@@ -230,7 +238,7 @@ TEST(EhcQpController, ManipulabilityFadeStopsNullSpaceDriftAtTheTarget) {
   // At the target (zero error, zero desired twist) the only thing that moves the robot is the
   // linear cost: with the constant manipulability term the arm keeps drifting in the null
   // space (the QP trades a little slack for manipulability); with the fade it holds still.
-  auto model = std::make_shared<const WholeBodyModel>(test::realmanConfig());
+  auto model = std::make_shared<const WholeBodyModel>(realmanWithoutStopDistances());
   const auto& rc = model->config();
   Eigen::VectorXd q = rc.arm_ready;
   q[1] += 0.6;  // a stretched pose: large manipulability gradient
@@ -280,7 +288,7 @@ TEST(EhcQpController, TenObstaclePairsClosedLoopReproducesTheRecordedCommands) {
   // 1e-6. The same record is met by the old controller with glibc's libm taking its non-FMA
   // code paths (GLIBC_TUNABLES=glibc.cpu.hwcaps=-AVX2,-FMA), so it does not hang on the last
   // bit of sin/cos.
-  auto model = std::make_shared<const WholeBodyModel>(test::realmanConfig());
+  auto model = std::make_shared<const WholeBodyModel>(realmanWithoutStopDistances());
   const auto& rc = model->config();
   // The record is of the paper's cost terms (the controller of 883b4fc): the later base-turn
   // unwinding and joint-limit centring are switched off here, so the record keeps checking
@@ -356,7 +364,7 @@ TEST(EhcQpController, TenObstaclePairsClosedLoopReproducesTheRecordedCommands) {
 }
 
 TEST(EhcQpController, ObstacleRowsAreTheNearestPairsUpToTheBound) {
-  auto model = std::make_shared<const WholeBodyModel>(test::realmanConfig());
+  auto model = std::make_shared<const WholeBodyModel>(realmanWithoutStopDistances());
   QpControllerParams p;
   p.mode = ControlMode::NeoC;
   p.max_obstacle_rows = 3;

@@ -94,7 +94,7 @@ int main() {
     const ehc_control::WholeBodyModel model(ehc_control::loadRobotConfig(robotYaml()));
     ObstacleMapConfig cfg;
     cfg.resolution = 0.02;
-    const ehc_control::RobotCollisionModel robot(model.urdfXml(), model.config().arm_joints, cfg.links);
+    const ehc_control::RobotCollisionModel robot(model.urdfXml(), model.config().arm_joints, model.config().checked_links);
     ObstacleDistanceField field(cfg, robot);
     // Table scene: 0.8 x 1.2 m table top at 0.7 m with legs, two objects, a wall behind.
     field.addOccupiedBox(Eigen::Vector3d(0.9, -0.6, 0.66), Eigen::Vector3d(1.7, 0.6, 0.70));

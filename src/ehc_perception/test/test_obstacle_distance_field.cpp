@@ -250,7 +250,7 @@ TEST(ObstacleDistanceField, RealManRobotNextToATable) {
   const ehc_control::WholeBodyModel model(
       ehc_control::loadRobotConfig(ehc_perception::test::robotYaml()));
   ObstacleMapConfig cfg;
-  const RobotCollisionModel robot(model.urdfXml(), model.config().arm_joints, cfg.links);
+  const RobotCollisionModel robot(model.urdfXml(), model.config().arm_joints, model.config().checked_links);
   EXPECT_EQ(robot.links().size(), 12u);
   ObstacleDistanceField field(cfg, robot);
   // Table top 0.66-0.70 m high, front edge 0.10 m ahead of the base cylinder (r 0.25).
@@ -341,11 +341,11 @@ TEST(ObstacleDistanceField, ConfigValidationNamesTheField) {
   expectFails("obstacle_map: {resolution: 0.5}", "resolution");
   expectFails("obstacle_map: {prob_hit: 0.3}", "prob_hit");
   expectFails("obstacle_map: {influence_distance: 0.001}", "influence_distance");
-  expectFails("obstacle_map: {links: []}", "links");
-  expectFails("obstacle_map: {links: base_link}", "links");
+  // Robot links are robot-specific: robot.yaml's robot.collision.checked_links, never this file.
+  expectFails("obstacle_map: {links: [base_link]}", "robot.collision.checked_links");
   const auto ok = ehc_control::ConfigNode::loadString(
-      "obstacle_map: {resolution: 0.05, links: [base_link]}", "ok.yaml", "ObstacleDistanceField");
+      "obstacle_map: {resolution: 0.05}", "ok.yaml", "ObstacleDistanceField");
   const ObstacleMapConfig c = loadObstacleMapConfig(ok.child("obstacle_map"));
   EXPECT_DOUBLE_EQ(c.resolution, 0.05);
-  EXPECT_EQ(c.links.size(), 1u);
+  EXPECT_TRUE(c.links.empty());  // = the robot's checked links
 }

@@ -81,7 +81,7 @@ int main() {
 
   // Camera: ready pose in front of the table (three tags in view), 640x480, 80x60 rays.
   world.reset(1);
-  SimulatedCamera camera(ehc_control::loadPinholeCamera(cfg.camera_file), cfg.camera, 1);
+  SimulatedCamera camera(ehc_control::loadPinholeCamera(simCameraFile(cfg, robot)), cfg.camera, 1);
   camera.setScene(world.bodies(), world.scene().floor_shade);
   vpImage<unsigned char> image;
   std::vector<Eigen::Vector3f> points;

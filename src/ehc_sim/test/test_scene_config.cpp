@@ -165,7 +165,9 @@ TEST(SimConfig, ShippedConfigLoadsAndResolvesPaths) {
   EXPECT_EQ(c.camera.ray_cols, 80);
   EXPECT_EQ(c.camera.ray_rows, 60);
   EXPECT_NO_THROW(loadSceneConfig(c.scene_file));
-  const ehc_control::PinholeCamera k = ehc_control::loadPinholeCamera(c.camera_file);
+  EXPECT_TRUE(c.camera_file.empty());  // robot-specific: robot.yaml's robot.camera_info
+  const ehc_control::PinholeCamera k =
+      ehc_control::loadPinholeCamera(simCameraFile(c, ehc_control::loadRobotConfig(c.fake_robot.robot_file)));
   EXPECT_EQ(k.width, 640);
   EXPECT_NEAR(k.fx, 615.0, 1e-9);
   EXPECT_FALSE(c.summary().empty());
@@ -190,7 +192,9 @@ TEST(SimConfig, BadValuesNameField) {
   expectError("  camera: {ray_grid: [80]}\n", "sim.camera.ray_grid");
   expectError("  camera: {min_range: 7, max_range: 6}\n", "sim.camera.min_range");
   expectError("  camera: {depth_noise: {base: 1}}\n", "sim.camera.depth_noise.base");
-  expectError("  collision: {ignore_pairs: [[a]]}\n", "sim.collision.ignore_pairs");
+  expectError("  collision: {ignore_pairs: [[a, b]]}\n", "sim.collision.ignore_pairs");  // robot.yaml's now
+  expectError("  collision: {floor_links: [base_link]}\n", "sim.collision.floor_links");
+  expectError("  collision: {self_collision_samples: 0}\n", "samples");
   expectError("  seed: -4\n", "sim.seed");
   expectError("  camera: {ray_gird: [80, 60]}\n", "unknown field 'sim.camera.ray_gird'");
   try {

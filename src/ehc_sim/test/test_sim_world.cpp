@@ -270,14 +270,20 @@ TEST(SimWorld, BadCommandsThrow) {
   cmd[4] = std::nan("");
   EXPECT_THROW(w.step(cmd), std::invalid_argument);
   EXPECT_EQ(w.stepCount(), 0);
-  SimConfig c = simConfig(false);
-  c.collision.ignore_pairs.emplace_back("link1", "no_such_link");
+  // A link robot.yaml names that the robot lacks: a start-up error naming the file and field.
+  ehc_control::RobotConfig rc = robotConfig();
+  rc.ignore_pairs.emplace_back("link1", "no_such_link");
   try {
-    SimWorld bad(c, robotConfig(), emptyScene());
+    SimWorld bad(simConfig(false), rc, emptyScene());
     FAIL();
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("no_such_link"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("robot.collision.ignore_pairs"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("robot.yaml"), std::string::npos);
   }
+  rc = robotConfig();
+  rc.floor_links = {"wheel_link"};
+  EXPECT_THROW(SimWorld(simConfig(false), rc, emptyScene()), std::invalid_argument);
 }
 
 TEST(ParallelGripper, StateMachine) {

@@ -28,9 +28,9 @@ struct Rig {
       cfg.camera.image_noise = 0.0;
       cfg.camera.depth_noise_base = cfg.camera.depth_noise_quadratic = 0.0;
     }
-    world = std::make_unique<SimWorld>(cfg, ehc_control::loadRobotConfig(cfg.fake_robot.robot_file),
-                                       loadSceneConfig(kConfig + "/scenes/" + scene));
-    camera = std::make_unique<SimulatedCamera>(ehc_control::loadPinholeCamera(cfg.camera_file), cfg.camera, 1);
+    const ehc_control::RobotConfig robot = ehc_control::loadRobotConfig(cfg.fake_robot.robot_file);
+    world = std::make_unique<SimWorld>(cfg, robot, loadSceneConfig(kConfig + "/scenes/" + scene));
+    camera = std::make_unique<SimulatedCamera>(ehc_control::loadPinholeCamera(simCameraFile(cfg, robot)), cfg.camera, 1);
     camera->setScene(world->bodies(), world->scene().floor_shade);
     for (int i = 0; i < 5; ++i) world->step(Eigen::VectorXd::Zero(world->robot().nDof()));
   }

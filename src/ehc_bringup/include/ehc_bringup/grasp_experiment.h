@@ -38,6 +38,7 @@ std::vector<std::string> graspMethodNames(GraspProtocol protocol, const std::str
 struct GraspExperimentParams {
   GraspProtocol protocol = GraspProtocol::Table;
   std::string config_dir = "config";
+  std::string robot;           ///< robot name or robot.yaml (GraspPipelineFiles::robot); "" = the config files'
   std::string scene;           ///< "" = the protocol's scene
   int sets = 15;
   int per_set = 5;             ///< Exp-3: grasps per approach per set

@@ -54,6 +54,10 @@ struct GraspPipelineFiles {
   std::vector<std::string> tags;  ///< one tag node file per sequencer object (detector + target)
   std::string grasp;              ///< grasp_node.yaml (generator + targeting)
   std::string obstacles;          ///< obstacle_node.yaml; "" = no obstacle distances (OBSTACLES=0)
+  /// The robot (a name or a robot.yaml, ehc_control::resolveRobotFile) for the simulator, the
+  /// controller and the obstacle field, as _robot:= does for the nodes; "" = the files' own
+  /// (which must then name the same robot).
+  std::string robot;
   /// The demo's files under `config_dir` (config/): sim/bullet_sim.yaml, demo/controller.yaml,
   /// demo/<sequencer>, demo/tag_<object>.yaml, perception/grasp_node.yaml, demo/obstacle_node.yaml.
   static GraspPipelineFiles demo(const std::string& config_dir, const std::string& scene,

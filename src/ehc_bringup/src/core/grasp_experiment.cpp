@@ -120,13 +120,17 @@ GraspExperiment::GraspExperiment(const GraspExperimentParams& params, std::vecto
   const std::string& dir = params_.config_dir;
   if (params_.protocol == GraspProtocol::Table) {
     const std::string scene = params_.scene.empty() ? dir + "/scenes/table_three_objects.yaml" : params_.scene;
-    base_[""] = loadGraspPipelineConfig(
-        GraspPipelineFiles::demo(dir, scene, dir + "/demo/grasp_sequencer.yaml", {"front", "middle", "back"}));
+    GraspPipelineFiles files = GraspPipelineFiles::demo(dir, scene, dir + "/demo/grasp_sequencer.yaml", {"front", "middle", "back"});
+    files.robot = params_.robot;
+    base_[""] = loadGraspPipelineConfig(files);
   } else {
     const std::string scene = params_.scene.empty() ? dir + "/scenes/single_object.yaml" : params_.scene;
-    for (const char* a : kApproaches)
-      base_[a] = loadGraspPipelineConfig(GraspPipelineFiles::demo(
-          dir, scene, dir + "/demo/grasp_single_" + std::string(a) + ".yaml", {"target"}));
+    for (const char* a : kApproaches) {
+      GraspPipelineFiles files =
+          GraspPipelineFiles::demo(dir, scene, dir + "/demo/grasp_single_" + std::string(a) + ".yaml", {"target"});
+      files.robot = params_.robot;
+      base_[a] = loadGraspPipelineConfig(files);
+    }
   }
 }
 

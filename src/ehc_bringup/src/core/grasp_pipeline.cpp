@@ -79,10 +79,20 @@ GraspPipelineConfig loadGraspPipelineConfig(const GraspPipelineFiles& files) {
   if (c.obstacles) {
     const auto root = ehc_control::ConfigNode::loadFile(files.obstacles, "GraspPipeline");
     const auto n = root.child("node");
+    n.ignore("robot_config");  // in-process the obstacle field checks the simulator's robot
     c.monitor = ehc_perception::loadObstacleMonitorParams(n);
     c.obstacle_rate_hz = n.get("publish_rate_hz", c.obstacle_rate_hz);
     ehc_control::requireRange("GraspPipeline", "node.publish_rate_hz", c.obstacle_rate_hz, 0.1, 1000.0);
     c.map = ehc_perception::loadObstacleMapConfig(root.childOrEmpty("obstacle_map"));
+  }
+  if (!files.robot.empty()) {
+    const std::string robot = ehc_control::resolveRobotFile(files.robot);
+    c.sim.fake_robot.robot_file = robot;
+    c.cycle.robot_file = robot;
+  } else if (c.sim.fake_robot.robot_file != c.cycle.robot_file) {
+    throw std::invalid_argument("[GraspPipeline] the simulator's robot (" + c.sim.fake_robot.robot_file + ", " +
+                                files.sim + ") differs from the controller's (" + c.cycle.robot_file + ", " +
+                                files.controller + "); name one robot (GraspPipelineFiles::robot, --robot)");
   }
   return c;
 }
@@ -106,7 +116,7 @@ struct GraspPipeline::Clocks {
 GraspPipeline::GraspPipeline(const GraspPipelineConfig& cfg, unsigned seed) : cfg_(cfg) {
   cfg_.sim.fake_robot.seed = seed;
   const ehc_control::RobotConfig robot = ehc_control::loadRobotConfig(cfg_.sim.fake_robot.robot_file);
-  const ehc_control::PinholeCamera intrinsics = ehc_control::loadPinholeCamera(cfg_.sim.camera_file);
+  const ehc_control::PinholeCamera intrinsics = ehc_control::loadPinholeCamera(ehc_sim::simCameraFile(cfg_.sim, robot));
   world_ = std::make_unique<ehc_sim::SimWorld>(cfg_.sim, robot, cfg_.scene);
   camera_ = std::make_unique<ehc_sim::SimulatedCamera>(intrinsics, cfg_.sim.camera, seed);
   camera_->setScene(world_->bodies(), cfg_.scene.floor_shade);

@@ -31,16 +31,16 @@
 namespace {
 
 const char* kUsage =
-    "usage: ehc_experiment reach --robot <robot.yaml> --method ehc|neo_e|neo_c|all --out DIR\n"
+    "usage: ehc_experiment reach --robot <name|robot.yaml> --method ehc|neo_e|neo_c|all --out DIR\n"
     "           [--sets 10] [--points 50] [--seed 1] [--targets targets.csv] [--noise on|off]\n"
     "           [--base-model ideal|water2]   (water2: the Water2 chain of ehc_sim/base_model.h with\n"
     "                                          its default parameters; the controller sees its odometry)\n"
     "           [--config controller.yaml] [--map reachability_map.bin] [--trace cycles.csv]\n"
     "           [--protocol sequence|reset]   (reset: every target from the ready pose at the origin)\n"
     "           [--all-targets]   (keep generated targets no whole-body IK solution reaches)\n"
-    "       ehc_experiment grasp --method tsmm|neo_c|neo_e|ehc|all --out DIR [--sets 15] [--seed 1]\n"
+    "       ehc_experiment grasp --method tsmm|neo_c|neo_e|ehc|all --out DIR [--robot <name|robot.yaml>] [--sets 15] [--seed 1]\n"
     "           [--scene scene.yaml] [--jobs 1] [--config-dir config] [--jitter-xy 0.01] [--jitter-yaw 3]\n"
-    "       ehc_experiment poses --method neo_nompbs|ehc_nompbs|ehc|all --out DIR [--sets 15] [--per-set 5]\n"
+    "       ehc_experiment poses --method neo_nompbs|ehc_nompbs|ehc|all --out DIR [--robot <name|robot.yaml>] [--sets 15] [--per-set 5]\n"
     "           [--seed 1] [--scene scene.yaml] [--jobs 1] [--config-dir config] [--jitter-xy 0.01] [--jitter-yaw 3]\n";
 
 struct Args {
@@ -62,7 +62,7 @@ Args parse(int argc, char** argv) {
                                      {"robot", "method", "out", "sets", "points", "seed", "targets",
                                       "config", "map", "trace", "noise", "base-model", "protocol"},
                                      {"all-targets"}, /*first=*/2);
-  a.robot = cli.text("robot");
+  a.robot = ehc_control::resolveRobotFile(cli.text("robot"));  // a robot name or a robot.yaml
   a.out = cli.text("out");
   a.method = cli.text("method", a.method);
   a.sets = static_cast<int>(cli.integer("sets", a.sets, 1, 1000000));
@@ -79,20 +79,16 @@ Args parse(int argc, char** argv) {
   return a;
 }
 
-std::string defaultConfig(const std::string& robot_yaml) {
-  // config/robots/<robot>/robot.yaml -> config/control/controller.yaml
-  const auto p = robot_yaml.rfind("/robots/");
-  return p == std::string::npos ? std::string("config/control/controller.yaml")
-                                : robot_yaml.substr(0, p) + "/control/controller.yaml";
-}
+/// The stack's controller.yaml (absolute: works from any working directory).
+std::string defaultConfig() { return ehc_control::configDirectory() + "/control/controller.yaml"; }
 
 /// `grasp` (Exp-2) and `poses` (Exp-3).
 int runGrasp(int argc, char** argv) {
   const std::string command = argv[1];
   ehc_bringup::GraspExperimentParams p;
   p.protocol = command == "grasp" ? ehc_bringup::GraspProtocol::Table : ehc_bringup::GraspProtocol::Poses;
-  std::vector<std::string> options = {"method", "out", "sets", "seed", "scene", "jobs", "config-dir", "jitter-xy",
-                                      "jitter-yaw"};
+  std::vector<std::string> options = {"robot", "method", "out", "sets", "seed", "scene", "jobs", "config-dir",
+                                      "jitter-xy", "jitter-yaw"};
   if (p.protocol == ehc_bringup::GraspProtocol::Poses) options.push_back("per-set");
   const ehc_control::CommandLine cli(argc, argv, options, {}, /*first=*/2);
   const std::string method = cli.text("method", "all");
@@ -103,7 +99,8 @@ int runGrasp(int argc, char** argv) {
   p.seed = static_cast<unsigned>(cli.integer("seed", p.seed, 0, 4294967295L));
   p.scene = cli.text("scene", p.scene);
   p.jobs = static_cast<int>(cli.integer("jobs", p.jobs, 1, 64));
-  p.config_dir = cli.text("config-dir", p.config_dir);
+  p.config_dir = cli.text("config-dir", ehc_control::configDirectory());
+  p.robot = cli.text("robot", "");
   p.jitter_xy = cli.real("jitter-xy", p.jitter_xy);
   p.jitter_yaw_deg = cli.real("jitter-yaw", p.jitter_yaw_deg);
   if (p.protocol == ehc_bringup::GraspProtocol::Table) p.per_set = 1;
@@ -161,7 +158,7 @@ int main(int argc, char** argv) {
     const Args a = parse(argc, argv);
     const auto robot_cfg = ehc_control::loadRobotConfig(a.robot);
     auto model = std::make_shared<const ehc_control::WholeBodyModel>(robot_cfg);
-    const std::string cfg_path = a.config.empty() ? defaultConfig(a.robot) : a.config;
+    const std::string cfg_path = a.config.empty() ? defaultConfig() : a.config;
     const auto cfg = ehc_control::ConfigNode::loadFile(cfg_path, "ehc_experiment");
     ehc_control::QpControllerParams ctrl = ehc_control::loadQpControllerParams(cfg.childOrEmpty("controller"));
     const auto wparams = ehc_control::loadEhcWeightingParams(cfg.childOrEmpty("weighting"));

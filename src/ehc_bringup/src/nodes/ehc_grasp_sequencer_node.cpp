@@ -20,6 +20,7 @@
 #include "ehc_msgs/GraspCandidates.h"
 #include "ehc_msgs/ObstacleExclusion.h"
 #include "ehc_control/config_node.h"
+#include "ehc_control/robot_config.h"
 #include "ehc_msgs/SimStatus.h"
 
 #include <geometry_msgs/PointStamped.h>
@@ -45,9 +46,9 @@ using ehc_bringup::GraspSequencer;
 constexpr double kLogThrottle = 2.0;  ///< s, period of every throttled log line
 
 struct NodeParams {
-  std::string world_frame = "odom";
-  std::string tcp_frame = "ee_link";
-  std::string camera_frame = "camera_color_optical_frame";
+  /// Frames: the robot's (robot.yaml frames.world / tcp / camera_optical) unless the file sets them.
+  std::string robot_file;  ///< node.robot (a name or a robot.yaml), _robot:= overrides
+  std::string world_frame, tcp_frame, camera_frame;
   std::string camera_info_topic = "/camera/color/camera_info";
   std::string goal_topic = "/ehc/target_pose";
   std::string object_pose_topic = "/ehc/sequencer/object_pose";
@@ -72,6 +73,7 @@ struct NodeParams {
 NodeParams loadNodeParams(const ehc_control::ConfigNode& root) {
   NodeParams p;
   const auto n = root.childOrEmpty("node");
+  p.robot_file = n.has("robot") ? ehc_control::robotFileField(n, "robot") : ehc_control::resolveRobotFile("realman_rm65_water2");
   p.world_frame = n.get("world_frame", p.world_frame);
   p.tcp_frame = n.get("tcp_frame", p.tcp_frame);
   p.camera_frame = n.get("camera_frame", p.camera_frame);
@@ -124,6 +126,12 @@ class SequencerNode {
     const auto root = ehc_control::ConfigNode::loadFile(config, "GraspSequencerNode");
     node_ = loadNodeParams(root);
     pnh.param("exit_when_done", node_.exit_when_done, node_.exit_when_done);
+    std::string robot;  // the one robot switch: the frames not set in the file come from robot.yaml
+    if (pnh.getParam("robot", robot) && !robot.empty()) node_.robot_file = ehc_control::resolveRobotFile(robot);
+    const ehc_control::RobotConfig rc = ehc_control::loadRobotConfig(node_.robot_file);
+    if (node_.world_frame.empty()) node_.world_frame = rc.world_frame;
+    if (node_.tcp_frame.empty()) node_.tcp_frame = rc.tcp_frame;
+    if (node_.camera_frame.empty()) node_.camera_frame = rc.camera_frame;
     const ehc_bringup::GraspSequencerParams sp = ehc_bringup::loadGraspSequencerParams(root);
     root.rejectUnknownKeys();  // both loaders have run: a key neither read is a misspelling
     seq_ = std::make_unique<GraspSequencer>(sp);

@@ -89,6 +89,8 @@ struct QpControllerParams {
   double obstacle_stop = 0.05;         ///< m: d_s (= S of the paper)
   /// Per-link d_s overriding obstacle_stop, e.g. the hand links, which must come close to the
   /// support surface of the object they grasp (each must stay below obstacle_influence).
+  /// Robot-specific, so not read from controller.yaml: EhcQpController adds robot.yaml's
+  /// robot.obstacle_stop_distances (entries set here win); a link the URDF lacks is an error.
   std::map<std::string, double> obstacle_stop_links;
   double obstacleStop(const std::string& link) const {
     const auto it = obstacle_stop_links.find(link);

@@ -1,13 +1,22 @@
 #pragma once
 // RobotConfig: everything about the robot that is not in the URDF (base type and limits,
-// arm joint order and limits, frame names, hand-eye calibration), loaded from robot.yaml.
+// arm joint order and limits, frame names, hand-eye calibration, camera intrinsics, the links
+// the obstacle field / simulator check, per-link obstacle stop distances), loaded from
+// robot.yaml. Every robot-specific name lives here (config/robots/<name>/robot.yaml); generic
+// configs (control, sim, perception, demo) name no link. The link names are checked against
+// the URDF by WholeBodyModel (a name the robot does not have is an error naming the file and
+// field).
 
 #include <Eigen/Core>
 
+#include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace ehc_control {
+
+class ConfigNode;
 
 enum class BaseType {
   Holonomic,     ///< base twist columns v_x, v_y, w_z (base frame)
@@ -48,6 +57,23 @@ struct RobotConfig {
 
   std::vector<FrameOverride> calibration;
 
+  /// camera_info YAML of the hand camera (intrinsics: simulated camera, TfM in-view test);
+  /// "" = none (the controller then uses PinholeCamera's defaults).
+  std::string camera_info_path;
+  /// robot.collision.checked_links: the links the obstacle field checks against the map, in
+  /// this order. Empty = every link with collision geometry (RobotCollisionModel's order).
+  std::vector<std::string> checked_links;
+  /// robot.collision.floor_links: links that may touch the floor (simulator). Empty = the
+  /// URDF's root link.
+  std::vector<std::string> floor_links;
+  /// robot.collision.ignore_pairs: self-collision pairs never checked, in addition to the
+  /// computed ones (adjacent links and pairs in contact in every sampled configuration:
+  /// selfCollisionIgnorePairs in self_collision.h).
+  std::vector<std::pair<std::string, std::string>> ignore_pairs;
+  /// robot.obstacle_stop_distances: per-link obstacle stop distance d_s (m); the other links
+  /// use the controller's obstacle_stop.
+  std::map<std::string, double> obstacle_stop_distances;
+
   int nArm() const { return static_cast<int>(arm_joints.size()); }
   int nBase() const { return base_type == BaseType::Holonomic ? 3 : 2; }
   /// Velocity bound of every DOF in [base..., arm...] order.
@@ -61,5 +87,20 @@ struct RobotConfig {
 
 /// Loads and validates robot.yaml. Relative paths inside are resolved against its folder.
 RobotConfig loadRobotConfig(const std::string& path);
+
+/// The stack's config folder (the checkout's config/, absolute; tools work from any working
+/// directory); the environment variable EHC_CONFIG_DIR overrides it.
+std::string configDirectory();
+/// Folder of the robots shipped with the stack (<configDirectory()>/robots); the environment
+/// variable EHC_ROBOTS_DIR overrides it.
+std::string robotsDirectory();
+/// The one robot switch (--robot, _robot:=, ROBOT=): a robot name (no '/', not ending in
+/// .yaml, e.g. "kuka_iiwa14_kmr") -> <robotsDirectory()>/<name>/robot.yaml; anything else is a
+/// path to a robot.yaml, returned unchanged. Throws std::invalid_argument "[RobotConfig] ..."
+/// for an unknown robot name (listing the known ones).
+std::string resolveRobotFile(const std::string& name_or_path);
+/// The robot field `key` of a config file (e.g. controller.yaml's `robot`): a robot name as
+/// resolveRobotFile, or a path relative to that file's folder. Errors name file and field.
+std::string robotFileField(const ConfigNode& node, const std::string& key);
 
 }  // namespace ehc_control

@@ -21,7 +21,7 @@ namespace ehc_control {
 class ConfigNode;
 
 struct TargetTrackerParams {
-  std::string camera_file;           ///< camera_info YAML (resolved path); "" = PinholeCamera defaults
+  std::string camera_file;           ///< camera_info YAML (resolved path), overrides robot.yaml's robot.camera_info; "" = the robot's (none: PinholeCamera defaults)
   double new_target_distance = 0.10; ///< m: centre jump that counts as a new target (TfM restarts)
   void validate() const;             ///< throws "[TargetTrackerParams] ..."
   std::string summary() const;

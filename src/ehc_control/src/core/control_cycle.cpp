@@ -28,7 +28,7 @@ void ControlCycleParams::validate() const {
 
 ControlCycleParams loadControlCycleParams(const ConfigNode& root) {
   ControlCycleParams p;
-  p.robot_file = root.resolvePath(root.get<std::string>("robot", "../robots/realman_rm65_water2/robot.yaml"));
+  p.robot_file = root.has("robot") ? robotFileField(root, "robot") : resolveRobotFile("realman_rm65_water2");
   p.controller = loadQpControllerParams(root.childOrEmpty("controller"));
   p.weighting = loadEhcWeightingParams(root.childOrEmpty("weighting"));
   const ConfigNode servo = root.childOrEmpty("servo");
@@ -80,12 +80,14 @@ ControlCycle::ControlCycle(std::shared_ptr<const WholeBodyModel> model, std::sha
   const RobotConfig& rc = model_->config();
   controller_ = std::make_unique<EhcQpController>(model_, params_.controller, weighting_);
   supervisor_ = std::make_unique<ControllerSupervisor>(rc, params_.watchdog);
-  // Camera: mount on the hand (URDF) for MPBS and TfM, intrinsics from tracking.camera.
+  // Camera: mount on the hand (URDF) for MPBS and TfM, intrinsics from robot.yaml's
+  // robot.camera_info (tracking.camera, if set, overrides it).
   if (!model_->hasLink(rc.camera_frame) || !model_->hasLink(rc.tcp_frame))
     throw std::invalid_argument("[ControlCycle] camera frame '" + rc.camera_frame + "' or TCP frame '" +
                                 rc.tcp_frame + "' is not in the URDF");
   tcp_T_camera_ = model_->linkPoseInBase(rc.arm_ready, rc.tcp_frame).inverse() *
                   model_->linkPoseInBase(rc.arm_ready, rc.camera_frame);
+  if (params_.tracking.camera_file.empty()) params_.tracking.camera_file = rc.camera_info_path;
   const PinholeCamera camera =
       params_.tracking.camera_file.empty() ? PinholeCamera{} : loadPinholeCamera(params_.tracking.camera_file);
   tracker_ = std::make_unique<TargetTracker>(camera, params_.tracking);

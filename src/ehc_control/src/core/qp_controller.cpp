@@ -127,10 +127,8 @@ QpControllerParams loadQpControllerParams(const ConfigNode& n) {
   p.joint_damper_gain = n.get("joint_damper_gain", p.joint_damper_gain);
   p.obstacle_influence = n.get("obstacle_influence", p.obstacle_influence);
   p.obstacle_stop = n.get("obstacle_stop", p.obstacle_stop);
-  if (n.has("obstacle_stop_links")) {
-    const ConfigNode links = n.child("obstacle_stop_links");
-    for (const auto& kv : links.yaml()) p.obstacle_stop_links[kv.first.as<std::string>()] = links.require<double>(kv.first.as<std::string>());
-  }
+  if (n.has("obstacle_stop_links"))  // robot-specific: lives in robot.yaml now
+    n.fail("obstacle_stop_links", "names robot links: move it to the robot's robot.yaml as robot.obstacle_stop_distances");
   p.obstacle_damper_gain = n.get("obstacle_damper_gain", p.obstacle_damper_gain);
   p.max_obstacle_rows = n.get("max_obstacle_rows", p.max_obstacle_rows);
   p.tsmm_switch_distance = n.get("tsmm_switch_distance", p.tsmm_switch_distance);
@@ -184,6 +182,12 @@ EhcQpController::EhcQpController(std::shared_ptr<const WholeBodyModel> model,
     : model_(std::move(model)), params_(params), weighting_(std::move(weighting)),
       solver_(std::make_unique<Solver>()) {
   if (!model_) throw std::invalid_argument("[EhcQpController] no whole-body model");
+  // Per-link stop distances: robot.yaml's robot.obstacle_stop_distances, unless set in params.
+  for (const auto& kv : model_->config().obstacle_stop_distances) params_.obstacle_stop_links.insert(kv);
+  for (const auto& kv : params_.obstacle_stop_links)
+    if (!model_->hasLink(kv.first))
+      throw std::invalid_argument("[EhcQpController] obstacle_stop_links names link '" + kv.first +
+                                  "' which is not in the robot's URDF");
   params_.validate();
   if (params_.mode == ControlMode::Ehc && !weighting_)
     throw std::invalid_argument("[EhcQpController] mode ehc needs a reachability map (EhcWeighting)");

@@ -3,6 +3,8 @@
 #include "ehc_control/config_node.h"
 
 #include <cmath>
+#include <cstdlib>
+#include <filesystem>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -62,6 +64,11 @@ void RobotConfig::validate() const {
     if (arm_ready[i] < arm_lower[i] || arm_ready[i] > arm_upper[i])
       fail("robot.arm.ready: joint " + j + " ready position is outside its limits");
   }
+  for (const auto& [link, d] : obstacle_stop_distances)
+    requireRange(kOwner, "robot.obstacle_stop_distances." + link, d, 0.0, 1.0);
+  for (const auto& [a, b] : ignore_pairs)
+    if (a.empty() || b.empty() || a == b)
+      fail("robot.collision.ignore_pairs: a pair needs two different link names");
   std::set<std::string> frames{world_frame, base_frame, arm_base_frame, tcp_frame, camera_frame};
   if (frames.count("")) fail("robot.frames: frame names must not be empty");
   if (world_frame == base_frame) fail("robot.frames: world and base frame must differ");
@@ -82,6 +89,19 @@ std::string RobotConfig::summary() const {
     os << "    " << arm_joints[static_cast<std::size_t>(i)] << ": [" << arm_lower[i] << ", "
        << arm_upper[i] << "] rad, |qd| <= " << arm_velocity[i] << " rad/s, ready " << arm_ready[i]
        << "\n";
+  os << "  camera intrinsics: " << (camera_info_path.empty() ? "(defaults)" : camera_info_path) << "\n"
+     << "  checked links: ";
+  if (checked_links.empty()) os << "(every link with collision geometry)";
+  for (std::size_t i = 0; i < checked_links.size(); ++i) os << (i ? ", " : "") << checked_links[i];
+  os << "\n  floor links: ";
+  if (floor_links.empty()) os << "(the URDF root)";
+  for (std::size_t i = 0; i < floor_links.size(); ++i) os << (i ? ", " : "") << floor_links[i];
+  os << "\n  extra self-collision pairs ignored: " << ignore_pairs.size();
+  for (const auto& [a, b] : ignore_pairs) os << " [" << a << ", " << b << "]";
+  os << "\n  obstacle stop distances:";
+  if (obstacle_stop_distances.empty()) os << " (controller default for every link)";
+  for (const auto& [link, d] : obstacle_stop_distances) os << " " << link << " " << d << " m";
+  os << "\n";
   for (const auto& c : calibration)
     os << "  calibration " << c.joint << ": xyz [" << c.xyz.transpose() << "] rpy ["
        << c.rpy.transpose() << "]\n";
@@ -115,7 +135,9 @@ RobotConfig loadRobotConfig(const std::string& path) {
 
   const ConfigNode a = r.child("arm");
   c.arm_joints = a.getStrings("joints", {});
-  if (c.arm_joints.empty()) a.fail("joints", "must list the arm joints");
+  if (c.arm_joints.size() != 6 && c.arm_joints.size() != 7)
+    a.fail("joints", "must list the 6 or 7 arm joints in command order (has " +
+                         std::to_string(c.arm_joints.size()) + "); other arms are not supported");
   const int n = c.nArm();
   c.arm_lower = a.requireVector("lower", n);
   c.arm_upper = a.requireVector("upper", n);
@@ -132,9 +154,68 @@ RobotConfig loadRobotConfig(const std::string& path) {
     o.rpy = e.requireVector("rpy", 3);
     c.calibration.push_back(o);
   }
+  if (r.has("camera_info")) c.camera_info_path = r.resolvePath(r.require<std::string>("camera_info"));
+  const ConfigNode col = r.childOrEmpty("collision");
+  c.checked_links = col.getStrings("checked_links", {});
+  c.floor_links = col.getStrings("floor_links", {});
+  for (std::size_t i = 0; i < col.listSize("ignore_pairs"); ++i) {  // [link_a, link_b] lists
+    const YAML::Node p = col.yaml()["ignore_pairs"][i];
+    if (!p.IsSequence() || p.size() != 2 || !p[0].IsScalar() || !p[1].IsScalar())
+      col.fail("ignore_pairs", "must be a list of [link_a, link_b] pairs");
+    c.ignore_pairs.emplace_back(p[0].as<std::string>(), p[1].as<std::string>());
+  }
+  col.ignore("ignore_pairs");
+  const ConfigNode stop = r.childOrEmpty("obstacle_stop_distances");
+  for (const std::string& link : stop.keys()) c.obstacle_stop_distances[link] = stop.require<double>(link);
   root.rejectUnknownKeys();
   root.validate(c);  // errors name the file
   return c;
+}
+
+std::string configDirectory() {
+  if (const char* env = std::getenv("EHC_CONFIG_DIR"); env && *env) return env;
+#ifdef EHC_CONFIG_DIR
+  return EHC_CONFIG_DIR;
+#else
+  return "config";
+#endif
+}
+
+std::string robotsDirectory() {
+  if (const char* env = std::getenv("EHC_ROBOTS_DIR"); env && *env) return env;
+  return configDirectory() + "/robots";
+}
+
+namespace {
+bool isRobotName(const std::string& s) {
+  return !s.empty() && s.find('/') == std::string::npos && !(s.size() >= 5 && s.compare(s.size() - 5, 5, ".yaml") == 0);
+}
+}  // namespace
+
+std::string robotFileField(const ConfigNode& node, const std::string& key) {
+  const std::string value = node.require<std::string>(key);
+  if (!isRobotName(value)) return node.resolvePath(value);
+  try {
+    return resolveRobotFile(value);
+  } catch (const std::invalid_argument& e) {
+    node.fail(key, e.what());
+  }
+}
+
+std::string resolveRobotFile(const std::string& name_or_path) {
+  namespace fs = std::filesystem;
+  const std::string& s = name_or_path;
+  if (!s.empty() && !isRobotName(s)) return s;
+  if (s.empty()) fail("no robot given (a robot name such as realman_rm65_water2, or a robot.yaml path)");
+  const fs::path dir = robotsDirectory();
+  const fs::path file = dir / s / "robot.yaml";
+  if (fs::is_regular_file(file)) return file.string();
+  std::string known;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir, ec))
+    if (fs::is_regular_file(e.path() / "robot.yaml")) known += (known.empty() ? "" : ", ") + e.path().filename().string();
+  fail("unknown robot '" + s + "': no " + file.string() + " (robots in " + dir.string() + ": " +
+       (known.empty() ? "none" : known) + "); give a robot name or a path to a robot.yaml");
 }
 
 }  // namespace ehc_control

@@ -246,6 +246,19 @@ void WholeBodyModel::build() {
 
   for (const std::string& f : {cfg_.arm_base_frame, cfg_.tcp_frame, cfg_.camera_frame})
     if (!impl_->links.count(f)) fail("frame '" + f + "' from robot.yaml is not a link of the URDF");
+  // Every link robot.yaml names must be a link of the URDF (never silently ignored).
+  const std::string in_file = cfg_.source_file.empty() ? std::string("robot config") : cfg_.source_file;
+  auto requireLink = [&](const std::string& link, const std::string& field) {
+    if (!impl_->links.count(link))
+      fail(in_file + ": field '" + field + "' names link '" + link + "' which is not in the URDF " + cfg_.urdf_path);
+  };
+  for (const std::string& l : cfg_.checked_links) requireLink(l, "robot.collision.checked_links");
+  for (const std::string& l : cfg_.floor_links) requireLink(l, "robot.collision.floor_links");
+  for (const auto& [a, b] : cfg_.ignore_pairs) {
+    requireLink(a, "robot.collision.ignore_pairs");
+    requireLink(b, "robot.collision.ignore_pairs");
+  }
+  for (const auto& kv : cfg_.obstacle_stop_distances) requireLink(kv.first, "robot.obstacle_stop_distances");
 
   // The TCP chain must contain exactly the arm joints, in the configured order.
   const LinkChain& tcp = *impl_->links.at(cfg_.tcp_frame);

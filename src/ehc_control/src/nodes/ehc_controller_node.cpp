@@ -61,7 +61,7 @@ NodeParams loadNodeParams(const ConfigNode& n) {
 ControlCycleParams loadParams(const ConfigNode& cfg, ros::NodeHandle& pnh) {
   ControlCycleParams p = loadControlCycleParams(cfg);
   std::string s;
-  if (pnh.getParam("robot", s) && !s.empty()) p.robot_file = s;
+  if (pnh.getParam("robot", s) && !s.empty()) p.robot_file = ehc_control::resolveRobotFile(s);  // name or path
   if (pnh.getParam("mode", s) && !s.empty()) p.controller.mode = controlModeFromString(s);
   if (pnh.getParam("servo", s)) p.servo_type = servoTypeFromString(s);
   if (pnh.hasParam("mpbs")) pnh.getParam("mpbs", p.mpbs.enabled);

@@ -71,7 +71,7 @@ int main(int argc, char** argv) {
       std::cout << kUsage;
       return 0;
     }
-    const std::string robot = cli.text("robot");
+    const std::string robot = ehc_control::resolveRobotFile(cli.text("robot"));  // a robot name or a robot.yaml
     if (cli.has("urdf")) {
       std::cout << ehc_control::WholeBodyModel(ehc_control::loadRobotConfig(robot)).calibratedUrdfXml();
       return 0;

@@ -13,7 +13,7 @@
 
 int main(int argc, char** argv) {
   const char* usage =
-      "usage: ehc_reachability --robot <robot.yaml> --samples N --out <file> [--seed S]\n"
+      "usage: ehc_reachability --robot <name|robot.yaml> --samples N --out <file> [--seed S]\n"
       "                        [--resolution m] [--direction-bins B (default 6)]\n";
   try {
     const ehc_control::CommandLine cli(
@@ -22,7 +22,7 @@ int main(int argc, char** argv) {
       std::cout << usage;
       return 0;
     }
-    const std::string robot = cli.text("robot");
+    const std::string robot = ehc_control::resolveRobotFile(cli.text("robot"));  // a robot name or a robot.yaml
     const std::string out = cli.text("out");
     const long samples = cli.integer("samples", 0, 1, 1000000000L);
     if (!cli.has("samples")) cli.text("samples");  // "--samples is required"

@@ -5,7 +5,7 @@
 // influence distance: closest point pair, unit normal (obstacle -> link) and distance.
 // Exclusion zones (spheres) hide parts of the map from the distance queries without erasing
 // them: the object the hand is about to grasp or holds, which it must touch.
-// The robot's shapes: ehc_control::RobotCollisionModel (the links in ObstacleMapConfig::links);
+// The robot's shapes: ehc_control::RobotCollisionModel (the links it was built with);
 // its gripper fingers are posed fully open by default (linkPoses), the widest they get.
 // ROS-free (OctoMap + FCL inside); not thread-safe.
 
@@ -35,9 +35,10 @@ struct ObstacleMapConfig {
   double min_height = 0.03;          ///< m (world z); lower points (the floor) are ignored
   double self_filter_padding = 0.03; ///< m; points this close to the robot are its own
   double influence_distance = 0.30;  ///< m; farther link-obstacle pairs are not reported
-  std::vector<std::string> links = {"base_link", "arm_base_link", "link1", "link2", "link3",
-                                    "link4", "link5", "link6", "gripper_base_link",
-                                    "left_finger_link", "right_finger_link", "camera_link"};
+  /// The links checked (in code: tests, tools). Empty = robot.yaml's robot.collision.checked_links
+  /// (ObstacleMonitor; itself empty = every link with collision geometry). Robot-specific, so
+  /// never read from the generic obstacle_node.yaml.
+  std::vector<std::string> links;
 
   void validate() const;  ///< throws std::invalid_argument "[ObstacleDistanceField] ..."
   std::string summary() const;

@@ -1,12 +1,10 @@
 #include "ehc_perception/obstacle_distance_field.h"
 
 #include "ehc_control/config_node.h"
+#include "ehc_control/fcl_geometry.h"
 #include "ehc_control/whole_body_model.h"
 
 #include <fcl/geometry/octree/octree.h>
-#include <fcl/geometry/shape/box.h>
-#include <fcl/geometry/shape/cylinder.h>
-#include <fcl/geometry/shape/sphere.h>
 #include <fcl/narrowphase/distance.h>
 #include <octomap/OcTree.h>
 
@@ -40,7 +38,6 @@ void ObstacleMapConfig::validate() const {
   ehc_control::requireRange(kOwner, "min_height", min_height, -10.0, 10.0);
   ehc_control::requireRange(kOwner, "self_filter_padding", self_filter_padding, 0.0, 0.5);
   ehc_control::requireRange(kOwner, "influence_distance", influence_distance, resolution, 5.0);
-  if (links.empty()) fail("parameter 'links' must name at least one robot link");
 }
 
 std::string ObstacleMapConfig::summary() const {
@@ -49,7 +46,7 @@ std::string ObstacleMapConfig::summary() const {
      << " m, hit/miss " << prob_hit << "/" << prob_miss << ", clamp [" << clamp_min << ", "
      << clamp_max << "], threshold " << occupancy_threshold << ", min height " << min_height
      << " m, self filter " << self_filter_padding << " m, influence " << influence_distance
-     << " m, " << links.size() << " links";
+     << " m, " << (links.empty() ? std::string("the robot's checked links") : std::to_string(links.size()) + " links");
   return os.str();
 }
 
@@ -65,7 +62,8 @@ ObstacleMapConfig loadObstacleMapConfig(const ehc_control::ConfigNode& n) {
   c.min_height = n.get("min_height", c.min_height);
   c.self_filter_padding = n.get("self_filter_padding", c.self_filter_padding);
   c.influence_distance = n.get("influence_distance", c.influence_distance);
-  c.links = n.getStrings("links", c.links);
+  if (n.has("links"))  // robot-specific: lives in robot.yaml now
+    n.fail("links", "names robot links: move it to the robot's robot.yaml as robot.collision.checked_links");
   n.validate(c);
   return c;
 }
@@ -163,20 +161,7 @@ ObstacleDistanceField::ObstacleDistanceField(const ObstacleMapConfig& config,
   for (std::size_t li = 0; li < robot_.links().size(); ++li)
     for (std::size_t si = 0; si < robot_.links()[li].shapes.size(); ++si) {
       const CollisionShape& s = robot_.links()[li].shapes[si];
-      std::shared_ptr<fcl::CollisionGeometry<double>> g;
-      switch (s.type) {
-        case CollisionShape::Type::Box:
-          g = std::make_shared<fcl::Box<double>>(s.size.x(), s.size.y(), s.size.z());
-          break;
-        case CollisionShape::Type::Cylinder:
-          g = std::make_shared<fcl::Cylinder<double>>(s.size[0], s.size[1]);
-          break;
-        case CollisionShape::Type::Sphere:
-          g = std::make_shared<fcl::Sphere<double>>(s.size[0]);
-          break;
-      }
-      g->computeLocalAABB();
-      impl_->geoms.push_back(g);
+      impl_->geoms.push_back(ehc_control::makeFclGeometry(s));
       impl_->shapes.push_back({li, si});
     }
 }

@@ -55,7 +55,8 @@ ObstacleMonitor::ObstacleMonitor(const ehc_control::RobotConfig& robot, const Ob
                                  const ObstacleMonitorParams& params)
     : params_(params),
       model_(robot),
-      field_(map, ehc_control::RobotCollisionModel(model_.urdfXml(), model_.config().arm_joints, map.links)),
+      field_(map, ehc_control::RobotCollisionModel(model_.urdfXml(), model_.config().arm_joints,
+                                                   map.links.empty() ? model_.config().checked_links : map.links)),
       q_(Eigen::VectorXd::Constant(model_.nArm(), std::nan(""))) {
   params_.validate();
   insert_limiter_ = RateLimiter(params_.max_insert_rate_hz);

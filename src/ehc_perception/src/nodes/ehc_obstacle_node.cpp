@@ -60,7 +60,7 @@ ObstacleNodeConfig loadObstacleNodeConfig(const std::string& path) {
   const auto root = ehc_control::ConfigNode::loadFile(path, "ObstacleNode");
   ObstacleNodeConfig c;
   const auto n = root.child("node");
-  c.robot_config = root.resolvePath(n.require<std::string>("robot_config"));
+  c.robot_config = ehc_control::robotFileField(n, "robot_config");  // a robot name or a robot.yaml path
   c.cloud_topic = n.get("cloud_topic", c.cloud_topic);
   c.joint_states_topic = n.get("joint_states_topic", c.joint_states_topic);
   c.odom_topic = n.get("odom_topic", c.odom_topic);
@@ -203,7 +203,9 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
-    const ObstacleNodeConfig cfg = loadObstacleNodeConfig(config);
+    ObstacleNodeConfig cfg = loadObstacleNodeConfig(config);
+    std::string robot;  // _robot:=<name | robot.yaml> overrides node.robot_config
+    if (pnh.getParam("robot", robot) && !robot.empty()) cfg.robot_config = ehc_control::resolveRobotFile(robot);
     ROS_INFO_STREAM(cfg.summary());
     ObstacleNode node(nh, cfg);
     ros::spin();

@@ -8,6 +8,9 @@
 
 #include "ehc_sim/fake_robot_config.h"
 
+#include "ehc_control/robot_config.h"
+#include "ehc_control/self_collision.h"
+
 #include <Eigen/Core>
 
 #include <string>
@@ -20,12 +23,13 @@ class ConfigNode;
 
 namespace ehc_sim {
 
+/// Collision checking. The robot-specific parts live in robot.yaml (ehc_control::RobotConfig):
+/// robot.collision.floor_links (links allowed to touch the floor; default the URDF root) and the
+/// self-collision pairs never checked (ehc_control::selfCollisionIgnorePairs: adjacent, always
+/// in contact, robot.collision.ignore_pairs).
 struct CollisionConfig {
   double tolerance = 0.001;  ///< m; a contact deeper than this is a collision
-  /// Link pairs never checked against each other (adjacent links are skipped automatically).
-  std::vector<std::pair<std::string, std::string>> ignore_pairs;
-  /// Links allowed to touch the floor (the wheels of the base).
-  std::vector<std::string> floor_links = {"base_link"};
+  ehc_control::SelfCollisionSampling self_collision;  ///< sim.collision.self_collision_samples / _seed
   void validate() const;
 };
 
@@ -55,7 +59,7 @@ struct SimulatedCameraConfig {
 struct SimConfig {
   std::string source_file;
   FakeRobotConfig fake_robot;  ///< robot file, dt, seed, stepping policy, noise
-  std::string camera_file;  ///< camera_info YAML of the colour stream
+  std::string camera_file;  ///< camera_info YAML of the colour stream; "" = robot.yaml's robot.camera_info
   std::string scene_file;   ///< default scene (the node's _scene overrides it)
   double max_physics_substep = 0.005;  ///< s; Bullet steps ceil(dt / this) times per step
   CollisionConfig collision;
@@ -67,6 +71,10 @@ struct SimConfig {
   /// Number of Bullet sub-steps per control step.
   int substeps() const;
 };
+
+/// The camera_info YAML the simulated camera uses: sim.camera_info if given, else robot.yaml's
+/// robot.camera_info. Throws "[SimConfig] ..." when neither names one.
+std::string simCameraFile(const SimConfig& sim, const ehc_control::RobotConfig& robot);
 
 SimConfig loadSimConfig(const std::string& path);
 SimConfig loadSimConfigString(const std::string& text, const std::string& origin);

@@ -126,6 +126,8 @@ class SimWorld {
   SceneConfig scene_;
   std::unique_ptr<ehc_control::WholeBodyModel> model_;
   std::unique_ptr<ehc_control::RobotCollisionModel> collision_model_;
+  std::set<ehc_control::LinkPair> ignored_pairs_;  ///< self-collision pairs never checked
+  std::vector<std::string> floor_links_;           ///< links allowed to touch the floor
   KinematicFakeRobot robot_;
   ParallelGripper gripper_;
   std::vector<BodyConfig> bodies_;

@@ -1,6 +1,7 @@
 #include "ehc_sim/fake_robot_config.h"
 
 #include "ehc_control/config_node.h"
+#include "ehc_control/robot_config.h"
 
 #include <algorithm>
 #include <cmath>
@@ -80,7 +81,7 @@ FakeRobotConfig loadFakeRobotConfig(const ConfigNode& s) {
                     "(the flag 'noise: false' is now 'noise: {enabled: false}')");
 
   FakeRobotConfig c;
-  c.robot_file = s.resolvePath(s.require<std::string>("robot"));
+  c.robot_file = ehc_control::robotFileField(s, "robot");  // a robot name or a robot.yaml path
   c.dt = s.get<double>("dt", c.dt);
   if (!(c.dt >= 1e-4 && c.dt <= 0.1)) s.fail("dt", "must be in [0.0001, 0.1] s");
   if (std::abs(c.dt * 1e9 - std::round(c.dt * 1e9)) > 1e-3) s.fail("dt", "must be a whole number of nanoseconds");

@@ -13,6 +13,7 @@ using ehc_control::requireRange;
 
 void CollisionConfig::validate() const {
   requireRange("CollisionConfig", "sim.collision.tolerance", tolerance, 0.0, 0.05);
+  self_collision.validate();
 }
 
 void GripperConfig::validate() const {
@@ -41,7 +42,6 @@ void SimulatedCameraConfig::validate() const {
 void SimConfig::validate() const {
   const char* o = "SimConfig";
   fake_robot.validate();
-  if (camera_file.empty()) throw std::invalid_argument("[SimConfig] sim.camera_info: no file given");
   requireRange(o, "sim.max_physics_substep", max_physics_substep, 1e-4, 0.02);
   collision.validate();
   gripper.validate();
@@ -58,8 +58,8 @@ std::string SimConfig::summary() const {
      << fake_robot.summary()
      << "  camera " << camera_file << ", scene " << scene_file << ", " << substeps()
      << " Bullet sub-steps per step\n"
-     << "  collision tolerance " << collision.tolerance << " m, " << collision.ignore_pairs.size()
-     << " ignored pairs\n"
+     << "  collision tolerance " << collision.tolerance << " m, self-collision pairs from "
+     << collision.self_collision.samples << " samples (seed " << collision.self_collision.seed << ")\n"
      << "  gripper speed " << gripper.speed << " m/s, lift " << gripper.lift_height << " m\n"
      << "  camera image " << camera.image_rate << " Hz, cloud " << camera.cloud_rate << " Hz ("
      << camera.ray_cols << "x" << camera.ray_rows << " rays, " << camera.min_range << ".."
@@ -68,21 +68,23 @@ std::string SimConfig::summary() const {
   return os.str();
 }
 
+std::string simCameraFile(const SimConfig& sim, const ehc_control::RobotConfig& robot) {
+  const std::string& f = sim.camera_file.empty() ? robot.camera_info_path : sim.camera_file;
+  if (f.empty())
+    throw std::invalid_argument("[SimConfig] no camera intrinsics: robot.yaml " + robot.source_file +
+                                " names no robot.camera_info and sim.camera_info is not set");
+  return f;
+}
+
 CollisionConfig loadCollisionConfig(const ConfigNode& n) {
   CollisionConfig c;
   c.tolerance = n.get<double>("tolerance", c.tolerance);
   if (c.tolerance < 0.0 || c.tolerance > 0.05) n.fail("tolerance", "must be in [0, 0.05] m");
-  c.floor_links = n.getStrings("floor_links", c.floor_links);
-  if (n.has("ignore_pairs")) {  // [link_a, link_b] lists: read whole here
-    const YAML::Node l = n.yaml()["ignore_pairs"];
-    if (!l.IsSequence()) n.fail("ignore_pairs", "must be a list of [link_a, link_b] pairs");
-    for (const auto& p : l) {
-      if (!p.IsSequence() || p.size() != 2 || !p[0].IsScalar() || !p[1].IsScalar())
-        n.fail("ignore_pairs", "must be a list of [link_a, link_b] pairs");
-      c.ignore_pairs.emplace_back(p[0].as<std::string>(), p[1].as<std::string>());
-    }
-    n.ignore("ignore_pairs");
-  }
+  for (const char* key : {"floor_links", "ignore_pairs"})  // robot-specific: live in robot.yaml now
+    if (n.has(key))
+      n.fail(key, std::string("names robot links: move it to the robot's robot.yaml as robot.collision.") + key);
+  c.self_collision.samples = n.get<int>("self_collision_samples", c.self_collision.samples);
+  c.self_collision.seed = static_cast<unsigned>(n.get<int>("self_collision_seed", static_cast<int>(c.self_collision.seed)));
   return c;
 }
 
@@ -144,7 +146,7 @@ SimConfig loadSim(const ConfigNode& root) {
   if (s.has("robot_start"))
     s.fail("robot_start", "is not used by the Bullet simulator: the robot starts at the scene's "
                           "robot_start");
-  c.camera_file = s.resolvePath(s.require<std::string>("camera_info"));
+  if (s.has("camera_info")) c.camera_file = s.resolvePath(s.require<std::string>("camera_info"));
   if (s.has("scene")) c.scene_file = s.resolvePath(s.require<std::string>("scene"));
   c.max_physics_substep = s.get<double>("max_physics_substep", c.max_physics_substep);
   if (!(c.max_physics_substep >= 1e-4 && c.max_physics_substep <= 0.02))

@@ -152,11 +152,10 @@ SimWorld::SimWorld(const SimConfig& cfg, const ehc_control::RobotConfig& robot,
     if (std::abs(f.upper - gripper_.maxOpening()) > 1e-9)
       fail("the two finger joints must have the same travel");
   dt_ns_ = cfg_.fake_robot.dtNs();
-  for (const auto& [a, b] : cfg_.collision.ignore_pairs)
-    for (const auto& l : {a, b})
-      if (std::find(collision_model_->allLinks().begin(), collision_model_->allLinks().end(), l) ==
-          collision_model_->allLinks().end())
-        fail("sim.collision.ignore_pairs names link '" + l + "' which is not in the URDF");
+  // robot.yaml's names were checked against the URDF by the WholeBodyModel.
+  const auto pairs = ehc_control::selfCollisionIgnorePairs(*model_, *collision_model_, cfg_.collision.self_collision);
+  ignored_pairs_.insert(pairs.begin(), pairs.end());
+  floor_links_ = robot.floor_links.empty() ? std::vector<std::string>{collision_model_->root()} : robot.floor_links;
   reset(cfg_.fake_robot.seed);
 }
 
@@ -279,16 +278,12 @@ void SimWorld::build() {
       }
       if (fingers[f].parent_link == g.name) m.gripper_link[i] = true;
     }
-    m.floor_link[i] = std::find(cfg_.collision.floor_links.begin(), cfg_.collision.floor_links.end(),
-                                g.name) != cfg_.collision.floor_links.end();
+    m.floor_link[i] = std::find(floor_links_.begin(), floor_links_.end(), g.name) != floor_links_.end();
   }
   for (std::size_t i = 0; i < n; ++i)
     for (std::size_t j = 0; j < n; ++j) {
-      bool ign = i == j || collision_model_->adjacent(links[i].name, links[j].name);
-      for (const auto& [a, b] : cfg_.collision.ignore_pairs)
-        if ((a == links[i].name && b == links[j].name) || (b == links[i].name && a == links[j].name))
-          ign = true;
-      m.ignore[i][j] = ign;
+      const std::string &a = links[i].name, &b = links[j].name;
+      m.ignore[i][j] = i == j || ignored_pairs_.count(a < b ? ehc_control::LinkPair{a, b} : ehc_control::LinkPair{b, a}) > 0;
     }
   for (std::size_t i = 0; i < n; ++i) m.add(m.links[i], kRobot, kFloor | kStatic | kObject | kRobot);
 }

@@ -41,7 +41,6 @@ class KinematicSimNode {
     if (!pnh.getParam("config", config_file))
       throw std::invalid_argument("[ehc_kinematic_sim_node] parameter _config:=<sim.yaml> is required");
     cfg_ = ehc_sim::loadFakeRobotConfigFile(config_file);
-    pnh.param("robot", cfg_.robot_file, cfg_.robot_file);
     ehc_sim::applyNodeOverrides(pnh, "ehc_kinematic_sim_node", &cfg_);
     const ehc_control::RobotConfig robot = ehc_control::loadRobotConfig(cfg_.robot_file);
     ROS_INFO_STREAM("[ehc_kinematic_sim_node] start-up configuration (" << config_file << ")\n"

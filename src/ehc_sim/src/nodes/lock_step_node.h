@@ -20,8 +20,11 @@ namespace ehc_sim {
 /// s between repeats of a throttled log message, in both simulator nodes.
 constexpr double kLogThrottle = 1.0;
 
-/// Private parameters _free_run and _seed override the configuration file.
+/// Private parameters _robot (a robot name or a robot.yaml), _free_run and _seed override the
+/// configuration file.
 inline void applyNodeOverrides(const ros::NodeHandle& pnh, const std::string& node, FakeRobotConfig* cfg) {
+  std::string robot;
+  if (pnh.getParam("robot", robot) && !robot.empty()) cfg->robot_file = ehc_control::resolveRobotFile(robot);
   pnh.param("free_run", cfg->free_run, cfg->free_run);
   int seed = static_cast<int>(cfg->seed);
   pnh.param("seed", seed, seed);

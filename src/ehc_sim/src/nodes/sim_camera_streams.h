@@ -32,7 +32,7 @@ struct BulletNodeSetup {
     applyNodeOverrides(pnh, node, &cfg.fake_robot);
     robot = ehc_control::loadRobotConfig(cfg.fake_robot.robot_file);
     scene = loadSceneConfig(scene_file);
-    intrinsics = ehc_control::loadPinholeCamera(cfg.camera_file);
+    intrinsics = ehc_control::loadPinholeCamera(simCameraFile(cfg, robot));
     ROS_INFO_STREAM("[" << node << "] start-up configuration\n"
                         << cfg.summary() << robot.summary() << "\n" << scene.summary());
   }
