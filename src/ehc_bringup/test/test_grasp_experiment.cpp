@@ -32,7 +32,7 @@ std::string trialsText(const GraspExperimentResult& r) {
   for (const auto& t : r.trials)
     os << t.method << " " << t.object << " " << t.success << " " << t.time_s << " " << t.tfm << " " << t.failed_phase
        << " " << t.reason << " " << t.contact_steps << " " << t.nearest.distance << " " << t.nearest.link << " " << t.nearest.body << " "
-       << t.nearest.phase << " " << t.tightest.margin() << " " << t.tightest.link << "\n";
+       << t.nearest.phase << " " << t.tightest.margin() << " " << t.tightest.link << " " << t.grasped.distance << "\n";
   return os.str();
 }
 
@@ -160,5 +160,10 @@ TEST(GraspExperiment, Exp3OneSetOfEveryMethodReportsTfmPerApproach) {
       EXPECT_LE(e.second.first, 1.0);
     }
   }
-  for (const auto& t : r.trials) EXPECT_EQ(t.joint_limit_violations, 0) << t.method << " " << t.approach;
+  for (const auto& t : r.trials) {
+    EXPECT_EQ(t.joint_limit_violations, 0) << t.method << " " << t.approach;
+    // The object being grasped is listed apart from PRE_GRASP on (the hand must come close).
+    if (t.nearest.body == t.object) EXPECT_TRUE(t.nearest.phase == "WAIT_TARGET" || t.nearest.phase == "APPROACH") << t.nearest.phase;
+    if (t.grasped.distance >= 0.0) EXPECT_NE(t.grasped.link, "") << t.method;
+  }
 }

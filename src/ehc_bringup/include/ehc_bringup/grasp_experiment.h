@@ -80,8 +80,12 @@ struct GraspTrial {
   double close_offset = -1.0;        ///< m, GraspResult::close_offset
   long contact_steps = 0;            ///< sim steps with a robot-scene or self collision
   long joint_limit_violations = 0;   ///< arm joint samples outside the limits
-  ObstacleExtreme nearest;           ///< the smallest perceived link-obstacle distance
-  ObstacleExtreme tightest;          ///< the smallest margin distance - d_s (< 0: closer than d_s)
+  /// Perceived link-obstacle pairs against the scene: the smallest distance and the smallest
+  /// margin distance - d_s (< 0: closer than d_s). The object being grasped counts as scene until
+  /// the grasp is locked (APPROACH); from PRE_GRASP on, the hand must come close to it (the
+  /// obstacle map excludes it from GRASP on), and its pairs go to `grasped` instead.
+  ObstacleExtreme nearest, tightest;
+  ObstacleExtreme grasped;           ///< the object being grasped, PRE_GRASP on: smallest distance
 };
 
 /// ‖TCP - object‖ (ground truth) and speeds, sampled every trace_period of an object's attempt.
@@ -100,7 +104,7 @@ struct GraspMethodSummary {
   SpeedMeans distant, close;          ///< mean |commanded speed| (Exp-1's definition)
   std::map<std::string, std::pair<double, int>> tfm;  ///< approach -> (mean TfM, grasps)
   long contact_steps = 0, joint_limit_violations = 0;
-  ObstacleExtreme nearest, tightest;  ///< over every grasp of the method
+  ObstacleExtreme nearest, tightest, grasped;  ///< over every grasp of the method (see GraspTrial)
   double sim_time_s = 0.0, wall_time_s = 0.0;
 };
 

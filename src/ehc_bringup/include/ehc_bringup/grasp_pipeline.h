@@ -99,9 +99,9 @@ struct PipelineCycle {
   GraspPhase phase = GraspPhase::WaitTarget;  ///< sequencer phase after the update
   ehc_control::ControlCycleStatus status;
   Eigen::VectorXd command;               ///< [base twist; arm rates] sent to the sim
-  /// The link-obstacle pair reported this cycle with the smallest distance, and the one with the
-  /// smallest margin distance - d_s (d_s: the link's stop distance, controller obstacle_stop[_links]).
-  ObstaclePairRecord nearest_obstacle, tightest_obstacle;
+  /// The link-obstacle pairs the controller received this cycle (empty: none), with each link's
+  /// stop distance d_s (controller obstacle_stop[_links]).
+  std::vector<ObstaclePairRecord> obstacle_pairs;
   bool collision = false;                ///< the sim step found a robot-world or self collision
   int joint_limit_violations = 0;        ///< arm joints outside their limits after the step
   std::vector<std::string> events;       ///< the sequencer's progress lines of this cycle

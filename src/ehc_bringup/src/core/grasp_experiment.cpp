@@ -161,7 +161,7 @@ GraspExperiment::RunOutput GraspExperiment::runOne(const RunSpec& spec) const {
   const int nb = pipe.cycle().model().nBase();
   const std::size_t n_objects = cfg.sequencer.objects.size();
   std::vector<long> contacts(n_objects, 0), limits(n_objects, 0);
-  std::vector<ObstacleExtreme> nearest(n_objects), tightest(n_objects);
+  std::vector<ObstacleExtreme> nearest(n_objects), tightest(n_objects), grasped(n_objects);
   std::vector<double> t0(n_objects, -1.0);
   std::vector<double> next_sample(n_objects, 0.0);
   // Per object: WAIT_TARGET .. LIFT (30 s each) + release + retreat, with margin.
@@ -174,21 +174,19 @@ GraspExperiment::RunOutput GraspExperiment::runOne(const RunSpec& spec) const {
     const std::size_t k = std::min(c.object, n_objects - 1);
     contacts[k] += c.collision;
     limits[k] += c.joint_limit_violations;
-    auto extreme = [&](const ObstaclePairRecord& r) {
+    for (const ObstaclePairRecord& r : c.obstacle_pairs) {
       ObstacleExtreme e;
-      if (r.distance < 0.0) return e;
       e.distance = r.distance;
       e.stop = r.stop;
       e.link = r.link;
       e.body = nearestSceneBody(pipe.world(), r.obstacle_point);
       e.phase = toString(c.phase);
-      return e;
-    };
-    if (c.nearest_obstacle.distance >= 0.0) {
-      if (nearest[k].distance < 0.0 || c.nearest_obstacle.distance < nearest[k].distance)
-        nearest[k] = extreme(c.nearest_obstacle);
-      if (tightest[k].distance < 0.0 || c.tightest_obstacle.margin() < tightest[k].margin())
-        tightest[k] = extreme(c.tightest_obstacle);
+      if (e.body == cfg.sequencer.objects[k].name && c.phase >= GraspPhase::PreGrasp && c.phase <= GraspPhase::Lift) {
+        grasped[k].take(e, false);
+      } else {
+        nearest[k].take(e, false);
+        tightest[k].take(e, true);
+      }
     }
     const bool working = c.phase != GraspPhase::Release && c.phase != GraspPhase::Retreat &&
                          c.phase != GraspPhase::Done;
@@ -239,6 +237,7 @@ GraspExperiment::RunOutput GraspExperiment::runOne(const RunSpec& spec) const {
     t.joint_limit_violations = limits[i];
     t.nearest = nearest[i];
     t.tightest = tightest[i];
+    t.grasped = grasped[i];
     out.trials.push_back(t);
   }
   out.counters = pipe.counters();
@@ -323,6 +322,7 @@ GraspExperimentResult GraspExperiment::run(const Progress& progress) const {
         s.joint_limit_violations += t.joint_limit_violations;
         s.nearest.take(t.nearest, false);
         s.tightest.take(t.tightest, true);
+        s.grasped.take(t.grasped, false);
         res.trials.push_back(t);
       }
       for (SpeedMeans* p : {&distant, &close}) {
@@ -398,6 +398,7 @@ std::string graspSummaryJson(const GraspMethodSummary& s) {
   }
   os << "},\"contact_steps\":" << s.contact_steps << ",\"joint_limit_violations\":" << s.joint_limit_violations
      << ",\"min_obstacle\":" << obstacleJson(s.nearest) << ",\"min_obstacle_margin\":" << obstacleJson(s.tightest)
+     << ",\"min_grasped_object\":" << obstacleJson(s.grasped)
      << ",\"sim_time_s\":" << s.sim_time_s << "}";
   return os.str();
 }
@@ -468,22 +469,28 @@ void writeGraspResults(const std::string& dir, const GraspExperimentParams& para
          "least its link's stop distance d_s):\n\n"
       << "| Method | sim steps with robot-scene contact (Bullet) | joint-limit violations "
          "| min perceived robot-obstacle distance d, mm (link - nearest scene body, phase) "
-         "| min margin d - d_s, mm (link - body, phase; d, d_s) | sim time (s) |\n"
-         "|---|---|---|---|---|---|\n";
+         "| min margin d - d_s, mm (link - body, phase; d, d_s) | object being grasped, PRE_GRASP on: min d, mm "
+         "| sim time (s) |\n"
+         "|---|---|---|---|---|---|---|\n";
     for (const auto& s : result.summaries)
       f << "| " << s.method << " | " << s.contact_steps << " | " << s.joint_limit_violations << " | "
-        << where(s.nearest, false) << " | " << where(s.tightest, true) << " | " << std::setprecision(1) << s.sim_time_s
+        << where(s.nearest, false) << " | " << where(s.tightest, true) << " | " << where(s.grasped, false) << " | "
+        << std::setprecision(1) << s.sim_time_s
         << " |\n";
     f << "\nPerceived distances are those the controller received (ehc_obstacle_node's: octomap of the depth "
          "clouds, robot points filtered, the grasped object's sphere excluded from the descent to the end of the "
-         "retreat); the scene body is the ground-truth body nearest to the perceived obstacle point.\n";
+         "retreat); the scene body is the ground-truth body nearest to the perceived obstacle point. The object "
+         "being grasped is scene until the grasp is locked; from PRE_GRASP on the hand must come close to it (the "
+         "controller still keeps its dampers until GRASP, d_s 10 mm for the fingers), so its pairs are listed "
+         "apart.\n";
     if (!notes.empty()) f << "\n" << notes << "\n";
   }
   {
     std::ofstream f = open("trials.csv");
     f << "method,set,index,seed,object,approach,success,time_s,tfm,tfm_until_switch,controller_tfm,failed_phase,"
          "reason,close_offset_m,contact_steps,joint_limit_violations,min_obstacle_distance_m,min_obstacle_link,min_obstacle_body,"
-         "min_obstacle_phase,min_margin_m,min_margin_link,min_margin_body,min_margin_phase\n";
+         "min_obstacle_phase,min_margin_m,min_margin_link,min_margin_body,min_margin_phase,min_grasped_object_m,"
+         "min_grasped_object_link,min_grasped_object_phase\n";
     for (const auto& t : result.trials) {
       std::string reason = t.reason;
       std::replace(reason.begin(), reason.end(), '"', '\'');
@@ -492,7 +499,8 @@ void writeGraspResults(const std::string& dir, const GraspExperimentParams& para
         << t.controller_tfm << "," << t.failed_phase << ",\"" << reason << "\"," << t.close_offset << "," << t.contact_steps << ","
         << t.joint_limit_violations << "," << t.nearest.distance << "," << t.nearest.link << "," << t.nearest.body
         << "," << t.nearest.phase << "," << (t.tightest.distance < 0.0 ? 0.0 : t.tightest.margin()) << ","
-        << t.tightest.link << "," << t.tightest.body << "," << t.tightest.phase << "\n";
+        << t.tightest.link << "," << t.tightest.body << "," << t.tightest.phase << "," << t.grasped.distance << ","
+        << t.grasped.link << "," << t.grasped.phase << "\n";
     }
   }
   {

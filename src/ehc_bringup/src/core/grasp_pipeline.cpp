@@ -208,9 +208,7 @@ void GraspPipeline::updateObstacles(double t) {
   pairs.reserve(r.distances.size());
   for (const auto& d : r.distances) {
     pairs.push_back({d.link, d.link_point, d.obstacle_point, d.normal, d.distance});
-    const ObstaclePairRecord rec{d.distance, cfg_.cycle.controller.obstacleStop(d.link), d.link, d.obstacle_point};
-    if (last_.nearest_obstacle.distance < 0.0 || rec.distance < last_.nearest_obstacle.distance) last_.nearest_obstacle = rec;
-    if (last_.tightest_obstacle.distance < 0.0 || rec.margin() < last_.tightest_obstacle.margin()) last_.tightest_obstacle = rec;
+    last_.obstacle_pairs.push_back({d.distance, cfg_.cycle.controller.obstacleStop(d.link), d.link, d.obstacle_point});
   }
   const std::string err = cycle_->setObstacles(r.stamp, pairs);
   if (!err.empty()) throw std::runtime_error("[GraspPipeline] obstacles rejected by the controller: " + err);
