@@ -14,8 +14,8 @@ Asserted (outcomes, no wall-clock figure; what is robust on a loaded 2-core mach
     the whole chain works end to end;
   - no self collision; every failed object has its phase and reason.
 Reported, not asserted (findings of the rehearsal, REALMAN.md): the number grasped (3/3 in 3
-of 7 runs here, 2/3 in the others: "gripper closed on nothing") and the robot-world contacts
-with their link and body (the fingers on the table top in 2 of 7 runs, 1 and 40 steps).
+of 8 runs here, 2/3 in the others: mostly "gripper closed on nothing") and the robot-world
+contacts with their link and body (the fingers on the table top in 2 of 8 runs, 1 and 40 steps).
 Why wall clock, and why not flaky under load: the hardware path is wall-clock driven (the
 adapters stream and time out on the steady clock, the controller runs on a timer). The stand-in
 steps its world by sim.dt until it has caught up with the wall clock, in one burst after a
