@@ -27,6 +27,9 @@
 #   TAG_OBJECTS        objects with a tag node config/demo/tag_<name>.yaml  [front middle back]
 #   MPBS               true | false: override the controller's mpbs.enabled  [from CONTROLLER_CONFIG]
 #   OBSTACLES          1: run the obstacle node (controller obstacle dampers), 0: without  [1]
+#   PERCEPTION_LOCKSTEP 1: the simulator steps past an image only once every tag node is done
+#                      with it (_perception_acks; results do not depend on the CPU load),
+#                      0: the tag nodes run beside the lock-step                      [1]
 # Exit code: 0 when the run completed (failed grasps are reported in the summary; with
 # EHC_DEMO_STRICT=1 a failed grasp exits 1), 2 on a set-up error or crash, 130 on Ctrl-C.
 set -o pipefail
@@ -151,9 +154,16 @@ for o in "${OBJECTS[@]}"; do TAG_NODES+=("ehc_tag_$o"); done
 clear_private_params ehc_sim_node "${TAG_NODES[@]}" ehc_grasp_node ehc_obstacle_node \
   ehc_controller_node ehc_grasp_sequencer_node
 
+# Lock-step perception gate (issue 18): every tag node acknowledges each image on
+# /sim/perception_ack (ack_topic of config/demo/tag_<object>.yaml); the simulator waits for them.
+PERCEPTION_ARG=()
+if [ "${PERCEPTION_LOCKSTEP:-1}" = 1 ]; then
+  acks=$(IFS=,; echo "${TAG_NODES[*]}")
+  PERCEPTION_ARG=(_perception_acks:="[$acks]" _perception_max_lag:=0.0)
+fi
 # shellcheck disable=SC2086
 start sim rosrun ${SIM_PREFIX:+--prefix "$SIM_PREFIX"} ehc_sim ehc_sim_node _config:="$SIM_CONFIG" _scene:="$SCENE" _seed:="$SEED" \
-  "${ROBOT_ARG[@]}"
+  "${ROBOT_ARG[@]}" "${PERCEPTION_ARG[@]}"
 for o in "${OBJECTS[@]}"; do
   start "tag_$o" rosrun ehc_perception ehc_tag_node _config:="config/demo/tag_$o.yaml" __name:="ehc_tag_$o"
 done

@@ -75,6 +75,64 @@ TEST(StepScheduler, LockStepNeverAdvancesWithoutAnAnswer) {
   EXPECT_EQ(s.next(1200.0), StepAction::Wait);
 }
 
+TEST(StepScheduler, PerceptionGateHoldsAStepUntilEveryNodeIsDoneWithTheImage) {
+  // Issue 18: perception in the lock-step. Two tag nodes; an image with the state at kT0.
+  StepScheduler s(robot(), config(false));
+  s.setPerceptionGate({"ehc_tag_a", "ehc_tag_b"}, 0);
+  auto answer = [&](double wall, std::int64_t t) {
+    EXPECT_EQ(s.onBaseTwist(wall, 0.0, 0.0, 0.0), "");
+    EXPECT_EQ(s.onArmCommand(wall, t, kNames, kRates), "");
+  };
+  // Nodes join with their first acknowledgement: before that they hold nothing back.
+  s.statePublished(100.0, kT0 - 10'000'000, true);
+  s.imagePublished(kT0 - 10'000'000);
+  answer(100.0, kT0 - 10'000'000);
+  EXPECT_EQ(s.next(100.0), StepAction::Step);
+  EXPECT_EQ(s.onPerceptionAck("ehc_tag_a", kT0 - 10'000'000), "");
+  EXPECT_EQ(s.onPerceptionAck("ehc_tag_b", kT0 - 10'000'000), "");
+  s.statePublished(100.0, kT0, true);
+  s.imagePublished(kT0);
+  answer(100.0, kT0);
+  // However long the detection takes (a loaded machine): no step, and no resending.
+  for (double wall = 100.0; wall < 200.0; wall += 0.5) ASSERT_EQ(s.next(wall), StepAction::Wait);
+  EXPECT_NE(s.perceptionWait().find("ehc_tag_a"), std::string::npos) << s.perceptionWait();
+  EXPECT_NE(s.onPerceptionAck("ehc_tag_c", kT0), "") << "not a gate node";
+  EXPECT_EQ(s.onPerceptionAck("/ehc_tag_a", kT0), "");  // ROS node names start with '/'
+  EXPECT_EQ(s.next(200.0), StepAction::Wait);
+  EXPECT_NE(s.perceptionWait().find("ehc_tag_b"), std::string::npos);
+  EXPECT_EQ(s.onPerceptionAck("ehc_tag_b", kT0), "");
+  EXPECT_EQ(s.perceptionWait(), "");
+  EXPECT_EQ(s.next(200.0), StepAction::Step);
+  // The next state has no image: it steps on the controller's answer alone.
+  s.statePublished(200.0, kT1, true);
+  answer(200.0, kT1);
+  EXPECT_EQ(s.next(200.0), StepAction::Step);
+
+  // With a lag of 2 steps an image holds only the step that would pass it by more than that;
+  // an acknowledgement of a later image covers an earlier one the node skipped.
+  StepScheduler lag(robot(), config(false));
+  lag.setPerceptionGate({"ehc_tag_a"}, 20'000'000);
+  const std::int64_t dt = 10'000'000;
+  EXPECT_EQ(lag.onPerceptionAck("ehc_tag_a", 0), "");  // joined
+  lag.statePublished(0.0, kT0, true);
+  lag.imagePublished(kT0);
+  for (int k = 0; k < 3; ++k) {
+    const std::int64_t t = kT0 + k * dt;
+    if (k > 0) lag.statePublished(0.0, t, true);
+    if (k == 1) lag.imagePublished(t);
+    EXPECT_EQ(lag.onBaseTwist(0.0, 0.0, 0.0, 0.0), "");
+    EXPECT_EQ(lag.onArmCommand(0.0, t, kNames, kRates), "");
+    if (k < 2) {
+      EXPECT_EQ(lag.next(0.0), StepAction::Step) << "step " << k << ": within the lag";
+    } else {
+      EXPECT_EQ(lag.next(0.0), StepAction::Wait) << "step " << k << ": would pass the image at kT0 by > 2 steps";
+      EXPECT_EQ(lag.onPerceptionAck("ehc_tag_a", kT0 + dt), "");  // the later image: both done
+      EXPECT_EQ(lag.next(0.0), StepAction::Step);
+    }
+  }
+  EXPECT_THROW(lag.setPerceptionGate({"x"}, -1), std::invalid_argument);
+}
+
 TEST(StepScheduler, RejectedCommandsAreCountedAnswersExecutedAsZero) {
   StepScheduler s(robot(), config(false));
   s.statePublished(0.0, kT0, true);

@@ -14,6 +14,7 @@
 
 #include <geometry_msgs/PoseStamped.h>
 #include <ros/ros.h>
+#include <std_msgs/Header.h>
 #include <message_filters/subscriber.h>
 #include <tf2_ros/transform_listener.h>
 
@@ -35,6 +36,9 @@ struct TagNodeConfig {
   std::string camera_file;   ///< optional camera_info YAML; "" = use the camera_info topic
   double tf_timeout = 0.05;  ///< s, lookup of a camera_frame other than the image's (see above)
   int image_queue = 5;       ///< images waiting for their camera pose (the oldest is dropped)
+  /// "" = off; else every image is acknowledged here when done with (std_msgs/Header: stamp =
+  /// the image's, frame_id = this node's name): a lock-step simulator's perception gate.
+  std::string ack_topic;
   TagDetectorConfig detector;
   TagTargetConfig target;
 
@@ -44,7 +48,8 @@ struct TagNodeConfig {
            " in '" + world_frame + "' (camera frame '" +
            (camera_frame.empty() ? "<image header>" : camera_frame) + "', tf timeout " +
            std::to_string(tf_timeout) + " s, " + std::to_string(image_queue) +
-           " images wait for their camera pose)\n  " + detector.summary() + "\n  " + target.summary();
+           " images wait for their camera pose" + (ack_topic.empty() ? "" : ", done acknowledged on " + ack_topic) +
+           ")\n  " + detector.summary() + "\n  " + target.summary();
   }
 };
 
@@ -62,6 +67,7 @@ TagNodeConfig loadTagNodeConfig(const std::string& path) {
   c.tf_timeout = n.get("tf_timeout", c.tf_timeout);
   ehc_control::requireRange("TagNode", "node.tf_timeout", c.tf_timeout, 0.0, 5.0);
   c.image_queue = n.get("image_queue", c.image_queue);
+  c.ack_topic = n.get("ack_topic", c.ack_topic);
   ehc_control::requireRange("TagNode", "node.image_queue", c.image_queue, 1, 100);
   if (c.world_frame.empty()) n.fail("world_frame", "must not be empty");
   c.detector = loadTagDetectorConfig(root.childOrEmpty("tag_detector"));
@@ -79,9 +85,11 @@ class TagNode {
         image_filter_(image_sub_, tf_, cfg_.world_frame, static_cast<std::uint32_t>(cfg_.image_queue), nh) {
     if (!cfg_.camera_file.empty()) build(ehc_control::loadPinholeCamera(cfg_.camera_file));
     pub_ = nh.advertise<geometry_msgs::PoseStamped>(cfg_.target_topic, 10);
+    if (!cfg_.ack_topic.empty()) ack_pub_ = nh.advertise<std_msgs::Header>(cfg_.ack_topic, 50);
     image_filter_.registerCallback(&TagNode::onImage, this);
     image_filter_.registerFailureCallback(
-        [](const sensor_msgs::ImageConstPtr& m, tf2_ros::filter_failure_reasons::FilterFailureReason why) {
+        [this](const sensor_msgs::ImageConstPtr& m, tf2_ros::filter_failure_reasons::FilterFailureReason why) {
+          acknowledge(m->header.stamp);
           ROS_WARN_STREAM_THROTTLE(kLogThrottle, "ehc_tag_node: image at " << m->header.stamp << " dropped before its camera pose arrived ("
                                                        << ros_conv::filterFailureText(why) << ")");
         });
@@ -113,8 +121,21 @@ class TagNode {
     }
   }
 
+  /// Done with the image stamped `stamp` (lock-step perception gate), whatever came of it.
+  void acknowledge(const ros::Time& stamp) {
+    if (cfg_.ack_topic.empty()) return;
+    std_msgs::Header h;
+    h.stamp = stamp;
+    h.frame_id = ros::this_node::getName();
+    ack_pub_.publish(h);
+  }
+
   void onImage(const sensor_msgs::ImageConstPtr& image) {
-    const sensor_msgs::Image& msg = *image;
+    process(*image);
+    acknowledge(image->header.stamp);  // after the target pose: the simulator steps on
+  }
+
+  void process(const sensor_msgs::Image& msg) {
     if (!detector_) {
       ROS_WARN_THROTTLE(kLogThrottle, "ehc_tag_node: no camera_info yet, image ignored");
       return;
@@ -149,7 +170,7 @@ class TagNode {
   vpImage<unsigned char> gray_;
   message_filters::Subscriber<sensor_msgs::Image> image_sub_;
   tf2_ros::MessageFilter<sensor_msgs::Image> image_filter_;  ///< passes an image once its camera pose is known
-  ros::Publisher pub_;
+  ros::Publisher pub_, ack_pub_;
   ros::Subscriber info_sub_;
 };
 

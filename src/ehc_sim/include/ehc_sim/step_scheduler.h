@@ -16,6 +16,14 @@
 //     controller that starts late or missed the message; with max_real_time_factor > 0 an
 //     answered step waits until dt / max_real_time_factor wall seconds have passed since the
 //     state was published (pacing for tests whose other inputs come on wall-clock timers).
+// Perception gate (lock-step only, off unless setPerceptionGate names nodes; issue 18): an
+// image published with the state stamped s must be acknowledged (onPerceptionAck, that image or
+// a later one) by every listed perception node before a step takes sim time past s + max_lag.
+// A node joins the gate with its first acknowledgement (one that has not started yet, or has
+// not subscribed yet, holds nothing back: it could never acknowledge the images before it).
+// Perception nodes are outside the controller's handshake; without the gate a loaded machine
+// let them fall behind sim time (fewer images processed per sim second: the back object's tag,
+// detectable only from close, was never seen in one run), so results depended on the load.
 // Free-run (free_run = true): a step every dt of wall time (no catching up after a stall)
 // with the latest commands; arm commands need no matching stamp; both groups are zeroed when
 // either the last /cmd_vel or the last accepted arm command is older than command_timeout.
@@ -60,8 +68,20 @@ class StepScheduler {
 
   /// [base twist; arm rates] to execute on a Step (zeros for rejected or zeroed groups).
   Eigen::VectorXd command() const { return gate_.command(); }
-  /// After a scene reset: zero commands and counters (then publish a fresh state).
+  /// After a scene reset: zero commands and counters, forget images and acknowledgements (then
+  /// publish a fresh state).
   void reset();
+
+  /// Perception gate (see the file comment): `nodes` (empty: off) must acknowledge every image
+  /// before sim time passes its stamp by more than `max_lag_ns` (>= 0). Lock-step only.
+  void setPerceptionGate(const std::vector<std::string>& nodes, std::int64_t max_lag_ns);
+  /// An image stamped `stamp_ns` was published (with the state of that stamp).
+  void imagePublished(std::int64_t stamp_ns);
+  /// `node` is done with the image stamped `stamp_ns` (whatever came of it): "" if counted,
+  /// else why not (a node the gate does not list).
+  std::string onPerceptionAck(const std::string& node, std::int64_t stamp_ns);
+  /// "" when no step is held back by perception; else which node and image it waits for.
+  std::string perceptionWait() const;
 
   bool lockStep() const { return !config_.free_run; }
   const CommandGate& gate() const { return gate_; }
@@ -74,6 +94,15 @@ class StepScheduler {
   double last_publish_ = 0.0;
   double last_fresh_publish_ = 0.0;
   std::optional<double> last_base_cmd_, last_arm_cmd_, next_step_;
+  std::int64_t state_ns_ = 0;  ///< stamp of the last fresh state
+  // Perception gate: listed nodes, their last acknowledged image stamp, images not yet acknowledged by all.
+  std::vector<std::string> perception_nodes_;
+  std::vector<std::int64_t> acked_ns_;
+  std::int64_t max_lag_ns_ = 0;
+  std::vector<std::int64_t> images_ns_;  ///< increasing
+  /// Index of a node that has not acknowledged the newest image the next step must not pass
+  /// (-1: none), and that image's stamp.
+  int heldBy(std::int64_t* image_ns) const;
 };
 
 }  // namespace ehc_sim

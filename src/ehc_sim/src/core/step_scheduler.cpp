@@ -1,6 +1,8 @@
 #include "ehc_sim/step_scheduler.h"
 
 #include <algorithm>
+#include <sstream>
+#include <stdexcept>
 
 namespace ehc_sim {
 
@@ -20,6 +22,7 @@ StepScheduler::StepScheduler(const ehc_control::RobotConfig& robot, const FakeRo
 
 void StepScheduler::statePublished(double wall_s, std::int64_t stamp_ns, bool fresh) {
   if (fresh) {
+    state_ns_ = stamp_ns;
     gate_.newState(stamp_ns);
     answered_ = false;
     last_fresh_publish_ = wall_s;
@@ -45,6 +48,8 @@ std::string StepScheduler::onArmCommand(double wall_s, std::int64_t stamp_ns,
 StepAction StepScheduler::next(double wall_s) {
   if (lockStep()) {
     if (gate_.ready()) {
+      std::int64_t image_ns = 0;
+      if (heldBy(&image_ns) >= 0) return StepAction::Wait;  // perception behind: never a timeout
       const bool paced = config_.max_real_time_factor > 0.0 &&
                          wall_s - last_fresh_publish_ < config_.dt / config_.max_real_time_factor;
       return paced ? StepAction::Wait : StepAction::Step;
@@ -72,6 +77,60 @@ double StepScheduler::callbackWait() const {
 void StepScheduler::reset() {
   gate_.zero();
   gate_.resetCounters();
+  images_ns_.clear();
+  std::fill(acked_ns_.begin(), acked_ns_.end(), std::int64_t{-1});
+}
+
+void StepScheduler::setPerceptionGate(const std::vector<std::string>& nodes, std::int64_t max_lag_ns) {
+  if (max_lag_ns < 0) throw std::invalid_argument("[StepScheduler] perception max lag must be >= 0");
+  for (const auto& n : nodes)
+    if (n.empty()) throw std::invalid_argument("[StepScheduler] empty perception node name");
+  perception_nodes_ = nodes;
+  acked_ns_.assign(nodes.size(), -1);
+  max_lag_ns_ = max_lag_ns;
+  images_ns_.clear();
+}
+
+void StepScheduler::imagePublished(std::int64_t stamp_ns) {
+  if (perception_nodes_.empty()) return;
+  if (!images_ns_.empty() && stamp_ns <= images_ns_.back()) images_ns_.clear();  // time restarted (reset)
+  images_ns_.push_back(stamp_ns);
+}
+
+std::string StepScheduler::onPerceptionAck(const std::string& node, std::int64_t stamp_ns) {
+  if (perception_nodes_.empty()) return "";  // gate off: nothing to count
+  const std::string name = !node.empty() && node.front() == '/' ? node.substr(1) : node;
+  const auto it = std::find(perception_nodes_.begin(), perception_nodes_.end(), name);
+  if (it == perception_nodes_.end()) return "'" + name + "' is not a perception node of the lock-step gate";
+  auto& a = acked_ns_[static_cast<std::size_t>(it - perception_nodes_.begin())];
+  a = std::max(a, stamp_ns);
+  // Images every node has acknowledged no longer hold anything back.
+  std::int64_t all = a;
+  for (const std::int64_t x : acked_ns_)
+    if (x >= 0) all = std::min(all, x);
+  images_ns_.erase(images_ns_.begin(), std::upper_bound(images_ns_.begin(), images_ns_.end(), all));
+  return "";
+}
+
+int StepScheduler::heldBy(std::int64_t* image_ns) const {
+  if (perception_nodes_.empty() || images_ns_.empty()) return -1;
+  // After the step sim time is state + dt: every image older than that minus max_lag must be done.
+  const std::int64_t limit = state_ns_ + config_.dtNs() - max_lag_ns_;
+  const auto last = std::upper_bound(images_ns_.begin(), images_ns_.end(), limit - 1);  // stamps < limit
+  if (last == images_ns_.begin()) return -1;
+  *image_ns = *(last - 1);
+  for (std::size_t i = 0; i < acked_ns_.size(); ++i)
+    if (acked_ns_[i] >= 0 && acked_ns_[i] < *image_ns) return static_cast<int>(i);  // -1: not joined yet
+  return -1;
+}
+
+std::string StepScheduler::perceptionWait() const {
+  std::int64_t image_ns = 0;
+  const int i = heldBy(&image_ns);
+  if (i < 0) return "";
+  std::ostringstream s;
+  s << perception_nodes_[static_cast<std::size_t>(i)] << " (image at " << 1e-9 * static_cast<double>(image_ns) << " s)";
+  return s.str();
 }
 
 }  // namespace ehc_sim

@@ -15,7 +15,10 @@
 // odom -> base_link from the base model's odometry: sim.base_model water2 = the Water2 bridge's),
 // /camera/color/image_raw (mono8) + /camera/color/camera_info, /camera/depth/points,
 // /sim/object_poses (ground truth, metrics only), /sim/status.
-// Subscribes /cmd_vel, /arm/joint_velocity_cmd. Services /sim/reset (ehc_msgs/ResetScene),
+// Subscribes /cmd_vel, /arm/joint_velocity_cmd, /sim/perception_ack (std_msgs/Header: frame_id
+// = a perception node's name, stamp = the image it is done with; lock-step perception gate,
+// private parameters _perception_acks:="[node, ...]" and _perception_max_lag:=<s>, default 0;
+// see ehc_sim::StepScheduler). Services /sim/reset (ehc_msgs/ResetScene),
 // /sim/gripper (std_srvs/SetBool: true = close, false = open).
 
 #include "lock_step_node.h"
@@ -25,6 +28,7 @@
 #include "ehc_msgs/ResetScene.h"
 
 #include <ros/ros.h>
+#include <std_msgs/Header.h>
 #include <std_srvs/SetBool.h>
 #include <tf2_msgs/TFMessage.h>
 
@@ -48,6 +52,35 @@ class SimNode {
     tf_pub_ = nh_.advertise<tf2_msgs::TFMessage>("/tf", 100);
     objects_pub_ = nh_.advertise<ehc_msgs::SimObjectPoses>("/sim/object_poses", 10);
     status_pub_ = nh_.advertise<ehc_msgs::SimStatus>("/sim/status", 10);
+    // A YAML list, or (rosrun _perception_acks:=[a,b]: roscpp keeps it a string) names
+    // separated by commas, blanks or brackets.
+    std::vector<std::string> perception_acks;
+    if (!pnh.getParam("perception_acks", perception_acks)) {
+      std::string text;
+      pnh.param<std::string>("perception_acks", text, "");
+      std::string name;
+      for (const char ch : text + ",") {
+        if (ch == ',' || ch == ' ' || ch == '[' || ch == ']') {
+          if (!name.empty()) perception_acks.push_back(name);
+          name.clear();
+        } else {
+          name += ch;
+        }
+      }
+    }
+    double max_lag = 0.0;
+    pnh.param("perception_max_lag", max_lag, max_lag);
+    if (!(max_lag >= 0.0 && max_lag <= 10.0))
+      throw std::invalid_argument("[ehc_sim_node] _perception_max_lag must be in [0, 10] s");
+    if (!perception_acks.empty()) {
+      lock_step_->scheduler().setPerceptionGate(perception_acks, static_cast<std::int64_t>(std::llround(max_lag * 1e9)));
+      std::string names;
+      for (const auto& n : perception_acks) names += " " + n;
+      ROS_INFO_STREAM("[ehc_sim_node] lock-step perception gate: every image acknowledged on /sim/perception_ack by"
+                      << names << " before sim time passes it by " << max_lag << " s");
+    }
+    ack_sub_ = nh_.subscribe("/sim/perception_ack", 50, &SimNode::onPerceptionAck, this,
+                             ros::TransportHints().tcpNoDelay());
     reset_srv_ = nh_.advertiseService("/sim/reset", &SimNode::onReset, this);
     gripper_srv_ = nh_.advertiseService("/sim/gripper", &SimNode::onGripper, this);
   }
@@ -73,7 +106,10 @@ class SimNode {
     rosgraph_msgs::Clock clock;
     clock.clock = stamp;
     clock_pub_.publish(clock);
-    if (fresh) camera_->publishDue(*world_, t_ns, stamp);
+    if (fresh) {
+      camera_->publishDue(*world_, t_ns, stamp,
+                          [this](std::int64_t t_image) { lock_step_->scheduler().imagePublished(t_image); });
+    }
     sensor_msgs::JointState js;
     ehc_sim::fillJointState(world_->robot(), stamp, &js);
     nav_msgs::Odometry odom;
@@ -116,6 +152,11 @@ class SimNode {
     return true;
   }
 
+  void onPerceptionAck(const std_msgs::Header& m) {
+    const std::string why = lock_step_->scheduler().onPerceptionAck(m.frame_id, static_cast<std::int64_t>(m.stamp.toNSec()));
+    if (!why.empty()) ROS_WARN_STREAM_THROTTLE(kLogThrottle, "[ehc_sim_node] /sim/perception_ack ignored: " << why);
+  }
+
   bool onGripper(std_srvs::SetBool::Request& req, std_srvs::SetBool::Response& res) {
     world_->commandGripper(req.data);
     res.success = true;
@@ -129,6 +170,7 @@ class SimNode {
   std::unique_ptr<ehc_sim::SimWorld> world_;
   std::unique_ptr<ehc_sim::SimCameraStreams> camera_;  ///< camera.image_rate / cloud_rate on sim time
   std::unique_ptr<ehc_sim::LockStepNode> lock_step_;  ///< callback queue, commands, stepping loop
+  ros::Subscriber ack_sub_;  ///< /sim/perception_ack (lock-step perception gate)
   ros::Publisher clock_pub_, joint_pub_, odom_pub_, tf_pub_, objects_pub_, status_pub_;
   ros::ServiceServer reset_srv_, gripper_srv_;
 };

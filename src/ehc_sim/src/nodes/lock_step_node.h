@@ -52,12 +52,24 @@ class LockStepNode {
   /// Serves callbacks until shutdown; `step()` on StepAction::Step (it executes command() and
   /// publishes the fresh state), `republish()` on StepAction::RepublishState.
   void run(const std::function<void()>& step, const std::function<void()>& republish) {
+    double last_step = ros::WallTime::now().toSec();
     while (ros::ok()) {
       queue_.callAvailable(ros::WallDuration(scheduler_.callbackWait()));
-      switch (scheduler_.next(ros::WallTime::now().toSec())) {
-        case StepAction::Step: step(); break;
+      const double wall = ros::WallTime::now().toSec();
+      switch (scheduler_.next(wall)) {
+        case StepAction::Step:
+          step();
+          last_step = wall;
+          break;
         case StepAction::RepublishState: republish(); break;  // nobody answered
-        case StepAction::Wait: break;
+        case StepAction::Wait:
+          if (wall - last_step > 2.0) {
+            const std::string who = scheduler_.perceptionWait();
+            if (!who.empty())
+              ROS_WARN_STREAM_THROTTLE(5.0, "[" << node_ << "] lock-step: sim time waits " << wall - last_step
+                                                << " wall s for perception: " << who);
+          }
+          break;
       }
     }
   }

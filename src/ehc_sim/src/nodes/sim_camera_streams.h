@@ -9,6 +9,7 @@
 #include <ros/ros.h>
 
 #include <memory>
+#include <functional>
 #include <string>
 
 namespace ehc_sim {
@@ -54,13 +55,17 @@ class SimCameraStreams {
   }
 
   /// Renders and publishes what is due at the world's time `t_ns`, stamped `stamp`.
-  void publishDue(const SimWorld& world, std::int64_t t_ns, const ros::Time& stamp) {
+  /// `before_image` (if set) runs just before an image is published (the lock-step perception
+  /// gate records it there, so an acknowledgement can never arrive before the record).
+  void publishDue(const SimWorld& world, std::int64_t t_ns, const ros::Time& stamp,
+                  const std::function<void(std::int64_t)>& before_image = {}) {
     if (image_clock_.due(t_ns)) {
       camera_.render(world, &image_);
       sensor_msgs::Image img;
       fillImage(image_, frame_, stamp, &img);
       sensor_msgs::CameraInfo info;
       fillCameraInfo(camera_.intrinsics(), frame_, stamp, &info);
+      if (before_image) before_image(t_ns);
       image_pub_.publish(img);
       info_pub_.publish(info);
     }
