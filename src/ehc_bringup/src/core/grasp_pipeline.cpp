@@ -208,7 +208,8 @@ void GraspPipeline::updateObstacles(double t) {
   pairs.reserve(r.distances.size());
   for (const auto& d : r.distances) {
     pairs.push_back({d.link, d.link_point, d.obstacle_point, d.normal, d.distance});
-    last_.obstacle_pairs.push_back({d.distance, cfg_.cycle.controller.obstacleStop(d.link), d.link, d.obstacle_point});
+    // d_s as the controller applies it (controller.yaml + robot.yaml's obstacle_stop_distances)
+    last_.obstacle_pairs.push_back({d.distance, cycle_->controller().params().obstacleStop(d.link), d.link, d.obstacle_point});
   }
   const std::string err = cycle_->setObstacles(r.stamp, pairs);
   if (!err.empty()) throw std::runtime_error("[GraspPipeline] obstacles rejected by the controller: " + err);
