@@ -17,7 +17,9 @@ rm -rf build/test_results
 source devel/setup.bash
 export ROS_HOME="${ROS_HOME:-$PWD/build/ros_home}"
 build_failed=0
-if ! "${CATKIN[@]}" run_tests; then
+# --force-cmake: catkin caches the test environment at configure time; on a fresh clone the devel
+# space had no Python packages then (PYTHONPATH=''), so rostests importing ehc_msgs failed.
+if ! "${CATKIN[@]}" --force-cmake run_tests; then
   echo "[tests] catkin run_tests reported an error (test build failure?)"
   build_failed=1
 fi
