@@ -178,6 +178,32 @@ TEST(EhcQpController, InfeasibleConstraintsGiveZeroCommandAndQpFailed) {
   EXPECT_EQ(c.obstacle_rows, 2);
 }
 
+// A solve that does not finish within max_qp_iterations active-set steps (vpQuadProg would
+// loop forever on a degenerate problem: test_bounded_quad_prog replays one) stops the robot:
+// zero command, QP_FAILED and the reason; the next cycle solves again (cold start).
+TEST(EhcQpController, IterationLimitGivesZeroCommandAndQpFailed) {
+  auto model = std::make_shared<const WholeBodyModel>(realmanWithoutStopDistances());
+  const Eigen::VectorXd q = model->config().arm_ready;
+  const Eigen::Isometry3d target = approachPose(1.5, 0.5, 0.8, Eigen::Vector3d(0, 0, -1));
+  const Vector6d nu = (Vector6d() << 2.0, 1.0, -0.5, 0.5, 0.5, 0.5).finished();  // saturates bounds
+  QpControllerParams p;
+  EhcQpController normal(model, p, weighting());
+  const ControllerCommand ok = normal.step(Eigen::Vector3d::Zero(), q, target, nu);
+  ASSERT_TRUE(ok.ok) << ok.failure;
+  p.max_qp_iterations = 1;
+  EhcQpController limited(model, p, weighting());
+  for (int k = 0; k < 2; ++k) {
+    const ControllerCommand c = limited.step(Eigen::Vector3d::Zero(), q, target, nu);
+    EXPECT_FALSE(c.ok);
+    EXPECT_EQ(c.qp_status, QpStatus::Failed);
+    EXPECT_NE(c.failure.find("QP iteration limit (1 active-set iterations"), std::string::npos) << c.failure;
+    EXPECT_EQ(c.velocity.size(), model->nDof());
+    EXPECT_TRUE(c.velocity.isZero(0.0));
+  }
+  p.max_qp_iterations = 0;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+}
+
 TEST(QpControllerParams, ValidationAndLoading) {
   QpControllerParams p;
   p.joint_stop = 1.0;

@@ -1,6 +1,7 @@
 #pragma once
 // EhcQpController: the whole-body QP of DESIGN.md section 6 (paper eq. 6-13), solved with
-// ViSP vpQuadProg (warm-started between cycles).
+// ViSP's vpQuadProg algorithm (warm-started between cycles) with an iteration limit
+// (BoundedQuadProg: vpQuadProg itself cycles forever on some degenerate problems).
 //
 //   x = [qd_base; qd_arm; delta]            (delta in R^6: slack of the end-effector task)
 //   min 1/2 x^T Q x + C^T x
@@ -24,7 +25,7 @@
 //                              was at the switch: the base stands at its grasping position
 //                              while the goal moves (pre-grasp, grasp, lift, perception updates);
 //                              a target farther away drives the base again (paper: TSMM).
-// A failed, infeasible or non-finite solve gives a zero command and qp_status QP_FAILED (the
+// A failed, infeasible, non-finite or over-iteration-limit solve gives a zero command and qp_status QP_FAILED (the
 // time budget: ControlCycle, watchdog.max_solve_time); the command never contains NaN/Inf and
 // never exceeds a velocity limit. The obstacle rows are bounded (max_obstacle_rows, nearest pairs first). ROS-free.
 
@@ -101,6 +102,10 @@ struct QpControllerParams {
   /// the nearest (smallest distance - d_s) are kept, the rest dropped for this cycle. Bounds
   /// the build (one link Jacobian per row) and the solve whatever the obstacle node sends.
   int max_obstacle_rows = 24;
+  /// At most this many active-set iterations per solve (BoundedQuadProg): ViSP's vpQuadProg
+  /// loops without a limit and cycles forever on some degenerate problems; at the limit the
+  /// cycle fails safely (zero command, QP_FAILED). Normal solves take a few to ~30.
+  int max_qp_iterations = 200;
   double tsmm_switch_distance = 0.2;   ///< m: tsmm switches to the arm stage here
   double arrival_position = 0.01;      ///< m
   double arrival_orientation = 2.0 * M_PI / 180.0;  ///< rad

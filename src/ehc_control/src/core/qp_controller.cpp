@@ -1,12 +1,12 @@
 #include "ehc_control/qp_controller.h"
 
+#include "ehc_control/bounded_quad_prog.h"
 #include "ehc_control/config_node.h"
 #include "ehc_control/joint_limit_centring.h"
 
 #include <visp3/core/vpColVector.h>
 #include <visp3/core/vpException.h>
 #include <visp3/core/vpMatrix.h>
-#include <visp3/core/vpQuadProg.h>
 
 #include <algorithm>
 #include <chrono>
@@ -69,6 +69,7 @@ void QpControllerParams::validate() const {
   }
   requireRange(kOwner, "obstacle_damper_gain", obstacle_damper_gain, 1e-3, 100.0);
   requireRange(kOwner, "max_obstacle_rows", max_obstacle_rows, 0, 1000);
+  requireRange(kOwner, "max_qp_iterations", max_qp_iterations, 1, 100000);
   requireRange(kOwner, "tsmm_switch_distance", tsmm_switch_distance, 0.0, 5.0);
   requireRange(kOwner, "arrival_position", arrival_position, 1e-5, 1.0);
   requireRange(kOwner, "arrival_orientation", arrival_orientation, 1e-5, M_PI);
@@ -88,6 +89,7 @@ std::string QpControllerParams::summary() const {
      << " m, d_s " << obstacle_stop << " m";
   for (const auto& [link, d] : obstacle_stop_links) os << " (" << link << " " << d << " m)";
   os << ", gain " << obstacle_damper_gain << ", at most " << max_obstacle_rows << " rows (nearest first)"
+     << "; QP at most " << max_qp_iterations << " active-set iterations"
      << "; tsmm switch " << tsmm_switch_distance << " m; arrival " << arrival_position << " m / "
      << arrival_orientation * 180.0 / M_PI << " deg";
   return os.str();
@@ -131,6 +133,7 @@ QpControllerParams loadQpControllerParams(const ConfigNode& n) {
     n.fail("obstacle_stop_links", "names robot links: move it to the robot's robot.yaml as robot.obstacle_stop_distances");
   p.obstacle_damper_gain = n.get("obstacle_damper_gain", p.obstacle_damper_gain);
   p.max_obstacle_rows = n.get("max_obstacle_rows", p.max_obstacle_rows);
+  p.max_qp_iterations = n.get("max_qp_iterations", p.max_qp_iterations);
   p.tsmm_switch_distance = n.get("tsmm_switch_distance", p.tsmm_switch_distance);
   p.arrival_position = n.get("arrival_position", p.arrival_position);
   p.arrival_orientation = n.get("arrival_orientation_deg", p.arrival_orientation * 180.0 / M_PI) * M_PI / 180.0;
@@ -149,7 +152,7 @@ Vector6d poseError(const Eigen::Isometry3d& tcp, const Eigen::Isometry3d& target
 /// The warm-started ViSP solver and every per-cycle matrix, sized on first use: once warm,
 /// step() allocates nothing but the returned command (and what vpQuadProg does inside).
 struct EhcQpController::Solver {
-  vpQuadProg qp;
+  BoundedQuadProg qp;  ///< vpQuadProg's algorithm with an iteration limit (bounded_quad_prog.h)
   vpMatrix Q, A, C;
   vpColVector r, b, d, x;
   unsigned last_rows = 0;
@@ -545,16 +548,22 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
   }
   if (s.x.getRows() != static_cast<unsigned>(nx)) s.x.resize(static_cast<unsigned>(nx), true);
 
-  bool solved = false;
+  QpSolveResult solved = QpSolveResult::Infeasible;
   try {
-    solved = s.qp.solveQP(s.Q, s.r, s.A, s.b, s.C, s.d, s.x, 1e-6);
+    solved = s.qp.solveQP(s.Q, s.r, s.A, s.b, s.C, s.d, s.x, 1e-6, params_.max_qp_iterations);
   } catch (const vpException& ex) {
     s.qp.resetActiveSet();
     out.solve_time_us = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count();
     return fail(out, std::string("vpQuadProg: ") + ex.what());
   }
   out.solve_time_us = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count();
-  if (!solved) {
+  if (solved == QpSolveResult::IterationLimit) {
+    // vpQuadProg's active set cycles on this (degenerate) problem: it would never return.
+    s.qp.resetActiveSet();
+    return fail(out, "QP iteration limit (" + std::to_string(params_.max_qp_iterations) +
+                         " active-set iterations, degenerate constraints)");
+  }
+  if (solved != QpSolveResult::Solved) {
     s.qp.resetActiveSet();
     return fail(out, "QP infeasible");
   }
