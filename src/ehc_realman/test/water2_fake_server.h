@@ -8,6 +8,7 @@
 
 #include "wall_clock.h"
 
+#include "ehc_realman/water2_client.h"
 #include "ehc_realman/water2_protocol.h"
 
 #include <arpa/inet.h>
@@ -49,24 +50,7 @@ class FakeWater2Server {
 
   void start() {
     stop();
-    listen_fd_ = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
-    if (listen_fd_ < 0) throw std::runtime_error("FakeWater2Server: socket failed");
-    const int one = 1;
-    ::setsockopt(listen_fd_, SOL_SOCKET, SO_REUSEADDR, &one, sizeof(one));
-    sockaddr_in addr{};
-    addr.sin_family = AF_INET;
-    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);  // 127.0.0.1 only
-    addr.sin_port = htons(static_cast<uint16_t>(port_));
-    if (::bind(listen_fd_, reinterpret_cast<sockaddr*>(&addr), sizeof(addr)) != 0 ||
-        ::listen(listen_fd_, 4) != 0) {
-      ::close(listen_fd_);
-      listen_fd_ = -1;
-      throw std::runtime_error("FakeWater2Server: cannot listen on 127.0.0.1:" +
-                               std::to_string(port_));
-    }
-    socklen_t len = sizeof(addr);
-    ::getsockname(listen_fd_, reinterpret_cast<sockaddr*>(&addr), &len);
-    port_ = ntohs(addr.sin_port);
+    listen_fd_ = ehc_realman::listenOnLoopback(&port_, /*nonblocking=*/false, "FakeWater2Server");
     running_ = true;
     thread_ = std::thread([this] { loop(); });
   }

@@ -47,4 +47,9 @@ class Water2Client {
   JsonObjectSplitter splitter_;
 };
 
+/// The base's side of the TCP link (the hardware stand-in, the tests' fake base): a socket
+/// listening on 127.0.0.1:`*port` (0: an ephemeral port, written back to `*port`). Throws
+/// std::runtime_error "[owner] ..." when it cannot listen.
+int listenOnLoopback(int* port, bool nonblocking, const std::string& owner);
+
 }  // namespace ehc_realman

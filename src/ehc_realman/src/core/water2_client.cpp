@@ -118,4 +118,26 @@ std::vector<std::string> Water2Client::receive(double timeout_s) {
   return out;
 }
 
+int listenOnLoopback(int* port, bool nonblocking, const std::string& owner) {
+  if (*port < 0 || *port > 65535)
+    throw std::runtime_error("[" + owner + "] port " + std::to_string(*port) + " is not in [0, 65535]");
+  const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC | (nonblocking ? SOCK_NONBLOCK : 0), 0);
+  if (fd < 0) throw std::runtime_error("[" + owner + "] socket: " + std::strerror(errno));
+  const int one = 1;
+  ::setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof(one));
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);  // 127.0.0.1 only
+  addr.sin_port = htons(static_cast<uint16_t>(*port));
+  if (::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof(addr)) != 0 || ::listen(fd, 4) != 0) {
+    const std::string why = std::strerror(errno);
+    ::close(fd);
+    throw std::runtime_error("[" + owner + "] cannot listen on 127.0.0.1:" + std::to_string(*port) + ": " + why);
+  }
+  socklen_t len = sizeof(addr);
+  ::getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len);
+  *port = ntohs(addr.sin_port);
+  return fd;
+}
+
 }  // namespace ehc_realman

@@ -1,5 +1,7 @@
 #include "ehc_sim/water2_api_server.h"
 
+#include "ehc_realman/water2_client.h"
+
 #include <arpa/inet.h>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
@@ -14,25 +16,8 @@
 
 namespace ehc_sim {
 
-Water2ApiServer::Water2ApiServer(int port) {
-  if (port < 0 || port > 65535)
-    throw std::runtime_error("[Water2ApiServer] port " + std::to_string(port) + " is not in [0, 65535]");
-  listen_fd_ = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
-  if (listen_fd_ < 0) throw std::runtime_error(std::string("[Water2ApiServer] socket: ") + std::strerror(errno));
-  const int one = 1;
-  ::setsockopt(listen_fd_, SOL_SOCKET, SO_REUSEADDR, &one, sizeof(one));
-  sockaddr_in addr{};
-  addr.sin_family = AF_INET;
-  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);  // 127.0.0.1 only
-  addr.sin_port = htons(static_cast<uint16_t>(port));
-  if (::bind(listen_fd_, reinterpret_cast<sockaddr*>(&addr), sizeof(addr)) != 0 || ::listen(listen_fd_, 4) != 0) {
-    const std::string why = std::strerror(errno);
-    ::close(listen_fd_);
-    throw std::runtime_error("[Water2ApiServer] cannot listen on 127.0.0.1:" + std::to_string(port) + ": " + why);
-  }
-  socklen_t len = sizeof(addr);
-  ::getsockname(listen_fd_, reinterpret_cast<sockaddr*>(&addr), &len);
-  port_ = ntohs(addr.sin_port);
+Water2ApiServer::Water2ApiServer(int port) : port_(port) {
+  listen_fd_ = ehc_realman::listenOnLoopback(&port_, /*nonblocking=*/true, "Water2ApiServer");
 }
 
 Water2ApiServer::~Water2ApiServer() {
