@@ -27,9 +27,11 @@
 #   TAG_OBJECTS        objects with a tag node config/demo/tag_<name>.yaml  [front middle back]
 #   MPBS               true | false: override the controller's mpbs.enabled  [from CONTROLLER_CONFIG]
 #   OBSTACLES          1: run the obstacle node (controller obstacle dampers), 0: without  [1]
-#   PERCEPTION_LOCKSTEP 1: the simulator steps past an image only once every tag node is done
-#                      with it (_perception_acks; results do not depend on the CPU load),
-#                      0: the tag nodes run beside the lock-step                      [1]
+#   LOCKSTEP_GATE      1: the nodes outside the controller's handshake join the lock-step:
+#                      the simulator steps past an image, a cloud or a state only once the
+#                      tag nodes (images), the obstacle node and the sequencer (states)
+#                      are done with it (_lockstep_acks, _ack_topic:=/sim/lockstep_ack), so
+#                      results do not depend on the CPU load; 0: they run beside it     [1]
 # Exit code: 0 when the run completed (failed grasps are reported in the summary; with
 # EHC_DEMO_STRICT=1 a failed grasp exits 1), 2 on a set-up error or crash, 130 on Ctrl-C.
 set -o pipefail
@@ -144,40 +146,60 @@ echo "== EHC-MM demo: grasp ${#OBJECTS[@]} object(s) with the EHC controller (${
 echo "   master $ROS_MASTER_URI, logs in $OUT/logs/"
 t0=$(date +%s.%N)
 start rosmaster rosmaster --core -p "$PORT"
+MASTER_PID=${PIDS[-1]}
+# Our master, not another one that took the port first (two demos started at the same instant
+# picked the same free port; the second one's nodes joined the first one's master).
+master_pid() {
+  /usr/bin/python3 -c "import sys, xmlrpc.client as x; print(x.ServerProxy(sys.argv[1]).getPid('/demo.sh')[2])" \
+    "$ROS_MASTER_URI" 2>/dev/null
+}
 for _ in $(seq 100); do
-  rosparam set /use_sim_time true >/dev/null 2>&1 && break
+  [ "$(master_pid)" = "$MASTER_PID" ] && break
+  kill -0 "$MASTER_PID" 2>/dev/null || break
   sleep 0.1
 done
+if [ "$(master_pid)" != "$MASTER_PID" ]; then
+  echo "demo.sh: the ROS master did not start on port $PORT (taken? see $OUT/logs/rosmaster.log)" >&2
+  exit 2
+fi
+rosparam set /use_sim_time true >/dev/null 2>&1
 rosparam get /use_sim_time >/dev/null 2>&1 || { echo "demo.sh: the ROS master did not start (port $PORT)" >&2; exit 2; }
 TAG_NODES=()
 for o in "${OBJECTS[@]}"; do TAG_NODES+=("ehc_tag_$o"); done
 clear_private_params ehc_sim_node "${TAG_NODES[@]}" ehc_grasp_node ehc_obstacle_node \
   ehc_controller_node ehc_grasp_sequencer_node
 
-# Lock-step perception gate (issue 18): every tag node acknowledges each image on
-# /sim/perception_ack (ack_topic of config/demo/tag_<object>.yaml); the simulator waits for them.
-PERCEPTION_ARG=()
-if [ "${PERCEPTION_LOCKSTEP:-1}" = 1 ]; then
-  acks=$(IFS=,; echo "${TAG_NODES[*]}")
-  PERCEPTION_ARG=(_perception_acks:="[$acks]" _perception_max_lag:=0.0)
+# Lock-step acknowledgement gate (issue 18): every tag node acknowledges each image, the
+# obstacle node each state and the sequencer each controller status on
+# /sim/lockstep_ack; the simulator publishes its first state once all are ready and steps on only
+# once they are done (ehc_sim::StepScheduler::setAckGate, ehc_msgs::LockstepAck).
+GATE_ARG=()
+ACK_ARG=()
+if [ "${LOCKSTEP_GATE:-1}" = 1 ]; then
+  # The grasp node can acknowledge clouds (_ack_topic) but is not in the gate yet: in session 6
+  # it stalled the simulator in 2 of ~15 runs (a cloud never acknowledged; not traced).
+  acks=$(IFS=,; echo "${TAG_NODES[*]},ehc_grasp_sequencer_node:state")
+  [ "${OBSTACLES:-1}" = 1 ] && acks="$acks,ehc_obstacle_node:state"
+  GATE_ARG=(_lockstep_acks:="[$acks]" _lockstep_max_lag:=0.0)
+  ACK_ARG=(_ack_topic:=/sim/lockstep_ack)
 fi
 # shellcheck disable=SC2086
 start sim rosrun ${SIM_PREFIX:+--prefix "$SIM_PREFIX"} ehc_sim ehc_sim_node _config:="$SIM_CONFIG" _scene:="$SCENE" _seed:="$SEED" \
-  "${ROBOT_ARG[@]}" "${PERCEPTION_ARG[@]}"
+  "${ROBOT_ARG[@]}" "${GATE_ARG[@]}"
 for o in "${OBJECTS[@]}"; do
-  start "tag_$o" rosrun ehc_perception ehc_tag_node _config:="config/demo/tag_$o.yaml" __name:="ehc_tag_$o"
+  start "tag_$o" rosrun ehc_perception ehc_tag_node _config:="config/demo/tag_$o.yaml" __name:="ehc_tag_$o" "${ACK_ARG[@]}"
 done
 # The grasp node computes grasps near the sequencer's current object (remapped target topic).
 start grasp rosrun ehc_perception ehc_grasp_node _config:=config/perception/grasp_node.yaml \
-  /ehc/target_pose:=/ehc/sequencer/object_pose
+  /ehc/target_pose:=/ehc/sequencer/object_pose "${ACK_ARG[@]}"
 [ "${OBSTACLES:-1}" = 1 ] &&
-  start obstacles rosrun ehc_perception ehc_obstacle_node _config:=config/demo/obstacle_node.yaml "${ROBOT_ARG[@]}"
+  start obstacles rosrun ehc_perception ehc_obstacle_node _config:=config/demo/obstacle_node.yaml "${ROBOT_ARG[@]}" "${ACK_ARG[@]}"
 # Without the obstacle node the controller must not wait for obstacle lists (OBSTACLES_STALE).
 OBSTACLE_ARG=()
 [ "${OBSTACLES:-1}" = 1 ] || OBSTACLE_ARG=(_require_obstacles:=false)
 start controller rosrun ehc_control ehc_controller_node _config:="$CONTROLLER_CONFIG" _mode:="$MODE" "${MPBS_ARG[@]}" \
   "${OBSTACLE_ARG[@]}" "${ROBOT_ARG[@]}"
-start sequencer rosrun ehc_bringup ehc_grasp_sequencer_node _config:="$SEQUENCER_CONFIG" "${ROBOT_ARG[@]}" \
+start sequencer rosrun ehc_bringup ehc_grasp_sequencer_node _config:="$SEQUENCER_CONFIG" "${ROBOT_ARG[@]}" "${ACK_ARG[@]}" \
   _summary:="$OUT/summary.json" _trace:="$OUT/trace.csv"
 SEQ_PID=${PIDS[-1]}
 

@@ -10,6 +10,8 @@
 
 #include <limits>
 
+using ehc_sim::AckNode;
+using ehc_sim::AckStream;
 using ehc_sim::StepAction;
 using ehc_sim::StepScheduler;
 
@@ -54,9 +56,14 @@ TEST(StepScheduler, LockStepNeverAdvancesWithoutAnAnswer) {
     }
   }
   EXPECT_GT(last_publish, 1098.0) << "resent every state_republish_period";
-  // Half an answer (the twist): no step, and no more resending (somebody is there).
+  // Half an answer (the twist): no step; the state is still resent (the other half may have
+  // been lost while the controller's publisher was connecting: waiting for it would stop time
+  // for good).
   EXPECT_EQ(s.onBaseTwist(1100.0, 0.1, 0.0, 0.2), "");
-  EXPECT_EQ(s.next(1100.0), StepAction::Wait);
+  s.statePublished(1100.0, kT0, false);
+  EXPECT_EQ(s.next(1100.5), StepAction::Wait);
+  EXPECT_EQ(s.next(1200.0), StepAction::RepublishState);
+  s.statePublished(1200.0, kT0, false);  // not fresh: the twist still counts
   EXPECT_EQ(s.next(1200.0), StepAction::Wait);
   // The arm command of another state is no answer either.
   EXPECT_NE(s.onArmCommand(1200.0, kT1, kNames, kRates), "");
@@ -75,33 +82,33 @@ TEST(StepScheduler, LockStepNeverAdvancesWithoutAnAnswer) {
   EXPECT_EQ(s.next(1200.0), StepAction::Wait);
 }
 
-TEST(StepScheduler, PerceptionGateHoldsAStepUntilEveryNodeIsDoneWithTheImage) {
+TEST(StepScheduler, AckGateHoldsAStepUntilEveryNodeIsDoneWithTheImage) {
   // Issue 18: perception in the lock-step. Two tag nodes; an image with the state at kT0.
   StepScheduler s(robot(), config(false));
-  s.setPerceptionGate({"ehc_tag_a", "ehc_tag_b"}, 0);
+  s.setAckGate({AckNode::parse("ehc_tag_a"), AckNode::parse("ehc_tag_b:image")}, 0);
   auto answer = [&](double wall, std::int64_t t) {
     EXPECT_EQ(s.onBaseTwist(wall, 0.0, 0.0, 0.0), "");
     EXPECT_EQ(s.onArmCommand(wall, t, kNames, kRates), "");
   };
   // Nodes join with their first acknowledgement: before that they hold nothing back.
   s.statePublished(100.0, kT0 - 10'000'000, true);
-  s.imagePublished(kT0 - 10'000'000);
+  s.framePublished(AckStream::Image, kT0 - 10'000'000);
   answer(100.0, kT0 - 10'000'000);
   EXPECT_EQ(s.next(100.0), StepAction::Step);
-  EXPECT_EQ(s.onPerceptionAck("ehc_tag_a", kT0 - 10'000'000), "");
-  EXPECT_EQ(s.onPerceptionAck("ehc_tag_b", kT0 - 10'000'000), "");
+  EXPECT_EQ(s.onAck("ehc_tag_a", kT0 - 10'000'000), "");
+  EXPECT_EQ(s.onAck("ehc_tag_b", kT0 - 10'000'000), "");
   s.statePublished(100.0, kT0, true);
-  s.imagePublished(kT0);
+  s.framePublished(AckStream::Image, kT0);
   answer(100.0, kT0);
   // However long the detection takes (a loaded machine): no step, and no resending.
   for (double wall = 100.0; wall < 200.0; wall += 0.5) ASSERT_EQ(s.next(wall), StepAction::Wait);
-  EXPECT_NE(s.perceptionWait().find("ehc_tag_a"), std::string::npos) << s.perceptionWait();
-  EXPECT_NE(s.onPerceptionAck("ehc_tag_c", kT0), "") << "not a gate node";
-  EXPECT_EQ(s.onPerceptionAck("/ehc_tag_a", kT0), "");  // ROS node names start with '/'
+  EXPECT_NE(s.ackWait().find("ehc_tag_a"), std::string::npos) << s.ackWait();
+  EXPECT_NE(s.onAck("ehc_tag_c", kT0), "") << "not a gate node";
+  EXPECT_EQ(s.onAck("/ehc_tag_a", kT0), "");  // ROS node names start with '/'
   EXPECT_EQ(s.next(200.0), StepAction::Wait);
-  EXPECT_NE(s.perceptionWait().find("ehc_tag_b"), std::string::npos);
-  EXPECT_EQ(s.onPerceptionAck("ehc_tag_b", kT0), "");
-  EXPECT_EQ(s.perceptionWait(), "");
+  EXPECT_NE(s.ackWait().find("ehc_tag_b"), std::string::npos);
+  EXPECT_EQ(s.onAck("ehc_tag_b", kT0), "");
+  EXPECT_EQ(s.ackWait(), "");
   EXPECT_EQ(s.next(200.0), StepAction::Step);
   // The next state has no image: it steps on the controller's answer alone.
   s.statePublished(200.0, kT1, true);
@@ -111,26 +118,85 @@ TEST(StepScheduler, PerceptionGateHoldsAStepUntilEveryNodeIsDoneWithTheImage) {
   // With a lag of 2 steps an image holds only the step that would pass it by more than that;
   // an acknowledgement of a later image covers an earlier one the node skipped.
   StepScheduler lag(robot(), config(false));
-  lag.setPerceptionGate({"ehc_tag_a"}, 20'000'000);
+  lag.setAckGate({AckNode::parse("ehc_tag_a")}, 20'000'000);
   const std::int64_t dt = 10'000'000;
-  EXPECT_EQ(lag.onPerceptionAck("ehc_tag_a", 0), "");  // joined
+  EXPECT_EQ(lag.onAck("ehc_tag_a", 0), "");  // joined
   lag.statePublished(0.0, kT0, true);
-  lag.imagePublished(kT0);
+  lag.framePublished(AckStream::Image, kT0);
   for (int k = 0; k < 3; ++k) {
     const std::int64_t t = kT0 + k * dt;
     if (k > 0) lag.statePublished(0.0, t, true);
-    if (k == 1) lag.imagePublished(t);
+    if (k == 1) lag.framePublished(AckStream::Image, t);
     EXPECT_EQ(lag.onBaseTwist(0.0, 0.0, 0.0, 0.0), "");
     EXPECT_EQ(lag.onArmCommand(0.0, t, kNames, kRates), "");
     if (k < 2) {
       EXPECT_EQ(lag.next(0.0), StepAction::Step) << "step " << k << ": within the lag";
     } else {
       EXPECT_EQ(lag.next(0.0), StepAction::Wait) << "step " << k << ": would pass the image at kT0 by > 2 steps";
-      EXPECT_EQ(lag.onPerceptionAck("ehc_tag_a", kT0 + dt), "");  // the later image: both done
+      EXPECT_EQ(lag.onAck("ehc_tag_a", kT0 + dt), "");  // the later image: both done
       EXPECT_EQ(lag.next(0.0), StepAction::Step);
     }
   }
-  EXPECT_THROW(lag.setPerceptionGate({"x"}, -1), std::invalid_argument);
+  EXPECT_THROW(lag.setAckGate({AckNode::parse("x")}, -1), std::invalid_argument);
+}
+
+TEST(StepScheduler, AckGateHoldsEachNodeOnlyToItsOwnStream) {
+  // A cloud consumer (the grasp node) and a state consumer (the grasp sequencer) beside an image
+  // consumer: each is held only to the frames of its stream.
+  StepScheduler s(robot(), config(false));
+  s.setAckGate({AckNode::parse("tag"), AckNode::parse("/grasp:cloud"), AckNode::parse("sequencer:state")}, 0);
+  auto answer = [&](std::int64_t t) {
+    EXPECT_EQ(s.onBaseTwist(0.0, 0.0, 0.0, 0.0), "");
+    EXPECT_EQ(s.onArmCommand(0.0, t, kNames, kRates), "");
+  };
+  s.statePublished(0.0, kT0, true);  // nobody joined yet: nothing held
+  s.framePublished(AckStream::Image, kT0);
+  s.framePublished(AckStream::Cloud, kT0);
+  answer(kT0);
+  EXPECT_EQ(s.next(0.0), StepAction::Step);
+  for (const char* n : {"tag", "grasp", "sequencer"}) EXPECT_EQ(s.onAck(n, kT0), "") << n;  // all joined
+  // kT1: an image only (no cloud). The cloud consumer is not held by it; the image and the
+  // state consumers are, each until it acknowledges.
+  s.statePublished(0.0, kT1, true);
+  s.framePublished(AckStream::Image, kT1);
+  answer(kT1);
+  EXPECT_EQ(s.next(0.0), StepAction::Wait);
+  EXPECT_NE(s.ackWait().find("tag (image"), std::string::npos) << s.ackWait();
+  EXPECT_EQ(s.onAck("tag", kT1), "");
+  EXPECT_EQ(s.next(0.0), StepAction::Wait);
+  EXPECT_NE(s.ackWait().find("sequencer (state"), std::string::npos) << s.ackWait();
+  EXPECT_EQ(s.onAck("sequencer", kT1), "");
+  EXPECT_EQ(s.ackWait(), "");
+  EXPECT_EQ(s.next(0.0), StepAction::Step);
+  // kT2: a cloud: the grasp node holds the step until it is done with it.
+  const std::int64_t kT2 = kT1 + (kT1 - kT0);
+  s.statePublished(0.0, kT2, true);
+  s.framePublished(AckStream::Cloud, kT2);
+  answer(kT2);
+  EXPECT_EQ(s.onAck("sequencer", kT2), "");
+  EXPECT_EQ(s.next(0.0), StepAction::Wait);
+  EXPECT_NE(s.ackWait().find("grasp (cloud"), std::string::npos) << s.ackWait();
+  EXPECT_EQ(s.onAck("grasp", kT2), "");
+  EXPECT_EQ(s.next(0.0), StepAction::Step);
+  // After a reset every node joins again.
+  s.reset();
+  s.statePublished(0.0, kT0, true);
+  answer(kT0);
+  EXPECT_EQ(s.next(0.0), StepAction::Step);
+
+  // Specs: "name[:state|image|cloud]"; bad ones are clear errors.
+  EXPECT_EQ(AckNode::parse("a").stream, AckStream::Image);
+  EXPECT_EQ(AckNode::parse("a:state").stream, AckStream::State);
+  EXPECT_EQ(AckNode::parse("/ns/a:cloud").name, "ns/a");
+  EXPECT_THROW(AckNode::parse(":cloud"), std::invalid_argument);
+  try {
+    AckNode::parse("a:depth");
+    FAIL() << "unknown stream accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("unknown stream 'depth'"), std::string::npos) << e.what();
+  }
+  StepScheduler twice(robot(), config(false));
+  EXPECT_THROW(twice.setAckGate({AckNode::parse("a"), AckNode::parse("a:cloud")}, 0), std::invalid_argument);
 }
 
 TEST(StepScheduler, RejectedCommandsAreCountedAnswersExecutedAsZero) {

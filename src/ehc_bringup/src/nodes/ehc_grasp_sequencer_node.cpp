@@ -22,6 +22,7 @@
 #include "ehc_control/config_node.h"
 #include "ehc_control/robot_config.h"
 #include "ehc_msgs/SimStatus.h"
+#include "ehc_msgs/lockstep_ack.h"
 
 #include <geometry_msgs/PointStamped.h>
 #include <geometry_msgs/PoseStamped.h>
@@ -36,8 +37,13 @@
 
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <iomanip>
+#include <limits>
+#include <map>
 #include <memory>
+#include <optional>
+#include <utility>
 
 namespace {
 
@@ -135,7 +141,13 @@ class SequencerNode {
     const ehc_bringup::GraspSequencerParams sp = ehc_bringup::loadGraspSequencerParams(root);
     root.rejectUnknownKeys();  // both loaders have run: a key neither read is a misspelling
     seq_ = std::make_unique<GraspSequencer>(sp);
-    ROS_INFO_STREAM("ehc_grasp_sequencer_node (" << config << ")\n" << sp.summary() << "\n" << node_.summary());
+    std::vector<std::string> inputs = node_.pose_topics;
+    for (const auto& t : {node_.status_topic, node_.candidates_topic, node_.sim_status_topic, node_.camera_info_topic,
+                          std::string("/tf")})
+      inputs.push_back(t);
+    ack_ = std::make_unique<ehc_msgs::LockstepAck>(pnh, inputs);
+    ROS_INFO_STREAM("ehc_grasp_sequencer_node (" << config << ")\n" << sp.summary() << "\n" << node_.summary()
+                                                  << (ack_->topic().empty() ? "" : "\n  each status acknowledged on " + ack_->topic()));
     if (!trace_file_.empty()) {
       trace_.open(trace_file_);
       if (!trace_) throw std::runtime_error("cannot write the trace file " + trace_file_);
@@ -147,17 +159,21 @@ class SequencerNode {
     centre_pub_ = nh.advertise<geometry_msgs::PointStamped>(node_.target_centre_topic, 10);
     results_pub_ = nh.advertise<std_msgs::String>("ehc/grasp_results", 1, true);  // latched JSON
     gripper_ = nh.serviceClient<std_srvs::SetBool>(node_.gripper_service);
+    // No Nagle delay on any input: in lock-step a delayed message arrived a cycle late (sent
+    // before the acknowledgement, received after the next status), so runs differed.
+    const ros::TransportHints fast = ros::TransportHints().tcpNoDelay();
     for (std::size_t i = 0; i < node_.pose_topics.size(); ++i)
       subs_.push_back(nh.subscribe<geometry_msgs::PoseStamped>(
-          node_.pose_topics[i], 5, [this, i](const geometry_msgs::PoseStamped::ConstPtr& m) { onObjectPose(i, *m); }));
-    subs_.push_back(nh.subscribe(node_.candidates_topic, 2, &SequencerNode::onCandidates, this));
+          node_.pose_topics[i], 5, [this, i](const geometry_msgs::PoseStamped::ConstPtr& m) { onObjectPose(i, *m); },
+          ros::VoidConstPtr(), fast));
+    subs_.push_back(nh.subscribe(node_.candidates_topic, 2, &SequencerNode::onCandidates, this, fast));
     if (!node_.exclusion_topic.empty())
       exclusion_pub_ = nh.advertise<ehc_msgs::ObstacleExclusion>(node_.exclusion_topic, 10);
-    subs_.push_back(nh.subscribe(node_.sim_status_topic, 10, &SequencerNode::onSimStatus, this));
-    subs_.push_back(nh.subscribe(node_.camera_info_topic, 1, &SequencerNode::onCameraInfo, this));
-    subs_.push_back(nh.subscribe("joint_states", 10, &SequencerNode::onJoints, this));
-    subs_.push_back(nh.subscribe("odom", 10, &SequencerNode::onOdom, this));
-    subs_.push_back(nh.subscribe(node_.status_topic, 10, &SequencerNode::onStatus, this));
+    subs_.push_back(nh.subscribe(node_.sim_status_topic, 10, &SequencerNode::onSimStatus, this, fast));
+    subs_.push_back(nh.subscribe(node_.camera_info_topic, 1, &SequencerNode::onCameraInfo, this, fast));
+    subs_.push_back(nh.subscribe("joint_states", 10, &SequencerNode::onJoints, this, fast));
+    subs_.push_back(nh.subscribe("odom", 10, &SequencerNode::onOdom, this, fast));
+    subs_.push_back(nh.subscribe(node_.status_topic, 10, &SequencerNode::onStatus, this, fast));
     t_start_ = -1.0;
   }
 
@@ -168,9 +184,11 @@ class SequencerNode {
                                          << "' ignored: expected '" << node_.world_frame << "'");
       return;
     }
-    if (!seq_->setObjectPose(i, ros::Time::now().toSec(), toEigen(m.pose)))
-      ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "[ehc_grasp_sequencer_node] rejected a non-finite / invalid pose on "
-                                         << node_.pose_topics[i]);
+    pending_.emplace(Key{m.header.stamp, static_cast<int>(i)}, [this, i, pose = toEigen(m.pose), t = m.header.stamp.toSec()] {
+      if (!seq_->setObjectPose(i, t, pose))
+        ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "[ehc_grasp_sequencer_node] rejected a non-finite / invalid pose on "
+                                           << node_.pose_topics[i]);
+    });
   }
   void onCandidates(const ehc_msgs::GraspCandidates& m) {
     if (!m.header.frame_id.empty() && m.header.frame_id != node_.world_frame) return;
@@ -180,7 +198,36 @@ class SequencerNode {
       c[i].width = i < m.widths.size() ? m.widths[i] : std::nan("");
       c[i].score = i < m.scores.size() ? m.scores[i] : std::nan("");
     }
-    seq_->setGraspCandidates(ros::Time::now().toSec(), c);
+    pending_.emplace(Key{m.header.stamp, kCandidates}, [this, c, t = m.header.stamp.toSec()] { seq_->setGraspCandidates(t, c); });
+  }
+  /// Takes the inputs stamped before `stamp`, oldest first.
+  void applyPendingBefore(const ros::Time& stamp) {
+    // A clock that jumped back (simulator reset): results from the old time are dropped.
+    if (!last_status_.isZero() && stamp < last_status_) pending_.clear();
+    last_status_ = stamp;
+    const auto end = pending_.lower_bound(Key{stamp, std::numeric_limits<int>::min()});
+    for (auto it = pending_.begin(); it != end; ++it) it->second();
+    pending_.erase(pending_.begin(), end);
+  }
+  /// world -> `frame` at `stamp` (the status's: in lock-step its tf came with the state), else
+  /// the latest (a real robot's tf may lag the controller's clock a little).
+  std::optional<Eigen::Isometry3d> lookup(const std::string& frame, const ros::Time& stamp) {
+    if (!ack_->topic().empty()) {
+      // Lock-step: the pose of `stamp` came with the state; the tf listener's thread may lag
+      // under CPU load: wait for it on the wall clock (sim time waits for this node).
+      const ros::WallTime give_up = ros::WallTime::now() + ros::WallDuration(1.0);
+      while (!tf_.canTransform(node_.world_frame, frame, stamp) && ros::WallTime::now() < give_up && ros::ok())
+        ros::WallDuration(0.001).sleep();
+    }
+    for (const ros::Time& t : {stamp, ros::Time(0)}) {
+      try {
+        return tf2::transformToEigen(tf_.lookupTransform(node_.world_frame, frame, t));
+      } catch (const tf2::TransformException& e) {
+        if (t.isZero())
+          ROS_WARN_STREAM_THROTTLE(kLogThrottle, "[ehc_grasp_sequencer_node] no " << frame << " pose yet: " << e.what());
+      }
+    }
+    return std::nullopt;
   }
   /// Sends the exclusions while there are any, and one empty list when they end.
   void publishExclusions(const std::vector<ehc_bringup::ExclusionSphere>& zones, const ros::Time& stamp) {
@@ -208,24 +255,36 @@ class SequencerNode {
       ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "[ehc_grasp_sequencer_node] invalid camera_info ignored");
   }
   void onSimStatus(const ehc_msgs::SimStatus& m) {
-    gripper_state_ = m.gripper_state;
-    grasp_succeeded_ = m.grasp_succeeded;
+    pending_.emplace(Key{m.header.stamp, kSimStatus}, [this, state = m.gripper_state, ok = m.grasp_succeeded] {
+      gripper_state_ = state;
+      grasp_succeeded_ = ok;
+    });
   }
-  void onJoints(const sensor_msgs::JointState& m) {
+  void onJoints(const sensor_msgs::JointState& m) {  // the trace's arm speed
     double s = 0.0;
     for (std::size_t i = 0; i < m.velocity.size() && i < m.name.size(); ++i)
       if (m.name[i].rfind("joint", 0) == 0 && std::isfinite(m.velocity[i])) s += m.velocity[i] * m.velocity[i];
-    arm_speed_ = std::sqrt(s);
+    pending_.emplace(Key{m.header.stamp, kJoints}, [this, speed = std::sqrt(s)] { arm_speed_ = speed; });
   }
-  void onOdom(const nav_msgs::Odometry& m) {
-    base_speed_ = std::hypot(m.twist.twist.linear.x, m.twist.twist.linear.y);
-    base_turn_ = std::abs(m.twist.twist.angular.z);
+  void onOdom(const nav_msgs::Odometry& m) {  // the trace's base speeds
+    pending_.emplace(Key{m.header.stamp, kOdom}, [this, v = std::hypot(m.twist.twist.linear.x, m.twist.twist.linear.y),
+                                                  w = std::abs(m.twist.twist.angular.z)] {
+      base_speed_ = v;
+      base_turn_ = w;
+    });
   }
 
   void onStatus(const ehc_msgs::ControllerStatus& m) {
-    if (finished_) return;
+    // Done, or a second status for the state already handled (the controller's watchdog
+    // answering a lock-step simulator that waits for a slow perception node, or a state the
+    // simulator resent): acknowledged, no second update for one instant.
+    if (finished_ || (!last_status_.isZero() && m.header.stamp == last_status_)) {
+      ack_->done(m.header.stamp);  // a simulator waiting for the sequencer goes on
+      return;
+    }
     try {
       step(m);
+      ack_->done(m.header.stamp);
     } catch (const std::exception& e) {
       // No more goals: the controller's target watchdog stops the robot (TARGET_LOST).
       ROS_FATAL_STREAM("[ehc_grasp_sequencer_node] " << e.what() << " -> no more goals, exiting");
@@ -247,19 +306,12 @@ class SequencerNode {
     if (std::isfinite(m.sig_omega)) in.sig = m.sig_omega;
     in.gripper_state = gripper_state_;
     in.grasp_succeeded = grasp_succeeded_;
-    try {
-      const auto tf = tf_.lookupTransform(node_.world_frame, node_.tcp_frame, ros::Time(0));
-      in.tcp = tf2::transformToEigen(tf);
-    } catch (const tf2::TransformException& e) {
-      ROS_WARN_STREAM_THROTTLE(kLogThrottle, "[ehc_grasp_sequencer_node] no TCP pose yet: " << e.what());
-    }
-    try {
-      in.camera = tf2::transformToEigen(tf_.lookupTransform(node_.world_frame, node_.camera_frame, ros::Time(0)));
-    } catch (const tf2::TransformException&) {
-    }
+    if (const auto tcp = lookup(node_.tcp_frame, m.header.stamp)) in.tcp = *tcp;
+    if (const auto camera = lookup(node_.camera_frame, m.header.stamp)) in.camera = *camera;
+    applyPendingBefore(m.header.stamp);
     const ehc_bringup::SequencerOutput out = seq_->update(in);
     for (const auto& e : out.events) ROS_INFO_STREAM("[grasp] t=" << std::fixed << std::setprecision(2) << in.t << " " << e);
-    const ros::Time now = ros::Time::now();
+    const ros::Time now = m.header.stamp;  // every output carries the time it was decided for
     if (out.object_pose) object_pub_.publish(toMsg(*out.object_pose, node_.world_frame, now));
     if (out.goal) goal_pub_.publish(toMsg(*out.goal, node_.world_frame, now));
     publishExclusions(out.exclusions, now);
@@ -319,6 +371,14 @@ class SequencerNode {
   std::size_t published_results_ = 0;
   ros::ServiceClient gripper_;
   std::vector<ros::Subscriber> subs_;
+  std::unique_ptr<ehc_msgs::LockstepAck> ack_;  ///< _ack_topic (lock-step acknowledgement gate)
+  /// Inputs by (stamp, source), taken at the first status after them: object poses (source =
+  /// object index), grasp candidates, the simulator's gripper status, the trace's speeds. The
+  /// source orders inputs of one stamp whatever order they arrived in.
+  using Key = std::pair<ros::Time, int>;
+  static constexpr int kCandidates = 1000000, kSimStatus = 1000001, kJoints = 1000002, kOdom = 1000003;
+  std::multimap<Key, std::function<void()>> pending_;
+  ros::Time last_status_;
   std::string summary_file_, trace_file_, mode_;
   std::ofstream trace_;
   std::string gripper_state_ = "open";

@@ -15,6 +15,9 @@
 //   - every mode: a wall-clock timer publishes zeros when no cycle ran for node.wall_timeout
 //     wall seconds while ROS time stood still as long (a dead simulator stops /clock as well).
 // In timer mode the timer cycle itself stops within the timeout + one cycle period.
+// Lock-step (trigger state): an obstacle list is taken by the first cycle answering a state
+// stamped after it (an obstacle node computes the list of state t while this node answers t;
+// which of the two finished first must not decide the command), with its receipt time.
 
 #include "ehc_msgs/ControllerStatus.h"
 #include "ehc_msgs/JointVelocityCommand.h"
@@ -30,6 +33,7 @@
 #include <sensor_msgs/JointState.h>
 
 #include <cmath>
+#include <deque>
 #include <sstream>
 
 namespace {
@@ -89,9 +93,9 @@ class ControllerNode {
     status_ = nh.advertise<ehc_msgs::ControllerStatus>("ehc/status", 10);
     subs_.push_back(nh.subscribe("joint_states", 10, &ControllerNode::onJoints, this, ros::TransportHints().tcpNoDelay()));
     subs_.push_back(nh.subscribe("odom", 10, &ControllerNode::onOdom, this, ros::TransportHints().tcpNoDelay()));
-    subs_.push_back(nh.subscribe("ehc/target_pose", 10, &ControllerNode::onTarget, this));
-    subs_.push_back(nh.subscribe("ehc/target_centre", 10, &ControllerNode::onTargetCentre, this));
-    subs_.push_back(nh.subscribe("ehc/obstacles", 10, &ControllerNode::onObstacles, this));
+    subs_.push_back(nh.subscribe("ehc/target_pose", 10, &ControllerNode::onTarget, this, ros::TransportHints().tcpNoDelay()));
+    subs_.push_back(nh.subscribe("ehc/target_centre", 10, &ControllerNode::onTargetCentre, this, ros::TransportHints().tcpNoDelay()));
+    subs_.push_back(nh.subscribe("ehc/obstacles", 10, &ControllerNode::onObstacles, this, ros::TransportHints().tcpNoDelay()));
     const double state_timeout = cycle_.params().watchdog.state_timeout;
     if (node_.trigger == "timer")
       timer_ = nh.createTimer(ros::Duration(1.0 / node_.rate), [this](const ros::TimerEvent&) { cycle(ros::Time::now()); });
@@ -173,8 +177,31 @@ class ControllerNode {
     std::vector<ObstaclePair> pairs;
     for (const auto& o : m.obstacles)
       pairs.push_back({o.link, toEigen(o.link_point), toEigen(o.obstacle_point), toEigen(o.normal), o.distance});
-    const std::string err = cycle_.setObstacles(ros::Time::now().toSec(), pairs);
+    if (node_.trigger == "state") {
+      // A stamp older than the last one kept: the clock jumped back (simulator reset).
+      if (!pending_obstacles_.empty() && m.header.stamp < pending_obstacles_.back().stamp) pending_obstacles_.clear();
+      if (pending_obstacles_.size() >= kMaxPendingObstacles) pending_obstacles_.pop_front();
+      pending_obstacles_.push_back({m.header.stamp, ros::Time::now(), std::move(pairs)});
+      return;
+    }
+    applyObstacles(ros::Time::now(), pairs);
+  }
+  void applyObstacles(const ros::Time& receipt, const std::vector<ObstaclePair>& pairs) {
+    const std::string err = cycle_.setObstacles(receipt.toSec(), pairs);
     if (!err.empty()) ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "[ehc_controller_node] rejected /ehc/obstacles: " << err);
+  }
+  /// Lock-step: the newest obstacle list stamped before the state stamped `stamp` (older ones
+  /// are superseded by it).
+  void applyObstaclesBefore(const ros::Time& stamp) {
+    const PendingObstacles* newest = nullptr;
+    std::size_t used = 0;
+    for (const auto& p : pending_obstacles_) {
+      if (!(p.stamp < stamp)) break;
+      newest = &p;
+      ++used;
+    }
+    if (newest) applyObstacles(newest->receipt, newest->pairs);
+    pending_obstacles_.erase(pending_obstacles_.begin(), pending_obstacles_.begin() + static_cast<long>(used));
   }
 
   /// Lock-step: answer the joint state once odometry of the same instant has arrived.
@@ -182,6 +209,7 @@ class ControllerNode {
     if (pending_.isZero() || odom_stamp_ != pending_) return;
     const ros::Time stamp = pending_;
     pending_ = ros::Time();
+    applyObstaclesBefore(stamp);
     cycle(stamp);
   }
 
@@ -252,6 +280,12 @@ class ControllerNode {
   ros::Timer timer_;            ///< timer trigger: the cycle; lock-step: the ROS-time watchdog
   ros::WallTimer wall_timer_;   ///< wall-clock watchdog (every mode)
   ros::Time pending_, odom_stamp_;
+  struct PendingObstacles {
+    ros::Time stamp, receipt;
+    std::vector<ObstaclePair> pairs;
+  };
+  std::deque<PendingObstacles> pending_obstacles_;  ///< lock-step: lists by arrival, not yet taken
+  static constexpr std::size_t kMaxPendingObstacles = 100;  ///< no state for long: the oldest go
   ros::Time last_cycle_, answered_;  ///< ROS time of the last cycle; the stamp it answered
   ros::WallTime last_cycle_wall_;
   ros::Time last_ros_time_;               ///< ROS time seen by the wall-clock watchdog

@@ -7,7 +7,13 @@
 // without a usable grasp publishes an empty candidate list (reason in the log). Clouds wait in
 // a tf2_ros::MessageFilter until the camera pose at their stamp is known (as in ehc_tag_node,
 // issue 18: a lookup with a timeout on lock-step sim time dropped clouds under CPU load).
+// Time is the clouds' and the target's stamps (the rate limit, the target's age), so which
+// cloud is processed with which target does not depend on when messages arrive; the target
+// used for a cloud is the newest one stamped before it. With _ack_topic:=<topic> every cloud is
+// acknowledged there once done with (after its candidates are published): a lock-step
+// simulator's acknowledgement gate (ehc_msgs::LockstepAck, demo.sh).
 #include "ehc_msgs/GraspCandidates.h"
+#include "ehc_msgs/lockstep_ack.h"
 #include "ehc_control/config_node.h"
 #include "ehc_perception/grasp_generator.h"
 #include "ehc_perception/rate_limiter.h"
@@ -17,6 +23,9 @@
 #include <ros/ros.h>
 #include <message_filters/subscriber.h>
 #include <tf2_ros/transform_listener.h>
+
+#include <deque>
+#include <utility>
 
 namespace {
 
@@ -62,22 +71,26 @@ GraspNodeConfig loadGraspNodeConfig(const std::string& path) {
 
 class GraspNode {
  public:
-  GraspNode(ros::NodeHandle& nh, const GraspNodeConfig& cfg)
+  GraspNode(ros::NodeHandle& nh, const ros::NodeHandle& pnh, const GraspNodeConfig& cfg)
       : cfg_(cfg),
         gen_(cfg.generator),
         listener_(tf_),
-        cloud_sub_(nh, cfg_.cloud_topic, static_cast<std::uint32_t>(cfg_.cloud_queue)),
+        cloud_sub_(nh, cfg_.cloud_topic, static_cast<std::uint32_t>(cfg_.cloud_queue), ros::TransportHints().tcpNoDelay()),
         cloud_filter_(cloud_sub_, tf_, cfg_.world_frame, static_cast<std::uint32_t>(cfg_.cloud_queue), nh),
-        limiter_(cfg.targeting.max_rate_hz) {
+        limiter_(cfg.targeting.max_rate_hz),
+        ack_(pnh, cfg.target_topic.empty() ? std::vector<std::string>{cfg.cloud_topic, "/tf"}
+                                            : std::vector<std::string>{cfg.cloud_topic, cfg.target_topic, "/tf"}) {
     pub_ = nh.advertise<ehc_msgs::GraspCandidates>(cfg_.output_topic, 2);
     cloud_filter_.registerCallback(&GraspNode::onCloud, this);
+    if (!ack_.topic().empty()) ROS_INFO_STREAM("ehc_grasp_node: each cloud acknowledged on " << ack_.topic() << " when done");
     cloud_filter_.registerFailureCallback(
-        [](const sensor_msgs::PointCloud2ConstPtr& m, tf2_ros::filter_failure_reasons::FilterFailureReason why) {
+        [this](const sensor_msgs::PointCloud2ConstPtr& m, tf2_ros::filter_failure_reasons::FilterFailureReason why) {
+          ack_.done(m->header.stamp);
           ROS_DEBUG_STREAM_THROTTLE(kLogThrottle, "ehc_grasp_node: cloud at " << m->header.stamp << " dropped before its camera pose arrived ("
                                                         << ros_conv::filterFailureText(why) << ")");
         });
     if (!cfg_.target_topic.empty())
-      target_sub_ = nh.subscribe(cfg_.target_topic, 5, &GraspNode::onTarget, this);
+      target_sub_ = nh.subscribe(cfg_.target_topic, 5, &GraspNode::onTarget, this, ros::TransportHints().tcpNoDelay());
   }
 
  private:
@@ -88,22 +101,34 @@ class GraspNode {
                          msg.header.frame_id.c_str(), cfg_.world_frame.c_str());
       return;
     }
-    target_ = p;
-    target_stamp_ = ros::Time::now();
-    have_target_ = true;
+    // Kept in stamp order (a target stamped before an older one is dropped); a clock that
+    // jumped back (simulator reset) starts the list again.
+    if (!targets_.empty() && msg.header.stamp < targets_.back().first) targets_.clear();
+    targets_.emplace_back(msg.header.stamp, p);
+    if (targets_.size() > kMaxTargets) targets_.pop_front();
   }
 
   void onCloud(const sensor_msgs::PointCloud2ConstPtr& cloud) {
-    const sensor_msgs::PointCloud2& msg = *cloud;
-    const ros::Time now = ros::Time::now();
-    if (!limiter_.accept(now.toSec())) return;
+    process(*cloud);
+    ack_.done(cloud->header.stamp);  // after the candidates: the simulator steps on
+  }
+
+  /// The newest target stamped before `stamp` and at most targeting.target_timeout older; null
+  /// if none.
+  const Eigen::Vector3d* targetFor(const ros::Time& stamp) const {
+    for (auto it = targets_.rbegin(); it != targets_.rend(); ++it)
+      if (it->first < stamp) return (stamp - it->first).toSec() <= cfg_.targeting.target_timeout ? &it->second : nullptr;
+    return nullptr;
+  }
+
+  void process(const sensor_msgs::PointCloud2& msg) {
+    if (!limiter_.accept(msg.header.stamp.toSec())) return;
     try {
       const geometry_msgs::TransformStamped tf = tf_.lookupTransform(
           cfg_.world_frame, msg.header.frame_id, msg.header.stamp, ros::Duration(cfg_.tf_timeout));
       const Eigen::Isometry3d T = tf2::transformToEigen(tf);
       const PointList pts = ros_conv::transformPoints(ros_conv::cloudToPoints(msg), T);
-      const bool fresh = have_target_ && (now - target_stamp_).toSec() <= cfg_.targeting.target_timeout;
-      const GraspResult res = generateForTarget(gen_, pts, T.translation(), fresh ? &target_ : nullptr,
+      const GraspResult res = generateForTarget(gen_, pts, T.translation(), targetFor(msg.header.stamp),
                                                 cfg_.targeting.target_gate);
       ehc_msgs::GraspCandidates out;
       out.header.stamp = msg.header.stamp;
@@ -129,10 +154,10 @@ class GraspNode {
   tf2_ros::MessageFilter<sensor_msgs::PointCloud2> cloud_filter_;  ///< passes a cloud once its camera pose is known
   ros::Publisher pub_;
   ros::Subscriber target_sub_;
-  RateLimiter limiter_;  ///< targeting.max_rate_hz on ROS time
-  bool have_target_ = false;
-  Eigen::Vector3d target_ = Eigen::Vector3d::Zero();
-  ros::Time target_stamp_;
+  RateLimiter limiter_;  ///< targeting.max_rate_hz on the clouds' stamps
+  static constexpr std::size_t kMaxTargets = 200;  ///< targets kept (the sequencer sends one per cycle)
+  std::deque<std::pair<ros::Time, Eigen::Vector3d>> targets_;  ///< by stamp, newest last
+  ehc_msgs::LockstepAck ack_;
 };
 
 }  // namespace
@@ -148,7 +173,7 @@ int main(int argc, char** argv) {
   try {
     const GraspNodeConfig cfg = loadGraspNodeConfig(config);
     ROS_INFO_STREAM(cfg.summary());
-    GraspNode node(nh, cfg);
+    GraspNode node(nh, pnh, cfg);
     ros::spin();
   } catch (const std::exception& e) {
     ROS_FATAL_STREAM("ehc_grasp_node: " << e.what());

@@ -15,10 +15,17 @@
 // Exclusion spheres (ehc_msgs/ObstacleExclusion on exclusion_topic, e.g. the object being
 // grasped, sent by the grasp sequencer) are ignored by the distance queries while the list is
 // younger than exclusion_timeout; an older list is dropped (the object is an obstacle again).
+// Lock-step (_ack_topic:=<topic>, demo.sh; ehc_msgs::LockstepAck): no timer; each state (the
+// /joint_states + /odom pair of one stamp t) first takes the clouds and exclusion lists stamped
+// before t (in stamp order, whenever they arrived), then publishes the distances at t when due
+// (publish_rate_hz on the stamps), then acknowledges t; times are the stamps. So the distances
+// do not depend on when messages arrive, and the simulator steps on only once they are out.
 #include "ehc_msgs/ObstacleArray.h"
 #include "ehc_msgs/ObstacleExclusion.h"
+#include "ehc_msgs/lockstep_ack.h"
 #include "ehc_control/config_node.h"
 #include "ehc_perception/obstacle_monitor.h"
+#include "ehc_perception/rate_limiter.h"
 #include "ros_conversions.h"
 
 #include <nav_msgs/Odometry.h>
@@ -27,6 +34,9 @@
 #include <tf2_ros/transform_listener.h>
 
 #include <cmath>
+#include <functional>
+#include <map>
+#include <memory>
 
 namespace {
 
@@ -79,16 +89,27 @@ ObstacleNodeConfig loadObstacleNodeConfig(const std::string& path) {
 
 class ObstacleNode {
  public:
-  ObstacleNode(ros::NodeHandle& nh, const ObstacleNodeConfig& cfg)
-      : cfg_(cfg), monitor_(ehc_control::loadRobotConfig(cfg.robot_config), cfg.map, cfg.monitor), listener_(tf_) {
+  ObstacleNode(ros::NodeHandle& nh, const ros::NodeHandle& pnh, const ObstacleNodeConfig& cfg)
+      : cfg_(cfg),
+        monitor_(ehc_control::loadRobotConfig(cfg.robot_config), cfg.map, cfg.monitor),
+        listener_(tf_),
+        ack_(pnh, lockstepInputs(cfg)),
+        publish_limiter_(cfg.publish_rate_hz) {
     ROS_INFO_STREAM("  " << monitor_.field().summary());
     pub_ = nh.advertise<ehc_msgs::ObstacleArray>(cfg_.output_topic, 5);
-    cloud_sub_ = nh.subscribe(cfg_.cloud_topic, 1, &ObstacleNode::onCloud, this);
-    joints_sub_ = nh.subscribe(cfg_.joint_states_topic, 5, &ObstacleNode::onJoints, this);
-    odom_sub_ = nh.subscribe(cfg_.odom_topic, 5, &ObstacleNode::onOdom, this);
+    lockstep_ = !ack_.topic().empty();
+    // Lock-step: every cloud is kept until its state (the simulator waits for this node).
+    const ros::TransportHints fast = ros::TransportHints().tcpNoDelay();  // no Nagle delay (lock-step order)
+    cloud_sub_ = nh.subscribe(cfg_.cloud_topic, lockstep_ ? 10 : 1, &ObstacleNode::onCloud, this, fast);
+    joints_sub_ = nh.subscribe(cfg_.joint_states_topic, 5, &ObstacleNode::onJoints, this, fast);
+    odom_sub_ = nh.subscribe(cfg_.odom_topic, 5, &ObstacleNode::onOdom, this, fast);
     if (!cfg_.exclusion_topic.empty())
-      exclusion_sub_ = nh.subscribe(cfg_.exclusion_topic, 5, &ObstacleNode::onExclusion, this);
-    timer_ = nh.createTimer(ros::Duration(1.0 / cfg_.publish_rate_hz), &ObstacleNode::onTimer, this);
+      exclusion_sub_ = nh.subscribe(cfg_.exclusion_topic, 5, &ObstacleNode::onExclusion, this, fast);
+    if (lockstep_)
+      ROS_INFO_STREAM("ehc_obstacle_node: lock-step: distances per state at " << cfg_.publish_rate_hz
+                                                                           << " Hz of its stamps, each state acknowledged on " << ack_.topic());
+    else
+      timer_ = nh.createTimer(ros::Duration(1.0 / cfg_.publish_rate_hz), &ObstacleNode::onTimer, this);
   }
 
  private:
@@ -96,11 +117,48 @@ class ObstacleNode {
   /// the wall clock on the robot), as the controller's watchdogs do, never by header stamps: a
   /// sender's clock offset (another machine, a driver's own clock) must not make a dead state
   /// look fresh or a live one stale.
-  static double receiptTime() { return ros::Time::now().toSec(); }
+  /// In lock-step the stamp (the simulator's time, which stands still until this node is done).
+  double receiptTime(const ros::Time& stamp) const { return lockstep_ ? stamp.toSec() : ros::Time::now().toSec(); }
+
+  /// The inputs the node needs before it takes part in a lock-step (ehc_msgs::LockstepAck).
+  static std::vector<std::string> lockstepInputs(const ObstacleNodeConfig& c) {
+    std::vector<std::string> in{c.cloud_topic, c.joint_states_topic, c.odom_topic, "/tf"};
+    if (!c.exclusion_topic.empty()) in.push_back(c.exclusion_topic);
+    return in;
+  }
 
   void onJoints(const sensor_msgs::JointState& msg) {
-    const std::string why = monitor_.setJointState(receiptTime(), msg.name, msg.position);
+    const std::string why = monitor_.setJointState(receiptTime(msg.header.stamp), msg.name, msg.position);
     if (!why.empty()) ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "ehc_obstacle_node: /joint_states rejected: " << why);
+    if (lockstep_) {
+      joints_stamp_ = msg.header.stamp;
+      tryLockstepCycle();
+    }
+  }
+
+  /// Lock-step: once /joint_states and /odom of one stamp t are in, the clouds and exclusion
+  /// lists stamped before t, the distances at t (when due), then the acknowledgement of t.
+  void tryLockstepCycle() {
+    if (joints_stamp_.isZero() || joints_stamp_ != odom_stamp_) return;
+    const ros::Time t = joints_stamp_;
+    joints_stamp_ = ros::Time();
+    if (!last_state_.isZero() && t < last_state_) {  // the clock jumped back (simulator reset)
+      pending_.clear();
+      publish_limiter_.reset();
+    }
+    last_state_ = t;
+    // A cloud whose camera pose has not reached the tf listener yet waits for the next state
+    // (a lookup with a timeout would wait for sim time, which waits for this node).
+    for (auto it = pending_.begin(); it != pending_.end() && it->first < t;) {
+      if (it->second() || (t - it->first).toSec() > kMaxCloudWait) {
+        it = pending_.erase(it);
+      } else {
+        ROS_WARN_STREAM_THROTTLE(kLogThrottle, "ehc_obstacle_node: cloud at " << it->first << " waits for its camera pose");
+        ++it;
+      }
+    }
+    if (publish_limiter_.accept(t.toSec())) publishDistances(t.toSec());
+    ack_.done(t);
   }
 
   void onOdom(const nav_msgs::Odometry& msg) {
@@ -109,8 +167,12 @@ class ObstacleNode {
     const double yaw = std::atan2(2.0 * (qn.w() * qn.z() + qn.x() * qn.y()),
                                   1.0 - 2.0 * (qn.y() * qn.y() + qn.z() * qn.z()));
     std::string why = qn.norm() < 1e-6 ? "zero orientation quaternion" : "";
-    if (why.empty()) why = monitor_.setBasePose(receiptTime(), Eigen::Vector3d(p.position.x, p.position.y, yaw));
+    if (why.empty()) why = monitor_.setBasePose(receiptTime(msg.header.stamp), Eigen::Vector3d(p.position.x, p.position.y, yaw));
     if (!why.empty()) ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "ehc_obstacle_node: odometry rejected: " << why);
+    if (lockstep_) {
+      odom_stamp_ = msg.header.stamp;
+      tryLockstepCycle();
+    }
   }
 
   void onExclusion(const ehc_msgs::ObstacleExclusion& msg) {
@@ -127,12 +189,38 @@ class ObstacleNode {
     std::vector<ExclusionZone> zones;
     for (std::size_t i = 0; i < msg.centres.size(); ++i)
       zones.push_back({Eigen::Vector3d(msg.centres[i].x, msg.centres[i].y, msg.centres[i].z), msg.radii[i]});
-    const std::string why = monitor_.setExclusionZones(receiptTime(), zones);
-    if (!why.empty()) ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "ehc_obstacle_node: exclusion list rejected: " << why);
+    auto apply = [this, zones](double t) {
+      const std::string why = monitor_.setExclusionZones(t, zones);
+      if (!why.empty()) ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "ehc_obstacle_node: exclusion list rejected: " << why);
+    };
+    if (lockstep_)
+      pending_.emplace(msg.header.stamp, [apply, t = msg.header.stamp.toSec()] {
+        apply(t);
+        return true;
+      });
+    else apply(receiptTime(msg.header.stamp));
   }
 
-  void onCloud(const sensor_msgs::PointCloud2& msg) {
-    const double now = ros::Time::now().toSec();
+  void onCloud(const sensor_msgs::PointCloud2ConstPtr& msg) {
+    if (lockstep_) {
+      pending_.emplace(msg->header.stamp, [this, msg] {
+        // The pose was published a state ago; the tf listener's thread may lag under CPU load:
+        // wait for it on the wall clock (sim time stands still until this node is done).
+        const ros::WallTime give_up = ros::WallTime::now() + ros::WallDuration(kTfWallWait);
+        while (!tf_.canTransform(cfg_.world_frame, msg->header.frame_id, msg->header.stamp)) {
+          if (ros::WallTime::now() > give_up || !ros::ok()) return false;
+          ros::WallDuration(0.001).sleep();
+        }
+        insertCloud(*msg);
+        return true;
+      });
+    } else {
+      insertCloud(*msg);
+    }
+  }
+
+  void insertCloud(const sensor_msgs::PointCloud2& msg) {
+    const double now = receiptTime(msg.header.stamp);
     if (!monitor_.acceptCloud(now)) return;
     try {
       const geometry_msgs::TransformStamped tf = tf_.lookupTransform(
@@ -147,9 +235,11 @@ class ObstacleNode {
     }
   }
 
-  void onTimer(const ros::TimerEvent&) {
+  void onTimer(const ros::TimerEvent&) { publishDistances(ros::Time::now().toSec()); }
+
+  void publishDistances(double now) {
     try {
-      const ObstacleReport r = monitor_.update(ros::Time::now().toSec());
+      const ObstacleReport r = monitor_.update(now);
       if (r.exclusions_expired)
         ROS_WARN("ehc_obstacle_node: exclusion list older than %.2f s dropped: every obstacle counts again",
                  cfg_.monitor.exclusion_timeout);
@@ -190,6 +280,15 @@ class ObstacleNode {
   ros::Publisher pub_;
   ros::Subscriber cloud_sub_, joints_sub_, odom_sub_, exclusion_sub_;
   ros::Timer timer_;
+  ehc_msgs::LockstepAck ack_;
+  bool lockstep_ = false;
+  RateLimiter publish_limiter_;  ///< lock-step: publish_rate_hz on the states' stamps
+  ros::Time joints_stamp_, odom_stamp_, last_state_;
+  /// Lock-step: clouds and exclusion lists by stamp, taken at the first state after them (true:
+  /// taken; false: a cloud without its camera pose yet, tried again at the next state).
+  std::multimap<ros::Time, std::function<bool()>> pending_;
+  static constexpr double kMaxCloudWait = 1.0;  ///< s of stamps; then the cloud is dropped
+  static constexpr double kTfWallWait = 1.0;    ///< wall s a cloud's camera pose is waited for per state
 };
 
 }  // namespace
@@ -207,7 +306,7 @@ int main(int argc, char** argv) {
     std::string robot;  // _robot:=<name | robot.yaml> overrides node.robot_config
     if (pnh.getParam("robot", robot) && !robot.empty()) cfg.robot_config = ehc_control::resolveRobotFile(robot);
     ROS_INFO_STREAM(cfg.summary());
-    ObstacleNode node(nh, cfg);
+    ObstacleNode node(nh, pnh, cfg);
     ros::spin();
   } catch (const std::exception& e) {
     ROS_FATAL_STREAM("ehc_obstacle_node: " << e.what());

@@ -8,13 +8,15 @@
 // the listener after the image, later than any fixed timeout on sim time, and a lookup with a
 // timeout dropped such images ("extrapolation into the future": the back object's tag was
 // never detected). Only a full queue (image_queue, newest kept) drops an image now.
+// With _ack_topic:=<topic> every image is acknowledged there once done with (after its pose is
+// published): a lock-step simulator's acknowledgement gate (ehc_msgs::LockstepAck, demo.sh).
 #include "ehc_control/config_node.h"
+#include "ehc_msgs/lockstep_ack.h"
 #include "ehc_perception/tag_detector.h"
 #include "ros_conversions.h"
 
 #include <geometry_msgs/PoseStamped.h>
 #include <ros/ros.h>
-#include <std_msgs/Header.h>
 #include <message_filters/subscriber.h>
 #include <tf2_ros/transform_listener.h>
 
@@ -36,9 +38,6 @@ struct TagNodeConfig {
   std::string camera_file;   ///< optional camera_info YAML; "" = use the camera_info topic
   double tf_timeout = 0.05;  ///< s, lookup of a camera_frame other than the image's (see above)
   int image_queue = 5;       ///< images waiting for their camera pose (the oldest is dropped)
-  /// "" = off; else every image is acknowledged here when done with (std_msgs/Header: stamp =
-  /// the image's, frame_id = this node's name): a lock-step simulator's perception gate.
-  std::string ack_topic;
   TagDetectorConfig detector;
   TagTargetConfig target;
 
@@ -48,7 +47,7 @@ struct TagNodeConfig {
            " in '" + world_frame + "' (camera frame '" +
            (camera_frame.empty() ? "<image header>" : camera_frame) + "', tf timeout " +
            std::to_string(tf_timeout) + " s, " + std::to_string(image_queue) +
-           " images wait for their camera pose" + (ack_topic.empty() ? "" : ", done acknowledged on " + ack_topic) +
+           " images wait for their camera pose" +
            ")\n  " + detector.summary() + "\n  " + target.summary();
   }
 };
@@ -67,7 +66,6 @@ TagNodeConfig loadTagNodeConfig(const std::string& path) {
   c.tf_timeout = n.get("tf_timeout", c.tf_timeout);
   ehc_control::requireRange("TagNode", "node.tf_timeout", c.tf_timeout, 0.0, 5.0);
   c.image_queue = n.get("image_queue", c.image_queue);
-  c.ack_topic = n.get("ack_topic", c.ack_topic);
   ehc_control::requireRange("TagNode", "node.image_queue", c.image_queue, 1, 100);
   if (c.world_frame.empty()) n.fail("world_frame", "must not be empty");
   c.detector = loadTagDetectorConfig(root.childOrEmpty("tag_detector"));
@@ -76,25 +74,33 @@ TagNodeConfig loadTagNodeConfig(const std::string& path) {
   return c;
 }
 
+/// The inputs the node needs before it takes part in a lock-step (ehc_msgs::LockstepAck).
+std::vector<std::string> lockstepInputs(const TagNodeConfig& c) {
+  std::vector<std::string> in{c.image_topic, "/tf"};
+  if (c.camera_file.empty()) in.push_back(c.camera_info_topic);
+  return in;
+}
+
 class TagNode {
  public:
-  TagNode(ros::NodeHandle& nh, const TagNodeConfig& cfg)
+  TagNode(ros::NodeHandle& nh, const ros::NodeHandle& pnh, const TagNodeConfig& cfg)
       : cfg_(cfg),
         listener_(tf_),
-        image_sub_(nh, cfg_.image_topic, static_cast<std::uint32_t>(cfg_.image_queue)),
-        image_filter_(image_sub_, tf_, cfg_.world_frame, static_cast<std::uint32_t>(cfg_.image_queue), nh) {
+        image_sub_(nh, cfg_.image_topic, static_cast<std::uint32_t>(cfg_.image_queue), ros::TransportHints().tcpNoDelay()),
+        image_filter_(image_sub_, tf_, cfg_.world_frame, static_cast<std::uint32_t>(cfg_.image_queue), nh),
+        ack_(pnh, lockstepInputs(cfg)) {
     if (!cfg_.camera_file.empty()) build(ehc_control::loadPinholeCamera(cfg_.camera_file));
     pub_ = nh.advertise<geometry_msgs::PoseStamped>(cfg_.target_topic, 10);
-    if (!cfg_.ack_topic.empty()) ack_pub_ = nh.advertise<std_msgs::Header>(cfg_.ack_topic, 50);
+    if (!ack_.topic().empty()) ROS_INFO_STREAM("ehc_tag_node: each image acknowledged on " << ack_.topic() << " when done");
     image_filter_.registerCallback(&TagNode::onImage, this);
     image_filter_.registerFailureCallback(
         [this](const sensor_msgs::ImageConstPtr& m, tf2_ros::filter_failure_reasons::FilterFailureReason why) {
-          acknowledge(m->header.stamp);
+          ack_.done(m->header.stamp);
           ROS_WARN_STREAM_THROTTLE(kLogThrottle, "ehc_tag_node: image at " << m->header.stamp << " dropped before its camera pose arrived ("
                                                        << ros_conv::filterFailureText(why) << ")");
         });
     if (cfg_.camera_file.empty())
-      info_sub_ = nh.subscribe(cfg_.camera_info_topic, 2, &TagNode::onInfo, this);
+      info_sub_ = nh.subscribe(cfg_.camera_info_topic, 2, &TagNode::onInfo, this, ros::TransportHints().tcpNoDelay());
   }
 
  private:
@@ -119,20 +125,24 @@ class TagNode {
     } catch (const std::exception& e) {
       ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "ehc_tag_node: bad camera_info: " << e.what());
     }
-  }
-
-  /// Done with the image stamped `stamp` (lock-step perception gate), whatever came of it.
-  void acknowledge(const ros::Time& stamp) {
-    if (cfg_.ack_topic.empty()) return;
-    std_msgs::Header h;
-    h.stamp = stamp;
-    h.frame_id = ros::this_node::getName();
-    ack_pub_.publish(h);
+    // The image that came before the first camera_info (a simulator publishes them together).
+    if (detector_ && waiting_image_) {
+      const sensor_msgs::ImageConstPtr image = waiting_image_;
+      waiting_image_.reset();
+      onImage(image);
+    }
   }
 
   void onImage(const sensor_msgs::ImageConstPtr& image) {
+    if (!detector_) {
+      // No camera_info yet: the newest such image waits for it (acknowledged when processed).
+      if (waiting_image_) ack_.done(waiting_image_->header.stamp);
+      waiting_image_ = image;
+      ROS_WARN_THROTTLE(kLogThrottle, "ehc_tag_node: no camera_info yet, the image waits for it");
+      return;
+    }
     process(*image);
-    acknowledge(image->header.stamp);  // after the target pose: the simulator steps on
+    ack_.done(image->header.stamp);  // after the target pose: the simulator steps on
   }
 
   void process(const sensor_msgs::Image& msg) {
@@ -170,7 +180,9 @@ class TagNode {
   vpImage<unsigned char> gray_;
   message_filters::Subscriber<sensor_msgs::Image> image_sub_;
   tf2_ros::MessageFilter<sensor_msgs::Image> image_filter_;  ///< passes an image once its camera pose is known
-  ros::Publisher pub_, ack_pub_;
+  ros::Publisher pub_;
+  ehc_msgs::LockstepAck ack_;
+  sensor_msgs::ImageConstPtr waiting_image_;  ///< an image that came before the first camera_info
   ros::Subscriber info_sub_;
 };
 
@@ -187,7 +199,7 @@ int main(int argc, char** argv) {
   try {
     const TagNodeConfig cfg = loadTagNodeConfig(config);
     ROS_INFO_STREAM(cfg.summary());
-    TagNode node(nh, cfg);
+    TagNode node(nh, pnh, cfg);
     ros::spin();
   } catch (const std::exception& e) {
     ROS_FATAL_STREAM("ehc_tag_node: " << e.what());

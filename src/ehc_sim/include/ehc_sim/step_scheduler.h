@@ -10,20 +10,26 @@
 //     since the last step. A rejected command (NaN, wrong size, over a limit) is an answer: it
 //     is counted and its group executed as zero, so lock-step never stalls on a bad command;
 //   - sim time never advances on a timeout: a controller that stops answering stops time.
-//     Wall-clock rules only resend or delay, never step: a state NOBODY answered (no command of
-//     either kind since it was published) is published again (RepublishState,
-//     statePublished(.., fresh = false)) every state_republish_period wall seconds, for a
-//     controller that starts late or missed the message; with max_real_time_factor > 0 an
+//     Wall-clock rules only resend or delay, never step: a state not fully answered (the two
+//     commands) is published again (RepublishState, statePublished(.., fresh = false)) every
+//     state_republish_period wall seconds, for a controller that starts late, missed the
+//     message, or whose answer (or half of it) was lost while its publishers were connecting; with max_real_time_factor > 0 an
 //     answered step waits until dt / max_real_time_factor wall seconds have passed since the
 //     state was published (pacing for tests whose other inputs come on wall-clock timers).
-// Perception gate (lock-step only, off unless setPerceptionGate names nodes; issue 18): an
-// image published with the state stamped s must be acknowledged (onPerceptionAck, that image or
-// a later one) by every listed perception node before a step takes sim time past s + max_lag.
+// Acknowledgement gate (lock-step only, off unless setAckGate names nodes; issue 18): nodes
+// outside the controller's handshake that must be done with what the simulator published before
+// sim time moves on. Each listed node consumes one stream: the images, the depth clouds or the
+// fresh states (e.g. the grasp sequencer, which turns each controller status into the next
+// goal). A frame (image, cloud or state) stamped s must be acknowledged (onAck with that stamp
+// or a later one) by every node of its stream before a step takes sim time past s + max_lag.
 // A node joins the gate with its first acknowledgement (one that has not started yet, or has
-// not subscribed yet, holds nothing back: it could never acknowledge the images before it).
-// Perception nodes are outside the controller's handshake; without the gate a loaded machine
-// let them fall behind sim time (fewer images processed per sim second: the back object's tag,
-// detectable only from close, was never seen in one run), so results depended on the load.
+// not subscribed yet, holds nothing back: it could never acknowledge the frames before it);
+// ehc_sim_node waits for every node's "ready" acknowledgement (notJoined, ehc_msgs::LockstepAck)
+// before its first state, so in practice every node is there from the start.
+// Without the gate a loaded machine let these nodes fall behind sim time (fewer images
+// processed per sim second: the back object's tag, detectable only from close, was never seen
+// in one run; the grasp candidates and the next goal arrived one or more cycles later), so
+// results depended on the load.
 // Free-run (free_run = true): a step every dt of wall time (no catching up after a stall)
 // with the latest commands; arm commands need no matching stamp; both groups are zeroed when
 // either the last /cmd_vel or the last accepted arm command is older than command_timeout.
@@ -33,12 +39,30 @@
 
 #include <Eigen/Core>
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
 
 namespace ehc_sim {
+
+/// What a node of the acknowledgement gate consumes.
+enum class AckStream {
+  State,  ///< every fresh state (statePublished(.., fresh = true))
+  Image,  ///< every camera image (framePublished)
+  Cloud,  ///< every depth cloud (framePublished)
+};
+const char* toString(AckStream s);
+
+/// A node of the acknowledgement gate and its stream.
+struct AckNode {
+  std::string name;
+  AckStream stream = AckStream::Image;
+  /// "name" (an image consumer) or "name:stream" with stream state | image | cloud; throws
+  /// std::invalid_argument ("[StepScheduler] ...") on an empty name or an unknown stream.
+  static AckNode parse(const std::string& spec);
+};
 
 enum class StepAction {
   Wait,            ///< nothing to do yet: keep serving callbacks
@@ -72,16 +96,21 @@ class StepScheduler {
   /// publish a fresh state).
   void reset();
 
-  /// Perception gate (see the file comment): `nodes` (empty: off) must acknowledge every image
-  /// before sim time passes its stamp by more than `max_lag_ns` (>= 0). Lock-step only.
-  void setPerceptionGate(const std::vector<std::string>& nodes, std::int64_t max_lag_ns);
-  /// An image stamped `stamp_ns` was published (with the state of that stamp).
-  void imagePublished(std::int64_t stamp_ns);
-  /// `node` is done with the image stamped `stamp_ns` (whatever came of it): "" if counted,
-  /// else why not (a node the gate does not list).
-  std::string onPerceptionAck(const std::string& node, std::int64_t stamp_ns);
-  /// "" when no step is held back by perception; else which node and image it waits for.
-  std::string perceptionWait() const;
+  /// Acknowledgement gate (see the file comment): `nodes` (empty: off) must acknowledge every
+  /// frame of their stream before sim time passes its stamp by more than `max_lag_ns` (>= 0).
+  /// Lock-step only. Throws std::invalid_argument on a negative lag, an empty or repeated name.
+  void setAckGate(const std::vector<AckNode>& nodes, std::int64_t max_lag_ns);
+  /// An image or a cloud stamped `stamp_ns` was published (states are recorded by statePublished).
+  void framePublished(AckStream stream, std::int64_t stamp_ns);
+  /// `node` is done with the frames of its stream up to `stamp_ns` (whatever came of them): ""
+  /// if counted, else why not (a node the gate does not list).
+  std::string onAck(const std::string& node, std::int64_t stamp_ns);
+  /// "" when no step is held back by the gate; else which node and frame it waits for.
+  std::string ackWait() const;
+  /// The gate's nodes that have not acknowledged anything yet (a "ready" stamp 0 counts),
+  /// space-separated; "" when all have (or the gate is off). The simulator node publishes its
+  /// first state only when this is empty, so no node of the gate misses the start.
+  std::string notJoined() const;
 
   bool lockStep() const { return !config_.free_run; }
   const CommandGate& gate() const { return gate_; }
@@ -90,19 +119,20 @@ class StepScheduler {
  private:
   FakeRobotConfig config_;
   CommandGate gate_;
-  bool answered_ = false;  ///< any command since the last fresh state
   double last_publish_ = 0.0;
   double last_fresh_publish_ = 0.0;
   std::optional<double> last_base_cmd_, last_arm_cmd_, next_step_;
   std::int64_t state_ns_ = 0;  ///< stamp of the last fresh state
-  // Perception gate: listed nodes, their last acknowledged image stamp, images not yet acknowledged by all.
-  std::vector<std::string> perception_nodes_;
+  // Acknowledgement gate: listed nodes, their last acknowledged stamp (-1: not joined), the
+  // frames per stream (increasing) not yet acknowledged by every joined node of the stream.
+  std::vector<AckNode> ack_nodes_;
   std::vector<std::int64_t> acked_ns_;
   std::int64_t max_lag_ns_ = 0;
-  std::vector<std::int64_t> images_ns_;  ///< increasing
-  /// Index of a node that has not acknowledged the newest image the next step must not pass
-  /// (-1: none), and that image's stamp.
-  int heldBy(std::int64_t* image_ns) const;
+  std::array<std::vector<std::int64_t>, 3> frames_ns_;
+  void recordFrame(AckStream stream, std::int64_t stamp_ns);
+  /// Index of a node that has not acknowledged the newest frame of its stream the next step
+  /// must not pass (-1: none), and that frame's stamp.
+  int heldBy(std::int64_t* frame_ns) const;
 };
 
 }  // namespace ehc_sim

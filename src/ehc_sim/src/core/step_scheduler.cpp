@@ -15,6 +15,32 @@ const char* toString(StepAction a) {
   return "?";
 }
 
+const char* toString(AckStream s) {
+  switch (s) {
+    case AckStream::State: return "state";
+    case AckStream::Image: return "image";
+    case AckStream::Cloud: return "cloud";
+  }
+  return "?";
+}
+
+AckNode AckNode::parse(const std::string& spec) {
+  AckNode n;
+  const auto colon = spec.find(':');
+  n.name = spec.substr(0, colon);
+  if (!n.name.empty() && n.name.front() == '/') n.name.erase(0, 1);
+  if (n.name.empty()) throw std::invalid_argument("[StepScheduler] acknowledgement gate: empty node name in '" + spec + "'");
+  if (colon == std::string::npos) return n;
+  const std::string stream = spec.substr(colon + 1);
+  for (const AckStream s : {AckStream::State, AckStream::Image, AckStream::Cloud})
+    if (stream == toString(s)) {
+      n.stream = s;
+      return n;
+    }
+  throw std::invalid_argument("[StepScheduler] acknowledgement gate: unknown stream '" + stream + "' in '" + spec +
+                              "' (state | image | cloud)");
+}
+
 StepScheduler::StepScheduler(const ehc_control::RobotConfig& robot, const FakeRobotConfig& config)
     : config_(config), gate_(robot) {
   config_.validate();
@@ -24,14 +50,13 @@ void StepScheduler::statePublished(double wall_s, std::int64_t stamp_ns, bool fr
   if (fresh) {
     state_ns_ = stamp_ns;
     gate_.newState(stamp_ns);
-    answered_ = false;
     last_fresh_publish_ = wall_s;
+    recordFrame(AckStream::State, stamp_ns);
   }
   last_publish_ = wall_s;
 }
 
 std::string StepScheduler::onBaseTwist(double wall_s, double vx, double vy, double wz) {
-  answered_ = true;
   last_base_cmd_ = wall_s;
   return gate_.onBaseTwist(vx, vy, wz);
 }
@@ -39,7 +64,6 @@ std::string StepScheduler::onBaseTwist(double wall_s, double vx, double vy, doub
 std::string StepScheduler::onArmCommand(double wall_s, std::int64_t stamp_ns,
                                         const std::vector<std::string>& names,
                                         const std::vector<double>& velocities) {
-  answered_ = true;
   const std::string why = gate_.onArmCommand(stamp_ns, names, velocities, lockStep());
   if (why.empty()) last_arm_cmd_ = wall_s;
   return why;
@@ -48,14 +72,13 @@ std::string StepScheduler::onArmCommand(double wall_s, std::int64_t stamp_ns,
 StepAction StepScheduler::next(double wall_s) {
   if (lockStep()) {
     if (gate_.ready()) {
-      std::int64_t image_ns = 0;
-      if (heldBy(&image_ns) >= 0) return StepAction::Wait;  // perception behind: never a timeout
+      std::int64_t frame_ns = 0;
+      if (heldBy(&frame_ns) >= 0) return StepAction::Wait;  // a gate node behind: never a timeout
       const bool paced = config_.max_real_time_factor > 0.0 &&
                          wall_s - last_fresh_publish_ < config_.dt / config_.max_real_time_factor;
       return paced ? StepAction::Wait : StepAction::Step;
     }
-    if (!answered_ && wall_s - last_publish_ > config_.state_republish_period)
-      return StepAction::RepublishState;
+    if (wall_s - last_publish_ > config_.state_republish_period) return StepAction::RepublishState;
     return StepAction::Wait;
   }
   if (!next_step_) next_step_ = wall_s + config_.dt;  // first call: one period from now
@@ -77,59 +100,80 @@ double StepScheduler::callbackWait() const {
 void StepScheduler::reset() {
   gate_.zero();
   gate_.resetCounters();
-  images_ns_.clear();
+  for (auto& f : frames_ns_) f.clear();
   std::fill(acked_ns_.begin(), acked_ns_.end(), std::int64_t{-1});
 }
 
-void StepScheduler::setPerceptionGate(const std::vector<std::string>& nodes, std::int64_t max_lag_ns) {
-  if (max_lag_ns < 0) throw std::invalid_argument("[StepScheduler] perception max lag must be >= 0");
-  for (const auto& n : nodes)
-    if (n.empty()) throw std::invalid_argument("[StepScheduler] empty perception node name");
-  perception_nodes_ = nodes;
+void StepScheduler::setAckGate(const std::vector<AckNode>& nodes, std::int64_t max_lag_ns) {
+  if (max_lag_ns < 0) throw std::invalid_argument("[StepScheduler] acknowledgement gate: max lag must be >= 0");
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    if (nodes[i].name.empty()) throw std::invalid_argument("[StepScheduler] acknowledgement gate: empty node name");
+    for (std::size_t j = 0; j < i; ++j)
+      if (nodes[j].name == nodes[i].name)
+        throw std::invalid_argument("[StepScheduler] acknowledgement gate: node '" + nodes[i].name + "' listed twice");
+  }
+  ack_nodes_ = nodes;
   acked_ns_.assign(nodes.size(), -1);
   max_lag_ns_ = max_lag_ns;
-  images_ns_.clear();
+  for (auto& f : frames_ns_) f.clear();
 }
 
-void StepScheduler::imagePublished(std::int64_t stamp_ns) {
-  if (perception_nodes_.empty()) return;
-  if (!images_ns_.empty() && stamp_ns <= images_ns_.back()) images_ns_.clear();  // time restarted (reset)
-  images_ns_.push_back(stamp_ns);
+void StepScheduler::framePublished(AckStream stream, std::int64_t stamp_ns) { recordFrame(stream, stamp_ns); }
+
+void StepScheduler::recordFrame(AckStream stream, std::int64_t stamp_ns) {
+  if (ack_nodes_.empty()) return;
+  auto& f = frames_ns_[static_cast<std::size_t>(stream)];
+  if (!f.empty() && stamp_ns <= f.back()) f.clear();  // time restarted (reset)
+  f.push_back(stamp_ns);
 }
 
-std::string StepScheduler::onPerceptionAck(const std::string& node, std::int64_t stamp_ns) {
-  if (perception_nodes_.empty()) return "";  // gate off: nothing to count
+std::string StepScheduler::onAck(const std::string& node, std::int64_t stamp_ns) {
+  if (ack_nodes_.empty()) return "";  // gate off: nothing to count
   const std::string name = !node.empty() && node.front() == '/' ? node.substr(1) : node;
-  const auto it = std::find(perception_nodes_.begin(), perception_nodes_.end(), name);
-  if (it == perception_nodes_.end()) return "'" + name + "' is not a perception node of the lock-step gate";
-  auto& a = acked_ns_[static_cast<std::size_t>(it - perception_nodes_.begin())];
-  a = std::max(a, stamp_ns);
-  // Images every node has acknowledged no longer hold anything back.
-  std::int64_t all = a;
-  for (const std::int64_t x : acked_ns_)
-    if (x >= 0) all = std::min(all, x);
-  images_ns_.erase(images_ns_.begin(), std::upper_bound(images_ns_.begin(), images_ns_.end(), all));
+  const auto it = std::find_if(ack_nodes_.begin(), ack_nodes_.end(), [&](const AckNode& n) { return n.name == name; });
+  if (it == ack_nodes_.end()) return "'" + name + "' is not a node of the lock-step acknowledgement gate";
+  const auto k = static_cast<std::size_t>(it - ack_nodes_.begin());
+  acked_ns_[k] = std::max(acked_ns_[k], stamp_ns);
+  // Frames every joined node of the stream has acknowledged no longer hold anything back.
+  std::int64_t all = acked_ns_[k];
+  for (std::size_t i = 0; i < ack_nodes_.size(); ++i)
+    if (ack_nodes_[i].stream == it->stream && acked_ns_[i] >= 0) all = std::min(all, acked_ns_[i]);
+  auto& f = frames_ns_[static_cast<std::size_t>(it->stream)];
+  f.erase(f.begin(), std::upper_bound(f.begin(), f.end(), all));
   return "";
 }
 
-int StepScheduler::heldBy(std::int64_t* image_ns) const {
-  if (perception_nodes_.empty() || images_ns_.empty()) return -1;
-  // After the step sim time is state + dt: every image older than that minus max_lag must be done.
+int StepScheduler::heldBy(std::int64_t* frame_ns) const {
+  if (ack_nodes_.empty()) return -1;
+  // After the step sim time is state + dt: every frame older than that minus max_lag must be done.
   const std::int64_t limit = state_ns_ + config_.dtNs() - max_lag_ns_;
-  const auto last = std::upper_bound(images_ns_.begin(), images_ns_.end(), limit - 1);  // stamps < limit
-  if (last == images_ns_.begin()) return -1;
-  *image_ns = *(last - 1);
-  for (std::size_t i = 0; i < acked_ns_.size(); ++i)
-    if (acked_ns_[i] >= 0 && acked_ns_[i] < *image_ns) return static_cast<int>(i);  // -1: not joined yet
+  for (std::size_t i = 0; i < ack_nodes_.size(); ++i) {
+    if (acked_ns_[i] < 0) continue;  // not joined yet
+    const auto& f = frames_ns_[static_cast<std::size_t>(ack_nodes_[i].stream)];
+    const auto last = std::upper_bound(f.begin(), f.end(), limit - 1);  // stamps < limit
+    if (last == f.begin()) continue;
+    if (acked_ns_[i] < *(last - 1)) {
+      *frame_ns = *(last - 1);
+      return static_cast<int>(i);
+    }
+  }
   return -1;
 }
 
-std::string StepScheduler::perceptionWait() const {
-  std::int64_t image_ns = 0;
-  const int i = heldBy(&image_ns);
+std::string StepScheduler::notJoined() const {
+  std::string names;
+  for (std::size_t i = 0; i < ack_nodes_.size(); ++i)
+    if (acked_ns_[i] < 0) names += (names.empty() ? "" : " ") + ack_nodes_[i].name;
+  return names;
+}
+
+std::string StepScheduler::ackWait() const {
+  std::int64_t frame_ns = 0;
+  const int i = heldBy(&frame_ns);
   if (i < 0) return "";
+  const AckNode& n = ack_nodes_[static_cast<std::size_t>(i)];
   std::ostringstream s;
-  s << perception_nodes_[static_cast<std::size_t>(i)] << " (image at " << 1e-9 * static_cast<double>(image_ns) << " s)";
+  s << n.name << " (" << toString(n.stream) << " at " << 1e-9 * static_cast<double>(frame_ns) << " s)";
   return s.str();
 }
 

@@ -15,10 +15,11 @@
 // odom -> base_link from the base model's odometry: sim.base_model water2 = the Water2 bridge's),
 // /camera/color/image_raw (mono8) + /camera/color/camera_info, /camera/depth/points,
 // /sim/object_poses (ground truth, metrics only), /sim/status.
-// Subscribes /cmd_vel, /arm/joint_velocity_cmd, /sim/perception_ack (std_msgs/Header: frame_id
-// = a perception node's name, stamp = the image it is done with; lock-step perception gate,
-// private parameters _perception_acks:="[node, ...]" and _perception_max_lag:=<s>, default 0;
-// see ehc_sim::StepScheduler). Services /sim/reset (ehc_msgs/ResetScene),
+// Subscribes /cmd_vel, /arm/joint_velocity_cmd, /sim/lockstep_ack (std_msgs/Header: frame_id
+// = the acknowledging node's name, stamp = the frame it is done with; the lock-step
+// acknowledgement gate of the nodes outside the controller's handshake, private parameters
+// _lockstep_acks:="[node[:image|cloud|state], ...]" (default stream image) and
+// _lockstep_max_lag:=<s>, default 0; see ehc_sim::StepScheduler). Services /sim/reset (ehc_msgs/ResetScene),
 // /sim/gripper (std_srvs/SetBool: true = close, false = open).
 
 #include "lock_step_node.h"
@@ -52,40 +53,44 @@ class SimNode {
     tf_pub_ = nh_.advertise<tf2_msgs::TFMessage>("/tf", 100);
     objects_pub_ = nh_.advertise<ehc_msgs::SimObjectPoses>("/sim/object_poses", 10);
     status_pub_ = nh_.advertise<ehc_msgs::SimStatus>("/sim/status", 10);
-    // A YAML list, or (rosrun _perception_acks:=[a,b]: roscpp keeps it a string) names
+    // A YAML list, or (rosrun _lockstep_acks:=[a,b:cloud]: roscpp keeps it a string) specs
     // separated by commas, blanks or brackets.
-    std::vector<std::string> perception_acks;
-    if (!pnh.getParam("perception_acks", perception_acks)) {
+    std::vector<std::string> specs;
+    if (!pnh.getParam("lockstep_acks", specs)) {
       std::string text;
-      pnh.param<std::string>("perception_acks", text, "");
-      std::string name;
+      pnh.param<std::string>("lockstep_acks", text, "");
+      std::string spec;
       for (const char ch : text + ",") {
         if (ch == ',' || ch == ' ' || ch == '[' || ch == ']') {
-          if (!name.empty()) perception_acks.push_back(name);
-          name.clear();
+          if (!spec.empty()) specs.push_back(spec);
+          spec.clear();
         } else {
-          name += ch;
+          spec += ch;
         }
       }
     }
     double max_lag = 0.0;
-    pnh.param("perception_max_lag", max_lag, max_lag);
+    pnh.param("lockstep_max_lag", max_lag, max_lag);
     if (!(max_lag >= 0.0 && max_lag <= 10.0))
-      throw std::invalid_argument("[ehc_sim_node] _perception_max_lag must be in [0, 10] s");
-    if (!perception_acks.empty()) {
-      lock_step_->scheduler().setPerceptionGate(perception_acks, static_cast<std::int64_t>(std::llround(max_lag * 1e9)));
+      throw std::invalid_argument("[ehc_sim_node] _lockstep_max_lag must be in [0, 10] s");
+    if (!specs.empty()) {
+      std::vector<ehc_sim::AckNode> nodes;
       std::string names;
-      for (const auto& n : perception_acks) names += " " + n;
-      ROS_INFO_STREAM("[ehc_sim_node] lock-step perception gate: every image acknowledged on /sim/perception_ack by"
-                      << names << " before sim time passes it by " << max_lag << " s");
+      for (const auto& spec : specs) {
+        nodes.push_back(ehc_sim::AckNode::parse(spec));
+        names += " " + nodes.back().name + " (" + ehc_sim::toString(nodes.back().stream) + ")";
+      }
+      lock_step_->scheduler().setAckGate(nodes, static_cast<std::int64_t>(std::llround(max_lag * 1e9)));
+      ROS_INFO_STREAM("[ehc_sim_node] lock-step acknowledgement gate on /sim/lockstep_ack:"
+                      << names << "; sim time passes a frame by at most " << max_lag << " s before they are done with it");
     }
-    ack_sub_ = nh_.subscribe("/sim/perception_ack", 50, &SimNode::onPerceptionAck, this,
-                             ros::TransportHints().tcpNoDelay());
+    ack_sub_ = nh_.subscribe("/sim/lockstep_ack", 50, &SimNode::onAck, this, ros::TransportHints().tcpNoDelay());
     reset_srv_ = nh_.advertiseService("/sim/reset", &SimNode::onReset, this);
     gripper_srv_ = nh_.advertiseService("/sim/gripper", &SimNode::onGripper, this);
   }
 
   void run() {
+    if (!lock_step_->waitForAckGate()) return;  // every node of the gate sees the first state
     publishState(true);
     lock_step_->run([this] { step(); }, [this] { publishState(false); });
   }
@@ -107,8 +112,9 @@ class SimNode {
     clock.clock = stamp;
     clock_pub_.publish(clock);
     if (fresh) {
-      camera_->publishDue(*world_, t_ns, stamp,
-                          [this](std::int64_t t_image) { lock_step_->scheduler().imagePublished(t_image); });
+      camera_->publishDue(*world_, t_ns, stamp, [this](ehc_sim::AckStream stream, std::int64_t stamp_ns) {
+        lock_step_->scheduler().framePublished(stream, stamp_ns);
+      });
     }
     sensor_msgs::JointState js;
     ehc_sim::fillJointState(world_->robot(), stamp, &js);
@@ -152,9 +158,9 @@ class SimNode {
     return true;
   }
 
-  void onPerceptionAck(const std_msgs::Header& m) {
-    const std::string why = lock_step_->scheduler().onPerceptionAck(m.frame_id, static_cast<std::int64_t>(m.stamp.toNSec()));
-    if (!why.empty()) ROS_WARN_STREAM_THROTTLE(kLogThrottle, "[ehc_sim_node] /sim/perception_ack ignored: " << why);
+  void onAck(const std_msgs::Header& m) {
+    const std::string why = lock_step_->scheduler().onAck(m.frame_id, static_cast<std::int64_t>(m.stamp.toNSec()));
+    if (!why.empty()) ROS_WARN_STREAM_THROTTLE(kLogThrottle, "[ehc_sim_node] /sim/lockstep_ack ignored: " << why);
   }
 
   bool onGripper(std_srvs::SetBool::Request& req, std_srvs::SetBool::Response& res) {
@@ -170,7 +176,7 @@ class SimNode {
   std::unique_ptr<ehc_sim::SimWorld> world_;
   std::unique_ptr<ehc_sim::SimCameraStreams> camera_;  ///< camera.image_rate / cloud_rate on sim time
   std::unique_ptr<ehc_sim::LockStepNode> lock_step_;  ///< callback queue, commands, stepping loop
-  ros::Subscriber ack_sub_;  ///< /sim/perception_ack (lock-step perception gate)
+  ros::Subscriber ack_sub_;  ///< /sim/lockstep_ack (lock-step acknowledgement gate)
   ros::Publisher clock_pub_, joint_pub_, odom_pub_, tf_pub_, objects_pub_, status_pub_;
   ros::ServiceServer reset_srv_, gripper_srv_;
 };

@@ -49,6 +49,33 @@ class LockStepNode {
     scheduler_.statePublished(ros::WallTime::now().toSec(), static_cast<std::int64_t>(stamp.toNSec()), fresh);
   }
 
+  /// With an acknowledgement gate: serves callbacks until every node of the gate is ready and
+  /// the controller's command publishers are connected (its first answer is not lost), logging
+  /// who it waits for every 5 s; false on shutdown. At once without a gate.
+  bool waitForAckGate() {
+    if (scheduler_.notJoined().empty()) return true;  // no gate
+    const double t0 = ros::WallTime::now().toSec();
+    double last_log = t0;
+    while (ros::ok()) {
+      std::string missing = scheduler_.notJoined();
+      if (cmd_vel_sub_.getNumPublishers() == 0 || arm_sub_.getNumPublishers() == 0)
+        missing += (missing.empty() ? "" : " ") + std::string("the controller (/cmd_vel, /arm/joint_velocity_cmd)");
+      if (missing.empty()) {
+        ROS_INFO_STREAM("[" << node_ << "] lock-step: every node of the acknowledgement gate and the controller are there after "
+                            << ros::WallTime::now().toSec() - t0 << " wall s: first state");
+        return true;
+      }
+      queue_.callAvailable(ros::WallDuration(0.05));
+      const double wall = ros::WallTime::now().toSec();
+      if (wall - last_log > 5.0) {
+        last_log = wall;
+        ROS_WARN_STREAM("[" << node_ << "] lock-step: the first state waits " << wall - t0
+                            << " wall s for the acknowledgement gate's nodes: " << missing);
+      }
+    }
+    return false;
+  }
+
   /// Serves callbacks until shutdown; `step()` on StepAction::Step (it executes command() and
   /// publishes the fresh state), `republish()` on StepAction::RepublishState.
   void run(const std::function<void()>& step, const std::function<void()>& republish) {
@@ -64,10 +91,10 @@ class LockStepNode {
         case StepAction::RepublishState: republish(); break;  // nobody answered
         case StepAction::Wait:
           if (wall - last_step > 2.0) {
-            const std::string who = scheduler_.perceptionWait();
+            const std::string who = scheduler_.ackWait();
             if (!who.empty())
               ROS_WARN_STREAM_THROTTLE(5.0, "[" << node_ << "] lock-step: sim time waits " << wall - last_step
-                                                << " wall s for perception: " << who);
+                                                << " wall s for an acknowledgement: " << who);
           }
           break;
       }

@@ -55,17 +55,18 @@ class SimCameraStreams {
   }
 
   /// Renders and publishes what is due at the world's time `t_ns`, stamped `stamp`.
-  /// `before_image` (if set) runs just before an image is published (the lock-step perception
-  /// gate records it there, so an acknowledgement can never arrive before the record).
+  /// `before_publish` (if set) runs just before an image or a cloud is published, with the
+  /// frame's stamp in ns (the lock-step acknowledgement gate records the frame there, so an
+  /// acknowledgement, which carries the stamp, can never arrive before the record).
   void publishDue(const SimWorld& world, std::int64_t t_ns, const ros::Time& stamp,
-                  const std::function<void(std::int64_t)>& before_image = {}) {
+                  const std::function<void(AckStream, std::int64_t)>& before_publish = {}) {
     if (image_clock_.due(t_ns)) {
       camera_.render(world, &image_);
       sensor_msgs::Image img;
       fillImage(image_, frame_, stamp, &img);
       sensor_msgs::CameraInfo info;
       fillCameraInfo(camera_.intrinsics(), frame_, stamp, &info);
-      if (before_image) before_image(t_ns);
+      if (before_publish) before_publish(AckStream::Image, static_cast<std::int64_t>(stamp.toNSec()));
       image_pub_.publish(img);
       info_pub_.publish(info);
     }
@@ -73,6 +74,7 @@ class SimCameraStreams {
       camera_.cloud(world, &points_);
       sensor_msgs::PointCloud2 cloud;
       fillCloud(points_, frame_, stamp, &cloud);
+      if (before_publish) before_publish(AckStream::Cloud, static_cast<std::int64_t>(stamp.toNSec()));
       cloud_pub_.publish(cloud);
     }
   }
