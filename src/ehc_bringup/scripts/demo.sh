@@ -153,13 +153,18 @@ master_pid() {
   /usr/bin/python3 -c "import sys, xmlrpc.client as x; print(x.ServerProxy(sys.argv[1]).getPid('/demo.sh')[2])" \
     "$ROS_MASTER_URI" 2>/dev/null
 }
+master_ok=0
 for _ in $(seq 100); do
-  [ "$(master_pid)" = "$MASTER_PID" ] && break
-  kill -0 "$MASTER_PID" 2>/dev/null || break
+  pid=$(master_pid)
+  if [ "$pid" = "$MASTER_PID" ]; then master_ok=1; break; fi
+  if [ -n "$pid" ] || ! kill -0 "$MASTER_PID" 2>/dev/null; then break; fi  # another master, or ours died
+  # No XML-RPC answer yet (or a stand-in master that only serves parameters): the parameter
+  # server answering is enough.
+  if rosparam set /use_sim_time true >/dev/null 2>&1; then master_ok=1; break; fi
   sleep 0.1
 done
-if [ "$(master_pid)" != "$MASTER_PID" ]; then
-  echo "demo.sh: the ROS master did not start on port $PORT (taken? see $OUT/logs/rosmaster.log)" >&2
+if [ "$master_ok" != 1 ]; then
+  echo "demo.sh: the ROS master did not start on port $PORT (taken by another master? see $OUT/logs/rosmaster.log)" >&2
   exit 2
 fi
 rosparam set /use_sim_time true >/dev/null 2>&1
