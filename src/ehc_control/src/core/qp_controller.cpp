@@ -446,7 +446,10 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
   if (s.row_a.rows() != nx || s.row_a.cols() < static_cast<Eigen::Index>(n_pairs))
     s.row_a.resize(nx, static_cast<Eigen::Index>(std::max<std::size_t>(n_pairs, 1)));
   if (s.row_b.size() < n_pairs) s.row_b.resize(n_pairs);
-  if (s.pair_links.size() < n_pairs) s.pair_links.resize(n_pairs);
+  if (s.pair_links.size() < n_pairs) {
+    s.pair_links.resize(n_pairs);
+    for (Solver::PairLink& link : s.pair_links) link.name.reserve(64);  // a name change copies, no allocation
+  }
   s.n_rows = 0;
   const double di = params_.obstacle_influence;
   for (std::size_t k = 0; k < n_pairs; ++k) {
