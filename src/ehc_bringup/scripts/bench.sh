@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Runs every benchmark executable (devel/lib/<pkg>/bench_*); each prints JSON lines.
+# Runs every benchmark executable (devel/lib/<pkg>/bench_*; ROS-node benches through their
+# launcher script); each prints JSON lines.
 set -eo pipefail
 cd "$(dirname "$0")/../../.."
 export PATH="/usr/bin:/bin:$PATH"
@@ -13,6 +14,17 @@ if [ ${#benches[@]} -eq 0 ]; then
 fi
 echo "[bench] machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs)" >&2
 for b in "${benches[@]}"; do
-  echo "[bench] $b" >&2
-  "$b"
+  # A bench that is a ROS node comes with a launcher, src/<pkg>/bench/<name without bench_>.sh,
+  # that starts a private master and the nodes it measures (run without them it would wait for
+  # a master forever).
+  pkg=$(basename "$(dirname "$b")")
+  name=$(basename "$b")
+  launcher="src/$pkg/bench/${name#bench_}.sh"
+  if [ -x "$launcher" ]; then
+    echo "[bench] $launcher" >&2
+    "$launcher"
+  else
+    echo "[bench] $b" >&2
+    "$b"
+  fi
 done

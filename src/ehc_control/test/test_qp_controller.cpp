@@ -306,14 +306,17 @@ TEST(EhcQpController, ManipulabilityFadeStopsNullSpaceDriftAtTheTarget) {
 TEST(EhcQpController, TenObstaclePairsClosedLoopReproducesTheRecordedCommands) {
   // Regression record: four targets in a row, ten link-obstacle pairs in every cycle (a point
   // obstacle 0.15-0.24 m from each link origin along a fixed world direction, as in
-  // bench_controller), 100 Hz closed loop. The expected values were printed by this test
-  // (EHC_PRINT_RECORD=1) against the controller of commit 883b4fc, whose Jacobians come from
-  // one KDL chain solver per link; the controller now reads them from one pass over the tree.
-  // The tolerance is rounding-level: the two Jacobians agree to 1e-15, and a genuine change of
-  // the QP (a cost or constraint term, another solution) moves these sums by far more than
-  // 1e-6. The same record is met by the old controller with glibc's libm taking its non-FMA
-  // code paths (GLIBC_TUNABLES=glibc.cpu.hwcaps=-AVX2,-FMA), so it does not hang on the last
-  // bit of sin/cos.
+  // bench_controller), 100 Hz closed loop. The expected values are printed by this test
+  // (EHC_PRINT_RECORD=1). History: recorded against the controller of commit 883b4fc (per-link
+  // KDL Jacobians, vpQuadProg), met to 1e-8 by the one-pass kinematics; re-recorded when the QP
+  // solver became DualActiveSetQp. Solving each cycle's QP with both showed two cycles where
+  // they differ: the first of the second target (vpQuadProg returned a feasible point of cost
+  // 0.287 where the optimum is -0.0019; the commands differed by 4 rad/s in one joint) and
+  // one of the fourth (-0.0564 vs -0.0603); everywhere else they agreed to 1e-11. The
+  // tolerance is rounding-level: a genuine change of the QP (a cost or constraint term, another
+  // solution) moves these sums by far more than 1e-6. The record is met with glibc's libm on
+  // its non-FMA code paths too (GLIBC_TUNABLES=glibc.cpu.hwcaps=-AVX2,-FMA), so it does not
+  // hang on the last bit of sin/cos.
   auto model = std::make_shared<const WholeBodyModel>(realmanWithoutStopDistances());
   const auto& rc = model->config();
   // The record is of the paper's cost terms (the controller of 883b4fc): the later base-turn
@@ -369,17 +372,17 @@ TEST(EhcQpController, TenObstaclePairsClosedLoopReproducesTheRecordedCommands) {
     print("state", state);
     std::printf("\n");
   }
-  // Recorded with the controller of commit 883b4fc (see above).
-  const int expected_cycles = 1565, expected_rows = 15650;
-  const std::vector<long> expected_arrival = {348, 356, 365, 496};
+  // Recorded with DualActiveSetQp (see above).
+  const int expected_cycles = 1567, expected_rows = 15670;
+  const std::vector<long> expected_arrival = {348, 356, 366, 497};
   Eigen::VectorXd expected_sum_v(8), expected_sum_abs_v(8), expected_state(9);
-  expected_sum_v << 297.25729592868572, 518.24238925961527, 9.0852727257247476, -118.62169007819794,
-      88.389332462228552, -0.015279225833302662, -93.84624103564596, -100.97830117638826;
-  expected_sum_abs_v << 314.72297344828064, 518.24238925961527, 315.52500810795618, 412.07222876559263,
-      434.56098057875516, 202.28317053014533, 249.85614632919396, 248.94118968352817;
-  expected_state << 0.25328440543168079, -0.088501091708551291, 5.1824238925961019, 0.090852727257246191,
-      -0.68621690078197861, -1.0161066753777122, -0.00015279225833402047, -1.4384624103564578,
-      -1.0097830117638829;
+  expected_sum_v << 298.17631017200512, 518.16624992874313, 8.7937398549671126, -118.55608400875612,
+      88.287504631544337, -0.014930797778809556, -93.811170378106965, -101.34617843716163;
+  expected_sum_abs_v << 315.10425355347923, 518.16624992874313, 317.27102816417488, 412.11586704019868,
+      432.84095069058878, 202.93122409039179, 246.98803020204605, 248.42706152087621;
+  expected_state << 0.25464694645588914, -0.087957702535265817, 5.1816624992873814, 0.087937398549671544,
+      -0.68556084008755924, -1.0171249536845579, -0.00014930797778991945, -1.4381117037810707,
+      -1.013461784371616;
   EXPECT_EQ(cycles, expected_cycles);
   EXPECT_EQ(rows, expected_rows);
   EXPECT_EQ(arrival, expected_arrival);

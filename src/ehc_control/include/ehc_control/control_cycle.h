@@ -92,7 +92,7 @@ class ControlCycle {
   /// Base pose (x, y, yaw) in the world frame.
   std::string setBasePose(double t, const Eigen::Vector3d& base_pose);
   /// Target TCP pose (world). One that differs from the last accepted one starts a new
-  /// approach: the QP's warm start and TSMM stage are reset.
+  /// approach (EhcQpController::reset; the TSMM stage follows the target).
   std::string setTarget(double t, const Eigen::Isometry3d& target);
   /// The point the camera watches and TfM counts (world), when it is not the target's centre
   /// (e.g. the object while the target is a pre-grasp pose). Used while younger than

@@ -30,7 +30,7 @@ struct SupervisorParams {
   bool require_obstacles = false;
   /// s: a cycle (servo + QP build + solve) that took longer on the cycle's clock
   /// (ControlCycle::setClock; the node: ROS time) gives a zero command, QP_FAILED, "... over
-  /// max_solve_time". The solve is bounded (controller.max_qp_iterations, BoundedQuadProg);
+  /// max_solve_time". The solve is bounded (controller.max_qp_iterations, DualActiveSetQp);
   /// with the rows bounded too, an overrun means a starved CPU, and the command would be late. Without a clock (offline runs) not checked.
   double max_solve_time = 0.05;
   void validate() const;           ///< throws "[SupervisorParams] ..."

@@ -1,7 +1,7 @@
 #pragma once
 // EhcQpController: the whole-body QP of DESIGN.md section 6 (paper eq. 6-13), solved with
-// ViSP's vpQuadProg algorithm (warm-started between cycles) with an iteration limit
-// (BoundedQuadProg: vpQuadProg itself cycles forever on some degenerate problems).
+// DualActiveSetQp (Goldfarb-Idnani dual active set, dual_active_set_qp.h) with an iteration
+// limit, after eliminating the slack delta = nu_e - J_e qd (see step()).
 //
 //   x = [qd_base; qd_arm; delta]            (delta in R^6: slack of the end-effector task)
 //   min 1/2 x^T Q x + C^T x
@@ -102,9 +102,10 @@ struct QpControllerParams {
   /// the nearest (smallest distance - d_s) are kept, the rest dropped for this cycle. Bounds
   /// the build (one link Jacobian per row) and the solve whatever the obstacle node sends.
   int max_obstacle_rows = 24;
-  /// At most this many active-set iterations per solve (BoundedQuadProg): ViSP's vpQuadProg
-  /// loops without a limit and cycles forever on some degenerate problems; at the limit the
-  /// cycle fails safely (zero command, QP_FAILED). Normal solves take a few to ~30.
+  /// At most this many active-set iterations (constraint additions and removals) per solve
+  /// (DualActiveSetQp): a degenerate problem could make an active-set method revisit active
+  /// sets (ViSP's vpQuadProg, used before, cycled forever on one); at the limit the cycle fails
+  /// safely (zero command, QP_FAILED). Normal solves take 0 to about 15.
   int max_qp_iterations = 200;
   double tsmm_switch_distance = 0.2;   ///< m: tsmm switches to the arm stage here
   double arrival_position = 0.01;      ///< m
@@ -132,6 +133,7 @@ struct QpStepFigures {
   double sig = 0.0;                   ///< sig(omega)
   double base_weight = 0.0;
   double solve_time_us = 0.0;         ///< QP build + solve
+  int qp_iterations = 0;              ///< active-set steps of the solve (<= max_qp_iterations)
   int obstacle_rows = 0;
 };
 
@@ -181,7 +183,8 @@ class EhcQpController {
                    const Eigen::Vector3d& target_world) const;
   bool hasWeighting() const { return static_cast<bool>(weighting_); }
 
-  /// New target: clears the warm start (the TSMM stage follows the target in step(), see above).
+  /// New target. The QP keeps nothing between cycles (each solve starts from the unconstrained
+  /// minimum); the TSMM stage follows the target in step() (see above).
   void reset();
   const QpControllerParams& params() const { return params_; }
   void setMode(ControlMode m);

@@ -1,14 +1,11 @@
 #include "ehc_control/qp_controller.h"
 
-#include "ehc_control/bounded_quad_prog.h"
 #include "ehc_control/config_node.h"
+#include "ehc_control/dual_active_set_qp.h"
 #include "ehc_control/joint_limit_centring.h"
 
-#include <visp3/core/vpColVector.h>
-#include <visp3/core/vpException.h>
-#include <visp3/core/vpMatrix.h>
-
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <sstream>
@@ -149,13 +146,18 @@ Vector6d poseError(const Eigen::Isometry3d& tcp, const Eigen::Isometry3d& target
   return e;
 }
 
-/// The warm-started ViSP solver and every per-cycle matrix, sized on first use: once warm,
-/// step() allocates nothing but the returned command (and what vpQuadProg does inside).
+/// The QP solver and every per-cycle matrix, sized on first use: once warm, step() allocates
+/// nothing but the returned command.
 struct EhcQpController::Solver {
-  BoundedQuadProg qp;  ///< vpQuadProg's algorithm with an iteration limit (bounded_quad_prog.h)
-  vpMatrix Q, A, C;
-  vpColVector r, b, d, x;
-  unsigned last_rows = 0;
+  DualActiveSetQp qp;                 ///< Goldfarb-Idnani, at most max_qp_iterations steps
+  Eigen::MatrixXd G, C;               ///< QP in the free rates: cost, inequality rows (top-left blocks used)
+  Eigen::VectorXd g, d, x_free;
+  Eigen::MatrixXd no_rows;            ///< 0 x nd: the QP has no equality rows
+  Eigen::VectorXd no_rhs;
+  Eigen::Matrix<double, 6, Eigen::Dynamic> task;  ///< TCP task rows over the free rates (held columns 0)
+  Vector6d task_rhs = Vector6d::Zero();           ///< nu_e minus the held rates' share
+  std::array<bool, 6> task_released{};            ///< orientation rows left to the slack
+  std::vector<int> free;              ///< DOFs in the QP (not held), ascending
 
   KinematicState kinematics;          ///< one FK pass per cycle
   int tcp_link = -1;                  ///< tree index of the TCP
@@ -201,6 +203,8 @@ EhcQpController::EhcQpController(std::shared_ptr<const WholeBodyModel> model,
   yaw_joint_ = armYawJoint(*model_);
   flip_ = std::make_unique<WristFlip>(*model_, params_.wrist_flip);
   solver_->last_arm_rates = Eigen::VectorXd::Zero(model_->nArm());
+  solver_->no_rows.resize(0, model_->nDof());
+  solver_->free.reserve(static_cast<std::size_t>(model_->nDof()));
 }
 
 EhcQpController::~EhcQpController() = default;
@@ -222,8 +226,8 @@ double unwoundBearing(double bearing, double winding) {
 }
 
 void EhcQpController::reset() {
-  solver_->qp.resetActiveSet();
-  solver_->last_rows = 0;
+  // Nothing of the QP carries over between cycles (each solve starts at the unconstrained
+  // minimum).
   // The tsmm stage is not reset here (a new goal near the grasping position keeps the base
   // standing); step() leaves the arm stage for a target farther than d from the switch point.
 }
@@ -280,9 +284,11 @@ void EhcQpController::nearestObstaclePairs(const std::vector<ObstaclePair>& obst
     ranked->emplace_back(o.distance - params_.obstacleStop(o.link), &o);
   }
   const std::size_t keep = std::min(ranked->size(), static_cast<std::size_t>(params_.max_obstacle_rows));
-  // Nearest first: smallest margin; ties keep the input order.
-  std::stable_sort(ranked->begin(), ranked->end(),
-                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  // Nearest first: smallest margin; ties keep the input order (the pointers into `obstacles`
+  // ascend with it). A partial sort on (margin, pointer) gives the order of a stable sort
+  // without its buffer (no allocation per cycle).
+  std::partial_sort(ranked->begin(), ranked->begin() + static_cast<std::ptrdiff_t>(keep), ranked->end(),
+                    [](const auto& a, const auto& b) { return a.first < b.first || (a.first == b.first && a.second < b.second); });
   ranked->resize(keep);
 }
 
@@ -440,7 +446,10 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
   if (s.row_a.rows() != nx || s.row_a.cols() < static_cast<Eigen::Index>(n_pairs))
     s.row_a.resize(nx, static_cast<Eigen::Index>(std::max<std::size_t>(n_pairs, 1)));
   if (s.row_b.size() < n_pairs) s.row_b.resize(n_pairs);
-  if (s.pair_links.size() < n_pairs) s.pair_links.resize(n_pairs);
+  if (s.pair_links.size() < n_pairs) {
+    s.pair_links.resize(n_pairs);
+    for (Solver::PairLink& link : s.pair_links) link.name.reserve(64);  // a name change copies, no allocation
+  }
   s.n_rows = 0;
   const double di = params_.obstacle_influence;
   for (std::size_t k = 0; k < n_pairs; ++k) {
@@ -460,7 +469,7 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
     a.head(nd).noalias() = s.J_point.topRows<3>().transpose() * (-n);
     a.tail(6).setZero();
     // Held DOFs (tsmm stages) cannot move the point: a pair only they move (the base link in
-    // the arm stage) leaves no row (a zero row made vpQuadProg's active set rank-deficient).
+    // the arm stage) leaves no row (a zero row only adds a degenerate constraint).
     for (int i = 0; i < nd; ++i)
       if (held[static_cast<std::size_t>(i)]) a[i] = 0.0;
     double b = params_.obstacle_damper_gain * (o.distance - ds) / (di - ds);
@@ -495,97 +504,100 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
     out.event = flip_->event();
   }
 
-  // --- assemble for vpQuadProg: min |Qx - r|^2 with Q^T Q = H (diagonal), r = -Q^-T c
-  s.Q.resize(static_cast<unsigned>(nx), static_cast<unsigned>(nx), true);
-  s.r.resize(static_cast<unsigned>(nx), false);
-  for (int i = 0; i < nx; ++i) {
-    const double sq = std::sqrt(h[i]);
-    s.Q[static_cast<unsigned>(i)][static_cast<unsigned>(i)] = sq;
-    s.r[static_cast<unsigned>(i)] = -c[i] / sq;
-  }
-  for (int i = 0; i < nx; ++i)
-    if (held[static_cast<std::size_t>(i)]) s.r[static_cast<unsigned>(i)] = 0.0;
-  s.A.resize(6, static_cast<unsigned>(nx), true);
-  s.b.resize(6, false);
+  // --- the QP in the rates alone. The slack is what the task rows leave, delta = nu_e - J qd,
+  // so its cost and bounds become terms in qd (the same optimum as with delta as variables and
+  // [J I] x = nu_e as equality rows, in n_dof instead of n_dof + 6 variables, no equality rows):
+  //   min 1/2 qd^T (H_qd + w_delta J^T J) qd + (c_qd - w_delta J^T nu_e)^T qd
+  //   s.t.  lb <= qd <= ub,   -delta+ <= nu_e - J qd <= delta+,   obstacle rows
+  // over the DOFs not held; a held DOF's value (0, or a wrist-flip rate) moves to the right-hand
+  // sides, and a released task row (orientation in the tsmm base stage or a wrist flip) has
+  // delta = 0 and no row.
+  s.free.clear();
+  for (int i = 0; i < nd; ++i)
+    if (!held[static_cast<std::size_t>(i)]) s.free.push_back(i);
+  const int nf = static_cast<int>(s.free.size());
+  const double w_slack = h[nd];  // the six slack weights are equal (1 / max(|e|, e_min))
+  s.task.setZero(6, nd);
   for (int r = 0; r < 6; ++r) {
     // The tsmm base stage only brings the TCP to the target position (orientation comes with
     // the arm stage), and so does a wrist flip: their orientation rows are left to the slack.
-    const bool released = (lock_arm || flip) && r >= 3;
-    double br = released ? 0.0 : nu_e[r];
-    for (int k = 0; k < nd; ++k) {
-      const bool hk = held[static_cast<std::size_t>(k)];
-      if (hk && !released) br -= J(r, k) * s.fixed[k];  // a prescribed rate's share of the task
-      s.A[static_cast<unsigned>(r)][static_cast<unsigned>(k)] = hk || released ? 0.0 : J(r, k);
-    }
-    s.A[static_cast<unsigned>(r)][static_cast<unsigned>(nd + r)] = 1.0;
-    s.b[static_cast<unsigned>(r)] = br;
+    s.task_released[r] = (lock_arm || flip) && r >= 3;
+    double br = s.task_released[r] ? 0.0 : nu_e[r];
+    if (!s.task_released[r])
+      for (int k = 0; k < nd; ++k) {
+        if (held[static_cast<std::size_t>(k)])
+          br -= J(r, k) * s.fixed[k];  // a prescribed rate's share of the task
+        else
+          s.task(r, k) = J(r, k);
+      }
+    s.task_rhs[r] = br;
   }
-  int n_held = 0;
-  for (char hd : held) n_held += hd;
-  const unsigned n_in = static_cast<unsigned>(s.n_rows + 2 * (nx - n_held));
-  s.C.resize(n_in, static_cast<unsigned>(nx), true);
-  s.d.resize(n_in, false);
-  unsigned row = 0;
-  for (int i = 0; i < nx; ++i) {
-    if (held[static_cast<std::size_t>(i)]) continue;
-    s.C[row][static_cast<unsigned>(i)] = 1.0;
+  if (s.G.rows() < nd) s.G.resize(nd, nd);
+  if (s.g.size() < nd) s.g.resize(nd);
+  for (int a = 0; a < nf; ++a) {
+    const int ia = s.free[static_cast<std::size_t>(a)];
+    for (int b = 0; b <= a; ++b)
+      s.G(a, b) = s.G(b, a) = w_slack * s.task.col(ia).dot(s.task.col(s.free[static_cast<std::size_t>(b)]));
+    s.G(a, a) += h[ia];
+    s.g[a] = c[ia] - w_slack * s.task.col(ia).dot(s.task_rhs);
+  }
+  const int n_in = 2 * nf + 12 + s.n_rows;
+  if (s.C.rows() < n_in || s.C.cols() < nd) s.C.resize(std::max<Eigen::Index>(n_in, s.C.rows()), nd);
+  if (s.d.size() < n_in) s.d.resize(s.C.rows());
+  s.C.topLeftCorner(n_in, nf).setZero();
+  int row = 0;
+  for (int a = 0; a < nf; ++a) {  // velocity bounds and dampers
+    const int i = s.free[static_cast<std::size_t>(a)];
+    s.C(row, a) = 1.0;
     s.d[row++] = ub[i];
-    s.C[row][static_cast<unsigned>(i)] = -1.0;
+    s.C(row, a) = -1.0;
     s.d[row++] = -lb[i];
   }
-  for (int r = 0; r < s.n_rows; ++r) {
-    double dr = s.row_b[static_cast<std::size_t>(r)];
-    for (int k = 0; k < nx; ++k) {
-      const bool hk = held[static_cast<std::size_t>(k)];
-      if (hk) dr -= s.row_a(k, r) * s.fixed[k];
-      s.C[row][static_cast<unsigned>(k)] = hk ? 0.0 : s.row_a(k, r);
+  for (int r = 0; r < 6; ++r) {  // slack bounds: |nu_e - J qd| <= delta+
+    if (s.task_released[r]) continue;
+    for (int a = 0; a < nf; ++a) {
+      s.C(row, a) = s.task(r, s.free[static_cast<std::size_t>(a)]);
+      s.C(row + 1, a) = -s.C(row, a);
     }
+    s.d[row++] = params_.slack_bound + s.task_rhs[r];
+    s.d[row++] = params_.slack_bound - s.task_rhs[r];
+  }
+  for (int r = 0; r < s.n_rows; ++r) {  // obstacle dampers
+    double dr = s.row_b[static_cast<std::size_t>(r)];
+    for (int k = 0; k < nd; ++k)
+      if (held[static_cast<std::size_t>(k)]) dr -= s.row_a(k, r) * s.fixed[k];
+    for (int a = 0; a < nf; ++a) s.C(row, a) = s.row_a(s.free[static_cast<std::size_t>(a)], r);
     s.d[row++] = dr;
   }
-  if (n_in != s.last_rows) {  // warm start only while the constraint set keeps its shape
-    s.qp.resetActiveSet();
-    s.last_rows = n_in;
-  }
-  if (s.x.getRows() != static_cast<unsigned>(nx)) s.x.resize(static_cast<unsigned>(nx), true);
 
   QpSolveResult solved = QpSolveResult::Infeasible;
   try {
-    solved = s.qp.solveQP(s.Q, s.r, s.A, s.b, s.C, s.d, s.x, 1e-6, params_.max_qp_iterations);
-  } catch (const vpException& ex) {
-    s.qp.resetActiveSet();
+    solved = s.qp.solve(s.G.topLeftCorner(nf, nf), s.g.head(nf), s.no_rows.leftCols(nf), s.no_rhs,
+                        s.C.topLeftCorner(row, nf), s.d.head(row), &s.x_free, params_.max_qp_iterations);
+  } catch (const std::invalid_argument& ex) {  // a cost that is not positive definite (not finite)
     out.solve_time_us = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count();
-    return fail(out, std::string("vpQuadProg: ") + ex.what());
+    return fail(out, std::string("QP: ") + ex.what());
   }
   out.solve_time_us = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count();
-  if (solved == QpSolveResult::IterationLimit) {
-    // vpQuadProg's active set cycles on this (degenerate) problem: it would never return.
-    s.qp.resetActiveSet();
+  out.qp_iterations = s.qp.iterations();
+  if (solved == QpSolveResult::IterationLimit)
     return fail(out, "QP iteration limit (" + std::to_string(params_.max_qp_iterations) +
                          " active-set iterations, degenerate constraints)");
-  }
-  if (solved != QpSolveResult::Solved) {
-    s.qp.resetActiveSet();
-    return fail(out, "QP infeasible");
-  }
-  Eigen::VectorXd& x = s.x_eigen;
+  if (solved != QpSolveResult::Solved) return fail(out, "QP infeasible");
+  if (!s.x_free.allFinite()) return fail(out, "QP solution is not finite");
+  Eigen::VectorXd& x = s.x_eigen;  // [qd; delta]
   x.resize(nx);
-  for (int i = 0; i < nx; ++i) x[i] = s.x[static_cast<unsigned>(i)];
-  if (!x.allFinite()) {
-    s.qp.resetActiveSet();
-    return fail(out, "QP solution is not finite");
-  }
+  for (int i = 0; i < nd; ++i) x[i] = s.fixed[i];
+  for (int a = 0; a < nf; ++a) x[s.free[static_cast<std::size_t>(a)]] = s.x_free[a];
+  x.tail<6>() = s.task_rhs - s.task * x.head(nd);  // held columns of `task` are 0
   // The solver meets the bounds to its tolerance; clamp so limits are never exceeded.
   const double tol = 1e-4;
-  bool violates = false;  // held variables are not in the problem (their value is set below)
+  bool violates = false;  // held variables are not in the problem (their value is set above)
   for (int i = 0; i < nx; ++i)
     violates = violates || (!held[static_cast<std::size_t>(i)] && (x[i] - ub[i] > tol || lb[i] - x[i] > tol));
-  if (violates) {
-    s.qp.resetActiveSet();
-    return fail(out, "QP solution violates the velocity bounds");
-  }
-  x = x.cwiseMax(lb).cwiseMin(ub);
+  if (violates) return fail(out, "QP solution violates the velocity bounds");
   for (int i = 0; i < nx; ++i)
-    if (held[static_cast<std::size_t>(i)]) x[i] = s.fixed[i];
+    if (!held[static_cast<std::size_t>(i)]) x[i] = std::clamp(x[i], lb[i], ub[i]);
   out.velocity = x.head(nd);
   s.last_arm_rates = out.velocity.segment(nb, na);
   out.slack = x.tail<6>();
