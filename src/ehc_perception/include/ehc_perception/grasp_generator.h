@@ -91,6 +91,10 @@ struct GraspGeneratorConfig {
   /// Antipodal quality given to single-contact hypotheses (closing axis = the seed's normal,
   /// far side unseen, as in one-view clouds); 0 disables them.
   double single_contact_weight = 0.7;
+  /// Antipodal quality given to footprint hypotheses (object on a support: closing axes
+  /// parallel to it along the footprint's least-area rectangle, width = the object's extent
+  /// across them); 0 disables them.
+  double footprint_weight = 1.0;
   double nms_distance = 0.01;         ///< m, grasps closer than this and ...
   double nms_angle_deg = 20.0;        ///< ... this rotation are duplicates
   int top_k = 10;                     ///< grasps returned per object

@@ -124,8 +124,17 @@ class GripperCheck {
     pr->use_extent = false;
     pr->too_wide = false;
     if (object) {
+      // The object rests on the support: the unseen volume below each seen point, down to the
+      // support, may be object too (single views miss the lower far side). Its extent along y
+      // is that of the points and of their projections onto the support.
       ext_.clear();
-      for (const auto& p : *object) ext_.push_back(y.dot(p.getVector3fMap().cast<double>() - c0));
+      const double yn = has_plane_ ? y.dot(plane_.head<3>()) : 0.0;
+      for (const auto& pf : *object) {
+        const Eigen::Vector3d p = pf.getVector3fMap().cast<double>();
+        const double e = y.dot(p - c0);
+        ext_.push_back(e);
+        if (has_plane_ && std::abs(yn) > 1e-9) ext_.push_back(e - (plane_.head<3>().dot(p) + plane_[3]) * yn);
+      }
       const std::size_t k = static_cast<std::size_t>(cfg_.max_collision_points);
       if (ext_.size() > 2 * k + 1) {
         std::nth_element(ext_.begin(), ext_.begin() + static_cast<long>(k), ext_.end());
@@ -248,6 +257,61 @@ class GripperCheck {
 
 };
 
+/// Lowest and highest of `v` after dropping the k most extreme values on each side (noise).
+std::pair<double, double> trimmedRange(std::vector<double>& v, std::size_t k) {
+  if (v.empty()) return {0.0, 0.0};
+  k = std::min(k, (v.size() - 1) / 2);
+  std::nth_element(v.begin(), v.begin() + static_cast<long>(k), v.end());
+  const double lo = v[k];
+  std::nth_element(v.begin(), v.end() - 1 - static_cast<long>(k), v.end());
+  return {lo, v[v.size() - 1 - k]};
+}
+
+/// Footprint of an object resting on a support plane: its points projected onto the plane, and
+/// the rectangle of least area around them (trimmed extents, orientations in 0.5 deg steps).
+/// For a convex object the extreme points along an axis parallel to the support carry that
+/// axis as their surface normal, so each rectangle axis is an antipodal closing axis whose
+/// width is the rectangle side, even where one of the two contacts is not seen.
+struct Footprint {
+  Eigen::Vector3d axis[2];   ///< unit axes in the plane (normals of the rectangle's sides)
+  double width[2] = {0, 0};  ///< m, trimmed extents along them
+  Eigen::Vector3d centre;    ///< rectangle centre at the height of `ref` above the plane
+};
+
+Footprint supportFootprint(const Cloud& cloud, const Eigen::Vector4d& plane, std::size_t k,
+                           const Eigen::Vector3d& ref) {
+  const Eigen::Vector3d n = plane.head<3>();
+  const Eigen::Vector3d e1 = n.unitOrthogonal(), e2 = n.cross(e1);
+  std::vector<Eigen::Vector2d> q;
+  q.reserve(cloud.size());
+  for (const auto& p : cloud) {
+    const Eigen::Vector3d v = p.getVector3fMap().cast<double>();
+    q.emplace_back(e1.dot(v), e2.dot(v));
+  }
+  Footprint f;
+  double best_area = std::numeric_limits<double>::max();
+  std::vector<double> a(q.size()), b(q.size());
+  for (int step = 0; step < 180; ++step) {
+    const double th = step * 0.5 * kDeg;
+    const Eigen::Vector2d d1(std::cos(th), std::sin(th)), d2(-std::sin(th), std::cos(th));
+    for (std::size_t i = 0; i < q.size(); ++i) {
+      a[i] = d1.dot(q[i]);
+      b[i] = d2.dot(q[i]);
+    }
+    const auto ra = trimmedRange(a, k), rb = trimmedRange(b, k);
+    const double area = (ra.second - ra.first) * (rb.second - rb.first);
+    if (area >= best_area) continue;
+    best_area = area;
+    f.axis[0] = d1.x() * e1 + d1.y() * e2;
+    f.axis[1] = d2.x() * e1 + d2.y() * e2;
+    f.width[0] = ra.second - ra.first;
+    f.width[1] = rb.second - rb.first;
+    f.centre = ref + f.axis[0] * (0.5 * (ra.first + ra.second) - f.axis[0].dot(ref)) +
+               f.axis[1] * (0.5 * (rb.first + rb.second) - f.axis[1].dot(ref));
+  }
+  return f;
+}
+
 std::string num(double v) {
   std::ostringstream os;
   os << v;
@@ -313,6 +377,7 @@ void GraspGeneratorConfig::validate() const {
   }
   range("max_evaluations", max_evaluations, 1, 1e7);
   range("single_contact_weight", single_contact_weight, 0.0, 1.0);
+  range("footprint_weight", footprint_weight, 0.0, 1.0);
   range("nms_distance", nms_distance, 0.0, 1.0);
   range("nms_angle_deg", nms_angle_deg, 0.0, 180.0);
   range("top_k", top_k, 1, 10000);
@@ -377,6 +442,7 @@ GraspGeneratorConfig loadGraspGeneratorConfig(const ehc_control::ConfigNode& n) 
   c.depth_margin = n.get("depth_margin", c.depth_margin);
   c.max_evaluations = n.get("max_evaluations", c.max_evaluations);
   c.single_contact_weight = n.get("single_contact_weight", c.single_contact_weight);
+  c.footprint_weight = n.get("footprint_weight", c.footprint_weight);
   c.nms_distance = n.get("nms_distance", c.nms_distance);
   c.nms_angle_deg = n.get("nms_angle_deg", c.nms_angle_deg);
   c.top_k = n.get("top_k", c.top_k);
@@ -559,6 +625,30 @@ GraspResult GraspGenerator::generate(const PointList& object, const Eigen::Vecto
                       cfg.single_contact_weight, true});
     }
   }
+  // Footprint hypotheses (object on a support): close along the axes of the footprint's
+  // least-area rectangle, parallel to the support, width = the object's extent (see
+  // supportFootprint). They find the grasp across a lying cylinder, whose single-view cloud
+  // shows its sides only at grazing angles (no antipodal pair there, normals tilted up).
+  Footprint footprint;
+  const bool use_footprint = has_plane && cfg.footprint_weight > 0.0;
+  if (use_footprint) {
+    footprint = supportFootprint(*cloud, plane, static_cast<std::size_t>(cfg.max_collision_points),
+                                 centroid);
+    for (int a = 0; a < 2; ++a)
+      hyps.push_back({footprint.axis[a], footprint.centre, {}, {}, cfg.footprint_weight, true});
+  }
+  // The margin rule's "too wide" reason: the footprint's narrowest side needs more than the
+  // opening (only used when no grasp is found).
+  auto tooWide = [&]() -> std::string {
+    if (!use_footprint) return "";
+    const double narrowest = std::min(footprint.width[0], footprint.width[1]);
+    if (narrowest + 2.0 * g.clearance <= g.max_width) return "";
+    return "too wide: the object measures " + num(narrowest) +
+           " m across its narrowest axis parallel to the support; the gripper opens " +
+           num(g.max_width) + " m and needs " + num(g.clearance) +
+           " m clearance each side (objects up to " + num(g.max_width - 2.0 * g.clearance) +
+           " m)";
+  };
   // Every (hypothesis, approach) with an optimistic score (before the collision checks,
   // which are the expensive part): candidates are checked best first until enough pass.
   struct Pending {
@@ -618,6 +708,8 @@ GraspResult GraspGenerator::generate(const PointList& object, const Eigen::Vecto
     cands.push_back(cd);
   }
   if (!any_pair && cands.empty()) {
+    res.reason = tooWide();
+    if (!res.reason.empty()) return res;
     res.reason = "no antipodal contact pair within the gripper opening (" +
                  std::to_string(g.max_width) + " m, friction cone " +
                  std::to_string(cfg.friction_cone_deg) + " deg)";
@@ -742,7 +834,8 @@ GraspResult GraspGenerator::generate(const PointList& object, const Eigen::Vecto
     gr.pca_weight = cd.wp;
     res.grasps.push_back(gr);
   }
-  if (res.grasps.empty())
+  if (res.grasps.empty()) res.reason = tooWide();
+  if (res.grasps.empty() && res.reason.empty())
     res.reason = "every grasp candidate collides with the cloud or the support, or needs more "
                  "than the " + std::to_string(g.max_width) + " m opening";
   return res;
