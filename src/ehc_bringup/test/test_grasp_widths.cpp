@@ -42,6 +42,10 @@ constexpr double kTableTop = 0.70;   // single_object.yaml's table
 constexpr double kLength = 0.12;     // height (standing) or length (lying)
 constexpr int kTagId = 2;            // tag36h11 id 2: 3 cm in the demo's detector (fits every face)
 constexpr double kTagSize = 0.03;
+/// The robot starts 0.9 m from the object (Exp-3: 1.5 m): the 3 cm tag that fits every
+/// object's face is not detected from 1.5 m (~12 px), and from 1.1 m the floor is still the
+/// largest plane of the first clouds (the table top and the object are then one cluster).
+constexpr double kRobotStartX = 0.6;
 
 GraspExperimentParams exp3Params() {
   GraspExperimentParams p;
@@ -64,30 +68,16 @@ GraspPipelineConfig widthConfig(Shape shape, double width, unsigned seed) {
   o.tag.id = kTagId;
   o.tag.size = kTagSize;
   o.rpy.setZero();
-  double tag_depth = 0.5 * width;  // the object's centre behind the tag
-  switch (shape) {
-    case Shape::Box:
-      o.shape = ehc_sim::ShapeType::Box;
-      o.size = Eigen::Vector3d(width, width, kLength);
-      o.position.z() = kTableTop + 0.5 * kLength;
-      o.tag.face = ehc_sim::Face::NegX;
-      break;
-    case Shape::StandingCylinder:
-      o.shape = ehc_sim::ShapeType::Cylinder;
-      o.size = Eigen::Vector3d(width, kLength, 0.0);
-      o.position.z() = kTableTop + 0.5 * kLength;
-      o.tag.face = ehc_sim::Face::NegX;
-      break;
-    case Shape::LyingCylinder:
-      // Axis along world x (towards the robot), tag on the cap facing the robot, upright.
-      o.shape = ehc_sim::ShapeType::Cylinder;
-      o.size = Eigen::Vector3d(width, kLength, 0.0);
-      o.rpy = Eigen::Vector3d(0.0, -0.5 * M_PI, 0.0);
-      o.position.z() = kTableTop + 0.5 * width;
-      o.tag.face = ehc_sim::Face::PosZ;
-      tag_depth = 0.5 * kLength;
-      break;
-  }
+  const bool box = shape == Shape::Box, lying = shape == Shape::LyingCylinder;
+  o.shape = box ? ehc_sim::ShapeType::Box : ehc_sim::ShapeType::Cylinder;
+  o.size = box ? Eigen::Vector3d(width, width, kLength) : Eigen::Vector3d(width, kLength, 0.0);
+  o.position.z() = kTableTop + 0.5 * (lying ? width : kLength);
+  // Upright: tag on the side facing the robot. Lying: axis along world x (towards the robot),
+  // tag upright on the cap facing the robot.
+  if (lying) o.rpy = Eigen::Vector3d(0.0, -0.5 * M_PI, 0.0);
+  o.tag.face = lying ? ehc_sim::Face::PosZ : ehc_sim::Face::NegX;
+  const double tag_depth = 0.5 * (lying ? kLength : width);  // the object's centre behind the tag
+  c.scene.robot_start.x() = kRobotStartX;
   c.scene.validate();
   c.tag_targets.at(0).tag_id = kTagId;
   c.tag_targets.at(0).offset_xyz = Eigen::Vector3d(0.0, 0.0, -tag_depth);
@@ -181,7 +171,7 @@ PerceptionOutcome perceive(Shape shape, double width) {
       out.with_grasps += !res.grasps.empty();
       out.too_wide += res.reason.find("too wide") != std::string::npos;
       if (out.first_reason.empty() && res.grasps.empty()) out.first_reason = res.reason;
-      std::printf("%s %.3f view(%.2f,%.0f,%.0f) seed %u: %zu grasps, spans %d, width max %.4f; %s\n",
+      std::printf("%s %.3f m, view (%.2f m, %.0f deg up, %.0f deg), seed %u: %zu grasps, spanning %d, widest %.4f m; %s\n",
                   toString(shape).c_str(), width, v.distance, v.elevation_deg, v.azimuth_deg, seed,
                   res.grasps.size(), spans, best_w, res.reason.c_str());
     }
@@ -191,43 +181,89 @@ PerceptionOutcome perceive(Shape shape, double width) {
 
 }  // namespace
 
-// Spanning grasps per (shape, width) over 3 views x 2 noise seeds. Measured on this branch
-// (before the footprint hypotheses the lying cylinder had 0/6 at every width: its sides are
-// seen only at grazing angles, so there is no antipodal pair and the seeds' normals tilt up):
-//   box 60/64/66: 6/6, 68: 0/6 (its measured width 68.0-68.3 mm + 2 x 1 mm > 70 mm);
-//   standing cylinder 60/64/66: 6/6, 68: 4/6;  lying cylinder 60: 5/6, 64/66/68: 3/6.
+namespace {
+/// Runs the Exp-3 downward grasp of `shape` `width` through the in-process pipeline (Bullet);
+/// true if the sequencer reports success from a generator candidate and the object rose.
+bool graspAndLift(Shape shape, double width, unsigned seed, std::string* what) {
+  const GraspPipelineConfig cfg = widthConfig(shape, width, seed);
+  GraspPipeline pipe(cfg, seed);
+  const double z0 = pipe.world().objectPose(0).translation().z();
+  double z_max = z0;
+  const double t_end = pipe.time() + 60.0;
+  while (!pipe.done() && pipe.time() < t_end) {
+    pipe.step();
+    z_max = std::max(z_max, pipe.world().objectPose(0).translation().z());
+  }
+  const auto& results = pipe.sequencer().results();
+  if (results.empty()) {
+    *what = "no result";
+    return false;
+  }
+  const GraspResult& r = results[0];
+  *what = graspResultLine(r) + "; used candidate " + std::to_string(r.used_candidate) + ", rose " +
+          std::to_string(z_max - z0) + " m, contact steps " + std::to_string(pipe.counters().collision_steps);
+  return r.success && r.used_candidate && z_max - z0 > 0.08;
+}
+}  // namespace
+
+// Per (shape, width): clouds (of 6) with a grasp whose fingers span the object, as measured
+// on this branch (deterministic: fixed views and noise seeds). Before the footprint hypotheses
+// the lying cylinder had 0/6 at every width (its sides are seen only at grazing angles: no
+// antipodal pair, the seeds' normals tilted up), and the simulator's cylinders were 4-5 mm
+// short in the depth cloud (Bullet's GJK ray cast; SimWorld::castRay intersects them exactly
+// now).
 struct WidthCase {
   Shape shape;
   double width;
   int min_spanning;  ///< of 6 clouds
+  bool lift = true;  ///< executed in Bullet
 };
+
+std::string caseName(const ::testing::TestParamInfo<WidthCase>& i) {
+  return toString(i.param.shape) + "_" + std::to_string(static_cast<int>(std::lround(i.param.width * 1000))) + "mm";
+}
+
+const WidthCase kWithinOpening[] = {
+    {Shape::Box, 0.060, 6},          {Shape::Box, 0.064, 6},          {Shape::Box, 0.066, 6},
+    {Shape::Box, 0.068, 6},          {Shape::StandingCylinder, 0.060, 6}, {Shape::StandingCylinder, 0.064, 5},
+    {Shape::StandingCylinder, 0.066, 6}, {Shape::StandingCylinder, 0.068, 6}, {Shape::LyingCylinder, 0.060, 6, false},
+    {Shape::LyingCylinder, 0.064, 6}, {Shape::LyingCylinder, 0.066, 6}, {Shape::LyingCylinder, 0.068, 4}};
 
 class NearLimitWidths : public ::testing::TestWithParam<WidthCase> {};
 
-TEST_P(NearLimitWidths, SingleViewCloudsGiveGraspsWhoseFingersSpanTheObject) {
+TEST_P(NearLimitWidths, SingleViewCloudsGiveCollisionFreeGraspsWhoseFingersSpanTheObject) {
   const WidthCase c = GetParam();
   const PerceptionOutcome o = perceive(c.shape, c.width);
   RecordProperty("spanning", std::to_string(o.spanning) + "/" + std::to_string(o.clouds));
   EXPECT_GE(o.spanning, c.min_spanning) << toString(c.shape) << " " << c.width << " m; " << o.first_reason;
+  EXPECT_EQ(o.too_wide, 0) << o.first_reason;
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    Issue18, NearLimitWidths,
-    ::testing::Values(WidthCase{Shape::Box, 0.060, 6}, WidthCase{Shape::Box, 0.064, 6}, WidthCase{Shape::Box, 0.066, 6},
-                      WidthCase{Shape::StandingCylinder, 0.060, 6}, WidthCase{Shape::StandingCylinder, 0.064, 6},
-                      WidthCase{Shape::StandingCylinder, 0.066, 6}, WidthCase{Shape::StandingCylinder, 0.068, 4},
-                      WidthCase{Shape::LyingCylinder, 0.060, 5}, WidthCase{Shape::LyingCylinder, 0.064, 3},
-                      WidthCase{Shape::LyingCylinder, 0.066, 3}, WidthCase{Shape::LyingCylinder, 0.068, 3}),
-    [](const ::testing::TestParamInfo<WidthCase>& i) {
-      return toString(i.param.shape) + "_" + std::to_string(static_cast<int>(std::lround(i.param.width * 1000))) + "mm";
-    });
+TEST_P(NearLimitWidths, TheGeneratorsGraspLiftsTheObjectInBullet) {
+  const WidthCase c = GetParam();
+  std::string what;
+  if (!c.lift) GTEST_SKIP() << "the 3 cm tag on the 60 mm cap is not detected from the start pose (tag, not width)";
+  const bool lifted = graspAndLift(c.shape, c.width, 3, &what);
+  std::printf("%s %.3f m: %s\n", toString(c.shape).c_str(), c.width, what.c_str());
+  EXPECT_TRUE(lifted) << what;
+}
 
-TEST(GraspWidths, HeldBack72MillimetreBoxIsTooWideWithTheMeasuredWidthAndTheOpening) {
+INSTANTIATE_TEST_SUITE_P(Issue18, NearLimitWidths, ::testing::ValuesIn(kWithinOpening), caseName);
+
+class HeldBackWidth : public ::testing::TestWithParam<WidthCase> {};
+
+TEST_P(HeldBackWidth, IsTooWideWithTheMeasuredWidthAndTheOpeningInTheReason) {
   // 72 mm (held back): no grasp from any view, and the reason names the measured width and the
   // opening (the margin rule: measured width + 2 x clearance <= max_width).
-  const PerceptionOutcome o = perceive(Shape::Box, 0.072);
-  EXPECT_EQ(o.with_grasps, 0);
+  const WidthCase c = GetParam();
+  const PerceptionOutcome o = perceive(c.shape, c.width);
+  EXPECT_EQ(o.with_grasps, 0) << o.first_reason;
   EXPECT_EQ(o.too_wide, o.clouds) << o.first_reason;
   EXPECT_NE(o.first_reason.find("too wide: the object measures 0.07"), std::string::npos) << o.first_reason;
   EXPECT_NE(o.first_reason.find("the gripper opens 0.07 m"), std::string::npos) << o.first_reason;
 }
+
+INSTANTIATE_TEST_SUITE_P(Issue18, HeldBackWidth,
+                         ::testing::Values(WidthCase{Shape::Box, 0.072, 0}, WidthCase{Shape::StandingCylinder, 0.072, 0},
+                                           WidthCase{Shape::LyingCylinder, 0.072, 0}),
+                         caseName);
