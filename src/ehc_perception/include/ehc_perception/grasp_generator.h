@@ -26,6 +26,30 @@
 // (max_depth_shift reached) there is no back-off. Refined grasps are rescored, and as
 // several candidates can converge onto the same deep pose, suppressed again.
 //
+// Single-view clouds of objects on a support (issue 18 item 3). Besides the antipodal pairs and
+// the single-contact hypotheses, the closing axes parallel to the support along the object's
+// footprint (its points projected onto the support; least-area rectangle) are hypotheses of
+// quality footprint_weight: for a convex object the extreme points along such an axis carry it
+// as their normal, so they are an antipodal pair even where one contact is not seen. This is
+// what finds the grasp across a lying cylinder, whose sides a single view shows only at grazing
+// angles (no antipodal pair there, the seeds' normals tilted up). The object's extent across a
+// closing axis counts the unseen volume below the seen points down to the support, and round
+// sections are completed by a fitted circle (round_fit_tolerance): a cylinder lying across the
+// axis (circle resting on the support) or standing (circular footprint of its mantle); an
+// upright round object's circle bounds every hypothesis closing parallel to the support.
+//
+// Margin rule (gripper.clearance): a grasp needs  measured width + 2 x clearance <= max_width,
+// the measured width being the object's extent across the closing axis as above (trimmed: the
+// max_collision_points most extreme points per side are noise; completed by the circle where
+// round) or, for the points between the fingers, their trimmed extent. With the 70 mm gripper
+// and clearance 0.5 mm, objects measured up to 69 mm are grasped. Measured on the simulator's
+// single views (test_grasp_widths, 3 views x 2 noise seeds): 68 mm objects measure 68.0-68.9 mm,
+// 72 mm ones 70.4-72.9 mm (boxes: sampling shortens the extent by up to one ray spacing), so
+// objects up to 68 mm pass and 72 mm fail with 1.4 mm to spare. When no grasp is found and the
+// footprint's narrowest completed width breaks the rule, the reason is "too wide: the object
+// measures W m across its narrowest axis parallel to the support; the gripper opens 0.07 m and
+// needs C m clearance each side (objects up to X m)".
+//
 // Grasp frame: origin between the fingertips at the grasp centre, z = approach direction
 // (into the object), y = finger closing direction, x = y cross z.
 // All geometry is in the cloud's frame; `up` (config) is the gravity-up direction there.
@@ -54,7 +78,9 @@ struct GripperGeometry {
   double palm_height = 0.080;       ///< m, gripper body behind the fingers (along approach)
   double palm_width = 0.110;        ///< m, along the closing axis
   double palm_breadth = 0.060;      ///< m, along x
-  double clearance = 0.002;         ///< m, free space each side of the object when open
+  /// m, margin each side of the measured width (the margin rule: measured width + 2 x
+  /// clearance <= max_width; see the header comment)
+  double clearance = 0.0005;
 };
 
 struct GraspGeneratorConfig {
@@ -91,6 +117,14 @@ struct GraspGeneratorConfig {
   /// Antipodal quality given to single-contact hypotheses (closing axis = the seed's normal,
   /// far side unseen, as in one-view clouds); 0 disables them.
   double single_contact_weight = 0.7;
+  /// Antipodal quality given to footprint hypotheses (object on a support: closing axes
+  /// parallel to it along the footprint's least-area rectangle, width = the object's extent
+  /// across them); 0 disables them.
+  double footprint_weight = 1.0;
+  /// m, RMS distance within which a footprint axis's cross-section counts as round (a circle
+  /// tangent to the support, e.g. a lying cylinder): its circle then gives the width across
+  /// that axis where the single view sees the sides only at grazing angles.
+  double round_fit_tolerance = 0.002;
   double nms_distance = 0.01;         ///< m, grasps closer than this and ...
   double nms_angle_deg = 20.0;        ///< ... this rotation are duplicates
   int top_k = 10;                     ///< grasps returned per object

@@ -86,11 +86,29 @@ double alignment(const std::vector<Eigen::MatrixXd>& subspaces, const Eigen::Vec
   return std::min(best, 1.0);
 }
 
+/// Lowest and highest of `v` after dropping the k most extreme values on each side (noise).
+std::pair<double, double> trimmedRange(std::vector<double>& v, std::size_t k) {
+  if (v.empty()) return {0.0, 0.0};
+  k = std::min(k, (v.size() - 1) / 2);
+  std::nth_element(v.begin(), v.begin() + static_cast<long>(k), v.end());
+  const double lo = v[k];
+  std::nth_element(v.begin(), v.end() - 1 - static_cast<long>(k), v.end());
+  return {lo, v[v.size() - 1 - k]};
+}
+
+/// Two points on the object's surface that bound it across a closing axis where the cloud does
+/// not show it (a round cross-section completed by its fitted circle, see roundCrossSection).
+struct ExtentHint {
+  bool valid = false;
+  Eigen::Vector3d a = Eigen::Vector3d::Zero(), b = Eigen::Vector3d::Zero();
+};
+
 struct Candidate {
   Eigen::Matrix3d R;
   Eigen::Vector3d c;
   double width = 0, antipodal = 0, wc = 0, wp = 0, score = 0;
   bool single = false;  ///< single-contact hypothesis (width from the object's extent)
+  ExtentHint hint;      ///< completes the object's extent (footprint hypotheses)
 };
 
 /// Evaluates the gripper at (R, c0): centres it along the closing axis on the points between
@@ -105,7 +123,8 @@ class GripperCheck {
   /// A closing axis y at c0 with the neighbourhood expressed in its (y, u, v) frame (u, v
   /// span the approach plane, v = y x u).
   struct Prepared {
-    Eigen::Vector3d c0, y, u, v;
+    Eigen::Vector3d c0 = Eigen::Vector3d::Zero(), y = Eigen::Vector3d::Zero(), u = Eigen::Vector3d::Zero(),
+                    v = Eigen::Vector3d::Zero();
     std::vector<Eigen::Vector3d> local;  ///< (y, u, v) coordinates of reachable points
     bool use_extent = false;             ///< bound the object by its extent along y
     bool too_wide = false;               ///< object extent along y exceeds the opening
@@ -116,26 +135,46 @@ class GripperCheck {
   /// points; its extent along y then bounds the part of the object between the fingers
   /// (used when the far contact is not seen).
   void prepare(const Eigen::Vector3d& c0, const Eigen::Vector3d& y, const Eigen::Vector3d& u,
-               const std::vector<Eigen::Vector3d>& nbrs, const Cloud* object, Prepared* pr) {
+               const std::vector<Eigen::Vector3d>& nbrs, const Cloud* object, const ExtentHint& hint,
+               Prepared* pr) {
     pr->c0 = c0;
     pr->y = y;
     pr->u = u;
     pr->v = y.cross(u);
     pr->use_extent = false;
     pr->too_wide = false;
+    // The object rests on the support: the unseen volume below each seen point, down to the
+    // support, may be object too (single views miss the lower far side). Its extent along y
+    // is that of the points and of their projections onto the support (k most extreme per
+    // side dropped as noise), widened to the hint's completion of a round section.
+    ext_.clear();
     if (object) {
-      ext_.clear();
-      for (const auto& p : *object) ext_.push_back(y.dot(p.getVector3fMap().cast<double>() - c0));
-      const std::size_t k = static_cast<std::size_t>(cfg_.max_collision_points);
-      if (ext_.size() > 2 * k + 1) {
-        std::nth_element(ext_.begin(), ext_.begin() + static_cast<long>(k), ext_.end());
-        pr->ext_min = ext_[k];
-        std::nth_element(ext_.begin(), ext_.end() - 1 - static_cast<long>(k), ext_.end());
-        pr->ext_max = ext_[ext_.size() - 1 - k];
-        pr->use_extent = true;
-        pr->too_wide = pr->ext_max - pr->ext_min + 2.0 * g_.clearance > g_.max_width;
-        if (pr->too_wide) return;
+      const double yn = has_plane_ ? y.dot(plane_.head<3>()) : 0.0;
+      for (const auto& pf : *object) {
+        const Eigen::Vector3d p = pf.getVector3fMap().cast<double>();
+        const double e = y.dot(p - c0);
+        ext_.push_back(e);
+        if (has_plane_ && std::abs(yn) > 1e-9) ext_.push_back(e - (plane_.head<3>().dot(p) + plane_[3]) * yn);
       }
+    }
+    const std::size_t k = static_cast<std::size_t>(cfg_.max_collision_points);
+    bool bounded = false;
+    if (ext_.size() > 2 * k + 1) {
+      const auto range = trimmedRange(ext_, k);
+      pr->ext_min = range.first;
+      pr->ext_max = range.second;
+      bounded = true;
+    }
+    if (hint.valid) {
+      const double ha = y.dot(hint.a - c0), hb = y.dot(hint.b - c0);
+      pr->ext_min = bounded ? std::min(pr->ext_min, std::min(ha, hb)) : std::min(ha, hb);
+      pr->ext_max = bounded ? std::max(pr->ext_max, std::max(ha, hb)) : std::max(ha, hb);
+      bounded = true;
+    }
+    if (bounded) {
+      pr->use_extent = true;
+      pr->too_wide = pr->ext_max - pr->ext_min + 2.0 * g_.clearance > g_.max_width;
+      if (pr->too_wide) return;
     }
     const double W = g_.max_width, t = g_.finger_thickness;
     const double ymax = std::max(W + 2 * t, 0.5 * g_.palm_width + 0.5 * W);
@@ -248,6 +287,146 @@ class GripperCheck {
 
 };
 
+/// Footprint of an object resting on a support plane: its points projected onto the plane, and
+/// the rectangle of least area around them (trimmed extents, orientations in 0.5 deg steps).
+/// For a convex object the extreme points along an axis parallel to the support carry that
+/// axis as their surface normal, so each rectangle axis is an antipodal closing axis whose
+/// width is the rectangle side, even where one of the two contacts is not seen.
+struct Footprint {
+  Eigen::Vector3d axis[2];   ///< unit axes in the plane (normals of the rectangle's sides)
+  double width[2] = {0, 0};  ///< m, trimmed extents along them
+  Eigen::Vector3d centre;    ///< rectangle centre at the height of `ref` above the plane
+};
+
+Footprint supportFootprint(const Cloud& cloud, const Eigen::Vector4d& plane, std::size_t k,
+                           const Eigen::Vector3d& ref) {
+  const Eigen::Vector3d n = plane.head<3>();
+  const Eigen::Vector3d e1 = n.unitOrthogonal(), e2 = n.cross(e1);
+  std::vector<Eigen::Vector2d> q;
+  q.reserve(cloud.size());
+  for (const auto& p : cloud) {
+    const Eigen::Vector3d v = p.getVector3fMap().cast<double>();
+    q.emplace_back(e1.dot(v), e2.dot(v));
+  }
+  Footprint f;
+  double best_area = std::numeric_limits<double>::max();
+  std::vector<double> a(q.size()), b(q.size());
+  for (int step = 0; step < 180; ++step) {
+    const double th = step * 0.5 * kDeg;
+    const Eigen::Vector2d d1(std::cos(th), std::sin(th)), d2(-std::sin(th), std::cos(th));
+    for (std::size_t i = 0; i < q.size(); ++i) {
+      a[i] = d1.dot(q[i]);
+      b[i] = d2.dot(q[i]);
+    }
+    const auto ra = trimmedRange(a, k), rb = trimmedRange(b, k);
+    const double area = (ra.second - ra.first) * (rb.second - rb.first);
+    if (area >= best_area) continue;
+    best_area = area;
+    f.axis[0] = d1.x() * e1 + d1.y() * e2;
+    f.axis[1] = d2.x() * e1 + d2.y() * e2;
+    f.width[0] = ra.second - ra.first;
+    f.width[1] = rb.second - rb.first;
+    f.centre = ref + f.axis[0] * (0.5 * (ra.first + ra.second) - f.axis[0].dot(ref)) +
+               f.axis[1] * (0.5 * (rb.first + rb.second) - f.axis[1].dot(ref));
+  }
+  return f;
+}
+
+/// Circle through 2-D points by Gauss-Newton on the geometric distances, from centre `c` and
+/// radius `r`; with `resting`, the circle touches the line h = 0 (centre (u, r)). Points farther
+/// than 3 x tolerance are dropped after the first iterations (edges of flat faces, strays).
+/// Valid (true) if at least 2/3 of the points are kept and their RMS distance is within
+/// `tolerance`.
+bool fitCircle(const std::vector<Eigen::Vector2d>& q, bool resting, double tolerance,
+               Eigen::Vector2d* c, double* r) {
+  if (q.size() < 10 || *r <= 0.0) return false;
+  double rms = 0.0;
+  int used = 0;
+  for (int it = 0; it < 12; ++it) {
+    Eigen::Matrix3d JtJ = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d Jtd = Eigen::Vector3d::Zero();
+    double ss = 0.0;
+    used = 0;
+    for (const auto& v : q) {
+      const Eigen::Vector2d w = v - *c;
+      const double rho = w.norm();
+      if (rho < 1e-9) continue;
+      const double d = rho - *r;
+      if (it >= 3 && std::abs(d) > 3.0 * tolerance) continue;
+      const Eigen::Vector3d J = resting ? Eigen::Vector3d(-w.x() / rho, -w.y() / rho - 1.0, 0.0)
+                                        : Eigen::Vector3d(-w.x() / rho, -w.y() / rho, -1.0);
+      JtJ += J * J.transpose();
+      Jtd += J * d;
+      ss += d * d;
+      ++used;
+    }
+    if (used < 10) return false;
+    rms = std::sqrt(ss / used);
+    if (resting) JtJ(2, 2) = 1.0;  // the radius is the centre's height
+    const Eigen::Vector3d step = JtJ.ldlt().solve(-Jtd);
+    if (!step.allFinite()) return false;
+    *c += step.head<2>();
+    *r = resting ? c->y() : *r + step.z();
+    if (*r <= 0.0) return false;
+  }
+  return used >= static_cast<int>(q.size() * 2 / 3) && rms <= tolerance;
+}
+
+/// Round cross-sections, completed by their circle where the single view shows them only in
+/// part (the far side and grazing sides unseen). Lying: the section across closing axis `y`
+/// (points projected along `along`, only those whose normal is across `along`, so end caps do
+/// not fill it) is a circle resting on the support. Upright (`along` = the support normal):
+/// the footprint of the points whose normal is parallel to the support (the mantle) is a
+/// circle. Valid if the circle fits (fitCircle), the seen extent along y is at least its radius
+/// and at most its diameter (a box's section or footprint is a rectangle: no fit); then the
+/// circle's extremes along y, at the height of its centre (lying) or of `ref` (upright).
+ExtentHint roundCrossSection(const Cloud& cloud, const Normals& normals, const Eigen::Vector4d& plane,
+                             const Eigen::Vector3d& y, const Eigen::Vector3d& along,
+                             const Eigen::Vector3d& ref, double tolerance) {
+  ExtentHint hint;
+  const Eigen::Vector3d n = plane.head<3>();
+  const bool upright = std::abs(along.dot(n)) > 0.9;
+  const Eigen::Vector3d v2 = upright ? along.cross(y) : n;  // second section coordinate
+  std::vector<Eigen::Vector2d> q;
+  double lo = std::numeric_limits<double>::max(), hi = -lo;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const Eigen::Vector3d nv = normals[i].getNormalVector3fMap().cast<double>();
+    if (!nv.allFinite() || nv.norm() < 0.5 || std::abs(nv.dot(along)) > 0.7) continue;
+    const Eigen::Vector3d p = cloud[i].getVector3fMap().cast<double>();
+    q.emplace_back(y.dot(p), upright ? v2.dot(p) : n.dot(p) + plane[3]);
+    lo = std::min(lo, q.back().x());
+    hi = std::max(hi, q.back().x());
+  }
+  if (q.size() < 10) return hint;
+  // Start: the middle of the seen extent; lying: half the top's height (a round section resting
+  // on the support is as high as it is wide); upright: a circle of the seen extent's width
+  // whose seen (near) side is the arc.
+  Eigen::Vector2d c(0.5 * (lo + hi), 0.0);
+  double r = 0.5 * (hi - lo);
+  if (upright) {
+    double near_v = std::numeric_limits<double>::max(), far_v = -near_v;
+    for (const auto& v : q) {
+      near_v = std::min(near_v, v.y());
+      far_v = std::max(far_v, v.y());
+    }
+    c.y() = 0.5 * (near_v + far_v);
+  } else {
+    std::vector<double> hs;
+    for (const auto& v : q) hs.push_back(v.y());
+    const std::size_t k2 = std::min<std::size_t>(2, hs.size() - 1);
+    std::nth_element(hs.begin(), hs.end() - 1 - static_cast<long>(k2), hs.end());
+    c.y() = r = 0.5 * hs[hs.size() - 1 - k2];
+  }
+  if (!fitCircle(q, !upright, tolerance, &c, &r)) return hint;
+  if (hi - lo < r || 2.0 * r < hi - lo - 2.0 * tolerance) return hint;
+  const Eigen::Vector3d base = upright ? Eigen::Vector3d(v2 * c.y() + n * n.dot(ref))
+                                       : Eigen::Vector3d(n * (c.y() - plane[3]));
+  hint.valid = true;
+  hint.a = y * (c.x() - r) + base;
+  hint.b = y * (c.x() + r) + base;
+  return hint;
+}
+
 std::string num(double v) {
   std::ostringstream os;
   os << v;
@@ -313,6 +492,8 @@ void GraspGeneratorConfig::validate() const {
   }
   range("max_evaluations", max_evaluations, 1, 1e7);
   range("single_contact_weight", single_contact_weight, 0.0, 1.0);
+  range("footprint_weight", footprint_weight, 0.0, 1.0);
+  range("round_fit_tolerance", round_fit_tolerance, 0.0, 0.05);
   range("nms_distance", nms_distance, 0.0, 1.0);
   range("nms_angle_deg", nms_angle_deg, 0.0, 180.0);
   range("top_k", top_k, 1, 10000);
@@ -377,6 +558,8 @@ GraspGeneratorConfig loadGraspGeneratorConfig(const ehc_control::ConfigNode& n) 
   c.depth_margin = n.get("depth_margin", c.depth_margin);
   c.max_evaluations = n.get("max_evaluations", c.max_evaluations);
   c.single_contact_weight = n.get("single_contact_weight", c.single_contact_weight);
+  c.footprint_weight = n.get("footprint_weight", c.footprint_weight);
+  c.round_fit_tolerance = n.get("round_fit_tolerance", c.round_fit_tolerance);
   c.nms_distance = n.get("nms_distance", c.nms_distance);
   c.nms_angle_deg = n.get("nms_angle_deg", c.nms_angle_deg);
   c.top_k = n.get("top_k", c.top_k);
@@ -523,6 +706,7 @@ GraspResult GraspGenerator::generate(const PointList& object, const Eigen::Vecto
     Eigen::Vector3d y, c0, u, v;
     double q;
     bool single;
+    ExtentHint hint;
   };
   std::vector<Hyp> hyps;
   bool any_pair = false;
@@ -548,7 +732,7 @@ GraspResult GraspGenerator::generate(const PointList& object, const Eigen::Vecto
     if (keep > 0) any_pair = true;
     for (std::size_t k = 0; k < keep; ++k) {
       const Eigen::Vector3d pj = pt(*cloud, partners[k].second);
-      hyps.push_back({(pj - pi).normalized(), 0.5 * (pi + pj), {}, {}, partners[k].first, false});
+      hyps.push_back({(pj - pi).normalized(), 0.5 * (pi + pj), {}, {}, partners[k].first, false, {}});
     }
     if (cfg.single_contact_weight > 0.0) {
       // Renormalised in double: the float normal's unit length is only float-accurate,
@@ -556,9 +740,63 @@ GraspResult GraspGenerator::generate(const PointList& object, const Eigen::Vecto
       const Eigen::Vector3d n_out =
           (ni.dot(pi - centroid) >= 0 ? ni : Eigen::Vector3d(-ni)).normalized();
       hyps.push_back({n_out, pi - n_out * (0.5 * g.max_width - g.clearance), {}, {},
-                      cfg.single_contact_weight, true});
+                      cfg.single_contact_weight, true, {}});
     }
   }
+  // Footprint hypotheses (object on a support): close along the axes of the footprint's
+  // least-area rectangle, parallel to the support, width = the object's extent (see
+  // supportFootprint). They find the grasp across a lying cylinder, whose single-view cloud
+  // shows its sides only at grazing angles (no antipodal pair there, normals tilted up).
+  Footprint footprint;
+  const bool use_footprint = has_plane && cfg.footprint_weight > 0.0;
+  if (use_footprint) {
+    footprint = supportFootprint(*cloud, plane, static_cast<std::size_t>(cfg.max_collision_points),
+                                 centroid);
+    // An upright round object (its footprint a circle, the far side unseen): the circle gives
+    // its width across every axis parallel to the support, for every hypothesis (a closing on
+    // a chord short of the diameter would push it until the diameter is between the fingers).
+    const ExtentHint upright = roundCrossSection(*cloud, *normals, plane, footprint.axis[0], plane.head<3>(),
+                                                 centroid, cfg.round_fit_tolerance);
+    if (upright.valid) {
+      const Eigen::Vector3d c = 0.5 * (upright.a + upright.b);
+      const double r = 0.5 * (upright.b - upright.a).norm();
+      for (Hyp& h : hyps) {
+        const Eigen::Vector3d yh = h.y - h.y.dot(plane.head<3>()) * plane.head<3>();
+        if (yh.norm() < 0.5) continue;  // closing across the support: not this section
+        h.hint = {true, c - r * yh.normalized(), c + r * yh.normalized()};
+      }
+    }
+    for (int a = 0; a < 2; ++a) {
+      // A round cross-section across this axis (a cylinder lying along the other axis, seen
+      // from one side down to grazing angles) is completed by its circle likewise.
+      ExtentHint hint = roundCrossSection(*cloud, *normals, plane, footprint.axis[a], footprint.axis[1 - a],
+                                          centroid, cfg.round_fit_tolerance);
+      if (!hint.valid && upright.valid) {
+        const Eigen::Vector3d c = 0.5 * (upright.a + upright.b);
+        const double r = 0.5 * (upright.b - upright.a).norm();
+        hint = {true, c - r * footprint.axis[a], c + r * footprint.axis[a]};
+      }
+      if (hint.valid) {
+        footprint.width[a] = std::max(footprint.width[a], footprint.axis[a].dot(hint.b - hint.a));
+        // Centre the hypothesis on the completed section.
+        footprint.centre += footprint.axis[a] * (0.5 * footprint.axis[a].dot(hint.a + hint.b) -
+                                                 footprint.axis[a].dot(footprint.centre));
+      }
+      hyps.push_back({footprint.axis[a], footprint.centre, {}, {}, cfg.footprint_weight, true, hint});
+    }
+  }
+  // The margin rule's "too wide" reason: the footprint's narrowest side needs more than the
+  // opening (only used when no grasp is found).
+  auto tooWide = [&]() -> std::string {
+    if (!use_footprint) return "";
+    const double narrowest = std::min(footprint.width[0], footprint.width[1]);
+    if (narrowest + 2.0 * g.clearance <= g.max_width) return "";
+    return "too wide: the object measures " + num(narrowest) +
+           " m across its narrowest axis parallel to the support; the gripper opens " +
+           num(g.max_width) + " m and needs " + num(g.clearance) +
+           " m clearance each side (objects up to " + num(g.max_width - 2.0 * g.clearance) +
+           " m)";
+  };
   // Every (hypothesis, approach) with an optimistic score (before the collision checks,
   // which are the expensive part): candidates are checked best first until enough pass.
   struct Pending {
@@ -607,7 +845,7 @@ GraspResult GraspGenerator::generate(const PointList& object, const Eigen::Vecto
       nbrs.clear();
       for (int e : idx) nbrs.push_back(pt(*env, e));
       it = prepared.emplace(pd.hyp, GripperCheck::Prepared()).first;
-      check.prepare(hp.c0, hp.y, hp.u, nbrs, hp.single ? cloud.get() : nullptr, &it->second);
+      check.prepare(hp.c0, hp.y, hp.u, nbrs, hp.single ? cloud.get() : nullptr, hp.hint, &it->second);
     }
     const double phi = 2.0 * M_PI * pd.step / cfg.approach_steps;
     Candidate cd;
@@ -615,9 +853,12 @@ GraspResult GraspGenerator::generate(const PointList& object, const Eigen::Vecto
       continue;
     cd.antipodal = hp.q;
     cd.single = hp.single;
+    cd.hint = hp.hint;
     cands.push_back(cd);
   }
   if (!any_pair && cands.empty()) {
+    res.reason = tooWide();
+    if (!res.reason.empty()) return res;
     res.reason = "no antipodal contact pair within the gripper opening (" +
                  std::to_string(g.max_width) + " m, friction cone " +
                  std::to_string(cfg.friction_cone_deg) + " deg)";
@@ -663,7 +904,7 @@ GraspResult GraspGenerator::generate(const PointList& object, const Eigen::Vecto
   };
   auto checkAt = [&](const Candidate& cd, const Eigen::Vector3d& c0, Candidate* out) {
     GripperCheck::Prepared pr;
-    check.prepare(c0, cd.R.col(1), cd.R.col(2), nbrs, cd.single ? cloud.get() : nullptr, &pr);
+    check.prepare(c0, cd.R.col(1), cd.R.col(2), nbrs, cd.single ? cloud.get() : nullptr, cd.hint, &pr);
     *out = cd;
     return check.evaluate(pr, 1.0, 0.0, &out->R, &out->c, &out->width);
   };
@@ -742,7 +983,8 @@ GraspResult GraspGenerator::generate(const PointList& object, const Eigen::Vecto
     gr.pca_weight = cd.wp;
     res.grasps.push_back(gr);
   }
-  if (res.grasps.empty())
+  if (res.grasps.empty()) res.reason = tooWide();
+  if (res.grasps.empty() && res.reason.empty())
     res.reason = "every grasp candidate collides with the cloud or the support, or needs more "
                  "than the " + std::to_string(g.max_width) + " m opening";
   return res;
