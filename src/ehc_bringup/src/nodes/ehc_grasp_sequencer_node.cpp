@@ -39,8 +39,6 @@
 #include <fstream>
 #include <functional>
 #include <iomanip>
-#include <limits>
-#include <map>
 #include <memory>
 #include <optional>
 #include <utility>
@@ -184,10 +182,11 @@ class SequencerNode {
                                          << "' ignored: expected '" << node_.world_frame << "'");
       return;
     }
-    pending_.emplace(Key{m.header.stamp, static_cast<int>(i)}, [this, i, pose = toEigen(m.pose), t = m.header.stamp.toSec()] {
+    inbox_.add(m.header.stamp, static_cast<int>(i), [this, i, pose = toEigen(m.pose), t = m.header.stamp.toSec()] {
       if (!seq_->setObjectPose(i, t, pose))
         ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "[ehc_grasp_sequencer_node] rejected a non-finite / invalid pose on "
                                            << node_.pose_topics[i]);
+      return true;
     });
   }
   void onCandidates(const ehc_msgs::GraspCandidates& m) {
@@ -198,27 +197,15 @@ class SequencerNode {
       c[i].width = i < m.widths.size() ? m.widths[i] : std::nan("");
       c[i].score = i < m.scores.size() ? m.scores[i] : std::nan("");
     }
-    pending_.emplace(Key{m.header.stamp, kCandidates}, [this, c, t = m.header.stamp.toSec()] { seq_->setGraspCandidates(t, c); });
-  }
-  /// Takes the inputs stamped before `stamp`, oldest first.
-  void applyPendingBefore(const ros::Time& stamp) {
-    // A clock that jumped back (simulator reset): results from the old time are dropped.
-    if (!last_status_.isZero() && stamp < last_status_) pending_.clear();
-    last_status_ = stamp;
-    const auto end = pending_.lower_bound(Key{stamp, std::numeric_limits<int>::min()});
-    for (auto it = pending_.begin(); it != end; ++it) it->second();
-    pending_.erase(pending_.begin(), end);
+    inbox_.add(m.header.stamp, kCandidates, [this, c, t = m.header.stamp.toSec()] {
+      seq_->setGraspCandidates(t, c);
+      return true;
+    });
   }
   /// world -> `frame` at `stamp` (the status's: in lock-step its tf came with the state), else
   /// the latest (a real robot's tf may lag the controller's clock a little).
   std::optional<Eigen::Isometry3d> lookup(const std::string& frame, const ros::Time& stamp) {
-    if (!ack_->topic().empty()) {
-      // Lock-step: the pose of `stamp` came with the state; the tf listener's thread may lag
-      // under CPU load: wait for it on the wall clock (sim time waits for this node).
-      const ros::WallTime give_up = ros::WallTime::now() + ros::WallDuration(1.0);
-      while (!tf_.canTransform(node_.world_frame, frame, stamp) && ros::WallTime::now() < give_up && ros::ok())
-        ros::WallDuration(0.001).sleep();
-    }
+    if (!ack_->topic().empty()) ehc_msgs::waitForTransformWall(tf_, node_.world_frame, frame, stamp, 1.0);  // lock-step
     for (const ros::Time& t : {stamp, ros::Time(0)}) {
       try {
         return tf2::transformToEigen(tf_.lookupTransform(node_.world_frame, frame, t));
@@ -255,22 +242,27 @@ class SequencerNode {
       ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "[ehc_grasp_sequencer_node] invalid camera_info ignored");
   }
   void onSimStatus(const ehc_msgs::SimStatus& m) {
-    pending_.emplace(Key{m.header.stamp, kSimStatus}, [this, state = m.gripper_state, ok = m.grasp_succeeded] {
+    inbox_.add(m.header.stamp, kSimStatus, [this, state = m.gripper_state, ok = m.grasp_succeeded] {
       gripper_state_ = state;
       grasp_succeeded_ = ok;
+      return true;
     });
   }
   void onJoints(const sensor_msgs::JointState& m) {  // the trace's arm speed
     double s = 0.0;
     for (std::size_t i = 0; i < m.velocity.size() && i < m.name.size(); ++i)
       if (m.name[i].rfind("joint", 0) == 0 && std::isfinite(m.velocity[i])) s += m.velocity[i] * m.velocity[i];
-    pending_.emplace(Key{m.header.stamp, kJoints}, [this, speed = std::sqrt(s)] { arm_speed_ = speed; });
+    inbox_.add(m.header.stamp, kJoints, [this, speed = std::sqrt(s)] {
+      arm_speed_ = speed;
+      return true;
+    });
   }
   void onOdom(const nav_msgs::Odometry& m) {  // the trace's base speeds
-    pending_.emplace(Key{m.header.stamp, kOdom}, [this, v = std::hypot(m.twist.twist.linear.x, m.twist.twist.linear.y),
-                                                  w = std::abs(m.twist.twist.angular.z)] {
+    inbox_.add(m.header.stamp, kOdom, [this, v = std::hypot(m.twist.twist.linear.x, m.twist.twist.linear.y),
+                                       w = std::abs(m.twist.twist.angular.z)] {
       base_speed_ = v;
       base_turn_ = w;
+      return true;
     });
   }
 
@@ -278,7 +270,7 @@ class SequencerNode {
     // Done, or a second status for the state already handled (the controller's watchdog
     // answering a lock-step simulator that waits for a slow perception node, or a state the
     // simulator resent): acknowledged, no second update for one instant.
-    if (finished_ || (!last_status_.isZero() && m.header.stamp == last_status_)) {
+    if (finished_ || (!inbox_.last().isZero() && m.header.stamp == inbox_.last())) {
       ack_->done(m.header.stamp);  // a simulator waiting for the sequencer goes on
       return;
     }
@@ -308,7 +300,7 @@ class SequencerNode {
     in.grasp_succeeded = grasp_succeeded_;
     if (const auto tcp = lookup(node_.tcp_frame, m.header.stamp)) in.tcp = *tcp;
     if (const auto camera = lookup(node_.camera_frame, m.header.stamp)) in.camera = *camera;
-    applyPendingBefore(m.header.stamp);
+    inbox_.takeBefore(m.header.stamp);
     const ehc_bringup::SequencerOutput out = seq_->update(in);
     for (const auto& e : out.events) ROS_INFO_STREAM("[grasp] t=" << std::fixed << std::setprecision(2) << in.t << " " << e);
     const ros::Time now = m.header.stamp;  // every output carries the time it was decided for
@@ -372,13 +364,10 @@ class SequencerNode {
   ros::ServiceClient gripper_;
   std::vector<ros::Subscriber> subs_;
   std::unique_ptr<ehc_msgs::LockstepAck> ack_;  ///< _ack_topic (lock-step acknowledgement gate)
-  /// Inputs by (stamp, source), taken at the first status after them: object poses (source =
-  /// object index), grasp candidates, the simulator's gripper status, the trace's speeds. The
-  /// source orders inputs of one stamp whatever order they arrived in.
-  using Key = std::pair<ros::Time, int>;
+  /// Inputs taken at the first status after their stamp: object poses (source = object index),
+  /// grasp candidates, the simulator's gripper status, the trace's speeds.
   static constexpr int kCandidates = 1000000, kSimStatus = 1000001, kJoints = 1000002, kOdom = 1000003;
-  std::multimap<Key, std::function<void()>> pending_;
-  ros::Time last_status_;
+  ehc_msgs::StampedInbox inbox_;
   std::string summary_file_, trace_file_, mode_;
   std::ofstream trace_;
   std::string gripper_state_ = "open";

@@ -35,7 +35,6 @@
 
 #include <cmath>
 #include <functional>
-#include <map>
 #include <memory>
 
 namespace {
@@ -142,21 +141,8 @@ class ObstacleNode {
     if (joints_stamp_.isZero() || joints_stamp_ != odom_stamp_) return;
     const ros::Time t = joints_stamp_;
     joints_stamp_ = ros::Time();
-    if (!last_state_.isZero() && t < last_state_) {  // the clock jumped back (simulator reset)
-      pending_.clear();
-      publish_limiter_.reset();
-    }
-    last_state_ = t;
-    // A cloud whose camera pose has not reached the tf listener yet waits for the next state
-    // (a lookup with a timeout would wait for sim time, which waits for this node).
-    for (auto it = pending_.begin(); it != pending_.end() && it->first < t;) {
-      if (it->second() || (t - it->first).toSec() > kMaxCloudWait) {
-        it = pending_.erase(it);
-      } else {
-        ROS_WARN_STREAM_THROTTLE(kLogThrottle, "ehc_obstacle_node: cloud at " << it->first << " waits for its camera pose");
-        ++it;
-      }
-    }
+    if (!inbox_.last().isZero() && t < inbox_.last()) publish_limiter_.reset();  // simulator reset
+    inbox_.takeBefore(t, kMaxCloudWait);  // a cloud without its camera pose yet waits for the next state
     if (publish_limiter_.accept(t.toSec())) publishDistances(t.toSec());
     ack_.done(t);
   }
@@ -194,7 +180,7 @@ class ObstacleNode {
       if (!why.empty()) ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "ehc_obstacle_node: exclusion list rejected: " << why);
     };
     if (lockstep_)
-      pending_.emplace(msg.header.stamp, [apply, t = msg.header.stamp.toSec()] {
+      inbox_.add(msg.header.stamp, kExclusionSource, [apply, t = msg.header.stamp.toSec()] {
         apply(t);
         return true;
       });
@@ -203,13 +189,10 @@ class ObstacleNode {
 
   void onCloud(const sensor_msgs::PointCloud2ConstPtr& msg) {
     if (lockstep_) {
-      pending_.emplace(msg->header.stamp, [this, msg] {
-        // The pose was published a state ago; the tf listener's thread may lag under CPU load:
-        // wait for it on the wall clock (sim time stands still until this node is done).
-        const ros::WallTime give_up = ros::WallTime::now() + ros::WallDuration(kTfWallWait);
-        while (!tf_.canTransform(cfg_.world_frame, msg->header.frame_id, msg->header.stamp)) {
-          if (ros::WallTime::now() > give_up || !ros::ok()) return false;
-          ros::WallDuration(0.001).sleep();
+      inbox_.add(msg->header.stamp, kCloudSource, [this, msg] {
+        if (!ehc_msgs::waitForTransformWall(tf_, cfg_.world_frame, msg->header.frame_id, msg->header.stamp, kTfWallWait)) {
+          ROS_WARN_STREAM_THROTTLE(kLogThrottle, "ehc_obstacle_node: cloud at " << msg->header.stamp << " waits for its camera pose");
+          return false;
         }
         insertCloud(*msg);
         return true;
@@ -283,10 +266,10 @@ class ObstacleNode {
   ehc_msgs::LockstepAck ack_;
   bool lockstep_ = false;
   RateLimiter publish_limiter_;  ///< lock-step: publish_rate_hz on the states' stamps
-  ros::Time joints_stamp_, odom_stamp_, last_state_;
-  /// Lock-step: clouds and exclusion lists by stamp, taken at the first state after them (true:
-  /// taken; false: a cloud without its camera pose yet, tried again at the next state).
-  std::multimap<ros::Time, std::function<bool()>> pending_;
+  ros::Time joints_stamp_, odom_stamp_;
+  /// Lock-step: clouds and exclusion lists, taken at the first state after their stamp.
+  ehc_msgs::StampedInbox inbox_;
+  static constexpr int kExclusionSource = 0, kCloudSource = 1;
   static constexpr double kMaxCloudWait = 1.0;  ///< s of stamps; then the cloud is dropped
   static constexpr double kTfWallWait = 1.0;    ///< wall s a cloud's camera pose is waited for per state
 };

@@ -16,7 +16,13 @@
 #include <ros/topic_manager.h>
 #include <std_msgs/Header.h>
 
+#include <tf2_ros/buffer.h>
+
+#include <functional>
+#include <limits>
+#include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace ehc_msgs {
@@ -73,5 +79,45 @@ class LockstepAck {
   ros::WallTimer ready_timer_;
   bool started_ = false;
 };
+
+/// Inputs a lock-step node takes by their stamps, not by when they arrived: each is held with
+/// its stamp and a source number (which orders inputs of one stamp) until takeBefore(t) hands
+/// over, oldest first, every input stamped before t. An input whose take() returns false (not
+/// ready, e.g. its tf has not arrived) stays until it is more than `max_wait` s of stamps old, then goes.
+/// A t older than the last one (the clock jumped back: simulator reset) drops everything held.
+class StampedInbox {
+ public:
+  void add(const ros::Time& stamp, int source, std::function<bool()> take) {
+    held_.emplace(std::make_pair(stamp, source), std::move(take));
+  }
+  void takeBefore(const ros::Time& t, double max_wait = 0.0) {
+    if (!last_.isZero() && t < last_) held_.clear();
+    last_ = t;
+    for (auto it = held_.begin(); it != held_.end() && it->first.first < t;) {
+      if (it->second() || (t - it->first.first).toSec() > max_wait) it = held_.erase(it);
+      else ++it;
+    }
+  }
+  /// The stamp of the last takeBefore (zero before the first).
+  const ros::Time& last() const { return last_; }
+
+ private:
+  std::multimap<std::pair<ros::Time, int>, std::function<bool()>> held_;
+  ros::Time last_;
+};
+
+/// Waits on the wall clock (at most `wall_s`) until `buffer` can transform `source` into
+/// `target` at `stamp`. In lock-step a pose of the current stamp came with the state, but the
+/// tf listener's thread may lag under CPU load; a tf2 lookup with a timeout would wait on sim
+/// time, which stands still until this node is done (a deadlock).
+inline bool waitForTransformWall(const tf2_ros::Buffer& buffer, const std::string& target, const std::string& source,
+                                 const ros::Time& stamp, double wall_s) {
+  const ros::WallTime give_up = ros::WallTime::now() + ros::WallDuration(wall_s);
+  while (!buffer.canTransform(target, source, stamp)) {
+    if (ros::WallTime::now() > give_up || !ros::ok()) return false;
+    ros::WallDuration(0.001).sleep();
+  }
+  return true;
+}
 
 }  // namespace ehc_msgs
