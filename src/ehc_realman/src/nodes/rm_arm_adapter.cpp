@@ -12,10 +12,15 @@
 // Service: /arm/gripper/set (std_srvs/SetBool: true = "pick", false = "open"; the grasp
 //   sequencer's gripper_service)
 // Publishes: /rm_driver/JointPos, /rm_driver/Emergency_Stop (latched), /rm_driver/Gripper_Set,
-//   /rm_driver/Gripper_Pick, /arm/adapter_status (diagnostic_msgs/DiagnosticStatus)
+//   /rm_driver/Gripper_Pick, /arm/adapter_status (diagnostic_msgs/DiagnosticStatus; key
+//   "last_step": the node-clock time of the last stream step)
+// Clock (node_clock.h): steady on the robot; ROS time under /use_sim_time, the stream then steps
+// on a ROS timer as /clock advances. `_status_every_step:=true` publishes the status after every
+// stream step (a lock-step test's handshake: its "frames" count says what that step published).
 
 #include "ehc_realman/realman_adapter_config.h"
 #include "ehc_realman/realman_joint_streamer.h"
+#include "node_clock.h"
 
 #include <diagnostic_msgs/DiagnosticStatus.h>
 #include <ehc_msgs/JointVelocityCommand.h>
@@ -33,6 +38,9 @@
 
 #include <atomic>
 #include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <thread>
@@ -42,10 +50,7 @@ namespace {
 constexpr double kLogThrottle = 1.0;  ///< s between repeats of a throttled log message
 
 using SteadyClock = std::chrono::steady_clock;
-
-double steadyNow() {
-  return std::chrono::duration<double>(SteadyClock::now().time_since_epoch()).count();
-}
+using ehc_realman_nodes::nodeNow;
 
 diagnostic_msgs::KeyValue kv(const std::string& key, const std::string& value) {
   diagnostic_msgs::KeyValue k;
@@ -56,8 +61,9 @@ diagnostic_msgs::KeyValue kv(const std::string& key, const std::string& value) {
 
 class RmArmAdapterNode {
  public:
-  RmArmAdapterNode(ros::NodeHandle& nh, const ehc_realman::RmArmAdapterConfig& config)
-      : config_(config), streamer_(config.stream, config.limits) {
+  RmArmAdapterNode(ros::NodeHandle& nh, const ehc_realman::RmArmAdapterConfig& config,
+                   bool status_every_step)
+      : config_(config), streamer_(config.stream, config.limits), status_every_step_(status_every_step) {
     ROS_INFO_STREAM("rm_arm_adapter effective limits:\n" << streamer_.summary());
     joint_pos_pub_ = nh.advertise<rm_msgs::JointPos>("/rm_driver/JointPos", 10);
     estop_pub_ = nh.advertise<rm_msgs::Stop>("/rm_driver/Emergency_Stop", 1, /*latch=*/true);
@@ -72,9 +78,12 @@ class RmArmAdapterNode {
     subs_.push_back(nh.subscribe("/arm/gripper/command", 10, &RmArmAdapterNode::onGripperCommand, this));
     subs_.push_back(nh.subscribe("/arm/gripper/width", 10, &RmArmAdapterNode::onGripperWidth, this));
     gripper_srv_ = nh.advertiseService("/arm/gripper/set", &RmArmAdapterNode::onGripperSet, this);
-    status_timer_ = nh.createSteadyTimer(ros::WallDuration(1.0 / config_.status_rate_hz),
-                                         [this](const ros::SteadyTimerEvent&) { publishStatus(); });
-    stream_thread_ = std::thread([this] { streamLoop(); });
+    status_timer_ = ehc_realman_nodes::NodeTimer(nh, 1.0 / config_.status_rate_hz,
+                                                 [this] { publishStatus(); });
+    if (ros::Time::isSimTime())
+      stream_timer_ = ehc_realman_nodes::NodeTimer(nh, streamer_.period(), [this] { streamStep(); });
+    else
+      stream_thread_ = std::thread([this] { streamLoop(); });
   }
 
   ~RmArmAdapterNode() {
@@ -86,7 +95,7 @@ class RmArmAdapterNode {
   void onJointState(const sensor_msgs::JointState::ConstPtr& msg) {
     std::lock_guard<std::mutex> lock(mutex_);
     try {
-      streamer_.setMeasured(msg->name, msg->position, steadyNow());
+      streamer_.setMeasured(msg->name, msg->position, nodeNow());
     } catch (const std::exception& e) {
       ROS_ERROR_THROTTLE(kLogThrottle, "rm_arm_adapter: %s", e.what());
     }
@@ -95,7 +104,7 @@ class RmArmAdapterNode {
   void onCommand(const ehc_msgs::JointVelocityCommand::ConstPtr& msg) {
     std::lock_guard<std::mutex> lock(mutex_);
     try {
-      streamer_.setVelocityCommand(msg->names, msg->velocities, steadyNow());
+      streamer_.setVelocityCommand(msg->names, msg->velocities, nodeNow());
     } catch (const std::exception& e) {
       ROS_ERROR_THROTTLE(kLogThrottle, "rm_arm_adapter: %s", e.what());
     }
@@ -177,19 +186,30 @@ class RmArmAdapterNode {
     const auto period = std::chrono::duration_cast<SteadyClock::duration>(
         std::chrono::duration<double>(streamer_.period()));
     auto next = SteadyClock::now() + period;
-    rm_msgs::JointPos msg;
-    msg.expand = 0.0f;
     while (running_ && ros::ok()) {
       std::this_thread::sleep_until(next);
       next += period;
       const auto now = SteadyClock::now();
       if (now > next + 10 * period) next = now + period;  // after a stall: do not burst frames
-      std::optional<ehc_realman::JointFrame> frame;
-      {
-        std::lock_guard<std::mutex> lock(mutex_);
-        frame = streamer_.step(steadyNow());
-      }
-      if (!frame) continue;
+      streamStep();
+    }
+  }
+
+  /// One stream period: the streamer's frame (if any) to /rm_driver/JointPos.
+  void streamStep() {
+    std::optional<ehc_realman::JointFrame> frame;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      const double now = nodeNow();
+      // One step per instant of the clock: a ROS timer may fire twice when /clock jumps (the
+      // first /clock message under /use_sim_time); the steady clock always advances.
+      if (now <= last_step_time_) return;
+      last_step_time_ = now;
+      frame = streamer_.step(now);
+    }
+    if (frame) {
+      rm_msgs::JointPos msg;
+      msg.expand = 0.0f;
       msg.joint.resize(static_cast<std::size_t>(frame->position.size()));
       for (Eigen::Index i = 0; i < frame->position.size(); ++i)
         msg.joint[static_cast<std::size_t>(i)] = static_cast<float>(frame->position[i]);
@@ -202,6 +222,7 @@ class RmArmAdapterNode {
       if (frame->speed_clamped)
         ROS_WARN_THROTTLE(kLogThrottle, "rm_arm_adapter: velocity command above the speed limits, scaled");
     }
+    if (status_every_step_) publishStatus();
   }
 
   void publishStatus() {
@@ -210,11 +231,15 @@ class RmArmAdapterNode {
     s.hardware_id = "rm_driver";
     ehc_realman::JointStreamerCounters c;
     ehc_realman::StreamPhase phase;
+    double last_step = NAN;
     {
       std::lock_guard<std::mutex> lock(mutex_);
       c = streamer_.counters();
       phase = streamer_.phase();
+      last_step = last_step_time_;
     }
+    char last_step_text[32];
+    std::snprintf(last_step_text, sizeof(last_step_text), "%.9f", last_step);
     if (phase == ehc_realman::StreamPhase::EmergencyStopped) {
       s.level = diagnostic_msgs::DiagnosticStatus::ERROR;
       s.message = "emergency stop latched";
@@ -232,7 +257,7 @@ class RmArmAdapterNode {
                 kv("tracking_clamped", std::to_string(c.tracking_clamped)),
                 kv("rejected_commands", std::to_string(c.rejected_commands)),
                 kv("rejected_states", std::to_string(c.rejected_states)),
-                kv("timeouts", std::to_string(c.timeouts))};
+                kv("timeouts", std::to_string(c.timeouts)), kv("last_step", last_step_text)};
     status_pub_.publish(s);
   }
 
@@ -242,7 +267,9 @@ class RmArmAdapterNode {
   ros::Publisher joint_pos_pub_, estop_pub_, gripper_set_pub_, gripper_pick_pub_, status_pub_;
   std::vector<ros::Subscriber> subs_;
   ros::ServiceServer gripper_srv_;
-  ros::SteadyTimer status_timer_;
+  const bool status_every_step_;
+  double last_step_time_ = -std::numeric_limits<double>::infinity();  ///< node clock, s; mutex_
+  ehc_realman_nodes::NodeTimer status_timer_, stream_timer_;
   std::atomic<bool> running_{true};
   std::thread stream_thread_;
 };
@@ -258,11 +285,14 @@ int main(int argc, char** argv) {
     ROS_FATAL("rm_arm_adapter: missing parameter _config:=<rm_arm_adapter.yaml>");
     return 2;
   }
+  const bool status_every_step = pnh.param("status_every_step", false);
   std::unique_ptr<RmArmAdapterNode> node;
   try {
     const auto config = ehc_realman::loadRmArmAdapterConfig(config_path);
-    ROS_INFO_STREAM("rm_arm_adapter configuration:\n" << config.summary());
-    node = std::make_unique<RmArmAdapterNode>(nh, config);
+    ROS_INFO_STREAM("rm_arm_adapter configuration:\n" << config.summary() << "\nclock: "
+                    << (ros::Time::isSimTime() ? "ROS time (/use_sim_time)" : "steady")
+                    << (status_every_step ? ", status after every stream step" : ""));
+    node = std::make_unique<RmArmAdapterNode>(nh, config, status_every_step);
   } catch (const std::exception& e) {
     ROS_FATAL("rm_arm_adapter: %s", e.what());
     return 2;
