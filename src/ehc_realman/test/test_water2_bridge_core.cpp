@@ -1,7 +1,11 @@
 // Water2 bridge core: watchdog and odometry logic on simulated time, then the whole bridge
 // against FakeWater2Server on 127.0.0.1 (rate, clamping, stop after timeout, odometry, server
-// killed mid-run => zero motion + reconnect, malformed replies). Waits are bounded and
-// assertions are about properties of every request, with generous timing tolerances.
+// killed mid-run => zero motion + reconnect, malformed replies), in lock-step on a clock the
+// test owns: each 10 ms step advances the clock shared by the bridge and the server, runs the
+// bridge's spinOnce (the node's network loop) and waits until the server has handled every
+// request sent so far, then drains the replies, so every request and reply is attributed to
+// the sim time of the step that produced it whatever the machine's load. Times asserted are
+// sim times; the only wall clock is a hang guard.
 
 #include "ehc_realman/water2_base_bridge.h"
 #include "water2_fake_server.h"
@@ -9,16 +13,22 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <functional>
+#include <memory>
+#include <optional>
 #include <thread>
 
 using namespace ehc_realman;
 using ehc_realman_test::FakeWater2Server;
 
 namespace {
-using ehc_realman_test::waitFor;
+
+constexpr double kStep = 0.01;        ///< s of sim time per lock-step
+constexpr int kHangGuardSeconds = 30;  ///< wall s without the server's handshake: a hang
 
 Water2BridgeConfig loopbackConfig(int port) {
   Water2BridgeConfig c;
@@ -30,33 +40,89 @@ Water2BridgeConfig loopbackConfig(int port) {
   return c;
 }
 
-/// Runs spinOnce in a thread, as the node does.
-class BridgeRunner {
+/// The bridge and FakeWater2Server on one manual clock, stepped by the test.
+class LockStep {
  public:
-  explicit BridgeRunner(const Water2BridgeConfig& c) : bridge(c) {
-    thread_ = std::thread([this] {
-      while (running_) bridge.spinOnce(0.02);
-    });
+  LockStep() : server_(0, [this] { return now(); }) { server_.start(); }
+  /// Builds the bridge (after the server, so that the port is known).
+  void makeBridge(const std::function<void(Water2BridgeConfig&)>& edit = {}) {
+    Water2BridgeConfig c = loopbackConfig(server_.port());
+    if (edit) edit(c);
+    bridge_ = std::make_unique<Water2BaseBridge>(c, [this] { return now(); });
   }
-  ~BridgeRunner() {
-    running_ = false;
-    thread_.join();
+
+  double now() const { return 100.0 + static_cast<double>(steps_.load()) * kStep; }
+  FakeWater2Server& server() { return server_; }
+  Water2BaseBridge& bridge() { return *bridge_; }
+
+  /// One step: the clock advances, the controller's command (if any), one network cycle, the
+  /// server's handshake, the replies drained. False (and a failure) if the handshake hangs.
+  bool step(const std::optional<std::pair<double, double>>& command = std::nullopt) {
+    ++steps_;
+    if (command) bridge_->setCommand(command->first, command->second);
+    bridge_->spinOnce(0.0);
+    noteConnection();
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(kHangGuardSeconds);
+    while (server_.running() && bridge_->status().connected && server_.handled() < expected()) {
+      if (std::chrono::steady_clock::now() > deadline) {
+        ADD_FAILURE() << "hang guard: after " << kHangGuardSeconds << " wall s the server handled "
+                      << server_.handled() << " of "
+                      << expected() << " requests";
+        return false;
+      }
+      std::this_thread::sleep_for(std::chrono::microseconds(200));
+    }
+    bridge_->spinOnce(0.0);  // the replies (in the socket once handled), at the same sim time
+    noteConnection();
+    return true;
   }
-  Water2BaseBridge bridge;
+  /// Steps for `seconds`, commanding (v, w) at 50 Hz (every other step).
+  bool drive(double v, double w, double seconds) {
+    const int n = static_cast<int>(std::lround(seconds / kStep));
+    for (int k = 0; k < n; ++k) {
+      if (!step(k % 2 == 0 ? std::optional<std::pair<double, double>>({v, w}) : std::nullopt)) return false;
+      if (k % 2 == 0) last_command_ = now();
+    }
+    return true;
+  }
+  bool idle(double seconds) {
+    const int n = static_cast<int>(std::lround(seconds / kStep));
+    for (int k = 0; k < n; ++k)
+      if (!step()) return false;
+    return true;
+  }
+  /// Steps (idle, or commanding (v, w) at 50 Hz if `v` is set) until `done` or `seconds` pass.
+  bool stepUntil(const std::function<bool()>& done, double seconds,
+                 std::optional<std::pair<double, double>> command = std::nullopt) {
+    const int n = static_cast<int>(std::lround(seconds / kStep));
+    for (int k = 0; k < n && !done(); ++k)
+      if (!step(command && k % 2 == 0 ? command : std::nullopt)) return false;
+    return done();
+  }
+  double lastCommand() const { return last_command_; }
 
  private:
-  std::atomic<bool> running_{true};
-  std::thread thread_;
+  /// Requests the server must have handled: those sent since the current connection opened.
+  std::uint64_t expected() const {
+    const auto s = bridge_->status();
+    return s.joy_requests + s.status_requests - base_;
+  }
+  /// A new connection: what was sent on the old one was handled or is lost with it.
+  void noteConnection() {
+    const auto s = bridge_->status();
+    if (s.connects != connects_) {
+      connects_ = s.connects;
+      base_ = s.joy_requests + s.status_requests - server_.handled();
+    }
+  }
+
+  std::atomic<long> steps_{0};
+  FakeWater2Server server_;
+  std::unique_ptr<Water2BaseBridge> bridge_;
+  std::uint64_t connects_ = 0, base_ = 0;
+  double last_command_ = 0.0;
 };
 
-/// Publishes a command at 50 Hz for `seconds` (the controller's /cmd_vel).
-void drive(Water2BaseBridge& b, double v, double w, double seconds) {
-  const double end = FakeWater2Server::now() + seconds;
-  while (FakeWater2Server::now() < end) {
-    b.setCommand(v, w);
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
-}
 }  // namespace
 
 // ------------------------------------------------------------------ watchdog (simulated time)
@@ -139,24 +205,23 @@ TEST(OdometryEstimator, DeadReckonsBetweenStatusRepliesAndGoesStale) {
   EXPECT_NEAR(e.estimate(20.6)->x, 3.0, 1e-12) << "a status resets the estimate";
 }
 
-// ------------------------------------------------------------------ bridge on loopback
+// ------------------------------------------------------------------ bridge on loopback (lock-step)
 TEST(Water2BaseBridge, StreamsClampedCommandsAtRateAndStopsAfterTimeout) {
-  FakeWater2Server server;
-  server.start();
-  BridgeRunner run(loopbackConfig(server.port()));
-  ASSERT_TRUE(waitFor([&] { return run.bridge.odometry().has_value(); }, 5.0))
-      << run.bridge.status().message;
-  EXPECT_EQ(run.bridge.status().level, Water2BridgeStatus::Level::Ok);
-  server.clearRequests();
+  LockStep ls;
+  ls.makeBridge();
+  Water2BaseBridge& bridge = ls.bridge();
+  ASSERT_TRUE(ls.stepUntil([&] { return bridge.odometry().has_value(); }, 5.0)) << bridge.status().message;
+  EXPECT_EQ(bridge.status().level, Water2BridgeStatus::Level::Ok);
+  ls.server().clearRequests();
 
-  const double t0 = FakeWater2Server::now();
-  drive(run.bridge, 2.0, 1.0, 2.0);  // above the bounds: s = min(0.25, 1.0) => (0.5, 0.25)
-  const double t_last_cmd = FakeWater2Server::now();
-  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  const double t0 = ls.now();
+  ASSERT_TRUE(ls.drive(2.0, 1.0, 2.0));  // above the bounds: s = min(0.25, 1.0) => (0.5, 0.25)
+  const double t_last_cmd = ls.lastCommand();
+  ASSERT_TRUE(ls.idle(1.5));
 
-  const auto reqs = server.requests();
-  int moving = 0, status = 0;
-  double first_zero_after = -1.0, last_moving = 0.0;
+  const auto reqs = ls.server().requests();
+  int moving = 0, status = 0, zeros_after = 0;
+  double first_moving = -1.0, first_zero_after = -1.0, last_moving = 0.0;
   for (const auto& r : reqs) {
     if (r.text == "/api/robot_status") {
       ++status;
@@ -167,69 +232,68 @@ TEST(Water2BaseBridge, StreamsClampedCommandsAtRateAndStopsAfterTimeout) {
     EXPECT_LE(std::abs(r.angular), 1.0 + 1e-9);
     if (r.linear != 0.0) {
       ++moving;
+      if (first_moving < 0.0) first_moving = r.time;
       last_moving = r.time;
       EXPECT_NEAR(r.linear, 0.5, 1e-4);
       EXPECT_NEAR(r.angular, 0.25, 1e-4);
-    } else if (r.time > t_last_cmd - 0.05 && first_zero_after < 0.0) {
-      first_zero_after = r.time;
+    } else if (r.time > t_last_cmd) {
+      ++zeros_after;
+      if (first_zero_after < 0.0) first_zero_after = r.time;
     }
   }
-  const double rate = moving / (last_moving - t0);
-  EXPECT_GE(rate, 10.0) << moving << " joy_control requests";  // configured 20 Hz
-  EXPECT_LE(rate, 25.0);
-  EXPECT_LE(last_moving - t_last_cmd, 0.15 + 0.2) << "no motion request after the timeout";
+  // Configured 20 Hz: one request per 0.05 s of sim time while commands are fresh.
+  EXPECT_LE(first_moving - t0, 0.05 + kStep + 1e-9) << "the first command within one resend period";
+  EXPECT_NEAR((last_moving - first_moving) / (moving - 1), 0.05, 1e-6) << moving << " joy_control requests";
+  // The watchdog on the bridge's clock: the last motion request before the 0.2 s timeout, the
+  // first zero at the step the timeout passes, then zeros for stop_repeat_duration (1 s).
+  EXPECT_LE(last_moving, t_last_cmd + 0.2 + 1e-9) << "no motion request after the timeout";
   ASSERT_GT(first_zero_after, 0.0) << "a zero command must follow";
-  EXPECT_LE(first_zero_after - t_last_cmd, 0.2 + 0.2);
-  EXPECT_GE(status, 4) << "robot_status polled about every 0.5 s";
+  EXPECT_GT(first_zero_after - t_last_cmd, 0.2 - 1e-9);
+  EXPECT_LE(first_zero_after - t_last_cmd, 0.2 + kStep + 1e-9) << "zero at once after the timeout";
+  EXPECT_GE(zeros_after, 20) << "zero at 20 Hz for 1 s";
+  EXPECT_LE(zeros_after, 22);
+  EXPECT_GE(status, 7) << "robot_status every 0.5 s over 3.5 s";
+  std::printf("[water2 bridge] lock-step: %d moving requests at %.3f s intervals, first zero %.3f s (sim) after "
+              "the last command, %d zeros\n", moving, (last_moving - first_moving) / (moving - 1),
+              first_zero_after - t_last_cmd, zeros_after);
   double x, y, th;
-  server.pose(x, y, th);
+  ls.server().pose(x, y, th);
   EXPECT_GT(x * x + y * y, 0.5) << "the fake base moved";
-  const auto o = run.bridge.odometry();
+  const auto o = bridge.odometry();
   ASSERT_TRUE(o);
-  EXPECT_NEAR(o->x, x, 0.05);
-  EXPECT_NEAR(o->y, y, 0.05);
-  EXPECT_GT(run.bridge.status().clamped_commands, 50u);
+  EXPECT_NEAR(o->x, x, 0.02);
+  EXPECT_NEAR(o->y, y, 0.02);
+  EXPECT_GE(bridge.status().clamped_commands, 100u) << "every command of 2 s at 50 Hz";
 }
 
 TEST(Water2BaseBridge, ServerKilledMidRunStopsMotionAndReconnects) {
-  FakeWater2Server server;
-  server.start();
-  const int port = server.port();
-  BridgeRunner run(loopbackConfig(port));
-  ASSERT_TRUE(waitFor([&] { return run.bridge.odometry().has_value(); }, 5.0));
-
-  std::atomic<bool> driving{true};
-  std::thread controller([&] {
-    while (driving) {
-      run.bridge.setCommand(0.3, 0.0);
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-  });
-  std::this_thread::sleep_for(std::chrono::milliseconds(500));
-  server.stop();  // killed mid-run while the controller keeps commanding
-  EXPECT_TRUE(waitFor([&] { return !run.bridge.status().connected; }, 2.0));
-  EXPECT_EQ(run.bridge.status().level, Water2BridgeStatus::Level::Error);
-  EXPECT_TRUE(waitFor([&] { return !run.bridge.odometry().has_value(); }, 3.0))
+  LockStep ls;
+  ls.makeBridge();
+  Water2BaseBridge& bridge = ls.bridge();
+  ASSERT_TRUE(ls.stepUntil([&] { return bridge.odometry().has_value(); }, 5.0));
+  const std::pair<double, double> cmd{0.3, 0.0};
+  ASSERT_TRUE(ls.drive(cmd.first, cmd.second, 0.5));
+  ls.server().stop();  // killed mid-run while the controller keeps commanding
+  const double t_kill = ls.now();
+  ASSERT_TRUE(ls.stepUntil([&] { return !bridge.status().connected; }, 2.0, cmd));
+  EXPECT_LE(ls.now() - t_kill, 1.0 + 2 * kStep) << "lost within reply_timeout";
+  EXPECT_EQ(bridge.status().level, Water2BridgeStatus::Level::Error);
+  ASSERT_TRUE(ls.stepUntil([&] { return !bridge.odometry().has_value(); }, 3.0, cmd))
       << "stale odometry must be withheld";
-  std::this_thread::sleep_for(std::chrono::milliseconds(500));  // a few failed attempts
-  EXPECT_GT(run.bridge.status().failed_connects, 0u);
+  ASSERT_TRUE(ls.drive(cmd.first, cmd.second, 0.5));  // a few failed attempts
+  EXPECT_GT(bridge.status().failed_connects, 0u);
 
-  server.start();  // same port
-  ASSERT_EQ(server.port(), port);
-  ASSERT_TRUE(waitFor([&] { return run.bridge.odometry().has_value(); }, 5.0))
-      << run.bridge.status().message;
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));
-  driving = false;
-  controller.join();
+  ls.server().start();  // same port
+  ASSERT_TRUE(ls.stepUntil([&] { return bridge.odometry().has_value(); }, 5.0, cmd)) << bridge.status().message;
+  ASSERT_TRUE(ls.drive(cmd.first, cmd.second, 0.3));
 
-  const auto s = run.bridge.status();
+  const auto s = bridge.status();
   EXPECT_TRUE(s.connected);
   EXPECT_GE(s.connects, 2u);
   EXPECT_GE(s.connection_losses, 1u);
   // The first motion request after the reconnection is a zero.
-  const auto reqs = server.requests();
   bool seen = false;
-  for (const auto& r : reqs) {
+  for (const auto& r : ls.server().requests()) {
     if (r.connection != 2 || !r.joy) continue;
     if (!seen) {
       EXPECT_EQ(r.linear, 0.0) << "first command after reconnect: " << r.text;
@@ -240,18 +304,18 @@ TEST(Water2BaseBridge, ServerKilledMidRunStopsMotionAndReconnects) {
 }
 
 TEST(Water2BaseBridge, SurvivesMalformedRepliesAndRecovers) {
-  FakeWater2Server server;
-  server.start();
-  BridgeRunner run(loopbackConfig(server.port()));
-  ASSERT_TRUE(waitFor([&] { return run.bridge.odometry().has_value(); }, 5.0));
+  LockStep ls;
+  ls.makeBridge();
+  Water2BaseBridge& bridge = ls.bridge();
+  ASSERT_TRUE(ls.stepUntil([&] { return bridge.odometry().has_value(); }, 5.0));
   using Mode = FakeWater2Server::ReplyMode;
   for (Mode m : {Mode::Garbage, Mode::BadJson, Mode::MissingType, Mode::BadPose, Mode::Oversized,
                  Mode::ErrorStatus, Mode::Truncated, Mode::Silent}) {
     SCOPED_TRACE(static_cast<int>(m));
-    const auto before = run.bridge.status();
-    server.setReplyMode(m);
-    drive(run.bridge, 0.1, 0.0, 1.2);
-    const auto during = run.bridge.status();
+    const auto before = bridge.status();
+    ls.server().setReplyMode(m);
+    ASSERT_TRUE(ls.drive(0.1, 0.0, 1.2));
+    const auto during = bridge.status();
     switch (m) {
       case Mode::BadJson:
       case Mode::MissingType:
@@ -265,31 +329,29 @@ TEST(Water2BaseBridge, SurvivesMalformedRepliesAndRecovers) {
       default:
         break;
     }
-    server.setReplyMode(Mode::Normal);
-    EXPECT_TRUE(waitFor([&] { return run.bridge.odometry().has_value() &&
-                                     run.bridge.status().status_age < 0.6; }, 6.0))
-        << run.bridge.status().message;
+    ls.server().setReplyMode(Mode::Normal);
+    EXPECT_TRUE(ls.stepUntil([&] { return bridge.odometry().has_value() && bridge.status().status_age < 0.6; },
+                             6.0))
+        << bridge.status().message;
   }
   // Replies that never complete (truncated) or never come (silent) are cured by reconnecting.
-  EXPECT_GE(run.bridge.status().connects, 3u);
+  EXPECT_GE(bridge.status().connects, 3u);
 }
 
 TEST(Water2BaseBridge, UnreachableBaseBacksOffWithoutThrowing) {
-  FakeWater2Server probe;
-  probe.start();
-  const int port = probe.port();
-  probe.stop();  // nothing listens on this loopback port now
-  Water2BridgeConfig c = loopbackConfig(port);
-  c.backoff_initial = 0.05;
-  c.backoff_max = 0.2;
-  Water2BaseBridge bridge(c);
-  const double t0 = FakeWater2Server::now();
-  while (FakeWater2Server::now() - t0 < 1.0) bridge.spinOnce(0.02);  // never throws
+  LockStep ls;
+  ls.makeBridge([](Water2BridgeConfig& c) {
+    c.backoff_initial = 0.05;
+    c.backoff_max = 0.2;
+  });
+  ls.server().stop();  // nothing listens on this loopback port now
+  Water2BaseBridge& bridge = ls.bridge();
+  ASSERT_TRUE(ls.idle(1.0));  // never throws
   const auto s = bridge.status();
   EXPECT_FALSE(s.connected);
   EXPECT_EQ(s.level, Water2BridgeStatus::Level::Error);
-  EXPECT_GE(s.failed_connects, 3u);
-  EXPECT_LE(s.failed_connects, 12u) << "attempts are spaced by the back-off";
+  // Attempts at +0, 0.05, 0.15, 0.35, 0.55, 0.75, 0.95 s (back-off 0.05 doubling to 0.2).
+  EXPECT_EQ(s.failed_connects, 7u) << "attempts are spaced by the back-off";
   EXPECT_FALSE(bridge.odometry());
 }
 

@@ -4,7 +4,9 @@
 // joy_control, each command lasting 0.5 s as on the real base), answers robot_status with the
 // simulated pose, and can misbehave on request (garbage, truncated, invalid JSON, missing fields,
 // bad pose, oversized, error status, silence). stop() closes everything ("killed"); start()
-// listens again on the same port.
+// listens again on the same port. Its clock (request times, the simulated base) is the steady
+// clock by default, or the lock-step test's (constructor); handled() counts the requests it has
+// answered (or, misbehaving, withheld the answer to), for a lock-step test's handshake.
 
 #include "wall_clock.h"
 
@@ -20,7 +22,9 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <functional>
 #include <mutex>
 #include <optional>
 #include <stdexcept>
@@ -33,7 +37,7 @@ namespace ehc_realman_test {
 class FakeWater2Server {
  public:
   struct Request {
-    double time = 0.0;  ///< steady-clock seconds at arrival
+    double time = 0.0;  ///< the server's clock at arrival, s
     std::string text;
     bool joy = false;
     double linear = 0.0, angular = 0.0;
@@ -42,10 +46,12 @@ class FakeWater2Server {
   enum class ReplyMode { Normal, Garbage, Truncated, BadJson, MissingType, BadPose, Oversized,
                          ErrorStatus, Silent };
 
+  using Clock = std::function<double()>;
   static double now() { return ehc_realman_test::now(); }
 
-  /// port 0: an ephemeral port is chosen by the first start().
-  explicit FakeWater2Server(int port = 0) : port_(port) {}
+  /// port 0: an ephemeral port is chosen by the first start(). `clock`: the steady clock if empty.
+  explicit FakeWater2Server(int port = 0, Clock clock = Clock())
+      : port_(port), clock_(clock ? std::move(clock) : Clock(&FakeWater2Server::now)) {}
   ~FakeWater2Server() { stop(); }
 
   void start() {
@@ -68,6 +74,7 @@ class FakeWater2Server {
   bool running() const { return running_; }
   void setReplyMode(ReplyMode m) { mode_ = m; }
   int connections() const { return connections_; }
+  std::uint64_t handled() const { return handled_; }
   std::vector<Request> requests() const {
     std::lock_guard<std::mutex> lock(mutex_);
     return requests_;
@@ -91,11 +98,11 @@ class FakeWater2Server {
 
  private:
   void loop() {
-    double last = now();
+    double last = clock_();
     while (running_) {
       pollfd fds[2] = {{listen_fd_, POLLIN, 0}, {client_fd_, POLLIN, 0}};
       ::poll(fds, client_fd_ >= 0 ? 2 : 1, 5);
-      const double t = now();
+      const double t = clock_();
       simulate(t - last, t);
       last = t;
       if (fds[0].revents & POLLIN) {
@@ -152,6 +159,7 @@ class FakeWater2Server {
       pose = ehc_realman::Water2Pose{x_, y_, theta_};
     }
     reply(command, pose);
+    ++handled_;
   }
 
   void reply(const std::string& command, const ehc_realman::Water2Pose& pose) {
@@ -188,6 +196,8 @@ class FakeWater2Server {
   }
 
   int port_;
+  Clock clock_;
+  std::atomic<std::uint64_t> handled_{0};
   int listen_fd_ = -1;
   int client_fd_ = -1;
   std::atomic<bool> running_{false};
