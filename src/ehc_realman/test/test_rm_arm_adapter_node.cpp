@@ -72,12 +72,20 @@ class Rig {
   }
 
   /// Spins until `pred` holds; false (and a failure) after kHangGuard wall seconds.
-  bool spinUntil(const std::function<bool()>& pred, const char* what) {
+  /// `resend` (if given) runs every 0.1 wall s while waiting: the same /clock again, in case
+  /// the node's /clock subscription connected after it went out (same time: idempotent).
+  bool spinUntil(const std::function<bool()>& pred, const char* what,
+                 const std::function<void()>& resend = {}) {
     const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(kHangGuard);
+    ros::WallTime next_resend = ros::WallTime::now() + ros::WallDuration(0.1);
     while (ros::ok() && !pred()) {
       if (ros::WallTime::now() > end) {
         ADD_FAILURE() << "hang guard: no " << what << " within " << kHangGuard << " wall s";
         return false;
+      }
+      if (resend && ros::WallTime::now() > next_resend) {
+        resend();
+        next_resend = ros::WallTime::now() + ros::WallDuration(0.1);
       }
       ros::WallDuration(0.0005).sleep();
       ros::spinOnce();
@@ -122,7 +130,7 @@ class Rig {
       cmd_pub_.publish(m);
     }
     return spinUntil([&] { return last_step_ >= t_ - 1e-6 && frames_.size() >= status_frames_; },
-                     "status of the step (last_step) and its frames");
+                     "status of the step (last_step) and its frames", [&] { clock_pub_.publish(c); });
   }
 
   /// Steps for `seconds` of sim time, commanding `v` at 50 Hz (every other step).

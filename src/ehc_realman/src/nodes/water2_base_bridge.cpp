@@ -8,9 +8,15 @@
 //
 // Subscribes: /cmd_vel (geometry_msgs/Twist; linear.x, angular.z)
 // Publishes:  /odom (nav_msgs/Odometry), tf odom->base_link,
-//             /water2/status (diagnostic_msgs/DiagnosticStatus: OK / WARN stale / ERROR link)
+//             /water2/status (diagnostic_msgs/DiagnosticStatus: OK / WARN stale / ERROR link;
+//             key "last_step": the node-clock time of the last network cycle under sim time)
+// Clock (node_clock.h): steady on the robot, the network work in its own thread; ROS time under
+// /use_sim_time, one network cycle per 10 ms of ROS time on a ROS timer (replies read in the
+// next cycle). `_status_every_step:=true` publishes the status after every such cycle (a
+// lock-step test's handshake: its request counters say what that cycle sent).
 
 #include "ehc_realman/water2_base_bridge.h"
+#include "node_clock.h"
 
 #include <diagnostic_msgs/DiagnosticStatus.h>
 #include <geometry_msgs/TransformStamped.h>
@@ -21,6 +27,8 @@
 
 #include <atomic>
 #include <cmath>
+#include <cstdio>
+#include <limits>
 #include <memory>
 #include <sstream>
 #include <thread>
@@ -28,6 +36,7 @@
 namespace {
 
 constexpr double kLogThrottle = 1.0;  ///< s between repeats of a throttled log message
+constexpr double kSimCyclePeriod = 0.01;  ///< s of ROS time per network cycle under sim time
 
 diagnostic_msgs::KeyValue kv(const std::string& key, const std::string& value) {
   diagnostic_msgs::KeyValue k;
@@ -38,19 +47,22 @@ diagnostic_msgs::KeyValue kv(const std::string& key, const std::string& value) {
 
 class Water2BaseBridgeNode {
  public:
-  Water2BaseBridgeNode(ros::NodeHandle& nh, const ehc_realman::Water2BridgeConfig& config)
-      : bridge_(config) {
+  Water2BaseBridgeNode(ros::NodeHandle& nh, const ehc_realman::Water2BridgeConfig& config,
+                       bool status_every_step)
+      : bridge_(config, [] { return ehc_realman_nodes::nodeNow(); }),
+        status_every_step_(status_every_step) {
     odom_pub_ = nh.advertise<nav_msgs::Odometry>("/odom", 10);
     status_pub_ = nh.advertise<diagnostic_msgs::DiagnosticStatus>("/water2/status", 1, true);
     cmd_sub_ = nh.subscribe("/cmd_vel", 10, &Water2BaseBridgeNode::onCmdVel, this,
                             ros::TransportHints().tcpNoDelay());
-    odom_timer_ = nh.createSteadyTimer(ros::WallDuration(1.0 / config.odom_rate_hz),
-                                       [this](const ros::SteadyTimerEvent&) { publishOdometry(); });
-    status_timer_ = nh.createSteadyTimer(ros::WallDuration(1.0 / config.status_rate_hz),
-                                         [this](const ros::SteadyTimerEvent&) { publishStatus(); });
-    network_thread_ = std::thread([this] {
-      while (running_ && ros::ok()) bridge_.spinOnce(0.02);
-    });
+    odom_timer_ = ehc_realman_nodes::NodeTimer(nh, 1.0 / config.odom_rate_hz, [this] { publishOdometry(); });
+    status_timer_ = ehc_realman_nodes::NodeTimer(nh, 1.0 / config.status_rate_hz, [this] { publishStatus(); });
+    if (ros::Time::isSimTime())
+      network_timer_ = ehc_realman_nodes::NodeTimer(nh, kSimCyclePeriod, [this] { networkCycle(); });
+    else
+      network_thread_ = std::thread([this] {
+        while (running_ && ros::ok()) bridge_.spinOnce(0.02);
+      });
   }
 
   ~Water2BaseBridgeNode() {
@@ -69,6 +81,15 @@ class Water2BaseBridgeNode {
     } catch (const std::exception& e) {
       ROS_ERROR_THROTTLE(kLogThrottle, "water2_base_bridge: /cmd_vel rejected: %s", e.what());
     }
+  }
+
+  /// Sim time: one bounded network cycle per instant of ROS time (no waiting for replies).
+  void networkCycle() {
+    const double now = ehc_realman_nodes::nodeNow();
+    if (now <= last_step_time_) return;  // a ROS timer may fire twice when /clock jumps
+    bridge_.spinOnce(0.0);
+    last_step_time_ = now;
+    if (status_every_step_) publishStatus();
   }
 
   void publishOdometry() {
@@ -129,7 +150,7 @@ class Water2BaseBridgeNode {
                 kv("error_replies", std::to_string(s.error_replies)),
                 kv("clamped_commands", std::to_string(s.clamped_commands)),
                 kv("rejected_commands", std::to_string(s.rejected_commands)),
-                kv("last_error", s.last_error)};
+                kv("last_error", s.last_error), kv("last_step", lastStepText())};
     status_pub_.publish(d);
     if (s.level != last_level_) {
       if (s.level == Level::Ok) ROS_INFO("water2_base_bridge: %s", s.message.c_str());
@@ -139,10 +160,18 @@ class Water2BaseBridgeNode {
     }
   }
 
+  std::string lastStepText() const {
+    char text[32];
+    std::snprintf(text, sizeof(text), "%.9f", last_step_time_.load());
+    return text;
+  }
+
   ehc_realman::Water2BaseBridge bridge_;
+  const bool status_every_step_;
+  std::atomic<double> last_step_time_{-std::numeric_limits<double>::infinity()};  ///< sim time only
   ros::Publisher odom_pub_, status_pub_;
   ros::Subscriber cmd_sub_;
-  ros::SteadyTimer odom_timer_, status_timer_;
+  ehc_realman_nodes::NodeTimer odom_timer_, status_timer_, network_timer_;
   tf2_ros::TransformBroadcaster tf_;
   ehc_realman::Water2BridgeStatus::Level last_level_ = ehc_realman::Water2BridgeStatus::Level::Ok;
   std::atomic<bool> running_{true};
@@ -168,8 +197,11 @@ int main(int argc, char** argv) {
     int port = 0;
     if (pnh.getParam("port", port)) config.port = port;
     config.validate();
-    ROS_INFO_STREAM("water2_base_bridge configuration:\n" << config.summary());
-    node = std::make_unique<Water2BaseBridgeNode>(nh, config);
+    const bool status_every_step = pnh.param("status_every_step", false);
+    ROS_INFO_STREAM("water2_base_bridge configuration:\n" << config.summary() << "\nclock: "
+                    << (ros::Time::isSimTime() ? "ROS time (/use_sim_time), network cycle every 10 ms" : "steady")
+                    << (status_every_step ? ", status after every network cycle" : ""));
+    node = std::make_unique<Water2BaseBridgeNode>(nh, config, status_every_step);
   } catch (const std::exception& e) {
     ROS_FATAL("water2_base_bridge: %s", e.what());
     return 2;
