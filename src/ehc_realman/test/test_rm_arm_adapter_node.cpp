@@ -9,7 +9,8 @@
 // The fake driver checks every frame (size, <= 10 deg and <= v_max/rate per joint from the
 // previous frame, joint limits) and executes it perfectly.
 // Times asserted are sim times. One step of tolerance where the order of two topics is not
-// defined (a command published before a /clock step may be taken at that step or the next).
+// defined: a command published after a /clock step may be taken before it (at the previous
+// step's time); the handshake also waits for the command (status "commands"), never later.
 
 #include "ehc_realman/realman_adapter_config.h"
 #include "ehc_realman/realman_joint_streamer.h"
@@ -30,6 +31,8 @@
 
 #include <gtest/gtest.h>
 
+#include "sim_clock_wait.h"
+
 #include <algorithm>
 #include <cmath>
 #include <functional>
@@ -37,10 +40,11 @@
 
 namespace {
 
+using ehc_realman_test::spinUntil;
+
 constexpr double kPeriod = 0.01;          ///< stream period (rate_hz 100 in rm_arm_adapter.yaml)
 constexpr double kCommandTimeout = 0.2;   ///< stream.command_timeout
 constexpr double kHold = 0.5;             ///< stream.hold_duration
-constexpr double kHangGuard = 30.0;       ///< wall s without a handshake: the test fails (a hang)
 
 struct Frame {
   double time;  ///< sim time of the step that produced it
@@ -69,28 +73,6 @@ class Rig {
     subs_.push_back(nh.subscribe("/rm_driver/Gripper_Pick", 10, &Rig::onGripperPick, this));
     subs_.push_back(nh.subscribe("/arm/adapter_status", 1000, &Rig::onStatus, this,
                                  ros::TransportHints().tcpNoDelay()));
-  }
-
-  /// Spins until `pred` holds; false (and a failure) after kHangGuard wall seconds.
-  /// `resend` (if given) runs every 0.1 wall s while waiting: the same /clock again, in case
-  /// the node's /clock subscription connected after it went out (same time: idempotent).
-  bool spinUntil(const std::function<bool()>& pred, const char* what,
-                 const std::function<void()>& resend = {}) {
-    const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(kHangGuard);
-    ros::WallTime next_resend = ros::WallTime::now() + ros::WallDuration(0.1);
-    while (ros::ok() && !pred()) {
-      if (ros::WallTime::now() > end) {
-        ADD_FAILURE() << "hang guard: no " << what << " within " << kHangGuard << " wall s";
-        return false;
-      }
-      if (resend && ros::WallTime::now() > next_resend) {
-        resend();
-        next_resend = ros::WallTime::now() + ros::WallDuration(0.1);
-      }
-      ros::WallDuration(0.0005).sleep();
-      ros::spinOnce();
-    }
-    return pred();
   }
 
   /// Waits until the adapter is connected to every topic, then starts the clock.
@@ -128,9 +110,14 @@ class Rig {
       m.names = names;
       m.velocities = *command;
       cmd_pub_.publish(m);
+      ++commands_sent_;
     }
-    return spinUntil([&] { return last_step_ >= t_ - 1e-6 && frames_.size() >= status_frames_; },
-                     "status of the step (last_step) and its frames", [&] { clock_pub_.publish(c); });
+    // The command too (accepted or rejected): its receipt time is this step or the previous one
+    // (it may be taken before this step's /clock), never later.
+    return spinUntil([&] {
+      return last_step_ >= t_ - 1e-6 && frames_.size() >= status_frames_ &&
+             count("commands") + count("rejected_commands") >= commands_sent_;
+    }, "status of the step (last_step), its frames and the command", [&] { clock_pub_.publish(c); });
   }
 
   /// Steps for `seconds` of sim time, commanding `v` at 50 Hz (every other step).
@@ -250,6 +237,7 @@ class Rig {
   double t_ = 100.0;       ///< the same, in seconds
   double last_step_ = -1.0;
   std::size_t status_frames_ = 0;
+  unsigned long commands_sent_ = 0;
   double last_command_time_ = 0.0;
   diagnostic_msgs::DiagnosticStatus status_;
   Eigen::VectorXd arm_;
@@ -334,9 +322,10 @@ TEST(RmArmAdapter, CommandTimeoutHoldsThenStopsOnTheAdaptersClock) {
   double last_motion = t_last;
   for (std::size_t k = 1; k < frames.size(); ++k)
     if (!(frames[k].q == frames[k - 1].q)) last_motion = frames[k].time;
-  // Motion until the timeout (taken at the step of receipt, or the next), then the same frame.
-  EXPECT_GE(last_motion, t_last + kCommandTimeout - kPeriod - 1e-6);
-  EXPECT_LE(last_motion, t_last + kCommandTimeout + 2 * kPeriod + 1e-6);
+  // Motion until the timeout after the last command's receipt (this step or the previous one;
+  // the step at exactly the timeout may fall either side by rounding), then the same frame.
+  EXPECT_GE(last_motion, t_last + kCommandTimeout - 2 * kPeriod - 1e-6);
+  EXPECT_LE(last_motion, t_last + kCommandTimeout + kPeriod + 1e-6);
   for (const auto& f : frames) {
     if (f.time > t_last + kCommandTimeout + 2 * kPeriod + 1e-6) {
       EXPECT_TRUE(f.q == held) << "moved while holding";
@@ -397,7 +386,7 @@ TEST(RmArmAdapter, EmergencyStopLatchesUntilReset) {
   const double t_stop = r.t();
   ASSERT_TRUE(r.command(v, 1.5));
   EXPECT_TRUE(r.framesSince(t_stop + kPeriod / 2).empty()) << "no frame after the stop";
-  ASSERT_TRUE(r.spinUntil([&] { return r.stops() > 0; }, "Stop{state: true}"));
+  ASSERT_TRUE(spinUntil([&] { return r.stops() > 0; }, "Stop{state: true}"));
   r.publishReset();
   for (int k = 0; k < 100 && r.statusValue("phase") == stopped; ++k) ASSERT_TRUE(r.idle(0.01));
   const double t1 = r.t();
@@ -412,7 +401,7 @@ TEST(RmArmAdapter, GripperRequestsMapToDriverMessages) {
   r.publishGripper("pick");
   r.publishGripper("bogus");
   r.publishWidth(0.035);
-  ASSERT_TRUE(r.spinUntil([&] { return r.gripperSets().size() >= 2 && !r.gripperPicks().empty(); },
+  ASSERT_TRUE(spinUntil([&] { return r.gripperSets().size() >= 2 && !r.gripperPicks().empty(); },
                           "gripper messages"));
   ASSERT_TRUE(r.idle(0.1));  // anything else in flight arrives (ordered per topic)
   EXPECT_EQ(r.gripperSets(), (std::vector<int>{1000, 500}));

@@ -23,6 +23,8 @@
 
 #include <gtest/gtest.h>
 
+#include "sim_clock_wait.h"
+
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -37,8 +39,9 @@ using ehc_realman_test::FakeWater2Server;
 
 namespace {
 
+using ehc_realman_test::spinUntil;
+
 constexpr double kStep = 0.01;       ///< s of sim time per step (the bridge's network cycle)
-constexpr double kHangGuard = 30.0;  ///< wall s without a handshake: the test fails (a hang)
 const std::string kConfig = std::string(EHC_CONFIG_DIR) + "/../src/ehc_realman/test/water2_loopback.yaml";
 
 /// The test's sim time, shared with the fake server's thread (integer steps: no drift).
@@ -53,27 +56,6 @@ class Rig {
     odom_sub_ = nh.subscribe("/odom", 1000, &Rig::onOdom, this);
     status_sub_ = nh.subscribe("/water2/status", 1000, &Rig::onStatus, this,
                                ros::TransportHints().tcpNoDelay());
-  }
-
-  /// `resend` (if given) runs every 0.1 wall s while waiting: the same /clock again, in case
-  /// the node's /clock subscription connected after it went out (same time: idempotent).
-  bool spinUntil(const std::function<bool()>& pred, const char* what,
-                 const std::function<void()>& resend = {}) {
-    const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(kHangGuard);
-    ros::WallTime next_resend = ros::WallTime::now() + ros::WallDuration(0.1);
-    while (ros::ok() && !pred()) {
-      if (ros::WallTime::now() > end) {
-        ADD_FAILURE() << "hang guard: no " << what << " within " << kHangGuard << " wall s";
-        return false;
-      }
-      if (resend && ros::WallTime::now() > next_resend) {
-        resend();
-        next_resend = ros::WallTime::now() + ros::WallDuration(0.1);
-      }
-      ros::WallDuration(0.0005).sleep();
-      ros::spinOnce();
-    }
-    return pred();
   }
 
   bool connected() {
@@ -95,9 +77,14 @@ class Rig {
       tw.linear.x = cmd->first;
       tw.angular.z = cmd->second;
       cmd_pub_.publish(tw);
+      ++commands_sent_;
     }
-    if (!spinUntil([&] { return last_step_ >= t - 1e-6; }, "status of the network cycle",
-                   [&] { clock_pub_.publish(c); }))
+    // The cycle's status and the command's receipt (this cycle or the previous one: it may be
+    // taken before this cycle's /clock, never later).
+    if (!spinUntil([&] {
+          return last_step_ >= t - 1e-6 &&
+                 count("commands") + count("rejected_commands") >= commands_sent_;
+        }, "status of the network cycle and the command", [&] { clock_pub_.publish(c); }))
       return false;
     noteConnection();
     return spinUntil([&] {
@@ -176,7 +163,7 @@ class Rig {
   std::vector<nav_msgs::Odometry> odom_;
   diagnostic_msgs::DiagnosticStatus status_;
   double last_step_ = -1.0;
-  unsigned long connects_ = 0, base_ = 0;
+  unsigned long connects_ = 0, base_ = 0, commands_sent_ = 0;
   double last_command_ = 0.0;
 };
 
@@ -235,11 +222,11 @@ TEST(Water2BaseBridgeNode, ForwardsClampedCommandsAtRateAndStopsAfterTimeout) {
   ASSERT_GT(moving, 1);
   EXPECT_NEAR((last_moving - first_moving) / (moving - 1), 0.05, 1e-6) << "20 Hz of sim time";
   // The timeout on the bridge's clock, from the receipt of the last /cmd_vel (that cycle or the
-  // next): no motion request after it, a zero at the next cycle, zeros for 1 s.
+  // previous one): no motion request after it, a zero at the next cycle, zeros for 1 s.
   const double timeout = ehc_realman::loadWater2BridgeConfig(kConfig).command_timeout;
-  EXPECT_LE(last_moving, t_last + kStep + timeout + 1e-6) << "no motion request after the timeout";
+  EXPECT_LE(last_moving, t_last + timeout + 1e-6) << "no motion request after the timeout";
   ASSERT_GT(first_zero, 0.0);
-  EXPECT_GT(first_zero - t_last, timeout - 1e-6);
+  EXPECT_GT(first_zero - t_last, timeout - 2 * kStep - 1e-6);  // receipt a step early; rounding
   EXPECT_LE(first_zero - t_last, timeout + 2 * kStep + 1e-6) << "zero within one cycle of the timeout";
   EXPECT_GE(zeros_after, 20);
   std::printf("[water2_base_bridge] lock-step: %d moving requests, first zero %.3f s (sim) after the last "

@@ -69,6 +69,7 @@ struct JointStreamerCounters {
   std::uint64_t tracking_clamped = 0;
   std::uint64_t limit_clamped = 0;
   std::uint64_t step_clamped = 0;
+  std::uint64_t commands = 0;  ///< velocity commands accepted
   std::uint64_t rejected_commands = 0;
   std::uint64_t rejected_states = 0;
   std::uint64_t timeouts = 0;  ///< transitions Streaming -> Holding

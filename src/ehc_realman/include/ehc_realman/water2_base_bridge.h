@@ -126,6 +126,7 @@ struct Water2BridgeStatus {
   std::uint64_t malformed_replies = 0;
   std::uint64_t error_replies = 0;     ///< well-formed replies whose status is not OK
   std::uint64_t clamped_commands = 0;
+  std::uint64_t commands = 0;          ///< commands accepted (clamped ones included)
   std::uint64_t rejected_commands = 0;
   std::string last_error;
 };

@@ -138,6 +138,7 @@ void JointPositionStreamer::setVelocityCommand(const std::vector<std::string>& n
   command_ = v;
   command_time_ = now;
   has_command_ = true;
+  ++counters_.commands;
 }
 
 void JointPositionStreamer::emergencyStop() { phase_ = StreamPhase::EmergencyStopped; }

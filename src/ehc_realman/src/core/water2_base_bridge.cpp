@@ -252,6 +252,7 @@ void Water2BaseBridge::setCommand(double linear, double angular) {
   std::lock_guard<std::mutex> lock(mutex_);
   try {
     if (watchdog_.setCommand(linear, angular, t)) ++counters_.clamped_commands;
+    ++counters_.commands;
   } catch (const std::invalid_argument&) {
     ++counters_.rejected_commands;
     throw;

@@ -16,7 +16,8 @@
 //   "last_step": the node-clock time of the last stream step)
 // Clock (node_clock.h): steady on the robot; ROS time under /use_sim_time, the stream then steps
 // on a ROS timer as /clock advances. `_status_every_step:=true` publishes the status after every
-// stream step (a lock-step test's handshake: its "frames" count says what that step published).
+// stream step and after every command (a lock-step test's handshake: "frames" says what that
+// step published, "commands" + "rejected_commands" that a command was taken).
 
 #include "ehc_realman/realman_adapter_config.h"
 #include "ehc_realman/realman_joint_streamer.h"
@@ -102,12 +103,15 @@ class RmArmAdapterNode {
   }
 
   void onCommand(const ehc_msgs::JointVelocityCommand::ConstPtr& msg) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    try {
-      streamer_.setVelocityCommand(msg->names, msg->velocities, nodeNow());
-    } catch (const std::exception& e) {
-      ROS_ERROR_THROTTLE(kLogThrottle, "rm_arm_adapter: %s", e.what());
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      try {
+        streamer_.setVelocityCommand(msg->names, msg->velocities, nodeNow());
+      } catch (const std::exception& e) {
+        ROS_ERROR_THROTTLE(kLogThrottle, "rm_arm_adapter: %s", e.what());
+      }
     }
+    if (status_every_step_) publishStatus();  // the command's receipt, for a lock-step test
   }
 
   void onEmergencyStop(const std_msgs::Bool::ConstPtr& msg) {
@@ -255,6 +259,7 @@ class RmArmAdapterNode {
                 kv("step_clamped", std::to_string(c.step_clamped)),
                 kv("limit_clamped", std::to_string(c.limit_clamped)),
                 kv("tracking_clamped", std::to_string(c.tracking_clamped)),
+                kv("commands", std::to_string(c.commands)),
                 kv("rejected_commands", std::to_string(c.rejected_commands)),
                 kv("rejected_states", std::to_string(c.rejected_states)),
                 kv("timeouts", std::to_string(c.timeouts)), kv("last_step", last_step_text)};

@@ -12,8 +12,9 @@
 //             key "last_step": the node-clock time of the last network cycle under sim time)
 // Clock (node_clock.h): steady on the robot, the network work in its own thread; ROS time under
 // /use_sim_time, one network cycle per 10 ms of ROS time on a ROS timer (replies read in the
-// next cycle). `_status_every_step:=true` publishes the status after every such cycle (a
-// lock-step test's handshake: its request counters say what that cycle sent).
+// next cycle). `_status_every_step:=true` publishes the status after every such cycle and every
+// /cmd_vel (a lock-step test's handshake: the request counters say what that cycle sent,
+// "commands" + "rejected_commands" that a command was taken).
 
 #include "ehc_realman/water2_base_bridge.h"
 #include "node_clock.h"
@@ -81,6 +82,7 @@ class Water2BaseBridgeNode {
     } catch (const std::exception& e) {
       ROS_ERROR_THROTTLE(kLogThrottle, "water2_base_bridge: /cmd_vel rejected: %s", e.what());
     }
+    if (status_every_step_) publishStatus();  // the command's receipt, for a lock-step test
   }
 
   /// Sim time: one bounded network cycle per instant of ROS time (no waiting for replies).
@@ -149,6 +151,7 @@ class Water2BaseBridgeNode {
                 kv("malformed_replies", std::to_string(s.malformed_replies)),
                 kv("error_replies", std::to_string(s.error_replies)),
                 kv("clamped_commands", std::to_string(s.clamped_commands)),
+                kv("commands", std::to_string(s.commands)),
                 kv("rejected_commands", std::to_string(s.rejected_commands)),
                 kv("last_error", s.last_error), kv("last_step", lastStepText())};
     status_pub_.publish(d);
