@@ -26,6 +26,7 @@
 #include "ros_conversions.h"
 
 #include <geometry_msgs/PoseStamped.h>
+#include <ros/callback_queue.h>
 #include <ros/ros.h>
 #include <tf2_ros/transform_listener.h>
 
@@ -88,8 +89,13 @@ class GraspNode {
     const ros::TransportHints fast = ros::TransportHints().tcpNoDelay();  // no Nagle delay (lock-step order)
     cloud_sub_ = nh.subscribe(cfg_.cloud_topic, static_cast<std::uint32_t>(cfg_.cloud_queue), &GraspNode::onCloud, this, fast);
     if (lockstep_) ROS_INFO_STREAM("ehc_grasp_node: each cloud acknowledged on " << ack_.topic() << " when done");
-    if (!cfg_.target_topic.empty())
-      target_sub_ = nh.subscribe(cfg_.target_topic, 5, &GraspNode::onTarget, this, fast);
+    if (!cfg_.target_topic.empty()) {  // taken when a cloud comes (onCloud), on their own queue
+      ros::SubscribeOptions opts = ros::SubscribeOptions::create<geometry_msgs::PoseStamped>(
+          cfg_.target_topic, static_cast<std::uint32_t>(kMaxTargets), [this](const geometry_msgs::PoseStampedConstPtr& m) { onTarget(*m); },
+          ros::VoidConstPtr(), &target_queue_);
+      opts.transport_hints = fast;
+      target_sub_ = nh.subscribe(opts);
+    }
   }
 
  private:
@@ -103,21 +109,34 @@ class GraspNode {
     // Kept in stamp order (a target stamped before an older one is dropped); a clock that
     // jumped back (simulator reset) starts the list again.
     if (!targets_.empty() && msg.header.stamp < targets_.back().first) targets_.clear();
+    else if (msg.header.stamp < last_cloud_ && msg.header.stamp > last_cloud_target_)
+      ROS_WARN_STREAM_THROTTLE(kLogThrottle, "ehc_grasp_node: target at " << msg.header.stamp << " came after the cloud at "
+                                                << last_cloud_ << ", which used an older one (receipt order)");
     targets_.emplace_back(msg.header.stamp, p);
     if (targets_.size() > kMaxTargets) targets_.pop_front();
   }
 
   /// Every cloud: processed, skipped or dropped (reason logged), then acknowledged once.
+  /// In lock-step the targets published before the cloud (by the sequencer, before its
+  /// acknowledgement let the simulator go on) are all taken first, whenever they arrived.
   void onCloud(const sensor_msgs::PointCloud2ConstPtr& cloud) {
+    if (lockstep_ && !cfg_.target_topic.empty() && !poll_pass_.wait(kTfWallWait))
+      ROS_WARN_STREAM_THROTTLE(kLogThrottle, "ehc_grasp_node: roscpp's poll thread did not pass within " << kTfWallWait << " wall s");
+    target_queue_.callAvailable();
     process(*cloud);
     ack_.done(cloud->header.stamp);  // after the candidates: the simulator steps on
   }
 
   /// The newest target stamped before `stamp` and at most targeting.target_timeout older; null
-  /// if none.
-  const Eigen::Vector3d* targetFor(const ros::Time& stamp) const {
+  /// if none. Noted for the receipt-order warning (onTarget).
+  const Eigen::Vector3d* targetFor(const ros::Time& stamp) {
+    last_cloud_ = stamp;
+    last_cloud_target_ = ros::Time();
     for (auto it = targets_.rbegin(); it != targets_.rend(); ++it)
-      if (it->first < stamp) return (stamp - it->first).toSec() <= cfg_.targeting.target_timeout ? &it->second : nullptr;
+      if (it->first < stamp) {
+        last_cloud_target_ = it->first;
+        return (stamp - it->first).toSec() <= cfg_.targeting.target_timeout ? &it->second : nullptr;
+      }
     return nullptr;
   }
 
@@ -158,10 +177,13 @@ class GraspNode {
   tf2_ros::Buffer tf_;
   tf2_ros::TransformListener listener_;
   ros::Publisher pub_;
+  ros::CallbackQueue target_queue_;  ///< the target subscription's, run when a cloud comes (outlives it)
   ros::Subscriber cloud_sub_, target_sub_;
   RateLimiter limiter_;  ///< targeting.max_rate_hz on the clouds' stamps
   static constexpr std::size_t kMaxTargets = 200;  ///< targets kept (the sequencer sends one per cycle)
   std::deque<std::pair<ros::Time, Eigen::Vector3d>> targets_;  ///< by stamp, newest last
+  ehc_msgs::PollPassBarrier poll_pass_;
+  ros::Time last_cloud_, last_cloud_target_;  ///< the last processed cloud's stamp and its target's
   ehc_msgs::LockstepAck ack_;
   bool lockstep_ = false;  ///< _ack_topic set: the simulator waits for this node
   static constexpr double kTfWallWait = 1.0;  ///< lock-step: wall s a cloud's camera pose is waited for
