@@ -14,7 +14,9 @@
 // lock-step no later transform comes until the cloud is acknowledged: the simulator stalled.
 // Time is the clouds' and the target's stamps (the rate limit, the target's age), so which
 // cloud is processed with which target does not depend on when messages arrive; the target
-// used for a cloud is the newest one stamped before it. With _ack_topic:=<topic> every cloud
+// used for a cloud is the newest one stamped before it (in lock-step every target published
+// before the cloud is taken first, ehc_msgs::PollPassBarrier; one that still comes after the
+// cloud that should have used it is logged). With _ack_topic:=<topic> every cloud
 // received is acknowledged there exactly once, whatever came of it (processed and its
 // candidates published, skipped by the rate limit, or dropped with a logged reason): a
 // lock-step simulator's acknowledgement gate (ehc_msgs::LockstepAck, demo.sh).
