@@ -29,9 +29,10 @@
 #   OBSTACLES          1: run the obstacle node (controller obstacle dampers), 0: without  [1]
 #   LOCKSTEP_GATE      1: the nodes outside the controller's handshake join the lock-step:
 #                      the simulator steps past an image, a cloud or a state only once the
-#                      tag nodes (images), the obstacle node and the sequencer (states)
-#                      are done with it (_lockstep_acks, _ack_topic:=/sim/lockstep_ack), so
-#                      results do not depend on the CPU load; 0: they run beside it     [1]
+#                      tag nodes (images), the grasp node (clouds), the obstacle node and
+#                      the sequencer (states) are done with it (_lockstep_acks,
+#                      _ack_topic:=/sim/lockstep_ack), so results do not depend on the CPU
+#                      load; 0: they run beside it                                    [1]
 # Exit code: 0 when the run completed (failed grasps are reported in the summary; with
 # EHC_DEMO_STRICT=1 a failed grasp exits 1), 2 on a set-up error or crash, 130 on Ctrl-C.
 set -o pipefail
@@ -174,16 +175,16 @@ for o in "${OBJECTS[@]}"; do TAG_NODES+=("ehc_tag_$o"); done
 clear_private_params ehc_sim_node "${TAG_NODES[@]}" ehc_grasp_node ehc_obstacle_node \
   ehc_controller_node ehc_grasp_sequencer_node
 
-# Lock-step acknowledgement gate (issue 18): every tag node acknowledges each image, the
-# obstacle node each state and the sequencer each controller status on
+# Lock-step acknowledgement gate (issue 18): every tag node acknowledges each image, the grasp
+# node each cloud, the obstacle node each state and the sequencer each controller status on
 # /sim/lockstep_ack; the simulator publishes its first state once all are ready and steps on only
 # once they are done (ehc_sim::StepScheduler::setAckGate, ehc_msgs::LockstepAck).
 GATE_ARG=()
 ACK_ARG=()
 if [ "${LOCKSTEP_GATE:-1}" = 1 ]; then
-  # The grasp node can acknowledge clouds (_ack_topic) but is not in the gate yet: in session 6
-  # it stalled the simulator in 2 of ~15 runs (a cloud never acknowledged; not traced).
-  acks=$(IFS=,; echo "${TAG_NODES[*]},ehc_grasp_sequencer_node:state")
+  # The grasp node acknowledges every cloud (processed, skipped by its rate limit, or dropped
+  # with a logged reason after a wall-clock wait for its camera pose).
+  acks=$(IFS=,; echo "${TAG_NODES[*]},ehc_grasp_node:cloud,ehc_grasp_sequencer_node:state")
   [ "${OBSTACLES:-1}" = 1 ] && acks="$acks,ehc_obstacle_node:state"
   GATE_ARG=(_lockstep_acks:="[$acks]" _lockstep_max_lag:=0.0)
   ACK_ARG=(_ack_topic:=/sim/lockstep_ack)

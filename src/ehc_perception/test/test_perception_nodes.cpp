@@ -15,18 +15,22 @@
 #include <gtest/gtest.h>
 #include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
+#include <rosgraph_msgs/Clock.h>
 #include <rosgraph_msgs/Log.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/JointState.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <sensor_msgs/point_cloud2_iterator.h>
+#include <std_msgs/Header.h>
 #include <tf2_eigen/tf2_eigen.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 #include <tf2_ros/transform_broadcaster.h>
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
+#include <map>
 #include <type_traits>
 
 using namespace ehc_perception;
@@ -73,6 +77,19 @@ sensor_msgs::PointCloud2 xyzCloud(const PointList& pts) {
     ++x, ++y, ++z;
   }
   return c;
+}
+
+/// The scene, in the camera frame: a table top (0.6 x 0.6 m at 0.58 m, x from 0.0 to 0.6) and
+/// a standing cylinder (r 3 cm, 12 cm tall) under the camera.
+PointList sceneInCamera() {
+  Surface scene = tableSurface(0.3, 0.0, 0.6, 0.6, kTableZ, 0.006);
+  Surface cyl = cylinderSurface(0.03, 0.0, 0.12, 0.003, false, true);
+  cyl.transform(pose(0.3, 0.0, kTableZ, 0.0));
+  scene.append(cyl);
+  const Eigen::Isometry3f camFromWorld = worldFromCamera().inverse().cast<float>();
+  PointList pts = scene.noisy(0.001, 3);
+  for (auto& p : pts) p = camFromWorld * p;
+  return pts;
 }
 
 /// `good` with its layout broken in each way a fault campaign found or the validation rejects;
@@ -145,17 +162,8 @@ class PerceptionNodes : public ::testing::Test {
     info_.D.assign(5, 0.0);
     info_.K = {cam_.fx, 0, cam_.cx, 0, cam_.fy, cam_.cy, 0, 0, 1};
 
-    // Scene: table top (0.6 x 0.6 m at 0.58 m, x from 0.0 to 0.6) and a standing cylinder
-    // (r 3 cm, 12 cm tall) under the camera; expressed in the camera frame.
-    Surface scene = tableSurface(0.3, 0.0, 0.6, 0.6, kTableZ, 0.006);
-    Surface cyl = cylinderSurface(0.03, 0.0, 0.12, 0.003, false, true);
-    cyl.transform(pose(0.3, 0.0, kTableZ, 0.0));
-    scene.append(cyl);
-    const Eigen::Isometry3f camFromWorld = worldFromCamera().inverse().cast<float>();
-    PointList pts = scene.noisy(0.001, 3);
-    for (auto& p : pts) p = camFromWorld * p;
-    scene_in_camera_ = pts;
-    cloud_ = xyzCloud<float>(pts);
+    scene_in_camera_ = sceneInCamera();
+    cloud_ = xyzCloud<float>(scene_in_camera_);
   }
 
   /// `state_stamp_offset` (s) is added to the stamps of /joint_states and /odom (a sender's
@@ -414,6 +422,104 @@ TEST_F(PerceptionNodes, MalformedCloudsAreRejectedAndTheNodesKeepWorking) {
   };
   EXPECT_TRUE(rejected("/ehc_grasp_node")) << "no malformed-cloud error logged";
   EXPECT_TRUE(rejected("/ehc_obstacle_node")) << "no malformed-cloud error logged";
+}
+
+// The grasp node in lock-step (grasp_node_lockstep.test: sim time, _ack_topic): this test is
+// the simulator (it owns /clock and publishes, like ehc_sim_node, each cloud before the camera
+// pose of its stamp) and checks that every cloud is acknowledged exactly once, whatever came of
+// it: processed (candidates published before the acknowledgement), skipped by the 2 Hz rate
+// limit, or dropped with a logged reason when its camera pose never arrives (once the wall-clock
+// wait is over; sim time stands still meanwhile). The wall-clock deadlines only guard against a
+// hang: a tf2_ros::MessageFilter held the cloud without a pose for good, so the simulator stalled.
+class GraspNodeLockstep : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    clock_pub_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 1, true);
+    cloud_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("/camera/depth/points", 5);
+    target_pub_ = nh_.advertise<geometry_msgs::PoseStamped>("/ehc/target_pose", 5);
+    ack_sub_ = nh_.subscribe("/sim/lockstep_ack", 50, &GraspNodeLockstep::onAck, this);
+    grasp_sub_ = nh_.subscribe("/ehc/grasp_candidates", 50, &GraspNodeLockstep::onGrasps, this);
+    log_sub_ = nh_.subscribe("/rosout", 200, &GraspNodeLockstep::onLog, this);
+    cloud_ = xyzCloud<float>(sceneInCamera());
+    setClock(ros::Time(1.0));
+  }
+
+  void setClock(const ros::Time& t) {
+    rosgraph_msgs::Clock c;
+    c.clock = t;
+    clock_pub_.publish(c);
+  }
+
+  /// One simulator step at `t`: the cloud, then (if `with_pose`) the camera pose at t on /tf;
+  /// then waits (wall-clock guard) for the node's acknowledgement of t.
+  bool step(const ros::Time& t, bool with_pose) {
+    setClock(t);
+    cloud_.header.stamp = t;
+    cloud_pub_.publish(cloud_);
+    if (with_pose) {
+      geometry_msgs::TransformStamped tf = tf2::eigenToTransform(worldFromCamera());
+      tf.header.frame_id = "odom";
+      tf.header.stamp = t;
+      tf.child_frame_id = kCamFrame;
+      tf_.sendTransform(tf);
+    }
+    return spinUntil([&] { return acks_.count(t) > 0; }, 30.0);
+  }
+
+  static bool spinUntil(const std::function<bool()>& done, double wall_s) {
+    const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(wall_s);
+    while (ros::ok() && !done() && ros::WallTime::now() < end) {
+      ros::spinOnce();
+      ros::WallDuration(0.005).sleep();
+    }
+    return done();
+  }
+
+  void onAck(const std_msgs::Header& m) {
+    if (m.frame_id == "/ehc_grasp_node") ++acks_[m.stamp];
+  }
+  void onGrasps(const ehc_msgs::GraspCandidates& m) { grasp_stamps_.push_back(m.header.stamp); }
+  void onLog(const rosgraph_msgs::Log& m) {
+    if (m.name == "/ehc_grasp_node" && m.level >= rosgraph_msgs::Log::WARN) warnings_.push_back(m.msg);
+  }
+
+  ros::NodeHandle nh_;
+  ros::Publisher clock_pub_, cloud_pub_, target_pub_;
+  ros::Subscriber ack_sub_, grasp_sub_, log_sub_;
+  tf2_ros::TransformBroadcaster tf_;
+  sensor_msgs::PointCloud2 cloud_;
+  std::map<ros::Time, int> acks_;  ///< acknowledgements per stamp (0: "ready")
+  std::vector<ros::Time> grasp_stamps_;
+  std::vector<std::string> warnings_;
+};
+
+TEST_F(GraspNodeLockstep, EveryCloudIsAcknowledgedOnceWhateverCameOfIt) {
+  ASSERT_TRUE(spinUntil([&] { return acks_.count(ros::Time(0)) > 0; }, 60.0))
+      << "the grasp node never announced it is ready for the lock-step";
+  const ros::Time processed(1.0), rate_limited(1.2), without_pose(2.0), processed_after(3.0);
+  ASSERT_TRUE(step(processed, true)) << "a cloud with its camera pose was not acknowledged";
+  ASSERT_TRUE(step(rate_limited, true)) << "a cloud inside the rate limit was not acknowledged";
+  ASSERT_TRUE(step(without_pose, false)) << "a cloud whose camera pose never comes was not acknowledged";
+  ASSERT_TRUE(step(processed_after, true)) << "the node does not process clouds after a dropped one";
+  // Candidates are published before the acknowledgement, but on another connection.
+  auto hasGrasps = [&](const ros::Time& t) {
+    return std::count(grasp_stamps_.begin(), grasp_stamps_.end(), t) == 1;
+  };
+  ASSERT_TRUE(spinUntil([&] { return hasGrasps(processed) && hasGrasps(processed_after); }, 30.0))
+      << "no candidates for the processed clouds";
+  // In order on one connection: nothing else was published before the last cloud's candidates.
+  EXPECT_EQ(grasp_stamps_, (std::vector<ros::Time>{processed, processed_after}));
+  for (const ros::Time& t : {processed, rate_limited, without_pose, processed_after})
+    EXPECT_EQ(acks_[t], 1) << "cloud at " << t << " acknowledged " << acks_[t] << " times";
+  ASSERT_TRUE(spinUntil(
+      [&] {
+        return std::any_of(warnings_.begin(), warnings_.end(),
+                           [](const std::string& w) { return w.find("dropped: no camera pose") != std::string::npos; });
+      },
+      30.0))
+      << "no reason logged for the cloud without a camera pose";
+  for (const std::string& w : warnings_)  // the targets were taken first (ehc_msgs::PollPassBarrier)
+    EXPECT_EQ(w.find("poll thread"), std::string::npos) << w;
 }
 
 int main(int argc, char** argv) {

@@ -4,14 +4,22 @@
 // cloud stamp), the support plane removed and the objects clustered; grasps are generated
 // for the object nearest the latest /ehc/target_pose (or every object without a fresh
 // target) and published best first (ehc_msgs/GraspCandidates, world frame). A cloud
-// without a usable grasp publishes an empty candidate list (reason in the log). Clouds wait in
-// a tf2_ros::MessageFilter until the camera pose at their stamp is known (as in ehc_tag_node,
-// issue 18: a lookup with a timeout on lock-step sim time dropped clouds under CPU load).
+// without a usable grasp publishes an empty candidate list (reason in the log). A cloud waits
+// for the camera pose at its stamp on the wall clock (ehc_msgs::waitForTransformWall: at most
+// tf_timeout s, in lock-step kTfWallWait s; a lookup with a timeout would wait on lock-step sim
+// time, which stands still until this node is done), then is dropped with a logged reason.
+// No tf2_ros::MessageFilter: it held a cloud forever when the cloud's transformable request
+// was registered just after the transform arrived (tf2::BufferCore::addTransformableRequest
+// checks, then registers; a transform inserted in between never answers the request), and in
+// lock-step no later transform comes until the cloud is acknowledged: the simulator stalled.
 // Time is the clouds' and the target's stamps (the rate limit, the target's age), so which
 // cloud is processed with which target does not depend on when messages arrive; the target
-// used for a cloud is the newest one stamped before it. With _ack_topic:=<topic> every cloud is
-// acknowledged there once done with (after its candidates are published): a lock-step
-// simulator's acknowledgement gate (ehc_msgs::LockstepAck, demo.sh).
+// used for a cloud is the newest one stamped before it (in lock-step every target published
+// before the cloud is taken first, ehc_msgs::PollPassBarrier; one that still comes after the
+// cloud that should have used it is logged). With _ack_topic:=<topic> every cloud
+// received is acknowledged there exactly once, whatever came of it (processed and its
+// candidates published, skipped by the rate limit, or dropped with a logged reason): a
+// lock-step simulator's acknowledgement gate (ehc_msgs::LockstepAck, demo.sh).
 #include "ehc_msgs/GraspCandidates.h"
 #include "ehc_msgs/lockstep_ack.h"
 #include "ehc_control/config_node.h"
@@ -20,8 +28,8 @@
 #include "ros_conversions.h"
 
 #include <geometry_msgs/PoseStamped.h>
+#include <ros/callback_queue.h>
 #include <ros/ros.h>
-#include <message_filters/subscriber.h>
 #include <tf2_ros/transform_listener.h>
 
 #include <deque>
@@ -39,14 +47,14 @@ struct GraspNodeConfig {
   std::string output_topic = "/ehc/grasp_candidates";
   std::string world_frame = "odom";
   GraspTargetingParams targeting;  ///< max rate, target timeout and gate
-  double tf_timeout = 0.1;       ///< s, lookup once the filter passed the cloud (the pose is there)
-  int cloud_queue = 3;           ///< clouds waiting for their camera pose (the oldest is dropped)
+  double tf_timeout = 0.1;       ///< wall s a cloud waits for its camera pose (lock-step: kTfWallWait)
+  int cloud_queue = 3;           ///< clouds waiting to be processed (the oldest is dropped)
   GraspGeneratorConfig generator;
 
   std::string summary() const {
     return "ehc_grasp_node: " + cloud_topic + " -> " + output_topic + " in '" + world_frame +
            "', target " + (target_topic.empty() ? std::string("<none>") : target_topic) + ", " +
-           targeting.summary() + ", " + std::to_string(cloud_queue) + " clouds wait for their camera pose\n  " +
+           targeting.summary() + ", " + std::to_string(cloud_queue) + " clouds queued, camera pose waited for " + std::to_string(tf_timeout) + " wall s\n  " +
            generator.summary();
   }
 };
@@ -75,22 +83,21 @@ class GraspNode {
       : cfg_(cfg),
         gen_(cfg.generator),
         listener_(tf_),
-        cloud_sub_(nh, cfg_.cloud_topic, static_cast<std::uint32_t>(cfg_.cloud_queue), ros::TransportHints().tcpNoDelay()),
-        cloud_filter_(cloud_sub_, tf_, cfg_.world_frame, static_cast<std::uint32_t>(cfg_.cloud_queue), nh),
         limiter_(cfg.targeting.max_rate_hz),
         ack_(pnh, cfg.target_topic.empty() ? std::vector<std::string>{cfg.cloud_topic, "/tf"}
                                             : std::vector<std::string>{cfg.cloud_topic, cfg.target_topic, "/tf"}) {
     pub_ = nh.advertise<ehc_msgs::GraspCandidates>(cfg_.output_topic, 2);
-    cloud_filter_.registerCallback(&GraspNode::onCloud, this);
-    if (!ack_.topic().empty()) ROS_INFO_STREAM("ehc_grasp_node: each cloud acknowledged on " << ack_.topic() << " when done");
-    cloud_filter_.registerFailureCallback(
-        [this](const sensor_msgs::PointCloud2ConstPtr& m, tf2_ros::filter_failure_reasons::FilterFailureReason why) {
-          ack_.done(m->header.stamp);
-          ROS_DEBUG_STREAM_THROTTLE(kLogThrottle, "ehc_grasp_node: cloud at " << m->header.stamp << " dropped before its camera pose arrived ("
-                                                        << ros_conv::filterFailureText(why) << ")");
-        });
-    if (!cfg_.target_topic.empty())
-      target_sub_ = nh.subscribe(cfg_.target_topic, 5, &GraspNode::onTarget, this, ros::TransportHints().tcpNoDelay());
+    lockstep_ = !ack_.topic().empty();
+    const ros::TransportHints fast = ros::TransportHints().tcpNoDelay();  // no Nagle delay (lock-step order)
+    cloud_sub_ = nh.subscribe(cfg_.cloud_topic, static_cast<std::uint32_t>(cfg_.cloud_queue), &GraspNode::onCloud, this, fast);
+    if (lockstep_) ROS_INFO_STREAM("ehc_grasp_node: each cloud acknowledged on " << ack_.topic() << " when done");
+    if (!cfg_.target_topic.empty()) {  // taken when a cloud comes (onCloud), on their own queue
+      ros::SubscribeOptions opts = ros::SubscribeOptions::create<geometry_msgs::PoseStamped>(
+          cfg_.target_topic, static_cast<std::uint32_t>(kMaxTargets), [this](const geometry_msgs::PoseStampedConstPtr& m) { onTarget(*m); },
+          ros::VoidConstPtr(), &target_queue_);
+      opts.transport_hints = fast;
+      target_sub_ = nh.subscribe(opts);
+    }
   }
 
  private:
@@ -104,28 +111,49 @@ class GraspNode {
     // Kept in stamp order (a target stamped before an older one is dropped); a clock that
     // jumped back (simulator reset) starts the list again.
     if (!targets_.empty() && msg.header.stamp < targets_.back().first) targets_.clear();
+    else if (msg.header.stamp < last_cloud_ && msg.header.stamp > last_cloud_target_)
+      ROS_WARN_STREAM_THROTTLE(kLogThrottle, "ehc_grasp_node: target at " << msg.header.stamp << " came after the cloud at "
+                                                << last_cloud_ << ", which used an older one (receipt order)");
     targets_.emplace_back(msg.header.stamp, p);
     if (targets_.size() > kMaxTargets) targets_.pop_front();
   }
 
+  /// Every cloud: processed, skipped or dropped (reason logged), then acknowledged once.
+  /// In lock-step the targets published before the cloud (by the sequencer, before its
+  /// acknowledgement let the simulator go on) are all taken first, whenever they arrived.
   void onCloud(const sensor_msgs::PointCloud2ConstPtr& cloud) {
+    if (lockstep_ && !cfg_.target_topic.empty() && !poll_pass_.wait(kTfWallWait))
+      ROS_WARN_STREAM_THROTTLE(kLogThrottle, "ehc_grasp_node: roscpp's poll thread did not pass within " << kTfWallWait << " wall s");
+    target_queue_.callAvailable();
     process(*cloud);
     ack_.done(cloud->header.stamp);  // after the candidates: the simulator steps on
   }
 
   /// The newest target stamped before `stamp` and at most targeting.target_timeout older; null
-  /// if none.
-  const Eigen::Vector3d* targetFor(const ros::Time& stamp) const {
+  /// if none. Noted for the receipt-order warning (onTarget).
+  const Eigen::Vector3d* targetFor(const ros::Time& stamp) {
+    last_cloud_ = stamp;
+    last_cloud_target_ = ros::Time();
     for (auto it = targets_.rbegin(); it != targets_.rend(); ++it)
-      if (it->first < stamp) return (stamp - it->first).toSec() <= cfg_.targeting.target_timeout ? &it->second : nullptr;
+      if (it->first < stamp) {
+        last_cloud_target_ = it->first;
+        return (stamp - it->first).toSec() <= cfg_.targeting.target_timeout ? &it->second : nullptr;
+      }
     return nullptr;
   }
 
   void process(const sensor_msgs::PointCloud2& msg) {
-    if (!limiter_.accept(msg.header.stamp.toSec())) return;
+    if (!limiter_.accept(msg.header.stamp.toSec())) return;  // skipped: inside the rate limit
+    if (!ehc_msgs::waitForTransformWall(tf_, cfg_.world_frame, msg.header.frame_id, msg.header.stamp,
+                                        lockstep_ ? kTfWallWait : cfg_.tf_timeout)) {
+      ROS_WARN_STREAM_THROTTLE(kLogThrottle, "ehc_grasp_node: cloud at " << msg.header.stamp << " dropped: no camera pose ('"
+                                                << msg.header.frame_id << "' in '" << cfg_.world_frame << "') at its stamp after "
+                                                << (lockstep_ ? kTfWallWait : cfg_.tf_timeout) << " wall s");
+      return;
+    }
     try {
-      const geometry_msgs::TransformStamped tf = tf_.lookupTransform(
-          cfg_.world_frame, msg.header.frame_id, msg.header.stamp, ros::Duration(cfg_.tf_timeout));
+      const geometry_msgs::TransformStamped tf =
+          tf_.lookupTransform(cfg_.world_frame, msg.header.frame_id, msg.header.stamp);  // there: waited for above
       const Eigen::Isometry3d T = tf2::transformToEigen(tf);
       const PointList pts = ros_conv::transformPoints(ros_conv::cloudToPoints(msg), T);
       const GraspResult res = generateForTarget(gen_, pts, T.translation(), targetFor(msg.header.stamp),
@@ -150,14 +178,17 @@ class GraspNode {
   GraspGenerator gen_;
   tf2_ros::Buffer tf_;
   tf2_ros::TransformListener listener_;
-  message_filters::Subscriber<sensor_msgs::PointCloud2> cloud_sub_;
-  tf2_ros::MessageFilter<sensor_msgs::PointCloud2> cloud_filter_;  ///< passes a cloud once its camera pose is known
   ros::Publisher pub_;
-  ros::Subscriber target_sub_;
+  ros::CallbackQueue target_queue_;  ///< the target subscription's, run when a cloud comes (outlives it)
+  ros::Subscriber cloud_sub_, target_sub_;
   RateLimiter limiter_;  ///< targeting.max_rate_hz on the clouds' stamps
   static constexpr std::size_t kMaxTargets = 200;  ///< targets kept (the sequencer sends one per cycle)
   std::deque<std::pair<ros::Time, Eigen::Vector3d>> targets_;  ///< by stamp, newest last
+  ehc_msgs::PollPassBarrier poll_pass_;
+  ros::Time last_cloud_, last_cloud_target_;  ///< the last processed cloud's stamp and its target's
   ehc_msgs::LockstepAck ack_;
+  bool lockstep_ = false;  ///< _ack_topic set: the simulator waits for this node
+  static constexpr double kTfWallWait = 1.0;  ///< lock-step: wall s a cloud's camera pose is waited for
 };
 
 }  // namespace

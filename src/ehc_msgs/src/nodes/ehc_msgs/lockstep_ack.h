@@ -12,15 +12,20 @@
 // Without _ack_topic it does nothing. Header-only (roscpp, std_msgs).
 
 #include <ros/names.h>
+#include <ros/poll_manager.h>
 #include <ros/ros.h>
 #include <ros/topic_manager.h>
 #include <std_msgs/Header.h>
 
 #include <tf2_ros/buffer.h>
 
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
 #include <functional>
 #include <limits>
 #include <map>
+#include <mutex>
 #include <string>
 #include <utility>
 #include <vector>
@@ -104,6 +109,45 @@ class StampedInbox {
  private:
   std::multimap<std::pair<ros::Time, int>, std::function<bool()>> held_;
   ros::Time last_;
+};
+
+/// Lock-step receipt order across connections. roscpp keeps the order of messages per connection
+/// only: a message published before a trigger on another connection (the sequencer's target
+/// before its acknowledgement, which lets the simulator publish the next cloud) has reached this
+/// process first, but roscpp's poll thread may read both sockets in one pass and queue the
+/// trigger first. wait() returns once the poll thread has finished a pass begun after the call
+/// (it is woken at once): every message that reached this process before the trigger is then in
+/// its callback queue. Call it in the trigger's callback, then run the other inputs' queue.
+class PollPassBarrier {
+ public:
+  PollPassBarrier() {
+    connection_ = ros::PollManager::instance()->addPollThreadListener([this] {
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        ++passes_;
+      }
+      passed_.notify_all();
+    });
+  }
+  ~PollPassBarrier() { ros::PollManager::instance()->removePollThreadListener(connection_); }
+  PollPassBarrier(const PollPassBarrier&) = delete;
+  PollPassBarrier& operator=(const PollPassBarrier&) = delete;
+
+  /// False if the poll thread did not finish a pass within `wall_s` (shutting down).
+  bool wait(double wall_s) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    const std::uint64_t next = passes_ + 1;  // the listener runs at the start of each pass
+    lock.unlock();
+    ros::PollManager::instance()->getPollSet().signal();  // wakes a poll() that waits for data
+    lock.lock();
+    return passed_.wait_for(lock, std::chrono::duration<double>(wall_s), [&] { return passes_ >= next; });
+  }
+
+ private:
+  boost::signals2::connection connection_;
+  std::mutex mutex_;
+  std::condition_variable passed_;
+  std::uint64_t passes_ = 0;
 };
 
 /// Waits on the wall clock (at most `wall_s`) until `buffer` can transform `source` into
