@@ -9,6 +9,7 @@
 #include <iterator>
 #include <string>
 #include <sys/wait.h>
+#include <unistd.h>
 
 namespace {
 
@@ -17,8 +18,15 @@ struct Result {
   std::string out;
 };
 
+// Per-process stderr file: concurrent test runs (CI jobs, parallel sessions) must not read
+// each other's output.
+const std::string& stderrPath() {
+  static const std::string path = "/tmp/ehc_kin_err_" + std::to_string(getpid()) + ".txt";
+  return path;
+}
+
 Result run(const std::string& args, const std::string& bin = EHC_KINEMATICS_BIN) {
-  const std::string cmd = bin + " " + args + " 2>/tmp/ehc_kin_err.txt";
+  const std::string cmd = bin + " " + args + " 2>" + stderrPath();
   FILE* p = popen(cmd.c_str(), "r");
   std::string out;
   std::array<char, 4096> buf{};
@@ -65,7 +73,7 @@ TEST(EhcKinematicsCli, ErrorsExitWithCode2) {
 }
 
 std::string lastStderr() {
-  std::ifstream in("/tmp/ehc_kin_err.txt");
+  std::ifstream in(stderrPath());
   return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 }
 
@@ -78,8 +86,9 @@ TEST(EhcKinematicsCli, UnparsableValuesNameTheFlag) {
 
 // Issue 16 defect 7: `--samples 1e6` ran one sample, wrote a one-voxel map and exited 0.
 TEST(EhcReachabilityCli, UnparsableValuesAreStartUpErrorsNamingTheFlag) {
-  const std::string out = " --out /tmp/ehc_cli_map.bin";
-  std::remove("/tmp/ehc_cli_map.bin");
+  const std::string map = "/tmp/ehc_cli_map_" + std::to_string(getpid()) + ".bin";
+  const std::string out = " --out " + map;
+  std::remove(map.c_str());
   for (const std::string& bad : {std::string("--samples 1e6"), std::string("--samples 10k"),
                                  std::string("--samples -5"), std::string("--seed 1.5"),
                                  std::string("--resolution 5cm"), std::string("--direction-bins x")}) {
@@ -89,7 +98,8 @@ TEST(EhcReachabilityCli, UnparsableValuesAreStartUpErrorsNamingTheFlag) {
     const std::string flag = bad.substr(0, bad.find(' '));
     EXPECT_NE(lastStderr().find(flag + ":"), std::string::npos) << bad << ": " << lastStderr();
   }
-  EXPECT_FALSE(std::ifstream("/tmp/ehc_cli_map.bin").good()) << "no map written";
+  EXPECT_FALSE(std::ifstream(map).good()) << "no map written";
   EXPECT_EQ(run(kRobot + out, EHC_REACHABILITY_BIN).code, 2);
   EXPECT_NE(lastStderr().find("--samples: is required"), std::string::npos) << lastStderr();
+  std::remove(stderrPath().c_str());
 }
