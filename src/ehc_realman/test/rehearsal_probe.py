@@ -67,7 +67,7 @@ class RehearsalProbe:
         self.lock = threading.Lock()
         self.truth_t, self.truth = [], []   # stamps (s), (x, y, yaw)
         self.odom_t, self.odom = [], []     # the bridge's /odom: stamps, (x, y, yaw)
-        self.tcp = None                     # latest true TCP position
+        self.tcp_t, self.tcp = [], []       # the true TCP: stamps, positions
         self.objects = {}                   # name -> true position (latest)
         self.odom_errors = []               # (t, position error m, yaw error rad)
         self.odom_last = None               # (t, error vector) for the jumps
@@ -100,7 +100,16 @@ class RehearsalProbe:
             self.truth.append(pose)
 
     def on_tcp(self, m):
-        self.tcp = vec(m.pose.position)
+        with self.lock:
+            self.tcp_t.append(m.header.stamp.to_sec())
+            self.tcp.append(vec(m.pose.position))
+
+    def true_tcp(self, t):
+        with self.lock:
+            i = bisect.bisect_left(self.tcp_t, t)
+            if i >= len(self.tcp_t):
+                return None
+            return self.tcp[i]  # the first at or after t (published with /sim/status)
 
     def _interpolate(self, ts, poses, t):
         """The planar pose at t from a stamped record (linear), None outside it."""
@@ -173,30 +182,33 @@ class RehearsalProbe:
         if state != "closing" or previous == "closing":
             return
         t = m.header.stamp.to_sec()
-        record = {"t": t, "outcome": None}
-        truth = self.true_base(t)
         with self.lock:
             objects = dict(self.objects)
-            est = self.odom[-1] if self.odom else None
-        true_tcp = self.tcp
-        record["odom_age"] = None if self.last_odom_stamp is None else round(t - self.last_odom_stamp, 4)
-        if truth is not None and est is not None and true_tcp is not None:
-            est_tcp = planar_apply(est, planar_inverse_apply(truth, true_tcp))
-            name = min(objects, key=lambda n: dist(objects[n], true_tcp)) if objects else None
-            record.update({
-                "object": name,
-                "tcp_estimate_error": round(dist(est_tcp, true_tcp), 4),
-                "closing_distance": round(dist(true_tcp, objects[name]), 4) if name else None,
-                # true TCP - true object in the true base frame (x forward, y left, z up)
-                "closing_offset_base": rounded(planar_inverse_apply(
-                    (0.0, 0.0, truth[2]), tuple(a - b for a, b in zip(true_tcp, objects[name])))) if name else None,
-            })
-            if self.goal is not None and name:
-                goal = vec(self.goal.pose.position)
-                record["goal_error"] = round(dist(goal, objects[name]), 4)
-                record["goal_offset_base"] = rounded(planar_inverse_apply(
-                    (0.0, 0.0, truth[2]), tuple(a - b for a, b in zip(goal, objects[name]))))
-        self.closings.append(record)
+        # Evaluated in summary(): the truth published with this status may arrive after it.
+        self.closings.append({"t": t, "outcome": None, "objects": objects,
+                              "goal": vec(self.goal.pose.position) if self.goal is not None else None,
+                              "odom_age": None if self.last_odom_stamp is None else round(t - self.last_odom_stamp, 4)})
+
+    def _closing(self, c):
+        t, objects = c["t"], c["objects"]
+        record = {"t": round(t, 3), "outcome": c["outcome"], "odom_age": c["odom_age"]}
+        truth, est, true_tcp = self.true_base(t), self.est_base(t), self.true_tcp(t)
+        if truth is None or est is None or true_tcp is None or not objects:
+            record["error"] = "no ground truth at t"
+            return record
+        est_tcp = planar_apply(est, planar_inverse_apply(truth, true_tcp))
+        name = min(objects, key=lambda n: dist(objects[n], true_tcp))
+        frame = (0.0, 0.0, truth[2])  # offsets in the true base frame (x forward, y left, z up)
+        record.update({
+            "object": name,
+            "tcp_estimate_error": round(dist(est_tcp, true_tcp), 4),
+            "closing_distance": round(dist(true_tcp, objects[name]), 4),
+            "closing_offset_base": rounded(planar_inverse_apply(frame, tuple(a - b for a, b in zip(true_tcp, objects[name])))),
+        })
+        if c["goal"] is not None:
+            record["goal_error"] = round(dist(c["goal"], objects[name]), 4)
+            record["goal_offset_base"] = rounded(planar_inverse_apply(frame, tuple(a - b for a, b in zip(c["goal"], objects[name]))))
+        return record
 
     # ---------------------------------------------------------------- summary
     @staticmethod
@@ -217,4 +229,4 @@ class RehearsalProbe:
             perception[name] = {k: self._stats([r[k] for r in rows]) for k in ("error", "odometry_share", "residual")}
         return {"odometry_position_error": self._stats(pos), "odometry_yaw_error": self._stats(yaw),
                 "odometry_error_step": self._stats(jumps), "perception": perception,
-                "closings": self.closings}
+                "closings": [self._closing(c) for c in self.closings]}

@@ -83,9 +83,16 @@ class RealmanRehearsal(unittest.TestCase):
                     tail = f.readlines()[-8:]
                 sys.stdout.write("---- %s (last lines)\n%s" % (name, "".join(tail)))
         measured = probe.summary()
+        summary_file = os.path.join(log_dir, "grasp_summary.json")
+        if os.path.exists(summary_file):
+            with open(summary_file) as f:
+                measured["grasp_summary"] = json.load(f)
+        if statuses:
+            measured["collision_steps"] = statuses[-1].collision_steps
+            measured["colliding_pairs"] = sorted(pairs)
         with open(os.path.join(log_dir, "rehearsal_probe.json"), "w") as f:
             json.dump(measured, f, indent=1)
-        record = os.environ.get("EHC_REHEARSAL_RECORD")
+        record = os.environ.get("EHC_REHEARSAL_RECORD")  # a copy for a series of runs
         if record:
             with open(record, "w") as f:
                 json.dump(measured, f, indent=1)
