@@ -33,6 +33,8 @@
 #   SEQUENCER_CONFIG   grasp sequencer YAML        [config/realman/rehearsal_grasp_sequencer.yaml]
 #   SEQUENCER_SUMMARY  the sequencer's JSON summary          [$LOG_DIR/grasp_summary.json]
 #   LOG_DIR            one log file per node                        [$HOME/.ros/ehc_realman]
+#   MASTER_TIMEOUT     s to wait for the master to answer `rosnode list` (a busy computer
+#                      takes seconds to start it: 5 s failed under load 35)          [20]
 #   ROS_MASTER_URI, ROS_IP  as usual (the master runs on the robot computer)
 #
 # Parameters never leak from an earlier run: before a node starts, its private namespace on the
@@ -164,7 +166,7 @@ if [ -z "${ROS_MASTER_URI:-}" ]; then
   echo "run_realman.sh: ROS_MASTER_URI is not set (the master runs on the robot computer)" >&2
   exit 2
 fi
-if ! timeout 5 rosnode list >/dev/null 2>&1; then
+if ! timeout "${MASTER_TIMEOUT:-20}" rosnode list >/dev/null 2>&1; then
   echo "run_realman.sh: no ROS master at $ROS_MASTER_URI (start roscore on the robot computer)" >&2
   exit 2
 fi

@@ -36,6 +36,9 @@ import rospy
 import rostest
 from ehc_msgs.msg import SimStatus
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from rehearsal_probe import RehearsalProbe  # noqa: E402
+
 WS = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
 PKG = "ehc_realman"
 
@@ -50,6 +53,7 @@ class RealmanRehearsal(unittest.TestCase):
             statuses.append(m)
             pairs.update(m.colliding_pairs)
         rospy.Subscriber("/sim/status", SimStatus, on_status, queue_size=1000)
+        probe = RehearsalProbe(objects=["front", "middle", "back"])
         port = None
         deadline = time.monotonic() + 120.0
         while port is None and time.monotonic() < deadline:
@@ -78,6 +82,26 @@ class RealmanRehearsal(unittest.TestCase):
                 with open(os.path.join(log_dir, name), errors="replace") as f:
                     tail = f.readlines()[-8:]
                 sys.stdout.write("---- %s (last lines)\n%s" % (name, "".join(tail)))
+        measured = probe.summary()
+        summary_file = os.path.join(log_dir, "grasp_summary.json")
+        if os.path.exists(summary_file):
+            with open(summary_file) as f:
+                measured["grasp_summary"] = json.load(f)
+        if statuses:
+            measured["collision_steps"] = statuses[-1].collision_steps
+            measured["colliding_pairs"] = sorted(pairs)
+        with open(os.path.join(log_dir, "rehearsal_probe.json"), "w") as f:
+            json.dump(measured, f, indent=1)
+        record = os.environ.get("EHC_REHEARSAL_RECORD")  # a copy for a series of runs
+        if record:
+            with open(record, "w") as f:
+                json.dump(measured, f, indent=1)
+        print("rehearsal: odometry error %s, its step per /odom %s" %
+              (measured["odometry_position_error"], measured["odometry_error_step"]))
+        for name, rows in measured["perception"].items():
+            print("rehearsal: perceived %s: %s" % (name, rows))
+        for c in measured["closings"]:
+            print("rehearsal: closing %s" % json.dumps(c))
         self.assertEqual(p.returncode, 0, "run_realman.sh all sequencer failed")
         with open(os.path.join(log_dir, "grasp_summary.json")) as f:
             summary = json.load(f)

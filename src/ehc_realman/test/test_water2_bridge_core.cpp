@@ -101,6 +101,44 @@ class LockStep {
   }
   double lastCommand() const { return last_command_; }
 
+  /// Drives (v, w) at 50 Hz until a step sends a robot_status request; the server answers it at
+  /// once but the reply reaches the bridge `late_steps` steps later (a descheduled network
+  /// thread or a slow link: the clock and the base move on meanwhile), then one normal step.
+  /// False on a hang.
+  bool driveReadingAStatusLate(double v, double w, int late_steps) {
+    for (int k = 0; k < 200; ++k) {
+      const auto requested = bridge_->status().status_requests;
+      server_.holdReplies(true);
+      ++steps_;
+      bridge_->setCommand(v, w);
+      bridge_->spinOnce(0.0);
+      noteConnection();
+      if (!waitFor([&] { return server_.handled() >= expected(); })) return false;
+      const bool late = bridge_->status().status_requests > requested;
+      if (late) steps_ += late_steps;
+      const auto releases = server_.releases();
+      server_.holdReplies(false);
+      if (!waitFor([&] { return server_.releases() > releases; })) return false;
+      bridge_->setCommand(v, w);
+      bridge_->spinOnce(0.0);  // reads the replies (late, if this step asked for the status)
+      noteConnection();
+      if (late) return step({{v, w}});
+    }
+    return false;
+  }
+  /// Waits (wall clock, hang guard only) until `done`.
+  static bool waitFor(const std::function<bool()>& done) {
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(kHangGuardSeconds);
+    while (!done()) {
+      if (std::chrono::steady_clock::now() > deadline) {
+        ADD_FAILURE() << "hang guard";
+        return false;
+      }
+      std::this_thread::sleep_for(std::chrono::microseconds(200));
+    }
+    return true;
+  }
+
  private:
   /// Requests the server must have handled: those sent since the current connection opened.
   std::uint64_t expected() const {
@@ -205,7 +243,48 @@ TEST(OdometryEstimator, DeadReckonsBetweenStatusRepliesAndGoesStale) {
   EXPECT_NEAR(e.estimate(20.6)->x, 3.0, 1e-12) << "a status resets the estimate";
 }
 
+// A status pose applied at the time it was valid, after twists were already sent: they are
+// replayed from it (before session 7 the pose was taken as valid when applied, and the twists
+// sent in between were lost: the base put back by v x delay).
+TEST(OdometryEstimator, AppliesALateStatusAtItsValidTimeAndReplaysTheTwistsSentSince) {
+  OdometryEstimator e(1.5, 0.6);
+  e.onStatus({0.0, 0.0, 0.0}, 0.0);
+  for (int k = 0; k <= 24; ++k) e.onTwistSent({0.4, 0.0}, 0.05 * k);  // 0.4 m/s, 20 Hz, until 1.2 s
+  // The base was at x = 0.4 at t = 1.0; the reply is read at 1.2 (0.2 s late).
+  ASSERT_TRUE(e.onStatus({0.4, 0.0, 0.0}, 1.0));
+  auto o = e.estimate(1.2);
+  ASSERT_TRUE(o);
+  EXPECT_NEAR(o->x, 0.48, 1e-9) << "the pose at 1.0 plus the 0.2 s driven since";
+  EXPECT_NEAR(o->status_age, 0.2, 1e-12);
+  EXPECT_DOUBLE_EQ(o->linear, 0.4);
+  EXPECT_FALSE(e.onStatus({0.3, 0.0, 0.0}, 0.9)) << "an older pose never replaces a newer one";
+  EXPECT_NEAR(e.estimate(1.2)->x, 0.48, 1e-9);
+  // Commands stop at 1.2: the last one lapses at 1.7; the extrapolation cap (0.6 s past 1.0) too.
+  EXPECT_NEAR(e.estimate(1.5)->x, 0.4 + 0.4 * 0.5, 1e-9) << "the last command (1.2) acts until 1.5";
+  EXPECT_NEAR(e.estimate(2.0)->x, 0.4 + 0.4 * 0.6, 1e-9) << "at most max_extrapolation past the status";
+}
+
 // ------------------------------------------------------------------ bridge on loopback (lock-step)
+// A robot_status reply read 0.15 s late (the bridge's thread starved on a loaded computer)
+// while the base drives at 0.3 m/s: /odom stays on the base's true pose, because the pose is
+// taken as valid when its request was sent (the fake base's pose when it answered). Before
+// session 7 it was taken as valid when read: /odom put the base 0.3 x 0.15 = 4.5 cm back.
+TEST(Water2BaseBridge, AStatusReplyReadLateIsAppliedAtTheTimeItWasValid) {
+  LockStep ls;
+  ls.makeBridge();
+  Water2BaseBridge& bridge = ls.bridge();
+  ASSERT_TRUE(ls.stepUntil([&] { return bridge.odometry().has_value(); }, 5.0)) << bridge.status().message;
+  ASSERT_TRUE(ls.drive(0.3, 0.0, 0.6));
+  ASSERT_TRUE(ls.driveReadingAStatusLate(0.3, 0.0, 15));
+  double x = 0.0, y = 0.0, theta = 0.0;
+  ls.server().pose(x, y, theta);  // the fake base, exact at the last handled request
+  const auto o = bridge.odometry();
+  ASSERT_TRUE(o);
+  EXPECT_GT(x, 0.2) << "the base drove";
+  EXPECT_NEAR(o->x, x, 0.005) << "status age " << o->status_age;
+  EXPECT_GT(o->status_age, 0.15) << "the age counts from when the pose was valid";
+}
+
 TEST(Water2BaseBridge, StreamsClampedCommandsAtRateAndStopsAfterTimeout) {
   LockStep ls;
   ls.makeBridge();

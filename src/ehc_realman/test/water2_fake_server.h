@@ -75,6 +75,13 @@ class FakeWater2Server {
   void setReplyMode(ReplyMode m) { mode_ = m; }
   int connections() const { return connections_; }
   std::uint64_t handled() const { return handled_; }
+  /// Replies are held back while `hold` (a reply in flight, read late by the client); on
+  /// release the server thread sends them in one go and counts releases().
+  void holdReplies(bool hold) {
+    if (!hold) release_requested_ = true;
+    hold_ = hold;
+  }
+  std::uint64_t releases() const { return releases_; }
   std::vector<Request> requests() const {
     std::lock_guard<std::mutex> lock(mutex_);
     return requests_;
@@ -125,6 +132,11 @@ class FakeWater2Server {
         splitter_.feed(buf, static_cast<std::size_t>(n));
         std::string r;
         while (splitter_.next(r)) handle(r, t);
+      }
+      if (!hold_ && release_requested_.exchange(false)) {
+        sendAll(held_out_);
+        held_out_.clear();
+        ++releases_;
       }
     }
   }
@@ -187,6 +199,14 @@ class FakeWater2Server {
         break;
       case ReplyMode::Silent: return;
     }
+    if (hold_) {
+      held_out_ += out;
+      return;
+    }
+    sendAll(out);
+  }
+
+  void sendAll(const std::string& out) {
     std::size_t done = 0;
     while (done < out.size() && client_fd_ >= 0) {
       const ssize_t n = ::send(client_fd_, out.data() + done, out.size() - done, MSG_NOSIGNAL);
@@ -202,6 +222,10 @@ class FakeWater2Server {
   int client_fd_ = -1;
   std::atomic<bool> running_{false};
   std::atomic<ReplyMode> mode_{ReplyMode::Normal};
+  std::atomic<bool> hold_{false};
+  std::atomic<bool> release_requested_{false};
+  std::atomic<std::uint64_t> releases_{0};
+  std::string held_out_;  ///< replies held back (server thread only)
   std::atomic<int> connections_{0};
   std::thread thread_;
   ehc_realman::Water2RequestSplitter splitter_;

@@ -1,7 +1,7 @@
 // HardwareStandIn + Water2ApiServer (the deployment rehearsal's hardware stand-in): the
 // rm_driver rules (frames followed within the velocity limits, wrong / NaN / > 10 deg frames
 // ignored, emergency stop holds, gripper mapping), stepping on a wall clock given by the test
-// (catching up, then skipping after a stall), and the Water2 API served on 127.0.0.1 to the
+// (catching up a stall of seconds, skipping only after a longer one), and the Water2 API served on 127.0.0.1 to the
 // bridge's own client (ehc_realman::Water2Client): joy_control drives the water2 base model,
 // robot_status reports its pose. No master, no sleeps: the wall times are arguments.
 
@@ -58,6 +58,29 @@ TEST(HardwareStandIn, StepsWithTheWallClockAndSkipsAfterAStall) {
   EXPECT_EQ(s.advanceTo(100.0 + 105.0 * dt), 1);
   EXPECT_EQ(w.world.stepCount(), 15);
   EXPECT_THROW(s.advanceTo(NAN), std::invalid_argument);
+}
+
+// A 3 s stall of the stand-in's process (a loaded machine) is caught up by default: the world
+// does what the hardware did meanwhile (the base runs its last joy_control for its 0.5 s
+// lifetime, then stops), so the world's time and the base pose stay those of the wall clock the
+// bridge dead-reckons on. With the old 1 s cap the world froze for 2 s: 200 steps skipped.
+TEST(HardwareStandIn, CatchesUpAStallOfSecondsAsTheHardwareMovedMeanwhile) {
+  World w;
+  HardwareStandIn s(w.world);
+  s.advanceTo(0.0);
+  s.onJoyControl(0.3, 0.0);
+  EXPECT_EQ(s.advanceTo(1.0 + 1e-9), 100);
+  const double x_before = w.world.robot().basePose().x();
+  s.onJoyControl(0.3, 0.0);  // the last command before the stall
+  EXPECT_EQ(s.advanceTo(4.0 + 1e-9), 300);
+  EXPECT_EQ(s.counters().skipped_steps, 0);
+  EXPECT_NEAR(w.world.time(), 4.0, 1e-9);
+  const double moved = w.world.robot().basePose().x() - x_before;
+  EXPECT_GT(moved, 0.05) << "the base ran out its last command";
+  EXPECT_LT(moved, 0.3 * 0.5 + 0.3 * 0.2) << "and stopped after its 0.5 s lifetime (plus the slow-down)";
+  const double x_stopped = w.world.robot().basePose().x();
+  EXPECT_EQ(s.advanceTo(4.5 + 1e-9), 50);
+  EXPECT_NEAR(w.world.robot().basePose().x(), x_stopped, 1e-9);
 }
 
 TEST(HardwareStandIn, FollowsJointPosLikeTheDriverAndIgnoresWhatTheDriverIgnores) {

@@ -5,15 +5,20 @@
 //  - BaseCommandWatchdog: clamps commands (uniform scaling keeps the path curvature w/v), resends
 //    fresh commands at resend_rate_hz (the base executes each for 0.5 s), sends zero for
 //    stop_repeat_duration once commands stop for command_timeout, then goes quiet.
-//  - OdometryEstimator: pose from the latest status (~2 Hz), dead-reckoned with the last sent
-//    twist for at most max_extrapolation; no estimate once the status is older than
-//    status_timeout (stale data is never published as fresh).
+//  - OdometryEstimator: pose from the latest status (~2 Hz) AT THE TIME IT WAS VALID, dead-
+//    reckoned from then with the twists sent since (each for its 0.5 s lifetime on the base) for
+//    at most max_extrapolation; no estimate once the status is older than status_timeout (stale
+//    data is never published as fresh). The bridge takes a robot_status pose as valid when its
+//    request was sent, not when the reply was read: a reply read late (a loaded computer, the
+//    network thread descheduled) otherwise puts the base where it was up to that delay ago and
+//    /odom and tf jump back by v x delay (session 7, REALMAN.md "Rehearsal").
 //  - Water2BaseBridge: owns a Water2Client; spinOnce() does one bounded cycle of network work.
 
 #include "ehc_realman/water2_client.h"
 #include "ehc_realman/water2_protocol.h"
 
 #include <cstdint>
+#include <deque>
 #include <functional>
 #include <limits>
 #include <mutex>
@@ -91,7 +96,9 @@ struct BaseOdometry {
 class OdometryEstimator {
  public:
   OdometryEstimator(double status_timeout, double max_extrapolation);
-  void onStatus(const Water2Pose& pose, double now);
+  /// A status pose valid at `valid_time` (it may be earlier than twists already sent: they are
+  /// replayed from it). A pose valid before the current one is ignored (returns false).
+  bool onStatus(const Water2Pose& pose, double valid_time);
   /// The base executes each joy_control for 0.5 s.
   void onTwistSent(const BaseTwist& twist, double now);
   /// Nothing before the first status or once the status is older than status_timeout.
@@ -100,15 +107,16 @@ class OdometryEstimator {
 
  private:
   static constexpr double kCommandLifetime = 0.5;  ///< s, Water2 joy_control duration
-  void advance(double until);  ///< dead-reckons pose_ with the current twist up to `until`
+  static constexpr std::size_t kMaxTwists = 4096;  ///< history bound (20 Hz x status_timeout)
+  struct SentTwist {
+    double time;
+    BaseTwist twist;
+  };
 
   double status_timeout_, max_extrapolation_;
   std::optional<Water2Pose> status_pose_;
-  double status_time_ = 0.0;
-  Water2Pose pose_;               ///< status pose advanced to integrated_until_
-  double integrated_until_ = 0.0;
-  BaseTwist twist_;
-  double twist_time_ = -std::numeric_limits<double>::infinity();
+  double status_time_ = 0.0;      ///< when status_pose_ was valid
+  std::deque<SentTwist> twists_;  ///< sent twists, oldest first (from the one in force at status_time_)
 };
 
 struct Water2BridgeStatus {
@@ -163,6 +171,7 @@ class Water2BaseBridge {
   double backoff_ = 0.0;
   double next_status_time_ = 0.0;
   double last_reply_time_ = 0.0;
+  std::deque<double> status_sent_times_;  ///< robot_status requests awaiting their reply (FIFO)
 };
 
 }  // namespace ehc_realman

@@ -179,28 +179,19 @@ double BaseCommandWatchdog::timeUntilDue(double now) const {
 OdometryEstimator::OdometryEstimator(double status_timeout, double max_extrapolation)
     : status_timeout_(status_timeout), max_extrapolation_(max_extrapolation) {}
 
-void OdometryEstimator::onStatus(const Water2Pose& pose, double now) {
+bool OdometryEstimator::onStatus(const Water2Pose& pose, double valid_time) {
+  if (status_pose_ && valid_time < status_time_) return false;  // an older pose than the one held
   status_pose_ = pose;
-  status_time_ = now;
-  pose_ = pose;
-  integrated_until_ = now;
-}
-
-void OdometryEstimator::advance(double until) {
-  if (!status_pose_) return;
-  const double horizon = std::min({until, status_time_ + max_extrapolation_,
-                                   twist_time_ + kCommandLifetime});
-  const double from = std::max(integrated_until_, twist_time_);
-  if (horizon > from)
-    integrateUnicycle(pose_.x, pose_.y, pose_.theta, twist_.linear, twist_.angular,
-                      horizon - from);
-  integrated_until_ = std::max(integrated_until_, until);
+  status_time_ = valid_time;
+  // Keep the twist in force at valid_time and every later one.
+  while (twists_.size() > 1 && twists_[1].time <= valid_time) twists_.pop_front();
+  return true;
 }
 
 void OdometryEstimator::onTwistSent(const BaseTwist& twist, double now) {
-  advance(now);  // the previous twist acted until now
-  twist_ = twist;
-  twist_time_ = now;
+  if (!twists_.empty() && now < twists_.back().time) now = twists_.back().time;  // monotonic
+  twists_.push_back(SentTwist{now, twist});
+  if (twists_.size() > kMaxTwists) twists_.pop_front();
 }
 
 double OdometryEstimator::statusAge(double now) const {
@@ -209,15 +200,22 @@ double OdometryEstimator::statusAge(double now) const {
 
 std::optional<BaseOdometry> OdometryEstimator::estimate(double now) const {
   if (!status_pose_ || now - status_time_ > status_timeout_) return std::nullopt;
-  OdometryEstimator copy = *this;
-  copy.advance(now);
   BaseOdometry o;
-  o.x = copy.pose_.x;
-  o.y = copy.pose_.y;
-  o.theta = copy.pose_.theta;
-  if (now - twist_time_ <= kCommandLifetime) {
-    o.linear = twist_.linear;
-    o.angular = twist_.angular;
+  o.x = status_pose_->x;
+  o.y = status_pose_->y;
+  o.theta = status_pose_->theta;
+  const double horizon = std::min(now, status_time_ + max_extrapolation_);
+  for (std::size_t i = 0; i < twists_.size(); ++i) {
+    // Twist i acts from its send time until the next one or the end of its lifetime.
+    const double next = i + 1 < twists_.size() ? twists_[i + 1].time : kInf;
+    const double from = std::max(twists_[i].time, status_time_);
+    const double until = std::min({next, twists_[i].time + kCommandLifetime, horizon});
+    if (until > from)
+      integrateUnicycle(o.x, o.y, o.theta, twists_[i].twist.linear, twists_[i].twist.angular, until - from);
+  }
+  if (!twists_.empty() && now - twists_.back().time <= kCommandLifetime) {
+    o.linear = twists_.back().twist.linear;
+    o.angular = twists_.back().twist.angular;
   }
   o.status_age = now - status_time_;
   return o;
@@ -262,6 +260,7 @@ void Water2BaseBridge::setCommand(double linear, double angular) {
 void Water2BaseBridge::dropConnection(const std::string& why, double now) {
   ++counters_.connection_losses;  // only called for an established connection
   client_.close();
+  status_sent_times_.clear();
   counters_.last_error = why;
   backoff_ = config_.backoff_initial;
   next_connect_time_ = now + backoff_;
@@ -283,7 +282,18 @@ void Water2BaseBridge::handleReply(const std::string& json, double now) {
     counters_.last_error = "[Water2BaseBridge] " + reply.command + " answered '" + reply.status +
                            "': " + reply.error_message;
   }
-  if (reply.pose) estimator_.onStatus(*reply.pose, now);
+  // The pose is valid when its request reached the base, i.e. not before the request was sent
+  // (replies come in request order on the one connection); not when the reply was read.
+  // Requests older than status_timeout lost their reply (a malformed one): forgotten, so one
+  // lost reply cannot shift every later pose to an earlier request.
+  double valid_time = now;
+  while (!status_sent_times_.empty() && status_sent_times_.front() < now - config_.status_timeout)
+    status_sent_times_.pop_front();
+  if (reply.command == robotStatusRequest() && !status_sent_times_.empty()) {
+    valid_time = std::min(now, status_sent_times_.front());
+    status_sent_times_.pop_front();
+  }
+  if (reply.pose) estimator_.onStatus(*reply.pose, valid_time);
 }
 
 void Water2BaseBridge::spinOnce(double max_wait) {
@@ -308,6 +318,7 @@ void Water2BaseBridge::spinOnce(double max_wait) {
       watchdog_.requestZero();  // never resume motion with a command from before the loss
       next_status_time_ = now;
       last_reply_time_ = now;
+      status_sent_times_.clear();
     } catch (const std::exception& e) {
       std::lock_guard<std::mutex> lock(mutex_);
       now = clock_();
@@ -339,10 +350,12 @@ void Water2BaseBridge::spinOnce(double max_wait) {
   }
   try {
     if (twist) client_.send(joyControlRequest(twist->linear, twist->angular));
+    const double status_sent = clock_();
     if (want_status) client_.send(robotStatusRequest());
     {
       std::lock_guard<std::mutex> lock(mutex_);
       const double t = clock_();
+      if (want_status) status_sent_times_.push_back(status_sent);
       if (twist) {
         ++counters_.joy_requests;
         estimator_.onTwistSent(*twist, t);

@@ -13,9 +13,15 @@
 //     its localisation error. sim.base_model must be water2.
 //   - Time: advanceTo(wall) steps the world by sim.dt until it has caught up with the wall clock
 //     (the hardware does not wait for anyone), in one burst after a stall (a physics step is
-//     ~30 us: a 1 s stall costs a few ms); after a stall longer than max_catch_up_steps steps
-//     (default 1 s at dt 0.01) the rest is skipped (counted: the world then lags the wall
-//     clock by that much, while the bridge dead-reckons on the wall clock).
+//     ~30 us: a 1 s stall costs a few ms). The burst is what the hardware did meanwhile: the
+//     base runs out its last joy_control (0.5 s lifetime) and stops, the arm reaches its last
+//     set-point and holds. Only after a stall longer than max_catch_up_steps steps (default
+//     kDefaultMaxCatchUpSteps = 10 s at dt 0.01: a suspended process) is the rest skipped
+//     (counted: the world then lags the wall clock by that much). Until session 7 the default
+//     was 1 s: on a loaded machine (load 15-25) the stand-in then froze the world for seconds
+//     per run (1212 steps in one rehearsal) while the bridge dead-reckoned the commanded motion
+//     on the wall clock and the adapter streamed set-points ahead of a frozen arm: odometry off
+//     by cm and JointPos frames ignored as "more than 10 deg" jumps, artefacts no robot has.
 // ROS-free.
 
 #include "ehc_realman/water2_protocol.h"
@@ -43,8 +49,10 @@ class HardwareStandIn {
   static constexpr double kDriverMaxStep = 10.0 * 3.14159265358979323846 / 180.0;  ///< rad
   static constexpr int kGripperOpenPosition = 500;  ///< Gripper_Set position at or above: open
 
+  static constexpr int kDefaultMaxCatchUpSteps = 1000;  ///< 10 s at dt 0.01
+
   /// `world` must outlive this and use sim.base_model water2 (throws "[HardwareStandIn] ...").
-  explicit HardwareStandIn(SimWorld& world, int max_catch_up_steps = 100);
+  explicit HardwareStandIn(SimWorld& world, int max_catch_up_steps = kDefaultMaxCatchUpSteps);
 
   /// Steps the world until its time has caught up with `wall_s` (s, any monotonic origin; the
   /// first call only sets the origin). Returns the number of steps done.

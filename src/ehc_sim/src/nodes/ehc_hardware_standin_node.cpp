@@ -16,7 +16,9 @@
 // /rm_driver/Gripper_Set, /rm_driver/Gripper_Pick; publishes /joint_states (joint1..joint6).
 // As the D435 driver: /camera/color/image_raw (mono8), /camera/color/camera_info,
 // /camera/depth/points. As the simulator (metrics and the sequencer's grasp result only):
-// /sim/status, /sim/object_poses. Not published here (the real nodes do it): /odom, /tf.
+// /sim/status, /sim/object_poses, /sim/base_pose (nav_msgs/Odometry: the TRUE base pose and
+// executed twist) and /sim/tcp_pose (geometry_msgs/PoseStamped: the TRUE TCP in the world), for
+// the rehearsal's odometry and closing-distance figures. Not published here (the real nodes do it): /odom, /tf.
 
 #include "sim_camera_streams.h"
 #include "sim_ros_conversions.h"
@@ -24,6 +26,7 @@
 #include "ehc_sim/hardware_stand_in.h"
 #include "ehc_sim/water2_api_server.h"
 
+#include <geometry_msgs/PoseStamped.h>
 #include <rm_msgs/Gripper_Pick.h>
 #include <rm_msgs/Gripper_Set.h>
 #include <rm_msgs/JointPos.h>
@@ -56,6 +59,8 @@ class HardwareStandInNode {
     joint_pub_ = nh.advertise<sensor_msgs::JointState>("/joint_states", 10);
     objects_pub_ = nh.advertise<ehc_msgs::SimObjectPoses>("/sim/object_poses", 10);
     status_pub_ = nh.advertise<ehc_msgs::SimStatus>("/sim/status", 10);
+    base_truth_pub_ = nh.advertise<nav_msgs::Odometry>("/sim/base_pose", 10);
+    tcp_truth_pub_ = nh.advertise<geometry_msgs::PoseStamped>("/sim/tcp_pose", 10);
     const ros::TransportHints fast = ros::TransportHints().tcpNoDelay();
     subs_.push_back(nh.subscribe("/rm_driver/JointPos", 100, &HardwareStandInNode::onJointPos, this, fast));
     subs_.push_back(nh.subscribe("/rm_driver/Emergency_Stop", 10, &HardwareStandInNode::onStop, this));
@@ -118,6 +123,13 @@ class HardwareStandInNode {
     ehc_msgs::SimStatus status;
     ehc_sim::fillStatus(*world_, *gate_, false, stamp, &status);
     status_pub_.publish(status);
+    nav_msgs::Odometry base;
+    ehc_sim::fillTrueBase(world_->robot(), stamp, &base);
+    base_truth_pub_.publish(base);
+    geometry_msgs::PoseStamped tcp;
+    tcp.header = base.header;
+    tcp.pose = ehc_sim::toPose(world_->linkPose(world_->robot().robot().tcp_frame));
+    tcp_truth_pub_.publish(tcp);
   }
 
   ehc_sim::BulletNodeSetup setup_;
@@ -126,7 +138,7 @@ class HardwareStandInNode {
   std::unique_ptr<ehc_sim::SimCameraStreams> camera_;  ///< camera rates on the world's time
   std::unique_ptr<ehc_sim::CommandGate> gate_;
   std::unique_ptr<ehc_sim::Water2ApiServer> server_;
-  ros::Publisher joint_pub_, objects_pub_, status_pub_;
+  ros::Publisher joint_pub_, objects_pub_, status_pub_, base_truth_pub_, tcp_truth_pub_;
   std::vector<ros::Subscriber> subs_;
 };
 

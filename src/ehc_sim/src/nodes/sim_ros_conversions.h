@@ -85,6 +85,20 @@ inline void fillOdometry(const KinematicFakeRobot& r, const ros::Time& stamp, na
   m->twist.twist.angular.z = v[2];
 }
 
+/// Ground truth for metrics (the hardware stand-in's /sim/base_pose): the TRUE base pose in the
+/// world (odom) frame and the executed base twist (base frame); never an input of the stack.
+inline void fillTrueBase(const KinematicFakeRobot& r, const ros::Time& stamp, nav_msgs::Odometry* m) {
+  const auto& cfg = r.robot();
+  m->header.stamp = stamp;
+  m->header.frame_id = cfg.world_frame;
+  m->child_frame_id = cfg.base_frame;
+  m->pose.pose = toPose(ehc_control::WholeBodyModel::baseTransform(r.basePose()));
+  const Eigen::VectorXd& v = r.executedVelocity();
+  m->twist.twist.linear.x = v[0];
+  m->twist.twist.linear.y = cfg.nBase() > 2 ? v[1] : 0.0;
+  m->twist.twist.angular.z = v[cfg.nBase() - 1];
+}
+
 /// odom -> base_link (the robot's world and base frames), from the odometry as /odom (on the
 /// robot the bridge publishes this tf from its estimate).
 inline void fillBaseTransform(const KinematicFakeRobot& r, const ros::Time& stamp, geometry_msgs::TransformStamped* t) {
