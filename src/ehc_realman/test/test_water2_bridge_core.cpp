@@ -37,6 +37,8 @@ Water2BridgeConfig loopbackConfig(int port) {
   c.reply_timeout = 1.0;
   c.backoff_initial = 0.1;
   c.backoff_max = 0.4;
+  // FakeWater2Server's base executes each joy_control at once and exactly.
+  c.base_response = Water2ResponseParams::commandedVelocity();
   return c;
 }
 
@@ -216,7 +218,7 @@ TEST(BaseCommandWatchdog, RequestZeroOverridesAFreshCommand) {
 
 // ------------------------------------------------------------------ odometry (simulated time)
 TEST(OdometryEstimator, DeadReckonsBetweenStatusRepliesAndGoesStale) {
-  OdometryEstimator e(1.5, 0.6);
+  OdometryEstimator e(1.5, 0.6, Water2ResponseParams::commandedVelocity());
   EXPECT_FALSE(e.estimate(0.0)) << "nothing before the first status";
   e.onStatus({1.0, 2.0, 0.0}, 10.0);
   e.onTwistSent({0.5, 0.0}, 10.0);
@@ -247,7 +249,7 @@ TEST(OdometryEstimator, DeadReckonsBetweenStatusRepliesAndGoesStale) {
 // replayed from it (before session 7 the pose was taken as valid when applied, and the twists
 // sent in between were lost: the base put back by v x delay).
 TEST(OdometryEstimator, AppliesALateStatusAtItsValidTimeAndReplaysTheTwistsSentSince) {
-  OdometryEstimator e(1.5, 0.6);
+  OdometryEstimator e(1.5, 0.6, Water2ResponseParams::commandedVelocity());
   e.onStatus({0.0, 0.0, 0.0}, 0.0);
   for (int k = 0; k <= 24; ++k) e.onTwistSent({0.4, 0.0}, 0.05 * k);  // 0.4 m/s, 20 Hz, until 1.2 s
   // The base was at x = 0.4 at t = 1.0; the reply is read at 1.2 (0.2 s late).
@@ -262,6 +264,35 @@ TEST(OdometryEstimator, AppliesALateStatusAtItsValidTimeAndReplaysTheTwistsSentS
   // Commands stop at 1.2: the last one lapses at 1.7; the extrapolation cap (0.6 s past 1.0) too.
   EXPECT_NEAR(e.estimate(1.5)->x, 0.4 + 0.4 * 0.5, 1e-9) << "the last command (1.2) acts until 1.5";
   EXPECT_NEAR(e.estimate(2.0)->x, 0.4 + 0.4 * 0.6, 1e-9) << "at most max_extrapolation past the status";
+}
+
+// The dead reckoning predicts what the base does with a command, through the base's response
+// model (Water2VelocityResponse): from rest, 0.4 m/s sent at 20 Hz from t = 0 with a status at
+// t = 0. Here with latency 0.05 s, acceleration limit 0.5 m/s^2 and no lag: the base stands
+// until 0.05 s, then ramps at 0.5 m/s^2 (0.225 m/s at 0.5 s, short of gain x 0.4): it covers
+// a/2 (t - 0.05)^2 = 5.1 cm by 0.5 s, where the commanded twist says 20 cm (the 15 cm jump
+// at the next status the rehearsal showed, REALMAN.md).
+TEST(OdometryEstimator, PredictsTheBaseResponseNotTheCommand) {
+  Water2ResponseParams response;  // the defaults (= the simulators' water2 base)
+  response.time_constant = 0.0;   // isolate the ramp
+  OdometryEstimator e(1.5, 0.6, response);
+  OdometryEstimator commanded(1.5, 0.6, Water2ResponseParams::commandedVelocity());
+  for (OdometryEstimator* x : {&e, &commanded}) {
+    x->onStatus({0.0, 0.0, 0.0}, 0.0);
+    for (int k = 0; k < 10; ++k) x->onTwistSent({0.4, 0.0}, 0.05 * k);
+  }
+  const double a = response.linear_acceleration, t = 0.5 - response.command_latency;
+  const auto o = e.estimate(0.5);
+  ASSERT_TRUE(o);
+  // Stepped at OdometryEstimator::kStep: the discrete ramp is ahead of a t^2 / 2 by a t kStep / 2.
+  EXPECT_NEAR(o->x, 0.5 * a * t * t, 0.5 * a * t * OdometryEstimator::kStep + 1e-9);
+  EXPECT_NEAR(o->linear, a * t, 1e-9) << "the predicted velocity, not the command";
+  EXPECT_NEAR(e.estimate(0.05)->x, 0.0, 1e-12) << "nothing before the latency";
+  EXPECT_NEAR(commanded.estimate(0.5)->x, 0.2, 1e-9);
+  EXPECT_DOUBLE_EQ(commanded.estimate(0.5)->linear, 0.4);
+  // A status resets the pose, not the velocity loop: the ramp goes on from where it was.
+  ASSERT_TRUE(e.onStatus({0.05, 0.0, 0.0}, 0.5));
+  EXPECT_NEAR(e.estimate(0.6)->linear, a * (t + 0.1), 1e-9);
 }
 
 // ------------------------------------------------------------------ bridge on loopback (lock-step)
@@ -451,5 +482,34 @@ TEST(Water2BridgeConfig, MisspelledKeyIsAStartUpError) {
 }
 
 TEST(Water2BridgeConfig, ShippedFileLoads) {
-  EXPECT_NO_THROW(loadWater2BridgeConfig(EHC_CONFIG_DIR "/realman/water2_base_bridge.yaml"));
+  const Water2BridgeConfig c = loadWater2BridgeConfig(EHC_CONFIG_DIR "/realman/water2_base_bridge.yaml");
+  // The dead reckoning's base response: the documented defaults (the simulators' water2 base).
+  const Water2ResponseParams d;
+  EXPECT_EQ(c.base_response.command_lifetime, d.command_lifetime);
+  EXPECT_EQ(c.base_response.command_latency, d.command_latency);
+  EXPECT_EQ(c.base_response.linear_acceleration, d.linear_acceleration);
+  EXPECT_EQ(c.base_response.angular_acceleration, d.angular_acceleration);
+  EXPECT_EQ(c.base_response.time_constant, d.time_constant);
+  EXPECT_EQ(c.base_response.linear_gain, d.linear_gain);
+  EXPECT_EQ(c.base_response.angular_gain, d.angular_gain);
+}
+
+TEST(Water2BridgeConfig, BaseResponseKeysAreCheckedAndValidated) {
+  const auto load = [](const std::string& text) {
+    const std::string path = ::testing::TempDir() + "/base_response_water2.yaml";
+    {
+      std::ofstream f(path);
+      f << "water2_base_bridge:\n  base_response:\n" << text;
+    }
+    return loadWater2BridgeConfig(path);
+  };
+  EXPECT_EQ(load("    linear_gain: 0.9\n").base_response.linear_gain, 0.9);
+  for (const char* bad : {"    linear_gian: 0.9\n", "    linear_gain: 2.0\n", "    time_constant: -0.1\n"}) {
+    try {
+      load(bad);
+      FAIL() << "accepted " << bad;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("base_response.") , std::string::npos) << e.what();
+    }
+  }
 }

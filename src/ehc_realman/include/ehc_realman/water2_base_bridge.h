@@ -6,9 +6,12 @@
 //    fresh commands at resend_rate_hz (the base executes each for 0.5 s), sends zero for
 //    stop_repeat_duration once commands stop for command_timeout, then goes quiet.
 //  - OdometryEstimator: pose from the latest status (~2 Hz) AT THE TIME IT WAS VALID, dead-
-//    reckoned from then with the twists sent since (each for its 0.5 s lifetime on the base) for
-//    at most max_extrapolation; no estimate once the status is older than status_timeout (stale
-//    data is never published as fresh). The bridge takes a robot_status pose as valid when its
+//    reckoned from then for at most max_extrapolation with the velocity the base is predicted to
+//    execute: the twists sent, through Water2VelocityResponse (latency, 0.5 s hold, velocity
+//    loop, acceleration limits, gain; base_response in the config), the model the simulators'
+//    Water2 base runs. Dead reckoning with the commanded twist instead made /odom jump by up to
+//    11 cm at a status in the rehearsal (session 7). No estimate once the status is older than
+//    status_timeout (stale data is never published as fresh). The bridge takes a robot_status pose as valid when its
 //    request was sent, not when the reply was read: a reply read late (a loaded computer, the
 //    network thread descheduled) otherwise puts the base where it was up to that delay ago and
 //    /odom and tf jump back by v x delay (session 7, REALMAN.md "Rehearsal").
@@ -16,6 +19,7 @@
 
 #include "ehc_realman/water2_client.h"
 #include "ehc_realman/water2_protocol.h"
+#include "ehc_realman/water2_velocity_response.h"
 
 #include <cstdint>
 #include <deque>
@@ -42,6 +46,9 @@ struct Water2BridgeConfig {
   double status_period = 0.5;        ///< s between robot_status requests
   double status_timeout = 1.5;       ///< s: older status => odometry stale (not published)
   double max_extrapolation = 0.6;    ///< s of dead reckoning past the last status
+  /// How the base executes joy_controls (base_response:), for the dead reckoning. Defaults =
+  /// the simulators' water2 model (mostly ASSUMPTIONS: identify them on the robot).
+  Water2ResponseParams base_response;
   double reply_timeout = 2.0;        ///< s without any reply while connected => reconnect
   double backoff_initial = 0.2;      ///< s before the first reconnection attempt
   double backoff_max = 5.0;          ///< s, doubling up to this
@@ -89,34 +96,44 @@ class BaseCommandWatchdog {
 
 struct BaseOdometry {
   double x = 0.0, y = 0.0, theta = 0.0;  ///< m, m, rad (odom frame)
-  double linear = 0.0, angular = 0.0;    ///< m/s, rad/s (base frame), last sent twist
+  double linear = 0.0, angular = 0.0;    ///< m/s, rad/s (base frame), predicted base velocity
   double status_age = 0.0;               ///< s since the status the pose is based on
 };
 
 class OdometryEstimator {
  public:
-  OdometryEstimator(double status_timeout, double max_extrapolation);
+  /// `response`: the base's velocity response the dead reckoning predicts through
+  /// (Water2ResponseParams::commandedVelocity() = the commanded twist, executed at once).
+  OdometryEstimator(double status_timeout, double max_extrapolation, const Water2ResponseParams& response);
   /// A status pose valid at `valid_time` (it may be earlier than twists already sent: they are
-  /// replayed from it). A pose valid before the current one is ignored (returns false).
+  /// replayed from it). A pose valid before the current one, or before the predicted velocity's
+  /// history (older than status_timeout), is ignored (returns false).
   bool onStatus(const Water2Pose& pose, double valid_time);
-  /// The base executes each joy_control for 0.5 s.
+  /// A joy_control sent at `now` (the base executes it through `response`).
   void onTwistSent(const BaseTwist& twist, double now);
-  /// Nothing before the first status or once the status is older than status_timeout.
+  /// Nothing before the first status or once the status is older than status_timeout. The
+  /// twist is the predicted base velocity at min(now, status time + max_extrapolation).
   std::optional<BaseOdometry> estimate(double now) const;
   double statusAge(double now) const;  ///< +inf before the first status
+  const Water2ResponseParams& response() const { return model_.params(); }
+
+  static constexpr double kStep = 0.01;  ///< s: integration step of the predicted velocity
+  /// s without a joy_control in flight after which the base is at rest (the 0.5 s hold ran out
+  /// and the velocity loop settled long ago): the model jumps instead of stepping.
+  static constexpr double kAtRestAfter = 30.0;
 
  private:
-  static constexpr double kCommandLifetime = 0.5;  ///< s, Water2 joy_control duration
-  static constexpr std::size_t kMaxTwists = 4096;  ///< history bound (20 Hz x status_timeout)
-  struct SentTwist {
-    double time;
-    BaseTwist twist;
-  };
+  void advanceModelTo(double t);  ///< steps model_ (no pose) from model_time_ to t
 
   double status_timeout_, max_extrapolation_;
   std::optional<Water2Pose> status_pose_;
-  double status_time_ = 0.0;      ///< when status_pose_ was valid
-  std::deque<SentTwist> twists_;  ///< sent twists, oldest first (from the one in force at status_time_)
+  double status_time_ = 0.0;  ///< when status_pose_ was valid
+  /// The predicted velocity loop at model_time_ (== status_time_ after a status; moved on to
+  /// status_timeout before the latest send without statuses, so its queue stays bounded), with
+  /// the twists sent since in flight.
+  Water2VelocityResponse model_;
+  double model_time_ = -std::numeric_limits<double>::infinity();
+  double last_sent_ = -std::numeric_limits<double>::infinity();
 };
 
 struct Water2BridgeStatus {

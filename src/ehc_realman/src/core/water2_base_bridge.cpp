@@ -51,6 +51,7 @@ void Water2BridgeConfig::validate() const {
   requireRange(kOwner, "status_period", status_period, 0.05, 10.0);
   requireRange(kOwner, "status_timeout", status_timeout, status_period, 60.0);
   requireRange(kOwner, "max_extrapolation", max_extrapolation, 0.0, 5.0);
+  base_response.validate(kOwner, "base_response.");
   requireRange(kOwner, "reply_timeout", reply_timeout, status_period, 60.0);
   requireRange(kOwner, "backoff_initial", backoff_initial, 0.01, 60.0);
   requireRange(kOwner, "backoff_max", backoff_max, backoff_initial, 600.0);
@@ -74,6 +75,7 @@ std::string Water2BridgeConfig::summary() const {
      << stop_repeat_duration << " s after a timeout\n"
      << "  status: every " << status_period << " s, stale after " << status_timeout
      << " s, dead reckoning <= " << max_extrapolation << " s\n"
+     << "  base response (dead reckoning): " << base_response.summary() << "\n"
      << "  odometry: " << odom_frame << " -> " << base_frame << " at " << odom_rate_hz << " Hz\n";
   return os.str();
 }
@@ -95,6 +97,7 @@ Water2BridgeConfig loadWater2BridgeConfig(const std::string& path) {
   c.status_period = b.get<double>("status_period", c.status_period);
   c.status_timeout = b.get<double>("status_timeout", c.status_timeout);
   c.max_extrapolation = b.get<double>("max_extrapolation", c.max_extrapolation);
+  readWater2ResponseParams(b.childOrEmpty("base_response"), &c.base_response);
   c.reply_timeout = b.get<double>("reply_timeout", c.reply_timeout);
   c.backoff_initial = b.get<double>("backoff_initial", c.backoff_initial);
   c.backoff_max = b.get<double>("backoff_max", c.backoff_max);
@@ -176,22 +179,39 @@ double BaseCommandWatchdog::timeUntilDue(double now) const {
 }
 
 // ------------------------------------------------------------------ odometry
-OdometryEstimator::OdometryEstimator(double status_timeout, double max_extrapolation)
-    : status_timeout_(status_timeout), max_extrapolation_(max_extrapolation) {}
+OdometryEstimator::OdometryEstimator(double status_timeout, double max_extrapolation,
+                                     const Water2ResponseParams& response)
+    : status_timeout_(status_timeout), max_extrapolation_(max_extrapolation), model_(response) {}
+
+void OdometryEstimator::advanceModelTo(double t) {
+  if (model_.inFlight() == 0 && t - model_time_ > kAtRestAfter) {  // long idle: at rest
+    model_.reset();
+    model_time_ = t;
+  }
+  while (model_time_ < t) {
+    const double dt = std::min(kStep, t - model_time_);
+    model_.advance(model_time_, dt);
+    model_time_ = dt < kStep ? t : model_time_ + dt;
+  }
+}
 
 bool OdometryEstimator::onStatus(const Water2Pose& pose, double valid_time) {
   if (status_pose_ && valid_time < status_time_) return false;  // an older pose than the one held
+  if (!std::isfinite(model_time_)) model_time_ = valid_time;     // nothing sent yet: at rest
+  if (valid_time < model_time_) return false;  // before the predicted velocity's history: stale
+  advanceModelTo(valid_time);
   status_pose_ = pose;
   status_time_ = valid_time;
-  // Keep the twist in force at valid_time and every later one.
-  while (twists_.size() > 1 && twists_[1].time <= valid_time) twists_.pop_front();
   return true;
 }
 
 void OdometryEstimator::onTwistSent(const BaseTwist& twist, double now) {
-  if (!twists_.empty() && now < twists_.back().time) now = twists_.back().time;  // monotonic
-  twists_.push_back(SentTwist{now, twist});
-  if (twists_.size() > kMaxTwists) twists_.pop_front();
+  now = std::max(now, last_sent_);  // monotonic
+  last_sent_ = now;
+  if (!std::isfinite(model_time_)) model_time_ = now;  // at rest until now
+  model_.joyControlSent(twist.linear, twist.angular, now);
+  // Without statuses, forget what no fresh status can need (bounds the queue).
+  if (model_time_ < now - status_timeout_) advanceModelTo(now - status_timeout_);
 }
 
 double OdometryEstimator::statusAge(double now) const {
@@ -199,24 +219,23 @@ double OdometryEstimator::statusAge(double now) const {
 }
 
 std::optional<BaseOdometry> OdometryEstimator::estimate(double now) const {
-  if (!status_pose_ || now - status_time_ > status_timeout_) return std::nullopt;
+  if (!status_pose_ || now - status_time_ > status_timeout_ || model_time_ > status_time_) return std::nullopt;
   BaseOdometry o;
   o.x = status_pose_->x;
   o.y = status_pose_->y;
   o.theta = status_pose_->theta;
+  // The velocity loop from the status on, on a copy: (v, w) over each step of at most kStep.
+  Water2VelocityResponse m = model_;
+  Eigen::Vector2d velocity = m.wheelVelocity();
   const double horizon = std::min(now, status_time_ + max_extrapolation_);
-  for (std::size_t i = 0; i < twists_.size(); ++i) {
-    // Twist i acts from its send time until the next one or the end of its lifetime.
-    const double next = i + 1 < twists_.size() ? twists_[i + 1].time : kInf;
-    const double from = std::max(twists_[i].time, status_time_);
-    const double until = std::min({next, twists_[i].time + kCommandLifetime, horizon});
-    if (until > from)
-      integrateUnicycle(o.x, o.y, o.theta, twists_[i].twist.linear, twists_[i].twist.angular, until - from);
+  for (double t = status_time_; t < horizon;) {
+    const double dt = std::min(kStep, horizon - t);
+    velocity = m.advance(t, dt);
+    integrateUnicycle(o.x, o.y, o.theta, velocity[0], velocity[1], dt);
+    t = dt < kStep ? horizon : t + dt;
   }
-  if (!twists_.empty() && now - twists_.back().time <= kCommandLifetime) {
-    o.linear = twists_.back().twist.linear;
-    o.angular = twists_.back().twist.angular;
-  }
+  o.linear = velocity[0];
+  o.angular = velocity[1];
   o.status_age = now - status_time_;
   return o;
 }
@@ -241,7 +260,7 @@ Water2BaseBridge::Water2BaseBridge(const Water2BridgeConfig& config, Clock clock
       watchdog_(config_.max_linear_velocity, config_.max_angular_velocity,
                 config_.command_timeout, 1.0 / config_.resend_rate_hz,
                 config_.stop_repeat_duration),
-      estimator_(config_.status_timeout, config_.max_extrapolation) {
+      estimator_(config_.status_timeout, config_.max_extrapolation, config_.base_response) {
   counters_.message = "not connected yet";
 }
 

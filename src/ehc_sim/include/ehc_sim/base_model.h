@@ -8,21 +8,24 @@
 //           classes (ehc_realman::BaseCommandWatchdog, OdometryEstimator):
 //           /cmd_vel -> bridge (scales into |V| <= 0.5 m/s, |W| <= 1 rad/s keeping the turn
 //           radius; resends the latest command at 20 Hz; zero once /cmd_vel stops for 0.2 s)
-//           -> command latency -> base firmware (executes each joy_control for 0.5 s unless
-//           renewed) -> velocity loop (first-order lag, acceleration limits, gain error; Table I
-//           noise on top) -> wheels. robot_status: the base's map pose (REALMAN.md: "the pose in
-//           robot_status is the base's map pose") with a slowly varying localisation error,
-//           sampled every 0.5 s and received after a status latency; /odom is the bridge's
-//           estimate: the latest status dead-reckoned with the last twist sent.
+//           -> ehc_realman::Water2VelocityResponse (command latency, the firmware executes each
+//           joy_control for 0.5 s unless renewed, velocity loop: first-order lag, acceleration
+//           limits, gain error; Table I noise on top) -> wheels. robot_status: the base's map
+//           pose (REALMAN.md: "the pose in robot_status is the base's map pose") with a slowly
+//           varying localisation error, sampled every 0.5 s and received after a status
+//           latency; /odom is the bridge's estimate: the latest status (valid at its sample
+//           time) dead-reckoned with the velocity the same response model predicts.
 //
 // Every Water2BaseParams field names its source; values nobody has measured are marked
 // ASSUMPTION (to be identified on the robot). ROS-free.
 
 #include "ehc_realman/water2_base_bridge.h"
+#include "ehc_realman/water2_velocity_response.h"
 
 #include <Eigen/Core>
 
 #include <deque>
+#include <optional>
 #include <random>
 #include <string>
 
@@ -53,30 +56,27 @@ struct Water2BaseParams {
   double max_extrapolation = ehc_realman::Water2BridgeConfig().max_extrapolation;
 
   // ---- the base (Water2 firmware and wheels) ----
-  /// s a joy_control command is executed unless renewed (REALMAN.md, DESIGN.md §12: 0.5 s).
-  double command_lifetime = 0.5;
-  /// s from the bridge sending a joy_control to the wheels acting on it. ASSUMPTION (TCP on the
-  /// robot's LAN + one firmware cycle; not measured).
-  double command_latency = 0.05;
+  /// The velocity response (latency, 0.5 s hold, velocity loop, acceleration limits, gain):
+  /// ehc_realman::Water2ResponseParams, whose defaults name their sources and ASSUMPTIONS. The
+  /// modelled bridge dead-reckons through the same model and values (the bridge's base_response
+  /// defaults are these).
+  ehc_realman::Water2ResponseParams response;
+  /// What the modelled bridge believes the response is (its base_response), when it differs
+  /// from `response`: a mis-identified model, or Water2ResponseParams::commandedVelocity() for
+  /// the bridge before session 8 (dead reckoning with the commanded twist). Unset = `response`.
+  std::optional<ehc_realman::Water2ResponseParams> bridge_response;
   /// s from the base sampling its pose to the bridge receiving the robot_status reply.
-  /// ASSUMPTION (not measured); the bridge treats the pose as current on reception.
+  /// ASSUMPTION (not measured). The bridge takes the pose as valid when it sent the request
+  /// (session 7), i.e. at the sample time here.
   double status_latency = 0.05;
-  /// m/s^2, rad/s^2: acceleration limits of the velocity loop. ASSUMPTION (typical of indoor
-  /// service-robot chassis; the Water2 data sheet gives none).
-  double linear_acceleration = 0.5;
-  double angular_acceleration = 1.0;
-  /// s: time constant of the first-order velocity loop. ASSUMPTION.
-  double time_constant = 0.1;
-  /// Executed / commanded velocity in steady state (load, wheel radius and track calibration).
-  /// ASSUMPTION (a few per cent).
-  double linear_gain = 0.95;
-  double angular_gain = 0.95;
   /// Error of the robot_status map pose: first-order Gauss-Markov per axis (x, y, heading) with
   /// this stationary sigma and correlation time, zero at reset. ASSUMPTION (lidar localisation;
   /// 0 = the status pose is the true pose).
   double localisation_position_sigma = 0.002;  ///< m
   double localisation_heading_sigma = 0.002;   ///< rad
   double localisation_correlation_time = 5.0;  ///< s
+
+  const ehc_realman::Water2ResponseParams& bridgeResponse() const { return bridge_response ? *bridge_response : response; }
 
   void validate() const;  ///< throws "[Water2BaseParams] ..."
   std::string summary() const;
@@ -93,7 +93,7 @@ struct BaseModelConfig {
 /// The `water2` mapping (every key optional; unknown keys are errors naming file and field).
 Water2BaseParams loadWater2BaseParams(const ehc_control::ConfigNode& n);
 
-/// What the bridge publishes on /odom: pose in odom (x, y, yaw), the last twist it sent.
+/// What the bridge publishes on /odom: pose in odom (x, y, yaw), the predicted base velocity.
 struct BaseOdometryEstimate {
   Eigen::Vector3d pose = Eigen::Vector3d::Zero();
   double linear = 0.0;   ///< m/s, base frame
@@ -140,25 +140,23 @@ class Water2BaseModel {
   BaseOdometryEstimate odometry(double now) const;
 
   /// The joy_control in force at the last advance() (zero if none), m/s and rad/s.
-  const Eigen::Vector2d& commandInForce() const { return in_force_; }
-  const Eigen::Vector2d& wheelVelocity() const { return wheel_; }
+  const Eigen::Vector2d& commandInForce() const { return response_.commandInForce(); }
+  const Eigen::Vector2d& wheelVelocity() const { return response_.wheelVelocity(); }
   long joyControls() const { return joy_controls_; }  ///< sent since reset
   long statuses() const { return statuses_; }          ///< robot_status replies received since reset
   const Water2BaseParams& params() const { return params_; }
 
  private:
-  struct Timed {
-    double at;               ///< s: when the base executes it / the bridge receives it
-    Eigen::Vector3d value;   ///< (v, w, -) for a command; (x, y, yaw) for a status
+  struct TimedPose {
+    double at;              ///< s: when the bridge receives it
+    double valid;           ///< s: when the bridge's request was sent (the base sampled it)
+    Eigen::Vector3d value;  ///< (x, y, yaw)
   };
   Water2BaseParams params_;
   ehc_realman::BaseCommandWatchdog bridge_;
   ehc_realman::OdometryEstimator estimator_;
-  std::deque<Timed> commands_in_flight_, statuses_in_flight_;
-  Eigen::Vector2d held_ = Eigen::Vector2d::Zero();
-  double held_until_ = -1.0;  ///< s
-  Eigen::Vector2d in_force_ = Eigen::Vector2d::Zero();
-  Eigen::Vector2d wheel_ = Eigen::Vector2d::Zero();
+  ehc_realman::Water2VelocityResponse response_;
+  std::deque<TimedPose> statuses_in_flight_;
   Eigen::Vector3d localisation_error_ = Eigen::Vector3d::Zero();
   double next_status_sample_ = 0.0;  ///< s
   long joy_controls_ = 0, statuses_ = 0;

@@ -60,7 +60,7 @@ class KinematicFakeRobot {
   /// estimate from the ~2 Hz status.
   Eigen::Vector3d odometryPose() const;
   /// The /odom twist (v_x, v_y, w_z), base frame: ideal = the executed base velocity; water2 =
-  /// the bridge's last sent twist (while in force).
+  /// the base velocity the bridge predicts from the twists it sent.
   Eigen::Vector3d odometryTwist() const;
   const BaseModelConfig& baseModel() const { return base_model_; }
   /// The Water2 chain (nullptr for the ideal base).

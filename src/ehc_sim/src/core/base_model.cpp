@@ -38,14 +38,9 @@ void Water2BaseParams::validate() const {
   ehc_control::requireRange(o, "bridge_command_timeout", bridge_command_timeout, 1e-3, 10.0);
   ehc_control::requireRange(o, "status_period", status_period, 1e-3, 1.0);
   ehc_control::requireRange(o, "max_extrapolation", max_extrapolation, 0.0, 10.0);
-  ehc_control::requireRange(o, "command_lifetime", command_lifetime, 1e-3, 10.0);
-  ehc_control::requireRange(o, "command_latency", command_latency, 0.0, 1.0);
+  response.validate(o);
+  if (bridge_response) bridge_response->validate(o, "bridge_response.");
   ehc_control::requireRange(o, "status_latency", status_latency, 0.0, 1.0);
-  ehc_control::requireRange(o, "linear_acceleration", linear_acceleration, 1e-3, 100.0);
-  ehc_control::requireRange(o, "angular_acceleration", angular_acceleration, 1e-3, 100.0);
-  ehc_control::requireRange(o, "time_constant", time_constant, 0.0, 10.0);
-  ehc_control::requireRange(o, "linear_gain", linear_gain, 0.5, 1.5);
-  ehc_control::requireRange(o, "angular_gain", angular_gain, 0.5, 1.5);
   ehc_control::requireRange(o, "localisation_position_sigma", localisation_position_sigma, 0.0, 1.0);
   ehc_control::requireRange(o, "localisation_heading_sigma", localisation_heading_sigma, 0.0, 1.0);
   ehc_control::requireRange(o, "localisation_correlation_time", localisation_correlation_time, 1e-3, 1e6);
@@ -59,9 +54,9 @@ std::string Water2BaseParams::summary() const {
   std::ostringstream os;
   os << "water2 (bridge: |v| <= " << max_linear_velocity << " m/s, |w| <= " << max_angular_velocity
      << " rad/s, resend " << resend_rate << " Hz, zero after " << bridge_command_timeout
-     << " s; base: latency " << command_latency << " s, hold " << command_lifetime << " s, accel "
-     << linear_acceleration << " m/s^2 / " << angular_acceleration << " rad/s^2, lag "
-     << time_constant << " s, gain " << linear_gain << " / " << angular_gain << "; status every "
+     << " s; base: " << response.summary()
+     << (bridge_response ? "; the bridge assumes: " + bridge_response->summary() : std::string())
+     << "; status every "
      << status_period << " s + " << status_latency << " s, extrapolation <= " << max_extrapolation
      << " s, localisation sigma " << localisation_position_sigma << " m / "
      << localisation_heading_sigma << " rad over " << localisation_correlation_time << " s)";
@@ -81,14 +76,12 @@ Water2BaseParams loadWater2BaseParams(const ConfigNode& n) {
   get("bridge_command_timeout", p.bridge_command_timeout);
   get("status_period", p.status_period);
   get("max_extrapolation", p.max_extrapolation);
-  get("command_lifetime", p.command_lifetime);
-  get("command_latency", p.command_latency);
+  ehc_realman::readWater2ResponseParams(n, &p.response);
+  if (n.has("bridge_response")) {
+    p.bridge_response = p.response;  // the keys given change the base's values
+    ehc_realman::readWater2ResponseParams(n.child("bridge_response"), &*p.bridge_response);
+  }
   get("status_latency", p.status_latency);
-  get("linear_acceleration", p.linear_acceleration);
-  get("angular_acceleration", p.angular_acceleration);
-  get("time_constant", p.time_constant);
-  get("linear_gain", p.linear_gain);
-  get("angular_gain", p.angular_gain);
   get("localisation_position_sigma", p.localisation_position_sigma);
   get("localisation_heading_sigma", p.localisation_heading_sigma);
   get("localisation_correlation_time", p.localisation_correlation_time);
@@ -102,7 +95,8 @@ Water2BaseModel::Water2BaseModel(const Water2BaseParams& params)
     : params_((params.validate(), params)),
       bridge_(params.max_linear_velocity, params.max_angular_velocity, params.bridge_command_timeout,
               1.0 / params.resend_rate, bridgeDefaults().stop_repeat_duration),
-      estimator_(bridgeDefaults().status_timeout, params.max_extrapolation) {
+      estimator_(bridgeDefaults().status_timeout, params.max_extrapolation, params.bridgeResponse()),
+      response_(params.response) {
   reset(Eigen::Vector3d::Zero());
 }
 
@@ -110,14 +104,11 @@ void Water2BaseModel::reset(const Eigen::Vector3d& pose) {
   bridge_ = ehc_realman::BaseCommandWatchdog(params_.max_linear_velocity, params_.max_angular_velocity,
                                              params_.bridge_command_timeout, 1.0 / params_.resend_rate,
                                              bridgeDefaults().stop_repeat_duration);
-  estimator_ = ehc_realman::OdometryEstimator(bridgeDefaults().status_timeout, params_.max_extrapolation);
+  estimator_ = ehc_realman::OdometryEstimator(bridgeDefaults().status_timeout, params_.max_extrapolation,
+                                              params_.bridgeResponse());
   estimator_.onStatus(ehc_realman::Water2Pose{pose.x(), pose.y(), pose.z()}, 0.0);
-  commands_in_flight_.clear();
+  response_.reset();
   statuses_in_flight_.clear();
-  held_.setZero();
-  held_until_ = -1.0;
-  in_force_.setZero();
-  wheel_.setZero();
   localisation_error_.setZero();
   next_status_sample_ = params_.status_period;
   joy_controls_ = 0;
@@ -129,7 +120,7 @@ bool Water2BaseModel::command(double linear, double angular, double now) {
 }
 
 void Water2BaseModel::joyControl(double linear, double angular, double sent) {
-  commands_in_flight_.push_back({sent + params_.command_latency, Eigen::Vector3d(linear, angular, 0.0)});
+  response_.joyControlSent(linear, angular, sent);
   estimator_.onTwistSent(ehc_realman::BaseTwist{linear, angular}, sent);  // the bridge's dead reckoning
   ++joy_controls_;
 }
@@ -138,7 +129,7 @@ void Water2BaseModel::joyControlReceived(double linear, double angular, double n
   if (!std::isfinite(linear) || !std::isfinite(angular))
     throw std::invalid_argument("[Water2BaseModel] joy_control velocities must be finite");
   bridge_bypassed_ = true;
-  commands_in_flight_.push_back({now, Eigen::Vector3d(linear, angular, 0.0)});
+  response_.joyControlAt(linear, angular, now);  // the real connection's latency has elapsed
   ++joy_controls_;
 }
 
@@ -152,25 +143,7 @@ Eigen::Vector2d Water2BaseModel::advance(double now, double dt, double deadband_
                                          double deadband_angular) {
   if (!bridge_bypassed_)
     if (const auto twist = bridge_.due(now)) joyControl(twist->linear, twist->angular, now);
-  while (!commands_in_flight_.empty() && commands_in_flight_.front().at <= now + kEps) {
-    held_ = commands_in_flight_.front().value.head<2>();
-    held_until_ = commands_in_flight_.front().at + params_.command_lifetime;
-    commands_in_flight_.pop_front();
-  }
-  in_force_ = now < held_until_ - kEps ? held_ : Eigen::Vector2d::Zero();
-  const Eigen::Vector2d band(deadband_linear, deadband_angular);
-  Eigen::Vector2d u = in_force_;
-  if (std::abs(u[0]) < band[0] && std::abs(u[1]) < band[1]) u.setZero();  // static friction
-  const Eigen::Vector2d gain(params_.linear_gain, params_.angular_gain);
-  const Eigen::Vector2d accel(params_.linear_acceleration, params_.angular_acceleration);
-  const double lag = params_.time_constant > 0.0 ? 1.0 - std::exp(-dt / params_.time_constant) : 1.0;
-  for (int i = 0; i < 2; ++i) {
-    const double target = gain[i] * u[i];
-    const double change = std::clamp(lag * (target - wheel_[i]), -accel[i] * dt, accel[i] * dt);
-    wheel_[i] += change;
-    if (target == 0.0 && std::abs(wheel_[i]) < band[i]) wheel_[i] = 0.0;
-  }
-  return wheel_;
+  return response_.advance(now, dt, deadband_linear, deadband_angular);
 }
 
 void Water2BaseModel::observe(const Eigen::Vector3d& true_pose, double now, std::mt19937_64& rng,
@@ -184,12 +157,13 @@ void Water2BaseModel::observe(const Eigen::Vector3d& true_pose, double now, std:
     for (int i = 0; i < 3; ++i)
       if (sigma[i] > 0.0) localisation_error_[i] = a * localisation_error_[i] + b * sigma[i] * gauss(rng);
     const Eigen::Vector3d reported = statusPose(true_pose);
-    statuses_in_flight_.push_back({next_status_sample_ + params_.status_latency, reported});
+    statuses_in_flight_.push_back({next_status_sample_ + params_.status_latency, next_status_sample_, reported});
     next_status_sample_ += params_.status_period;
   }
   while (!statuses_in_flight_.empty() && statuses_in_flight_.front().at <= now + kEps) {
     const Eigen::Vector3d& p = statuses_in_flight_.front().value;
-    estimator_.onStatus(ehc_realman::Water2Pose{p.x(), p.y(), p.z()}, statuses_in_flight_.front().at);
+    // Valid at the sample time: the bridge stamps a pose with its request's send time.
+    estimator_.onStatus(ehc_realman::Water2Pose{p.x(), p.y(), p.z()}, statuses_in_flight_.front().valid);
     statuses_in_flight_.pop_front();
     ++statuses_;
   }
