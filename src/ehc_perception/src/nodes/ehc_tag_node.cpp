@@ -152,17 +152,18 @@ class TagNode {
     }
     try {
       ros_conv::imageToGray(msg, &gray_);
-      const std::vector<TagDetection> dets = detector_->detect(gray_);
-      if (!findTarget(dets, cfg_.target, nullptr)) {
+      // The camera pose at the image stamp (the tf filter waited for it): the detector's prior
+      // for ambiguous tag poses, and the target in the world.
+      const std::string cam_frame = cfg_.camera_frame.empty() ? msg.header.frame_id : cfg_.camera_frame;
+      const Eigen::Isometry3d T_world_cam = tf2::transformToEigen(tf_.lookupTransform(
+          cfg_.world_frame, cam_frame, msg.header.stamp, ros::Duration(cfg_.tf_timeout)));
+      const std::vector<TagDetection> dets = detector_->detect(gray_, T_world_cam);
+      Eigen::Isometry3d T_world;
+      if (!findTargetInWorld(dets, cfg_.target, T_world_cam, &T_world)) {
         ROS_DEBUG_THROTTLE(kLogThrottle, "ehc_tag_node: target tag %d not seen (%zu tags)",
                            cfg_.target.tag_id, dets.size());
         return;
       }
-      const std::string cam_frame = cfg_.camera_frame.empty() ? msg.header.frame_id : cfg_.camera_frame;
-      const geometry_msgs::TransformStamped tf = tf_.lookupTransform(
-          cfg_.world_frame, cam_frame, msg.header.stamp, ros::Duration(cfg_.tf_timeout));
-      Eigen::Isometry3d T_world;
-      findTargetInWorld(dets, cfg_.target, tf2::transformToEigen(tf), &T_world);
       geometry_msgs::PoseStamped out;
       out.header.stamp = msg.header.stamp;
       out.header.frame_id = cfg_.world_frame;
