@@ -209,6 +209,10 @@ class GraspSequencer {
 
  private:
   void startObject(double t, SequencerOutput* out);
+  /// The phase logic of one cycle (update() without the bookkeeping and the time limit).
+  void advance(const SequencerInput& in, SequencerOutput* out);
+  /// SequencerOutput::exclusions for the phase reached this cycle (every cycle, whatever ended it).
+  std::vector<ExclusionSphere> obstacleExclusions(const SequencerInput& in) const;
   void enter(GraspPhase p, double t, SequencerOutput* out, const std::string& why = "");
   void finishObject(double t, bool success, const std::string& reason, const SequencerInput& in,
                     SequencerOutput* out);
