@@ -692,6 +692,44 @@ TEST(GraspSequencer, TheExclusionHasNoGapFromTheDescentToTheEndOfTheRetreatWhate
   }
 }
 
+TEST(GraspSequencer, TsmmLocksOnlyOnceTheBaseStageStoppedAtDForTheObjectCentre) {
+  // Exp-2 tsmm (paper IV-D: the base stops with the TCP d from the object): the controller's arm
+  // stage may still be on from the search pose when the approach starts, with the TCP already
+  // within the pre-grasp switch distance. The sequencer once locked at once (pre-grasp goal) and
+  // the base never drove: the arm alone stalled short of the middle object. The goal must be
+  // the object centre until the controller reports TSMM_ARM for it, and only then the lock.
+  GraspSequencerParams p = twoObjects();
+  Harness h(p);
+  h.follow = false;
+  h.controller_phase = "TSMM_ARM";  // left on by the search pose
+  const Eigen::Isometry3d target = forwardTarget();
+  h.perceive = target;
+  h.tcp = target;
+  h.tcp.translation() -= 0.2 * target.linear().col(2);  // within pregrasp_switch_distance (0.25)
+  h.step();  // perceived: APPROACH at once, the controller's answer to the search pose still TSMM_ARM
+  ASSERT_EQ(h.seq.phase(), GraspPhase::Approach);
+  ASSERT_TRUE(h.last_goal);
+  EXPECT_LT((h.last_goal->translation() - target.translation()).norm(), 1e-9) << "the centre, not the pre-grasp";
+  // The controller sees the centre: base stage, drives, stops at d: arm stage.
+  h.controller_phase = "TSMM_BASE";
+  h.step();
+  EXPECT_EQ(h.seq.phase(), GraspPhase::Approach) << "no lock while the base drives";
+  EXPECT_LT((h.last_goal->translation() - target.translation()).norm(), 1e-9);
+  h.controller_phase = "TSMM_ARM";
+  h.step();
+  EXPECT_EQ(h.seq.phase(), GraspPhase::PreGrasp) << "the base stopped at d: lock, pre-grasp";
+  EXPECT_GT((h.last_goal->translation() - target.translation()).norm(), 0.05);
+  // Not tsmm: the lock within the switch distance is immediate, as before.
+  Harness e(p);
+  e.follow = false;
+  e.perceive = target;
+  e.tcp = h.tcp;
+  e.step();
+  ASSERT_EQ(e.seq.phase(), GraspPhase::Approach);
+  e.step();
+  EXPECT_EQ(e.seq.phase(), GraspPhase::PreGrasp);
+}
+
 TEST(GraspSequencer, RejectsNonFiniteInput) {
   GraspSequencer s(twoObjects());
   Eigen::Isometry3d bad = forwardTarget();

@@ -241,6 +241,7 @@ void GraspSequencer::startObject(double t, SequencerOutput* out) {
   locked_.reset();
   centre_in_tcp_.reset();
   hold_goal_.reset();
+  centre_sent_ = tsmm_at_d_ = false;
   ctrl_fov_cycles_ = ctrl_cycles_ = 0;
   for (ehc_control::TargetTracker* t : tfmWindows()) t->reset();
   was_distant_ = false;
@@ -292,13 +293,18 @@ Eigen::Isometry3d GraspSequencer::preGrasp(const Eigen::Isometry3d& grasp) const
   return T;
 }
 
-Eigen::Isometry3d GraspSequencer::approachGoal(const SequencerInput& in, const Eigen::Isometry3d& grasp) const {
+Eigen::Isometry3d GraspSequencer::approachGoal(const SequencerInput& in, const Eigen::Isometry3d& grasp) {
   const std::optional<Eigen::Vector3d> centre = objectCentre();
-  if (!centre || in.controller_phase != ehc_control::toString(ehc_control::ControlPhase::TsmmBase))
-    return preGrasp(grasp);
+  if (!centre || !tsmmController(in) || tsmm_at_d_) return preGrasp(grasp);
   Eigen::Isometry3d T = grasp;  // the base stage drives the TCP position only
   T.translation() = *centre;
+  centre_sent_ = true;
   return T;
+}
+
+bool GraspSequencer::tsmmController(const SequencerInput& in) {
+  return in.controller_phase == ehc_control::toString(ehc_control::ControlPhase::TsmmBase) ||
+         in.controller_phase == ehc_control::toString(ehc_control::ControlPhase::TsmmArm);
 }
 
 bool GraspSequencer::within(const SequencerInput& in, const Eigen::Isometry3d& goal, double pos,
@@ -413,6 +419,8 @@ SequencerOutput GraspSequencer::update(const SequencerInput& in) {
 void GraspSequencer::advance(const SequencerInput& in, SequencerOutput* out) {
   const double t = in.t;
   const double in_phase = t - phase_t0_;
+  const bool centre_was_sent = centre_sent_;  // the goal of the last cycle (tsmm, see Approach)
+  centre_sent_ = false;
   const bool fresh = object_pose_ && (t - object_pose_t_) <= params_.perception_hold;
   if (object_pose_ && !locked_) out->object_pose = *object_pose_;
 
@@ -441,8 +449,16 @@ void GraspSequencer::advance(const SequencerInput& in, SequencerOutput* out) {
       }
       const auto choice = currentChoice(in);
       if (!choice) break;
+      // tsmm: the base has stopped d from the object once the controller reports its arm stage
+      // for the object centre sent as the goal. No lock before: the lock makes the pre-grasp the
+      // goal, which ended the base stage where the lock happened (0.25 m from the grasp, 3-D:
+      // ~0.24-0.29 m horizontally from a middle or back object), or never started it when the arm
+      // stage of the search pose was still on (the arm alone then stalled 1-3 cm short).
+      if (centre_was_sent && in.controller_phase == ehc_control::toString(ehc_control::ControlPhase::TsmmArm))
+        tsmm_at_d_ = true;
       out->goal = approachGoal(in, choice->pose);
-      if (within(in, choice->pose, params_.pregrasp_switch_distance, 180.0)) {
+      const bool tsmm_base_pending = tsmmController(in) && !tsmm_at_d_;
+      if (!tsmm_base_pending && within(in, choice->pose, params_.pregrasp_switch_distance, 180.0)) {
         locked_object_centre_ = *objectCentre();  // frozen from here (before locked_ is set)
         locked_ = choice;
         out->goal = preGrasp(choice->pose);
