@@ -59,6 +59,34 @@ TEST(GraspExperiment, MethodNamesPerProtocol) {
   EXPECT_TRUE(graspMethod("ehc").mpbs);
 }
 
+TEST(GraspExperiment, APenetratingPairIsTheWorstCaseNotNone) {
+  // A perceived distance <= 0 (the link inside an occupied voxel) once read as "no pair" and
+  // was left out of the safety table's minima.
+  auto pair = [](double d, double stop) {
+    ObstacleExtreme e;
+    e.found = true;
+    e.distance = d;
+    e.stop = stop;
+    return e;
+  };
+  ObstacleExtreme nearest, tightest;
+  EXPECT_FALSE(nearest.found);
+  for (const ObstacleExtreme& e : {pair(0.004, 0.010), pair(-0.007, 0.015), pair(0.030, 0.050), ObstacleExtreme{}}) {
+    nearest.take(e, false);
+    tightest.take(e, true);
+  }
+  ASSERT_TRUE(nearest.found);
+  EXPECT_DOUBLE_EQ(nearest.distance, -0.007);
+  EXPECT_DOUBLE_EQ(tightest.margin(), -0.022);
+  EXPECT_NE(graspSummaryJson([&] {
+              GraspMethodSummary s;
+              s.method = "ehc";
+              s.tightest = tightest;
+              return s;
+            }()).find("\"margin\":-0.022"),
+            std::string::npos);
+}
+
 TEST(GraspExperiment, SetsJitterTheObjectsBySeed) {
   const GraspExperiment exp(params(GraspProtocol::Table), {"ehc"});
   const auto a = exp.runConfig("ehc", "", 7000), b = exp.runConfig("ehc", "", 7000), c = exp.runConfig("ehc", "", 7010);
@@ -163,7 +191,11 @@ TEST(GraspExperiment, Exp3OneSetOfEveryMethodReportsTfmPerApproach) {
   for (const auto& t : r.trials) {
     EXPECT_EQ(t.joint_limit_violations, 0) << t.method << " " << t.approach;
     // The object being grasped is listed apart from PRE_GRASP on (the hand must come close).
-    if (t.nearest.body == t.object) EXPECT_TRUE(t.nearest.phase == "WAIT_TARGET" || t.nearest.phase == "APPROACH") << t.nearest.phase;
-    if (t.grasped.distance >= 0.0) EXPECT_NE(t.grasped.link, "") << t.method;
+    if (t.nearest.body == t.object) {
+      EXPECT_TRUE(t.nearest.phase == "WAIT_TARGET" || t.nearest.phase == "APPROACH") << t.nearest.phase;
+    }
+    if (t.grasped.found) {
+      EXPECT_NE(t.grasped.link, "") << t.method;
+    }
   }
 }

@@ -648,6 +648,88 @@ TEST(GraspSequencer, TheObjectIsAnObstacleUntilTheDescentAndExcludedWhileTouched
   while (h0.seq.currentObject() == 0 && h0.t < 100) EXPECT_TRUE(h0.step().exclusions.empty());
 }
 
+TEST(GraspSequencer, TheExclusionHasNoGapFromTheDescentToTheEndOfTheRetreatWhateverEndsTheGrasp) {
+  // Exp-2 (issue 14 item 4): a failed descent of the back object (the time limit in GRASP, the
+  // hand stalled at the object) once dropped the exclusion for the one cycle of the failure, so
+  // the obstacle map showed the object under the fingers (perceived 2 mm, d_s 10 mm) as the
+  // retreat began. Every cycle from the first GRASP cycle to the last RETREAT cycle must send
+  // the object's sphere, whatever ends the grasp: the time limit, an empty close, a success.
+  enum class End { TimeLimit, ClosedEmpty, Success };
+  for (const End end : {End::TimeLimit, End::ClosedEmpty, End::Success}) {
+    SCOPED_TRACE(static_cast<int>(end));
+    GraspSequencerParams p = twoObjects();
+    p.object_time_limit = 6.0;
+    Harness h(p);
+    const Eigen::Vector3d centre(1.5, 0.0, 0.76);
+    h.perceive = forwardTarget(centre.x(), centre.y(), centre.z());
+    if (end == End::ClosedEmpty) h.close_result = "closed_empty";
+    while (h.seq.phase() != GraspPhase::Grasp && h.t < 20) h.step();
+    ASSERT_EQ(h.seq.phase(), GraspPhase::Grasp);
+    if (end == End::TimeLimit) {  // stalled 3 cm short of the grasp: never closes
+      h.follow = false;
+      h.tcp = h.seq.lockedGrasp()->pose;
+      h.tcp.translation() -= 0.03 * h.tcp.linear().col(2);
+    }
+    bool retreated = false;
+    long cycles = 0;
+    while (h.seq.currentObject() == 0 && h.t < 40) {
+      const GraspPhase before = h.seq.phase();
+      if (end == End::TimeLimit && before >= GraspPhase::Release) h.follow = true;  // backs out
+      const SequencerOutput out = h.step();
+      if (h.seq.currentObject() != 0) break;  // the retreat ended: the next object
+      retreated = retreated || h.seq.phase() == GraspPhase::Retreat;
+      ++cycles;
+      ASSERT_FALSE(out.exclusions.empty()) << toString(before) << " -> " << toString(h.seq.phase()) << " at " << h.t;
+      EXPECT_LT((out.exclusions[0].centre - centre).norm(), 1e-9);
+    }
+    ASSERT_EQ(h.seq.results().size(), 1u);
+    EXPECT_EQ(h.seq.results()[0].success, end == End::Success);
+    if (end == End::TimeLimit) {
+      EXPECT_EQ(h.seq.results()[0].failed_phase, "GRASP");
+    }
+    EXPECT_TRUE(retreated);
+    EXPECT_GT(cycles, 10);
+  }
+}
+
+TEST(GraspSequencer, TsmmLocksOnlyOnceTheBaseStageStoppedAtDForTheObjectCentre) {
+  // Exp-2 tsmm (paper IV-D: the base stops with the TCP d from the object): the controller's arm
+  // stage may still be on from the search pose when the approach starts, with the TCP already
+  // within the pre-grasp switch distance. The sequencer once locked at once (pre-grasp goal) and
+  // the base never drove: the arm alone stalled short of the middle object. The goal must be
+  // the object centre until the controller reports TSMM_ARM for it, and only then the lock.
+  GraspSequencerParams p = twoObjects();
+  Harness h(p);
+  h.follow = false;
+  h.controller_phase = "TSMM_ARM";  // left on by the search pose
+  const Eigen::Isometry3d target = forwardTarget();
+  h.perceive = target;
+  h.tcp = target;
+  h.tcp.translation() -= 0.2 * target.linear().col(2);  // within pregrasp_switch_distance (0.25)
+  h.step();  // perceived: APPROACH at once, the controller's answer to the search pose still TSMM_ARM
+  ASSERT_EQ(h.seq.phase(), GraspPhase::Approach);
+  ASSERT_TRUE(h.last_goal);
+  EXPECT_LT((h.last_goal->translation() - target.translation()).norm(), 1e-9) << "the centre, not the pre-grasp";
+  // The controller sees the centre: base stage, drives, stops at d: arm stage.
+  h.controller_phase = "TSMM_BASE";
+  h.step();
+  EXPECT_EQ(h.seq.phase(), GraspPhase::Approach) << "no lock while the base drives";
+  EXPECT_LT((h.last_goal->translation() - target.translation()).norm(), 1e-9);
+  h.controller_phase = "TSMM_ARM";
+  h.step();
+  EXPECT_EQ(h.seq.phase(), GraspPhase::PreGrasp) << "the base stopped at d: lock, pre-grasp";
+  EXPECT_GT((h.last_goal->translation() - target.translation()).norm(), 0.05);
+  // Not tsmm: the lock within the switch distance is immediate, as before.
+  Harness e(p);
+  e.follow = false;
+  e.perceive = target;
+  e.tcp = h.tcp;
+  e.step();
+  ASSERT_EQ(e.seq.phase(), GraspPhase::Approach);
+  e.step();
+  EXPECT_EQ(e.seq.phase(), GraspPhase::PreGrasp);
+}
+
 TEST(GraspSequencer, RejectsNonFiniteInput) {
   GraspSequencer s(twoObjects());
   Eigen::Isometry3d bad = forwardTarget();

@@ -330,23 +330,27 @@ TEST(WholeBodyModel, CameraLooksAlongTheApproachAxis) {
   EXPECT_NEAR(std::hypot(d.x(), d.y()), 0.07, 1e-9);
 }
 
-// Issue 16 (pending): the D435 image is upside down in the ready pose. Optical frame: z forward,
-// x right, y down. Upright: in the ready pose (base at the origin, facing +x) the image's down
-// (y) points to the floor and its right (x) to the robot's right (-y). Disabled until the tag
-// detector resolves the planar-pose ambiguity the upright mount exposes (robot.urdf).
-TEST(WholeBodyModel, DISABLED_CameraImageIsUprightInTheReadyPose) {
-  RobotConfig uncalibrated = realmanConfig();
-  uncalibrated.calibration.clear();
-  for (const RobotConfig& rc : {realmanConfig(), uncalibrated}) {
-    const WholeBodyModel model(rc);
-    const Eigen::Isometry3d Tc =
-        model.fk(Eigen::Vector3d::Zero(), rc.arm_ready, "camera_color_optical_frame");
-    EXPECT_LT(Tc.linear().col(1).z(), -0.9) << "image down must point to the floor";
-    EXPECT_LT(Tc.linear().col(0).y(), -0.99) << "image right must be the robot's right";
-    EXPECT_GT(Tc.linear().col(2).x(), 0.9) << "looking ahead";
-    // The camera sits above the gripper (on the flange's +x side, which points up here).
-    const Eigen::Isometry3d Te = model.fk(Eigen::Vector3d::Zero(), rc.arm_ready, "ee_link");
-    EXPECT_GT(Tc.translation().z(), Te.translation().z());
+// Issue 16 item 6: the hand camera's image is upright in the ready pose, on both robots, with
+// robot.yaml's calibration and with the URDF's own mount. Optical frame: z forward, x right,
+// y down. Upright: in the ready pose (base at the origin, facing +x) the image's down (y) points
+// to the floor and its right (x) to the robot's right (-y).
+TEST(WholeBodyModel, CameraImageIsUprightInTheReadyPose) {
+  for (const char* robot : {"realman_rm65_water2", "kuka_iiwa14_kmr"}) {
+    const RobotConfig calibrated = loadRobotConfig(resolveRobotFile(robot));
+    RobotConfig uncalibrated = calibrated;
+    uncalibrated.calibration.clear();
+    for (const RobotConfig& rc : {calibrated, uncalibrated}) {
+      SCOPED_TRACE(std::string(robot) + (rc.calibration.empty() ? " (URDF mount)" : " (robot.yaml mount)"));
+      const WholeBodyModel model(rc);
+      const Eigen::Isometry3d Tc =
+          model.fk(Eigen::Vector3d::Zero(), rc.arm_ready, "camera_color_optical_frame");
+      EXPECT_LT(Tc.linear().col(1).z(), -0.9) << "image down must point to the floor";
+      EXPECT_LT(Tc.linear().col(0).y(), -0.99) << "image right must be the robot's right";
+      EXPECT_GT(Tc.linear().col(2).x(), 0.9) << "looking ahead";
+      // The camera sits above the gripper (on the flange's +x side, which points up here).
+      const Eigen::Isometry3d Te = model.fk(Eigen::Vector3d::Zero(), rc.arm_ready, "ee_link");
+      EXPECT_GT(Tc.translation().z(), Te.translation().z());
+    }
   }
 }
 

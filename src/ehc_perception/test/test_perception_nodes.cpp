@@ -243,8 +243,10 @@ TEST_F(PerceptionNodes, TagNodePublishesTheTargetInOdom) {
 
 TEST_F(PerceptionNodes, TagNodeWaitsForTheCameraPoseOfALateImage) {
   // Issue 18: under load the camera pose (tf) at an image's stamp can reach the tag node after
-  // the image, later than its tf_timeout (0.05 s): the image used to be dropped. Here an image in
-  // a frame with no pose yet; its pose follows 0.5 s later; the target must come, at that stamp.
+  // the image: the image used to be dropped after a lookup timeout on ROS time (0.05 s). It now
+  // waits on the wall clock up to tf_timeout (config/perception/tag_node.yaml: 1 s). Here an
+  // image in a frame with no pose yet; its pose follows 0.5 s later; the target must come, at
+  // that stamp.
   ASSERT_TRUE(spinUntil([&] { return !targets_.empty(); }, 30.0)) << "the tag node does not run";
   const char* late_frame = "late_camera";
   sensor_msgs::Image image = image_;

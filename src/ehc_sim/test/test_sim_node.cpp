@@ -27,8 +27,7 @@
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
 
-#include <visp3/core/vpCameraParameters.h>
-#include <visp3/detection/vpDetectorAprilTag.h>
+#include "ehc_perception/tag_detector.h"
 
 #include <gtest/gtest.h>
 
@@ -225,26 +224,30 @@ TEST(SimNode, CameraSeesTheTagAndTheTableTop) {
   ASSERT_EQ(img.height, 480u);
   EXPECT_EQ(img.header.frame_id, "camera_color_optical_frame");
   EXPECT_EQ(ctl->info_->K[0], 615.0);
-  // ViSP AprilTag detection in the published image vs ground truth from /tf + /sim/object_poses.
+  // The project's tag detector on the published image vs ground truth from /tf +
+  // /sim/object_poses (the camera pose at the image stamp is also the detector's prior).
   vpImage<unsigned char> I(img.height, img.width);
   std::copy(img.data.begin(), img.data.end(), I.bitmap);
-  vpDetectorAprilTag detector(vpDetectorAprilTag::TAG_36h11);
-  vpCameraParameters cam;
-  cam.initPersProjWithoutDistortion(ctl->info_->K[0], ctl->info_->K[4], ctl->info_->K[2], ctl->info_->K[5]);
-  std::vector<vpHomogeneousMatrix> cMo;
-  const double size = ctl->objects_.tag_sizes.at(0);
-  detector.detect(I, size, cam, cMo);
-  ASSERT_EQ(cMo.size(), 1u);
-  EXPECT_EQ(detector.getTagsId().at(0), ctl->objects_.tag_ids.at(0));
   ASSERT_TRUE(ctl->spinUntil([&] {
     return ctl->buffer_.canTransform("odom", "camera_color_optical_frame", img.header.stamp);
   }));
   const Eigen::Isometry3d T_cam = tf2::transformToEigen(
       ctl->buffer_.lookupTransform("odom", "camera_color_optical_frame", img.header.stamp));
+  ehc_perception::TagDetectorConfig tag_cfg;
+  tag_cfg.default_tag_size = ctl->objects_.tag_sizes.at(0);
+  ehc_control::PinholeCamera k;
+  k.width = static_cast<int>(img.width);
+  k.height = static_cast<int>(img.height);
+  k.fx = ctl->info_->K[0];
+  k.fy = ctl->info_->K[4];
+  k.cx = ctl->info_->K[2];
+  k.cy = ctl->info_->K[5];
+  ehc_perception::TagDetector detector(tag_cfg, k);
+  const std::vector<ehc_perception::TagDetection> dets = detector.detect(I, T_cam);
+  ASSERT_EQ(dets.size(), 1u);
+  EXPECT_EQ(dets[0].id, ctl->objects_.tag_ids.at(0));
   const Eigen::Isometry3d truth = T_cam.inverse() * toEigen(ctl->objects_.tag_poses.at(0));
-  Eigen::Isometry3d det = Eigen::Isometry3d::Identity();
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 4; ++c) det.matrix()(r, c) = cMo[0][static_cast<unsigned>(r)][static_cast<unsigned>(c)];
+  const Eigen::Isometry3d& det = dets[0].T_cam_tag;
   const Eigen::Isometry3d E = truth.inverse() * det;
   EXPECT_LT(E.translation().norm(), 0.03) << "tag ~1.1 m away, ~25 px wide";
   EXPECT_LT(Eigen::AngleAxisd(E.linear()).angle() * 180 / M_PI, 6.0);

@@ -1,4 +1,5 @@
-// SimulatedCamera: the rendered tag is found by ViSP's AprilTag detector with a pose error
+// SimulatedCamera: the rendered tag is found by the project's TagDetector (ehc_perception, ViSP's
+// AprilTag detector, the camera pose as its prior for ambiguous poses) with a pose error
 // < 1 cm / 2 deg against ground truth; in the ready pose the camera sees the tagged object of
 // single_object.yaml; the depth cloud of the table top lies at the table height within noise;
 // images are reproducible per seed.
@@ -8,8 +9,7 @@
 
 #include <gtest/gtest.h>
 
-#include <visp3/core/vpCameraParameters.h>
-#include <visp3/detection/vpDetectorAprilTag.h>
+#include "ehc_perception/tag_detector.h"
 
 #include <cmath>
 
@@ -36,35 +36,20 @@ struct Rig {
   }
 };
 
-struct Detection {
-  int id = -1;
-  Eigen::Isometry3d cMo = Eigen::Isometry3d::Identity();
-};
-
-std::vector<Detection> detect(const vpImage<unsigned char>& I, const ehc_control::PinholeCamera& k, double tag_size) {
-  vpDetectorAprilTag detector(vpDetectorAprilTag::TAG_36h11);
-  detector.setAprilTagQuadDecimate(1.0);
-  detector.setAprilTagNbThreads(1);
-  vpCameraParameters cam;
-  cam.initPersProjWithoutDistortion(k.fx, k.fy, k.cx, k.cy);
-  std::vector<vpHomogeneousMatrix> cMo;
-  vpImage<unsigned char> copy = I;
-  detector.detect(copy, tag_size, cam, cMo);
-  const std::vector<int> ids = detector.getTagsId();
-  std::vector<Detection> out;
-  for (std::size_t i = 0; i < cMo.size() && i < ids.size(); ++i) {
-    Detection d;
-    d.id = ids[i];
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 4; ++c) d.cMo.matrix()(r, c) = cMo[i][static_cast<unsigned>(r)][static_cast<unsigned>(c)];
-    out.push_back(d);
-  }
-  return out;
+/// The project's tag detector (ehc_perception), with the camera's pose in the world as the
+/// prior for ambiguous tag poses, as ehc_tag_node and the in-process pipeline run it.
+std::vector<ehc_perception::TagDetection> detect(const vpImage<unsigned char>& I,
+                                                 const ehc_control::PinholeCamera& k,
+                                                 double tag_size, const Eigen::Isometry3d& T_world_cam) {
+  ehc_perception::TagDetectorConfig cfg;
+  cfg.default_tag_size = tag_size;
+  ehc_perception::TagDetector detector(cfg, k);
+  return detector.detect(I, T_world_cam);
 }
 
 /// Pose error of the detected tag against ground truth: (m, deg).
-std::pair<double, double> poseError(const Detection& d, const Eigen::Isometry3d& truth) {
-  const Eigen::Isometry3d E = truth.inverse() * d.cMo;
+std::pair<double, double> poseError(const ehc_perception::TagDetection& d, const Eigen::Isometry3d& truth) {
+  const Eigen::Isometry3d E = truth.inverse() * d.T_cam_tag;
   return {E.translation().norm(), Eigen::AngleAxisd(E.linear()).angle() * 180.0 / M_PI};
 }
 }  // namespace
@@ -98,7 +83,7 @@ TEST(SimulatedCamera, ReadyPoseSeesTheTaggedObjectOfSingleObjectScene) {
   // The detector finds tag 0 from the ready pose (about 1.1 m away).
   vpImage<unsigned char> I;
   rig.camera->render(*rig.world, &I);
-  const auto dets = detect(I, k, rig.world->scene().objects[0].tag.size);
+  const auto dets = detect(I, k, rig.world->scene().objects[0].tag.size, rig.world->cameraPose());
   ASSERT_EQ(dets.size(), 1u);
   EXPECT_EQ(dets[0].id, 0);
   const Eigen::Isometry3d truth = T_cam.inverse() * rig.world->tagPose(rig.world->objectBodyIndex(0));
@@ -127,7 +112,7 @@ TEST(SimulatedCamera, DetectedTagPoseMatchesGroundTruth) {
           continue;  // tag not well inside this view
         vpImage<unsigned char> I;
         rig.camera->render(*rig.world, &I);
-        const auto dets = detect(I, k, rig.world->scene().objects[0].tag.size);
+        const auto dets = detect(I, k, rig.world->scene().objects[0].tag.size, rig.world->cameraPose());
         SCOPED_TRACE("base x " + std::to_string(x) + " yaw " + std::to_string(yaw) + " dq5 " +
                      std::to_string(dq5) + ", distance " + std::to_string(c.norm()) + " m");
         ASSERT_EQ(dets.size(), 1u);
@@ -169,7 +154,7 @@ TEST(SimulatedCamera, TagOnACylinderIsDetectedCloseUp) {
       vpImage<unsigned char> I;
       rig.camera->render(*rig.world, &I);
       bool found = false;
-      for (const auto& d : detect(I, k, rig.world->scene().objects[1].tag.size))
+      for (const auto& d : detect(I, k, rig.world->scene().objects[1].tag.size, rig.world->cameraPose()))
         if (d.id == rig.world->scene().objects[1].tag.id) {
           found = true;
           const auto [et, er] = poseError(d, truth);
@@ -188,11 +173,8 @@ TEST(SimulatedCamera, AllThreeObjectsAreDetectedOnTheTable) {
   rig.world->setRobotState(Eigen::Vector3d(0.6, 0.0, 0.0), rig.world->model().config().arm_ready);
   vpImage<unsigned char> I;
   rig.camera->render(*rig.world, &I);
-  vpDetectorAprilTag detector(vpDetectorAprilTag::TAG_36h11);
-  detector.setAprilTagQuadDecimate(1.0);
-  vpImage<unsigned char> copy = I;
-  detector.detect(copy);
-  std::vector<int> ids = detector.getTagsId();
+  std::vector<int> ids;
+  for (const auto& d : detect(I, rig.camera->intrinsics(), 0.04, rig.world->cameraPose())) ids.push_back(d.id);
   std::sort(ids.begin(), ids.end());
   EXPECT_EQ(ids, (std::vector<int>{1, 2, 3}));
 }

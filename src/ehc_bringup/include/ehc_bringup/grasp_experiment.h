@@ -56,14 +56,15 @@ struct GraspExperimentParams {
 /// the link and its stop distance d_s, the scene body nearest to the perceived obstacle point
 /// (ground truth: "table_top", an object's name, "floor"), the sequencer phase.
 struct ObstacleExtreme {
-  double distance = -1.0;  ///< m; -1: no pair within the influence distance
+  bool found = false;      ///< false: no pair within the influence distance (the rest unset)
+  double distance = 0.0;   ///< m; <= 0: penetration (the worst case, never "no pair")
   double stop = 0.0;       ///< m, d_s of the link
   std::string link, body, phase;
   double margin() const { return distance - stop; }
   /// Takes `d` if it is smaller in distance (by_margin false) or in distance - d_s (true), or the first.
   void take(const ObstacleExtreme& d, bool by_margin) {
-    if (d.distance < 0.0) return;
-    if (distance < 0.0 || (by_margin ? d.margin() < margin() : d.distance < distance)) *this = d;
+    if (!d.found) return;
+    if (!found || (by_margin ? d.margin() < margin() : d.distance < distance)) *this = d;
   }
 };
 

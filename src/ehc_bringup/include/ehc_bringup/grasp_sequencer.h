@@ -14,12 +14,15 @@
 //                base + arm drive. Ends when the TCP is within pregrasp_switch_distance of the
 //                grasp position. tsmm (paper, section IV-D: "the robot first moves to a position
 //                d away from the target object's position, measured from the end-effector"):
-//                while the controller reports TSMM_BASE the goal is the object centre itself
+//                until the tsmm base stage has stopped the goal is the object centre itself
 //                (with the grasp's orientation, which the base stage does not servo), so the
 //                controller's tsmm_switch_distance d (0.2 m, horizontal) is measured from the
 //                TCP to the object, not to the pre-grasp 0.1 m before it; from TSMM_ARM on the
 //                goal is the pre-grasp again (0.1 m from the grasp, well within d of the switch
-//                point: the base stays stopped) and the arm alone does the rest
+//                point: the base stays stopped) and the arm alone does the rest. The goal stays
+//                the object centre, and the grasp is not locked (PRE_GRASP), until the controller
+//                reports TSMM_ARM for that goal (an arm stage still on from the search pose, or
+//                the lock's pre-grasp goal, would stop the base where it is, not at d)
 //   PRE_GRASP    the grasp is locked in the world frame (the object is static until touched, and
 //                the tag may leave the view at close range); goal = pre-grasp pose, tight tolerance
 //   GRASP        goal = grasp pose; ends within grasp tolerance (or stalled near it, see
@@ -209,6 +212,10 @@ class GraspSequencer {
 
  private:
   void startObject(double t, SequencerOutput* out);
+  /// The phase logic of one cycle (update() without the bookkeeping and the time limit).
+  void advance(const SequencerInput& in, SequencerOutput* out);
+  /// SequencerOutput::exclusions for the phase reached this cycle (every cycle, whatever ended it).
+  std::vector<ExclusionSphere> obstacleExclusions(const SequencerInput& in) const;
   void enter(GraspPhase p, double t, SequencerOutput* out, const std::string& why = "");
   void finishObject(double t, bool success, const std::string& reason, const SequencerInput& in,
                     SequencerOutput* out);
@@ -216,7 +223,10 @@ class GraspSequencer {
   Eigen::Isometry3d preGrasp(const Eigen::Isometry3d& grasp) const;
   /// APPROACH goal: the pre-grasp of `grasp`; the object centre while the controller is in the
   /// tsmm base stage (see the header comment).
-  Eigen::Isometry3d approachGoal(const SequencerInput& in, const Eigen::Isometry3d& grasp) const;
+  /// Until the tsmm base stage has stopped d from the object (tsmm_at_d_).
+  Eigen::Isometry3d approachGoal(const SequencerInput& in, const Eigen::Isometry3d& grasp);
+  /// The controller runs tsmm (reports one of its stages).
+  static bool tsmmController(const SequencerInput& in);
   bool within(const SequencerInput& in, const Eigen::Isometry3d& goal, double pos, double ori_deg) const;
   std::string label() const;
   std::array<ehc_control::TargetTracker*, 3> tfmWindows();  ///< the three TfM trackers
@@ -243,6 +253,8 @@ class GraspSequencer {
   std::optional<Eigen::Vector3d> centre_in_tcp_;
   std::optional<Eigen::Isometry3d> hold_goal_;  ///< RELEASE / RETREAT goal
   Eigen::Vector3d last_approach_ = Eigen::Vector3d::UnitX();
+  bool centre_sent_ = false;  ///< this cycle's goal is the object centre (tsmm base stage)
+  bool tsmm_at_d_ = false;    ///< tsmm: the arm stage began with the centre as the goal (base stopped at d)
   // bookkeeping
   GraspResult cur_;
   // TfM windows (see the header comment), one tracker each: until the arm takes over (tfm),

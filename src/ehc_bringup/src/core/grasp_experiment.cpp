@@ -176,6 +176,7 @@ GraspExperiment::RunOutput GraspExperiment::runOne(const RunSpec& spec) const {
     limits[k] += c.joint_limit_violations;
     for (const ObstaclePairRecord& r : c.obstacle_pairs) {
       ObstacleExtreme e;
+      e.found = true;
       e.distance = r.distance;
       e.stop = r.stop;
       e.link = r.link;
@@ -373,8 +374,9 @@ std::string pipelineStageCosts(const PipelineCounters& c, double sim_time_s) {
 namespace {
 std::string obstacleJson(const ObstacleExtreme& e) {
   std::ostringstream os;
+  if (!e.found) return "{\"distance\":null,\"stop\":null,\"margin\":null,\"link\":\"\",\"body\":\"\",\"phase\":\"\"}";
   os << std::setprecision(6) << "{\"distance\":" << e.distance << ",\"stop\":" << e.stop << ",\"margin\":"
-     << (e.distance < 0.0 ? 0.0 : e.margin()) << ",\"link\":\"" << e.link << "\",\"body\":\"" << e.body
+     << e.margin() << ",\"link\":\"" << e.link << "\",\"body\":\"" << e.body
      << "\",\"phase\":\"" << e.phase << "\"}";
   return os.str();
 }
@@ -427,7 +429,7 @@ void writeGraspResults(const std::string& dir, const GraspExperimentParams& para
     auto pct = [](int a, int b) { return b ? 100.0 * a / b : 0.0; };
     auto where = [](const ObstacleExtreme& d, bool margin) {
       std::ostringstream os;
-      if (d.distance < 0.0) return std::string("none within the influence distance");
+      if (!d.found) return std::string("none within the influence distance");
       os << std::fixed << std::setprecision(1);
       if (margin) os << d.margin() * 1000.0 << " (" << d.link << " - " << d.body << ", " << d.phase << "; d "
                      << d.distance * 1000.0 << ", d_s " << d.stop * 1000.0 << ")";
@@ -491,15 +493,22 @@ void writeGraspResults(const std::string& dir, const GraspExperimentParams& para
          "reason,close_offset_m,contact_steps,joint_limit_violations,min_obstacle_distance_m,min_obstacle_link,min_obstacle_body,"
          "min_obstacle_phase,min_margin_m,min_margin_link,min_margin_body,min_margin_phase,min_grasped_object_m,"
          "min_grasped_object_link,min_grasped_object_phase\n";
+    // An empty field: no pair within the influence distance (a distance <= 0 is a penetration).
+    auto csvValue = [](const ObstacleExtreme& e, double v) {
+      std::ostringstream os;
+      if (e.found) os << v;
+      return os.str();
+    };
     for (const auto& t : result.trials) {
       std::string reason = t.reason;
       std::replace(reason.begin(), reason.end(), '"', '\'');
       f << t.method << "," << t.set << "," << t.index << "," << t.seed << "," << t.object << "," << t.approach << ","
         << (t.success ? 1 : 0) << "," << t.time_s << "," << t.tfm << "," << t.tfm_until_switch << ","
         << t.controller_tfm << "," << t.failed_phase << ",\"" << reason << "\"," << t.close_offset << "," << t.contact_steps << ","
-        << t.joint_limit_violations << "," << t.nearest.distance << "," << t.nearest.link << "," << t.nearest.body
-        << "," << t.nearest.phase << "," << (t.tightest.distance < 0.0 ? 0.0 : t.tightest.margin()) << ","
-        << t.tightest.link << "," << t.tightest.body << "," << t.tightest.phase << "," << t.grasped.distance << ","
+        << t.joint_limit_violations << "," << csvValue(t.nearest, t.nearest.distance) << "," << t.nearest.link << ","
+        << t.nearest.body << "," << t.nearest.phase << "," << csvValue(t.tightest, t.tightest.margin()) << ","
+        << t.tightest.link << "," << t.tightest.body << "," << t.tightest.phase << ","
+        << csvValue(t.grasped, t.grasped.distance) << ","
         << t.grasped.link << "," << t.grasped.phase << "\n";
     }
   }

@@ -149,11 +149,11 @@ void GraspPipeline::perceive(double t) {
       camera_->render(*world_, &image);
     }
     ++counters_.images;
+    const Eigen::Isometry3d T_world_cam = world_->cameraPose();
     {
       StageTimer timer(timing_, &counters_.wall_tags);
-      detections = detector_->detect(image);
+      detections = detector_->detect(image, T_world_cam);  // the camera pose: ambiguity prior
     }
-    const Eigen::Isometry3d T_world_cam = world_->cameraPose();
     for (std::size_t i = 0; i < cfg_.tag_targets.size(); ++i) {
       Eigen::Isometry3d T_world;
       if (!ehc_perception::findTargetInWorld(detections, cfg_.tag_targets[i], T_world_cam, &T_world)) continue;

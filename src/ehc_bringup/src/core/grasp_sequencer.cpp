@@ -241,6 +241,7 @@ void GraspSequencer::startObject(double t, SequencerOutput* out) {
   locked_.reset();
   centre_in_tcp_.reset();
   hold_goal_.reset();
+  centre_sent_ = tsmm_at_d_ = false;
   ctrl_fov_cycles_ = ctrl_cycles_ = 0;
   for (ehc_control::TargetTracker* t : tfmWindows()) t->reset();
   was_distant_ = false;
@@ -292,13 +293,18 @@ Eigen::Isometry3d GraspSequencer::preGrasp(const Eigen::Isometry3d& grasp) const
   return T;
 }
 
-Eigen::Isometry3d GraspSequencer::approachGoal(const SequencerInput& in, const Eigen::Isometry3d& grasp) const {
+Eigen::Isometry3d GraspSequencer::approachGoal(const SequencerInput& in, const Eigen::Isometry3d& grasp) {
   const std::optional<Eigen::Vector3d> centre = objectCentre();
-  if (!centre || in.controller_phase != ehc_control::toString(ehc_control::ControlPhase::TsmmBase))
-    return preGrasp(grasp);
+  if (!centre || !tsmmController(in) || tsmm_at_d_) return preGrasp(grasp);
   Eigen::Isometry3d T = grasp;  // the base stage drives the TCP position only
   T.translation() = *centre;
+  centre_sent_ = true;
   return T;
+}
+
+bool GraspSequencer::tsmmController(const SequencerInput& in) {
+  return in.controller_phase == ehc_control::toString(ehc_control::ControlPhase::TsmmBase) ||
+         in.controller_phase == ehc_control::toString(ehc_control::ControlPhase::TsmmArm);
 }
 
 bool GraspSequencer::within(const SequencerInput& in, const Eigen::Isometry3d& goal, double pos,
@@ -353,7 +359,6 @@ SequencerOutput GraspSequencer::update(const SequencerInput& in) {
   if (done()) return out;
   const double t = in.t;
   const double in_object = t - object_t0_;
-  const double in_phase = t - phase_t0_;
 
   // Controller phase bookkeeping (counts per phase; tsmm stages and stops show as events).
   if (phase_ <= GraspPhase::Lift) {
@@ -401,11 +406,23 @@ SequencerOutput GraspSequencer::update(const SequencerInput& in) {
         << " s since it last came closer)";
     }
     finishObject(t, false, s.str(), in, &out);
-    return out;
+  } else {
+    advance(in, &out);
   }
+  // Every path, the time limit's too: the exclusion must not lapse for a cycle while the hand
+  // is still at the object (a failed descent's RELEASE; the obstacle map would show the object
+  // under the fingers, inside their stop distance).
+  out.exclusions = obstacleExclusions(in);
+  return out;
+}
 
+void GraspSequencer::advance(const SequencerInput& in, SequencerOutput* out) {
+  const double t = in.t;
+  const double in_phase = t - phase_t0_;
+  const bool centre_was_sent = centre_sent_;  // the goal of the last cycle (tsmm, see Approach)
+  centre_sent_ = false;
   const bool fresh = object_pose_ && (t - object_pose_t_) <= params_.perception_hold;
-  if (object_pose_ && !locked_) out.object_pose = *object_pose_;
+  if (object_pose_ && !locked_) out->object_pose = *object_pose_;
 
   switch (phase_) {
     case GraspPhase::WaitTarget: {
@@ -414,122 +431,130 @@ SequencerOutput GraspSequencer::update(const SequencerInput& in) {
         if (seen && params_.search_distance > 0.0) {
           Eigen::Isometry3d look = *seen;
           look.translation() -= params_.search_distance * seen->linear().col(2);
-          out.goal = look;
+          out->goal = look;
         }
         break;
       }
       const auto choice = currentChoice(in);
       if (!choice) break;  // require_candidate and none yet
-      enter(GraspPhase::Approach, t, &out,
+      enter(GraspPhase::Approach, t, out,
             choice->from_candidate ? "grasp candidate" : "tag grasp (no candidate yet)");
-      out.goal = approachGoal(in, choice->pose);
+      out->goal = approachGoal(in, choice->pose);
       break;
     }
     case GraspPhase::Approach: {
       if (!fresh) {  // perception lost: search again
-        enter(GraspPhase::WaitTarget, t, &out, "object pose older than " + num(params_.perception_hold, 1) + " s");
+        enter(GraspPhase::WaitTarget, t, out, "object pose older than " + num(params_.perception_hold, 1) + " s");
         break;
       }
       const auto choice = currentChoice(in);
       if (!choice) break;
-      out.goal = approachGoal(in, choice->pose);
-      if (within(in, choice->pose, params_.pregrasp_switch_distance, 180.0)) {
+      // tsmm: the base has stopped d from the object once the controller reports its arm stage
+      // for the object centre sent as the goal. No lock before: the lock makes the pre-grasp the
+      // goal, which ended the base stage where the lock happened (0.25 m from the grasp, 3-D:
+      // ~0.24-0.29 m horizontally from a middle or back object), or never started it when the arm
+      // stage of the search pose was still on (the arm alone then stalled 1-3 cm short).
+      if (centre_was_sent && in.controller_phase == ehc_control::toString(ehc_control::ControlPhase::TsmmArm))
+        tsmm_at_d_ = true;
+      out->goal = approachGoal(in, choice->pose);
+      const bool tsmm_base_pending = tsmmController(in) && !tsmm_at_d_;
+      if (!tsmm_base_pending && within(in, choice->pose, params_.pregrasp_switch_distance, 180.0)) {
         locked_object_centre_ = *objectCentre();  // frozen from here (before locked_ is set)
         locked_ = choice;
-        out.goal = preGrasp(choice->pose);
-        enter(GraspPhase::PreGrasp, t, &out,
+        out->goal = preGrasp(choice->pose);
+        enter(GraspPhase::PreGrasp, t, out,
               std::string("grasp locked: ") + (choice->from_candidate ? "perception candidate" : "tag fallback"));
       }
       break;
     }
     case GraspPhase::PreGrasp: {
       const Eigen::Isometry3d pre = preGrasp(locked_->pose);
-      out.goal = pre;
+      out->goal = pre;
       const bool there = within(in, pre, params_.pregrasp_position_tolerance, params_.pregrasp_orientation_tolerance_deg);
       if (there || nearEnoughWhenStalled(in, pre, params_.pregrasp_position_tolerance,
                                          params_.pregrasp_orientation_tolerance_deg)) {
-        enter(GraspPhase::Grasp, t, &out,
+        enter(GraspPhase::Grasp, t, out,
               there ? "" : "stalled " + num((in.tcp->translation() - pre.translation()).norm() * 100.0, 1) +
                                " cm from the pre-grasp: going on");
-        out.goal = locked_->pose;
+        out->goal = locked_->pose;
       }
       break;
     }
     case GraspPhase::Grasp: {
-      out.goal = locked_->pose;
+      out->goal = locked_->pose;
       const bool there = within(in, locked_->pose, params_.grasp_position_tolerance, params_.grasp_orientation_tolerance_deg);
       const double stall_tolerance =
           std::min(params_.stall_tolerance_factor * params_.grasp_position_tolerance, params_.max_close_offset) /
           params_.stall_tolerance_factor;
       if (there || nearEnoughWhenStalled(in, locked_->pose, stall_tolerance, params_.grasp_orientation_tolerance_deg)) {
-        enter(GraspPhase::Close, t, &out,
+        enter(GraspPhase::Close, t, out,
               there ? "" : "stalled " + num((in.tcp->translation() - locked_->pose.translation()).norm() * 100.0, 1) +
                                " cm from the grasp: closing there");
         counting_tfm_ = false;
-        out.gripper_command = true;
+        out->gripper_command = true;
         cur_.close_offset = (in.tcp->translation() - locked_->pose.translation()).norm();
         centre_in_tcp_ = in.tcp->inverse() * locked_object_centre_;  // within() checked the TCP
       }
       break;
     }
     case GraspPhase::Close: {
-      out.goal = locked_->pose;
+      out->goal = locked_->pose;
       if (in.gripper_state == "holding") {
-        enter(GraspPhase::Lift, t, &out, "object held");
+        enter(GraspPhase::Lift, t, out, "object held");
         Eigen::Isometry3d lift = locked_->pose;
         lift.translation().z() += params_.lift_height;
-        out.goal = lift;
+        out->goal = lift;
       } else if (in.gripper_state == "closed_empty") {
-        finishObject(t, false, "gripper closed on nothing", in, &out);
+        finishObject(t, false, "gripper closed on nothing", in, out);
       } else if (in_phase > params_.gripper_timeout) {
         finishObject(t, false, "gripper did not close within " + std::to_string(params_.gripper_timeout) + " s (state '" +
-                                   in.gripper_state + "')", in, &out);
+                                   in.gripper_state + "')", in, out);
       }
       break;
     }
     case GraspPhase::Lift: {
       Eigen::Isometry3d lift = locked_->pose;
       lift.translation().z() += params_.lift_height;
-      out.goal = lift;
+      out->goal = lift;
       if (in.grasp_succeeded && in.gripper_state == "holding") {
-        finishObject(t, true, "", in, &out);
+        finishObject(t, true, "", in, out);
       } else if (in.gripper_state != "holding" && in_phase > 0.0) {
-        finishObject(t, false, "object lost while lifting (gripper '" + in.gripper_state + "')", in, &out);
+        finishObject(t, false, "object lost while lifting (gripper '" + in.gripper_state + "')", in, out);
       }
       break;
     }
     case GraspPhase::Release: {
-      if (hold_goal_) out.goal = *hold_goal_;
+      if (hold_goal_) out->goal = *hold_goal_;
       if (in.gripper_state == "open" || in_phase > params_.release_timeout) {
         if (hold_goal_) {
           Eigen::Isometry3d back = *hold_goal_;
           back.translation() -= params_.retreat_distance * last_approach_;
           back.translation().z() += params_.retreat_raise;
           hold_goal_ = back;
-          out.goal = back;
+          out->goal = back;
         }
-        enter(GraspPhase::Retreat, t, &out);
+        enter(GraspPhase::Retreat, t, out);
       }
       break;
     }
     case GraspPhase::Retreat: {
-      if (hold_goal_) out.goal = *hold_goal_;
+      if (hold_goal_) out->goal = *hold_goal_;
       const bool there = hold_goal_ && in.tcp && isValidPose(*in.tcp) &&
                          (in.tcp->translation() - hold_goal_->translation()).norm() <= params_.retreat_tolerance;
       if (there || !hold_goal_ || in_phase > params_.retreat_timeout) {
         if (current_ + 1 < params_.objects.size()) {
-          enter(GraspPhase::WaitTarget, t, &out);
+          enter(GraspPhase::WaitTarget, t, out);
           ++current_;
           object_pose_.reset();
           object_pose_t_ = -1.0;
           candidates_.clear();
-          startObject(t, &out);
+          startObject(t, out);
         } else {
-          enter(GraspPhase::Done, t, &out);
-          out.goal.reset();
+          enter(GraspPhase::Done, t, out);
+          out->goal.reset();
           int ok = 0;
           for (const auto& r : results_) ok += r.success ? 1 : 0;
-          out.events.push_back("all objects handled: " + std::to_string(ok) + "/" +
+          out->events.push_back("all objects handled: " + std::to_string(ok) + "/" +
                                std::to_string(results_.size()) + " grasped");
         }
       }
@@ -537,13 +562,17 @@ SequencerOutput GraspSequencer::update(const SequencerInput& in) {
     }
     case GraspPhase::Done: break;
   }
+}
+
+std::vector<ExclusionSphere> GraspSequencer::obstacleExclusions(const SequencerInput& in) const {
   // The object may be touched from the descent to the pre-grasp on, until the hand has left.
+  std::vector<ExclusionSphere> zones;
   if (locked_ && phase_ >= GraspPhase::Grasp && phase_ <= GraspPhase::Retreat && params_.obstacle_exclusion_radius > 0.0) {
-    out.exclusions.push_back({locked_object_centre_, params_.obstacle_exclusion_radius});
+    zones.push_back({locked_object_centre_, params_.obstacle_exclusion_radius});
     if (centre_in_tcp_ && in.tcp && isValidPose(*in.tcp))
-      out.exclusions.push_back({*in.tcp * *centre_in_tcp_, params_.obstacle_exclusion_radius});
+      zones.push_back({*in.tcp * *centre_in_tcp_, params_.obstacle_exclusion_radius});
   }
-  return out;
+  return zones;
 }
 
 // ---------------------------------------------------------------- reporting

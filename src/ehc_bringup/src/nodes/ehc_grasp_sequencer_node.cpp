@@ -27,6 +27,7 @@
 #include <geometry_msgs/PointStamped.h>
 #include <geometry_msgs/PoseStamped.h>
 #include <nav_msgs/Odometry.h>
+#include <ros/callback_queue.h>
 #include <ros/ros.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/JointState.h>
@@ -160,17 +161,22 @@ class SequencerNode {
     // No Nagle delay on any input: in lock-step a delayed message arrived a cycle late (sent
     // before the acknowledgement, received after the next status), so runs differed.
     const ros::TransportHints fast = ros::TransportHints().tcpNoDelay();
+    // The inputs come on their own queue, taken when a status comes (onStatus) after one
+    // receive pass: what was published before the status (a tag pose or candidates before the
+    // acknowledgement that let the simulator go on) is then in, whatever the CPU load.
+    ros::NodeHandle inputs_nh(nh);
+    inputs_nh.setCallbackQueue(&inputs_queue_);
     for (std::size_t i = 0; i < node_.pose_topics.size(); ++i)
-      subs_.push_back(nh.subscribe<geometry_msgs::PoseStamped>(
+      subs_.push_back(inputs_nh.subscribe<geometry_msgs::PoseStamped>(
           node_.pose_topics[i], 5, [this, i](const geometry_msgs::PoseStamped::ConstPtr& m) { onObjectPose(i, *m); },
           ros::VoidConstPtr(), fast));
-    subs_.push_back(nh.subscribe(node_.candidates_topic, 2, &SequencerNode::onCandidates, this, fast));
+    subs_.push_back(inputs_nh.subscribe(node_.candidates_topic, 2, &SequencerNode::onCandidates, this, fast));
     if (!node_.exclusion_topic.empty())
       exclusion_pub_ = nh.advertise<ehc_msgs::ObstacleExclusion>(node_.exclusion_topic, 10);
-    subs_.push_back(nh.subscribe(node_.sim_status_topic, 10, &SequencerNode::onSimStatus, this, fast));
-    subs_.push_back(nh.subscribe(node_.camera_info_topic, 1, &SequencerNode::onCameraInfo, this, fast));
-    subs_.push_back(nh.subscribe("joint_states", 10, &SequencerNode::onJoints, this, fast));
-    subs_.push_back(nh.subscribe("odom", 10, &SequencerNode::onOdom, this, fast));
+    subs_.push_back(inputs_nh.subscribe(node_.sim_status_topic, 10, &SequencerNode::onSimStatus, this, fast));
+    subs_.push_back(inputs_nh.subscribe(node_.camera_info_topic, 1, &SequencerNode::onCameraInfo, this, fast));
+    subs_.push_back(inputs_nh.subscribe("joint_states", 10, &SequencerNode::onJoints, this, fast));
+    subs_.push_back(inputs_nh.subscribe("odom", 10, &SequencerNode::onOdom, this, fast));
     subs_.push_back(nh.subscribe(node_.status_topic, 10, &SequencerNode::onStatus, this, fast));
     t_start_ = -1.0;
   }
@@ -267,6 +273,10 @@ class SequencerNode {
   }
 
   void onStatus(const ehc_msgs::ControllerStatus& m) {
+    if (!poll_pass_.wait(kPollPassWall))
+      ROS_WARN_STREAM_THROTTLE(kLogThrottle, "[ehc_grasp_sequencer_node] roscpp's receive thread did not pass within "
+                                                 << kPollPassWall << " wall s");
+    inputs_queue_.callAvailable();
     // Done, or a second status for the state already handled (the controller's watchdog
     // answering a lock-step simulator that waits for a slow perception node, or a state the
     // simulator resent): acknowledged, no second update for one instant.
@@ -368,6 +378,9 @@ class SequencerNode {
   /// grasp candidates, the simulator's gripper status, the trace's speeds.
   static constexpr int kCandidates = 1000000, kSimStatus = 1000001, kJoints = 1000002, kOdom = 1000003;
   ehc_msgs::StampedInbox inbox_;
+  ros::CallbackQueue inputs_queue_;  ///< every input but the status (taken in onStatus)
+  ehc_msgs::PollPassBarrier poll_pass_;
+  static constexpr double kPollPassWall = 1.0;  ///< wall s: a receive pass takes far less
   std::string summary_file_, trace_file_, mode_;
   std::ofstream trace_;
   std::string gripper_state_ = "open";

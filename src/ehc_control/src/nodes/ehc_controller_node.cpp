@@ -22,6 +22,7 @@
 #include "ehc_msgs/ControllerStatus.h"
 #include "ehc_msgs/JointVelocityCommand.h"
 #include "ehc_msgs/ObstacleArray.h"
+#include "ehc_msgs/lockstep_ack.h"
 #include "ehc_control/config_node.h"
 #include "ehc_control/control_cycle.h"
 
@@ -29,6 +30,7 @@
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/Twist.h>
 #include <nav_msgs/Odometry.h>
+#include <ros/callback_queue.h>
 #include <ros/ros.h>
 #include <sensor_msgs/JointState.h>
 
@@ -93,9 +95,14 @@ class ControllerNode {
     status_ = nh.advertise<ehc_msgs::ControllerStatus>("ehc/status", 10);
     subs_.push_back(nh.subscribe("joint_states", 10, &ControllerNode::onJoints, this, ros::TransportHints().tcpNoDelay()));
     subs_.push_back(nh.subscribe("odom", 10, &ControllerNode::onOdom, this, ros::TransportHints().tcpNoDelay()));
-    subs_.push_back(nh.subscribe("ehc/target_pose", 10, &ControllerNode::onTarget, this, ros::TransportHints().tcpNoDelay()));
-    subs_.push_back(nh.subscribe("ehc/target_centre", 10, &ControllerNode::onTargetCentre, this, ros::TransportHints().tcpNoDelay()));
-    subs_.push_back(nh.subscribe("ehc/obstacles", 10, &ControllerNode::onObstacles, this, ros::TransportHints().tcpNoDelay()));
+    // Lock-step: the target and the obstacle list for a state were published before the
+    // acknowledgements that let the simulator publish it, but on other connections; they are
+    // taken when the state comes, after one receive pass (tryCycle), on their own queue.
+    ros::NodeHandle inputs_nh(nh);
+    if (node_.trigger == "state") inputs_nh.setCallbackQueue(&inputs_queue_);
+    subs_.push_back(inputs_nh.subscribe("ehc/target_pose", 10, &ControllerNode::onTarget, this, ros::TransportHints().tcpNoDelay()));
+    subs_.push_back(inputs_nh.subscribe("ehc/target_centre", 10, &ControllerNode::onTargetCentre, this, ros::TransportHints().tcpNoDelay()));
+    subs_.push_back(inputs_nh.subscribe("ehc/obstacles", 10, &ControllerNode::onObstacles, this, ros::TransportHints().tcpNoDelay()));
     const double state_timeout = cycle_.params().watchdog.state_timeout;
     if (node_.trigger == "timer")
       timer_ = nh.createTimer(ros::Duration(1.0 / node_.rate), [this](const ros::TimerEvent&) { cycle(ros::Time::now()); });
@@ -209,6 +216,13 @@ class ControllerNode {
     if (pending_.isZero() || odom_stamp_ != pending_) return;
     const ros::Time stamp = pending_;
     pending_ = ros::Time();
+    // Everything that reached this process before the state is queued after one receive pass
+    // (roscpp keeps the order per connection only): the sequencer's goal for the previous
+    // status is then used in this cycle, whatever the CPU load.
+    if (!poll_pass_.wait(kPollPassWall))
+      ROS_WARN_STREAM_THROTTLE(kLogThrottle, "[ehc_controller_node] roscpp's receive thread did not pass within "
+                                                 << kPollPassWall << " wall s");
+    inputs_queue_.callAvailable();
     applyObstaclesBefore(stamp);
     cycle(stamp);
   }
@@ -290,6 +304,9 @@ class ControllerNode {
   ros::WallTime last_cycle_wall_;
   ros::Time last_ros_time_;               ///< ROS time seen by the wall-clock watchdog
   ros::WallTime last_ros_advance_wall_;   ///< wall time at which ROS time last moved
+  ros::CallbackQueue inputs_queue_;       ///< lock-step: target, target centre, obstacles (taken per state)
+  ehc_msgs::PollPassBarrier poll_pass_;
+  static constexpr double kPollPassWall = 1.0;  ///< wall s: a receive pass takes far less
 };
 
 }  // namespace

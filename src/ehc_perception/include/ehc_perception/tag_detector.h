@@ -4,6 +4,12 @@
 // Tag frame (ViSP / AprilTag convention): origin at the tag centre, x right, y up (as the tag
 // is printed), z out of the printed face; a tag facing the camera squarely has
 // T_cam_tag.rotation() == diag(1, -1, -1).
+// Planar-pose ambiguity: a small or distant tag seen obliquely has two poses, tilted one way or
+// the other about the line of sight, that reproject equally well (a 21 px tag 1.1 m away, 19 deg
+// oblique: both within 1e-3 px, 35 deg apart). ViSP returns both (getPose's second solution);
+// when they reproject within `ambiguity_margin` px of each other the detector keeps the one
+// consistent with a world prior (default: the tag is printed upright, its y axis points up),
+// given the camera's pose in the world at the image's time (detect(image, T_world_cam)).
 // ROS-free; not thread-safe (the ViSP detector keeps state).
 
 #include "ehc_control/pinhole_camera.h"
@@ -31,6 +37,14 @@ struct TagDetectorConfig {
   int threads = 1;                         ///< AprilTag worker threads
   std::string pose_method = "homography_virtual_vs";  ///< see poseMethodNames()
   double max_reprojection_error = 2.0;     ///< px (RMS); detections above are dropped
+  /// Pose prior for ambiguous detections: the tag axis `prior_tag_axis` (tag frame) points as
+  /// close as possible to `prior_world_direction` (world frame). Default: tags printed upright
+  /// on a vertical face (the pattern's top, tag y, is the world's up), as in every scene.
+  Eigen::Vector3d prior_tag_axis = Eigen::Vector3d::UnitY();
+  Eigen::Vector3d prior_world_direction = Eigen::Vector3d::UnitZ();
+  /// px (RMS): the two pose solutions are ambiguous when their reprojection errors differ by at
+  /// most this; then the prior decides (0: never, the lower error always wins).
+  double ambiguity_margin = 0.5;
 
   double tagSize(int id) const;
   void validate() const;  ///< throws std::invalid_argument "[TagDetector] ..."
@@ -48,6 +62,13 @@ struct TagDetection {
   Eigen::Isometry3d T_cam_tag = Eigen::Isometry3d::Identity();
   std::array<Eigen::Vector2d, 4> corners;           ///< px, ViSP polygon order
   double reprojection_error = 0.0;                  ///< px, RMS over the 4 corners
+  /// The other planar-pose solution (not kept) and its RMS reprojection error (px); equal to
+  /// T_cam_tag / reprojection_error when ViSP found only one.
+  Eigen::Isometry3d T_cam_tag_other = Eigen::Isometry3d::Identity();
+  double other_reprojection_error = 0.0;
+  /// The two solutions were within ambiguity_margin: the prior chose (or, without a camera
+  /// pose, the lower error did).
+  bool ambiguous = false;
 };
 
 class TagDetector {
@@ -61,13 +82,20 @@ class TagDetector {
   /// Detects every tag of the family. The image must have the camera's size (throws
   /// std::invalid_argument otherwise). Distortion is ignored (pass rectified images).
   std::vector<TagDetection> detect(const vpImage<unsigned char>& gray);
-  /// Same, from a raw 8-bit grey buffer (`stride` bytes per row).
+  /// Same, resolving ambiguous poses with the configured prior: `T_world_cam` is the camera's
+  /// (optical frame's) pose in the world at the image's time. Throws on a non-finite pose.
+  std::vector<TagDetection> detect(const vpImage<unsigned char>& gray,
+                                   const Eigen::Isometry3d& T_world_cam);
+  /// Same as detect(gray), from a raw 8-bit grey buffer (`stride` bytes per row).
   std::vector<TagDetection> detect(const unsigned char* data, int width, int height, int stride);
 
   const TagDetectorConfig& config() const { return config_; }
   const ehc_control::PinholeCamera& camera() const { return camera_; }
 
  private:
+  /// `prior_in_camera`: the prior's world direction in the camera frame (unit), or null.
+  std::vector<TagDetection> detectResolving(const vpImage<unsigned char>& gray,
+                                            const Eigen::Vector3d* prior_in_camera);
   struct Impl;
   TagDetectorConfig config_;
   ehc_control::PinholeCamera camera_;

@@ -10,6 +10,7 @@
 #include <visp3/io/vpImageIo.h>
 
 #include <cmath>
+#include <limits>
 #include <vector>
 #include <fstream>
 #include <cstring>
@@ -81,6 +82,12 @@ void TagDetectorConfig::validate() const {
   ehc_control::requireRange(kOwner, "quad_decimate", quad_decimate, 1.0, 8.0);
   ehc_control::requireRange(kOwner, "threads", threads, 1, 64);
   ehc_control::requirePositive(kOwner, "max_reprojection_error", max_reprojection_error);
+  if (!prior_tag_axis.allFinite() || prior_tag_axis.norm() < 1e-9)
+    fail("pose_prior.tag_axis must be a finite, non-zero vector");
+  if (!prior_world_direction.allFinite() || prior_world_direction.norm() < 1e-9)
+    fail("pose_prior.world_direction must be a finite, non-zero vector");
+  ehc_control::requireRange(kOwner, "pose_prior.ambiguity_margin", ambiguity_margin, 0.0,
+                            max_reprojection_error);
 }
 
 std::string TagDetectorConfig::summary() const {
@@ -88,7 +95,10 @@ std::string TagDetectorConfig::summary() const {
   os << "tag detector: family " << family << ", default size " << default_tag_size << " m";
   for (const auto& kv : tag_sizes) os << ", id " << kv.first << ": " << kv.second << " m";
   os << ", quad_decimate " << quad_decimate << ", threads " << threads << ", pose "
-     << pose_method << ", max reprojection error " << max_reprojection_error << " px";
+     << pose_method << ", max reprojection error " << max_reprojection_error
+     << " px, ambiguous poses (within " << ambiguity_margin << " px): tag axis ["
+     << prior_tag_axis.transpose() << "] nearest the world's [" << prior_world_direction.transpose()
+     << "]";
   return os.str();
 }
 
@@ -117,6 +127,12 @@ TagDetectorConfig loadTagDetectorConfig(const ehc_control::ConfigNode& n) {
   c.threads = n.get<int>("threads", c.threads);
   c.pose_method = n.get<std::string>("pose_method", c.pose_method);
   c.max_reprojection_error = n.get<double>("max_reprojection_error", c.max_reprojection_error);
+  if (n.has("pose_prior")) {
+    const ehc_control::ConfigNode p = n.child("pose_prior");
+    c.prior_tag_axis = p.getVector("tag_axis", c.prior_tag_axis, 3);
+    c.prior_world_direction = p.getVector("world_direction", c.prior_world_direction, 3);
+    c.ambiguity_margin = p.get<double>("ambiguity_margin", c.ambiguity_margin);
+  }
   n.validate(c);
   return c;
 }
@@ -165,6 +181,19 @@ std::vector<TagDetection> TagDetector::detect(const unsigned char* data, int wid
 }
 
 std::vector<TagDetection> TagDetector::detect(const vpImage<unsigned char>& I) {
+  return detectResolving(I, nullptr);
+}
+
+std::vector<TagDetection> TagDetector::detect(const vpImage<unsigned char>& I,
+                                              const Eigen::Isometry3d& T_world_cam) {
+  if (!T_world_cam.matrix().allFinite()) fail("camera pose is not finite");
+  const Eigen::Vector3d prior =
+      T_world_cam.linear().transpose() * config_.prior_world_direction.normalized();
+  return detectResolving(I, &prior);
+}
+
+std::vector<TagDetection> TagDetector::detectResolving(const vpImage<unsigned char>& I,
+                                                       const Eigen::Vector3d* prior_in_camera) {
   if (I.getSize() == 0) fail("image is empty");
   if (static_cast<int>(I.getWidth()) != camera_.width ||
       static_cast<int>(I.getHeight()) != camera_.height)
@@ -179,28 +208,56 @@ std::vector<TagDetection> TagDetector::detect(const vpImage<unsigned char>& I) {
   std::map<int, double> sizes;
   for (int id : ids) sizes[id] = config_.tagSize(id);
   const std::vector<std::vector<vpPoint>> pts3d = det.getTagsPoints3D(ids, sizes);
+  const Eigen::Vector3d tag_axis = config_.prior_tag_axis.normalized();
 
   for (std::size_t i = 0; i < ids.size(); ++i) {
     TagDetection d;
     d.id = ids[i];
     d.tag_size = config_.tagSize(d.id);
-    vpHomogeneousMatrix cMo;
-    if (!det.getPose(i, d.tag_size, impl_->cam, cMo)) continue;
-    d.T_cam_tag = toEigen(cMo);
-    if (!d.T_cam_tag.matrix().allFinite() || d.T_cam_tag.translation().z() <= 0.0) continue;
     const std::vector<vpImagePoint> poly = det.getPolygon(i);
-    if (poly.size() != 4) continue;
-    double sq = 0.0;
-    for (std::size_t k = 0; k < 4; ++k) {
-      d.corners[k] = Eigen::Vector2d(poly[k].get_u(), poly[k].get_v());
-      if (i < pts3d.size() && pts3d[i].size() == 4) {
+    if (poly.size() != 4 || i >= pts3d.size() || pts3d[i].size() != 4) continue;
+    for (std::size_t k = 0; k < 4; ++k) d.corners[k] = Eigen::Vector2d(poly[k].get_u(), poly[k].get_v());
+    // RMS reprojection error (px) of a pose; +inf for a pose that is unusable.
+    auto reprojection = [&](const Eigen::Isometry3d& T) {
+      if (!T.matrix().allFinite() || T.translation().z() <= 0.0)
+        return std::numeric_limits<double>::infinity();
+      double sq = 0.0;
+      for (std::size_t k = 0; k < 4; ++k) {
         const vpPoint& P = pts3d[i][k];
-        const Eigen::Vector3d pc =
-            d.T_cam_tag * Eigen::Vector3d(P.get_oX(), P.get_oY(), P.get_oZ());
+        const Eigen::Vector3d pc = T * Eigen::Vector3d(P.get_oX(), P.get_oY(), P.get_oZ());
+        if (pc.z() <= 0.0) return std::numeric_limits<double>::infinity();
         sq += (camera_.pixel(pc) - d.corners[k]).squaredNorm();
       }
+      return std::sqrt(sq / 4.0);
+    };
+    vpHomogeneousMatrix cMo, cMo2;
+    if (!det.getPose(i, d.tag_size, impl_->cam, cMo, &cMo2)) continue;
+    Eigen::Isometry3d kept = toEigen(cMo), other = toEigen(cMo2);
+    double kept_error = reprojection(kept), other_error = reprojection(other);
+    if (other_error < kept_error) {
+      std::swap(kept, other);
+      std::swap(kept_error, other_error);
     }
-    d.reprojection_error = std::sqrt(sq / 4.0);
+    if (!std::isfinite(kept_error)) continue;
+    if (!std::isfinite(other_error)) {  // one usable solution
+      other = kept;
+      other_error = kept_error;
+    }
+    const bool distinct =
+        Eigen::AngleAxisd(kept.linear().transpose() * other.linear()).angle() > 1e-6;
+    d.ambiguous = distinct && config_.ambiguity_margin > 0.0 &&
+                  other_error - kept_error <= config_.ambiguity_margin &&
+                  other_error <= config_.max_reprojection_error;
+    if (d.ambiguous && prior_in_camera &&
+        (other.linear() * tag_axis).dot(*prior_in_camera) >
+            (kept.linear() * tag_axis).dot(*prior_in_camera)) {
+      std::swap(kept, other);
+      std::swap(kept_error, other_error);
+    }
+    d.T_cam_tag = kept;
+    d.reprojection_error = kept_error;
+    d.T_cam_tag_other = other;
+    d.other_reprojection_error = other_error;
     if (d.reprojection_error > config_.max_reprojection_error) continue;
     out.push_back(d);
   }

@@ -3,11 +3,13 @@
 // The pose of the configured tag, with its grasp offset, is transformed into the world frame
 // (odom) with tf2 at the image time stamp and published as geometry_msgs/PoseStamped. Nothing
 // is published for an image without the target (the controller's watchdog handles that).
-// Images wait in a tf2_ros::MessageFilter until the camera pose at their stamp is known
-// (issue 18): with a lock-step simulator under CPU load the /tf of an image's stamp can reach
-// the listener after the image, later than any fixed timeout on sim time, and a lookup with a
-// timeout dropped such images ("extrapolation into the future": the back object's tag was
-// never detected). Only a full queue (image_queue, newest kept) drops an image now.
+// An image waits for the camera pose at its stamp on the wall clock
+// (ehc_msgs::waitForTransformWall: at most tf_timeout s, in lock-step kTfWallWait s), then is
+// dropped with a logged reason (issue 18: with a lock-step simulator under CPU load the /tf of
+// an image's stamp can reach the listener after the image; a tf2 lookup with a timeout waits on
+// sim time, which stands still until this node is done). No tf2_ros::MessageFilter: it held a
+// message forever when its transformable request was registered just after the transform
+// arrived (found in the grasp node, which stalled the lock-step simulator; see ehc_grasp_node).
 // With _ack_topic:=<topic> every image is acknowledged there once done with (after its pose is
 // published): a lock-step simulator's acknowledgement gate (ehc_msgs::LockstepAck, demo.sh).
 #include "ehc_control/config_node.h"
@@ -17,7 +19,6 @@
 
 #include <geometry_msgs/PoseStamped.h>
 #include <ros/ros.h>
-#include <message_filters/subscriber.h>
 #include <tf2_ros/transform_listener.h>
 
 #include <memory>
@@ -36,8 +37,8 @@ struct TagNodeConfig {
   std::string world_frame = "odom";
   std::string camera_frame;  ///< "" = the image's header.frame_id
   std::string camera_file;   ///< optional camera_info YAML; "" = use the camera_info topic
-  double tf_timeout = 0.05;  ///< s, lookup of a camera_frame other than the image's (see above)
-  int image_queue = 5;       ///< images waiting for their camera pose (the oldest is dropped)
+  double tf_timeout = 0.05;  ///< wall s an image waits for its camera pose (lock-step: kTfWallWait)
+  int image_queue = 5;       ///< images queued for processing (the oldest is dropped)
   TagDetectorConfig detector;
   TagTargetConfig target;
 
@@ -46,8 +47,8 @@ struct TagNodeConfig {
            (camera_file.empty() ? camera_info_topic : camera_file) + " -> " + target_topic +
            " in '" + world_frame + "' (camera frame '" +
            (camera_frame.empty() ? "<image header>" : camera_frame) + "', tf timeout " +
-           std::to_string(tf_timeout) + " s, " + std::to_string(image_queue) +
-           " images wait for their camera pose" +
+           std::to_string(tf_timeout) + " wall s, " + std::to_string(image_queue) +
+           " images queued" +
            ")\n  " + detector.summary() + "\n  " + target.summary();
   }
 };
@@ -86,19 +87,13 @@ class TagNode {
   TagNode(ros::NodeHandle& nh, const ros::NodeHandle& pnh, const TagNodeConfig& cfg)
       : cfg_(cfg),
         listener_(tf_),
-        image_sub_(nh, cfg_.image_topic, static_cast<std::uint32_t>(cfg_.image_queue), ros::TransportHints().tcpNoDelay()),
-        image_filter_(image_sub_, tf_, cfg_.world_frame, static_cast<std::uint32_t>(cfg_.image_queue), nh),
         ack_(pnh, lockstepInputs(cfg)) {
     if (!cfg_.camera_file.empty()) build(ehc_control::loadPinholeCamera(cfg_.camera_file));
     pub_ = nh.advertise<geometry_msgs::PoseStamped>(cfg_.target_topic, 10);
-    if (!ack_.topic().empty()) ROS_INFO_STREAM("ehc_tag_node: each image acknowledged on " << ack_.topic() << " when done");
-    image_filter_.registerCallback(&TagNode::onImage, this);
-    image_filter_.registerFailureCallback(
-        [this](const sensor_msgs::ImageConstPtr& m, tf2_ros::filter_failure_reasons::FilterFailureReason why) {
-          ack_.done(m->header.stamp);
-          ROS_WARN_STREAM_THROTTLE(kLogThrottle, "ehc_tag_node: image at " << m->header.stamp << " dropped before its camera pose arrived ("
-                                                       << ros_conv::filterFailureText(why) << ")");
-        });
+    lockstep_ = !ack_.topic().empty();
+    if (lockstep_) ROS_INFO_STREAM("ehc_tag_node: each image acknowledged on " << ack_.topic() << " when done");
+    image_sub_ = nh.subscribe(cfg_.image_topic, static_cast<std::uint32_t>(cfg_.image_queue), &TagNode::onImage, this,
+                              ros::TransportHints().tcpNoDelay());
     if (cfg_.camera_file.empty())
       info_sub_ = nh.subscribe(cfg_.camera_info_topic, 2, &TagNode::onInfo, this, ros::TransportHints().tcpNoDelay());
   }
@@ -150,19 +145,27 @@ class TagNode {
       ROS_WARN_THROTTLE(kLogThrottle, "ehc_tag_node: no camera_info yet, image ignored");
       return;
     }
+    // The camera pose at the image stamp: the detector's prior for ambiguous tag poses, and the
+    // target in the world.
+    const std::string cam_frame = cfg_.camera_frame.empty() ? msg.header.frame_id : cfg_.camera_frame;
+    const double wait = lockstep_ ? kTfWallWait : cfg_.tf_timeout;
+    if (!ehc_msgs::waitForTransformWall(tf_, cfg_.world_frame, cam_frame, msg.header.stamp, wait)) {
+      ROS_WARN_STREAM_THROTTLE(kLogThrottle, "ehc_tag_node: image at " << msg.header.stamp << " dropped: no camera pose ('"
+                                                << cam_frame << "' in '" << cfg_.world_frame << "') at its stamp after "
+                                                << wait << " wall s");
+      return;
+    }
     try {
       ros_conv::imageToGray(msg, &gray_);
-      const std::vector<TagDetection> dets = detector_->detect(gray_);
-      if (!findTarget(dets, cfg_.target, nullptr)) {
+      const Eigen::Isometry3d T_world_cam =
+          tf2::transformToEigen(tf_.lookupTransform(cfg_.world_frame, cam_frame, msg.header.stamp));
+      const std::vector<TagDetection> dets = detector_->detect(gray_, T_world_cam);
+      Eigen::Isometry3d T_world;
+      if (!findTargetInWorld(dets, cfg_.target, T_world_cam, &T_world)) {
         ROS_DEBUG_THROTTLE(kLogThrottle, "ehc_tag_node: target tag %d not seen (%zu tags)",
                            cfg_.target.tag_id, dets.size());
         return;
       }
-      const std::string cam_frame = cfg_.camera_frame.empty() ? msg.header.frame_id : cfg_.camera_frame;
-      const geometry_msgs::TransformStamped tf = tf_.lookupTransform(
-          cfg_.world_frame, cam_frame, msg.header.stamp, ros::Duration(cfg_.tf_timeout));
-      Eigen::Isometry3d T_world;
-      findTargetInWorld(dets, cfg_.target, tf2::transformToEigen(tf), &T_world);
       geometry_msgs::PoseStamped out;
       out.header.stamp = msg.header.stamp;
       out.header.frame_id = cfg_.world_frame;
@@ -178,8 +181,9 @@ class TagNode {
   tf2_ros::TransformListener listener_;
   std::unique_ptr<TagDetector> detector_;
   vpImage<unsigned char> gray_;
-  message_filters::Subscriber<sensor_msgs::Image> image_sub_;
-  tf2_ros::MessageFilter<sensor_msgs::Image> image_filter_;  ///< passes an image once its camera pose is known
+  ros::Subscriber image_sub_;
+  bool lockstep_ = false;  ///< _ack_topic set: a lock-step simulator waits for every image
+  static constexpr double kTfWallWait = 1.0;  ///< lock-step: wall s an image's camera pose is waited for
   ros::Publisher pub_;
   ehc_msgs::LockstepAck ack_;
   sensor_msgs::ImageConstPtr waiting_image_;  ///< an image that came before the first camera_info

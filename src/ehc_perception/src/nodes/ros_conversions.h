@@ -12,7 +12,6 @@
 #include <sensor_msgs/PointCloud2.h>
 #include <sensor_msgs/image_encodings.h>
 #include <tf2_eigen/tf2_eigen.h>
-#include <tf2_ros/message_filter.h>
 #include <visp3/core/vpImage.h>
 #include <visp3/core/vpImageConvert.h>
 
@@ -87,15 +86,5 @@ inline PointList transformPoints(const PointList& in, const Eigen::Isometry3d& T
 }
 
 inline geometry_msgs::Pose toPose(const Eigen::Isometry3d& T) { return tf2::toMsg(T); }
-
-/// Why a tf2_ros::MessageFilter dropped a message (the nodes that wait for a sensor message's
-/// pose at its stamp instead of looking it up with a timeout, issue 18).
-inline const char* filterFailureText(tf2_ros::filter_failure_reasons::FilterFailureReason why) {
-  switch (why) {
-    case tf2_ros::filter_failure_reasons::OutTheBack: return "older than the tf cache";
-    case tf2_ros::filter_failure_reasons::EmptyFrameID: return "no frame_id";
-    default: return "queue full: a newer message came before its pose";
-  }
-}
 
 }  // namespace ehc_perception::ros_conv
