@@ -71,32 +71,31 @@ inline void fillJointState(const KinematicFakeRobot& r, const ros::Time& stamp, 
   m->effort.clear();
 }
 
-/// /odom: odom -> base_link pose and twist (base frame) as the base model's odometry reports
-/// them (ideal: the true pose and the executed twist; water2: the bridge's estimate).
-inline void fillOdometry(const KinematicFakeRobot& r, const ros::Time& stamp, nav_msgs::Odometry* m) {
-  const auto& cfg = r.robot();
+/// A base pose (x, y, yaw in the world) and twist (vx, vy, wz in the base frame) as an Odometry
+/// message odom -> base_link.
+inline void fillBaseOdometry(const ehc_control::RobotConfig& cfg, const ros::Time& stamp, const Eigen::Vector3d& pose,
+                             const Eigen::Vector3d& twist, nav_msgs::Odometry* m) {
   m->header.stamp = stamp;
   m->header.frame_id = cfg.world_frame;
   m->child_frame_id = cfg.base_frame;
-  m->pose.pose = toPose(ehc_control::WholeBodyModel::baseTransform(r.odometryPose()));
-  const Eigen::Vector3d v = r.odometryTwist();
-  m->twist.twist.linear.x = v[0];
-  m->twist.twist.linear.y = v[1];
-  m->twist.twist.angular.z = v[2];
+  m->pose.pose = toPose(ehc_control::WholeBodyModel::baseTransform(pose));
+  m->twist.twist.linear.x = twist[0];
+  m->twist.twist.linear.y = twist[1];
+  m->twist.twist.angular.z = twist[2];
+}
+
+/// /odom: the pose and twist as the base model's odometry reports them (ideal: the true pose and
+/// the executed twist; water2: the bridge's estimate).
+inline void fillOdometry(const KinematicFakeRobot& r, const ros::Time& stamp, nav_msgs::Odometry* m) {
+  fillBaseOdometry(r.robot(), stamp, r.odometryPose(), r.odometryTwist(), m);
 }
 
 /// Ground truth for metrics (the hardware stand-in's /sim/base_pose): the TRUE base pose in the
 /// world (odom) frame and the executed base twist (base frame); never an input of the stack.
 inline void fillTrueBase(const KinematicFakeRobot& r, const ros::Time& stamp, nav_msgs::Odometry* m) {
   const auto& cfg = r.robot();
-  m->header.stamp = stamp;
-  m->header.frame_id = cfg.world_frame;
-  m->child_frame_id = cfg.base_frame;
-  m->pose.pose = toPose(ehc_control::WholeBodyModel::baseTransform(r.basePose()));
   const Eigen::VectorXd& v = r.executedVelocity();
-  m->twist.twist.linear.x = v[0];
-  m->twist.twist.linear.y = cfg.nBase() > 2 ? v[1] : 0.0;
-  m->twist.twist.angular.z = v[cfg.nBase() - 1];
+  fillBaseOdometry(cfg, stamp, r.basePose(), Eigen::Vector3d(v[0], cfg.nBase() > 2 ? v[1] : 0.0, v[cfg.nBase() - 1]), m);
 }
 
 /// odom -> base_link (the robot's world and base frames), from the odometry as /odom (on the
