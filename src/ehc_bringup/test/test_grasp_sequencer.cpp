@@ -293,6 +293,62 @@ TEST(GraspSequencer, AStallNearTheGraspClosesThereAndAFarStallWaits) {
   EXPECT_THROW(bad.validate(), std::invalid_argument);
 }
 
+TEST(GraspSequencer, TheDescentFollowsTheApproachAxis) {
+  // A GRASP that begins off the approach axis (a pre-grasp reached after a stall, 5.6 cm off in
+  // Exp-3) first goes sideways onto the axis at its depth; within descent_lateral_tolerance +
+  // depth / descent_slope of the axis the goal is the grasp itself. descent_slope 0: straight.
+  for (const double slope : {20.0, 0.0}) {
+    GraspSequencerParams p = twoObjects();
+    p.objects.resize(1);
+    p.descent_slope = slope;
+    p.descent_lateral_tolerance = 0.005;
+    p.pregrasp_position_tolerance = 0.06;  // lets GRASP begin 4 cm off the axis
+    Harness h(p);
+    h.perceive = forwardTarget();
+    h.follow = false;
+    while (h.seq.phase() == GraspPhase::WaitTarget || h.seq.phase() == GraspPhase::Approach) {
+      h.tcp = *h.last_goal;
+      h.step();
+      if (h.t > 5.0) break;
+    }
+    ASSERT_EQ(h.seq.phase(), GraspPhase::PreGrasp);
+    const Eigen::Isometry3d grasp = h.seq.lockedGrasp()->pose;
+    const Eigen::Vector3d x = grasp.linear().col(0), z = grasp.linear().col(2);
+    h.tcp = grasp;
+    h.tcp.translation() += 0.04 * x - 0.1 * z;  // 4 cm off the axis, 10 cm before the grasp
+    h.step();
+    ASSERT_EQ(h.seq.phase(), GraspPhase::Grasp);
+    ASSERT_TRUE(h.last_goal);
+    if (slope == 0.0) {
+      EXPECT_TRUE(h.last_goal->translation().isApprox(grasp.translation(), 1e-12));
+      continue;
+    }
+    // 4 cm > 5 mm + 10 cm / 20: onto the axis at the TCP's depth.
+    EXPECT_TRUE(h.last_goal->translation().isApprox(grasp.translation() - 0.1 * z, 1e-9))
+        << (grasp.inverse() * h.last_goal->translation()).transpose();
+    EXPECT_TRUE(h.last_goal->linear().isApprox(grasp.linear(), 1e-12));
+    // 9 mm off at 10 cm depth (allowed 5 + 5 mm): the grasp.
+    h.tcp.translation() = grasp.translation() + 0.009 * x - 0.1 * z;
+    h.step();
+    EXPECT_TRUE(h.last_goal->translation().isApprox(grasp.translation(), 1e-12));
+    // 6 mm off 1 cm before the grasp (allowed 5.5 mm): onto the axis at 1 cm.
+    h.tcp.translation() = grasp.translation() + 0.006 * x - 0.01 * z;
+    h.step();
+    EXPECT_TRUE(h.last_goal->translation().isApprox(grasp.translation() - 0.01 * z, 1e-9));
+    EXPECT_EQ(h.seq.phase(), GraspPhase::Grasp);
+    // On the axis: the grasp, and the grasp tolerance still decides CLOSE.
+    h.tcp = grasp;
+    h.step();
+    EXPECT_EQ(h.seq.phase(), GraspPhase::Close);
+  }
+  GraspSequencerParams bad = twoObjects();
+  bad.descent_slope = -1.0;
+  expectInvalid([&] { bad.validate(); }, "descent_slope");
+  bad = twoObjects();
+  bad.descent_lateral_tolerance = 0.0;
+  expectInvalid([&] { bad.validate(); }, "descent_lateral_tolerance");
+}
+
 TEST(GraspSequencer, StalePerceptionBeforeTheLockSearchesAgain) {
   Harness h(twoObjects());
   h.follow = false;
@@ -984,23 +1040,59 @@ TEST(GraspSelection, SidewaysTurnedTowardsTheRobot) {
 
 TEST(GraspSelection, CandidateCentredOnTheTagAcrossTheApproach) {
   // A top-grasp candidate closing along world x (the camera's line of sight) centred 2.7 cm
-  // short of the object (a single-view cloud misses the far face) and 1 cm deeper than the
-  // tag centre: across the approach it is moved onto the tag centre, its depth is kept.
+  // short of the object (a single-view cloud misses the far face) and 4 cm above the tag centre
+  // (shallower than the tag grasp, 3 cm above): across the approach it is moved onto the tag
+  // centre, its depth is kept.
   const Eigen::Isometry3d tag = forwardTarget();
   Eigen::Isometry3d top = Eigen::Isometry3d::Identity();
   top.linear().col(0) = Eigen::Vector3d(0, 1, 0);
   top.linear().col(1) = Eigen::Vector3d(1, 0, 0);
   top.linear().col(2) = Eigen::Vector3d(0, 0, -1);
-  top.translation() = tag.translation() + Eigen::Vector3d(-0.027, 0.004, -0.01);
+  top.translation() = tag.translation() + Eigen::Vector3d(-0.027, 0.004, 0.04);
   GraspSelectionParams p;
   const auto c = chooseGrasp({{top, 0.05, 0.9}}, ApproachDirection::Downward, tag, top.linear(), p);
   ASSERT_TRUE(c && c->from_candidate);
-  EXPECT_TRUE(c->pose.translation().isApprox(tag.translation() + Eigen::Vector3d(0, 0, -0.01), 1e-12))
+  EXPECT_TRUE(c->pose.translation().isApprox(tag.translation() + Eigen::Vector3d(0, 0, 0.04), 1e-12))
       << c->pose.translation().transpose();
   p.centre_from_tag = false;
   const auto raw = chooseGrasp({{top, 0.05, 0.9}}, ApproachDirection::Downward, tag, top.linear(), p);
   ASSERT_TRUE(raw);
   EXPECT_TRUE(raw->pose.translation().isApprox(top.translation(), 1e-12));
+}
+
+TEST(GraspSelection, ATurnedCandidateGoesNoDeeperThanTheTagGrasp) {
+  // Exp-3 downward: a candidate from the front-top (approach 25 deg from vertical), 2 cm below
+  // the object centre, turned straight down about its centre, kept its height: the palm, 4 cm
+  // behind the TCP, came down on the 12 cm box's top. Turned onto a downward (sideways)
+  // approach, a candidate goes no deeper than the tag grasp, fallback_backoff_downward
+  // (_sideways) before the centre; a shallower one keeps its depth; forward ones are not limited.
+  const Eigen::Isometry3d tag = forwardTarget();
+  const Eigen::Matrix3d tilt = Eigen::AngleAxisd(25.0 * M_PI / 180.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  Eigen::Isometry3d c = downwardAt(tag.translation() + Eigen::Vector3d(0, 0, -0.02));
+  c.linear() = tilt * c.linear();
+  GraspSelectionParams p;
+  p.fallback_backoff_downward = 0.03;
+  auto chosen = chooseGrasp({{c, 0.06, 0.9}}, ApproachDirection::Downward, tag, c.linear(), p);
+  ASSERT_TRUE(chosen && chosen->from_candidate);
+  EXPECT_NEAR(chosen->pose.linear().col(2).z(), -1.0, 1e-9) << "turned straight down";
+  EXPECT_NEAR(chosen->pose.translation().z(), tag.translation().z() + 0.03, 1e-9);
+  p.fallback_backoff_downward = 0.05;
+  chosen = chooseGrasp({{c, 0.06, 0.9}}, ApproachDirection::Downward, tag, c.linear(), p);
+  ASSERT_TRUE(chosen);
+  EXPECT_NEAR(chosen->pose.translation().z(), tag.translation().z() + 0.05, 1e-9);
+  // Shallower than the limit: its own depth.
+  Eigen::Isometry3d high = c;
+  high.translation().z() = tag.translation().z() + 0.045;
+  p.fallback_backoff_downward = 0.03;
+  chosen = chooseGrasp({{high, 0.06, 0.9}}, ApproachDirection::Downward, tag, c.linear(), p);
+  ASSERT_TRUE(chosen);
+  EXPECT_NEAR(chosen->pose.translation().z(), tag.translation().z() + 0.045, 1e-9);
+  // Forward: a candidate 1 cm past the centre keeps its depth.
+  Eigen::Isometry3d fwd = tag;
+  fwd.translation() += 0.01 * tag.linear().col(2);
+  chosen = chooseGrasp({{fwd, 0.06, 0.9}}, ApproachDirection::Forward, tag, tag.linear(), p);
+  ASSERT_TRUE(chosen && chosen->from_candidate);
+  EXPECT_NEAR((chosen->pose.translation() - tag.translation()).dot(tag.linear().col(2)), 0.01, 1e-9);
 }
 
 TEST(GraspSelection, CandidateClosesAlongTheNearestTagAxis) {

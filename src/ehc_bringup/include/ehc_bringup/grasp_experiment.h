@@ -17,7 +17,9 @@
 #include "ehc_bringup/reach_experiment.h"
 
 #include <functional>
+#include <limits>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -49,6 +51,10 @@ struct GraspExperimentParams {
   double distant_threshold = 0.5;  ///< m: cycles with |e| above are "distant"
   double trace_period = 0.1;   ///< s of sim time between trace samples (plots)
   bool timing = true;          ///< wall seconds per pipeline stage (counters; never in the results' logic)
+  /// Base model of the simulator (--base-model): unset = the sim file's (bullet_sim.yaml: ideal);
+  /// water2 = the RealMan Water2 chain, whose /odom estimate is what the stack sees
+  /// (GraspPipeline::stackView).
+  std::optional<ehc_sim::BaseModelType> base_model;
   void validate() const;       ///< throws "[GraspExperiment] ..."
 };
 
@@ -87,6 +93,15 @@ struct GraspTrial {
   /// obstacle map excludes it from GRASP on), and its pairs go to `grasped` instead.
   ObstacleExtreme nearest, tightest;
   ObstacleExtreme grasped;           ///< the object being grasped, PRE_GRASP on: smallest distance
+  /// Ground truth (the simulator's object pose), to trace a grasp that closed on nothing: the
+  /// object's centre in the locked grasp's frame at the lock (x, y = finger closing axis,
+  /// z = approach; the plan's error is its difference from the tag target's grasp offset), and
+  /// in the TCP frame when the gripper was commanded to close. m; NaN: no lock / never closed.
+  Eigen::Vector3d lock_centre_in_grasp = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  Eigen::Vector3d close_centre_in_tcp = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  /// Ground truth at the lock: the angle of the grasp's finger closing axis (y) from the nearest
+  /// axis of the object's frame (a box's face normals), deg; NaN: no lock.
+  double lock_closing_axis_error_deg = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// ‖TCP - object‖ (ground truth) and speeds, sampled every trace_period of an object's attempt.
@@ -96,6 +111,11 @@ struct GraspTraceSample {
   std::string object;
   double t = 0.0;  ///< s since the object's attempt began
   double distance = 0.0, base_speed = 0.0, base_turn = 0.0, arm_speed = 0.0;
+  std::string phase;  ///< the sequencer's phase
+  /// Ground truth, from the grasp lock on (NaN before): the true TCP in the locked grasp's frame
+  /// (x, y = closing axis, z = approach; z < 0 before the grasp point), m.
+  Eigen::Vector3d tcp_in_grasp = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  double object_moved = 0.0;  ///< m, the object's true displacement since the run began
 };
 
 struct GraspMethodSummary {

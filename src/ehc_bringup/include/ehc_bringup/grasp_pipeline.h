@@ -142,6 +142,14 @@ class GraspPipeline {
  private:
   void perceive(double t);
   void updateObstacles(double t);
+  /// The stack's view of a world pose of a robot frame: what tf gives the nodes. Ideal base: the
+  /// true pose (unchanged, bit for bit). Water2 base: /odom is the bridge's estimate, so every
+  /// robot frame the nodes look up (camera, TCP) is the true one moved by the odometry error:
+  /// odom_T_base(estimate) * base_T_frame(true). Perception then puts a tag or a cloud where the
+  /// odometry says the camera was, as on the robot.
+  Eigen::Isometry3d stackView(const Eigen::Isometry3d& T_world_frame) const;
+  /// The base pose the nodes get from /odom (x, y, yaw).
+  Eigen::Vector3d odometryPose() const;
 
   GraspPipelineConfig cfg_;
   std::unique_ptr<ehc_sim::SimWorld> world_;

@@ -45,6 +45,12 @@ struct GraspSelectionParams {
   /// A horizontal approach also gets a level closing axis (an upright object's side faces are
   /// vertical). The descent from the pre-grasp is then a straight line along that direction
   /// and the fingers close level. `tag` and `any` keep the candidate as it is.
+  /// A candidate turned onto a downward or sideways approach keeps its depth along it only up to
+  /// the tag fallback's (the tag target moved back by fallback_backoff_<direction> along the
+  /// approach): the generator checked its palm for its own approach, not for the turned one. A
+  /// candidate from the front-top turned straight down kept its height, 2 cm below the centre of
+  /// the 12 cm box, so the palm (4 cm behind the TCP) came down on the box's top and knocked it
+  /// over (Exp-3, downward: 38 of 75 NEO grasps "closed on nothing").
   bool align_approach = true;
   /// Move a chosen candidate across its approach (along its closing and x axes) onto the tag
   /// target's centre; keep its depth along the approach. A single-view cloud misses the far

@@ -142,6 +142,7 @@ GraspPipelineConfig GraspExperiment::runConfig(const std::string& method, const 
   const GraspMethod m = graspMethod(method);
   c.cycle.controller.mode = m.mode;
   c.cycle.mpbs.enabled = m.mpbs;
+  if (params_.base_model) c.sim.fake_robot.base_model.type = *params_.base_model;
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   for (auto& o : c.scene.objects) {
@@ -164,6 +165,13 @@ GraspExperiment::RunOutput GraspExperiment::runOne(const RunSpec& spec) const {
   std::vector<ObstacleExtreme> nearest(n_objects), tightest(n_objects), grasped(n_objects);
   std::vector<double> t0(n_objects, -1.0);
   std::vector<double> next_sample(n_objects, 0.0);
+  const Eigen::Vector3d unset = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  std::vector<Eigen::Vector3d> lock_centre(n_objects, unset), close_centre(n_objects, unset);
+  std::vector<double> lock_axis_error(n_objects, unset.x());
+  GraspPhase previous_phase = GraspPhase::WaitTarget;
+  const std::string tcp_frame = pipe.cycle().model().config().tcp_frame;
+  std::vector<Eigen::Vector3d> object_start;
+  for (std::size_t i = 0; i < n_objects; ++i) object_start.push_back(pipe.world().objectPose(static_cast<int>(i)).translation());
   // Per object: WAIT_TARGET .. LIFT (30 s each) + release + retreat, with margin.
   const double limit = static_cast<double>(n_objects) *
                        (cfg.sequencer.object_time_limit + cfg.sequencer.release_timeout +
@@ -189,6 +197,18 @@ GraspExperiment::RunOutput GraspExperiment::runOne(const RunSpec& spec) const {
         tightest[k].take(e, true);
       }
     }
+    // Ground truth at the lock and at the close (GraspTrial::lock_centre_in_grasp / close_centre_in_tcp).
+    if (c.phase != previous_phase && k < n_objects) {
+      const Eigen::Vector3d centre = pipe.world().objectPose(static_cast<int>(k)).translation();
+      if (c.phase == GraspPhase::PreGrasp && pipe.sequencer().lockedGrasp()) {
+        const Eigen::Isometry3d& grasp = pipe.sequencer().lockedGrasp()->pose;
+        lock_centre[k] = grasp.inverse() * centre;
+        const Eigen::Vector3d closing = pipe.world().objectPose(static_cast<int>(k)).linear().transpose() * grasp.linear().col(1);
+        lock_axis_error[k] = std::acos(std::min(1.0, closing.cwiseAbs().maxCoeff())) * 180.0 / M_PI;
+      }
+      if (c.phase == GraspPhase::Close) close_centre[k] = pipe.world().linkPose(tcp_frame).inverse() * centre;
+    }
+    previous_phase = c.phase;
     const bool working = c.phase != GraspPhase::Release && c.phase != GraspPhase::Retreat &&
                          c.phase != GraspPhase::Done;
     if (t0[k] < 0.0) t0[k] = c.t;
@@ -202,9 +222,12 @@ GraspExperiment::RunOutput GraspExperiment::runOne(const RunSpec& spec) const {
       s.index = spec.index;
       s.object = cfg.sequencer.objects[k].name;
       s.t = c.t - t0[k];
-      s.distance = (pipe.world().linkPose(pipe.cycle().model().config().tcp_frame).translation() -
-                    pipe.world().objectPose(static_cast<int>(k)).translation())
-                       .norm();
+      const Eigen::Isometry3d tcp = pipe.world().linkPose(tcp_frame);
+      const Eigen::Vector3d object = pipe.world().objectPose(static_cast<int>(k)).translation();
+      s.distance = (tcp.translation() - object).norm();
+      s.phase = toString(c.phase);
+      if (pipe.sequencer().lockedGrasp()) s.tcp_in_grasp = pipe.sequencer().lockedGrasp()->pose.inverse() * tcp.translation();
+      s.object_moved = (object - object_start[k]).norm();
       s.base_speed = nb == 3 ? std::hypot(c.command[0], c.command[1]) : std::abs(c.command[0]);
       s.base_turn = std::abs(c.command[nb - 1]);
       s.arm_speed = c.command.tail(c.command.size() - nb).cwiseAbs().sum();
@@ -239,6 +262,9 @@ GraspExperiment::RunOutput GraspExperiment::runOne(const RunSpec& spec) const {
     t.nearest = nearest[i];
     t.tightest = tightest[i];
     t.grasped = grasped[i];
+    t.lock_centre_in_grasp = lock_centre[i];
+    t.close_centre_in_tcp = close_centre[i];
+    t.lock_closing_axis_error_deg = lock_axis_error[i];
     out.trials.push_back(t);
   }
   out.counters = pipe.counters();
@@ -492,7 +518,9 @@ void writeGraspResults(const std::string& dir, const GraspExperimentParams& para
     f << "method,set,index,seed,object,approach,success,time_s,tfm,tfm_until_switch,controller_tfm,failed_phase,"
          "reason,close_offset_m,contact_steps,joint_limit_violations,min_obstacle_distance_m,min_obstacle_link,min_obstacle_body,"
          "min_obstacle_phase,min_margin_m,min_margin_link,min_margin_body,min_margin_phase,min_grasped_object_m,"
-         "min_grasped_object_link,min_grasped_object_phase\n";
+         "min_grasped_object_link,min_grasped_object_phase,lock_centre_in_grasp_x_m,lock_centre_in_grasp_y_m,"
+         "lock_centre_in_grasp_z_m,close_centre_in_tcp_x_m,close_centre_in_tcp_y_m,close_centre_in_tcp_z_m,"
+         "lock_closing_axis_error_deg\n";
     // An empty field: no pair within the influence distance (a distance <= 0 is a penetration).
     auto csvValue = [](const ObstacleExtreme& e, double v) {
       std::ostringstream os;
@@ -509,15 +537,31 @@ void writeGraspResults(const std::string& dir, const GraspExperimentParams& para
         << t.nearest.body << "," << t.nearest.phase << "," << csvValue(t.tightest, t.tightest.margin()) << ","
         << t.tightest.link << "," << t.tightest.body << "," << t.tightest.phase << ","
         << csvValue(t.grasped, t.grasped.distance) << ","
-        << t.grasped.link << "," << t.grasped.phase << "\n";
+        << t.grasped.link << "," << t.grasped.phase;
+    for (const Eigen::Vector3d* v : {&t.lock_centre_in_grasp, &t.close_centre_in_tcp})
+      for (int a = 0; a < 3; ++a) {
+        f << ",";
+        if (std::isfinite((*v)[a])) f << (*v)[a];
+      }
+    f << ",";
+    if (std::isfinite(t.lock_closing_axis_error_deg)) f << t.lock_closing_axis_error_deg;
+    f << "\n";
     }
   }
   {
     std::ofstream f = open("trace.csv");
-    f << "method,set,index,object,t,distance,base_speed,base_turn,arm_speed\n" << std::setprecision(5);
-    for (const auto& s : result.trace)
+    f << "method,set,index,object,t,distance,base_speed,base_turn,arm_speed,phase,tcp_in_grasp_x,tcp_in_grasp_y,"
+         "tcp_in_grasp_z,object_moved\n"
+      << std::setprecision(5);
+    for (const auto& s : result.trace) {
       f << s.method << "," << s.set << "," << s.index << "," << s.object << "," << s.t << "," << s.distance << ","
-        << s.base_speed << "," << s.base_turn << "," << s.arm_speed << "\n";
+        << s.base_speed << "," << s.base_turn << "," << s.arm_speed << "," << s.phase;
+      for (int a = 0; a < 3; ++a) {
+        f << ",";
+        if (std::isfinite(s.tcp_in_grasp[a])) f << s.tcp_in_grasp[a];
+      }
+      f << "," << s.object_moved << "\n";
+    }
   }
 }
 

@@ -149,7 +149,7 @@ void GraspPipeline::perceive(double t) {
       camera_->render(*world_, &image);
     }
     ++counters_.images;
-    const Eigen::Isometry3d T_world_cam = world_->cameraPose();
+    const Eigen::Isometry3d T_world_cam = stackView(world_->cameraPose());
     {
       StageTimer timer(timing_, &counters_.wall_tags);
       detections = detector_->detect(image, T_world_cam);  // the camera pose: ambiguity prior
@@ -172,7 +172,7 @@ void GraspPipeline::perceive(double t) {
     camera_->cloud(*world_, &cam_points);
   }
   ++counters_.clouds;
-  const Eigen::Isometry3d T_world_cam = world_->cameraPose();
+  const Eigen::Isometry3d T_world_cam = stackView(world_->cameraPose());
   const Eigen::Isometry3f T = T_world_cam.cast<float>();
   ehc_perception::PointList points;
   points.reserve(cam_points.size());
@@ -199,7 +199,7 @@ void GraspPipeline::updateObstacles(double t) {
   const ehc_sim::KinematicFakeRobot& robot = world_->robot();
   const Eigen::VectorXd& q = robot.armPositions();
   monitor_->setJointState(t, arm_names_, std::vector<double>(q.data(), q.data() + q.size()));
-  monitor_->setBasePose(t, robot.basePose());
+  monitor_->setBasePose(t, odometryPose());
   if (!clocks_->obstacles.due(world_->timeNs())) return;
   const ehc_perception::ObstacleReport r = monitor_->update(t);
   ++counters_.obstacle_updates;
@@ -230,7 +230,7 @@ const PipelineCycle& GraspPipeline::step() {
     const ehc_sim::KinematicFakeRobot& robot = world_->robot();
     const Eigen::VectorXd& q = robot.armPositions();
     std::string err = cycle_->setJointState(t, arm_names_, std::vector<double>(q.data(), q.data() + q.size()));
-    if (err.empty()) err = cycle_->setBasePose(t, robot.basePose());
+    if (err.empty()) err = cycle_->setBasePose(t, odometryPose());
     if (!err.empty()) throw std::runtime_error("[GraspPipeline] state rejected by the controller: " + err);
     out = cycle_->update(t);
   }
@@ -245,8 +245,8 @@ const PipelineCycle& GraspPipeline::step() {
     in.sig = out.status.sig;
     in.gripper_state = ehc_sim::toString(world_->gripper().state());
     in.grasp_succeeded = world_->gripper().graspSucceeded();
-    in.tcp = world_->linkPose(cycle_->model().config().tcp_frame);
-    in.camera = world_->cameraPose();
+    in.tcp = stackView(world_->linkPose(cycle_->model().config().tcp_frame));
+    in.camera = stackView(world_->cameraPose());
     const SequencerOutput s = sequencer_->update(in);
     if (s.object_pose) {
       grasp_target_ = s.object_pose->translation();
@@ -285,6 +285,20 @@ const PipelineCycle& GraspPipeline::step() {
   counters_.collision_steps += last_.collision;
   counters_.joint_limit_violations += last_.joint_limit_violations;
   return last_;
+}
+
+Eigen::Vector3d GraspPipeline::odometryPose() const { return world_->robot().odometryPose(); }
+
+Eigen::Isometry3d GraspPipeline::stackView(const Eigen::Isometry3d& T_world_frame) const {
+  const ehc_sim::KinematicFakeRobot& robot = world_->robot();
+  if (!robot.water2()) return T_world_frame;  // ideal base: /odom is the true pose
+  auto planar = [](const Eigen::Vector3d& p) {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.translation() << p.x(), p.y(), 0.0;
+    T.linear() = Eigen::AngleAxisd(p.z(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    return T;
+  };
+  return planar(robot.odometryPose()) * planar(robot.basePose()).inverse() * T_world_frame;
 }
 
 bool GraspPipeline::runUntilDone(double sim_time_limit) {

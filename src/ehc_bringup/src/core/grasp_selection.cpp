@@ -205,6 +205,15 @@ std::optional<GraspChoice> chooseGrasp(const std::vector<GraspCandidate>& candid
     const Eigen::Vector3d d = tag_target.translation() - best.pose.translation();
     best.pose.translation() += d - d.dot(z) * z;
   }
+  if (found && p.align_approach &&
+      (direction == ApproachDirection::Downward || direction == ApproachDirection::Sideways)) {
+    // No deeper along the turned approach than the tag fallback (see align_approach).
+    const Eigen::Vector3d z = best.pose.linear().col(2);
+    const double backoff =
+        direction == ApproachDirection::Downward ? p.fallback_backoff_downward : p.fallback_backoff_sideways;
+    const double past_centre = z.dot(best.pose.translation() - tag_target.translation());
+    if (past_centre > -backoff) best.pose.translation() -= (past_centre + backoff) * z;
+  }
   if (!found) {
     if (p.require_candidate && direction != ApproachDirection::Tag) return std::nullopt;
     double backoff = p.fallback_backoff_forward;

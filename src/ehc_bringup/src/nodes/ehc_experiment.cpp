@@ -40,8 +40,10 @@ const char* kUsage =
     "           [--all-targets]   (keep generated targets no whole-body IK solution reaches)\n"
     "       ehc_experiment grasp --method tsmm|neo_c|neo_e|ehc|all --out DIR [--robot <name|robot.yaml>] [--sets 15] [--seed 1]\n"
     "           [--scene scene.yaml] [--jobs 1] [--config-dir config] [--jitter-xy 0.01] [--jitter-yaw 3]\n"
+    "           [--base-model ideal|water2]   (default: the sim file's, ideal; water2: the stack sees the bridge's /odom)\n"
     "       ehc_experiment poses --method neo_nompbs|ehc_nompbs|ehc|all --out DIR [--robot <name|robot.yaml>] [--sets 15] [--per-set 5]\n"
-    "           [--seed 1] [--scene scene.yaml] [--jobs 1] [--config-dir config] [--jitter-xy 0.01] [--jitter-yaw 3]\n";
+    "           [--seed 1] [--scene scene.yaml] [--jobs 1] [--config-dir config] [--jitter-xy 0.01] [--jitter-yaw 3]\n"
+    "           [--base-model ideal|water2]\n";
 
 struct Args {
   std::string command, robot, method = "ehc", out, targets_csv, config, map, trace;
@@ -88,7 +90,7 @@ int runGrasp(int argc, char** argv) {
   ehc_bringup::GraspExperimentParams p;
   p.protocol = command == "grasp" ? ehc_bringup::GraspProtocol::Table : ehc_bringup::GraspProtocol::Poses;
   std::vector<std::string> options = {"robot", "method", "out", "sets", "seed", "scene", "jobs", "config-dir",
-                                      "jitter-xy", "jitter-yaw"};
+                                      "jitter-xy", "jitter-yaw", "base-model"};
   if (p.protocol == ehc_bringup::GraspProtocol::Poses) options.push_back("per-set");
   const ehc_control::CommandLine cli(argc, argv, options, {}, /*first=*/2);
   const std::string method = cli.text("method", "all");
@@ -104,6 +106,8 @@ int runGrasp(int argc, char** argv) {
   p.jitter_xy = cli.real("jitter-xy", p.jitter_xy);
   p.jitter_yaw_deg = cli.real("jitter-yaw", p.jitter_yaw_deg);
   if (p.protocol == ehc_bringup::GraspProtocol::Table) p.per_set = 1;
+  if (cli.has("base-model"))
+    p.base_model = ehc_sim::baseModelTypeFromString(cli.choice("base-model", {"ideal", "water2"}, "ideal"));
   const std::vector<std::string> methods = ehc_bringup::graspMethodNames(p.protocol, method);
   const ehc_bringup::GraspExperiment exp(p, methods);
   std::cerr << "[ehc_experiment] " << command << ": " << p.sets << " set(s)"
@@ -139,7 +143,11 @@ int runGrasp(int argc, char** argv) {
         << "grasps; unlike the paper, the 30 s limit per object applies to tsmm too. Time = mean over successful grasps of the sequencer's "
         << "object time (object start -> lift success). Speeds: mean |v| (m/s) / |w| (rad/s) / sum |qd_arm| (rad/s) of "
         << "the commanded velocity while an object is worked on (QP solved); distant = controller position error > "
-        << p.distant_threshold << " m. In-process pipeline (no ROS transport latency), "
+        << p.distant_threshold << " m. Base model: "
+        << exp.runConfig(methods.front(), p.protocol == ehc_bringup::GraspProtocol::Table ? "" : "forward", 0).sim.fake_robot.base_model.summary()
+        << (p.base_model && *p.base_model == ehc_sim::BaseModelType::Water2
+                ? " (the stack sees the bridge's /odom estimate: controller, perception, sequencer)" : "")
+        << ". In-process pipeline (no ROS transport latency), "
         << res.sim_time_s << " s of sim time in " << wall << " s wall with " << p.jobs << " job(s) (real-time factor "
         << res.sim_time_s / std::max(1e-9, wall) << "; wall figures depend on the machine's load).";
   ehc_bringup::writeGraspResults(out, p, res, notes.str());
