@@ -140,9 +140,10 @@ TEST(GraspSequencer, FullSequencePerObjectInOrder) {
   }
   ASSERT_TRUE(h.seq.done());
   const std::vector<GraspPhase> expected = {
-      GraspPhase::Approach, GraspPhase::PreGrasp, GraspPhase::Grasp, GraspPhase::Close,  GraspPhase::Lift,
-      GraspPhase::Release,  GraspPhase::Retreat,  GraspPhase::WaitTarget, GraspPhase::Approach,
-      GraspPhase::PreGrasp, GraspPhase::Grasp,    GraspPhase::Close,  GraspPhase::Lift, GraspPhase::Release,
+      GraspPhase::Approach, GraspPhase::PreGrasp, GraspPhase::Grasp,      GraspPhase::Close,
+      GraspPhase::Lift,     GraspPhase::Place,    GraspPhase::Release,    GraspPhase::Retreat,
+      GraspPhase::WaitTarget, GraspPhase::Approach, GraspPhase::PreGrasp, GraspPhase::Grasp,
+      GraspPhase::Close,    GraspPhase::Lift,     GraspPhase::Place,      GraspPhase::Release,
       GraspPhase::Retreat,  GraspPhase::Done};
   // The first recorded phase may be WAIT_TARGET or APPROACH (pose given before the first cycle).
   std::vector<GraspPhase> got = h.phases;

@@ -34,7 +34,13 @@
 //   CLOSE        gripper close command once; HOLDING -> LIFT, CLOSED_EMPTY -> failure
 //   LIFT         goal = grasp pose raised by lift_height; the simulator's grasp result decides:
 //                grasp_succeeded -> success, the object dropped -> failure
-//   RELEASE      (after success or failure) gripper open; until open or release_timeout
+//   PLACE        (after a successful lift) goal = the grasp pose raised by place_height: the
+//                object is put back where it stood before the gripper opens, until within
+//                place_tolerance, stalled (stall_time) or place_timeout. Released at the lift
+//                height instead, the demo's middle cylinder fell over, rolled against the back
+//                box and the hand pushed both 2.5 cm: the back grasp closed on nothing
+//                (demo.sh, seeds 4001 / 4009). place_timeout 0: no PLACE (released where lifted)
+//   RELEASE      (after PLACE, or after a failure) gripper open; until open or release_timeout
 //   RETREAT      goal = the TCP pose at release, backed off along the approach and raised;
 //                until within retreat_tolerance or retreat_timeout; then the next object
 //   DONE         all objects handled: no goal any more (the controller stops on TARGET_LOST)
@@ -76,7 +82,7 @@ class ConfigNode;
 
 namespace ehc_bringup {
 
-enum class GraspPhase { WaitTarget, Approach, PreGrasp, Grasp, Close, Lift, Release, Retreat, Done };
+enum class GraspPhase { WaitTarget, Approach, PreGrasp, Grasp, Close, Lift, Place, Release, Retreat, Done };
 std::string toString(GraspPhase p);
 
 struct GraspObjectSpec {
@@ -128,6 +134,9 @@ struct GraspSequencerParams {
   double tfm_handover_sig = 0.5;
   double gripper_timeout = 3.0;           ///< s, CLOSE without HOLDING / CLOSED_EMPTY
   double lift_height = 0.15;              ///< m, above the grasp pose (> the sim's 0.10 m)
+  double place_height = 0.005;            ///< m, PLACE: the grasp pose raised by this (the object just above its support)
+  double place_tolerance = 0.01;          ///< m, PLACE ends within this of its pose
+  double place_timeout = 4.0;             ///< s, PLACE ends after this at the latest; 0 = no PLACE
   double release_timeout = 2.0;           ///< s
   double retreat_distance = 0.12;         ///< m back along the approach
   double retreat_raise = 0.05;            ///< m up
@@ -237,6 +246,7 @@ class GraspSequencer {
                     SequencerOutput* out);
   std::optional<GraspChoice> currentChoice(const SequencerInput& in) const;
   Eigen::Isometry3d preGrasp(const Eigen::Isometry3d& grasp) const;
+  Eigen::Isometry3d placePose() const;  ///< PLACE goal: the locked grasp raised by place_height
   /// APPROACH goal: the pre-grasp of `grasp`; the object centre while the controller is in the
   /// tsmm base stage (see the header comment).
   /// Until the tsmm base stage has stopped d from the object (tsmm_at_d_).

@@ -209,7 +209,7 @@ GraspExperiment::RunOutput GraspExperiment::runOne(const RunSpec& spec) const {
       if (c.phase == GraspPhase::Close) close_centre[k] = pipe.world().linkPose(tcp_frame).inverse() * centre;
     }
     previous_phase = c.phase;
-    const bool working = c.phase != GraspPhase::Release && c.phase != GraspPhase::Retreat &&
+    const bool working = c.phase != GraspPhase::Place && c.phase != GraspPhase::Release && c.phase != GraspPhase::Retreat &&
                          c.phase != GraspPhase::Done;
     if (t0[k] < 0.0) t0[k] = c.t;
     if (working && c.status.qp_status == ehc_control::QpStatus::Ok)

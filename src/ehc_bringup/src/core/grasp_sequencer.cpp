@@ -20,6 +20,7 @@ std::string toString(GraspPhase p) {
     case GraspPhase::Grasp: return "GRASP";
     case GraspPhase::Close: return "CLOSE";
     case GraspPhase::Lift: return "LIFT";
+    case GraspPhase::Place: return "PLACE";
     case GraspPhase::Release: return "RELEASE";
     case GraspPhase::Retreat: return "RETREAT";
     case GraspPhase::Done: return "DONE";
@@ -80,6 +81,10 @@ void GraspSequencerParams::validate() const {
   positive(grasp_orientation_tolerance_deg, "grasp_orientation_tolerance_deg");
   positive(gripper_timeout, "gripper_timeout");
   positive(lift_height, "lift_height");
+  check(std::isfinite(place_height) && place_height >= 0.0 && place_height <= 0.1, "place_height must be in [0, 0.1] m");
+  positive(place_tolerance, "place_tolerance");
+  check(std::isfinite(place_timeout) && place_timeout >= 0.0 && place_timeout <= 30.0,
+        "place_timeout must be in [0, 30] s (0 = release where lifted)");
   positive(release_timeout, "release_timeout");
   check(std::isfinite(retreat_distance) && retreat_distance >= 0.0, "retreat_distance must be >= 0");
   check(std::isfinite(retreat_raise) && retreat_raise >= 0.0, "retreat_raise must be >= 0");
@@ -101,7 +106,11 @@ std::string GraspSequencerParams::summary() const {
     << max_close_offset << " m)"
     << "; descent funnel " << (descent_slope > 0.0 ? num(descent_lateral_tolerance, 4) + " m + depth / " + num(descent_slope, 3) : std::string("off"))
     << "; TfM until sig(w) >= " << tfm_handover_sig << " or the pre-grasp switch"
-    << "\n  gripper timeout " << gripper_timeout << " s, lift " << lift_height << " m, release timeout "
+    << "\n  gripper timeout " << gripper_timeout << " s, lift " << lift_height << " m, place "
+    << (place_timeout > 0.0 ? "back " + num(place_height, 3) + " m above the grasp (tol " + num(place_tolerance, 3) + " m, " +
+                                  num(place_timeout, 1) + " s)"
+                            : std::string("off"))
+    << ", release timeout "
     << release_timeout << " s, retreat " << retreat_distance << " m back + " << retreat_raise << " m up (tol "
     << retreat_tolerance << " m, " << retreat_timeout << " s)"
     << "\n  selection: gate " << selection.candidate_gate << " m, max angle " << selection.max_angle_deg
@@ -139,6 +148,9 @@ GraspSequencerParams loadGraspSequencerParams(const ehc_control::ConfigNode& roo
   p.grasp_orientation_tolerance_deg = s.get("grasp_orientation_tolerance_deg", p.grasp_orientation_tolerance_deg);
   p.gripper_timeout = s.get("gripper_timeout", p.gripper_timeout);
   p.lift_height = s.get("lift_height", p.lift_height);
+  p.place_height = s.get("place_height", p.place_height);
+  p.place_tolerance = s.get("place_tolerance", p.place_tolerance);
+  p.place_timeout = s.get("place_timeout", p.place_timeout);
   p.release_timeout = s.get("release_timeout", p.release_timeout);
   p.retreat_distance = s.get("retreat_distance", p.retreat_distance);
   p.retreat_raise = s.get("retreat_raise", p.retreat_raise);
@@ -355,10 +367,21 @@ void GraspSequencer::finishObject(double t, bool success, const std::string& rea
   if (locked_) last_approach_ = locked_->pose.linear().col(2);
   else if (in.tcp && isValidPose(*in.tcp)) last_approach_ = in.tcp->linear().col(2);
   hold_goal_ = (in.tcp && isValidPose(*in.tcp)) ? std::optional<Eigen::Isometry3d>(*in.tcp) : std::nullopt;
-  enter(GraspPhase::Release, t, out, success ? "grasp succeeded" : "FAILED: " + reason);
+  const bool place = success && locked_ && params_.place_timeout > 0.0;
+  enter(place ? GraspPhase::Place : GraspPhase::Release, t, out, success ? "grasp succeeded" : "FAILED: " + reason);
   results_.push_back(cur_);
   out->events.push_back(graspResultLine(cur_));
+  if (place) {
+    out->goal = placePose();
+    return;
+  }
   if (in.gripper_state != "open") out->gripper_command = false;
+}
+
+Eigen::Isometry3d GraspSequencer::placePose() const {
+  Eigen::Isometry3d T = locked_->pose;
+  T.translation().z() += params_.place_height;
+  return T;
 }
 
 SequencerOutput GraspSequencer::update(const SequencerInput& in) {
@@ -538,6 +561,22 @@ void GraspSequencer::advance(const SequencerInput& in, SequencerOutput* out) {
         finishObject(t, true, "", in, out);
       } else if (in.gripper_state != "holding" && in_phase > 0.0) {
         finishObject(t, false, "object lost while lifting (gripper '" + in.gripper_state + "')", in, out);
+      }
+      break;
+    }
+    case GraspPhase::Place: {
+      const Eigen::Isometry3d place = placePose();
+      out->goal = place;
+      const bool there = within(in, place, params_.place_tolerance, 180.0);
+      const bool dropped = in.gripper_state != "holding";
+      if (there || dropped || stalled(in, place) || in_phase > params_.place_timeout) {
+        hold_goal_ = (in.tcp && isValidPose(*in.tcp)) ? std::optional<Eigen::Isometry3d>(*in.tcp) : std::nullopt;
+        if (hold_goal_) out->goal = *hold_goal_;
+        std::string why = there ? "placed" : dropped ? "object no longer held" : "placing stopped";
+        if (!there && !dropped && in.tcp && isValidPose(*in.tcp))
+          why += " " + num((in.tcp->translation() - place.translation()).norm() * 100.0, 1) + " cm from its place";
+        enter(GraspPhase::Release, t, out, why);
+        if (in.gripper_state != "open") out->gripper_command = false;
       }
       break;
     }
