@@ -294,62 +294,6 @@ TEST(GraspSequencer, AStallNearTheGraspClosesThereAndAFarStallWaits) {
   EXPECT_THROW(bad.validate(), std::invalid_argument);
 }
 
-TEST(GraspSequencer, TheDescentFollowsTheApproachAxis) {
-  // A GRASP that begins off the approach axis (a pre-grasp reached after a stall, 5.6 cm off in
-  // Exp-3) first goes sideways onto the axis at its depth; within descent_lateral_tolerance +
-  // depth / descent_slope of the axis the goal is the grasp itself. descent_slope 0: straight.
-  for (const double slope : {20.0, 0.0}) {
-    GraspSequencerParams p = twoObjects();
-    p.objects.resize(1);
-    p.descent_slope = slope;
-    p.descent_lateral_tolerance = 0.005;
-    p.pregrasp_position_tolerance = 0.06;  // lets GRASP begin 4 cm off the axis
-    Harness h(p);
-    h.perceive = forwardTarget();
-    h.follow = false;
-    while (h.seq.phase() == GraspPhase::WaitTarget || h.seq.phase() == GraspPhase::Approach) {
-      h.tcp = *h.last_goal;
-      h.step();
-      if (h.t > 5.0) break;
-    }
-    ASSERT_EQ(h.seq.phase(), GraspPhase::PreGrasp);
-    const Eigen::Isometry3d grasp = h.seq.lockedGrasp()->pose;
-    const Eigen::Vector3d x = grasp.linear().col(0), z = grasp.linear().col(2);
-    h.tcp = grasp;
-    h.tcp.translation() += 0.04 * x - 0.1 * z;  // 4 cm off the axis, 10 cm before the grasp
-    h.step();
-    ASSERT_EQ(h.seq.phase(), GraspPhase::Grasp);
-    ASSERT_TRUE(h.last_goal);
-    if (slope == 0.0) {
-      EXPECT_TRUE(h.last_goal->translation().isApprox(grasp.translation(), 1e-12));
-      continue;
-    }
-    // 4 cm > 5 mm + 10 cm / 20: onto the axis at the TCP's depth.
-    EXPECT_TRUE(h.last_goal->translation().isApprox(grasp.translation() - 0.1 * z, 1e-9))
-        << (grasp.inverse() * h.last_goal->translation()).transpose();
-    EXPECT_TRUE(h.last_goal->linear().isApprox(grasp.linear(), 1e-12));
-    // 9 mm off at 10 cm depth (allowed 5 + 5 mm): the grasp.
-    h.tcp.translation() = grasp.translation() + 0.009 * x - 0.1 * z;
-    h.step();
-    EXPECT_TRUE(h.last_goal->translation().isApprox(grasp.translation(), 1e-12));
-    // 6 mm off 1 cm before the grasp (allowed 5.5 mm): onto the axis at 1 cm.
-    h.tcp.translation() = grasp.translation() + 0.006 * x - 0.01 * z;
-    h.step();
-    EXPECT_TRUE(h.last_goal->translation().isApprox(grasp.translation() - 0.01 * z, 1e-9));
-    EXPECT_EQ(h.seq.phase(), GraspPhase::Grasp);
-    // On the axis: the grasp, and the grasp tolerance still decides CLOSE.
-    h.tcp = grasp;
-    h.step();
-    EXPECT_EQ(h.seq.phase(), GraspPhase::Close);
-  }
-  GraspSequencerParams bad = twoObjects();
-  bad.descent_slope = -1.0;
-  expectInvalid([&] { bad.validate(); }, "descent_slope");
-  bad = twoObjects();
-  bad.descent_lateral_tolerance = 0.0;
-  expectInvalid([&] { bad.validate(); }, "descent_lateral_tolerance");
-}
-
 TEST(GraspSequencer, StalePerceptionBeforeTheLockSearchesAgain) {
   Harness h(twoObjects());
   h.follow = false;

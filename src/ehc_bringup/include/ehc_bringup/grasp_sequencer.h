@@ -25,11 +25,7 @@
 //                the lock's pre-grasp goal, would stop the base where it is, not at d)
 //   PRE_GRASP    the grasp is locked in the world frame (the object is static until touched, and
 //                the tag may leave the view at close range); goal = pre-grasp pose, tight tolerance
-//   GRASP        goal = grasp pose, reached along the approach axis (a descent funnel: while the
-//                TCP is farther from the axis through the grasp than descent_lateral_tolerance +
-//                its depth before the grasp / descent_slope, the goal is the point of that axis at
-//                the TCP's depth, so the hand first moves sideways onto the axis; see
-//                descent_slope); ends within grasp tolerance (or stalled near it, see
+//   GRASP        goal = grasp pose; ends within grasp tolerance (or stalled near it, see
 //                stall_time, never farther than max_close_offset; PRE_GRASP likewise)
 //   CLOSE        gripper close command once; HOLDING -> LIFT, CLOSED_EMPTY -> failure
 //   LIFT         goal = grasp pose raised by lift_height; the simulator's grasp result decides:
@@ -117,18 +113,6 @@ struct GraspSequencerParams {
   /// not (issue 18: a grasp closed 2.4 cm short closed on nothing). A stall in GRASP beyond it
   /// keeps waiting; the object time limit then fails it and says how far the TCP stalled.
   double max_close_offset = 0.01;
-  /// Descent funnel of GRASP (see the header comment). The open fingers span the object with a
-  /// few mm to spare on each side (70 mm gripper, 60 mm box: 5 mm), so the hand must enter the
-  /// object's region on the approach axis: a GRASP that began at a pre-grasp stalled 5.6 cm off
-  /// the axis (the stall rule above) went straight for the grasp, the palm hit the box's top edge
-  /// and knocked it over (Exp-3, NEO, downward: 38 of 75 grasps "closed on nothing"). The TCP may
-  /// be descent_lateral_tolerance + depth / descent_slope off the axis at a depth (m before the
-  /// grasp along the approach); farther off, it is sent sideways onto the axis at its depth. A
-  /// straight line to the grasp from inside the funnel stays inside it. descent_lateral_tolerance
-  /// must exceed the controller's arrival_position (the controller stops correcting within it).
-  /// descent_slope 0: off (straight to the grasp).
-  double descent_lateral_tolerance = 0.005;  ///< m
-  double descent_slope = 20.0;               ///< m of depth per m of lateral offset (0 = off)
   /// TfM counts the approach until sig(w) reaches this (the arm takes over), see above.
   /// (0, 1]; 1 = until the pre-grasp switch.
   double tfm_handover_sig = 0.5;
@@ -259,8 +243,6 @@ class GraspSequencer {
   /// Updates the best distance to `goal` in this phase; true when it has not improved for
   /// stall_time.
   bool stalled(const SequencerInput& in, const Eigen::Isometry3d& goal);
-  /// GRASP goal: the grasp, or the approach axis at the TCP's depth outside the descent funnel.
-  Eigen::Isometry3d descentGoal(const SequencerInput& in) const;
   bool nearEnoughWhenStalled(const SequencerInput& in, const Eigen::Isometry3d& goal, double pos, double ori_deg);
 
   GraspSequencerParams params_;

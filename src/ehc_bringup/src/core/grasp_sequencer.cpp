@@ -63,10 +63,6 @@ void GraspSequencerParams::validate() const {
         "stall_tolerance_factor must be in [1, 10]");
   check(std::isfinite(max_close_offset) && max_close_offset > 0.0 && max_close_offset <= 0.05,
         "max_close_offset must be in (0, 0.05] m");
-  check(std::isfinite(descent_lateral_tolerance) && descent_lateral_tolerance > 0.0 && descent_lateral_tolerance <= 0.05,
-        "descent_lateral_tolerance must be in (0, 0.05] m");
-  check(std::isfinite(descent_slope) && descent_slope >= 0.0 && descent_slope <= 1000.0,
-        "descent_slope must be in [0, 1000] (0 = off)");
   check(std::isfinite(tfm_handover_sig) && tfm_handover_sig > 0.0 && tfm_handover_sig <= 1.0,
         "tfm_handover_sig must be in (0, 1]");
   positive(pregrasp_position_tolerance, "pregrasp_position_tolerance");
@@ -104,7 +100,6 @@ std::string GraspSequencerParams::summary() const {
     << " deg, grasp " << grasp_position_tolerance << " m/" << grasp_orientation_tolerance_deg << " deg"
     << " (stalled for " << stall_time << " s: x" << stall_tolerance_factor << "; the gripper closes within "
     << max_close_offset << " m)"
-    << "; descent funnel " << (descent_slope > 0.0 ? num(descent_lateral_tolerance, 4) + " m + depth / " + num(descent_slope, 3) : std::string("off"))
     << "; TfM until sig(w) >= " << tfm_handover_sig << " or the pre-grasp switch"
     << "\n  gripper timeout " << gripper_timeout << " s, lift " << lift_height << " m, place "
     << (place_timeout > 0.0 ? "back " + num(place_height, 3) + " m above the grasp (tol " + num(place_tolerance, 3) + " m, " +
@@ -140,8 +135,6 @@ GraspSequencerParams loadGraspSequencerParams(const ehc_control::ConfigNode& roo
   p.stall_tolerance_factor = s.get("stall_tolerance_factor", p.stall_tolerance_factor);
   p.max_close_offset = s.get("max_close_offset", p.max_close_offset);
   p.tfm_handover_sig = s.get("tfm_handover_sig", p.tfm_handover_sig);
-  p.descent_lateral_tolerance = s.get("descent_lateral_tolerance", p.descent_lateral_tolerance);
-  p.descent_slope = s.get("descent_slope", p.descent_slope);
   p.pregrasp_position_tolerance = s.get("pregrasp_position_tolerance", p.pregrasp_position_tolerance);
   p.pregrasp_orientation_tolerance_deg = s.get("pregrasp_orientation_tolerance_deg", p.pregrasp_orientation_tolerance_deg);
   p.grasp_position_tolerance = s.get("grasp_position_tolerance", p.grasp_position_tolerance);
@@ -310,17 +303,6 @@ Eigen::Isometry3d GraspSequencer::preGrasp(const Eigen::Isometry3d& grasp) const
   Eigen::Isometry3d T = grasp;
   T.translation() -= params_.pregrasp_distance * grasp.linear().col(2);
   return T;
-}
-
-Eigen::Isometry3d GraspSequencer::descentGoal(const SequencerInput& in) const {
-  const Eigen::Isometry3d& grasp = locked_->pose;
-  if (params_.descent_slope <= 0.0 || !in.tcp || !isValidPose(*in.tcp)) return grasp;
-  const Eigen::Vector3d p = grasp.inverse() * in.tcp->translation();  // z: along the approach
-  const double depth = std::max(0.0, -p.z());                          // before the grasp point
-  if (p.head<2>().norm() <= params_.descent_lateral_tolerance + depth / params_.descent_slope) return grasp;
-  Eigen::Isometry3d onto_axis = grasp;
-  onto_axis.translation() = grasp * Eigen::Vector3d(0.0, 0.0, -depth);
-  return onto_axis;
 }
 
 Eigen::Isometry3d GraspSequencer::approachGoal(const SequencerInput& in, const Eigen::Isometry3d& grasp) {
@@ -517,12 +499,12 @@ void GraspSequencer::advance(const SequencerInput& in, SequencerOutput* out) {
         enter(GraspPhase::Grasp, t, out,
               there ? "" : "stalled " + num((in.tcp->translation() - pre.translation()).norm() * 100.0, 1) +
                                " cm from the pre-grasp: going on");
-        out->goal = descentGoal(in);
+        out->goal = locked_->pose;
       }
       break;
     }
     case GraspPhase::Grasp: {
-      out->goal = descentGoal(in);
+      out->goal = locked_->pose;
       const bool there = within(in, locked_->pose, params_.grasp_position_tolerance, params_.grasp_orientation_tolerance_deg);
       const double stall_tolerance =
           std::min(params_.stall_tolerance_factor * params_.grasp_position_tolerance, params_.max_close_offset) /
