@@ -106,6 +106,11 @@ struct Harness {
   void run(double seconds) {
     for (int i = 0; i < static_cast<int>(seconds / dt); ++i) step();
   }
+  /// Steps until `done()` or for `seconds` at most.
+  template <class F>
+  void stepUntil(F&& done, double seconds) {
+    for (int i = 0; i < static_cast<int>(seconds / dt) && !done(); ++i) step();
+  }
   void runUntilDone(double max_seconds = 200.0) {
     while (!seq.done() && t < max_seconds) step();
   }
@@ -292,6 +297,50 @@ TEST(GraspSequencer, AStallNearTheGraspClosesThereAndAFarStallWaits) {
   GraspSequencerParams bad = twoObjects();
   bad.max_close_offset = 0.0;
   EXPECT_THROW(bad.validate(), std::invalid_argument);
+}
+
+TEST(GraspSequencer, AGraspedObjectIsPutBackBeforeTheGripperOpens) {
+  // Opened at the lift height, the demo's middle cylinder fell over and rolled against the back
+  // box (session 8). After a successful lift the goal is the grasp pose raised by place_height,
+  // and the gripper opens only once the TCP is there (or place_timeout); place_timeout 0 opens
+  // it where the lift ended.
+  for (const double place_timeout : {4.0, 0.0}) {
+    GraspSequencerParams p = twoObjects();
+    p.objects.resize(1);
+    p.place_timeout = place_timeout;
+    Harness h(p);
+    h.perceive = forwardTarget();
+    while (h.seq.phase() != GraspPhase::Lift && h.t < 20) h.step();
+    ASSERT_EQ(h.seq.phase(), GraspPhase::Lift);
+    const Eigen::Isometry3d grasp = h.seq.lockedGrasp()->pose;
+    while (h.seq.phase() == GraspPhase::Lift && h.t < 30) h.step();
+    ASSERT_EQ(h.seq.results().size(), 1u);
+    EXPECT_TRUE(h.seq.results()[0].success);
+    if (place_timeout == 0.0) {
+      EXPECT_EQ(h.seq.phase(), GraspPhase::Release);
+      EXPECT_EQ(h.gripper_opens, 1) << "opened where the lift ended";
+      continue;
+    }
+    ASSERT_EQ(h.seq.phase(), GraspPhase::Place);
+    ASSERT_TRUE(h.last_goal);
+    EXPECT_TRUE(h.last_goal->translation().isApprox(grasp.translation() + Eigen::Vector3d(0, 0, p.place_height), 1e-12));
+    EXPECT_EQ(h.gripper_opens, 0) << "still held while it is put back";
+    // The TCP held 5 cm above the place: no release before place_timeout.
+    h.follow = false;
+    h.tcp = *h.last_goal;
+    h.tcp.translation().z() += 0.05;
+    h.stepUntil([&] { return h.seq.phase() != GraspPhase::Place; }, 0.5);
+    EXPECT_EQ(h.seq.phase(), GraspPhase::Place);
+    EXPECT_EQ(h.gripper_opens, 0);
+    h.tcp.translation().z() -= 0.05;  // there
+    h.step();
+    EXPECT_EQ(h.seq.phase(), GraspPhase::Release);
+    EXPECT_EQ(h.gripper_opens, 1);
+    EXPECT_TRUE(hasEvent(h.events, "placed"));
+  }
+  GraspSequencerParams bad = twoObjects();
+  bad.place_timeout = -1.0;
+  expectInvalid([&] { bad.validate(); }, "place_timeout");
 }
 
 TEST(GraspSequencer, StalePerceptionBeforeTheLockSearchesAgain) {
