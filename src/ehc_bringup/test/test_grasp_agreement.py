@@ -14,18 +14,15 @@ is taken; over ROS they arrive after the nodes' processing (wall time during whi
 sim may go on for a few cycles) and the grasp node runs at 2 Hz, so a candidate can be one grasp
 period (0.5 s) later at the start of the approach and again at the lock; the sequencer's stall
 rule decides in steps of stall_time (1 s). One stall step plus two grasp periods: 2.0 s. The
-ROS path is not bit-reproducible (perception runs outside the lock-step handshake), hence a
+ROS path is not bit-reproducible (a goal can leave the sequencer just after an acknowledgement and
+be used a cycle later; see the README), hence a
 tolerance and not equality. No wall-clock assertion; the .test time-limit only guards a hang.
 
-Measured (seed 1, loaded machine): ehc and tsmm agree on every object (|dt| <= 0.73 s; tsmm
-fails the back object in GRASP on both paths). neo_c and neo_e do not: their back grasp (at the
-edge of the arm's reach) succeeded on one path and failed on the other, and neo_e's middle grasp
-differed by 2.45 s. Their outcome on that object hinges on where the base stops, which the
-perception timing shifts: a per-run comparison of them measures that sensitivity, not the
-pipelines. After the 1 cm closing rule of issue 18 (the gripper no longer closes up to 2.5 cm
-short), tsmm's middle grasp became marginal the same way: in-process its arm alone stalls 2.8 cm
-short and times out, the ROS path grasps it (seed 1; open). Hence make test runs ehc;
-methods:="tsmm neo_c neo_e" reproduces the rest.
+Measured (seed 1), session 8, after the sequencer began to put each object back before opening
+the gripper: tsmm, neo_c, neo_e and ehc agree on every object, |dt| <= 0.35 s. Before (session 5),
+neo_c and neo_e disagreed on the back object: the middle cylinder, released at the lift height,
+could fall over and roll against it, which depends on the exact motion. make test runs ehc;
+methods:="tsmm neo_c neo_e ehc" runs all four (about 4 min more).
 """
 import csv
 import json
