@@ -228,6 +228,8 @@ class GraspSequencer {
   void enter(GraspPhase p, double t, SequencerOutput* out, const std::string& why = "");
   void finishObject(double t, bool success, const std::string& reason, const SequencerInput& in,
                     SequencerOutput* out);
+  /// Enters RELEASE: holds the TCP where it is (hold_goal_) and opens the gripper.
+  void startRelease(double t, const SequencerInput& in, SequencerOutput* out, const std::string& why);
   std::optional<GraspChoice> currentChoice(const SequencerInput& in) const;
   Eigen::Isometry3d preGrasp(const Eigen::Isometry3d& grasp) const;
   Eigen::Isometry3d placePose() const;  ///< PLACE goal: the locked grasp raised by place_height

@@ -406,6 +406,11 @@ std::string obstacleJson(const ObstacleExtreme& e) {
      << "\",\"phase\":\"" << e.phase << "\"}";
   return os.str();
 }
+/// ",value" for a finite value, "," (an empty CSV field) for NaN (not measured).
+void writeFiniteField(std::ostream& f, double v) {
+  f << ",";
+  if (std::isfinite(v)) f << v;
+}
 }  // namespace
 
 std::string graspSummaryJson(const GraspMethodSummary& s) {
@@ -538,13 +543,9 @@ void writeGraspResults(const std::string& dir, const GraspExperimentParams& para
         << t.tightest.link << "," << t.tightest.body << "," << t.tightest.phase << ","
         << csvValue(t.grasped, t.grasped.distance) << ","
         << t.grasped.link << "," << t.grasped.phase;
-    for (const Eigen::Vector3d* v : {&t.lock_centre_in_grasp, &t.close_centre_in_tcp})
-      for (int a = 0; a < 3; ++a) {
-        f << ",";
-        if (std::isfinite((*v)[a])) f << (*v)[a];
-      }
-    f << ",";
-    if (std::isfinite(t.lock_closing_axis_error_deg)) f << t.lock_closing_axis_error_deg;
+    for (int a = 0; a < 3; ++a) writeFiniteField(f, t.lock_centre_in_grasp[a]);
+    for (int a = 0; a < 3; ++a) writeFiniteField(f, t.close_centre_in_tcp[a]);
+    writeFiniteField(f, t.lock_closing_axis_error_deg);
     f << "\n";
     }
   }
@@ -556,10 +557,7 @@ void writeGraspResults(const std::string& dir, const GraspExperimentParams& para
     for (const auto& s : result.trace) {
       f << s.method << "," << s.set << "," << s.index << "," << s.object << "," << s.t << "," << s.distance << ","
         << s.base_speed << "," << s.base_turn << "," << s.arm_speed << "," << s.phase;
-      for (int a = 0; a < 3; ++a) {
-        f << ",";
-        if (std::isfinite(s.tcp_in_grasp[a])) f << s.tcp_in_grasp[a];
-      }
+      for (int a = 0; a < 3; ++a) writeFiniteField(f, s.tcp_in_grasp[a]);
       f << "," << s.object_moved << "\n";
     }
   }

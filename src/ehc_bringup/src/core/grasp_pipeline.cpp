@@ -292,13 +292,9 @@ Eigen::Vector3d GraspPipeline::odometryPose() const { return world_->robot().odo
 Eigen::Isometry3d GraspPipeline::stackView(const Eigen::Isometry3d& T_world_frame) const {
   const ehc_sim::KinematicFakeRobot& robot = world_->robot();
   if (!robot.water2()) return T_world_frame;  // ideal base: /odom is the true pose
-  auto planar = [](const Eigen::Vector3d& p) {
-    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-    T.translation() << p.x(), p.y(), 0.0;
-    T.linear() = Eigen::AngleAxisd(p.z(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
-    return T;
-  };
-  return planar(robot.odometryPose()) * planar(robot.basePose()).inverse() * T_world_frame;
+  using ehc_control::WholeBodyModel;
+  return WholeBodyModel::baseTransform(robot.odometryPose()) * WholeBodyModel::baseTransform(robot.basePose()).inverse() *
+         T_world_frame;
 }
 
 bool GraspPipeline::runUntilDone(double sim_time_limit) {

@@ -140,6 +140,12 @@ Eigen::Matrix3d closerHalfTurn(const Eigen::Matrix3d& R, const Eigen::Matrix3d& 
   if (std::abs(R.col(2).z()) < kShallow) return R.col(0).z() >= 0.0 ? R : flipped;
   return rotationAngle(flipped, reference) < rotationAngle(R, reference) ? flipped : R;
 }
+/// The tag fallback's back-off along the approach (m) for a wanted direction.
+double fallbackBackoff(ApproachDirection direction, const GraspSelectionParams& p) {
+  if (direction == ApproachDirection::Downward) return p.fallback_backoff_downward;
+  if (direction == ApproachDirection::Sideways) return p.fallback_backoff_sideways;
+  return p.fallback_backoff_forward;
+}
 }  // namespace
 
 std::optional<GraspChoice> chooseGrasp(const std::vector<GraspCandidate>& candidates,
@@ -209,19 +215,17 @@ std::optional<GraspChoice> chooseGrasp(const std::vector<GraspCandidate>& candid
       (direction == ApproachDirection::Downward || direction == ApproachDirection::Sideways)) {
     // No deeper along the turned approach than the tag fallback (see align_approach).
     const Eigen::Vector3d z = best.pose.linear().col(2);
-    const double backoff =
-        direction == ApproachDirection::Downward ? p.fallback_backoff_downward : p.fallback_backoff_sideways;
+    const double backoff = fallbackBackoff(direction, p);
     const double past_centre = z.dot(best.pose.translation() - tag_target.translation());
     if (past_centre > -backoff) best.pose.translation() -= (past_centre + backoff) * z;
   }
   if (!found) {
     if (p.require_candidate && direction != ApproachDirection::Tag) return std::nullopt;
-    double backoff = p.fallback_backoff_forward;
+    const double backoff = fallbackBackoff(direction, p);
     Eigen::Vector3d approach = tag_target.linear().col(2);
     if (direction == ApproachDirection::Downward || direction == ApproachDirection::Sideways) {
       // Sideways: the side facing the reference orientation's approach better.
       approach = *wantedApproach(direction, tag_target, p, reference.col(2));
-      backoff = direction == ApproachDirection::Downward ? p.fallback_backoff_downward : p.fallback_backoff_sideways;
     }
     if (direction == ApproachDirection::Tag || direction == ApproachDirection::Forward ||
         direction == ApproachDirection::Any) {

@@ -345,18 +345,22 @@ void GraspSequencer::finishObject(double t, bool success, const std::string& rea
   cur_.tfm_until_close = tfm_close_.tfm();
   cur_.controller_tfm = ctrl_cycles_ > 0 ? static_cast<double>(ctrl_fov_cycles_) / static_cast<double>(ctrl_cycles_) : 0.0;
   cur_.used_candidate = locked_ ? locked_->from_candidate : false;
-  // RELEASE holds the TCP where it is; RETREAT backs off along the approach from there.
+  // RETREAT backs off along this approach.
   if (locked_) last_approach_ = locked_->pose.linear().col(2);
   else if (in.tcp && isValidPose(*in.tcp)) last_approach_ = in.tcp->linear().col(2);
-  hold_goal_ = (in.tcp && isValidPose(*in.tcp)) ? std::optional<Eigen::Isometry3d>(*in.tcp) : std::nullopt;
   const bool place = success && locked_ && params_.place_timeout > 0.0;
-  enter(place ? GraspPhase::Place : GraspPhase::Release, t, out, success ? "grasp succeeded" : "FAILED: " + reason);
+  const std::string why = success ? "grasp succeeded" : "FAILED: " + reason;
+  if (place) enter(GraspPhase::Place, t, out, why);
+  else startRelease(t, in, out, why);
   results_.push_back(cur_);
   out->events.push_back(graspResultLine(cur_));
-  if (place) {
-    out->goal = placePose();
-    return;
-  }
+  if (place) out->goal = placePose();
+}
+
+void GraspSequencer::startRelease(double t, const SequencerInput& in, SequencerOutput* out, const std::string& why) {
+  // RELEASE holds the TCP where it is; RETREAT backs off along the approach from there.
+  hold_goal_ = (in.tcp && isValidPose(*in.tcp)) ? std::optional<Eigen::Isometry3d>(*in.tcp) : std::nullopt;
+  enter(GraspPhase::Release, t, out, why);
   if (in.gripper_state != "open") out->gripper_command = false;
 }
 
@@ -552,13 +556,11 @@ void GraspSequencer::advance(const SequencerInput& in, SequencerOutput* out) {
       const bool there = within(in, place, params_.place_tolerance, 180.0);
       const bool dropped = in.gripper_state != "holding";
       if (there || dropped || stalled(in, place) || in_phase > params_.place_timeout) {
-        hold_goal_ = (in.tcp && isValidPose(*in.tcp)) ? std::optional<Eigen::Isometry3d>(*in.tcp) : std::nullopt;
-        if (hold_goal_) out->goal = *hold_goal_;
         std::string why = there ? "placed" : dropped ? "object no longer held" : "placing stopped";
         if (!there && !dropped && in.tcp && isValidPose(*in.tcp))
           why += " " + num((in.tcp->translation() - place.translation()).norm() * 100.0, 1) + " cm from its place";
-        enter(GraspPhase::Release, t, out, why);
-        if (in.gripper_state != "open") out->gripper_command = false;
+        startRelease(t, in, out, why);
+        if (hold_goal_) out->goal = *hold_goal_;
       }
       break;
     }
