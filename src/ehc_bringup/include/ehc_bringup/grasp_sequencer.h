@@ -34,8 +34,8 @@
 //                object is put back where it stood before the gripper opens, until within
 //                place_tolerance, stalled (stall_time) or place_timeout. Released at the lift
 //                height instead, the demo's middle cylinder fell over, rolled against the back
-//                box and the hand pushed both 2.5 cm: the back grasp closed on nothing
-//                (demo.sh, seeds 4001 / 4009). place_timeout 0: no PLACE (released where lifted)
+//                box and the hand pushed both, the box 2.5 cm: the back grasp closed on nothing
+//                (demo.sh seed 4009, ground truth recorded). place_timeout 0: no PLACE
 //   RELEASE      (after PLACE, or after a failure) gripper open; until open or release_timeout
 //   RETREAT      goal = the TCP pose at release, backed off along the approach and raised;
 //                until within retreat_tolerance or retreat_timeout; then the next object
