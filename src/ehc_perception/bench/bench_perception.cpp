@@ -1,5 +1,6 @@
 // Benchmarks of the perception core (DESIGN.md section 11), one JSON object per line:
-//  - perception.tag_detect_pose_640x480: AprilTag 36h11 detection + pose, rendered image
+//  - perception.tag_detect_pose_640x480: AprilTag 36h11 detection + pose, rendered image;
+//    _noisy: a stream with the simulator's pixel noise, _noisy_tracked: with the tracking window
 //  - perception.grasps_object_20k: grasp generation on a 20 000-point noisy object cloud
 //  - perception.grasps_scene: table scene (RANSAC plane + clusters + grasps on one object)
 //  - perception.obstacle_distances_2cm: every robot link vs a 2 cm OctoMap of a table scene
@@ -16,6 +17,7 @@
 #include "ehc_perception/tag_image_renderer.h"
 #include "../test/perception_test_helpers.h"
 
+#include <algorithm>
 #include <random>
 
 using namespace ehc_perception;
@@ -56,6 +58,33 @@ int main() {
     });
     std::printf("{\"bench\":\"perception.tag_detect_pose_640x480.detections\",\"found\":%d,"
                 "\"expected\":200}\n", found);
+    // A stream: one tag crossing the view 0.6 m away (1 cm, 1 deg a frame) with the simulator's
+    // pixel noise (config/sim/bullet_sim.yaml camera.image_noise: 2 grey levels, i.i.d.),
+    // searched whole every image, then with the tracking window of config/demo/tag_*.yaml.
+    std::mt19937 rng(7);
+    std::normal_distribution<double> pixel_noise(0.0, 2.0);
+    std::vector<vpImage<unsigned char>> stream;
+    for (int k = 0; k < 20; ++k) {
+      stream.push_back(renderer.render(
+          {{0, 0.05, facingTag(0.01 * k - 0.1, 0.02, 0.6, 0.2, 0.1, 0.0175 * k)}}));
+      for (unsigned p = 0; p < stream.back().getSize(); ++p)
+        stream.back().bitmap[p] = static_cast<unsigned char>(
+            std::clamp(std::lround(stream.back().bitmap[p] + pixel_noise(rng)), 0L, 255L));
+    }
+    for (const int margin : {0, 40}) {
+      TagDetectorConfig c = cfg;
+      c.roi_margin = margin;
+      TagDetector tracker(c, cam);
+      const std::string name = margin ? "perception.tag_detect_pose_640x480_noisy_tracked"
+                                      : "perception.tag_detect_pose_640x480_noisy";
+      int n = 0;
+      ehc_control::benchReport(name, 100, [&](int i) {
+        n += static_cast<int>(tracker.detect(stream[static_cast<std::size_t>(i % 20)]).size());
+      });
+      std::printf("{\"bench\":\"%s.detections\",\"found\":%d,\"expected\":100,"
+                  "\"whole_images\":%ld,\"windows\":%ld}\n",
+                  name.c_str(), n, tracker.fullFrameSearches(), tracker.windowSearches());
+    }
   }
   // ------------------------------------------------------------------ grasps
   {

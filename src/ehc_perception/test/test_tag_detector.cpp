@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <random>
 
 using namespace ehc_perception;
 using ehc_perception::test::pose;
@@ -254,6 +255,78 @@ TEST(TagDetector, TargetOffsetIsAppliedInTheTagFrame) {
   EXPECT_FALSE(findTarget({}, target, &T));
 }
 
+namespace {
+/// The simulator's pixel noise (config/sim/bullet_sim.yaml camera.image_noise: 2 grey levels).
+void addPixelNoise(vpImage<unsigned char>* I, std::mt19937* rng) {
+  std::normal_distribution<double> n(0.0, 2.0);
+  for (unsigned k = 0; k < I->getSize(); ++k)
+    I->bitmap[k] = static_cast<unsigned char>(std::clamp(std::lround(I->bitmap[k] + n(*rng)), 0L, 255L));
+}
+}  // namespace
+
+// The tracking window (roi_margin): on a stream of a moving tag (noisy, as the simulator renders
+// it) it finds the tag in every image with the pose and corners of the whole-image search, while
+// searching most images in the window only; a jump out of the window loses one image, the next
+// is searched whole and finds it again; a wanted tag missing makes the next search whole.
+TEST(TagDetector, TheTrackingWindowFollowsATagAndRecoversFromAJump) {
+  const ehc_control::PinholeCamera cam = d435();
+  TagImageRenderer renderer(cam);
+  TagDetectorConfig whole_cfg;
+  whole_cfg.default_tag_size = 0.04;
+  TagDetectorConfig tracked_cfg = whole_cfg;
+  tracked_cfg.roi_margin = 40;
+  tracked_cfg.roi_full_frame_every = 15;
+  TagDetector whole(whole_cfg, cam), tracked(tracked_cfg, cam);
+  std::mt19937 rng(3);
+  auto frame = [&](const std::vector<TagPlacement>& tags) {
+    vpImage<unsigned char> I = renderer.render(tags);
+    addPixelNoise(&I, &rng);
+    return I;
+  };
+  // 30 images: the tag drifts 5 mm and 1 deg an image, 0.5-0.6 m away (~20 px over the stream).
+  for (int k = 0; k < 30; ++k) {
+    const Eigen::Isometry3d truth = tagPose(-0.06 + 0.005 * k, 0.02, 0.5 + 0.003 * k, 0.2, 0.1, 0.0175 * k);
+    const vpImage<unsigned char> I = frame({{2, 0.04, truth}});
+    const auto a = whole.detect(I), b = tracked.detect(I);
+    ASSERT_EQ(a.size(), 1u) << "image " << k;
+    ASSERT_EQ(b.size(), 1u) << "image " << k;
+    EXPECT_LT((a[0].T_cam_tag.translation() - b[0].T_cam_tag.translation()).norm(), 1e-3) << "image " << k;
+    EXPECT_LT(rotationError(a[0].T_cam_tag, b[0].T_cam_tag), 1.0 * kDeg) << "image " << k;
+    for (std::size_t c = 0; c < 4; ++c) EXPECT_LT((a[0].corners[c] - b[0].corners[c]).norm(), 0.2) << "image " << k;
+    EXPECT_LT((b[0].T_cam_tag.translation() - truth.translation()).norm(), 0.01) << "image " << k;
+  }
+  EXPECT_EQ(tracked.fullFrameSearches(), 2);  // the first image and the 16th
+  EXPECT_EQ(tracked.windowSearches(), 28);
+
+  // The tag jumps 25 cm across the view: the window misses it once, the whole image finds it.
+  const Eigen::Isometry3d left = tagPose(-0.12, 0.0, 0.55, 0.0, 0.0, 0.0);
+  const Eigen::Isometry3d right = tagPose(0.13, 0.0, 0.55, 0.0, 0.0, 0.0);
+  ASSERT_EQ(tracked.detect(frame({{2, 0.04, left}})).size(), 1u);
+  const long full_before = tracked.fullFrameSearches();
+  EXPECT_TRUE(tracked.detect(frame({{2, 0.04, right}})).empty()) << "outside the window";
+  EXPECT_EQ(tracked.fullFrameSearches(), full_before) << "that image was searched in the window";
+  ASSERT_EQ(tracked.detect(frame({{2, 0.04, right}})).size(), 1u) << "the next image is searched whole";
+  EXPECT_EQ(tracked.fullFrameSearches(), full_before + 1);
+
+  // Tag 2 tracked; the caller wants tag 5, not seen: every image is searched whole, and the
+  // moment tag 5 comes into view it is found.
+  tracked.setWantedTags({5});
+  const long full0 = tracked.fullFrameSearches();
+  for (int k = 0; k < 3; ++k) ASSERT_EQ(tracked.detect(frame({{2, 0.04, right}})).size(), 1u);
+  EXPECT_EQ(tracked.fullFrameSearches(), full0 + 3);
+  const auto both = tracked.detect(frame({{2, 0.04, right}, {5, 0.04, left}}));
+  EXPECT_EQ(both.size(), 2u);
+  // Both found: the window (around both) is used again.
+  const long windows = tracked.windowSearches();
+  EXPECT_EQ(tracked.detect(frame({{2, 0.04, right}, {5, 0.04, left}})).size(), 2u);
+  EXPECT_EQ(tracked.windowSearches(), windows + 1);
+  // resetTracking: the next image is searched whole.
+  tracked.resetTracking();
+  const long full1 = tracked.fullFrameSearches();
+  EXPECT_EQ(tracked.detect(frame({{2, 0.04, right}, {5, 0.04, left}})).size(), 2u);
+  EXPECT_EQ(tracked.fullFrameSearches(), full1 + 1);
+}
+
 TEST(TagDetector, ConfigsAndCamerasAreValidated) {
   const ehc_control::PinholeCamera cam = d435();
   auto expectFails = [&](const std::string& yaml, const std::string& needle) {
@@ -282,6 +355,8 @@ TEST(TagDetector, ConfigsAndCamerasAreValidated) {
     EXPECT_THROW(n.rejectUnknownKeys(), std::invalid_argument) << "misspelled pose_prior key";
   }
   expectFails("tag_detector: {threads: two}", "threads");
+  expectFails("tag_detector: {roi_margin: -5}", "roi_margin");
+  expectFails("tag_detector: {roi_full_frame_every: 0}", "roi_full_frame_every");
 
   const auto ok = ehc_control::ConfigNode::loadString(
       "tag_detector: {family: 36h11, default_tag_size: 0.04, tag_sizes: {2: 0.1}}", "ok.yaml",

@@ -152,6 +152,8 @@ void GraspPipeline::perceive(double t) {
     const Eigen::Isometry3d T_world_cam = stackView(world_->cameraPose());
     {
       StageTimer timer(timing_, &counters_.wall_tags);
+      const std::size_t target = std::min(sequencer_->currentObject(), cfg_.tag_targets.size() - 1);
+      detector_->setWantedTags({cfg_.tag_targets[target].tag_id});  // tracking window: see TagDetector
       detections = detector_->detect(image, T_world_cam);  // the camera pose: ambiguity prior
     }
     for (std::size_t i = 0; i < cfg_.tag_targets.size(); ++i) {

@@ -9,6 +9,7 @@
 #include <visp3/detection/vpDetectorAprilTag.h>
 #include <visp3/io/vpImageIo.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <vector>
@@ -81,6 +82,8 @@ void TagDetectorConfig::validate() const {
   }
   ehc_control::requireRange(kOwner, "quad_decimate", quad_decimate, 1.0, 8.0);
   ehc_control::requireRange(kOwner, "threads", threads, 1, 64);
+  ehc_control::requireRange(kOwner, "roi_margin", roi_margin, 0, 10000);
+  ehc_control::requireRange(kOwner, "roi_full_frame_every", roi_full_frame_every, 1, 1000);
   ehc_control::requirePositive(kOwner, "max_reprojection_error", max_reprojection_error);
   if (!prior_tag_axis.allFinite() || prior_tag_axis.norm() < 1e-9)
     fail("pose_prior.tag_axis must be a finite, non-zero vector");
@@ -95,7 +98,11 @@ std::string TagDetectorConfig::summary() const {
   os << "tag detector: family " << family << ", default size " << default_tag_size << " m";
   for (const auto& kv : tag_sizes) os << ", id " << kv.first << ": " << kv.second << " m";
   os << ", quad_decimate " << quad_decimate << ", threads " << threads << ", pose "
-     << pose_method << ", max reprojection error " << max_reprojection_error
+     << pose_method << ", tracking window "
+     << (roi_margin > 0 ? "+" + std::to_string(roi_margin) + " px, whole image every " +
+                              std::to_string(roi_full_frame_every)
+                        : std::string("off"))
+     << ", max reprojection error " << max_reprojection_error
      << " px, ambiguous poses (within " << ambiguity_margin << " px): tag axis ["
      << prior_tag_axis.transpose() << "] nearest the world's [" << prior_world_direction.transpose()
      << "]";
@@ -125,6 +132,8 @@ TagDetectorConfig loadTagDetectorConfig(const ehc_control::ConfigNode& n) {
   }
   c.quad_decimate = n.get<double>("quad_decimate", c.quad_decimate);
   c.threads = n.get<int>("threads", c.threads);
+  c.roi_margin = n.get<int>("roi_margin", c.roi_margin);
+  c.roi_full_frame_every = n.get<int>("roi_full_frame_every", c.roi_full_frame_every);
   c.pose_method = n.get<std::string>("pose_method", c.pose_method);
   c.max_reprojection_error = n.get<double>("max_reprojection_error", c.max_reprojection_error);
   if (n.has("pose_prior")) {
@@ -142,7 +151,9 @@ TagDetectorConfig loadTagDetectorConfig(const ehc_control::ConfigNode& n) {
 struct TagDetector::Impl {
   vpDetectorAprilTag detector;
   vpCameraParameters cam;
+  vpCameraParameters window_cam;  ///< cam with the principal point in the window's pixels
   vpImage<unsigned char> buffer;
+  vpImage<unsigned char> window;
 };
 
 TagDetector::TagDetector(const TagDetectorConfig& config, const ehc_control::PinholeCamera& camera)
@@ -203,7 +214,30 @@ std::vector<TagDetection> TagDetector::detectResolving(const vpImage<unsigned ch
 
   std::vector<TagDetection> out;
   vpDetectorAprilTag& det = impl_->detector;
-  if (!det.detect(I)) return out;
+  // Whole image or the tracking window (then ViSP sees the window, its camera the window's
+  // principal point, and the corners are shifted back to image pixels).
+  const bool whole = window_[2] == 0 || ++images_since_full_ >= config_.roi_full_frame_every;
+  const int u0 = whole ? 0 : window_[0], v0 = whole ? 0 : window_[1];
+  const vpCameraParameters* cam = &impl_->cam;
+  bool found = false;
+  if (whole) {
+    images_since_full_ = 0;
+    ++full_searches_;
+    found = det.detect(I);
+  } else {
+    ++window_searches_;
+    vpImage<unsigned char>& W = impl_->window;
+    W.resize(static_cast<unsigned>(window_[3]), static_cast<unsigned>(window_[2]));
+    for (int r = 0; r < window_[3]; ++r)
+      std::memcpy(W[static_cast<unsigned>(r)], I[static_cast<unsigned>(v0 + r)] + u0,
+                  static_cast<std::size_t>(window_[2]));
+    impl_->window_cam.initPersProjWithoutDistortion(camera_.fx, camera_.fy, camera_.cx - u0,
+                                                    camera_.cy - v0);
+    cam = &impl_->window_cam;
+    found = det.detect(W);
+  }
+  window_ = {{0, 0, 0, 0}};
+  if (!found) return out;
   const std::vector<int> ids = det.getTagsId();
   std::map<int, double> sizes;
   for (int id : ids) sizes[id] = config_.tagSize(id);
@@ -216,7 +250,8 @@ std::vector<TagDetection> TagDetector::detectResolving(const vpImage<unsigned ch
     d.tag_size = config_.tagSize(d.id);
     const std::vector<vpImagePoint> poly = det.getPolygon(i);
     if (poly.size() != 4 || i >= pts3d.size() || pts3d[i].size() != 4) continue;
-    for (std::size_t k = 0; k < 4; ++k) d.corners[k] = Eigen::Vector2d(poly[k].get_u(), poly[k].get_v());
+    for (std::size_t k = 0; k < 4; ++k)
+      d.corners[k] = Eigen::Vector2d(poly[k].get_u() + u0, poly[k].get_v() + v0);
     // RMS reprojection error (px) of a pose; +inf for a pose that is unusable.
     auto reprojection = [&](const Eigen::Isometry3d& T) {
       if (!T.matrix().allFinite() || T.translation().z() <= 0.0)
@@ -231,7 +266,7 @@ std::vector<TagDetection> TagDetector::detectResolving(const vpImage<unsigned ch
       return std::sqrt(sq / 4.0);
     };
     vpHomogeneousMatrix cMo, cMo2;
-    if (!det.getPose(i, d.tag_size, impl_->cam, cMo, &cMo2)) continue;
+    if (!det.getPose(i, d.tag_size, *cam, cMo, &cMo2)) continue;
     Eigen::Isometry3d kept = toEigen(cMo), other = toEigen(cMo2);
     double kept_error = reprojection(kept), other_error = reprojection(other);
     if (other_error < kept_error) {
@@ -261,7 +296,35 @@ std::vector<TagDetection> TagDetector::detectResolving(const vpImage<unsigned ch
     if (d.reprojection_error > config_.max_reprojection_error) continue;
     out.push_back(d);
   }
+  const bool wanted_found = std::all_of(wanted_tags_.begin(), wanted_tags_.end(), [&](int id) {
+    return std::any_of(out.begin(), out.end(), [id](const TagDetection& d) { return d.id == id; });
+  });
+  if (config_.roi_margin > 0 && !out.empty() && wanted_found) {
+    Eigen::Vector2d lo = out.front().corners[0], hi = lo;
+    for (const TagDetection& d : out)
+      for (const Eigen::Vector2d& c : d.corners) {
+        lo = lo.cwiseMin(c);
+        hi = hi.cwiseMax(c);
+      }
+    const Eigen::Vector2d grow = Eigen::Vector2d::Constant(config_.roi_margin) + 0.5 * (hi - lo);
+    const int c0 = std::max(0, static_cast<int>(std::floor(lo.x() - grow.x())));
+    const int r0 = std::max(0, static_cast<int>(std::floor(lo.y() - grow.y())));
+    const int c1 = std::min(camera_.width, static_cast<int>(std::ceil(hi.x() + grow.x())) + 1);
+    const int r1 = std::min(camera_.height, static_cast<int>(std::ceil(hi.y() + grow.y())) + 1);
+    if (c1 - c0 >= 16 && r1 - r0 >= 16) window_ = {{c0, r0, c1 - c0, r1 - r0}};
+  }
   return out;
+}
+
+void TagDetector::setWantedTags(const std::vector<int>& ids) {
+  if (ids == wanted_tags_) return;
+  wanted_tags_ = ids;
+  resetTracking();
+}
+
+void TagDetector::resetTracking() {
+  window_ = {{0, 0, 0, 0}};
+  images_since_full_ = 0;
 }
 
 namespace {

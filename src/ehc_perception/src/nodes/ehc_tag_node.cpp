@@ -101,6 +101,7 @@ class TagNode {
  private:
   void build(const PinholeCamera& cam) {
     detector_ = std::make_unique<TagDetector>(cfg_.detector, cam);
+    detector_->setWantedTags({cfg_.target.tag_id});
     ROS_INFO_STREAM("ehc_tag_node: " << cam.summary());
     if (cam.distortion.size() > 0 && cam.distortion.cwiseAbs().maxCoeff() > 0.0)
       ROS_WARN("ehc_tag_node: the camera has non-zero distortion coefficients; they are ignored "
