@@ -176,7 +176,9 @@ TEST(ReachExperiment, WristFlipRemovesTheForearmRollTrapBackToBack) {
                 a.targets, a.mean_time_s, b.failed, b.mean_time_s);
     EXPECT_EQ(a.failed, 0) << a.method;
     EXPECT_EQ(a.qp_failures, 0) << a.method;
-    if (mode == ehc_control::ControlMode::Ehc) EXPECT_LE(a.mean_time_s, b.mean_time_s + 0.1);
+    if (mode == ehc_control::ControlMode::Ehc) {
+      EXPECT_LE(a.mean_time_s, b.mean_time_s + 0.1);
+    }
   }
 }
 

@@ -28,7 +28,9 @@ TEST(ReachTargets, GeneratorFollowsTheProtocolAndIsSeeded) {
     EXPECT_NEAR(a[i].linear().determinant(), 1.0, 1e-12);
     // The approach axis leans along the travel direction (within the 45 deg spread).
     const Eigen::Vector2d zh = a[i].linear().col(2).head<2>();
-    if (zh.norm() > 1e-6) EXPECT_GE(zh.normalized().dot((xy - prev).normalized()), std::cos(M_PI / 4) - 1e-9);
+    if (zh.norm() > 1e-6) {
+      EXPECT_GE(zh.normalized().dot((xy - prev).normalized()), std::cos(M_PI / 4) - 1e-9);
+    }
     prev = xy;
   }
   EXPECT_GT(max_tilt, 80.0 * M_PI / 180.0);  // the whole tilt range is used

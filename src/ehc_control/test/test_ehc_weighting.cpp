@@ -143,7 +143,7 @@ TEST(EhcWeighting, FarTargetTheBaseLeads) {
 
 TEST(EhcWeighting, MonotoneInDistanceAlongARay) {
   const EhcWeighting w(shippedMap(), EhcWeightingParams{});
-  for (const Eigen::Vector3d dir : {Eigen::Vector3d(1, 0, 0), Eigen::Vector3d(0.6, 0.8, 0),
+  for (const Eigen::Vector3d& dir : {Eigen::Vector3d(1, 0, 0), Eigen::Vector3d(0.6, 0.8, 0),
                                     Eigen::Vector3d(0.7, 0, -0.7).normalized()}) {
     const Eigen::Vector3d tcp(0.1, 0.0, 0.3);
     double prev = 2.0;

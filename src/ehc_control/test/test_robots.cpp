@@ -79,8 +79,9 @@ TEST_P(ShippedRobot, LoadsByNameWithItsMapAndSelfCollisionPairs) {
   const auto pairs = selfCollisionIgnorePairs(model, collision);
   for (const auto& l : collision.links())
     for (const auto& m : collision.links())
-      if (l.name < m.name && collision.adjacent(l.name, m.name))
+      if (l.name < m.name && collision.adjacent(l.name, m.name)) {
         EXPECT_TRUE(std::count(pairs.begin(), pairs.end(), LinkPair{l.name, m.name})) << l.name << " " << m.name;
+      }
   for (const auto& [a, b] : rc.ignore_pairs)
     EXPECT_TRUE(std::count(pairs.begin(), pairs.end(), a < b ? LinkPair{a, b} : LinkPair{b, a}));
   const auto always = alwaysCollidingPairs(model, collision, {200, 3});
