@@ -62,14 +62,11 @@ int main() {
     // pixel noise (config/sim/bullet_sim.yaml camera.image_noise: 2 grey levels, i.i.d.),
     // searched whole every image, then with the tracking window of config/demo/tag_*.yaml.
     std::mt19937 rng(7);
-    std::normal_distribution<double> pixel_noise(0.0, 2.0);
     std::vector<vpImage<unsigned char>> stream;
     for (int k = 0; k < 20; ++k) {
       stream.push_back(renderer.render(
           {{0, 0.05, facingTag(0.01 * k - 0.1, 0.02, 0.6, 0.2, 0.1, 0.0175 * k)}}));
-      for (unsigned p = 0; p < stream.back().getSize(); ++p)
-        stream.back().bitmap[p] = static_cast<unsigned char>(
-            std::clamp(std::lround(stream.back().bitmap[p] + pixel_noise(rng)), 0L, 255L));
+      addPixelNoise(&stream.back(), &rng);
     }
     for (const int margin : {0, 40}) {
       TagDetectorConfig c = cfg;

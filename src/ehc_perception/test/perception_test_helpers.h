@@ -1,11 +1,13 @@
 #pragma once
 // Synthetic data for the perception tests and benchmarks: object surface clouds (box,
-// cylinder, lying bottle), a table plane, and the shipped camera / robot files.
+// cylinder, lying bottle), a table plane, image pixel noise, and the shipped camera / robot files.
 
 #include "ehc_perception/grasp_generator.h"
 
 #include <Eigen/Geometry>
+#include <visp3/core/vpImage.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <string>
@@ -15,6 +17,14 @@ namespace ehc_perception::test {
 inline std::string configDir() { return EHC_CONFIG_DIR; }
 inline std::string cameraYaml() { return configDir() + "/robots/realman_rm65_water2/camera.yaml"; }
 inline std::string robotYaml() { return configDir() + "/robots/realman_rm65_water2/robot.yaml"; }
+
+/// The simulator's pixel noise (config/sim/bullet_sim.yaml camera.image_noise: 2 grey levels,
+/// i.i.d. Gaussian), added to a grey image.
+inline void addPixelNoise(vpImage<unsigned char>* image, std::mt19937* rng, double sigma = 2.0) {
+  std::normal_distribution<double> n(0.0, sigma);
+  for (unsigned k = 0; k < image->getSize(); ++k)
+    image->bitmap[k] = static_cast<unsigned char>(std::clamp(std::lround(image->bitmap[k] + n(*rng)), 0L, 255L));
+}
 
 struct Surface {
   PointList points;

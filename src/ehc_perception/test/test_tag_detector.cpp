@@ -255,15 +255,6 @@ TEST(TagDetector, TargetOffsetIsAppliedInTheTagFrame) {
   EXPECT_FALSE(findTarget({}, target, &T));
 }
 
-namespace {
-/// The simulator's pixel noise (config/sim/bullet_sim.yaml camera.image_noise: 2 grey levels).
-void addPixelNoise(vpImage<unsigned char>* I, std::mt19937* rng) {
-  std::normal_distribution<double> n(0.0, 2.0);
-  for (unsigned k = 0; k < I->getSize(); ++k)
-    I->bitmap[k] = static_cast<unsigned char>(std::clamp(std::lround(I->bitmap[k] + n(*rng)), 0L, 255L));
-}
-}  // namespace
-
 // The tracking window (roi_margin): on a stream of a moving tag (noisy, as the simulator renders
 // it) it finds the tag in every image with the pose and corners of the whole-image search, while
 // searching most images in the window only; a jump out of the window loses one image, the next
@@ -280,7 +271,7 @@ TEST(TagDetector, TheTrackingWindowFollowsATagAndRecoversFromAJump) {
   std::mt19937 rng(3);
   auto frame = [&](const std::vector<TagPlacement>& tags) {
     vpImage<unsigned char> I = renderer.render(tags);
-    addPixelNoise(&I, &rng);
+    ehc_perception::test::addPixelNoise(&I, &rng);
     return I;
   };
   // 30 images: the tag drifts 5 mm and 1 deg an image, 0.5-0.6 m away (~20 px over the stream).
