@@ -109,8 +109,8 @@ class SimWorld {
 
   /// Closest hit of the segment from -> to with the floor and the scene bodies (the robot is
   /// transparent to the camera). Returns false if nothing is hit; `from` inside a body or below
-  /// the floor hits at `from`. Every shape is intersected in closed form (sim_world.cpp says why
-  /// not Bullet's ray test).
+  /// the floor hits at `from`. Boxes by Bullet's ray-box test (btRayAabb), cylinders and the
+  /// floor plane in closed form (sim_world.cpp says why not Bullet's collision-world ray test).
   bool castRay(const Eigen::Vector3d& from, const Eigen::Vector3d& to, Eigen::Vector3d* hit) const;
 
   /// Finds collisions of the current configuration without advancing time (tests, tools).
