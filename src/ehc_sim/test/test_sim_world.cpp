@@ -9,7 +9,6 @@
 #include <Eigen/Dense>
 
 #include <cmath>
-#include <random>
 
 using namespace ehc_sim;
 
@@ -245,65 +244,6 @@ TEST(SimWorld, SameSeedSameTrajectoryDifferentSeedDifferent) {
   double diff = 0;
   for (std::size_t i = 0; i < a.size(); ++i) diff = std::max(diff, std::abs(a[i] - c[i]));
   EXPECT_GT(diff, 1e-3);
-}
-
-// castRay (the depth camera's rays) against a brute-force march: on 3000 random segments
-// through tilted boxes, a lying cylinder, the table scene and the floor, the hit is where the
-// segment first enters a solid (within the march's 0.5 mm step), and there is a hit exactly when
-// the march finds one.
-TEST(SimWorld, CastRayFindsTheFirstSurfaceOnTheSegment) {
-  const SceneConfig scene = loadSceneConfigString(R"(
-scene:
-  name: rays
-  objects:
-    - {name: tilted, shape: box, size: [0.08, 0.05, 0.12], position: [0.9, 0.2, 0.3], rpy: [0.4, -0.3, 0.7], mass: 0.1}
-    - {name: lying, shape: cylinder, size: [0.07, 0.2], position: [0.8, -0.25, 0.2], rpy: [1.5707963, 0.2, 0.3], mass: 0.1}
-  obstacles:
-    - {name: wall, shape: box, size: [0.05, 0.6, 0.5], position: [1.3, 0.0, 0.25], rpy: [0, 0, 0.2]}
-)", "rays");
-  SimWorld w(simConfig(false), robotConfig(), scene);
-  auto inside = [&](const Eigen::Vector3d& p) {
-    if (p.z() <= 0.0) return true;
-    for (std::size_t i = 0; i < w.bodies().size(); ++i) {
-      const Eigen::Vector3d q = w.bodyPose(static_cast<int>(i)).inverse() * p;
-      const Eigen::Vector3d he = w.bodies()[i].halfExtents();
-      if (w.bodies()[i].shape == ShapeType::Cylinder) {
-        if (q.head<2>().norm() <= he.x() && std::abs(q.z()) <= he.z()) return true;
-      } else if ((q.cwiseAbs() - he).maxCoeff() <= 0.0) {
-        return true;
-      }
-    }
-    return false;
-  };
-  std::mt19937 rng(11);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  int hits = 0;
-  for (int k = 0; k < 3000; ++k) {
-    const Eigen::Vector3d from(0.2 + 0.4 * u(rng), -0.6 + 1.2 * u(rng), 0.05 + 1.2 * u(rng));
-    const Eigen::Vector3d to(0.6 + 1.2 * u(rng), -0.8 + 1.6 * u(rng), -0.2 + 0.8 * u(rng));
-    if (inside(from)) continue;
-    const double len = (to - from).norm(), step = 0.0005;
-    double first = -1.0;  // arc length of the first sample inside a solid
-    for (double s = 0.0; s <= len; s += step)
-      if (inside(from + (s / len) * (to - from))) {
-        first = s;
-        break;
-      }
-    if (first < 0.0 && inside(to)) first = len;  // entered within the last step
-    Eigen::Vector3d hit;
-    const bool got = w.castRay(from, to, &hit);
-    if (first < 0.0) {
-      EXPECT_FALSE(got) << "segment " << k << ": castRay hit " << hit.transpose() << ", the march found nothing";
-      continue;
-    }
-    // A segment that only grazes a solid between two samples may hit without the march seeing it.
-    ASSERT_TRUE(got) << "segment " << k;
-    ++hits;
-    const double s_hit = (hit - from).norm();
-    EXPECT_LE(s_hit, first + 1e-6) << "segment " << k;
-    EXPECT_GE(s_hit, first - step - 1e-6) << "segment " << k;
-  }
-  EXPECT_GT(hits, 1000);  // most segments end in something
 }
 
 TEST(SimWorld, ResetRestoresTheScene) {

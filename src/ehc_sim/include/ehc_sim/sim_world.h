@@ -108,9 +108,8 @@ class SimWorld {
   Eigen::Isometry3d tagPose(int i) const;
 
   /// Closest hit of the segment from -> to with the floor and the scene bodies (the robot is
-  /// transparent to the camera). Returns false if nothing is hit; `from` inside a body or below
-  /// the floor hits at `from`. Boxes by Bullet's ray-box test (btRayAabb), cylinders and the
-  /// floor plane in closed form (sim_world.cpp says why not Bullet's collision-world ray test).
+  /// transparent to the camera). Returns false if nothing is hit. Cylinders are intersected
+  /// exactly (Bullet's GJK ray cast stops up to ~5 mm inside them); boxes and the floor by Bullet.
   bool castRay(const Eigen::Vector3d& from, const Eigen::Vector3d& to, Eigen::Vector3d* hit) const;
 
   /// Finds collisions of the current configuration without advancing time (tests, tools).

@@ -1,6 +1,6 @@
 #include "ehc_sim/sim_world.h"
 
-#include <LinearMath/btAabbUtil2.h>
+#include <BulletCollision/NarrowPhaseCollision/btRaycastCallback.h>
 #include <btBulletDynamicsCommon.h>
 
 #include <algorithm>
@@ -20,6 +20,7 @@ constexpr int kFloor = 1 << 6;
 constexpr int kStatic = 1 << 7;
 constexpr int kObject = 1 << 8;
 constexpr int kRobot = 1 << 9;
+constexpr int kRay = 1 << 10;
 
 // btCollisionObject user index = kind, user index 2 = index within the kind.
 enum Kind { KindFloor = 1, KindScene = 2, KindRobot = 3 };
@@ -199,7 +200,7 @@ void SimWorld::build() {
   m.floor.body->setFriction(scene_.floor_friction);
   m.floor.body->setUserIndex(KindFloor);
   m.floor.body->setUserIndex2(0);
-  m.add(m.floor, kFloor, kObject | kRobot);
+  m.add(m.floor, kFloor, kObject | kRobot | kRay);
 
   // Scene bodies: table parts, objects, obstacles.
   bodies_.clear();
@@ -225,9 +226,9 @@ void SimWorld::build() {
     b.body->setUserIndex(KindScene);
     b.body->setUserIndex2(static_cast<int>(i));
     if (c.mass > 0.0)
-      m.add(b, kObject, kFloor | kStatic | kObject | kRobot);
+      m.add(b, kObject, kFloor | kStatic | kObject | kRobot | kRay);
     else
-      m.add(b, kStatic, kObject | kRobot);
+      m.add(b, kStatic, kObject | kRobot | kRay);
   }
 
   // Robot links: kinematic compound bodies.
@@ -508,12 +509,17 @@ const StepReport& SimWorld::step(const Eigen::VectorXd& command) {
 }
 
 namespace {
-// castRay: boxes with Bullet's ray-box test (btRayAabb, in the box's frame), cylinders in closed
-// form, the floor plane z = 0. Bullet's collision-world ray test was used before: its GJK ray
-// cast stops up to ~5 mm short of a cylinder's surface (measured: the ray through a 68 mm
-// cylinder's axis hit it 4.5 mm inside, its lateral extent 65.5 mm), and on boxes its iterations
-// were a fifth of the whole grasping pipeline's CPU time (perf on bench_pipeline, session 9): the
-// depth camera casts 80 x 60 rays a cloud.
+/// Bullet's ray test with cylinder bodies left out: its GJK ray cast stops up to ~5 mm short of
+/// a cylinder's surface (measured: the ray through a 68 mm cylinder's axis hit it 4.5 mm
+/// inside, its lateral extent 65.5 mm), so castRay intersects cylinders exactly instead.
+struct ClosestNonCylinderRay : btCollisionWorld::ClosestRayResultCallback {
+  using btCollisionWorld::ClosestRayResultCallback::ClosestRayResultCallback;
+  bool needsCollision(btBroadphaseProxy* proxy) const override {
+    if (!btCollisionWorld::ClosestRayResultCallback::needsCollision(proxy)) return false;
+    const auto* obj = static_cast<const btCollisionObject*>(proxy->m_clientObject);
+    return obj->getCollisionShape()->getShapeType() != CYLINDER_SHAPE_PROXYTYPE;
+  }
+};
 
 /// Smallest t in [0, t_max] where o + t d (cylinder frame: axis z, radius r, half height hz)
 /// enters the solid cylinder; t_max + 1 if it does not.
@@ -540,36 +546,26 @@ double rayCylinder(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double r,
     }
   return best;
 }
-
-/// Smallest t in [0, 1] where o + t d (box frame: centred, half extents he) enters the solid
-/// box (0 if o is inside); 2 if it does not meet it.
-double rayBox(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const Eigen::Vector3d& he) {
-  btScalar t = 1.0;
-  btVector3 normal;
-  const btVector3 lo(-he.x(), -he.y(), -he.z()), hi(he.x(), he.y(), he.z());
-  if (!btRayAabb(btVector3(o.x(), o.y(), o.z()), btVector3(o.x() + d.x(), o.y() + d.y(), o.z() + d.z()), lo, hi, t,
-                 normal))
-    return 2.0;
-  return static_cast<double>(t);
-}
 }  // namespace
 
 bool SimWorld::castRay(const Eigen::Vector3d& from, const Eigen::Vector3d& to,
                        Eigen::Vector3d* hit) const {
-  const Eigen::Vector3d d = to - from;
-  double fraction = 2.0;
-  // The floor: the plane z = 0, solid below (Bullet's btStaticPlaneShape in the physics).
-  if (from.z() <= 0.0) fraction = 0.0;
-  else if (d.z() < 0.0) fraction = std::min(fraction, -from.z() / d.z());
+  const btVector3 f(from.x(), from.y(), from.z()), t(to.x(), to.y(), to.z());
+  ClosestNonCylinderRay cb(f, t);
+  cb.m_collisionFilterGroup = kRay;
+  cb.m_collisionFilterMask = kFloor | kStatic | kObject;
+  cb.m_flags |= btTriangleRaycastCallback::kF_UseGjkConvexCastRaytest;  // exact on boxes
+  impl_->world->rayTest(f, t, cb);
+  double fraction = cb.hasHit() ? static_cast<double>(cb.m_closestHitFraction) : 2.0;
   for (std::size_t i = 0; i < bodies_.size(); ++i) {
+    if (bodies_[i].shape != ShapeType::Cylinder) continue;
     const Eigen::Isometry3d T_body_world = bodyPose(static_cast<int>(i)).inverse();
-    const Eigen::Vector3d o = T_body_world * from, dir = T_body_world.linear() * d;
     const Eigen::Vector3d he = bodies_[i].halfExtents();
-    fraction = std::min(fraction, bodies_[i].shape == ShapeType::Cylinder ? rayCylinder(o, dir, he.x(), he.z(), 1.0)
-                                                                          : rayBox(o, dir, he));
+    fraction = std::min(fraction, rayCylinder(T_body_world * from, T_body_world.linear() * (to - from),
+                                              he.x(), he.z(), 1.0));
   }
   if (fraction > 1.0) return false;
-  if (hit) *hit = from + fraction * d;
+  if (hit) *hit = from + fraction * (to - from);
   return true;
 }
 
