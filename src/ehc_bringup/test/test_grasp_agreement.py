@@ -2,8 +2,7 @@
 """Issue 14 item 7: the in-process pipeline (ehc_experiment grasp, GraspPipeline) and the ROS
 pipeline (scripts/demo.sh: the same cores as nodes, lock-step sim time) agree, run by rostest.
 
-For each method in ~methods (space-separated; grasp_agreement.test passes all four of Exp-2,
-the node's own default is "ehc") one Exp-2 set runs through both
+For each method in ~methods (space-separated; default "ehc") one Exp-2 set runs through both
 paths on the same scene (config/scenes/table_three_objects.yaml, no placement jitter: the ROS
 path reads the scene file as it is) with the same noise seed (run seed = ~seed * 1000, as
 ehc_experiment's set 0; demo.sh SEED) and the same MPBS setting (from the in-process summary).
@@ -24,7 +23,9 @@ the gripper: tsmm, neo_c, neo_e and ehc agree on every object, |dt| <= 0.35 s. B
 neo_c and neo_e disagreed on the back object: the middle cylinder, released at the lift height,
 could fall over and roll against it, which depends on the exact motion. Session 9 (seed 2, the
 tag detector's tracking window, load 15-20): all four agree on every object, |dt| <= 0.74 s
-(tsmm's back object 5.53 / 6.27 s). make test runs all four; methods:=ehc runs one.
+(tsmm's back object 5.53 / 6.27 s); seed 1 on the same code: tsmm's back object disagrees
+(in-process 30 s in GRASP, ROS 4.5 s; the arm alone at its reach limit), the other 11 agree.
+make test runs ehc; methods:="tsmm neo_c neo_e ehc" runs all four.
 """
 import csv
 import json
