@@ -5,6 +5,7 @@
 #include <visp3/core/vpCameraParameters.h>
 #include <visp3/core/vpHomogeneousMatrix.h>
 #include <visp3/core/vpImagePoint.h>
+#include <visp3/core/vpImageTools.h>
 #include <visp3/core/vpPoint.h>
 #include <visp3/detection/vpDetectorAprilTag.h>
 #include <visp3/io/vpImageIo.h>
@@ -227,10 +228,7 @@ std::vector<TagDetection> TagDetector::detectResolving(const vpImage<unsigned ch
   } else {
     ++window_searches_;
     vpImage<unsigned char>& W = impl_->window;
-    W.resize(static_cast<unsigned>(window_[3]), static_cast<unsigned>(window_[2]));
-    for (int r = 0; r < window_[3]; ++r)
-      std::memcpy(W[static_cast<unsigned>(r)], I[static_cast<unsigned>(v0 + r)] + u0,
-                  static_cast<std::size_t>(window_[2]));
+    vpImageTools::crop(I, v0, u0, static_cast<unsigned>(window_[3]), static_cast<unsigned>(window_[2]), W);
     impl_->window_cam.initPersProjWithoutDistortion(camera_.fx, camera_.fy, camera_.cx - u0,
                                                     camera_.cy - v0);
     cam = &impl_->window_cam;
