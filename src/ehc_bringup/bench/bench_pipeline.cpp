@@ -1,12 +1,13 @@
 // bench_pipeline: cost of the in-process grasping pipeline (issue 14 item 6). Runs one Exp-2 set
-// (ehc: front, middle, back of config/scenes/table_three_objects.yaml) and one Exp-3 set (ehc:
-// forward, downward, sideways grasps of config/scenes/single_object.yaml), each on one thread, and
-// prints one JSON line per set: sim seconds, process CPU seconds (load-independent: the real-time
-// factor on one core), wall seconds and the 1-minute load average (wall figures depend on the
-// machine's load), and wall seconds per sim second of every stage (render, tags, grasps,
-// obstacles, control, sequencer, physics; pipelineStageCosts). The camera renders only what
-// perception consumes, at its rate (GraspPipeline::perceive): the counts of images and clouds
-// are in the stage line.
+// (front, middle, back of config/scenes/table_three_objects.yaml) and one Exp-3 set (forward,
+// downward, sideways grasps of config/scenes/single_object.yaml) of every method of the protocol
+// ("all", as make experiments runs them), on one thread, and prints one JSON line per protocol:
+// sim seconds, process CPU seconds (load-independent: the real-time factor on one core), wall
+// seconds and the 1-minute load average (wall figures depend on the machine's load), and wall
+// seconds per sim second of every stage (image, depth, tags, grasps, obstacles, control,
+// sequencer, physics; pipelineStageCosts). The camera renders only what perception consumes, at
+// its rate (GraspPipeline::perceive): the counts of images (and of images skipped with no tag in
+// view) and clouds are in the stage line.
 #include "ehc_bringup/grasp_experiment.h"
 
 #include <chrono>
@@ -23,7 +24,7 @@ void bench(const char* name, ehc_bringup::GraspProtocol protocol) {
   p.sets = 1;
   p.per_set = 1;
   p.jobs = 1;
-  const ehc_bringup::GraspExperiment exp(p, {"ehc"});
+  const ehc_bringup::GraspExperiment exp(p, ehc_bringup::graspMethodNames(protocol, "all"));
   const std::clock_t c0 = std::clock();
   const auto w0 = std::chrono::steady_clock::now();
   const ehc_bringup::GraspExperimentResult r = exp.run();

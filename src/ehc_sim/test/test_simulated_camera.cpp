@@ -11,7 +11,10 @@
 
 #include "ehc_perception/tag_detector.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <random>
 
 using namespace ehc_sim;
 
@@ -281,4 +284,68 @@ TEST(SimulatedCamera, CameraInsideOrTouchingAnObjectDoesNotCrash) {
     EXPECT_EQ(I.getWidth(), 640u);
   }
   EXPECT_GT(rig.camera->clippedFaces(), 0);
+}
+
+// The in-process pipeline skips images with no tag in view (GraspPipeline::perceive): tagInView
+// may say "in view" for a tag that draws nothing (occluded, conservative), never the reverse.
+// Random views around the Exp-2 table: whenever the image with the tags differs from the image
+// of the same scene without them, tagInView is true.
+TEST(SimulatedCamera, TagInViewIsFalseOnlyWhenNoTagPixelIsDrawn) {
+  Rig rig("table_three_objects.yaml", false);
+  std::vector<BodyConfig> untagged = rig.world->bodies();
+  for (auto& b : untagged) b.tag.enabled = false;
+  SimulatedCamera plain(rig.camera->intrinsics(), rig.camera->config(), 1);
+  plain.setScene(untagged, rig.world->scene().floor_shade);
+  std::vector<Eigen::Isometry3d> poses(rig.world->bodies().size());
+  for (std::size_t i = 0; i < poses.size(); ++i) poses[i] = rig.world->bodyPose(static_cast<int>(i));
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int drawn = 0, not_in_view = 0, conservative = 0;
+  vpImage<unsigned char> with, without;
+  for (int k = 0; k < 300; ++k) {
+    const Eigen::Vector3d eye(1.4 + 0.9 * u(rng), 0.8 * u(rng), 1.05 + 0.3 * u(rng));
+    const Eigen::Vector3d at(1.8 + 0.6 * u(rng), 0.6 * u(rng), 0.8 + 0.3 * u(rng));
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    const Eigen::Vector3d z = (at - eye).normalized();
+    const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
+    T.linear().col(0) = x;
+    T.linear().col(1) = z.cross(x);
+    T.linear().col(2) = z;
+    T.translation() = eye;
+    rig.camera->render(T, poses, &with);
+    plain.render(T, poses, &without);
+    const bool differs = !std::equal(with.bitmap, with.bitmap + with.getSize(), without.bitmap);
+    const bool in_view = rig.camera->tagInView(T, poses);
+    EXPECT_TRUE(in_view || !differs) << "view " << k << ": a tag is drawn but tagInView is false";
+    drawn += differs;
+    not_in_view += !in_view;
+    conservative += in_view && !differs;
+  }
+  std::printf("300 views: %d with tag pixels, %d with no tag in view, %d in view but hidden\n", drawn,
+              not_in_view, conservative);
+  EXPECT_GE(drawn, 30);         // both outcomes are exercised
+  EXPECT_GE(not_in_view, 30);
+  EXPECT_LE(conservative, 90);  // and the test seldom says "in view" for nothing
+}
+
+// A skipped image advances the noise stream as a rendered one: the clouds and images after it are
+// those of the run that rendered it.
+TEST(SimulatedCamera, SkippingAnImageKeepsTheNoiseStream) {
+  Rig rig("single_object.yaml");
+  SimulatedCamera other(rig.camera->intrinsics(), rig.camera->config(), 9);
+  rig.camera->reseed(9);
+  other.setScene(rig.world->bodies(), rig.world->scene().floor_shade);
+  vpImage<unsigned char> a, b;
+  rig.camera->render(*rig.world, &a);
+  other.skipImage();
+  std::vector<Eigen::Vector3f> pa, pb;
+  rig.camera->cloud(*rig.world, &pa);
+  other.cloud(*rig.world, &pb);
+  ASSERT_EQ(pa.size(), pb.size());
+  ASSERT_FALSE(pa.empty());
+  EXPECT_TRUE(std::equal(pa.begin(), pa.end(), pb.begin()));
+  rig.camera->render(*rig.world, &a);
+  other.render(*rig.world, &b);
+  EXPECT_TRUE(std::equal(a.bitmap, a.bitmap + a.getSize(), b.bitmap));
+  EXPECT_TRUE(rig.camera->tagInView(*rig.world));  // the ready pose sees the tag (test above)
 }

@@ -362,14 +362,7 @@ GraspExperimentResult GraspExperiment::run(const Progress& progress) const {
       res.trace.insert(res.trace.end(), o.trace.begin(), o.trace.end());
       s.sim_time_s += o.sim_time_s;
       s.wall_time_s += wall[i];
-      const PipelineCounters& c = o.counters;
-      PipelineCounters& r = res.counters;
-      r.cycles += c.cycles; r.images += c.images; r.clouds += c.clouds; r.tag_detections += c.tag_detections;
-      r.grasp_runs += c.grasp_runs; r.obstacle_updates += c.obstacle_updates;
-      r.collision_steps += c.collision_steps; r.joint_limit_violations += c.joint_limit_violations;
-      r.wall_render += c.wall_render; r.wall_tags += c.wall_tags; r.wall_grasps += c.wall_grasps;
-      r.wall_obstacles += c.wall_obstacles; r.wall_control += c.wall_control; r.wall_sequencer += c.wall_sequencer;
-      r.wall_physics += c.wall_physics;
+      res.counters += o.counters;
     }
     for (auto& e : tfm) e.second.first /= std::max(1, e.second.second);
     s.tfm = tfm;
@@ -386,11 +379,11 @@ std::string pipelineStageCosts(const PipelineCounters& c, double sim_time_s) {
   std::ostringstream os;
   os << std::fixed << std::setprecision(3);
   const double per = sim_time_s > 0.0 ? 1.0 / sim_time_s : 0.0;
-  const double total = c.wall_render + c.wall_tags + c.wall_grasps + c.wall_obstacles + c.wall_control +
+  const double total = c.wall_image + c.wall_depth + c.wall_tags + c.wall_grasps + c.wall_obstacles + c.wall_control +
                        c.wall_sequencer + c.wall_physics;
   os << "{\"sim_time_s\":" << sim_time_s << ",\"cycles\":" << c.cycles << ",\"images\":" << c.images
-     << ",\"clouds\":" << c.clouds << ",\"grasp_runs\":" << c.grasp_runs << ",\"obstacle_updates\":" << c.obstacle_updates
-     << ",\"wall_s_per_sim_s\":{\"render\":" << c.wall_render * per << ",\"tags\":" << c.wall_tags * per
+     << ",\"images_without_tags\":" << c.images_without_tags << ",\"clouds\":" << c.clouds << ",\"grasp_runs\":" << c.grasp_runs << ",\"obstacle_updates\":" << c.obstacle_updates
+     << ",\"wall_s_per_sim_s\":{\"image\":" << c.wall_image * per << ",\"depth\":" << c.wall_depth * per << ",\"tags\":" << c.wall_tags * per
      << ",\"grasps\":" << c.wall_grasps * per << ",\"obstacles\":" << c.wall_obstacles * per
      << ",\"control\":" << c.wall_control * per << ",\"sequencer\":" << c.wall_sequencer * per
      << ",\"physics\":" << c.wall_physics * per << ",\"total\":" << total * per << "}}";

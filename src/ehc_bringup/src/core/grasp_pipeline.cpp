@@ -108,6 +108,27 @@ std::string GraspPipelineConfig::summary() const {
   return os.str();
 }
 
+PipelineCounters& PipelineCounters::operator+=(const PipelineCounters& o) {
+  cycles += o.cycles;
+  images += o.images;
+  clouds += o.clouds;
+  tag_detections += o.tag_detections;
+  grasp_runs += o.grasp_runs;
+  obstacle_updates += o.obstacle_updates;
+  images_without_tags += o.images_without_tags;
+  collision_steps += o.collision_steps;
+  joint_limit_violations += o.joint_limit_violations;
+  wall_image += o.wall_image;
+  wall_depth += o.wall_depth;
+  wall_tags += o.wall_tags;
+  wall_grasps += o.wall_grasps;
+  wall_obstacles += o.wall_obstacles;
+  wall_control += o.wall_control;
+  wall_sequencer += o.wall_sequencer;
+  wall_physics += o.wall_physics;
+  return *this;
+}
+
 struct GraspPipeline::Clocks {
   ehc_sim::StreamClock image, cloud, obstacles;
   ehc_perception::RateLimiter grasp;
@@ -144,17 +165,25 @@ void GraspPipeline::perceive(double t) {
   if (clocks_->image.due(t_ns) && consumed) {
     vpImage<unsigned char> image;
     std::vector<ehc_perception::TagDetection> detections;
+    const std::size_t target = std::min(sequencer_->currentObject(), cfg_.tag_targets.size() - 1);
+    detector_->setWantedTags({cfg_.tag_targets[target].tag_id});  // tracking window: see TagDetector
+    bool tag_in_view = false;
     {
-      StageTimer timer(timing_, &counters_.wall_render);
-      camera_->render(*world_, &image);
+      StageTimer timer(timing_, &counters_.wall_image);
+      // An image with no tag drawn in it gives no detection: it is neither rendered nor searched
+      // (the noise stream advances as if it were, so the run is the one that searched it).
+      tag_in_view = camera_->tagInView(*world_);
+      if (tag_in_view) camera_->render(*world_, &image);
+      else camera_->skipImage();
     }
-    ++counters_.images;
     const Eigen::Isometry3d T_world_cam = stackView(world_->cameraPose());
-    {
+    if (tag_in_view) {
+      ++counters_.images;
       StageTimer timer(timing_, &counters_.wall_tags);
-      const std::size_t target = std::min(sequencer_->currentObject(), cfg_.tag_targets.size() - 1);
-      detector_->setWantedTags({cfg_.tag_targets[target].tag_id});  // tracking window: see TagDetector
       detections = detector_->detect(image, T_world_cam);  // the camera pose: ambiguity prior
+    } else {
+      ++counters_.images_without_tags;
+      detector_->resetTracking();  // as a search that found nothing: the next image is searched whole
     }
     for (std::size_t i = 0; i < cfg_.tag_targets.size(); ++i) {
       Eigen::Isometry3d T_world;
@@ -170,7 +199,7 @@ void GraspPipeline::perceive(double t) {
   if (!want_grasps && !want_obstacles) return;
   std::vector<Eigen::Vector3f> cam_points;
   {
-    StageTimer timer(timing_, &counters_.wall_render);
+    StageTimer timer(timing_, &counters_.wall_depth);
     camera_->cloud(*world_, &cam_points);
   }
   ++counters_.clouds;

@@ -71,6 +71,16 @@ class SimulatedCamera {
   /// Convenience: scene and camera pose from the world.
   void render(const SimWorld& world, vpImage<unsigned char>* image);
 
+  /// True if render() would draw some tag's pattern into the image: a tag face with every corner
+  /// in front of the camera (render draws no other) whose projection's bounding box overlaps the
+  /// image (conservative: occlusion is not considered).
+  bool tagInView(const Eigen::Isometry3d& T_world_cam, const std::vector<Eigen::Isometry3d>& poses) const;
+  bool tagInView(const SimWorld& world) const;
+  /// For an image that is not rendered (a consumer skips images with no tag in view): advances
+  /// the noise stream as render() does, so the depth noise of later clouds, and the images after,
+  /// are those of a run that rendered it.
+  void skipImage();
+
   /// Depth cloud in the camera optical frame (only hits inside [min_range, max_range]; depth
   /// measured along the optical axis, noise added along the ray).
   void cloud(const SimWorld& world, const Eigen::Isometry3d& T_world_cam,
@@ -83,6 +93,7 @@ class SimulatedCamera {
 
  private:
   struct Impl;
+  int noiseOffset();  ///< draws where an image's pixel noise starts in the noise table
   ehc_control::PinholeCamera intrinsics_;
   SimulatedCameraConfig cfg_;
   std::mt19937 rng_;

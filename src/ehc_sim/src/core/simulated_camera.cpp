@@ -17,6 +17,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 namespace ehc_sim {
@@ -87,6 +88,7 @@ vpImage<unsigned char> makeTagTexture(int id, int pixels_per_cell) {
 struct SimulatedCamera::Impl {
   struct Quad {
     int body = 0;
+    bool tag = false;  ///< the AprilTag pattern (not a body face)
     std::array<Eigen::Vector3d, 4> corners;  ///< body frame
     vpImageSimulator sim{vpImageSimulator::GRAY_SCALED};
   };
@@ -135,9 +137,10 @@ void SimulatedCamera::setScene(const std::vector<BodyConfig>& bodies, int floor_
   const Eigen::Vector3d light = Eigen::Vector3d(0.3, -0.2, 1.0).normalized();
   // A textured quad; corners clockwise seen from outside, as vpImageSimulator expects.
   auto pushQuad = [&](int body, const vpImage<unsigned char>& tex, const std::vector<Eigen::Vector3d>& c,
-                      bool bilinear) {
+                      bool bilinear, bool tag = false) {
     auto q = std::make_unique<Impl::Quad>();
     q->body = body;
+    q->tag = tag;
     vpColVector X[4];
     for (int i = 0; i < 4; ++i) {
       X[i] = col(c[static_cast<std::size_t>(i)]);
@@ -217,7 +220,7 @@ void SimulatedCamera::setScene(const std::vector<BodyConfig>& bodies, int floor_
                                         T * Eigen::Vector3d(a, a, 0) + lift,
                                         T * Eigen::Vector3d(a, -a, 0) + lift,
                                         T * Eigen::Vector3d(-a, -a, 0) + lift};
-      pushQuad(body, tex, c, true);
+      pushQuad(body, tex, c, true, true);
     }
   }
 }
@@ -247,8 +250,7 @@ void SimulatedCamera::render(const Eigen::Isometry3d& T_world_cam,
     q->sim.getImage(*image, m.cam, m.zbuffer);
   }
   if (cfg_.image_noise > 0.0) {
-    std::uniform_int_distribution<int> off(0, kNoiseTable - 1);
-    int k = off(rng_);
+    int k = noiseOffset();
     unsigned char* px = image->bitmap;
     const std::size_t n = static_cast<std::size_t>(W) * H;
     for (std::size_t i = 0; i < n; ++i) {
@@ -259,10 +261,53 @@ void SimulatedCamera::render(const Eigen::Isometry3d& T_world_cam,
   }
 }
 
-void SimulatedCamera::render(const SimWorld& world, vpImage<unsigned char>* image) {
+namespace {
+std::vector<Eigen::Isometry3d> bodyPoses(const SimWorld& world) {
   std::vector<Eigen::Isometry3d> poses(world.bodies().size());
   for (std::size_t i = 0; i < poses.size(); ++i) poses[i] = world.bodyPose(static_cast<int>(i));
-  render(world.cameraPose(), poses, image);
+  return poses;
+}
+}  // namespace
+
+void SimulatedCamera::render(const SimWorld& world, vpImage<unsigned char>* image) {
+  render(world.cameraPose(), bodyPoses(world), image);
+}
+
+bool SimulatedCamera::tagInView(const Eigen::Isometry3d& T_world_cam,
+                                const std::vector<Eigen::Isometry3d>& poses) const {
+  const Eigen::Isometry3d T_cam_world = T_world_cam.inverse();
+  for (const auto& q : impl_->quads) {
+    if (!q->tag) continue;
+    if (q->body < 0 || q->body >= static_cast<int>(poses.size())) fail("tagInView: fewer poses than bodies");
+    const Eigen::Isometry3d T_cam_body = T_cam_world * poses[static_cast<std::size_t>(q->body)];
+    Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+    bool in_front = true;
+    for (const auto& c : q->corners) {
+      const Eigen::Vector3d p = T_cam_body * c;
+      in_front &= p.z() > kNearPlane;  // render's rule: otherwise the face is not drawn
+      if (!in_front) break;
+      const Eigen::Vector2d uv = intrinsics_.pixel(p);
+      lo = lo.cwiseMin(uv);
+      hi = hi.cwiseMax(uv);
+    }
+    // One pixel of slack on every side for the rasteriser's rounding.
+    if (in_front && hi.x() >= -1.0 && hi.y() >= -1.0 && lo.x() <= intrinsics_.width && lo.y() <= intrinsics_.height)
+      return true;
+  }
+  return false;
+}
+
+bool SimulatedCamera::tagInView(const SimWorld& world) const {
+  return tagInView(world.cameraPose(), bodyPoses(world));
+}
+
+int SimulatedCamera::noiseOffset() {
+  std::uniform_int_distribution<int> off(0, kNoiseTable - 1);
+  return off(rng_);
+}
+
+void SimulatedCamera::skipImage() {
+  if (cfg_.image_noise > 0.0) noiseOffset();
 }
 
 void SimulatedCamera::cloud(const SimWorld& world, const Eigen::Isometry3d& T_world_cam,
