@@ -307,15 +307,24 @@ TEST(TagDetector, TheTrackingWindowFollowsATagAndRecoversFromAJump) {
   EXPECT_EQ(tracked.fullFrameSearches(), full0 + 3);
   const auto both = tracked.detect(frame({{2, 0.04, right}, {5, 0.04, left}}));
   EXPECT_EQ(both.size(), 2u);
-  // Both found: the window (around both) is used again.
+  // The wanted tag found: the next image is searched in the window around it alone (tag 2, 25 cm
+  // away, is found again in the next whole image).
   const long windows = tracked.windowSearches();
-  EXPECT_EQ(tracked.detect(frame({{2, 0.04, right}, {5, 0.04, left}})).size(), 2u);
+  const auto in_window = tracked.detect(frame({{2, 0.04, right}, {5, 0.04, left}}));
+  ASSERT_EQ(in_window.size(), 1u);
+  EXPECT_EQ(in_window[0].id, 5);
   EXPECT_EQ(tracked.windowSearches(), windows + 1);
   // resetTracking: the next image is searched whole.
   tracked.resetTracking();
   const long full1 = tracked.fullFrameSearches();
   EXPECT_EQ(tracked.detect(frame({{2, 0.04, right}, {5, 0.04, left}})).size(), 2u);
   EXPECT_EQ(tracked.fullFrameSearches(), full1 + 1);
+  // No tag wanted: the window spans every tag found (the change of set searches whole first).
+  tracked.setWantedTags({});
+  EXPECT_EQ(tracked.detect(frame({{2, 0.04, right}, {5, 0.04, left}})).size(), 2u);
+  const long windows1 = tracked.windowSearches();
+  EXPECT_EQ(tracked.detect(frame({{2, 0.04, right}, {5, 0.04, left}})).size(), 2u);
+  EXPECT_EQ(tracked.windowSearches(), windows1 + 1);
 }
 
 TEST(TagDetector, ConfigsAndCamerasAreValidated) {

@@ -6,8 +6,8 @@
 //   SimulatedCamera              ehc_sim_node: image / depth cloud when due (StreamClock), only
 //                                what perception consumes: the image and the grasps only while
 //                                GraspSequencer::wantsPerception() (until the grasp is locked),
-//                                the image only if a tag is in view (tagInView; else the tag
-//                                node would find nothing in it),
+//                                the image only if a tag can be found in it (tagInView: one
+//                                seen from the front, its black square in the image),
 //                                the cloud only when the grasp generator or the obstacle map
 //                                takes it (their rate limits)
 //   TagDetector + findTargetInWorld   ehc_tag_node (one detection per image serves every object)
@@ -112,7 +112,8 @@ struct PipelineCycle {
 /// Work done so far (counts, and wall seconds per stage for `make bench`).
 struct PipelineCounters {
   long cycles = 0, images = 0, clouds = 0, tag_detections = 0, grasp_runs = 0, obstacle_updates = 0;
-  long images_without_tags = 0;  ///< images due but not rendered: no tag in view (SimulatedCamera::tagInView)
+  long images_without_tags = 0;  ///< images due but not rendered: no tag to find (SimulatedCamera::tagInView)
+  long tag_whole_searches = 0, tag_window_searches = 0;  ///< TagDetector: whole images / tracking windows
   long collision_steps = 0, joint_limit_violations = 0;
   double wall_image = 0.0, wall_depth = 0.0, wall_tags = 0.0, wall_grasps = 0.0, wall_obstacles = 0.0,
          wall_control = 0.0, wall_sequencer = 0.0, wall_physics = 0.0;

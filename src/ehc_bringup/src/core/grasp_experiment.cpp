@@ -382,7 +382,9 @@ std::string pipelineStageCosts(const PipelineCounters& c, double sim_time_s) {
   const double total = c.wall_image + c.wall_depth + c.wall_tags + c.wall_grasps + c.wall_obstacles + c.wall_control +
                        c.wall_sequencer + c.wall_physics;
   os << "{\"sim_time_s\":" << sim_time_s << ",\"cycles\":" << c.cycles << ",\"images\":" << c.images
-     << ",\"images_without_tags\":" << c.images_without_tags << ",\"clouds\":" << c.clouds << ",\"grasp_runs\":" << c.grasp_runs << ",\"obstacle_updates\":" << c.obstacle_updates
+     << ",\"images_without_tags\":" << c.images_without_tags
+     << ",\"tag_searches\":{\"whole\":" << c.tag_whole_searches << ",\"window\":" << c.tag_window_searches << "}"
+     << ",\"clouds\":" << c.clouds << ",\"grasp_runs\":" << c.grasp_runs << ",\"obstacle_updates\":" << c.obstacle_updates
      << ",\"wall_s_per_sim_s\":{\"image\":" << c.wall_image * per << ",\"depth\":" << c.wall_depth * per << ",\"tags\":" << c.wall_tags * per
      << ",\"grasps\":" << c.wall_grasps * per << ",\"obstacles\":" << c.wall_obstacles * per
      << ",\"control\":" << c.wall_control * per << ",\"sequencer\":" << c.wall_sequencer * per

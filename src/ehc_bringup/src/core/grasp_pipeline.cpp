@@ -116,6 +116,8 @@ PipelineCounters& PipelineCounters::operator+=(const PipelineCounters& o) {
   grasp_runs += o.grasp_runs;
   obstacle_updates += o.obstacle_updates;
   images_without_tags += o.images_without_tags;
+  tag_whole_searches += o.tag_whole_searches;
+  tag_window_searches += o.tag_window_searches;
   collision_steps += o.collision_steps;
   joint_limit_violations += o.joint_limit_violations;
   wall_image += o.wall_image;
@@ -170,8 +172,9 @@ void GraspPipeline::perceive(double t) {
     bool tag_in_view = false;
     {
       StageTimer timer(timing_, &counters_.wall_image);
-      // An image with no tag drawn in it gives no detection: it is neither rendered nor searched
-      // (the noise stream advances as if it were, so the run is the one that searched it).
+      // An image in which no tag can be found (none seen from the front with its black square in
+      // the image, SimulatedCamera::tagInView) is neither rendered nor searched; the noise stream
+      // advances as if it were, so the run is the one that searched it and found nothing.
       tag_in_view = camera_->tagInView(*world_);
       if (tag_in_view) camera_->render(*world_, &image);
       else camera_->skipImage();
@@ -181,6 +184,8 @@ void GraspPipeline::perceive(double t) {
       ++counters_.images;
       StageTimer timer(timing_, &counters_.wall_tags);
       detections = detector_->detect(image, T_world_cam);  // the camera pose: ambiguity prior
+      counters_.tag_whole_searches = detector_->fullFrameSearches();
+      counters_.tag_window_searches = detector_->windowSearches();
     } else {
       ++counters_.images_without_tags;
       detector_->resetTracking();  // as a search that found nothing: the next image is searched whole

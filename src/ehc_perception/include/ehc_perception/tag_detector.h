@@ -11,7 +11,8 @@
 // consistent with a world prior (default: the tag is printed upright, its y axis points up),
 // given the camera's pose in the world at the image's time (detect(image, T_world_cam)).
 // Tracking window (roi_margin > 0): after an image in which tags were found, the next image is
-// searched only in the box around them, grown by the margin; the image after one in which a
+// searched only in the box around them (around the wanted tags when some are wanted: other tags
+// are found again in the next whole image), grown by the margin; the image after one in which a
 // wanted tag (setWantedTags: the target) was not found, and every roi_full_frame_every-th image,
 // is searched whole (new tags are found then). Why: the
 // search's cost grows with the area searched, and pixel noise in flat regions makes it costly
@@ -43,7 +44,7 @@ struct TagDetectorConfig {
   std::map<int, double> tag_sizes;         ///< m, per tag id
   double quad_decimate = 1.0;              ///< >= 1; 2 is faster, less range
   int threads = 1;                         ///< AprilTag worker threads
-  /// px: tracking window (see above) = the box around the tags found in the previous image,
+  /// px: tracking window (see above) = the box around the (wanted) tags found in the previous image,
   /// grown on every side by this plus half the box's own size; 0 = search every image whole.
   int roi_margin = 0;
   /// Every this-many images one is searched whole even while tracking (>= 1; 1 = every image).

@@ -298,12 +298,19 @@ std::vector<TagDetection> TagDetector::detectResolving(const vpImage<unsigned ch
     return std::any_of(out.begin(), out.end(), [id](const TagDetection& d) { return d.id == id; });
   });
   if (config_.roi_margin > 0 && !out.empty() && wanted_found) {
-    Eigen::Vector2d lo = out.front().corners[0], hi = lo;
+    // The box around the wanted tags (every tag found when none is wanted): other tags in view
+    // would widen the window (three on a table: most of the image) and are found again in the
+    // next whole image.
+    const auto tracked = [&](const TagDetection& d) {
+      return wanted_tags_.empty() || std::find(wanted_tags_.begin(), wanted_tags_.end(), d.id) != wanted_tags_.end();
+    };
+    Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
     for (const TagDetection& d : out)
-      for (const Eigen::Vector2d& c : d.corners) {
-        lo = lo.cwiseMin(c);
-        hi = hi.cwiseMax(c);
-      }
+      if (tracked(d))
+        for (const Eigen::Vector2d& c : d.corners) {
+          lo = lo.cwiseMin(c);
+          hi = hi.cwiseMax(c);
+        }
     const Eigen::Vector2d grow = Eigen::Vector2d::Constant(config_.roi_margin) + 0.5 * (hi - lo);
     const int c0 = std::max(0, static_cast<int>(std::floor(lo.x() - grow.x())));
     const int r0 = std::max(0, static_cast<int>(std::floor(lo.y() - grow.y())));

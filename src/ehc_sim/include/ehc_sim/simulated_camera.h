@@ -71,9 +71,13 @@ class SimulatedCamera {
   /// Convenience: scene and camera pose from the world.
   void render(const SimWorld& world, vpImage<unsigned char>* image);
 
-  /// True if render() would draw some tag's pattern into the image: a tag face with every corner
-  /// in front of the camera (render draws no other) whose projection's bounding box overlaps the
-  /// image (conservative: occlusion is not considered).
+  /// True if some tag may be detected in the image render() draws: one seen from its printed
+  /// side whose black square lies inside the image grown by two of the tag's cells (its side / 8)
+  /// + 2 px. AprilTag fits the quad to the border's edges and extrapolates a corner that is cut
+  /// off, but not far (measured: up to 0.94 of a cell outside, test_simulated_camera); a tag seen
+  /// from behind is hidden by its body. On random views with the detector, tagInView false never
+  /// had a tag found (test TagInViewIsFalseOnlyWhenTheDetectorFindsNoTag). Occlusion is not
+  /// considered (true for a hidden tag).
   bool tagInView(const Eigen::Isometry3d& T_world_cam, const std::vector<Eigen::Isometry3d>& poses) const;
   bool tagInView(const SimWorld& world) const;
   /// For an image that is not rendered (a consumer skips images with no tag in view): advances

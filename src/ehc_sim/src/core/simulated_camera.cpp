@@ -63,6 +63,7 @@ Eigen::Matrix3d faceFrame(const Eigen::Vector3d& n, const Eigen::Vector3d& up) {
 constexpr int kNoiseTable = 1 << 18;
 constexpr double kNearPlane = 0.01;  ///< m: faces with a corner closer than this are not drawn
 constexpr int kCylinderSides = 16;
+constexpr double kTagBorderMargin = 2.0;  ///< px, tagInView: beyond two cells of the tag
 }  // namespace
 
 vpImage<unsigned char> makeTagTexture(int id, int pixels_per_cell) {
@@ -88,7 +89,9 @@ vpImage<unsigned char> makeTagTexture(int id, int pixels_per_cell) {
 struct SimulatedCamera::Impl {
   struct Quad {
     int body = 0;
-    bool tag = false;  ///< the AprilTag pattern (not a body face)
+    bool tag = false;  ///< the AprilTag pattern (not a body face); then:
+    std::array<Eigen::Vector3d, 4> black;  ///< corners of its black square (body frame)
+    Eigen::Vector3d outward = Eigen::Vector3d::Zero();  ///< its printed side's normal (body frame)
     std::array<Eigen::Vector3d, 4> corners;  ///< body frame
     vpImageSimulator sim{vpImageSimulator::GRAY_SCALED};
   };
@@ -221,6 +224,11 @@ void SimulatedCamera::setScene(const std::vector<BodyConfig>& bodies, int floor_
                                         T * Eigen::Vector3d(a, -a, 0) + lift,
                                         T * Eigen::Vector3d(-a, -a, 0) + lift};
       pushQuad(body, tex, c, true, true);
+      Impl::Quad& q = *m.quads.back();
+      const double s = 0.5 * b.tag.size;
+      q.black = {T * Eigen::Vector3d(-s, s, 0) + lift, T * Eigen::Vector3d(s, s, 0) + lift,
+                 T * Eigen::Vector3d(s, -s, 0) + lift, T * Eigen::Vector3d(-s, -s, 0) + lift};
+      q.outward = T.linear().col(2);
     }
   }
 }
@@ -280,19 +288,26 @@ bool SimulatedCamera::tagInView(const Eigen::Isometry3d& T_world_cam,
     if (!q->tag) continue;
     if (q->body < 0 || q->body >= static_cast<int>(poses.size())) fail("tagInView: fewer poses than bodies");
     const Eigen::Isometry3d T_cam_body = T_cam_world * poses[static_cast<std::size_t>(q->body)];
-    Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+    // Seen from its front: the camera on the outward side of the tag's plane.
+    if ((T_cam_body.inverse().translation() - q->corners[0]).dot(q->outward) <= 0.0) continue;
+    std::array<Eigen::Vector2d, 4> uv;
     bool in_front = true;
-    for (const auto& c : q->corners) {
-      const Eigen::Vector3d p = T_cam_body * c;
-      in_front &= p.z() > kNearPlane;  // render's rule: otherwise the face is not drawn
-      if (!in_front) break;
-      const Eigen::Vector2d uv = intrinsics_.pixel(p);
-      lo = lo.cwiseMin(uv);
-      hi = hi.cwiseMax(uv);
+    for (std::size_t i = 0; i < 4; ++i) {
+      const Eigen::Vector3d p = T_cam_body * q->black[i];
+      in_front = in_front && p.z() > kNearPlane;
+      if (in_front) uv[i] = intrinsics_.pixel(p);
     }
-    // One pixel of slack on every side for the rasteriser's rounding.
-    if (in_front && hi.x() >= -1.0 && hi.y() >= -1.0 && lo.x() <= intrinsics_.width && lo.y() <= intrinsics_.height)
-      return true;
+    if (!in_front) continue;
+    // AprilTag extrapolates a corner from the border's edges: measured up to 0.94 of a cell
+    // (the black square's side / 8) outside the image. Margin: two cells + 2 px.
+    double side = 0.0;
+    for (std::size_t i = 0; i < 4; ++i) side = std::max(side, (uv[i] - uv[(i + 1) % 4]).norm());
+    const double m = side / 4.0 + kTagBorderMargin;
+    bool inside = true;
+    for (const auto& p : uv)
+      inside = inside && p.x() >= -m && p.y() >= -m && p.x() <= intrinsics_.width - 1 + m &&
+               p.y() <= intrinsics_.height - 1 + m;
+    if (inside) return true;
   }
   return false;
 }
