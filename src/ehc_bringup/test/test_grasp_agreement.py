@@ -15,8 +15,17 @@ sim may go on for a few cycles) and the grasp node runs at 2 Hz, so a candidate 
 period (0.5 s) later at the start of the approach and again at the lock; the sequencer's stall
 rule decides in steps of stall_time (1 s). One stall step plus two grasp periods: 2.0 s. The
 ROS path is not bit-reproducible (a goal can leave the sequencer just after an acknowledgement and
-be used a cycle later; see the README), hence a
-tolerance and not equality. No wall-clock assertion; the .test time-limit only guards a hang.
+be used a cycle later; see the README), hence a tolerance and not equality. No wall-clock
+assertion; the .test time-limit only guards a hang.
+
+One stated exception to "success agrees": an object at the arm's reach limit. When one path
+grasps it and the other times out in GRASP with the TCP within REACH_LIMIT_M of the grasp (the
+sequencer's reason says how far), the arm got there but not into it: which side of the limit a
+run falls on is decided by where the base stopped, i.e. by the few cycles of perception latency
+that separate the paths (TSMM's base stops d = 0.2 m from the perceived centre; at its 0.49 m/s
+a 30 ms later pose moves the stop 1.5 cm). Table III's TSMM misses are all of this kind: the
+back object, the TCP 1.1-2.2 cm short after 30 s (session 10). Such a disagreement is printed,
+not failed; any other (a miss in another phase, or farther than REACH_LIMIT_M) fails.
 
 Measured (seed 1), session 8, after the sequencer began to put each object back before opening
 the gripper: tsmm, neo_c, neo_e and ehc agree on every object, |dt| <= 0.35 s. Before (session 5),
@@ -25,11 +34,12 @@ could fall over and roll against it, which depends on the exact motion. Session 
 tag detector's tracking window, load 15-20): all four agree on every object, |dt| <= 0.74 s
 (tsmm's back object 5.53 / 6.27 s); seed 1 on the same code: tsmm's back object disagrees
 (in-process 30 s in GRASP, ROS 4.5 s; the arm alone at its reach limit), the other 11 agree.
-make test runs ehc; methods:="tsmm neo_c neo_e ehc" runs all four.
+make test runs all four methods (methods:="ehc" runs one).
 """
 import csv
 import json
 import os
+import re
 import subprocess
 import sys
 import unittest
@@ -41,6 +51,14 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from demo_run import WS, devel_space, results_dir, run_demo  # noqa: E402
 
 TIME_TOLERANCE_S = 2.0
+REACH_LIMIT_M = 0.03
+
+
+def reach_limit_miss(reason):
+    """The TCP's distance (m) from the grasp if `reason` is a GRASP time-out (the sequencer's
+    "time limit 30 s in GRASP (TCP 1.4 cm from the grasp, ...)"), else None."""
+    m = re.search(r"time limit \S+ s in GRASP \(TCP ([0-9.]+) cm from the grasp", reason or "")
+    return float(m.group(1)) / 100.0 if m else None
 
 
 def run_in_process(method, seed, out):
@@ -60,7 +78,7 @@ def run_in_process(method, seed, out):
 
 class GraspAgreement(unittest.TestCase):
     def test_in_process_and_ros_agree(self):
-        methods = rospy.get_param("~methods", "ehc").split()
+        methods = rospy.get_param("~methods", "tsmm neo_c neo_e ehc").split()
         seed = int(rospy.get_param("~seed", 1))
         base = results_dir("grasp_agreement_")
         lines, problems = [], []
@@ -78,7 +96,13 @@ class GraspAgreement(unittest.TestCase):
                     m, o["name"], ok_in, t_in, i["failed_phase"] or "-", o["success"], o["time_s"],
                     o["failed_phase"] or "-"))
                 if ok_in != o["success"]:
-                    problems.append("%s %s: success in-process %s, ROS %s" % (m, o["name"], ok_in, o["success"]))
+                    short = reach_limit_miss(o.get("reason") if ok_in else i["reason"])
+                    what = "%s %s: success in-process %s, ROS %s" % (m, o["name"], ok_in, o["success"])
+                    if short is not None and short <= REACH_LIMIT_M:
+                        lines.append("%s %s: at the reach limit (the miss ended %.1f cm short in GRASP, <= %.1f cm): "
+                                     "tolerated" % (m, o["name"], 100.0 * short, 100.0 * REACH_LIMIT_M))
+                    else:
+                        problems.append(what)
                 elif ok_in and abs(t_in - o["time_s"]) > TIME_TOLERANCE_S:
                     problems.append("%s %s: time in-process %.2f s, ROS %.2f s (tolerance %.1f s)"
                                     % (m, o["name"], t_in, o["time_s"], TIME_TOLERANCE_S))
