@@ -216,6 +216,59 @@ TEST(GraspSequencer, GoalsFollowThePhases) {
   EXPECT_NEAR(h.last_goal->translation().z(), 0.76 + 0.15, 1e-9);
 }
 
+// The pre-grasp switch needs the TCP on the approach axis (pregrasp_lateral_tolerance), not only
+// within the position tolerance: a TCP that came in from the side and went on to the grasp with
+// 2-3 cm across the axis swept a finger into the box (Exp-3 sideways misses, session 10).
+TEST(GraspSequencer, ThePreGraspSwitchWaitsForTheTcpOnTheApproachAxis) {
+  GraspSequencerParams p = twoObjects();
+  p.objects.resize(1);
+  p.pregrasp_position_tolerance = 0.03;
+  p.pregrasp_lateral_tolerance = 0.01;
+  Harness h(p);
+  h.perceive = forwardTarget();
+  h.follow = false;
+  h.step();
+  h.tcp = *h.last_goal;
+  h.tcp.translation().x() -= 0.1;
+  h.step();
+  ASSERT_EQ(h.seq.phase(), GraspPhase::PreGrasp);
+  const Eigen::Isometry3d pre = *h.last_goal;
+  const Eigen::Vector3d axis = pre.linear().col(2);  // the approach (forward: +x)
+  ASSERT_NEAR(axis.x(), 1.0, 1e-9);
+  // 2.5 cm across the axis: inside the 3 cm position tolerance, outside the lateral one.
+  h.tcp = pre;
+  h.tcp.translation() += Eigen::Vector3d(0.0, 0.025, 0.0);
+  h.run(0.5);
+  EXPECT_EQ(h.seq.phase(), GraspPhase::PreGrasp);
+  // 2.5 cm along the axis, 0.8 cm across: goes on to the grasp.
+  h.tcp.translation() = pre.translation() + Eigen::Vector3d(-0.025, 0.008, 0.0);
+  h.step();
+  EXPECT_EQ(h.seq.phase(), GraspPhase::Grasp);
+  EXPECT_FALSE(hasEvent(h.events, "stalled"));
+
+  // Stalled (no progress for stall_time): within stall_tolerance_factor x the lateral tolerance
+  // (2.5 cm) it goes on and says so; 4 cm across waits (the time limit decides).
+  for (double across : {0.04, 0.02}) {
+    Harness s(p);
+    s.perceive = forwardTarget();
+    s.follow = false;
+    s.step();
+    s.tcp = *s.last_goal;
+    s.tcp.translation().x() -= 0.1;
+    s.step();
+    ASSERT_EQ(s.seq.phase(), GraspPhase::PreGrasp);
+    s.tcp = *s.last_goal;
+    s.tcp.translation() += Eigen::Vector3d(0.0, 0.0, across);
+    s.run(2.0 * p.stall_time + 0.5);
+    if (across > 0.03) {
+      EXPECT_EQ(s.seq.phase(), GraspPhase::PreGrasp) << across;
+    } else {
+      EXPECT_EQ(s.seq.phase(), GraspPhase::Grasp) << across;
+      EXPECT_TRUE(hasEvent(s.events, "stalled")) << across;
+    }
+  }
+}
+
 TEST(GraspSequencer, PerceptionMovesTheGoalUntilTheLock) {
   GraspSequencerParams p = twoObjects();
   p.pose_filter_gain = 1.0;  // no filter: the goal follows each pose
@@ -850,6 +903,10 @@ TEST(GraspSequencerParams, ValidationNamesTheField) {
   expectInvalid([&] { p.validate(); }, "pregrasp_switch_distance");  // pre-grasp beyond the switch
   p.pregrasp_switch_distance = 0.25;
   EXPECT_NO_THROW(p.validate());
+  p.pregrasp_lateral_tolerance = 0.04;  // wider than the position tolerance
+  expectInvalid([&] { p.validate(); }, "pregrasp_lateral_tolerance");
+  p.pregrasp_lateral_tolerance = 0.0;
+  expectInvalid([&] { p.validate(); }, "pregrasp_lateral_tolerance");
 }
 
 TEST(GraspSequencerParams, LoadsYamlAndNamesFileAndField) {

@@ -99,6 +99,12 @@ struct GraspSequencerParams {
   double pregrasp_distance = 0.10;        ///< m, pre-grasp = grasp backed off along the approach
   double pregrasp_switch_distance = 0.25;  ///< m: APPROACH -> PRE_GRASP (TCP to grasp position)
   double pregrasp_position_tolerance = 0.015;     ///< m
+  /// m: and the TCP within this of the approach axis through the pre-grasp, so that the straight
+  /// move to the grasp brings the fingers in along the axis. A TCP that entered the position
+  /// tolerance from the side (downward and sideways approaches come in across the axis) went on
+  /// with 2-3 cm of lateral error; on the way in a finger then swept into a 5 cm box (1 cm of
+  /// clearance a side in the 7 cm gripper) and pushed it away (Exp-3, session 10).
+  double pregrasp_lateral_tolerance = 0.01;
   double pregrasp_orientation_tolerance_deg = 5.0;
   double grasp_position_tolerance = 0.01;         ///< m
   double grasp_orientation_tolerance_deg = 4.0;

@@ -73,6 +73,9 @@ void GraspSequencerParams::validate() const {
         "pregrasp_position_tolerance (" + num(pregrasp_distance + pregrasp_position_tolerance, 3) +
         " m): the approach heads for the pre-grasp and would never switch");
   positive(pregrasp_orientation_tolerance_deg, "pregrasp_orientation_tolerance_deg");
+  check(std::isfinite(pregrasp_lateral_tolerance) && pregrasp_lateral_tolerance > 0.0 &&
+            pregrasp_lateral_tolerance <= pregrasp_position_tolerance,
+        "pregrasp_lateral_tolerance must be in (0, pregrasp_position_tolerance]");
   positive(grasp_position_tolerance, "grasp_position_tolerance");
   positive(grasp_orientation_tolerance_deg, "grasp_orientation_tolerance_deg");
   positive(gripper_timeout, "gripper_timeout");
@@ -97,7 +100,7 @@ std::string GraspSequencerParams::summary() const {
     << " s, search " << search_distance << " m, obstacle exclusion " << obstacle_exclusion_radius
     << " m, pose filter gain " << pose_filter_gain << ", pre-grasp " << pregrasp_distance << " m"
     << "\n  pre-grasp from " << pregrasp_switch_distance << " m; tolerances: pre-grasp " << pregrasp_position_tolerance << " m/" << pregrasp_orientation_tolerance_deg
-    << " deg, grasp " << grasp_position_tolerance << " m/" << grasp_orientation_tolerance_deg << " deg"
+    << " deg (" << pregrasp_lateral_tolerance << " m across the approach), grasp " << grasp_position_tolerance << " m/" << grasp_orientation_tolerance_deg << " deg"
     << " (stalled for " << stall_time << " s: x" << stall_tolerance_factor << "; the gripper closes within "
     << max_close_offset << " m)"
     << "; TfM until sig(w) >= " << tfm_handover_sig << " or the pre-grasp switch"
@@ -136,6 +139,7 @@ GraspSequencerParams loadGraspSequencerParams(const ehc_control::ConfigNode& roo
   p.max_close_offset = s.get("max_close_offset", p.max_close_offset);
   p.tfm_handover_sig = s.get("tfm_handover_sig", p.tfm_handover_sig);
   p.pregrasp_position_tolerance = s.get("pregrasp_position_tolerance", p.pregrasp_position_tolerance);
+  p.pregrasp_lateral_tolerance = s.get("pregrasp_lateral_tolerance", p.pregrasp_lateral_tolerance);
   p.pregrasp_orientation_tolerance_deg = s.get("pregrasp_orientation_tolerance_deg", p.pregrasp_orientation_tolerance_deg);
   p.grasp_position_tolerance = s.get("grasp_position_tolerance", p.grasp_position_tolerance);
   p.grasp_orientation_tolerance_deg = s.get("grasp_orientation_tolerance_deg", p.grasp_orientation_tolerance_deg);
@@ -497,9 +501,18 @@ void GraspSequencer::advance(const SequencerInput& in, SequencerOutput* out) {
     case GraspPhase::PreGrasp: {
       const Eigen::Isometry3d pre = preGrasp(locked_->pose);
       out->goal = pre;
-      const bool there = within(in, pre, params_.pregrasp_position_tolerance, params_.pregrasp_orientation_tolerance_deg);
-      if (there || nearEnoughWhenStalled(in, pre, params_.pregrasp_position_tolerance,
-                                         params_.pregrasp_orientation_tolerance_deg)) {
+      // Lateral: the TCP's offset across the approach axis (the grasp's z) through the pre-grasp
+      // (within() has checked the TCP).
+      const auto lateral = [&](double factor) {
+        const Eigen::Vector3d e = in.tcp->translation() - pre.translation();
+        const Eigen::Vector3d axis = pre.linear().col(2);
+        return (e - e.dot(axis) * axis).norm() <= factor * params_.pregrasp_lateral_tolerance;
+      };
+      const bool there = within(in, pre, params_.pregrasp_position_tolerance, params_.pregrasp_orientation_tolerance_deg) &&
+                         lateral(1.0);
+      if (there || (nearEnoughWhenStalled(in, pre, params_.pregrasp_position_tolerance,
+                                          params_.pregrasp_orientation_tolerance_deg) &&
+                    lateral(params_.stall_tolerance_factor))) {
         enter(GraspPhase::Grasp, t, out,
               there ? "" : "stalled " + num((in.tcp->translation() - pre.translation()).norm() * 100.0, 1) +
                                " cm from the pre-grasp: going on");
