@@ -224,14 +224,18 @@ TEST(GraspSequencer, ThePreGraspSwitchWaitsForTheTcpOnTheApproachAxis) {
   p.objects.resize(1);
   p.pregrasp_position_tolerance = 0.03;
   p.pregrasp_lateral_tolerance = 0.01;
+  // A forward target seen, the TCP put 0.2 m from the grasp: PRE_GRASP, goal = the pre-grasp.
+  const auto toPreGrasp = [](Harness& x) {
+    x.perceive = forwardTarget();
+    x.follow = false;
+    x.step();
+    x.tcp = *x.last_goal;
+    x.tcp.translation().x() -= 0.1;
+    x.step();
+    return x.seq.phase() == GraspPhase::PreGrasp;
+  };
   Harness h(p);
-  h.perceive = forwardTarget();
-  h.follow = false;
-  h.step();
-  h.tcp = *h.last_goal;
-  h.tcp.translation().x() -= 0.1;
-  h.step();
-  ASSERT_EQ(h.seq.phase(), GraspPhase::PreGrasp);
+  ASSERT_TRUE(toPreGrasp(h));
   const Eigen::Isometry3d pre = *h.last_goal;
   const Eigen::Vector3d axis = pre.linear().col(2);  // the approach (forward: +x)
   ASSERT_NEAR(axis.x(), 1.0, 1e-9);
@@ -250,13 +254,7 @@ TEST(GraspSequencer, ThePreGraspSwitchWaitsForTheTcpOnTheApproachAxis) {
   // (2.5 cm) it goes on and says so; 4 cm across waits (the time limit decides).
   for (double across : {0.04, 0.02}) {
     Harness s(p);
-    s.perceive = forwardTarget();
-    s.follow = false;
-    s.step();
-    s.tcp = *s.last_goal;
-    s.tcp.translation().x() -= 0.1;
-    s.step();
-    ASSERT_EQ(s.seq.phase(), GraspPhase::PreGrasp);
+    ASSERT_TRUE(toPreGrasp(s));
     s.tcp = *s.last_goal;
     s.tcp.translation() += Eigen::Vector3d(0.0, 0.0, across);
     s.run(2.0 * p.stall_time + 0.5);
