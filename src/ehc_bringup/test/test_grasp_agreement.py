@@ -24,7 +24,7 @@ sequencer's reason says how far), the arm got there but not into it: which side 
 run falls on is decided by where the base stopped, i.e. by the few cycles of perception latency
 that separate the paths (TSMM's base stops d = 0.2 m from the perceived centre; at its 0.49 m/s
 a 30 ms later pose moves the stop 1.5 cm). Table III's TSMM misses are all of this kind: the
-back object, the TCP 1.1-2.2 cm short after 30 s (session 10). Such a disagreement is printed,
+back object, the TCP 1.0-2.2 cm short after 30 s (sessions 9-10). Such a disagreement is printed,
 not failed; any other (a miss in another phase, or farther than REACH_LIMIT_M) fails.
 
 Measured (seed 1), session 8, after the sequencer began to put each object back before opening
