@@ -14,7 +14,10 @@ Recorded:
     robot_status reply replaces the dead-reckoned pose);
   - perception error per object: each perceived pose against the true object, and how much of
     it the odometry error at the image stamp explains (the pose of the object seen from the
-    estimated instead of the true base);
+    estimated instead of the true base); the residual also horizontally ("residual_horizontal"):
+    a tag node's target is the object's grasp point, which the demo raises above the centre for
+    the middle and back objects (grasp_offset 2 and 3 cm up, config/demo/tag_*.yaml), so the
+    3-D residual includes that designed offset and the horizontal one does not;
   - per gripper closing (/sim/status gripper_state open -> closing): the goal vs the true
     object (the planned grasp's error), the TCP the stack believes in vs the true TCP, the closing distance (true TCP to true object),
     the age of the newest /odom and the outcome (holding / closed_empty).
@@ -171,7 +174,7 @@ class RehearsalProbe:
         explained = planar_apply(est, planar_inverse_apply(truth, true_obj))
         self.perceived.setdefault(name, []).append({
             "t": t, "error": dist(seen, true_obj), "odometry_share": dist(explained, true_obj),
-            "residual": dist(seen, explained)})
+            "residual": dist(seen, explained), "residual_horizontal": dist(seen[:2], explained[:2])})
 
     # ---------------------------------------------------------------- closings
     def on_status(self, m):
@@ -226,7 +229,7 @@ class RehearsalProbe:
             jumps = list(self.odom_jumps)
         perception = {}
         for name, rows in self.perceived.items():
-            perception[name] = {k: self._stats([r[k] for r in rows]) for k in ("error", "odometry_share", "residual")}
+            perception[name] = {k: self._stats([r[k] for r in rows]) for k in ("error", "odometry_share", "residual", "residual_horizontal")}
         return {"odometry_position_error": self._stats(pos), "odometry_yaw_error": self._stats(yaw),
                 "odometry_error_step": self._stats(jumps), "perception": perception,
                 "closings": [self._closing(c) for c in self.closings]}
