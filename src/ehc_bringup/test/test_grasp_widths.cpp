@@ -118,18 +118,6 @@ bool spansObject(const ehc_perception::Grasp& g, const ehc_perception::GripperGe
   return lo < 0.0 && hi > 0.0 && hi <= 0.5 * gripper.max_width && lo >= -0.5 * gripper.max_width;
 }
 
-/// Optical frame at `eye` looking at `target` (z forward, x right, y down; world z up).
-Eigen::Isometry3d lookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target) {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  const Eigen::Vector3d z = (target - eye).normalized();
-  const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
-  T.linear().col(0) = x;
-  T.linear().col(1) = z.cross(x);
-  T.linear().col(2) = z;
-  T.translation() = eye;
-  return T;
-}
-
 struct View {
   double distance, elevation_deg, azimuth_deg;  ///< from the object centre; azimuth 0 = from -x
 };
@@ -158,7 +146,7 @@ PerceptionOutcome perceive(Shape shape, double width) {
     const double el = v.elevation_deg * M_PI / 180.0, az = v.azimuth_deg * M_PI / 180.0;
     const Eigen::Vector3d eye =
         centre + v.distance * Eigen::Vector3d(-std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
-    const Eigen::Isometry3d T_world_cam = lookAt(eye, centre);
+    const Eigen::Isometry3d T_world_cam = ehc_perception::test::lookAt(eye, centre);
     for (unsigned seed : {11u, 12u}) {
       ehc_sim::SimulatedCamera camera(intrinsics, cfg.sim.camera, seed);
       std::vector<Eigen::Vector3f> cam_points;

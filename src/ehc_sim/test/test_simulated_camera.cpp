@@ -12,6 +12,9 @@
 #include "ehc_control/config_node.h"
 #include "ehc_perception/tag_detector.h"
 
+// The perception tests' helpers (lookAt).
+#include "../../ehc_perception/test/perception_test_helpers.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -318,13 +321,7 @@ TEST(SimulatedCamera, TagInViewIsFalseOnlyWhenTheDetectorFindsNoTag) {
     Eigen::Vector3d dir = tag.linear() * Eigen::Vector3d(0.8 * u(rng), 0.8 * u(rng), k % 6 == 5 ? -1.0 : 1.0);
     dir.z() = std::abs(dir.z()) + 0.1;  // from above the table
     const Eigen::Vector3d eye = tag.translation() + (0.2 + 1.3 * r01(rng)) * dir.normalized();
-    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-    const Eigen::Vector3d z = (tag.translation() - eye).normalized();
-    const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
-    T.linear().col(0) = x;
-    T.linear().col(1) = z.cross(x);
-    T.linear().col(2) = z;
-    T.translation() = eye;
+    Eigen::Isometry3d T = ehc_perception::test::lookAt(eye, tag.translation());
     // Turn the camera so that the tag's centre is seen at pixel (u, v): within 30 px of the
     // image border in half of the views (most of them cut the tag), anywhere in the others.
     const ehc_control::PinholeCamera& K = rig.camera->intrinsics();

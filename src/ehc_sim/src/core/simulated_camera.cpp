@@ -89,13 +89,17 @@ vpImage<unsigned char> makeTagTexture(int id, int pixels_per_cell) {
 struct SimulatedCamera::Impl {
   struct Quad {
     int body = 0;
-    bool tag = false;  ///< the AprilTag pattern (not a body face); then:
-    std::array<Eigen::Vector3d, 4> black;  ///< corners of its black square (body frame)
-    Eigen::Vector3d outward = Eigen::Vector3d::Zero();  ///< its printed side's normal (body frame)
     std::array<Eigen::Vector3d, 4> corners;  ///< body frame
     vpImageSimulator sim{vpImageSimulator::GRAY_SCALED};
   };
   std::vector<std::unique_ptr<Quad>> quads;  // vpImageSimulator is heavy: never copied
+  /// A tag's pattern as tagInView sees it (its textured quad is one of `quads`).
+  struct Tag {
+    int body = 0;
+    std::array<Eigen::Vector3d, 4> black;  ///< corners of its black square (body frame)
+    Eigen::Vector3d outward = Eigen::Vector3d::Zero();  ///< its printed side's normal (body frame)
+  };
+  std::vector<Tag> tags;
   int background = 110;
   vpMatrix zbuffer;
   std::vector<signed char> noise;
@@ -136,14 +140,14 @@ void SimulatedCamera::reseed(unsigned seed) {
 void SimulatedCamera::setScene(const std::vector<BodyConfig>& bodies, int floor_shade) {
   Impl& m = *impl_;
   m.quads.clear();
+  m.tags.clear();
   m.background = cfg_.background >= 0 ? cfg_.background : floor_shade;
   const Eigen::Vector3d light = Eigen::Vector3d(0.3, -0.2, 1.0).normalized();
   // A textured quad; corners clockwise seen from outside, as vpImageSimulator expects.
   auto pushQuad = [&](int body, const vpImage<unsigned char>& tex, const std::vector<Eigen::Vector3d>& c,
-                      bool bilinear, bool tag = false) {
+                      bool bilinear) {
     auto q = std::make_unique<Impl::Quad>();
     q->body = body;
-    q->tag = tag;
     vpColVector X[4];
     for (int i = 0; i < 4; ++i) {
       X[i] = col(c[static_cast<std::size_t>(i)]);
@@ -223,12 +227,12 @@ void SimulatedCamera::setScene(const std::vector<BodyConfig>& bodies, int floor_
                                         T * Eigen::Vector3d(a, a, 0) + lift,
                                         T * Eigen::Vector3d(a, -a, 0) + lift,
                                         T * Eigen::Vector3d(-a, -a, 0) + lift};
-      pushQuad(body, tex, c, true, true);
-      Impl::Quad& q = *m.quads.back();
+      pushQuad(body, tex, c, true);
       const double s = 0.5 * b.tag.size;
-      q.black = {T * Eigen::Vector3d(-s, s, 0) + lift, T * Eigen::Vector3d(s, s, 0) + lift,
-                 T * Eigen::Vector3d(s, -s, 0) + lift, T * Eigen::Vector3d(-s, -s, 0) + lift};
-      q.outward = T.linear().col(2);
+      m.tags.push_back({body,
+                        {T * Eigen::Vector3d(-s, s, 0) + lift, T * Eigen::Vector3d(s, s, 0) + lift,
+                         T * Eigen::Vector3d(s, -s, 0) + lift, T * Eigen::Vector3d(-s, -s, 0) + lift},
+                        T.linear().col(2)});
     }
   }
 }
@@ -284,16 +288,15 @@ void SimulatedCamera::render(const SimWorld& world, vpImage<unsigned char>* imag
 bool SimulatedCamera::tagInView(const Eigen::Isometry3d& T_world_cam,
                                 const std::vector<Eigen::Isometry3d>& poses) const {
   const Eigen::Isometry3d T_cam_world = T_world_cam.inverse();
-  for (const auto& q : impl_->quads) {
-    if (!q->tag) continue;
-    if (q->body < 0 || q->body >= static_cast<int>(poses.size())) fail("tagInView: fewer poses than bodies");
-    const Eigen::Isometry3d T_cam_body = T_cam_world * poses[static_cast<std::size_t>(q->body)];
+  for (const Impl::Tag& tag : impl_->tags) {
+    if (tag.body < 0 || tag.body >= static_cast<int>(poses.size())) fail("tagInView: fewer poses than bodies");
+    const Eigen::Isometry3d T_cam_body = T_cam_world * poses[static_cast<std::size_t>(tag.body)];
     // Seen from its front: the camera on the outward side of the tag's plane.
-    if ((T_cam_body.inverse().translation() - q->corners[0]).dot(q->outward) <= 0.0) continue;
+    if ((T_cam_body.inverse().translation() - tag.black[0]).dot(tag.outward) <= 0.0) continue;
     std::array<Eigen::Vector2d, 4> uv;
     bool in_front = true;
     for (std::size_t i = 0; i < 4; ++i) {
-      const Eigen::Vector3d p = T_cam_body * q->black[i];
+      const Eigen::Vector3d p = T_cam_body * tag.black[i];
       in_front = in_front && p.z() > kNearPlane;
       if (in_front) uv[i] = intrinsics_.pixel(p);
     }
