@@ -22,8 +22,8 @@ One stated exception to "success agrees": an object at the arm's reach limit. Wh
 grasps it and the other times out in GRASP with the TCP within REACH_LIMIT_M of the grasp (the
 sequencer's reason says how far), the arm got there but not into it: which side of the limit a
 run falls on is decided by where the base stopped, i.e. by the few cycles of perception latency
-that separate the paths (TSMM's base stops d = 0.2 m from the perceived centre; at its 0.49 m/s
-a 30 ms later pose moves the stop 1.5 cm). Table III's TSMM misses are all of this kind: the
+that separate the paths (TSMM's base stops d = 0.2 m from the perceived centre; at its measured
+0.49 m/s distant speed, Table III, each 10 ms cycle of delay moves the stop by up to 0.5 cm). Table III's TSMM misses are all of this kind: the
 back object, the TCP 1.0-2.2 cm short after 30 s (sessions 9-10). Such a disagreement is printed,
 not failed; any other (a miss in another phase, or farther than REACH_LIMIT_M) fails.
 
