@@ -3,6 +3,7 @@
 #   make test   - every gtest + rostest, closing line "N passed, N failed"
 #   make bench  - benchmarks, one JSON object per line
 #   make experiments - paper Exp-1..3 in-process -> results/experiments/REPORT.md
+#   make results - docs/RESULTS.md from the result folders under results/ (missing ones: "not run")
 SHELL := /bin/bash
 .SHELLFLAGS := -eo pipefail -c
 export PATH := /usr/bin:/bin:/usr/sbin:/sbin:$(PATH)
@@ -11,6 +12,7 @@ JOBS ?= 2
 CATKIN := catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCMAKE_BUILD_TYPE=Release -j$(JOBS)
 
 .PHONY: all deps build demo test bench experiments clean
+.PHONY: results
 
 all: build
 
@@ -35,3 +37,7 @@ experiments: build
 
 clean:
 	rm -rf build devel install
+
+# No build needed: reads results/experiments, results/bench, results/demo (whatever exists).
+results: deps
+	/usr/bin/python3 src/ehc_bringup/scripts/make_results.py

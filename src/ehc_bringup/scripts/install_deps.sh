@@ -20,7 +20,7 @@ PACKAGES=(
   # perception, collision, physics
   libpcl-dev libfcl-dev liboctomap-dev libbullet-dev
   # tests and result plots
-  googletest libgtest-dev python3-yaml python3-numpy python3-matplotlib
+  googletest libgtest-dev python3-yaml python3-numpy python3-matplotlib python3-pytest
   # rostopic pub / echo of the messages the nodes use (README "Running a node")
   python3-geometry-msgs python3-sensor-msgs python3-nav-msgs
 )

@@ -1,0 +1,548 @@
+#!/usr/bin/python3
+"""docs/RESULTS.md from the result folders (`make results`; the end of `make experiments`).
+
+  make_results.py [--results DIR] [--experiments DIR] [--bench DIR] [--demo DIR] [--out FILE]
+      Reads DIR/experiments/{exp1,exp2,exp3} (ehc_experiment reach / grasp / poses, written by
+      experiments.sh), DIR/bench (bench.sh) and DIR/demo (demo.sh), DIR = results/ by default,
+      and writes FILE (docs/RESULTS.md). A folder that is not there is listed as "not run".
+      Every table comes with the command that made it, the code version, the machine, the date
+      and the seeds (from the folder's meta.json) and the paper's figure beside ours. Means of
+      per-set data come with a 95 % bootstrap interval over the sets (fixed bootstrap seed:
+      the same folders give the same file). A malformed file is an error naming the file;
+      nothing is written then. Exit code 0, or 2 on an error.
+
+  make_results.py meta DIR --command CMD [--run NAME CMD]... [--seed S] [--robot R] [--setting K=V]...
+  make_results.py meta DIR --finish
+      Writes DIR/meta.json at the start of a run (the command, the per-table commands, the seed,
+      the robot, `git describe --always --dirty`, CPU model and cores, the start time) and adds
+      the end time and wall time with --finish. Called by experiments.sh and bench.sh.
+"""
+import argparse
+import csv
+import datetime
+import json
+import math
+import os
+import subprocess
+import sys
+
+ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", ".."))
+BOOTSTRAP_SEED = 1
+BOOTSTRAP_RESAMPLES = 2000
+
+# The paper's figures (Tables II, III, IV). Table II is its simulation, Tables III and IV its
+# real robot. Speeds: Base-T m/s / Base-R rad/s / Arm rad/s.
+PAPER_TABLE2 = {
+    "neo_c": {"name": "NEO(c)", "time": "11.69", "distant": "1.644/0.691/5.879", "close": "0.091/0.062/0.641", "failed": "37"},
+    "neo_e": {"name": "NEO(e)", "time": "11.81", "distant": "1.630/0.683/5.870", "close": "0.087/0.056/0.607", "failed": "35"},
+    "ehc": {"name": "EHC", "time": "9.98", "distant": "1.716/0.733/7.068", "close": "0.080/0.042/0.870", "failed": "18"},
+}
+PAPER_TABLE3 = {
+    "tsmm": {"name": "TSMM", "time": "34.89", "distant": "NAN", "close": "NAN", "success": "80.0"},
+    "neo_c": {"name": "NEO(c)", "time": "30.03", "distant": "8.776/0.578/1.971", "close": "1.294/0.335/0.345", "success": "11.1"},
+    "neo_e": {"name": "NEO(e)", "time": "27.80", "distant": "8.709/0.517/2.284", "close": "1.270/0.416/0.638", "success": "51.1"},
+    "ehc": {"name": "EHC", "time": "13.54", "distant": "8.826/0.908/2.594", "close": "1.259/0.162/1.369", "success": "95.6"},
+}
+PAPER_TABLE4 = {
+    "neo_nompbs": {"name": "NEO (without MPBS)", "forward": "100.0", "downward": "31.6", "sideways": "38.7"},
+    "ehc_nompbs": {"name": "EHC (without MPBS)", "forward": "100.0", "downward": "34.3", "sideways": "36.2"},
+    "ehc": {"name": "EHC (MPBS)", "forward": "100.0", "downward": "100.0", "sideways": "100.0"},
+}
+APPROACHES = ("forward", "downward", "sideways")
+# Design bars of the benchmarks (the paper reports no timings): bench name -> (field, op, bar, text).
+BENCH_BARS = {
+    "controller.step_obstacles_10": ("median_us", "<=", 10.0, "median <= 10 us"),
+    "grasp_pipeline_exp2_set": ("cpu_real_time_factor", ">=", 10.0, ">= 10x real time per core"),
+    "grasp_pipeline_exp3_set": ("cpu_real_time_factor", ">=", 10.0, ">= 10x real time per core"),
+    "perception.obstacle_distances_2cm": ("median_us", "<=", 1000.0, "<= 1 ms per cycle"),
+    "perception.tag_detect_pose_640x480": ("mean_us", "<=", 1e6 / 30.0, ">= 30 Hz"),
+    "perception.grasps_object_20k": ("median_us", "<=", 100000.0, "<= 100 ms"),
+}
+
+
+class ResultsError(Exception):
+    """A result file that cannot be read; the message starts with the file's path."""
+
+
+def rel(path):
+    """`path` relative to the workspace root when inside it (stable text in the report)."""
+    a = os.path.abspath(path)
+    return os.path.relpath(a, ROOT) if a.startswith(ROOT + os.sep) else a
+
+
+# ------------------------------------------------------------------------------ reading
+def read_json(path):
+    try:
+        with open(path) as f:
+            return json.load(f)
+    except json.JSONDecodeError as e:
+        raise ResultsError("%s: not valid JSON (line %d: %s)" % (rel(path), e.lineno, e.msg)) from None
+    except OSError as e:
+        raise ResultsError("%s: cannot read (%s)" % (rel(path), e.strerror)) from None
+
+
+def read_csv(path, columns):
+    """Rows of a CSV file as dicts; every column in `columns` must be in its header."""
+    try:
+        with open(path, newline="") as f:
+            reader = csv.DictReader(f)
+            missing = [c for c in columns if c not in (reader.fieldnames or [])]
+            if missing:
+                raise ResultsError("%s: missing column(s) %s (header: %s)" % (
+                    rel(path), ", ".join(missing), ",".join(reader.fieldnames or []) or "empty file"))
+            rows = []
+            for row in reader:
+                if None in row or any(row[c] is None for c in columns):
+                    raise ResultsError("%s: line %d has %s fields than the header" % (
+                        rel(path), reader.line_num, "more" if None in row else "fewer"))
+                row["_line"] = reader.line_num
+                rows.append(row)
+            return rows
+    except OSError as e:
+        raise ResultsError("%s: cannot read (%s)" % (rel(path), e.strerror)) from None
+
+
+def number(row, key, path, kind=float):
+    try:
+        v = kind(row[key])
+    except (TypeError, ValueError):
+        raise ResultsError("%s: line %d: column '%s' is not a number ('%s')" % (
+            rel(path), row["_line"], key, row[key])) from None
+    if not math.isfinite(v):
+        raise ResultsError("%s: line %d: column '%s' is not finite" % (rel(path), row["_line"], key))
+    return v
+
+
+def field(obj, keys, path):
+    """obj[k1][k2]... with an error naming the file and the missing field."""
+    cur = obj
+    for i, k in enumerate(keys):
+        if not isinstance(cur, dict) or k not in cur:
+            raise ResultsError("%s: missing field '%s'" % (rel(path), ".".join(keys[: i + 1])))
+        cur = cur[k]
+    return cur
+
+
+def read_meta(folder):
+    """folder/meta.json (or None when the folder has none)."""
+    path = os.path.join(folder, "meta.json")
+    if not os.path.exists(path):
+        return None
+    meta = read_json(path)
+    if not isinstance(meta, dict):
+        raise ResultsError("%s: expected a JSON object" % rel(path))
+    return meta
+
+
+# ------------------------------------------------------------------------------ statistics
+def bootstrap(nums, dens, scale=1.0):
+    """Pooled ratio sum(nums)/sum(dens) * scale over the sets and its 95 % percentile interval
+    from resampling the sets with replacement (None when there are fewer than two sets)."""
+    import numpy as np
+    nums = np.asarray(nums, dtype=float)
+    dens = np.asarray(dens, dtype=float)
+    point = float(nums.sum() / dens.sum() * scale) if dens.sum() > 0 else float("nan")
+    if len(nums) < 2:
+        return point, None
+    rng = np.random.default_rng(BOOTSTRAP_SEED)
+    idx = rng.integers(0, len(nums), size=(BOOTSTRAP_RESAMPLES, len(nums)))
+    d = dens[idx].sum(axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        stats = nums[idx].sum(axis=1) / d * scale
+    stats = stats[d > 0]
+    if stats.size == 0:
+        return point, None
+    lo, hi = np.percentile(stats, [2.5, 97.5])
+    return point, (float(lo), float(hi))
+
+
+def per_set(rows, key_fn):
+    """{set: (num, den)} summed with key_fn(row) -> (num, den)."""
+    out = {}
+    for r in rows:
+        n, d = key_fn(r)
+        a = out.setdefault(r["set"], [0.0, 0.0])
+        a[0] += n
+        a[1] += d
+    return [tuple(out[k]) for k in sorted(out, key=lambda s: int(s) if s.isdigit() else s)]
+
+
+def fmt_ci(point, ci, digits):
+    if point is None or math.isnan(point):
+        return "-"
+    text = "%.*f" % (digits, point)
+    return text + (" [%.*f, %.*f]" % (digits, ci[0], digits, ci[1]) if ci else "")
+
+
+def fmt_speeds(s):
+    return "%.3f/%.3f/%.3f" % (s["base_t"], s["base_r"], s["arm"])
+
+
+# ------------------------------------------------------------------------------ metadata
+def provenance(meta, run_key, folder, seeds_text):
+    """The bullet list every table starts with."""
+    if meta is None:
+        missing = "not recorded (no meta.json in %s)" % rel(folder)
+        lines = ["- command: " + missing, "- code version: " + missing, "- machine: " + missing,
+                 "- date: " + missing]
+    else:
+        command = "`%s`" % meta.get("command", "?")
+        run = meta.get("runs", {}).get(run_key) if run_key else None
+        if run:
+            command += ", which ran `%s`" % run
+        machine = meta.get("machine", {})
+        date = meta.get("started", "?")
+        if meta.get("finished"):
+            date += " to %s (%s s wall)" % (meta["finished"], meta.get("wall_s", "?"))
+        else:
+            date += " (no end recorded: the run did not finish)"
+        lines = ["- command: " + command,
+                 "- code version: `%s`" % meta.get("code_version", "?"),
+                 "- machine: %s, %s core(s)" % (machine.get("cpu", "?"), machine.get("cores", "?")),
+                 "- date: " + date]
+        if meta.get("robot"):
+            lines.append("- robot: " + meta["robot"])
+    lines.append("- seeds: " + seeds_text)
+    lines.append("- folder: `%s`" % rel(folder))
+    return lines
+
+
+# ------------------------------------------------------------------------------ Exp-1
+def exp1_section(folder, meta):
+    summary_path = os.path.join(folder, "summary.json")
+    trials_path = os.path.join(folder, "trials.csv")
+    summaries = read_json(summary_path)
+    if isinstance(summaries, dict):
+        summaries = [summaries]
+    if not isinstance(summaries, list) or not summaries:
+        raise ResultsError("%s: expected a method summary or a list of them" % rel(summary_path))
+    rows = read_csv(trials_path, ["method", "set", "reached", "time_s"])
+    seed = meta.get("seed", "?") if meta else "?"
+    seeds = ("--seed %s: targets of set k drawn with seed*1000 + k, Table I noise of set k seeded seed + k"
+             % seed)
+    out = ["## Exp-1: random reaching (paper Table II, simulation)", ""]
+    out += provenance(meta, "exp1", folder, seeds)
+    out += ["", "| Method | Time (s) [95 % CI] | paper Time (s) | Failed (/N) [95 % CI] | paper Failed (/500) "
+            "| Distant (Base-T/Base-R/Arm) | paper Distant | Close (Base-T/Base-R/Arm) | paper Close |",
+            "|---|---|---|---|---|---|---|---|---|"]
+    causes = []
+    for s in summaries:
+        m = field(s, ["method"], summary_path)
+        mine = [r for r in rows if r["method"] == m]
+        for r in mine:
+            r["_reached"] = number(r, "reached", trials_path, int)
+            r["_time"] = number(r, "time_s", trials_path)
+        targets = int(field(s, ["targets"], summary_path))
+        failed = int(field(s, ["failed"], summary_path))
+        if mine:
+            t = bootstrap(*zip(*per_set(mine, lambda r: (r["_time"] * r["_reached"], r["_reached"]))))
+            f = bootstrap(*zip(*per_set(mine, lambda r: (1 - r["_reached"], 1))), scale=len(mine))
+        else:
+            t, f = (float(field(s, ["mean_time_s"], summary_path)), None), (float(failed), None)
+        p = PAPER_TABLE2.get(m, {})
+        out.append("| %s | %s | %s | %s (/%d) | %s | %s | %s | %s | %s |" % (
+            p.get("name", m), fmt_ci(t[0], t[1], 2), p.get("time", "-"), fmt_ci(f[0], f[1], 0), targets,
+            p.get("failed", "-"), fmt_speeds(field(s, ["distant"], summary_path)), p.get("distant", "-"),
+            fmt_speeds(field(s, ["close"], summary_path)), p.get("close", "-")))
+        fc = s.get("failure_causes", {})
+        causes.append("%s: %s" % (m, ", ".join("%s %s" % (k, v) for k, v in fc.items() if v) or "none"))
+    out += ["", "Failure causes (not in the paper): " + "; ".join(causes) + "."]
+    return out
+
+
+# ------------------------------------------------------------------------------ Exp-2 and Exp-3
+def grasp_rows(folder):
+    path = os.path.join(folder, "trials.csv")
+    rows = read_csv(path, ["method", "set", "index", "seed", "object", "approach", "success", "time_s", "tfm"])
+    for r in rows:
+        r["_success"] = number(r, "success", path, int)
+        r["_time"] = number(r, "time_s", path)
+        r["_tfm"] = number(r, "tfm", path)
+        number(r, "seed", path, int)
+    return rows
+
+
+def grasp_summary(folder):
+    path = os.path.join(folder, "summary.json")
+    s = read_json(path)
+    methods = field(s, ["methods"], path)
+    if not isinstance(methods, list):
+        raise ResultsError("%s: field 'methods' is not a list" % rel(path))
+    return s, methods, path
+
+
+def run_seeds(summary, rows, rule):
+    seeds = sorted({int(r["seed"]) for r in rows})
+    listed = ", ".join(str(x) for x in seeds[:6]) + (", ..." if len(seeds) > 6 else "")
+    return "--seed %s: run seed = %s (%d run seeds: %s)" % (summary.get("seed", "?"), rule, len(seeds), listed)
+
+
+def success_and_time(rows):
+    ok = bootstrap(*zip(*per_set(rows, lambda r: (r["_success"], 1))), scale=100.0)
+    t = bootstrap(*zip(*per_set(rows, lambda r: (r["_time"] * r["_success"], r["_success"]))))
+    return ok, t
+
+
+def safety_text(methods, path):
+    parts = []
+    for s in methods:
+        margin = s.get("min_obstacle_margin", {}) or {}
+        m = margin.get("margin")
+        parts.append("%s: %s sim steps in contact, %s joint-limit violations, min margin d - d_s %s" % (
+            field(s, ["method"], path), s.get("contact_steps", "?"), s.get("joint_limit_violations", "?"),
+            "%.1f mm" % (1000.0 * m) if isinstance(m, (int, float)) else "n/a"))
+    return "Safety (not in the paper; contacts and violations must be zero): " + "; ".join(parts) + "."
+
+
+def exp2_section(folder, meta):
+    summary, methods, path = grasp_summary(folder)
+    rows = grasp_rows(folder)
+    out = ["## Exp-2: grasping three objects in sequence (paper Table III, real robot)", ""]
+    out += provenance(meta, "exp2", folder, run_seeds(summary, rows, "seed*1000 + set*10"))
+    out += ["", "| Method | Time (s) [95 % CI] | paper Time (s) | Success (%) [95 % CI] | paper Success (%) "
+            "| Distant (Base-T/Base-R/Arm) | paper Distant | Close (Base-T/Base-R/Arm) | paper Close |",
+            "|---|---|---|---|---|---|---|---|---|"]
+    for s in methods:
+        m = field(s, ["method"], path)
+        mine = [r for r in rows if r["method"] == m]
+        if not mine:
+            raise ResultsError("%s: no trials of method '%s' listed in %s" % (
+                rel(os.path.join(folder, "trials.csv")), m, rel(path)))
+        ok, t = success_and_time(mine)
+        p = PAPER_TABLE3.get(m, {})
+        n_ok = sum(r["_success"] for r in mine)
+        out.append("| %s | %s | %s | %s (%d/%d) | %s | %s | %s | %s | %s |" % (
+            p.get("name", m), fmt_ci(t[0], t[1], 2), p.get("time", "-"), fmt_ci(ok[0], ok[1], 1), n_ok, len(mine),
+            p.get("success", "-"), fmt_speeds(field(s, ["distant"], path)), p.get("distant", "-"),
+            fmt_speeds(field(s, ["close"], path)), p.get("close", "-")))
+    out += ["", safety_text(methods, path)]
+    return out
+
+
+def exp3_section(folder, meta):
+    summary, methods, path = grasp_summary(folder)
+    rows = grasp_rows(folder)
+    out = ["## Exp-3: grasp orientations, TfM (paper Table IV, real robot)", ""]
+    out += provenance(meta, "exp3", folder, run_seeds(summary, rows, "seed*1000 + set*10 + index"))
+    head = "| Method |"
+    for a in APPROACHES:
+        head += " TfM %s (%%) [95 %% CI] | paper %s |" % (a, a)
+    out += ["", head + " Success (%) [95 % CI] | paper Success (%) |", "|---" * (2 * len(APPROACHES) + 3) + "|"]
+    for s in methods:
+        m = field(s, ["method"], path)
+        mine = [r for r in rows if r["method"] == m]
+        if not mine:
+            raise ResultsError("%s: no trials of method '%s' listed in %s" % (
+                rel(os.path.join(folder, "trials.csv")), m, rel(path)))
+        p = PAPER_TABLE4.get(m, {})
+        line = "| %s |" % p.get("name", m)
+        for a in APPROACHES:
+            sub = [r for r in mine if r["approach"] == a]
+            tfm = bootstrap(*zip(*per_set(sub, lambda r: (r["_tfm"], 1))), scale=100.0) if sub else (None, None)
+            line += " %s | %s |" % (fmt_ci(tfm[0], tfm[1], 1), p.get(a, "-"))
+        ok, _ = success_and_time(mine)
+        n_ok = sum(r["_success"] for r in mine)
+        line += " %s (%d/%d) | not reported |" % (fmt_ci(ok[0], ok[1], 1), n_ok, len(mine))
+        out.append(line)
+    out += ["", "TfM: the share of the time at a distance with the object in the camera's view.",
+            "", safety_text(methods, path)]
+    return out
+
+
+# ------------------------------------------------------------------------------ bench, demo
+def read_bench_lines(path):
+    records = []
+    try:
+        with open(path) as f:
+            lines = f.readlines()
+    except OSError as e:
+        raise ResultsError("%s: cannot read (%s)" % (rel(path), e.strerror)) from None
+    for i, line in enumerate(lines, 1):
+        if not line.startswith("{"):
+            continue  # a launcher's text line
+        try:
+            r = json.loads(line)
+        except json.JSONDecodeError as e:
+            raise ResultsError("%s: line %d is not valid JSON (%s)" % (rel(path), i, e.msg)) from None
+        if not isinstance(r, dict) or "bench" not in r:
+            raise ResultsError("%s: line %d has no \"bench\" field" % (rel(path), i))
+        records.append(r)
+    return records
+
+
+def bench_figure(r):
+    if "median_us" in r:
+        return "median %.3g us, p99 %.3g us (n %s)" % (r["median_us"], r.get("p99_us", float("nan")), r.get("n", "?"))
+    if "cpu_real_time_factor" in r:
+        return "%.2fx real time per core (wall %.2fx), %s/%s grasped" % (
+            r["cpu_real_time_factor"], r.get("wall_real_time_factor", float("nan")), r.get("successes", "?"),
+            r.get("grasps", "?"))
+    if "rate_hz" in r:
+        return "%.1f Hz" % r["rate_hz"]
+    if "found" in r:
+        return "%s of %s found" % (r["found"], r.get("expected", "?"))
+    if "mean" in r:
+        return "mean %s" % r["mean"]
+    return ", ".join("%s %s" % (k, v) for k, v in r.items() if k != "bench")
+
+
+def bench_bar(r):
+    if "bar_hz" in r:
+        return ">= %s Hz" % r["bar_hz"], ("yes" if r.get("meets_bar") else "no")
+    bar = BENCH_BARS.get(r["bench"])
+    if not bar or bar[0] not in r:
+        return "-", "-"
+    key, op, limit, text = bar
+    ok = r[key] <= limit if op == "<=" else r[key] >= limit
+    return text, "yes" if ok else "no"
+
+
+def bench_section(folder, meta):
+    path = os.path.join(folder, "bench.jsonl")
+    records = read_bench_lines(path)
+    out = ["## Benchmarks (`make bench`; design bars, the paper reports no timings)", ""]
+    out += provenance(meta, None, folder, "none (fixed inputs)")
+    out += ["", "| Benchmark | ours | design bar | meets bar | paper |", "|---|---|---|---|---|"]
+    for r in records:
+        bar, ok = bench_bar(r)
+        out.append("| %s | %s | %s | %s | not reported |" % (r["bench"], bench_figure(r), bar, ok))
+    if not records:
+        out.append("| (no JSON lines in %s) | - | - | - | - |" % rel(path))
+    return out
+
+
+def demo_section(folder, meta):
+    path = os.path.join(folder, "summary.json")
+    s = read_json(path)
+    objects = field(s, ["objects"], path)
+    if not isinstance(objects, list):
+        raise ResultsError("%s: field 'objects' is not a list" % rel(path))
+    out = ["## Demo (`make demo`: the ROS nodes on the Exp-2 table, one run)", ""]
+    out += provenance(meta, None, folder, "SEED %s (simulator noise)" % (meta or {}).get("seed", "not recorded"))
+    out += ["", "| Object | Success | Time (s) | TfM (%) | paper (Table III, EHC) |", "|---|---|---|---|---|"]
+    for o in objects:
+        out.append("| %s | %s | %.2f | %.1f | 13.54 s mean, 95.6 %% success |" % (
+            field(o, ["name"], path), "yes" if field(o, ["success"], path) else "no", float(field(o, ["time_s"], path)),
+            100.0 * float(field(o, ["tfm"], path))))
+    out += ["", "%s/%s grasped, mode %s, MPBS %s." % (
+        s.get("successes", "?"), s.get("objects_total", "?"), s.get("mode", "?"), s.get("mpbs", "?"))]
+    return out
+
+
+# ------------------------------------------------------------------------------ report
+def sources(args):
+    exp = args.experiments or os.path.join(args.results, "experiments")
+    return [
+        ("Exp-1", os.path.join(exp, "exp1"), exp, exp1_section, "make experiments"),
+        ("Exp-2", os.path.join(exp, "exp2"), exp, exp2_section, "make experiments"),
+        ("Exp-3", os.path.join(exp, "exp3"), exp, exp3_section, "make experiments"),
+        ("Benchmarks", args.bench or os.path.join(args.results, "bench"), None, bench_section, "make bench"),
+        ("Demo", args.demo or os.path.join(args.results, "demo"), None, demo_section, "make demo"),
+    ]
+
+
+def build_report(args):
+    header = ["# EHC-MM results", "",
+              "Generated by `make results` (src/ehc_bringup/scripts/make_results.py) from the result folders; "
+              "do not edit by hand. Our figures come from the simulator; the paper's Table II is its simulation, "
+              "Tables III and IV its real robot. Mean [95 %% CI]: percentile bootstrap over the sets "
+              "(%d resamples, seed %d)." % (BOOTSTRAP_RESAMPLES, BOOTSTRAP_SEED), "",
+              "| Results | folder | status |", "|---|---|---|"]
+    body = []
+    for name, folder, meta_folder, section, command in sources(args):
+        if not os.path.isdir(folder):
+            header.append("| %s | `%s` | not run (`%s`) |" % (name, rel(folder), command))
+            continue
+        meta = read_meta(meta_folder or folder)
+        header.append("| %s | `%s` | below |" % (name, rel(folder)))
+        body += [""] + section(folder, meta)
+    return "\n".join(header + body) + "\n"
+
+
+def main_report(argv):
+    ap = argparse.ArgumentParser(description="docs/RESULTS.md from the result folders")
+    ap.add_argument("--results", default=os.path.join(ROOT, "results"), help="root of the result folders [results]")
+    ap.add_argument("--experiments", help="the experiments folder [RESULTS/experiments]")
+    ap.add_argument("--bench", help="the bench folder [RESULTS/bench]")
+    ap.add_argument("--demo", help="the demo folder [RESULTS/demo]")
+    ap.add_argument("--out", default=os.path.join(ROOT, "docs", "RESULTS.md"), help="report file [docs/RESULTS.md]")
+    args = ap.parse_args(argv)
+    try:
+        text = build_report(args)
+    except ResultsError as e:
+        print("make_results.py: error: %s" % e, file=sys.stderr)
+        return 2
+    os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
+    with open(args.out, "w") as f:
+        f.write(text)
+    print("make_results.py: %s" % rel(args.out), file=sys.stderr)
+    return 0
+
+
+# ------------------------------------------------------------------------------ meta.json
+def code_version():
+    try:
+        r = subprocess.run(["git", "-C", ROOT, "describe", "--always", "--dirty"], capture_output=True, text=True,
+                           check=False)
+    except OSError:
+        return "unknown (git not found)"
+    return r.stdout.strip() if r.returncode == 0 and r.stdout.strip() else "unknown (not a git checkout)"
+
+
+def machine():
+    cpu = "unknown"
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.startswith("model name"):
+                    cpu = " ".join(line.split(":", 1)[1].split())
+                    break
+    except OSError:
+        pass
+    return {"cpu": cpu, "cores": os.cpu_count()}
+
+
+def now():
+    return datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M:%S UTC")
+
+
+def main_meta(argv):
+    ap = argparse.ArgumentParser(prog="make_results.py meta", description="writes DIR/meta.json")
+    ap.add_argument("dir")
+    ap.add_argument("--command", help="the command line of the run")
+    ap.add_argument("--run", nargs=2, action="append", default=[], metavar=("NAME", "CMD"),
+                    help="the command that made the result folder NAME")
+    ap.add_argument("--seed")
+    ap.add_argument("--robot")
+    ap.add_argument("--setting", action="append", default=[], metavar="KEY=VALUE")
+    ap.add_argument("--finish", action="store_true", help="add the end time to an existing meta.json")
+    a = ap.parse_args(argv)
+    path = os.path.join(a.dir, "meta.json")
+    if a.finish:
+        try:
+            meta = read_json(path)
+        except ResultsError as e:
+            print("make_results.py meta: %s" % e, file=sys.stderr)
+            return 2
+        meta["finished"] = now()
+        start = meta.get("started_epoch")
+        if isinstance(start, (int, float)):
+            meta["wall_s"] = round(datetime.datetime.now().timestamp() - start)
+    else:
+        if not a.command:
+            ap.error("--command is required (or --finish)")
+        meta = {"command": a.command, "runs": dict(a.run), "seed": a.seed, "robot": a.robot,
+                "settings": dict(s.split("=", 1) for s in a.setting if "=" in s),
+                "code_version": code_version(), "machine": machine(), "started": now(),
+                "started_epoch": round(datetime.datetime.now().timestamp())}
+    os.makedirs(a.dir, exist_ok=True)
+    with open(path, "w") as f:
+        json.dump(meta, f, indent=1)
+        f.write("\n")
+    return 0
+
+
+if __name__ == "__main__":
+    if len(sys.argv) > 1 and sys.argv[1] == "meta":
+        sys.exit(main_meta(sys.argv[2:]))
+    sys.exit(main_report(sys.argv[1:]))
