@@ -11,7 +11,7 @@
       the same folders give the same file). A malformed file is an error naming the file;
       nothing is written then. Exit code 0, or 2 on an error.
 
-  make_results.py meta DIR --command CMD [--run NAME CMD]... [--seed S] [--robot R] [--setting K=V]...
+  make_results.py meta DIR --command CMD [--run NAME CMD]... [--seed S] [--robot R]
   make_results.py meta DIR --finish
       Writes DIR/meta.json at the start of a run (the command, the per-table commands, the seed,
       the robot, `git describe --always --dirty`, CPU model and cores, the start time) and adds
@@ -370,9 +370,16 @@ def read_bench_lines(path):
     return records
 
 
+def fmt_us(v):
+    """A duration given in microseconds, in us below 1 ms, else in ms."""
+    if not isinstance(v, (int, float)):
+        return "?"
+    return "%.2f us" % v if v < 10 else "%.1f us" % v if v < 1000 else "%.1f ms" % (v / 1000.0)
+
+
 def bench_figure(r):
     if "median_us" in r:
-        return "median %.3g us, p99 %.3g us (n %s)" % (r["median_us"], r.get("p99_us", float("nan")), r.get("n", "?"))
+        return "median %s, p99 %s (n %s)" % (fmt_us(r["median_us"]), fmt_us(r.get("p99_us")), r.get("n", "?"))
     if "cpu_real_time_factor" in r:
         return "%.2fx real time per core (wall %.2fx), %s/%s grasped" % (
             r["cpu_real_time_factor"], r.get("wall_real_time_factor", float("nan")), r.get("successes", "?"),
@@ -499,7 +506,7 @@ def machine():
                     break
     except OSError:
         pass
-    return {"cpu": cpu, "cores": os.cpu_count()}
+    return {"cpu": cpu, "cores": len(os.sched_getaffinity(0))}  # as nproc: the cores this run may use
 
 
 def now():
@@ -514,7 +521,6 @@ def main_meta(argv):
                     help="the command that made the result folder NAME")
     ap.add_argument("--seed")
     ap.add_argument("--robot")
-    ap.add_argument("--setting", action="append", default=[], metavar="KEY=VALUE")
     ap.add_argument("--finish", action="store_true", help="add the end time to an existing meta.json")
     a = ap.parse_args(argv)
     path = os.path.join(a.dir, "meta.json")
@@ -532,7 +538,6 @@ def main_meta(argv):
         if not a.command:
             ap.error("--command is required (or --finish)")
         meta = {"command": a.command, "runs": dict(a.run), "seed": a.seed, "robot": a.robot,
-                "settings": dict(s.split("=", 1) for s in a.setting if "=" in s),
                 "code_version": code_version(), "machine": machine(), "started": now(),
                 "started_epoch": round(datetime.datetime.now().timestamp())}
     os.makedirs(a.dir, exist_ok=True)

@@ -1,0 +1,176 @@
+#!/usr/bin/python3
+"""make_results.py (docs/RESULTS.md) on the small result folders of test/fixtures/results.
+
+test/fixtures/results holds the files experiments.sh and bench.sh write (exp1..3 summary.json
+and trials.csv in the ehc_experiment formats, bench.jsonl, meta.json), trimmed to a few sets;
+it has no demo folder. The tests run the generator as `make results` does and check that every
+table comes with its command, code version, machine, date, seeds and the paper's figures, that
+a folder that is not there is reported as not run, that a malformed file is an error naming the
+file (and nothing is written), and that the means and intervals are those of the fixture data.
+
+  /usr/bin/python3 -m pytest src/ehc_bringup/test/test_make_results.py
+"""
+import csv
+import importlib.util
+import json
+import os
+import shutil
+import subprocess
+import sys
+
+import pytest
+
+ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", ".."))
+SCRIPT = os.path.join(ROOT, "src", "ehc_bringup", "scripts", "make_results.py")
+FIXTURE = os.path.join(ROOT, "test", "fixtures", "results")
+
+_spec = importlib.util.spec_from_file_location("make_results", SCRIPT)
+make_results = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(make_results)
+
+
+def run(*args):
+    """make_results.py with `args`: (exit code, stdout + stderr)."""
+    r = subprocess.run([sys.executable, SCRIPT] + list(args), capture_output=True, text=True, check=False)
+    return r.returncode, r.stdout + r.stderr
+
+
+def generate(tmp_path, results=FIXTURE, *extra):
+    out = tmp_path / "RESULTS.md"
+    code, log = run("--results", str(results), "--out", str(out), *extra)
+    assert code == 0, log
+    return out.read_text()
+
+
+def sections(text):
+    """{title: body} of the '## ' sections."""
+    out, title = {}, None
+    for line in text.splitlines():
+        if line.startswith("## "):
+            title = line[3:]
+            out[title] = []
+        elif title:
+            out[title].append(line)
+    return {k: "\n".join(v) for k, v in out.items()}
+
+
+def table_rows(body):
+    """The rows of the (only) markdown table of a section, header first, as lists of cells."""
+    rows = [[c.strip() for c in line.strip().strip("|").split("|")] for line in body.splitlines()
+            if line.startswith("|") and not line.startswith("|---")]
+    return rows
+
+
+def test_every_table_has_its_provenance_and_the_papers_figures(tmp_path):
+    text = generate(tmp_path)
+    secs = sections(text)
+    assert sum(s.startswith(("Exp-1", "Exp-2", "Exp-3", "Benchmarks")) for s in secs) == 4, list(secs)
+    for title, body in secs.items():
+        for field in ("- command: `", "- code version: `a7f2a35", "- machine: AMD EPYC 7B13, 2 core(s)",
+                      "- date: 2026-11-27 04:", "- seeds: "):
+            assert field in body, "%s: no '%s'" % (title, field)
+        header = table_rows(body)[0]
+        assert any(h.startswith("paper") for h in header), "%s: no paper column in %s" % (title, header)
+    # Each experiment names the ehc_experiment run that made it and its seeds.
+    assert "ehc_experiment reach" in secs[next(s for s in secs if s.startswith("Exp-1"))]
+    assert "ehc_experiment grasp" in secs[next(s for s in secs if s.startswith("Exp-2"))]
+    exp3 = secs[next(s for s in secs if s.startswith("Exp-3"))]
+    assert "ehc_experiment poses" in exp3
+    assert "run seed = seed*1000 + set*10 + index (2 run seeds: 1000, 1010)" in exp3
+
+
+def test_the_papers_figures_stand_beside_ours(tmp_path):
+    secs = sections(generate(tmp_path))
+    rows = {title.split(":")[0]: {r[0]: r for r in table_rows(body)[1:]} for title, body in secs.items()}
+    assert rows["Exp-1"]["EHC"][2] == "9.98" and rows["Exp-1"]["EHC"][4] == "18"
+    assert rows["Exp-1"]["NEO(e)"][2] == "11.81" and rows["Exp-1"]["NEO(e)"][4] == "35"
+    assert rows["Exp-1"]["NEO(c)"][2] == "11.69" and rows["Exp-1"]["NEO(c)"][4] == "37"
+    assert rows["Exp-2"]["EHC"][2] == "13.54" and rows["Exp-2"]["EHC"][4] == "95.6"
+    assert rows["Exp-2"]["TSMM"][4] == "80.0" and rows["Exp-2"]["NEO(e)"][4] == "51.1"
+    assert rows["Exp-2"]["NEO(c)"][4] == "11.1"
+    # Table IV: forward, downward, sideways TfM
+    neo, ehc_nompbs, ehc = (rows["Exp-3"][k] for k in ("NEO (without MPBS)", "EHC (without MPBS)", "EHC (MPBS)"))
+    assert (neo[2], neo[4], neo[6]) == ("100.0", "31.6", "38.7")
+    assert (ehc_nompbs[2], ehc_nompbs[4], ehc_nompbs[6]) == ("100.0", "34.3", "36.2")
+    assert (ehc[2], ehc[4], ehc[6]) == ("100.0", "100.0", "100.0")
+
+
+def test_a_missing_folder_is_reported_as_not_run(tmp_path):
+    text = generate(tmp_path)  # the fixture has no demo folder
+    assert "| Demo | `test/fixtures/results/demo` | not run (`make demo`) |" in text
+    assert not any(t.startswith("Demo") for t in sections(text))
+    text = generate(tmp_path, FIXTURE, "--bench", str(tmp_path / "nothing_here"))
+    assert "| Benchmarks | `%s` | not run (`make bench`) |" % (tmp_path / "nothing_here") in text
+    assert not any(t.startswith("Benchmarks") for t in sections(text))
+    text = generate(tmp_path, tmp_path / "no_results_at_all")
+    assert text.count("not run") == 5
+
+
+@pytest.mark.parametrize("name, damage, says", [
+    ("experiments/exp2/summary.json", lambda t: t[: len(t) // 2], "not valid JSON"),
+    ("experiments/exp1/trials.csv", lambda t: t.replace(",1,", ",yes,", 1), "is not a number"),
+    ("experiments/exp3/trials.csv", lambda t: t.replace("approach,", "approach_,", 1), "missing column(s) approach"),
+    ("experiments/exp1/summary.json", lambda t: t.replace('"targets"', '"target_count"', 1), "missing field 'targets'"),
+    ("bench/bench.jsonl", lambda t: t.replace('"n":20000,', '"n":20000', 1), "line 1 is not valid JSON"),
+    ("experiments/meta.json", lambda t: "[1, 2]", "expected a JSON object"),
+])
+def test_a_malformed_file_is_an_error_naming_it(tmp_path, name, damage, says):
+    results = tmp_path / "results"
+    shutil.copytree(FIXTURE, results)
+    path = results / name
+    path.write_text(damage(path.read_text()))
+    out = tmp_path / "RESULTS.md"
+    code, log = run("--results", str(results), "--out", str(out))
+    assert code == 2, log
+    assert "make_results.py: error: %s" % path in log, log
+    assert says in log, log
+    assert not out.exists(), "a report was written from a malformed folder"
+
+
+def test_the_means_are_the_fixture_datas_and_the_output_is_deterministic(tmp_path):
+    text = generate(tmp_path)
+    assert generate(tmp_path) == text  # fixed bootstrap seed
+    with open(os.path.join(FIXTURE, "experiments", "exp1", "trials.csv")) as f:
+        ehc = [r for r in csv.DictReader(f) if r["method"] == "ehc"]
+    reached = [float(r["time_s"]) for r in ehc if r["reached"] == "1"]
+    failed = sum(r["reached"] == "0" for r in ehc)
+    secs = sections(text)
+    row = {r[0]: r for r in table_rows(secs[next(s for s in secs if s.startswith("Exp-1"))])}["EHC"]
+    time, lo_hi = row[1].split(" ", 1)
+    assert float(time) == pytest.approx(sum(reached) / len(reached), abs=0.005)
+    lo, hi = (float(x) for x in lo_hi.strip("[]").split(","))
+    assert min(reached) <= lo <= float(time) <= hi <= max(reached)
+    assert row[3].startswith("%d [" % failed) and row[3].endswith("(/%d)" % len(ehc))
+    with open(os.path.join(FIXTURE, "experiments", "exp2", "trials.csv")) as f:
+        tsmm = [r for r in csv.DictReader(f) if r["method"] == "tsmm"]
+    ok = sum(r["success"] == "1" for r in tsmm)
+    row = {r[0]: r for r in table_rows(secs[next(s for s in secs if s.startswith("Exp-2"))])}["TSMM"]
+    assert row[3].startswith("%.1f [" % (100.0 * ok / len(tsmm))) and row[3].endswith("(%d/%d)" % (ok, len(tsmm)))
+
+
+def test_bootstrap_interval_over_sets():
+    # Pooled ratio; one set: no interval; identical sets: a zero-width interval.
+    assert make_results.bootstrap([3.0], [2.0]) == (1.5, None)
+    point, ci = make_results.bootstrap([1.0, 1.0, 1.0], [2.0, 2.0, 2.0], scale=100.0)
+    assert point == 50.0 and ci == (50.0, 50.0)
+    point, ci = make_results.bootstrap([0.0, 10.0], [1.0, 1.0])
+    assert point == 5.0 and 0.0 <= ci[0] < 5.0 < ci[1] <= 10.0
+
+
+def test_meta_records_command_code_version_machine_and_dates(tmp_path):
+    out = tmp_path / "run"
+    code, log = run("meta", str(out), "--command", "SEED=3 experiments.sh", "--run", "exp1", "ehc_experiment reach --seed 3",
+                    "--seed", "3", "--robot", "kuka_iiwa14_kmr")
+    assert code == 0, log
+    meta = json.loads((out / "meta.json").read_text())
+    assert meta["command"] == "SEED=3 experiments.sh" and meta["runs"] == {"exp1": "ehc_experiment reach --seed 3"}
+    assert meta["seed"] == "3" and meta["robot"] == "kuka_iiwa14_kmr"
+    assert meta["code_version"] and meta["machine"]["cores"] >= 1 and meta["machine"]["cpu"]
+    assert meta["started"].endswith("UTC") and "finished" not in meta
+    code, log = run("meta", str(out), "--finish")
+    assert code == 0, log
+    meta = json.loads((out / "meta.json").read_text())
+    assert meta["finished"].endswith("UTC") and meta["wall_s"] >= 0
+    # A run that did not finish says so in its tables.
+    lines = make_results.provenance({"command": "x", "started": "then"}, None, str(out), "s")
+    assert any("the run did not finish" in line for line in lines)
