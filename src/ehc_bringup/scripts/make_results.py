@@ -431,8 +431,9 @@ def demo_section(folder, meta):
         out.append("| %s | %s | %.2f | %.1f | 13.54 s mean, 95.6 %% success |" % (
             field(o, ["name"], path), "yes" if field(o, ["success"], path) else "no", float(field(o, ["time_s"], path)),
             100.0 * float(field(o, ["tfm"], path))))
+    mpbs = {True: "on", False: "off"}.get(s.get("mpbs"), "n/a")
     out += ["", "%s/%s grasped, mode %s, MPBS %s." % (
-        s.get("successes", "?"), s.get("objects_total", "?"), s.get("mode", "?"), s.get("mpbs", "?"))]
+        s.get("successes", "?"), s.get("objects_total", "?"), s.get("mode", "?"), mpbs)]
     return out
 
 

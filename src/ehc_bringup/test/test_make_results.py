@@ -106,6 +106,25 @@ def test_a_missing_folder_is_reported_as_not_run(tmp_path):
     assert text.count("not run") == 5
 
 
+def test_a_demo_run_gets_its_table(tmp_path):
+    results = tmp_path / "results"
+    shutil.copytree(FIXTURE, results)
+    (results / "demo").mkdir()
+    (results / "demo" / "summary.json").write_text(json.dumps({
+        "mode": "ehc", "successes": 2, "objects_total": 3, "mpbs": True, "objects": [
+            {"name": "front", "success": True, "time_s": 12.5, "tfm": 0.9},
+            {"name": "middle", "success": True, "time_s": 13.25, "tfm": 0.85},
+            {"name": "back", "success": False, "time_s": 30.0, "tfm": 0.5}]}))
+    shutil.copy(results / "bench" / "meta.json", results / "demo" / "meta.json")
+    secs = sections(generate(tmp_path, results))
+    demo = secs[next(s for s in secs if s.startswith("Demo"))]
+    assert "- code version: `a7f2a35`" in demo and "- seeds: " in demo
+    rows = table_rows(demo)
+    assert rows[0][-1].startswith("paper") and [r[:3] for r in rows[1:]] == [
+        ["front", "yes", "12.50"], ["middle", "yes", "13.25"], ["back", "no", "30.00"]]
+    assert "2/3 grasped, mode ehc, MPBS on." in demo
+
+
 @pytest.mark.parametrize("name, damage, says", [
     ("experiments/exp2/summary.json", lambda t: t[: len(t) // 2], "not valid JSON"),
     ("experiments/exp1/trials.csv", lambda t: t.replace(",1,", ",yes,", 1), "is not a number"),
