@@ -6,7 +6,8 @@ headers; not tests or benchmarks) for parameter reads:
   - YAML keys read through ehc_common::ConfigNode: get, require, child, childOrEmpty, getVector,
     requireVector, getStrings, listSize, element, has, ignore with a literal key; a lambda or a
     function that takes the key and passes it on (`auto get = [&](const char* key, ...) {
-    n.get(key, ...) }`); a range-for over a list of literal keys passed on the same way;
+    n.get(key, ...) }`, a NodeHandle helper taking the name); a range-for over a list of literal
+    keys passed on the same way;
   - private ROS parameters: NodeHandle param, getParam, hasParam, searchParam, getParamCached
     and ros::param::get / param / has (a leading `~` is dropped).
 Calls on a CommandLine (the CLI tools' options) are not parameters. A key counts as documented
@@ -36,8 +37,9 @@ DIRECT = re.compile(r'(\w+|\))\s*(?:\.|->)\s*(%s)\s*%s\s*\(\s*%s' % ("|".join(ME
 ROS_PARAM_NS = re.compile(r'ros::param::(?:get|param|has|getCached|search)\s*%s\s*\(\s*%s' % (TEMPLATE, KEY))
 COMMAND_LINE_VAR = re.compile(r'\bCommandLine\s+(\w+)\s*[({]')
 LAMBDA = re.compile(r'\bauto\s+(\w+)\s*=\s*\[[^\]]*\]\s*\(\s*(?:const\s+)?(?:char\s*\*|std::string\s*&?)\s*(\w+)')
-FUNCTION = re.compile(r'\b(\w+)\s*\(\s*const\s+(?:ehc_common::)?ConfigNode\s*&\s*\w+\s*,\s*'
-                      r'const\s+(?:char\s*\*|std::string\s*&)\s*(\w+)\s*[,)]')
+# A function definition: name, parameter list, then its body.
+FUNCTION = re.compile(r'\b(\w+)\s*\(([^()]*)\)\s*(?:const\s*)?(?:noexcept\s*)?\{')
+KEY_PARAM = re.compile(r'(?:const\s+)?(?:char\s*\*|std::string\s*&?)\s*(\w+)\s*(?:=[^,]*)?$')
 RANGE_FOR = re.compile(r'\bfor\s*\(\s*(?:const\s+)?(?:char\s*\*|std::string\s*&?|auto\s*&?|auto\s*\*)\s*(\w+)\s*:\s*'
                        r'\{([^{}]*)\}\s*\)')
 
@@ -105,8 +107,13 @@ def scan_text(text):
         if passes_on(block_after(text, m.end()), m.group(2)):
             wrappers.add(m.group(1))
     for m in FUNCTION.finditer(text):
-        if passes_on(block_after(text, m.end()), m.group(2)):
-            wrappers.add(m.group(1))
+        if m.group(1) in ("if", "for", "while", "switch", "catch"):
+            continue
+        body = block_after(text, m.end() - 1)
+        for param in m.group(2).split(","):
+            k = KEY_PARAM.search(param.strip())
+            if k and passes_on(body, k.group(1)):
+                wrappers.add(m.group(1))
     for name in wrappers:
         for m in re.finditer(r'\b%s\s*\((?:[^()"]*,\s*)?%s' % (re.escape(name), KEY), text):
             found.append((m.group(1), line(m.start())))
@@ -162,10 +169,16 @@ def test_scanner_finds_every_kind_of_read():
         return node.require<std::string>(key);
       }
       robotFileField(n, "through_function");
+      template <class T> void override(const ros::NodeHandle& pnh, const std::string& name, T* value) {
+        if (pnh.hasParam(name)) pnh.getParam(name, *value);
+      }
+      override(pnh, "node_override", &p.x);
+      void unrelated(const std::string& text) { log(text); }
+      unrelated("not_a_key_either");
     '''
     keys = {k for k, _ in scan_text(src)}
     assert keys == {"plain", "section", "multi_line", "ack_topic", "private_name", "through_lambda", "loop_a",
-                    "loop_b", "through_function"}
+                    "loop_b", "through_function", "node_override"}
 
 
 def test_documented_words_are_code_spans_only():
