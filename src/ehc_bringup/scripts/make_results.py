@@ -217,7 +217,7 @@ def exp1_section(folder, meta):
     if not isinstance(summaries, list) or not summaries:
         raise ResultsError("%s: expected a method summary or a list of them" % rel(summary_path))
     rows = read_csv(trials_path, ["method", "set", "reached", "time_s"])
-    seed = meta.get("seed", "?") if meta else "?"
+    seed = (meta or {}).get("seed") or "not recorded"
     seeds = ("--seed %s: targets of set k drawn with seed*1000 + k, Table I noise of set k seeded seed + k"
              % seed)
     out = ["## Exp-1: random reaching (paper Table II, simulation)", ""]
@@ -274,7 +274,8 @@ def grasp_summary(folder):
 def run_seeds(summary, rows, rule):
     seeds = sorted({int(r["seed"]) for r in rows})
     listed = ", ".join(str(x) for x in seeds[:6]) + (", ..." if len(seeds) > 6 else "")
-    return "--seed %s: run seed = %s (%d run seeds: %s)" % (summary.get("seed", "?"), rule, len(seeds), listed)
+    return "--seed %s: run seed = %s (%d run seed%s: %s)" % (
+        summary.get("seed", "?"), rule, len(seeds), "" if len(seeds) == 1 else "s", listed)
 
 
 def success_and_time(rows):
@@ -290,7 +291,7 @@ def safety_text(methods, path):
         m = margin.get("margin")
         parts.append("%s: %s sim steps in contact, %s joint-limit violations, min margin d - d_s %s" % (
             field(s, ["method"], path), s.get("contact_steps", "?"), s.get("joint_limit_violations", "?"),
-            "%.1f mm" % (1000.0 * m) if isinstance(m, (int, float)) else "n/a"))
+            "%.1f mm" % (round(1000.0 * m, 1) + 0.0) if isinstance(m, (int, float)) else "n/a"))
     return "Safety (not in the paper; contacts and violations must be zero): " + "; ".join(parts) + "."
 
 

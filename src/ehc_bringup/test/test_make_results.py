@@ -1,9 +1,10 @@
 #!/usr/bin/python3
 """make_results.py (docs/RESULTS.md) on the small result folders of test/fixtures/results.
 
-test/fixtures/results holds the files experiments.sh and bench.sh write (exp1..3 summary.json
-and trials.csv in the ehc_experiment formats, bench.jsonl, meta.json), trimmed to a few sets;
-it has no demo folder. The tests run the generator as `make results` does and check that every
+test/fixtures/results holds what experiments.sh and bench.sh write, kept to the files the
+generator reads: summary.json and trials.csv of a reduced ehc_experiment run (seed 7; Exp-1 and
+Exp-2 two sets, Exp-3 one), bench.jsonl lines in the bench executables' format, and a meta.json
+each; it has no demo folder. The tests run the generator as `make results` does and check that every
 table comes with its command, code version, machine, date, seeds and the paper's figures, that
 a folder that is not there is reported as not run, that a malformed file is an error naming the
 file (and nothing is written), and that the means and intervals are those of the fixture data.
@@ -66,8 +67,8 @@ def test_every_table_has_its_provenance_and_the_papers_figures(tmp_path):
     secs = sections(text)
     assert sum(s.startswith(("Exp-1", "Exp-2", "Exp-3", "Benchmarks")) for s in secs) == 4, list(secs)
     for title, body in secs.items():
-        for field in ("- command: `", "- code version: `a7f2a35", "- machine: AMD EPYC 7B13, 2 core(s)",
-                      "- date: 2026-11-27 04:", "- seeds: "):
+        for field in ("- command: `", "- code version: `ef2b0fb`", "- machine: AMD EPYC, 2 core(s)",
+                      "- date: 2026-11-27 05:", "- seeds: "):
             assert field in body, "%s: no '%s'" % (title, field)
         header = table_rows(body)[0]
         assert any(h.startswith("paper") for h in header), "%s: no paper column in %s" % (title, header)
@@ -76,7 +77,8 @@ def test_every_table_has_its_provenance_and_the_papers_figures(tmp_path):
     assert "ehc_experiment grasp" in secs[next(s for s in secs if s.startswith("Exp-2"))]
     exp3 = secs[next(s for s in secs if s.startswith("Exp-3"))]
     assert "ehc_experiment poses" in exp3
-    assert "run seed = seed*1000 + set*10 + index (2 run seeds: 1000, 1010)" in exp3
+    assert "run seed = seed*1000 + set*10 + index (1 run seed: 7000)" in exp3
+    assert "run seed = seed*1000 + set*10 (2 run seeds: 7000, 7010)" in secs[next(s for s in secs if s.startswith("Exp-2"))]
 
 
 def test_the_papers_figures_stand_beside_ours(tmp_path):
@@ -118,7 +120,7 @@ def test_a_demo_run_gets_its_table(tmp_path):
     shutil.copy(results / "bench" / "meta.json", results / "demo" / "meta.json")
     secs = sections(generate(tmp_path, results))
     demo = secs[next(s for s in secs if s.startswith("Demo"))]
-    assert "- code version: `a7f2a35`" in demo and "- seeds: " in demo
+    assert "- code version: `ef2b0fb`" in demo and "- seeds: " in demo
     rows = table_rows(demo)
     assert rows[0][-1].startswith("paper") and [r[:3] for r in rows[1:]] == [
         ["front", "yes", "12.50"], ["middle", "yes", "13.25"], ["back", "no", "30.00"]]
