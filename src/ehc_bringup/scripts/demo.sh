@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# `make demo`: the product's main job (issue 6). Headless, rosrun only (no roslaunch, no display):
+# `make demo`: the product's main job. Headless, rosrun only (no roslaunch, no display):
 # a private ROS master, the Bullet sim (config/scenes/table_three_objects.yaml, lock-step sim
 # time), one AprilTag node per object, the grasp node, the obstacle node, the EHC controller and
 # the grasp sequencer, which grasps the three objects in sequence. Prints progress per phase, one
@@ -8,7 +8,7 @@
 #   trace.csv      per control cycle: |e|, sig(omega), base / arm speeds, phases
 #   demo.png       |e|, sig(omega) and base / arm speeds over time
 #   logs/*.log     one log per node
-# Every process started here is stopped on exit, also on Ctrl-C.
+# Every process started here is stopped on exit, also on Ctrl-C (src/ehc_common/scripts/supervise.sh).
 #
 # Environment (defaults in brackets):
 #   EHC_DEVEL          devel space to source                          [devel]
@@ -49,6 +49,10 @@ if [ ! -f "$EHC_DEVEL/setup.bash" ]; then
 fi
 # shellcheck disable=SC1090,SC1091
 source "$EHC_DEVEL/setup.bash"
+# shellcheck source=../../ehc_common/scripts/supervise.sh
+source src/ehc_common/scripts/supervise.sh
+SUP_TAG=demo.sh
+SUP_LOG_DIR="$OUT/logs"
 
 CONTROLLER_CONFIG="${CONTROLLER_CONFIG:-config/demo/controller.yaml}"
 MODE="${MODE:-ehc}"
@@ -83,88 +87,16 @@ done
 mkdir -p "$OUT/logs"
 rm -f "$OUT/summary.json" "$OUT/trace.csv" "$OUT/demo.png" "$OUT"/logs/*.log
 # Private master and ROS_HOME: never touches another ROS system on this machine.
-export ROS_HOME="$OUT/ros_home"
-export ROS_LOG_DIR="$ROS_HOME/log"
-mkdir -p "$ROS_LOG_DIR"
-free_port() {
-  /usr/bin/python3 - "$1" <<'EOF'
-import socket, sys
-for p in range(int(sys.argv[1]), int(sys.argv[1]) + 200):
-    s = socket.socket()
-    try:
-        s.bind(("127.0.0.1", p)); s.close(); print(p); break
-    except OSError:
-        s.close()
-EOF
-}
-PORT="${EHC_DEMO_PORT:-$(free_port 11411)}"
-export ROS_MASTER_URI="http://127.0.0.1:$PORT"
-export ROS_HOSTNAME=127.0.0.1
-unset ROS_IP
-
-PIDS=()
-NAMES=()
-stopped=0
-stop_all() {
-  [ "$stopped" = 1 ] && return
-  stopped=1
-  trap - INT TERM EXIT
-  # Nodes first (reverse start order), the master last; SIGINT, then SIGKILL after 5 s.
-  for ((i = ${#PIDS[@]} - 1; i >= 0; i--)); do kill -INT "${PIDS[$i]}" 2>/dev/null; done
-  for _ in $(seq 50); do
-    alive=0
-    for p in "${PIDS[@]}"; do kill -0 "$p" 2>/dev/null && alive=1; done
-    [ "$alive" = 0 ] && break
-    sleep 0.1
-  done
-  for p in "${PIDS[@]}"; do kill -KILL "$p" 2>/dev/null; done
-  wait "${PIDS[@]}" 2>/dev/null
-}
-trap 'echo; echo "demo.sh: interrupted, stopping every process it started"; stop_all; exit 130' INT TERM
-trap 'stop_all' EXIT
-
-# Parameters never leak from an earlier run on the same master (e.g. an earlier MPBS=true when
-# this run leaves MPBS unset): each node's private namespace is deleted before it starts, so it
-# gets exactly the overrides of this run.
-clear_private_params() {  # clear_private_params NODE_NAME...
-  local ns
-  for ns in "$@"; do
-    if rosparam list "/$ns" 2>/dev/null | grep -q .; then
-      rosparam delete "/$ns" >/dev/null 2>&1 || { echo "demo.sh: cannot delete /$ns" >&2; exit 2; }
-    fi
-  done
-}
-
-start() {  # start NAME COMMAND...
-  local name="$1"
-  shift
-  stdbuf -oL -eL "$@" >"$OUT/logs/$name.log" 2>&1 &  # line-buffered: progress is streamed
-  PIDS+=($!)
-  NAMES+=("$name")
-}
+PORT="${EHC_DEMO_PORT:-$(sup_free_port 11411)}"
+sup_private_master "$PORT" "$OUT/ros_home"
+sup_install_traps "interrupted, stopping every process it started" 130
 
 echo "== EHC-MM demo: grasp ${#OBJECTS[@]} object(s) with the EHC controller (${ROBOT:+robot $ROBOT, }scene $SCENE, mode $MODE${MPBS:+, MPBS $MPBS}, seed $SEED)"
 echo "   master $ROS_MASTER_URI, logs in $OUT/logs/"
 t0=$(date +%s.%N)
-start rosmaster rosmaster --core -p "$PORT"
-MASTER_PID=${PIDS[-1]}
 # Our master, not another one that took the port first (two demos started at the same instant
 # picked the same free port; the second one's nodes joined the first one's master).
-master_pid() {
-  /usr/bin/python3 -c "import sys, xmlrpc.client as x; print(x.ServerProxy(sys.argv[1]).getPid('/demo.sh')[2])" \
-    "$ROS_MASTER_URI" 2>/dev/null
-}
-master_ok=0
-for _ in $(seq 100); do
-  pid=$(master_pid)
-  if [ "$pid" = "$MASTER_PID" ]; then master_ok=1; break; fi
-  if [ -n "$pid" ] || ! kill -0 "$MASTER_PID" 2>/dev/null; then break; fi  # another master, or ours died
-  # No XML-RPC answer yet (or a stand-in master that only serves parameters): the parameter
-  # server answering is enough.
-  if rosparam set /use_sim_time true >/dev/null 2>&1; then master_ok=1; break; fi
-  sleep 0.1
-done
-if [ "$master_ok" != 1 ]; then
+if ! sup_start_master; then
   echo "demo.sh: the ROS master did not start on port $PORT (taken by another master? see $OUT/logs/rosmaster.log)" >&2
   exit 2
 fi
@@ -172,10 +104,13 @@ rosparam set /use_sim_time true >/dev/null 2>&1
 rosparam get /use_sim_time >/dev/null 2>&1 || { echo "demo.sh: the ROS master did not start (port $PORT)" >&2; exit 2; }
 TAG_NODES=()
 for o in "${OBJECTS[@]}"; do TAG_NODES+=("ehc_tag_$o"); done
-clear_private_params ehc_sim_node "${TAG_NODES[@]}" ehc_grasp_node ehc_obstacle_node \
-  ehc_controller_node ehc_grasp_sequencer_node
+# Parameters never leak from an earlier run on the same master (e.g. an earlier MPBS=true when
+# this run leaves MPBS unset): each node's private namespace is deleted before it starts, so it
+# gets exactly the overrides of this run.
+sup_clear_params /ehc_sim_node "${TAG_NODES[@]/#//}" /ehc_grasp_node /ehc_obstacle_node \
+  /ehc_controller_node /ehc_grasp_sequencer_node || exit 2
 
-# Lock-step acknowledgement gate (issue 18): every tag node acknowledges each image, the grasp
+# Lock-step acknowledgement gate: every tag node acknowledges each image, the grasp
 # node each cloud, the obstacle node each state and the sequencer each controller status on
 # /sim/lockstep_ack; the simulator publishes its first state once all are ready and steps on only
 # once they are done (ehc_sim::StepScheduler::setAckGate, ehc_msgs::LockstepAck).
@@ -190,54 +125,42 @@ if [ "${LOCKSTEP_GATE:-1}" = 1 ]; then
   ACK_ARG=(_ack_topic:=/sim/lockstep_ack)
 fi
 # shellcheck disable=SC2086
-start sim rosrun ${SIM_PREFIX:+--prefix "$SIM_PREFIX"} ehc_sim ehc_sim_node _config:="$SIM_CONFIG" _scene:="$SCENE" _seed:="$SEED" \
+sup_start sim rosrun ${SIM_PREFIX:+--prefix "$SIM_PREFIX"} ehc_sim ehc_sim_node _config:="$SIM_CONFIG" _scene:="$SCENE" _seed:="$SEED" \
   "${ROBOT_ARG[@]}" "${GATE_ARG[@]}"
 for o in "${OBJECTS[@]}"; do
-  start "tag_$o" rosrun ehc_perception ehc_tag_node _config:="config/demo/tag_$o.yaml" __name:="ehc_tag_$o" "${ACK_ARG[@]}"
+  sup_start "tag_$o" rosrun ehc_perception ehc_tag_node _config:="config/demo/tag_$o.yaml" __name:="ehc_tag_$o" "${ACK_ARG[@]}"
 done
 # The grasp node computes grasps near the sequencer's current object (remapped target topic).
-start grasp rosrun ehc_perception ehc_grasp_node _config:=config/perception/grasp_node.yaml \
+sup_start grasp rosrun ehc_perception ehc_grasp_node _config:=config/perception/grasp_node.yaml \
   /ehc/target_pose:=/ehc/sequencer/object_pose "${ACK_ARG[@]}"
 [ "${OBSTACLES:-1}" = 1 ] &&
-  start obstacles rosrun ehc_perception ehc_obstacle_node _config:=config/demo/obstacle_node.yaml "${ROBOT_ARG[@]}" "${ACK_ARG[@]}"
+  sup_start obstacles rosrun ehc_perception ehc_obstacle_node _config:=config/demo/obstacle_node.yaml "${ROBOT_ARG[@]}" "${ACK_ARG[@]}"
 # Without the obstacle node the controller must not wait for obstacle lists (OBSTACLES_STALE).
 OBSTACLE_ARG=()
 [ "${OBSTACLES:-1}" = 1 ] || OBSTACLE_ARG=(_require_obstacles:=false)
-start controller rosrun ehc_control ehc_controller_node _config:="$CONTROLLER_CONFIG" _mode:="$MODE" "${MPBS_ARG[@]}" \
+sup_start controller rosrun ehc_control ehc_controller_node _config:="$CONTROLLER_CONFIG" _mode:="$MODE" "${MPBS_ARG[@]}" \
   "${OBSTACLE_ARG[@]}" "${ROBOT_ARG[@]}"
-start sequencer rosrun ehc_bringup ehc_grasp_sequencer_node _config:="$SEQUENCER_CONFIG" "${ROBOT_ARG[@]}" "${ACK_ARG[@]}" \
+sup_start sequencer rosrun ehc_bringup ehc_grasp_sequencer_node _config:="$SEQUENCER_CONFIG" "${ROBOT_ARG[@]}" "${ACK_ARG[@]}" \
   _summary:="$OUT/summary.json" _trace:="$OUT/trace.csv"
-SEQ_PID=${PIDS[-1]}
+SEQ_PID=$SUP_LAST_PID
 
 # Progress: the sequencer's "[grasp]" lines, without the ROS log prefix.
 # tail ends with the sequencer (--pid), so the pipeline never outlives the run.
 tail --pid="$SEQ_PID" -n +1 -F "$OUT/logs/sequencer.log" 2>/dev/null |
   sed -u -n -e 's/\x1b\[[0-9;]*m//g' -e 's/^.*\[grasp\] //p' | grep --line-buffered -v '^json \|^summary ' &
-TAIL_PID=$!
-PIDS+=($TAIL_PID)
-NAMES+=(progress)
+sup_adopt progress $!
 
 status=0
-deadline=$(( $(date +%s) + WALL_LIMIT ))
-while kill -0 "$SEQ_PID" 2>/dev/null; do
-  for i in "${!PIDS[@]}"; do
-    case "${NAMES[$i]}" in sequencer|progress) continue ;; esac
-    if ! kill -0 "${PIDS[$i]}" 2>/dev/null; then
-      echo "demo.sh: ${NAMES[$i]} exited unexpectedly; last lines of $OUT/logs/${NAMES[$i]}.log:" >&2
-      tail -n 5 "$OUT/logs/${NAMES[$i]}.log" >&2
-      status=2
-      break 2
-    fi
-  done
-  if [ "$(date +%s)" -ge "$deadline" ]; then
-    echo "demo.sh: wall-clock guard of $WALL_LIMIT s reached; stopping" >&2
-    status=2
-    break
-  fi
-  sleep 0.5
-done
+sup_watch --until sequencer --ignore progress --limit "$WALL_LIMIT"
+case $? in
+  1) echo "demo.sh: $SUP_DEAD exited unexpectedly; last lines of $OUT/logs/$SUP_DEAD.log:" >&2
+     sup_log_tail "$SUP_DEAD"
+     status=2 ;;
+  2) echo "demo.sh: wall-clock guard of $WALL_LIMIT s reached; stopping" >&2
+     status=2 ;;
+esac
 sleep 0.3  # let the progress tail print the last lines
-stop_all
+sup_stop_all
 wall=$(/usr/bin/python3 -c "import time; print(f'{time.time() - $t0:.1f}')")
 
 if [ ! -f "$OUT/summary.json" ]; then

@@ -41,8 +41,9 @@
 # parameter server (/<node name>, e.g. /ehc_controller_node) is deleted, so that it gets exactly
 # this run's overrides (an earlier CONTROLLER_MODE=tsmm does not stay in force).
 # Every node is started in the background; Ctrl-C (or any node exiting) stops all the nodes
-# this script started, by their process ids. Exit code: 0 on Ctrl-C or when the sequencer
-# completed, 1 if a node died (or the sequencer failed), 2 on a usage or set-up error.
+# this script started, by their process ids (src/ehc_common/scripts/supervise.sh). Exit code:
+# 0 on Ctrl-C or when the sequencer completed, 1 if a node died (or the sequencer failed), 2 on
+# a usage or set-up error.
 set -o pipefail
 
 usage() { awk 'NR == 1 { next } /^#/ { sub(/^# ?/, ""); print; next } { exit }' "$0"; }
@@ -62,6 +63,10 @@ done
 [ ${#COMPONENTS[@]} -eq 0 ] && COMPONENTS=(arm base perception controller)
 
 export PATH="/usr/bin:/bin:$PATH"  # the catkin-aware python3 first
+# The process supervisor beside this script's package (ehc_common, a dependency of ehc_realman).
+# shellcheck source=../../ehc_common/scripts/supervise.sh
+source "$(dirname "$0")/../../ehc_common/scripts/supervise.sh" || exit 2
+SUP_TAG=run_realman.sh
 EHC_WS="${EHC_WS:-$(cd "$(dirname "$0")/../../.." && pwd)}"
 cd "$EHC_WS" || exit 2
 if [ -z "${EHC_SKIP_SETUP:-}" ]; then
@@ -173,24 +178,8 @@ fi
 
 # ---------------------------------------------------------------- start, watch, stop
 mkdir -p "$LOG_DIR"
-PIDS=()
-NAMES=()
-stop_all() {
-  trap - INT TERM EXIT
-  for i in "${!PIDS[@]}"; do
-    kill -INT "${PIDS[$i]}" 2>/dev/null
-  done
-  for _ in $(seq 50); do  # at most 5 s for a clean shutdown
-    alive=0
-    for p in "${PIDS[@]}"; do kill -0 "$p" 2>/dev/null && alive=1; done
-    [ "$alive" = 0 ] && break
-    sleep 0.1
-  done
-  for p in "${PIDS[@]}"; do kill -KILL "$p" 2>/dev/null; done
-  wait 2>/dev/null
-}
-trap 'echo; echo "run_realman.sh: stopping"; stop_all; exit 0' INT TERM
-trap 'stop_all' EXIT
+SUP_LOG_DIR="$LOG_DIR"
+sup_install_traps "stopping" 0
 
 # Node names: the __name:= remap if any, else the executable's ros::init name, under ROS_NAMESPACE.
 node_ns() { local ns="${ROS_NAMESPACE:-}"; ns="${ns#/}"; ns="${ns%/}"; echo "${ns:+/$ns}/$1"; }
@@ -205,9 +194,7 @@ for n in "${NODES[@]}"; do
   # shellcheck disable=SC2086
   name="$(node_name "$exe" $args)"
   ns="$(node_ns "$name")"
-  if rosparam list "$ns" 2>/dev/null | grep -q .; then
-    rosparam delete "$ns" || { echo "run_realman.sh: cannot delete the parameters $ns" >&2; exit 2; }
-  fi
+  sup_clear_params "$ns" || exit 2
   if [ "$exe" = robot_state_publisher ]; then
     # robot_state_publisher reads robot_description in its own namespace (searchParam), the
     # usual global /robot_description; set on every run, so it is never an earlier run's.
@@ -218,30 +205,20 @@ for n in "${NODES[@]}"; do
   fi
   log="$LOG_DIR/$name.log"
   # shellcheck disable=SC2086
-  rosrun "$pkg" "$exe" $args >"$log" 2>&1 &
-  PIDS+=($!)
-  NAMES+=("$name")
-  echo "started $name (pid $!, log $log): rosrun $n"
+  sup_start "$name" rosrun "$pkg" "$exe" $args
+  echo "started $name (pid $SUP_LAST_PID, log $log): rosrun $n"
 done
 
 # Any node exiting is an error: stop everything (the robot must not run half-controlled).
-while :; do
-  for i in "${!PIDS[@]}"; do
-    if ! kill -0 "${PIDS[$i]}" 2>/dev/null; then
-      wait "${PIDS[$i]}"
-      rc=$?
-      if [ "${NAMES[$i]}" = ehc_grasp_sequencer_node ]; then
-        # The task's end, not a fault: every object handled (summary in SEQUENCER_SUMMARY).
-        echo "run_realman.sh: the grasp sequencer finished (code $rc, summary $SEQUENCER_SUMMARY); stopping the others."
-        stop_all
-        exit $(( rc == 0 ? 0 : 1 ))
-      fi
-      echo "run_realman.sh: ${NAMES[$i]} exited (code $rc); stopping the others." >&2
-      echo "  last lines of $LOG_DIR/${NAMES[$i]}.log:" >&2
-      tail -n 5 "$LOG_DIR/${NAMES[$i]}.log" >&2
-      stop_all
-      exit 1
-    fi
-  done
-  sleep 0.5
-done
+sup_watch
+if [ "$SUP_DEAD" = ehc_grasp_sequencer_node ]; then
+  # The task's end, not a fault: every object handled (summary in SEQUENCER_SUMMARY).
+  echo "run_realman.sh: the grasp sequencer finished (code $SUP_DEAD_RC, summary $SEQUENCER_SUMMARY); stopping the others."
+  sup_stop_all
+  exit $(( SUP_DEAD_RC == 0 ? 0 : 1 ))
+fi
+echo "run_realman.sh: $SUP_DEAD exited (code $SUP_DEAD_RC); stopping the others." >&2
+echo "  last lines of $LOG_DIR/$SUP_DEAD.log:" >&2
+sup_log_tail "$SUP_DEAD"
+sup_stop_all
+exit 1
