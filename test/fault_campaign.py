@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Fault and bad-input campaign (issue 16 item 7): replays malformed messages against the
+"""Fault and bad-input campaign: replays malformed messages against the
 running nodes and counts crashes, hangs and unsafe outputs. Goal: 0, 0, 0.
 
     source devel/setup.bash; test/fault_campaign.py [--quick] [--out DIR]

@@ -1,4 +1,4 @@
-// bench_pipeline: cost of the in-process grasping pipeline (issue 14 item 6). Runs one Exp-2 set
+// bench_pipeline: cost of the in-process grasping pipeline. Runs one Exp-2 set
 // (front, middle, back of config/scenes/table_three_objects.yaml) and one Exp-3 set (forward,
 // downward, sideways grasps of config/scenes/single_object.yaml) of every method of the protocol
 // ("all", as make experiments runs them), on one thread, and prints one JSON line per protocol:

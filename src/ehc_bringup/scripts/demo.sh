@@ -113,7 +113,7 @@ sup_clear_params /ehc_sim_node "${TAG_NODES[@]/#//}" /ehc_grasp_node /ehc_obstac
 # Lock-step acknowledgement gate: every tag node acknowledges each image, the grasp
 # node each cloud, the obstacle node each state and the sequencer each controller status on
 # /sim/lockstep_ack; the simulator publishes its first state once all are ready and steps on only
-# once they are done (ehc_sim::StepScheduler::setAckGate, ehc_msgs::LockstepAck).
+# once they are done (ehc_sim::StepScheduler::setAckGate, ehc_common::LockstepAck).
 GATE_ARG=()
 ACK_ARG=()
 if [ "${LOCKSTEP_GATE:-1}" = 1 ]; then

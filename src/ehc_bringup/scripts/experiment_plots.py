@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""PNG plots of an `ehc_experiment grasp|poses` result folder (issue 14 item 5).
+"""PNG plots of an `ehc_experiment grasp|poses` result folder.
 
   experiment_plots.py DIR
 

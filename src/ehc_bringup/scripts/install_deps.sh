@@ -14,7 +14,7 @@ PACKAGES=(
   ros-robot-state-publisher  # run_realman.sh: arm / camera tf on the real robot
   # kinematics
   libeigen3-dev liborocos-kdl-dev libkdl-parser-dev liburdf-dev liburdfdom-dev liburdfdom-tools
-  libyaml-cpp-dev
+  libyaml-cpp-dev nlohmann-json3-dev
   # servoing, QP, vision
   libvisp-dev libopencv-dev libapriltag-dev
   # perception, collision, physics

@@ -1,4 +1,4 @@
-// rostest: the watchdogs of ehc_controller_node (issue 16, defect 5), on sim time that this
+// rostest: the watchdogs of ehc_controller_node, on sim time that this
 // test owns: it is the simulator (publishes /clock, /joint_states, /odom) and the target
 // source, so it can die in every way a simulator can. Private param `trigger`: the controller's
 // node.trigger in the .test file (state: lock-step, config/control/controller.yaml; timer:

@@ -1,4 +1,4 @@
-// `make demo` reliability, reduced (issue 18 item 2): the demo scene and configuration
+// `make demo` reliability, reduced: the demo scene and configuration
 // (config/scenes/table_three_objects.yaml, config/demo/*) through the in-process GraspPipeline
 // with three noise seeds that each failed or closed short before the issue-18 fixes:
 //   1040: back timed out in GRASP, TCP held 2.9 cm above the grasp by the wrist's table stop;

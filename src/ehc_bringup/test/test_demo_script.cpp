@@ -2,9 +2,9 @@
 // the stubs stand in for rosmaster / rosrun / rosparam through a stub devel space (EHC_DEVEL)
 // whose setup.bash puts them first on PATH; the stub sequencer writes the summary where the
 // script tells it to.
-//   - Issue 16 defect 9: an absolute OUT= wrote inside the repository ("$WS//abs/path") and
+//   - An absolute OUT= wrote inside the repository ("$WS//abs/path") and
 //     exited 2 ("no summary written") after a completed run.
-//   - Issue 16 defect 8: each node's private namespace is deleted before it starts (parameters
+//   - Each node's private namespace is deleted before it starts (parameters
 //     of an earlier run on the same master never leak into this one).
 
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-// ehc_experiment CLI (issue 16 defect 7): unparsable values, unknown and repeated flags are
+// ehc_experiment CLI: unparsable values, unknown and repeated flags are
 // start-up errors naming the flag (exit code 2, nothing written).
 
 #include <gtest/gtest.h>

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Issue 14 item 7: the in-process pipeline (ehc_experiment grasp, GraspPipeline) and the ROS
+"""The in-process pipeline (ehc_experiment grasp, GraspPipeline) and the ROS
 pipeline (scripts/demo.sh: the same cores as nodes, lock-step sim time) agree, run by rostest.
 
 For each method in ~methods (space-separated; default "ehc") one Exp-2 set runs through both
@@ -24,17 +24,12 @@ sequencer's reason says how far), the arm got there but not into it: which side 
 run falls on is decided by where the base stopped, i.e. by the few cycles of perception latency
 that separate the paths (TSMM's base stops d = 0.2 m from the perceived centre; at its measured
 0.49 m/s distant speed, Table III, each 10 ms cycle of delay moves the stop by up to 0.5 cm). Table III's TSMM misses are all of this kind: the
-back object, the TCP 1.0-2.2 cm short after 30 s (sessions 9-10). Such a disagreement is printed,
+back object, the TCP 1.0-2.2 cm short after 30 s. Such a disagreement is printed,
 not failed; any other (a miss in another phase, or farther than REACH_LIMIT_M) fails.
 
-Measured (seed 1), session 8, after the sequencer began to put each object back before opening
-the gripper: tsmm, neo_c, neo_e and ehc agree on every object, |dt| <= 0.35 s. Before (session 5),
-neo_c and neo_e disagreed on the back object: the middle cylinder, released at the lift height,
-could fall over and roll against it, which depends on the exact motion. Session 9 (seed 2, the
-tag detector's tracking window, load 15-20): all four agree on every object, |dt| <= 0.74 s
-(tsmm's back object 5.53 / 6.27 s); seed 1 on the same code: tsmm's back object disagrees
-(in-process 30 s in GRASP, ROS 4.5 s; the arm alone at its reach limit), the other 11 agree.
-make test runs all four methods (methods:="ehc" runs one).
+Objects are put back before the gripper opens (a cylinder released at the lift height could
+fall over and roll against the next object, which depends on the exact motion and made the
+paths disagree). make test runs all four methods (methods:="ehc" runs one).
 """
 import csv
 import json

@@ -1,4 +1,4 @@
-// GraspExperiment / GraspPipeline (issue 14): one set of every method of Exp-2 and Exp-3 runs
+// GraspExperiment / GraspPipeline: one set of every method of Exp-2 and Exp-3 runs
 // in-process to the end and reports every grasp; the same seed gives bit-identical results
 // (one set run twice, summaries and trials compared as text); a different seed jitters the
 // objects. No ROS master, no wall clock in the pipeline.

@@ -1,6 +1,6 @@
 // GraspSequencer + grasp selection (ROS-free): phase order, timeouts, failure paths, bad input.
 #include "ehc_bringup/grasp_sequencer.h"
-#include "ehc_control/config_node.h"
+#include "ehc_common/config_node.h"
 
 #include <gtest/gtest.h>
 
@@ -218,7 +218,7 @@ TEST(GraspSequencer, GoalsFollowThePhases) {
 
 // The pre-grasp switch needs the TCP on the approach axis (pregrasp_lateral_tolerance), not only
 // within the position tolerance: a TCP that came in from the side and went on to the grasp with
-// 2-3 cm across the axis swept a finger into the box (Exp-3 sideways misses, session 10).
+// 2-3 cm across the axis swept a finger into the box (Exp-3 sideways misses).
 TEST(GraspSequencer, ThePreGraspSwitchWaitsForTheTcpOnTheApproachAxis) {
   GraspSequencerParams p = twoObjects();
   p.objects.resize(1);
@@ -305,7 +305,7 @@ TEST(GraspSequencer, PoseFilterSmoothsPerception) {
 TEST(GraspSequencer, AStallNearTheGraspClosesThereAndAFarStallWaits) {
   // Grasp tolerance 4 mm, stall factor 2.5 (10 mm), max_close_offset 8 mm: a stall 7 mm short
   // closes there; 9 mm (within the factor, beyond max_close_offset) and 30 mm wait, and the
-  // time limit fails the object saying how far the TCP stalled (issue 18: no grasp closes more
+  // time limit fails the object saying how far the TCP stalled (no grasp closes more
   // than max_close_offset short of its planned pose).
   for (const double short_by : {0.007, 0.009, 0.03}) {
     GraspSequencerParams p = twoObjects();
@@ -352,7 +352,7 @@ TEST(GraspSequencer, AStallNearTheGraspClosesThereAndAFarStallWaits) {
 
 TEST(GraspSequencer, AGraspedObjectIsPutBackBeforeTheGripperOpens) {
   // Opened at the lift height, the demo's middle cylinder fell over and rolled against the back
-  // box (session 8). After a successful lift the goal is the grasp pose raised by place_height,
+  // box. After a successful lift the goal is the grasp pose raised by place_height,
   // and the gripper opens only once the TCP is there (or place_timeout); place_timeout 0 opens
   // it where the lift ended.
   for (const double place_timeout : {4.0, 0.0}) {
@@ -750,7 +750,7 @@ TEST(GraspSequencer, TheObjectIsAnObstacleUntilTheDescentAndExcludedWhileTouched
 }
 
 TEST(GraspSequencer, TheExclusionHasNoGapFromTheDescentToTheEndOfTheRetreatWhateverEndsTheGrasp) {
-  // Exp-2 (issue 14 item 4): a failed descent of the back object (the time limit in GRASP, the
+  // Exp-2: a failed descent of the back object (the time limit in GRASP, the
   // hand stalled at the object) once dropped the exclusion for the one cycle of the failure, so
   // the obstacle map showed the object under the fingers (perceived 2 mm, d_s 10 mm) as the
   // retreat began. Every cycle from the first GRASP cycle to the last RETREAT cycle must send
@@ -911,7 +911,7 @@ TEST(GraspSequencerParams, LoadsYamlAndNamesFileAndField) {
   const std::string ok =
       "sequencer: {object_time_limit: 20.0, lift_height: 0.12, selection: {max_angle_deg: 25.0}}\n"
       "objects:\n  - {name: front, approach: downward, pose_topic: /a}\n  - {name: back, pose_topic: /b}\n";
-  const auto p = loadGraspSequencerParams(ehc_control::ConfigNode::loadString(ok, "seq.yaml", "GraspSequencerNode"));
+  const auto p = loadGraspSequencerParams(ehc_common::ConfigNode::loadString(ok, "seq.yaml", "GraspSequencerNode"));
   ASSERT_EQ(p.objects.size(), 2u);
   EXPECT_EQ(p.objects[0].approach, ApproachDirection::Downward);
   EXPECT_EQ(p.objects[1].approach, ApproachDirection::Forward);
@@ -919,7 +919,7 @@ TEST(GraspSequencerParams, LoadsYamlAndNamesFileAndField) {
   EXPECT_DOUBLE_EQ(p.selection.max_angle_deg, 25.0);
   auto expectError = [](const std::string& yaml, const std::string& needle) {
     try {
-      loadGraspSequencerParams(ehc_control::ConfigNode::loadString(yaml, "seq.yaml", "GraspSequencerNode"));
+      loadGraspSequencerParams(ehc_common::ConfigNode::loadString(yaml, "seq.yaml", "GraspSequencerNode"));
       ADD_FAILURE() << "no error for " << yaml;
     } catch (const std::invalid_argument& e) {
       const std::string w = e.what();
@@ -933,7 +933,7 @@ TEST(GraspSequencerParams, LoadsYamlAndNamesFileAndField) {
   expectError("sequencer: {lift_height: -0.1}\nobjects: [{name: a}]\n", "lift_height");
   expectError("sequencer: {}\n", "objects");
   // Misspelled keys: the node calls rejectUnknownKeys() after its own and this loader.
-  const auto typo = ehc_control::ConfigNode::loadString(
+  const auto typo = ehc_common::ConfigNode::loadString(
       "sequencer: {lift_hieght: 0.1, selection: {max_angel_deg: 20}}\nobjects: [{name: a, aproach: downward}]\n",
       "seq.yaml", "GraspSequencerNode");
   loadGraspSequencerParams(typo);
@@ -956,7 +956,7 @@ TEST(GraspSequencerParams, DemoAndTestConfigsLoad) {
       ADD_FAILURE() << "missing " << path;
       continue;
     }
-    EXPECT_NO_THROW(loadGraspSequencerParams(ehc_control::ConfigNode::loadFile(path, "GraspSequencerNode"))) << path;
+    EXPECT_NO_THROW(loadGraspSequencerParams(ehc_common::ConfigNode::loadFile(path, "GraspSequencerNode"))) << path;
   }
 }
 

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""End-to-end grasp of config/scenes/single_object.yaml (issue 6 item 6), run by rostest.
+"""End-to-end grasp of config/scenes/single_object.yaml, run by rostest.
 
 For one grasp orientation (~orientation: forward | downward | sideways) the whole headless
 pipeline (src/ehc_bringup/scripts/demo.sh: sim in lock-step sim time, tag node, grasp node,

@@ -1,4 +1,4 @@
-// Near-limit widths (issue 18 item 3): objects up to 68 mm across the closing axis are grasped
+// Near-limit widths: objects up to 68 mm across the closing axis are grasped
 // with the 70 mm gripper; 72 mm (held back) gives a clear "too wide" result.
 //
 // The scene is config/scenes/single_object.yaml (Exp-3, downward approach) with its object
@@ -16,7 +16,7 @@
 #include "ehc_sim/simulated_camera.h"
 
 // The perception tests' exact object surfaces (box, cylinder): the true geometry here.
-#include "../../ehc_perception/test/perception_test_helpers.h"
+#include "ehc_test/perception_fixtures.h"
 
 #include <gtest/gtest.h>
 

@@ -4,7 +4,7 @@
 
 #include "ehc_bringup/reach_experiment.h"
 #include "ehc_bringup/reach_targets.h"
-#include "ehc_control/config_node.h"
+#include "ehc_common/config_node.h"
 
 #include <gtest/gtest.h>
 
@@ -24,7 +24,7 @@ ExpSetup makeSetup(int points, int n_sets = 1) {
   ExpSetup s;
   const auto rc = ehc_control::loadRobotConfig(std::string(EHC_CONFIG_DIR) + "/robots/realman_rm65_water2/robot.yaml");
   s.model = std::make_shared<const ehc_control::WholeBodyModel>(rc);
-  const auto cfg = ehc_control::ConfigNode::loadFile(std::string(EHC_CONFIG_DIR) + "/control/controller.yaml", "test");
+  const auto cfg = ehc_common::ConfigNode::loadFile(std::string(EHC_CONFIG_DIR) + "/control/controller.yaml", "test");
   s.ctrl = ehc_control::loadQpControllerParams(cfg.child("controller"));
   s.params.servo = ehc_control::loadPoseServoParams(cfg.child("servo"));
   s.weighting = std::make_shared<const ehc_control::EhcWeighting>(
@@ -154,7 +154,7 @@ TEST(ReachExperiment, NoJointLimitTrapsBackToBackEveryMethod) {
 TEST(ReachExperiment, WristFlipRemovesTheForearmRollTrapBackToBack) {
   // The first 47 targets of `ehc_experiment reach --seed 1` back to back, noise on. Without
   // the wrist flip, EHC ends target 46 with joint4 pinned 0.1 rad from its limit, 9 cm short
-  // (the sequence-protocol trap of session 4: 23-33 of 500 failed per method, mostly this);
+  // (the sequence-protocol trap: without the flip 23-33 of 500 failed per method, mostly this);
   // with it every method reaches all 47, and the flip costs EHC no mean time.
   ExpSetup s = makeSetup(1);
   const auto sets = experimentSet0(s, 47);
@@ -202,7 +202,7 @@ TEST(ReachExperiment, RunsOnTheSevenDofTestArm) {
   const auto rc = ehc_control::loadRobotConfig(std::string(EHC_CONTROL_TEST_DIR) + "/robots/arm7_differential/robot.yaml");
   ExpSetup s = makeSetup(1);
   s.model = std::make_shared<const ehc_control::WholeBodyModel>(rc);
-  const auto cfg = ehc_control::ConfigNode::loadFile(std::string(EHC_CONFIG_DIR) + "/control/controller.yaml", "test");
+  const auto cfg = ehc_common::ConfigNode::loadFile(std::string(EHC_CONFIG_DIR) + "/control/controller.yaml", "test");
   auto map = std::make_shared<const ehc_control::ReachabilityMap>(ehc_control::ReachabilityMap::load(rc.reachability_map_path));
   map->checkCompatible(rc);
   s.weighting = std::make_shared<const ehc_control::EhcWeighting>(map, ehc_control::loadEhcWeightingParams(cfg.child("weighting")));

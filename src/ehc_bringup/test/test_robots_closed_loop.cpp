@@ -1,4 +1,4 @@
-// Issue 15: the closed loop on every shipped robot (parameterised over the RealMan on its
+// The closed loop on every shipped robot (parameterised over the RealMan on its
 // differential base and the KUKA iiwa 14 on a holonomic base), as ocs2 runs its closed-loop
 // tests over robots. Everything is selected by the robot switch alone (a robot name):
 //  - reduced Exp-1: the controller converges from several start states (each target of the
@@ -12,7 +12,7 @@
 #include "ehc_bringup/grasp_experiment.h"
 #include "ehc_bringup/reach_experiment.h"
 #include "ehc_bringup/reach_targets.h"
-#include "ehc_control/config_node.h"
+#include "ehc_common/config_node.h"
 #include "ehc_control/robot_config.h"
 
 #include <gtest/gtest.h>
@@ -28,7 +28,7 @@ class RobotClosedLoop : public ::testing::TestWithParam<std::string> {};
 ReachSummary runReach(const std::string& robot, ReachProtocol protocol, std::vector<ReachTrial>* trials) {
   const auto rc = ehc_control::loadRobotConfig(ehc_control::resolveRobotFile(robot));
   auto model = std::make_shared<const ehc_control::WholeBodyModel>(rc);
-  const auto cfg = ehc_control::ConfigNode::loadFile(ehc_control::configDirectory() + "/control/controller.yaml", "test");
+  const auto cfg = ehc_common::ConfigNode::loadFile(ehc_control::configDirectory() + "/control/controller.yaml", "test");
   ehc_control::QpControllerParams ctrl = ehc_control::loadQpControllerParams(cfg.child("controller"));
   ReachExperimentParams params;
   params.servo = ehc_control::loadPoseServoParams(cfg.child("servo"));

@@ -4,13 +4,13 @@
 //   bench_controller [--steps N] [--obstacles K]
 // --steps: closed-loop steps per run (default 20000); --obstacles: run only with K (0..10)
 // obstacle pairs instead of 0 and 10 (e.g. a short run under valgrind --tool=callgrind).
-// Bars: median <= 20 us, p99 <= 60 us with 10 obstacle pairs (issue 17; DESIGN.md section 11
+// Bars: median <= 20 us, p99 <= 60 us with 10 obstacle pairs (DESIGN.md section 11
 // asks for 50 / 200 us). Instructions per step, load-independent:
 //   valgrind --tool=callgrind --toggle-collect='ehc_control::EhcQpController::step*'
 //       devel/lib/ehc_control/bench_controller --steps 2000 --obstacles 10
 // ("Collected" / 2000).
 
-#include "ehc_control/bench_util.h"
+#include "ehc_common/bench_util.h"
 #include "ehc_control/pose_servo.h"
 #include "ehc_control/qp_controller.h"
 
@@ -21,6 +21,8 @@
 #include <random>
 
 using namespace ehc_control;
+using ehc_common::benchPrint;
+using ehc_common::benchStats;
 
 int main(int argc, char** argv) {
   int steps = 20000;
@@ -93,10 +95,12 @@ int main(int argc, char** argv) {
       q += c.velocity.tail(rc.nArm()) * dt;
     }
     benchPrint("controller.step_obstacles_" + std::to_string(n_obstacles), us.size(), benchStats(us),
-               "\"obstacle_rows_mean\":" + std::to_string(static_cast<double>(rows) / steps) +
-                   ",\"qp_failures\":" + std::to_string(failed) +
-                   ",\"qp_iterations_mean\":" + std::to_string(static_cast<double>(iterations) / steps) +
-                   ",\"qp_iterations_max\":" + std::to_string(max_iterations) + ",\"bar_median_us\":20,\"bar_p99_us\":60");
+               {{"obstacle_rows_mean", ehc_common::jsonNumber(static_cast<double>(rows) / steps)},
+                {"qp_failures", failed},
+                {"qp_iterations_mean", ehc_common::jsonNumber(static_cast<double>(iterations) / steps)},
+                {"qp_iterations_max", max_iterations},
+                {"bar_median_us", 20},
+                {"bar_p99_us", 60}});
   }
   return 0;
 }

@@ -1,7 +1,7 @@
 // Benchmark: WholeBodyModel FK, whole-body Jacobian and manipulability gradient.
 // Prints one JSON object per figure: {"bench":..., "median_us":..., "p99_us":..., "n":...}.
 
-#include "ehc_control/bench_util.h"
+#include "ehc_common/bench_util.h"
 #include "ehc_control/whole_body_model.h"
 
 #include <random>
@@ -22,13 +22,13 @@ int main(int argc, char** argv) {
   const Eigen::Vector3d base(1.0, 2.0, 0.3);
   const int n = 20000;
   double sink = 0.0;
-  ehc_control::benchReport("kinematics.fk_tcp", n, [&](int i) {
+  ehc_common::benchReport("kinematics.fk_tcp", n, [&](int i) {
     sink += model.fk(base, qs[static_cast<std::size_t>(i % 1000)], "ee_link").translation().x();
   });
-  ehc_control::benchReport("kinematics.whole_body_jacobian_tcp", n, [&](int i) {
+  ehc_common::benchReport("kinematics.whole_body_jacobian_tcp", n, [&](int i) {
     sink += model.jacobian(base, qs[static_cast<std::size_t>(i % 1000)], "ee_link")(0, 0);
   });
-  ehc_control::benchReport("kinematics.manipulability_gradient", n, [&](int i) {
+  ehc_common::benchReport("kinematics.manipulability_gradient", n, [&](int i) {
     sink += model.manipulabilityGradient(qs[static_cast<std::size_t>(i % 1000)])[0];
   });
   return sink == 12345.678 ? 1 : 0;  // keep the work observable

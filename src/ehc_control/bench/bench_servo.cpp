@@ -5,13 +5,15 @@
 // for MPBS, the TfM in-view test; servo.cycle_<tag>_weight_servo_fov_step adds the QP step's
 // build + solve time (from the cycle's status) to those pieces. JSON lines.
 
-#include "ehc_control/bench_util.h"
+#include "ehc_common/bench_util.h"
 #include "ehc_control/control_cycle.h"
 
 #include <chrono>
 #include <random>
 
 using namespace ehc_control;
+using ehc_common::benchPrint;
+using ehc_common::benchStats;
 
 int main() {
   const std::string dir = std::string(EHC_CONFIG_DIR) + "/robots/realman_rm65_water2/";
@@ -76,7 +78,7 @@ int main() {
       q += v.tail(rc.nArm()) * dt;
     }
     const std::string tag = mpbs ? "mpbs" : "pbvs";
-    const std::string failures = "\"qp_failures\":" + std::to_string(failed);
+    const ehc_common::Json failures = {{"qp_failures", failed}};
     benchPrint("servo." + tag + "_twist", servo_us.size(), benchStats(servo_us));
     if (mpbs) {
       benchPrint("servo.ehc_weight", weight_us.size(), benchStats(weight_us));

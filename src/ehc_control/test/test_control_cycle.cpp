@@ -2,13 +2,13 @@
 // (proportional, PBVS, PBVS + MPBS); the watchdog (stale state -> STOPPED, no target -> IDLE,
 // old target -> TARGET_LOST, a fresh one resumes) with zero commands; rejected inputs; TfM
 // bookkeeping with the watched centre; a new target restarts the QP (TSMM stage); parameter
-// loading from the shipped controller.yaml and the configuration checks. Issue 16: required
+// loading from the shipped controller.yaml and the configuration checks. Required
 // obstacles (OBSTACLES_STALE), no command from a state that went stale during the solve (fake
 // clock), bounded obstacle rows (200 / 1000 pairs), the solve-time budget.
 
-#include "ehc_control/config_node.h"
+#include "ehc_common/config_node.h"
 #include "ehc_control/control_cycle.h"
-#include "test_helpers.h"
+#include "ehc_test/control_fixtures.h"
 
 #include <gtest/gtest.h>
 
@@ -403,7 +403,7 @@ TEST(ControlCycle, ANewTargetRestartsTheQp) {
 // ------------------------------------------------------------------ parameters
 
 TEST(ControlCycle, LoadsTheShippedControllerYamlAndChecksTheConfiguration) {
-  const ConfigNode cfg = ConfigNode::loadFile(kConfigDir + "/control/controller.yaml", "ControllerNode");
+  const ehc_common::ConfigNode cfg = ehc_common::ConfigNode::loadFile(kConfigDir + "/control/controller.yaml", "ControllerNode");
   const ControlCycleParams p = loadControlCycleParams(cfg);
   EXPECT_EQ(p.servo_type, ServoType::Pbvs);
   EXPECT_TRUE(p.mpbs.enabled);
@@ -430,13 +430,13 @@ TEST(ControlCycle, LoadsTheShippedControllerYamlAndChecksTheConfiguration) {
   // Every shipped controller.yaml (demo and real robot extend this one) builds a cycle.
   for (const char* file : {"/demo/controller.yaml", "/realman/controller.yaml"}) {
     SCOPED_TRACE(file);
-    const ControlCycleParams other = loadControlCycleParams(ConfigNode::loadFile(kConfigDir + file, "ControllerNode"));
+    const ControlCycleParams other = loadControlCycleParams(ehc_common::ConfigNode::loadFile(kConfigDir + file, "ControllerNode"));
     EXPECT_EQ(other.servo_type, ServoType::Pbvs);
     EXPECT_NO_THROW(ControlCycle{other});
   }
 
   auto load = [](const std::string& yaml) {
-    return loadControlCycleParams(ConfigNode::loadString(yaml, "/cfg/controller.yaml", "ControllerNode"));
+    return loadControlCycleParams(ehc_common::ConfigNode::loadString(yaml, "/cfg/controller.yaml", "ControllerNode"));
   };
   EXPECT_EQ(load("servo: {type: proportional}\n").servo_type, ServoType::Proportional);
   EXPECT_EQ(load("{}\n").robot_file, resolveRobotFile("realman_rm65_water2"));

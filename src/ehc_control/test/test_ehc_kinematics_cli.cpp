@@ -1,6 +1,8 @@
 // ehc_kinematics CLI: JSON output for a valid call, exit code 2 + stderr for bad calls.
 // ehc_reachability CLI: unparsable values are start-up errors naming the flag.
 
+#include "ehc_common/json.h"
+
 #include <gtest/gtest.h>
 
 #include <array>
@@ -18,7 +20,7 @@ struct Result {
   std::string out;
 };
 
-// Per-process stderr file: concurrent test runs (CI jobs, parallel sessions) must not read
+// Per-process stderr file: concurrent test runs (CI jobs, parallel runs) must not read
 // each other's output.
 const std::string& stderrPath() {
   static const std::string path = "/tmp/ehc_kin_err_" + std::to_string(getpid()) + ".txt";
@@ -47,12 +49,14 @@ TEST(EhcKinematicsCli, PrintsOneJsonObject) {
   for (const char* key : {"\"joint_names\":[\"joint1\"", "\"base_type\":\"differential\"",
                           "\"T\":[[", "\"J\":[[", "\"manipulability\":"})
     EXPECT_NE(r.out.find(key), std::string::npos) << key << " missing in " << r.out;
-  // Last row of T is [0,0,0,1]; J has 6 rows of 8 columns.
-  EXPECT_NE(r.out.find("[0,0,0,1]]"), std::string::npos);
-  const auto jpos = r.out.find("\"J\":");
-  const std::string jtxt = r.out.substr(jpos, r.out.find("\"manipulability\"") - jpos);
-  EXPECT_EQ(std::count(jtxt.begin(), jtxt.end(), '['), 7);
-  EXPECT_EQ(std::count(jtxt.begin(), jtxt.end(), ','), 6 * 7 + 5 + 1);
+  // One JSON object: T is 4x4 with last row [0,0,0,1]; J has 6 rows of 8 columns.
+  const ehc_common::Json j = ehc_common::Json::parse(r.out);
+  ASSERT_EQ(j["T"].size(), 4u);
+  EXPECT_EQ(j["T"][3], ehc_common::Json::parse("[0,0,0,1]"));
+  ASSERT_EQ(j["J"].size(), 6u);
+  for (const auto& row : j["J"]) EXPECT_EQ(row.size(), 8u);
+  EXPECT_EQ(j["joint_names"].size(), 6u);
+  EXPECT_GT(j["manipulability"].get<double>(), 0.0);
 }
 
 TEST(EhcKinematicsCli, OtherLink) {
@@ -84,7 +88,7 @@ TEST(EhcKinematicsCli, UnparsableValuesNameTheFlag) {
   EXPECT_NE(lastStderr().find("--q: given twice"), std::string::npos) << lastStderr();
 }
 
-// Issue 16 defect 7: `--samples 1e6` ran one sample, wrote a one-voxel map and exited 0.
+// A loose parser read `--samples 1e6` as one sample, wrote a one-voxel map and exited 0.
 TEST(EhcReachabilityCli, UnparsableValuesAreStartUpErrorsNamingTheFlag) {
   const std::string map = "/tmp/ehc_cli_map_" + std::to_string(getpid()) + ".bin";
   const std::string out = " --out " + map;

@@ -2,7 +2,7 @@
 // the reachable set, ~0 for a target 3 m away, monotone along a ray; bad files and NaN rejected.
 
 #include "ehc_control/ehc_weighting.h"
-#include "test_helpers.h"
+#include "ehc_test/control_fixtures.h"
 
 #include <gtest/gtest.h>
 
@@ -75,7 +75,7 @@ TEST(ReachabilityMap, BadFilesFailClearly) {
   EXPECT_THROW(shippedMap()->checkCompatible(other), std::invalid_argument);
 }
 
-// Issue 16 defect 7: a header claiming 2000^3 voxels allocated 7.9 GB before it was rejected.
+// A header claiming 2000^3 voxels allocated 7.9 GB before it was rejected.
 // The load runs in a child process whose address space is capped at +512 MB over its current
 // size: it must fail with the size named, not with an allocation failure.
 [[noreturn]] void loadWithCappedMemory(const std::string& path) {

@@ -5,10 +5,10 @@
 // MPBS, no ROS) shows the point of it: with MPBS the camera keeps the target in view while the robot
 // approaches a downward grasp, without MPBS it loses it for part of the approach.
 
-#include "ehc_control/config_node.h"
+#include "ehc_common/config_node.h"
 #include "ehc_control/control_cycle.h"
 #include "ehc_control/mpbs.h"
-#include "test_helpers.h"
+#include "ehc_test/control_fixtures.h"
 
 #include <gtest/gtest.h>
 
@@ -181,10 +181,10 @@ TEST(Mpbs, ServoFollowsTheBlendAndOffMeansTheGraspPose) {
   MpbsParams tiny;
   tiny.min_monitor_distance = 0.05;
   EXPECT_THROW(MpbsServo(eTc, PbvsServoParams{}, tiny), std::invalid_argument);
-  EXPECT_THROW(loadMpbsParams(ConfigNode::loadString("target_centre: [1, 2]\n", "c.yaml", "ControllerNode")),
+  EXPECT_THROW(loadMpbsParams(ehc_common::ConfigNode::loadString("target_centre: [1, 2]\n", "c.yaml", "ControllerNode")),
                std::invalid_argument);
   const MpbsParams loaded = loadMpbsParams(
-      ConfigNode::loadString("enabled: false\nmin_monitor_distance: 0.2\ntarget_centre: [0, 0, 0.03]\n", "c.yaml", "X"));
+      ehc_common::ConfigNode::loadString("enabled: false\nmin_monitor_distance: 0.2\ntarget_centre: [0, 0, 0.03]\n", "c.yaml", "X"));
   EXPECT_FALSE(loaded.enabled);
   EXPECT_EQ(loaded.min_monitor_distance, 0.2);
   EXPECT_EQ(loaded.target_centre.z(), 0.03);

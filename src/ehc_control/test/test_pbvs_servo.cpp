@@ -4,9 +4,9 @@
 // camera origin travels on the straight line the cdMc PBVS law prescribes (a wrong mount
 // transform bends it), plus the adaptive gain, the saturation and the roll unwinding.
 
-#include "ehc_control/config_node.h"
+#include "ehc_common/config_node.h"
 #include "ehc_control/pbvs_servo.h"
-#include "test_helpers.h"
+#include "ehc_test/control_fixtures.h"
 
 #include <gtest/gtest.h>
 
@@ -218,9 +218,9 @@ TEST(PbvsServo, BadParametersAndInputsThrowWithTheClassName) {
   Eigen::Isometry3d nan = Eigen::Isometry3d::Identity();
   nan.translation().x() = std::nan("");
   EXPECT_THROW(servo.twist(nan, Eigen::Isometry3d::Identity()), std::invalid_argument);
-  const ConfigNode bad = ConfigNode::loadString("gain_at_zero: -1\n", "servo.yaml", "ControllerNode");
+  const ehc_common::ConfigNode bad = ehc_common::ConfigNode::loadString("gain_at_zero: -1\n", "servo.yaml", "ControllerNode");
   EXPECT_THROW(loadPbvsServoParams(bad), std::invalid_argument);
-  const ConfigNode good = ConfigNode::loadString("gain_at_zero: 3\ngain_at_infinity: 1\nslope_at_zero: 5\nmax_linear: 1\n",
+  const ehc_common::ConfigNode good = ehc_common::ConfigNode::loadString("gain_at_zero: 3\ngain_at_infinity: 1\nslope_at_zero: 5\nmax_linear: 1\n",
                                                  "servo.yaml", "ControllerNode");
   const PbvsServoParams q = loadPbvsServoParams(good);
   EXPECT_EQ(q.gain_at_zero, 3.0);

@@ -3,7 +3,7 @@
 // camera_info conversion the nodes use.
 
 #include "ehc_control/pinhole_camera.h"
-#include "test_helpers.h"
+#include "ehc_test/control_fixtures.h"
 
 #include <gtest/gtest.h>
 

@@ -2,10 +2,10 @@
 // kinematic integration), velocity limits and finiteness, joint limits over a long random run,
 // obstacle dampers keep d >= d_s, failures give a zero command with QP_FAILED.
 
-#include "ehc_control/config_node.h"
+#include "ehc_common/config_node.h"
 #include "ehc_control/pose_servo.h"
 #include "ehc_control/qp_controller.h"
-#include "test_helpers.h"
+#include "ehc_test/control_fixtures.h"
 
 #include <gtest/gtest.h>
 
@@ -209,7 +209,7 @@ TEST(QpControllerParams, ValidationAndLoading) {
   p.joint_stop = 1.0;
   p.joint_influence = 0.5;
   EXPECT_THROW(p.validate(), std::invalid_argument);
-  const auto cfg = ConfigNode::loadString("controller: {mode: walk}", "test.yaml", "Test");
+  const auto cfg = ehc_common::ConfigNode::loadString("controller: {mode: walk}", "test.yaml", "Test");
   try {
     loadQpControllerParams(cfg.child("controller"));
     FAIL();
@@ -217,7 +217,7 @@ TEST(QpControllerParams, ValidationAndLoading) {
     EXPECT_NE(std::string(e.what()).find("field 'controller.mode' must be ehc, neo_e, neo_c or tsmm"), std::string::npos)
         << e.what();
   }
-  const auto ok = ConfigNode::loadFile(std::string(EHC_CONFIG_DIR) + "/control/controller.yaml", "Test");
+  const auto ok = ehc_common::ConfigNode::loadFile(std::string(EHC_CONFIG_DIR) + "/control/controller.yaml", "Test");
   EXPECT_EQ(loadQpControllerParams(ok.child("controller")).mode, ControlMode::Ehc);
   EXPECT_THROW(EhcQpController(std::make_shared<const WholeBodyModel>(realmanWithoutStopDistances()), QpControllerParams{}, nullptr),
                std::invalid_argument);  // ehc needs a map
@@ -294,7 +294,7 @@ TEST(EhcQpController, ManipulabilityFadeStopsNullSpaceDriftAtTheTarget) {
   const ControllerCommand f1 = faded.step(base, q, far, nu, {});
   EXPECT_LT((f0.velocity - f1.velocity).norm(), 1e-9);
   // Validation: a negative fade distance fails naming the field.
-  const auto bad = ConfigNode::loadString("controller: {manipulability_fade_distance: -0.1}", "test.yaml", "Test");
+  const auto bad = ehc_common::ConfigNode::loadString("controller: {manipulability_fade_distance: -0.1}", "test.yaml", "Test");
   try {
     loadQpControllerParams(bad.child("controller"));
     FAIL() << "negative fade distance accepted";

@@ -3,7 +3,7 @@
 // and adjacency, the finger joints and their offsets (toy gripper and the RealMan robot).
 
 #include "ehc_control/robot_collision_model.h"
-#include "test_helpers.h"
+#include "ehc_test/control_fixtures.h"
 
 #include <gtest/gtest.h>
 

@@ -1,8 +1,8 @@
 // loadRobotConfig: the shipped robot.yaml loads; bad files fail with a message naming the field.
 
-#include "ehc_control/config_node.h"
+#include "ehc_common/config_node.h"
 #include "ehc_control/robot_config.h"
-#include "test_helpers.h"
+#include "ehc_test/control_fixtures.h"
 
 #include <gtest/gtest.h>
 
@@ -95,7 +95,7 @@ TEST(RobotConfig, YamlSyntaxError) {
 TEST(ConfigNode, ExtendsMergesOverTheBaseFile) {
   std::ofstream("/tmp/ehc_base.yaml") << "a: {x: 1, y: 2, list: [1, 2, 3]}\nb: base\n";
   std::ofstream("/tmp/ehc_over.yaml") << "extends: ehc_base.yaml\na: {y: 20, list: [9]}\nc: new\n";
-  const auto n = ConfigNode::loadFile("/tmp/ehc_over.yaml", "Test");
+  const auto n = ehc_common::ConfigNode::loadFile("/tmp/ehc_over.yaml", "Test");
   EXPECT_EQ(n.child("a").require<int>("x"), 1);    // kept from the base
   EXPECT_EQ(n.child("a").require<int>("y"), 20);   // overridden
   EXPECT_EQ(n.child("a").requireVector("list").size(), 1);  // lists are replaced
@@ -103,10 +103,10 @@ TEST(ConfigNode, ExtendsMergesOverTheBaseFile) {
   EXPECT_EQ(n.require<std::string>("c"), "new");
   EXPECT_FALSE(n.has("extends"));
   std::ofstream("/tmp/ehc_loop.yaml") << "extends: ehc_loop.yaml\n";
-  EXPECT_THROW(ConfigNode::loadFile("/tmp/ehc_loop.yaml", "Test"), std::invalid_argument);
+  EXPECT_THROW(ehc_common::ConfigNode::loadFile("/tmp/ehc_loop.yaml", "Test"), std::invalid_argument);
   std::ofstream("/tmp/ehc_missing.yaml") << "extends: no_such_file.yaml\n";
   try {
-    ConfigNode::loadFile("/tmp/ehc_missing.yaml", "Test");
+    ehc_common::ConfigNode::loadFile("/tmp/ehc_missing.yaml", "Test");
     FAIL();
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("cannot read config file '/tmp/no_such_file.yaml'"), std::string::npos) << e.what();
@@ -114,8 +114,8 @@ TEST(ConfigNode, ExtendsMergesOverTheBaseFile) {
 }
 
 TEST(ConfigNode, RealmanControllerConfigIsTheSimConfigWithATimer) {
-  const auto real = ConfigNode::loadFile(std::string(EHC_CONFIG_DIR) + "/realman/controller.yaml", "Test");
-  const auto sim = ConfigNode::loadFile(std::string(EHC_CONFIG_DIR) + "/control/controller.yaml", "Test");
+  const auto real = ehc_common::ConfigNode::loadFile(std::string(EHC_CONFIG_DIR) + "/realman/controller.yaml", "Test");
+  const auto sim = ehc_common::ConfigNode::loadFile(std::string(EHC_CONFIG_DIR) + "/control/controller.yaml", "Test");
   EXPECT_EQ(real.child("node").require<std::string>("trigger"), "timer");
   EXPECT_EQ(sim.child("node").require<std::string>("trigger"), "state");
   // Everything else comes from the same file: the controller tuning cannot drift apart.
@@ -125,7 +125,7 @@ TEST(ConfigNode, RealmanControllerConfigIsTheSimConfigWithATimer) {
     b << sim.child(section).yaml();
     EXPECT_EQ(a.str(), b.str()) << section;
   }
-  // ... but the real robot runs the obstacle node and stops without its distances (issue 16).
+  // ... but the real robot runs the obstacle node and stops without its distances.
   EXPECT_TRUE(real.child("watchdog").require<bool>("require_obstacles"));
   EXPECT_FALSE(sim.child("watchdog").require<bool>("require_obstacles"));
   for (const char* key : {"state_timeout", "target_timeout", "obstacle_timeout"})

@@ -1,16 +1,17 @@
-// Issue 15: any mobile manipulator from a URDF + robot.yaml. Over every shipped robot (the
+// Any mobile manipulator from a URDF + robot.yaml. Over every shipped robot (the
 // RealMan on a differential base, the KUKA iiwa 14 on a holonomic base): the robot switch
 // resolves the name, the description loads, its map fits and matches, the self-collision pairs
 // are computed; a minimal robot.yaml is enough; a link robot.yaml names that the URDF lacks, an
 // unknown robot and an arm of other than 6 or 7 joints are start-up errors naming the field.
 
-#include "ehc_control/config_node.h"
+#include "ehc_common/config_node.h"
 #include "ehc_control/control_cycle.h"
 #include "ehc_control/reachability_map.h"
 #include "ehc_control/robot_collision_model.h"
 #include "ehc_control/robot_config.h"
 #include "ehc_control/self_collision.h"
 #include "ehc_control/whole_body_model.h"
+#include "ehc_test/control_fixtures.h"
 
 #include <gtest/gtest.h>
 
@@ -20,6 +21,7 @@
 #include <string>
 
 using namespace ehc_control;
+using ehc_control::test::errorOf;
 
 namespace {
 
@@ -44,15 +46,6 @@ std::string writeTemp(const std::string& text) {
   const std::string path = ::testing::TempDir() + "/ehc_robot_" + std::to_string(std::hash<std::string>{}(text)) + ".yaml";
   std::ofstream(path) << text;
   return path;
-}
-
-std::string errorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const std::invalid_argument& e) {
-    return e.what();
-  }
-  return "";
 }
 
 class ShippedRobot : public ::testing::TestWithParam<std::string> {};
@@ -87,7 +80,7 @@ TEST_P(ShippedRobot, LoadsByNameWithItsMapAndSelfCollisionPairs) {
   const auto always = alwaysCollidingPairs(model, collision, {200, 3});
   for (const LinkPair& p : always) EXPECT_TRUE(std::count(pairs.begin(), pairs.end(), p));
   // The shipped controller.yaml runs this robot (the one switch: robot_file).
-  ControlCycleParams params = loadControlCycleParams(ConfigNode::loadFile(kConfigDir + "/control/controller.yaml", "test"));
+  ControlCycleParams params = loadControlCycleParams(ehc_common::ConfigNode::loadFile(kConfigDir + "/control/controller.yaml", "test"));
   params.robot_file = file;
   const ControlCycle cycle(params);
   EXPECT_EQ(cycle.model().config().name, GetParam());

@@ -2,10 +2,10 @@
 // windows, new intrinsics), and the supervisor's hold / TARGET_LOST / resume sequence. The
 // camera model itself: test_pinhole_camera.
 
-#include "ehc_control/config_node.h"
+#include "ehc_common/config_node.h"
 #include "ehc_control/controller_supervisor.h"
 #include "ehc_control/target_tracker.h"
-#include "test_helpers.h"
+#include "ehc_test/control_fixtures.h"
 
 #include <gtest/gtest.h>
 
@@ -105,12 +105,12 @@ TEST(TargetTracker, MovingTargetsPausedWindowsAndNewIntrinsics) {
 }
 
 TEST(TargetTracker, ParamsLoadAndResolveTheCameraPath) {
-  const ConfigNode n = ConfigNode::loadString("camera: ../robots/x/camera.yaml\nnew_target_distance: 0.2\n",
+  const ehc_common::ConfigNode n = ehc_common::ConfigNode::loadString("camera: ../robots/x/camera.yaml\nnew_target_distance: 0.2\n",
                                               "/a/b/controller.yaml", "ControllerNode");
   const TargetTrackerParams p = loadTargetTrackerParams(n);
   EXPECT_EQ(p.camera_file, "/a/b/../robots/x/camera.yaml");
   EXPECT_EQ(p.new_target_distance, 0.2);
-  EXPECT_THROW(loadTargetTrackerParams(ConfigNode::loadString("new_target_distance: -1\n", "c.yaml", "X")),
+  EXPECT_THROW(loadTargetTrackerParams(ehc_common::ConfigNode::loadString("new_target_distance: -1\n", "c.yaml", "X")),
                std::invalid_argument);
 }
 

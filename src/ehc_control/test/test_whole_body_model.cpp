@@ -2,7 +2,7 @@
 // manipulability gradient vs finite differences, and bad inputs.
 
 #include "ehc_control/whole_body_model.h"
-#include "test_helpers.h"
+#include "ehc_test/control_fixtures.h"
 
 #include <gtest/gtest.h>
 
@@ -330,7 +330,7 @@ TEST(WholeBodyModel, CameraLooksAlongTheApproachAxis) {
   EXPECT_NEAR(std::hypot(d.x(), d.y()), 0.07, 1e-9);
 }
 
-// Issue 16 item 6: the hand camera's image is upright in the ready pose, on both robots, with
+// The hand camera's image is upright in the ready pose, on both robots, with
 // robot.yaml's calibration and with the URDF's own mount. Optical frame: z forward, x right,
 // y down. Upright: in the ready pose (base at the origin, facing +x) the image's down (y) points
 // to the floor and its right (x) to the robot's right (-y).

@@ -6,7 +6,7 @@
 #include "ehc_control/pose_servo.h"
 #include "ehc_control/qp_controller.h"
 #include "ehc_control/wrist_flip.h"
-#include "test_helpers.h"
+#include "ehc_test/control_fixtures.h"
 
 #include <gtest/gtest.h>
 

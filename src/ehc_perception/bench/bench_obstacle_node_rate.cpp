@@ -1,5 +1,5 @@
-// bench_obstacle_node_rate: the rate of /ehc/obstacles under a full D435 depth stream (issue 16
-// item 2). A ROS node that plays the camera and the robot for a running ehc_obstacle_node
+// bench_obstacle_node_rate: the rate of /ehc/obstacles under a full D435 depth stream
+// (docs/DESIGN.md, performance bars). A ROS node that plays the camera and the robot for a running ehc_obstacle_node
 // (bench/obstacle_node_rate.sh starts master, node and this): organised 640x480 XYZ+RGB clouds
 // (4.9 MB each: a wall 2 m ahead, a table edge 1.2 m ahead in the lower part, 10 % invalid
 // pixels as NaN) at `cloud_hz`, /joint_states and /odom at 100 Hz, a static tf odom -> camera.

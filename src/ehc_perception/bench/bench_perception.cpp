@@ -7,7 +7,7 @@
 //  - perception.octomap_insert_cloud: ray insertion of a 20 000-point depth cloud
 //  - perception.obstacle_monitor_bound_d435 / _insert_d435: ObstacleMonitor bounding (voxel +
 //    budget) and inserting a full 640x480 D435 frame (307 200 points, wall 1.5 m ahead)
-#include "ehc_control/bench_util.h"
+#include "ehc_common/bench_util.h"
 #include "ehc_control/whole_body_model.h"
 #include "ehc_control/pinhole_camera.h"
 #include "ehc_perception/grasp_generator.h"
@@ -15,7 +15,7 @@
 #include "ehc_perception/obstacle_monitor.h"
 #include "ehc_perception/tag_detector.h"
 #include "ehc_perception/tag_image_renderer.h"
-#include "../test/perception_test_helpers.h"
+#include "ehc_test/perception_fixtures.h"
 
 #include <algorithm>
 #include <random>
@@ -52,7 +52,7 @@ int main() {
       images.push_back(renderer.render(
           {{k, 0.05, facingTag(0.03 * k - 0.06, 0.02, 0.45 + 0.05 * k, 0.3, 0.1, 0.2 * k)}}));
     int found = 0;
-    ehc_control::benchReport("perception.tag_detect_pose_640x480", 200, [&](int i) {
+    ehc_common::benchReport("perception.tag_detect_pose_640x480", 200, [&](int i) {
       const auto d = det.detect(images[static_cast<std::size_t>(i % 5)]);
       found += static_cast<int>(d.size());
     });
@@ -75,7 +75,7 @@ int main() {
       const std::string name = margin ? "perception.tag_detect_pose_640x480_noisy_tracked"
                                       : "perception.tag_detect_pose_640x480_noisy";
       int n = 0;
-      ehc_control::benchReport(name, 100, [&](int i) {
+      ehc_common::benchReport(name, 100, [&](int i) {
         n += static_cast<int>(tracker.detect(stream[static_cast<std::size_t>(i % 20)]).size());
       });
       std::printf("{\"bench\":\"%s.detections\",\"found\":%d,\"expected\":100,"
@@ -97,7 +97,7 @@ int main() {
                                             resample(bottle.points, 20000, 3)};
     const Eigen::Vector3d view(0, 0, 0.9);
     std::size_t n_grasps = 0;
-    ehc_control::benchReport("perception.grasps_object_20k", 30, [&](int i) {
+    ehc_common::benchReport("perception.grasps_object_20k", 30, [&](int i) {
       n_grasps += gen.generate(objects[static_cast<std::size_t>(i % 3)], view).grasps.size();
     }, "\"points\":20000");
     sink += static_cast<double>(n_grasps);
@@ -111,7 +111,7 @@ int main() {
     scene.append(c2);
     const PointList scene_cloud = scene.noisy(0.001, 4);
     const Eigen::Vector3d near(0.75, -0.15, 0.76);
-    ehc_control::benchReport("perception.grasps_scene", 10, [&](int) {
+    ehc_common::benchReport("perception.grasps_scene", 10, [&](int) {
       sink += static_cast<double>(gen.generateFromScene(scene_cloud, Eigen::Vector3d(0.2, 0, 1.3), &near).grasps.size());
     }, "\"points\":" + std::to_string(scene_cloud.size()));
   }
@@ -140,7 +140,7 @@ int main() {
       poses.push_back(field.linkPoses(model, base, q));
     }
     std::size_t pairs = 0;
-    ehc_control::benchReport("perception.obstacle_distances_2cm", 2000, [&](int i) {
+    ehc_common::benchReport("perception.obstacle_distances_2cm", 2000, [&](int i) {
       pairs += field.distances(poses[static_cast<std::size_t>(i % 50)]).size();
     }, "\"links\":" + std::to_string(robot.links().size()) + ",\"occupied_voxels\":" +
            std::to_string(field.occupiedLeafCount()));
@@ -153,7 +153,7 @@ int main() {
       cloud.push_back(Eigen::Vector3f(1.5f, static_cast<float>(0.8 * u(rng)),
                                       static_cast<float>(0.2 + 1.0 * (u(rng) + 1) / 2)));
     ObstacleDistanceField field2(cfg, robot);
-    ehc_control::benchReport("perception.octomap_insert_cloud", 20, [&](int) {
+    ehc_common::benchReport("perception.octomap_insert_cloud", 20, [&](int) {
       field2.insertCloud(cloud, Eigen::Vector3d(0.3, 0.0, 1.2));
     }, "\"points\":20000,\"range_m\":1.3");
 
@@ -161,10 +161,10 @@ int main() {
     const PointList frame = fullD435Wall();
     ObstacleMonitor monitor(model.config(), cfg, ObstacleMonitorParams());
     std::size_t kept = 0;
-    ehc_control::benchReport("perception.obstacle_monitor_bound_d435", 20, [&](int) {
+    ehc_common::benchReport("perception.obstacle_monitor_bound_d435", 20, [&](int) {
       kept = monitor.boundCloud(frame).size();
     }, "\"points\":307200");
-    ehc_control::benchReport("perception.obstacle_monitor_insert_d435", 20, [&](int) {
+    ehc_common::benchReport("perception.obstacle_monitor_insert_d435", 20, [&](int) {
       monitor.insertCloud(0.0, frame, Eigen::Vector3d(0.0, 0.0, 1.0));
     }, "\"points\":307200,\"inserted\":" + std::to_string(kept));
   }

@@ -1,8 +1,8 @@
 // GraspGenerator: synthetic box / cylinder / lying bottle clouds with noise, scenes with a
 // table, depth refinement (standing box, short box on a table), bad clouds and bad configs.
-#include "ehc_control/config_node.h"
+#include "ehc_common/config_node.h"
 #include "ehc_perception/grasp_generator.h"
-#include "perception_test_helpers.h"
+#include "ehc_test/perception_fixtures.h"
 
 #include <gtest/gtest.h>
 
@@ -219,13 +219,13 @@ TEST(GraspGenerator, IsDeterministic) {
 }
 
 TEST(GraspGenerator, ConfigLoadsAndBadValuesFailNamingTheField) {
-  const auto ok = ehc_control::ConfigNode::loadString(
+  const auto ok = ehc_common::ConfigNode::loadString(
       "grasp_generator: {top_k: 3, voxel_size: 0.005, gripper: {max_width: 0.08}}", "ok.yaml",
       "GraspGenerator");
   const GraspGeneratorConfig c = loadGraspGeneratorConfig(ok.child("grasp_generator"));
   EXPECT_EQ(c.top_k, 3);
   EXPECT_DOUBLE_EQ(c.gripper.max_width, 0.08);
-  const auto depth = ehc_control::ConfigNode::loadString(
+  const auto depth = ehc_common::ConfigNode::loadString(
       "grasp_generator: {max_depth_shift: 0.03, depth_step: 0.0025, depth_margin: 0.004}",
       "ok.yaml", "GraspGenerator");
   const GraspGeneratorConfig cd = loadGraspGeneratorConfig(depth.child("grasp_generator"));
@@ -235,7 +235,7 @@ TEST(GraspGenerator, ConfigLoadsAndBadValuesFailNamingTheField) {
   EXPECT_NE(cd.summary().find("depth shift <= 0.03 m"), std::string::npos) << cd.summary();
 
   auto expectFails = [](const std::string& yaml, const std::string& needle) {
-    const auto n = ehc_control::ConfigNode::loadString(yaml, "bad.yaml", "GraspGenerator");
+    const auto n = ehc_common::ConfigNode::loadString(yaml, "bad.yaml", "GraspGenerator");
     try {
       loadGraspGeneratorConfig(n.childOrEmpty("grasp_generator"));
       ADD_FAILURE() << "no error for " << yaml;
@@ -263,7 +263,7 @@ TEST(GraspGenerator, ConfigLoadsAndBadValuesFailNamingTheField) {
   expectFails("grasp_generator: {max_depth_shift: 0.01, depth_margin: 0.01}", "'depth_margin'");
   expectFails("grasp_generator: {depth_margin: .inf}", "depth_margin");
   // Disabled (max_depth_shift 0): step and margin are not constrained by it.
-  const auto off = ehc_control::ConfigNode::loadString(
+  const auto off = ehc_common::ConfigNode::loadString(
       "grasp_generator: {max_depth_shift: 0, depth_step: 0, depth_margin: 0.01}", "off.yaml",
       "GraspGenerator");
   const GraspGeneratorConfig c_off = loadGraspGeneratorConfig(off.child("grasp_generator"));

@@ -2,10 +2,10 @@
 // the model itself: ehc_control/test/test_robot_collision_model): distances against analytic
 // values, free-space clearing by rays, self filtering, the RealMan robot with its fingers fully
 // open, bad inputs and configs.
-#include "ehc_control/config_node.h"
+#include "ehc_common/config_node.h"
 #include "ehc_control/whole_body_model.h"
 #include "ehc_perception/obstacle_distance_field.h"
-#include "perception_test_helpers.h"
+#include "ehc_test/perception_fixtures.h"
 
 #include <gtest/gtest.h>
 
@@ -329,7 +329,7 @@ TEST(ObstacleDistanceField, FingersAreModelledFullyOpen) {
 
 TEST(ObstacleDistanceField, ConfigValidationNamesTheField) {
   auto expectFails = [](const std::string& yaml, const std::string& needle) {
-    const auto n = ehc_control::ConfigNode::loadString(yaml, "obst.yaml", "ObstacleDistanceField");
+    const auto n = ehc_common::ConfigNode::loadString(yaml, "obst.yaml", "ObstacleDistanceField");
     try {
       loadObstacleMapConfig(n.childOrEmpty("obstacle_map"));
       ADD_FAILURE() << yaml;
@@ -343,7 +343,7 @@ TEST(ObstacleDistanceField, ConfigValidationNamesTheField) {
   expectFails("obstacle_map: {influence_distance: 0.001}", "influence_distance");
   // Robot links are robot-specific: robot.yaml's robot.collision.checked_links, never this file.
   expectFails("obstacle_map: {links: [base_link]}", "robot.collision.checked_links");
-  const auto ok = ehc_control::ConfigNode::loadString(
+  const auto ok = ehc_common::ConfigNode::loadString(
       "obstacle_map: {resolution: 0.05}", "ok.yaml", "ObstacleDistanceField");
   const ObstacleMapConfig c = loadObstacleMapConfig(ok.child("obstacle_map"));
   EXPECT_DOUBLE_EQ(c.resolution, 0.05);

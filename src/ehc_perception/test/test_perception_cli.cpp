@@ -2,7 +2,7 @@
 // JSON output parsed back with yaml-cpp, clear errors).
 #include "ehc_perception/grasp_generator.h"
 #include "ehc_perception/tag_image_renderer.h"
-#include "perception_test_helpers.h"
+#include "ehc_test/perception_fixtures.h"
 
 #include <gtest/gtest.h>
 #include <visp3/io/vpImageIo.h>
@@ -89,7 +89,7 @@ TEST(DetectTagsCli, BadInputsExitWithCode2AndAClearError) {
   r = run(bin + " --image /tmp/ehc_cli_tag.png --camera " + cameraYaml());
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.out.find("--tag-size"), std::string::npos) << r.out;
-  // Issue 16: image sizes read from the file are checked before the decoder allocates them
+  // Image sizes read from the file are checked before the decoder allocates them
   // (a PNG header claiming 100000 x 100000 pixels, a PGM claiming 90000 x 90000).
   {
     const unsigned char png[] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n', 0, 0, 0, 13, 'I', 'H', 'D', 'R',
@@ -168,7 +168,7 @@ TEST(GraspsCli, NoGraspAndBadInputs) {
   EXPECT_NE(r.out.find("--viewpoint: expects x,y,z"), std::string::npos) << r.out;
   r = run(bin + " --cloud /tmp/ehc_cli_empty.pcd --out /tmp/x.json --top 0");
   EXPECT_EQ(r.code, 2);
-  // Issue 16 defect 7: unparsable values name the flag.
+  // Unparsable values name the flag.
   for (const std::string& bad : {std::string("--top 5.5"), std::string("--top 1e3"),
                                  std::string("--viewpoint 0,0,x"), std::string("--up 0,0,1,"),
                                  std::string("--mode objects"), std::string("--topp 3")}) {

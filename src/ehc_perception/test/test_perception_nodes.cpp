@@ -5,11 +5,11 @@
 // state stops the obstacle output, and that malformed clouds are rejected without harm.
 #include "ehc_msgs/GraspCandidates.h"
 #include "ehc_msgs/ObstacleArray.h"
-#include "ehc_control/config_node.h"
+#include "ehc_common/config_node.h"
 #include "ehc_control/pinhole_camera.h"
 #include "ehc_perception/tag_detector.h"
 #include "ehc_perception/tag_image_renderer.h"
-#include "perception_test_helpers.h"
+#include "ehc_test/perception_fixtures.h"
 
 #include <geometry_msgs/PoseStamped.h>
 #include <gtest/gtest.h>
@@ -231,7 +231,7 @@ TEST_F(PerceptionNodes, TagNodePublishesTheTargetInOdom) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   tf2::fromMsg(m.pose, T);
   // Expected: the tag pose composed with the grasp offset of the shipped config.
-  const auto root = ehc_control::ConfigNode::loadFile(
+  const auto root = ehc_common::ConfigNode::loadFile(
       configDir() + "/perception/tag_node.yaml", "TagNode");
   const TagTargetConfig target = loadTagTargetConfig(root.child("target"));
   EXPECT_EQ(target.tag_id, 0);
@@ -242,7 +242,7 @@ TEST_F(PerceptionNodes, TagNodePublishesTheTargetInOdom) {
 }
 
 TEST_F(PerceptionNodes, TagNodeWaitsForTheCameraPoseOfALateImage) {
-  // Issue 18: under load the camera pose (tf) at an image's stamp can reach the tag node after
+  // Under load the camera pose (tf) at an image's stamp can reach the tag node after
   // the image: the image used to be dropped after a lookup timeout on ROS time (0.05 s). It now
   // waits on the wall clock up to tf_timeout (config/perception/tag_node.yaml: 1 s). Here an
   // image in a frame with no pose yet; its pose follows 0.5 s later; the target must come, at
@@ -332,7 +332,7 @@ TEST_F(PerceptionNodes, ObstacleNodePublishesDistancesAndStopsOnABadState) {
   EXPECT_TRUE(obstacles_.empty()) << obstacles_.size() << " messages with a NaN state";
 }
 
-// Issue 16: the obstacle node judges the state's freshness by receipt time on its own clock
+// The obstacle node judges the state's freshness by receipt time on its own clock
 // (like the controller's watchdogs), not by header stamps. A state stamped 10 s in the past (a
 // sender's clock offset) but arriving now is fresh: distances are published (by stamps: stale,
 // nothing). A state stamped 10 s in the future that stops arriving goes stale after the
@@ -353,7 +353,7 @@ TEST_F(PerceptionNodes, ObstacleNodeJudgesStateFreshnessByReceiptTime) {
                                   << " /ehc/obstacles messages 1-2 s after the last (future-stamped) state";
 }
 
-// Malformed clouds (issue 16): both cloud nodes reject each with a logged reason before
+// Malformed clouds: both cloud nodes reject each with a logged reason before
 // reading it, stay alive, publish nothing made from it, and afterwards process a valid FLOAT64
 // cloud of the scene (grasps on the cylinder; the base's distance to the table).
 TEST_F(PerceptionNodes, MalformedCloudsAreRejectedAndTheNodesKeepWorking) {
@@ -520,7 +520,7 @@ TEST_F(GraspNodeLockstep, EveryCloudIsAcknowledgedOnceWhateverCameOfIt) {
       },
       30.0))
       << "no reason logged for the cloud without a camera pose";
-  for (const std::string& w : warnings_)  // the targets were taken first (ehc_msgs::PollPassBarrier)
+  for (const std::string& w : warnings_)  // the targets were taken first (ehc_common::PollPassBarrier)
     EXPECT_EQ(w.find("poll thread"), std::string::npos) << w;
 }
 

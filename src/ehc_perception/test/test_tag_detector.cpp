@@ -1,9 +1,9 @@
 // TagDetector (ViSP vpDetectorAprilTag) on images rendered with TagImageRenderer
 // (vpImageSimulator + libapriltag 36h11 bitmaps): poses, per-id sizes, bad inputs, configs.
-#include "ehc_control/config_node.h"
+#include "ehc_common/config_node.h"
 #include "ehc_perception/tag_detector.h"
 #include "ehc_perception/tag_image_renderer.h"
-#include "perception_test_helpers.h"
+#include "ehc_test/perception_fixtures.h"
 
 #include <gtest/gtest.h>
 #include <visp3/io/vpImageIo.h>
@@ -70,7 +70,7 @@ TEST(TagDetector, PoseOfARenderedTagMatchesTheTruth) {
   }
 }
 
-// Issue 16 item 6: the planar-pose ambiguity. A small tag (3.5-4 cm, 0.8-1.1 m away: 20-31 px) upright
+// The planar-pose ambiguity. A small tag (3.5-4 cm, 0.8-1.1 m away: 20-31 px) upright
 // on a vertical face, seen from a hand camera 20-30 deg above it, as from the robot's ready pose;
 // the camera upright and rolled 180 deg about its optical axis (the hand camera's old, upside-down
 // mount): the same scene, only the pixel rounding differs. ViSP's two solutions reproject equally
@@ -330,7 +330,7 @@ TEST(TagDetector, TheTrackingWindowFollowsATagAndRecoversFromAJump) {
 TEST(TagDetector, ConfigsAndCamerasAreValidated) {
   const ehc_control::PinholeCamera cam = d435();
   auto expectFails = [&](const std::string& yaml, const std::string& needle) {
-    const auto n = ehc_control::ConfigNode::loadString(yaml, "tags.yaml", "TagDetector");
+    const auto n = ehc_common::ConfigNode::loadString(yaml, "tags.yaml", "TagDetector");
     try {
       loadTagDetectorConfig(n.childOrEmpty("tag_detector"));
       ADD_FAILURE() << "no error for " << yaml;
@@ -349,7 +349,7 @@ TEST(TagDetector, ConfigsAndCamerasAreValidated) {
   expectFails("tag_detector: {pose_prior: {world_direction: [0, 1]}}", "world_direction");
   expectFails("tag_detector: {pose_prior: {ambiguity_margin: -1}}", "pose_prior.ambiguity_margin");
   {
-    const auto n = ehc_control::ConfigNode::loadString(
+    const auto n = ehc_common::ConfigNode::loadString(
         "tag_detector: {pose_prior: {tag_axes: [0, 1, 0]}}", "tags.yaml", "TagDetector");
     loadTagDetectorConfig(n.childOrEmpty("tag_detector"));
     EXPECT_THROW(n.rejectUnknownKeys(), std::invalid_argument) << "misspelled pose_prior key";
@@ -358,21 +358,21 @@ TEST(TagDetector, ConfigsAndCamerasAreValidated) {
   expectFails("tag_detector: {roi_margin: -5}", "roi_margin");
   expectFails("tag_detector: {roi_full_frame_every: 0}", "roi_full_frame_every");
 
-  const auto ok = ehc_control::ConfigNode::loadString(
+  const auto ok = ehc_common::ConfigNode::loadString(
       "tag_detector: {family: 36h11, default_tag_size: 0.04, tag_sizes: {2: 0.1}}", "ok.yaml",
       "TagDetector");
   const TagDetectorConfig c = loadTagDetectorConfig(ok.child("tag_detector"));
   EXPECT_DOUBLE_EQ(c.tagSize(2), 0.1);
   EXPECT_DOUBLE_EQ(c.tagSize(7), 0.04);
 
-  const auto tn = ehc_control::ConfigNode::loadString(
+  const auto tn = ehc_common::ConfigNode::loadString(
       "target: {tag_id: 2, grasp_offset: {xyz: [0, 0, 0.03], rpy: [3.14159, 0, 0]}}", "t.yaml",
       "TagTarget");
   EXPECT_EQ(loadTagTargetConfig(tn.child("target")).tag_id, 2);
-  const auto bad_target = ehc_control::ConfigNode::loadString(
+  const auto bad_target = ehc_common::ConfigNode::loadString(
       "target: {tag_id: -1}", "t.yaml", "TagTarget");
   EXPECT_THROW(loadTagTargetConfig(bad_target.child("target")), std::invalid_argument);
-  const auto bad_offset = ehc_control::ConfigNode::loadString(
+  const auto bad_offset = ehc_common::ConfigNode::loadString(
       "target: {grasp_offset: {xyz: [0, 0]}}", "t.yaml", "TagTarget");
   EXPECT_THROW(loadTagTargetConfig(bad_offset.child("target")), std::invalid_argument);
 

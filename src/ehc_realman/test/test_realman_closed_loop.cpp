@@ -1,4 +1,4 @@
-// rostest (issue 7): the real controller drives a target through the RealMan adapters, on wall
+// rostest: the real controller drives a target through the RealMan adapters, on wall
 // time (no /clock), with both hardware ends faked in this test node:
 //   - fake rm_driver: checks EVERY /rm_driver/JointPos frame (6 finite joints, <= 10 deg and
 //     <= v_max / stream rate per joint from the previous frame, inside the joint limits), records

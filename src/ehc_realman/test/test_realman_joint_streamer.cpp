@@ -196,7 +196,7 @@ TEST(JointPositionStreamer, LaggingArmDoesNotWindUp) {
   EXPECT_GT(h.streamer->counters().tracking_clamped, 0u);
 }
 
-// Issue 16 defect 6: a 0.1 s glitch of +1 rad on joint1's measured state while commanding
+// A 0.1 s glitch of +1 rad on joint1's measured state while commanding
 // -0.2 rad/s drove the set-point 0.28 rad the other way (the tracking clamp chased the glitch).
 TEST(JointPositionStreamer, MeasuredStateGlitchNeverMovesTheSetPointAgainstTheCommand) {
   Harness h;

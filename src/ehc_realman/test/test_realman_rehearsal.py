@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Deployment rehearsal (issue 16 item 5), run by rostest (realman_rehearsal.test).
+"""Deployment rehearsal, run by rostest (realman_rehearsal.test).
 
 The launch file starts ehc_hardware_standin_node (the Bullet world behind the rm_driver topics,
 the Water2 TCP API and the D435 topics). This node reads the Water2 port the stand-in bound

@@ -341,7 +341,7 @@ TEST(RmArmAdapter, CommandTimeoutHoldsThenStopsOnTheAdaptersClock) {
   EXPECT_GT(r.count("timeouts"), 0ul);
 }
 
-// Issue 16 defect 6 through the node: a 0.1 s glitch of +1 rad on joint1's /joint_states while
+// Through the node: a 0.1 s glitch of +1 rad on joint1's /joint_states while
 // commanding -0.2 rad/s never moves the set-point the other way; the motion resumes after it.
 TEST(RmArmAdapter, JointStateGlitchNeverTurnsIntoMotion) {
   Rig& r = *g_rig;

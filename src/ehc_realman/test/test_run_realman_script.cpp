@@ -1,7 +1,7 @@
 // rostest: scripts/run_realman.sh (components arm + base) against a fake Water2 server on
 // 127.0.0.1: the nodes come up with rosrun, /odom flows, the adapter listens; SIGINT to the
 // script stops every node it started; --dry-run lists the rosrun commands.
-// Issue 16: private parameters of an earlier run (e.g. _mode:=tsmm) are deleted before a node
+// Private parameters of an earlier run (e.g. _mode:=tsmm) are deleted before a node
 // starts; robot_state_publisher (started with the arm) publishes base_link -> ... -> camera tf
 // from /joint_states, matching the controller's kinematic model (URDF + robot.yaml).
 
@@ -87,7 +87,7 @@ TEST(RunRealmanScript, StartsTheRobotNodesAndStopsThemOnCtrlC) {
                         [&](const nav_msgs::Odometry::ConstPtr&) { ++odom; }));
   ros::Publisher width = nh.advertise<std_msgs::Float64>("/arm/gripper/width", 1);
 
-  // Leftovers of an earlier run on this master (issue 16 defect 8: an earlier
+  // Leftovers of an earlier run on this master (an earlier
   // CONTROLLER_MODE=tsmm stayed in force): the script deletes each node's private namespace.
   ros::param::set("/rm_arm_adapter/left_by_an_earlier_run", 1);
   ros::param::set("/water2_base_bridge/left_by_an_earlier_run", 1);

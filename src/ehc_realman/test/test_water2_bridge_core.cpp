@@ -246,8 +246,8 @@ TEST(OdometryEstimator, DeadReckonsBetweenStatusRepliesAndGoesStale) {
 }
 
 // A status pose applied at the time it was valid, after twists were already sent: they are
-// replayed from it (before session 7 the pose was taken as valid when applied, and the twists
-// sent in between were lost: the base put back by v x delay).
+// replayed from it (taken as valid when applied instead, the twists sent in between would be
+// lost: the base put back by v x delay).
 TEST(OdometryEstimator, AppliesALateStatusAtItsValidTimeAndReplaysTheTwistsSentSince) {
   OdometryEstimator e(1.5, 0.6, Water2ResponseParams::commandedVelocity());
   e.onStatus({0.0, 0.0, 0.0}, 0.0);
@@ -298,8 +298,8 @@ TEST(OdometryEstimator, PredictsTheBaseResponseNotTheCommand) {
 // ------------------------------------------------------------------ bridge on loopback (lock-step)
 // A robot_status reply read 0.15 s late (the bridge's thread starved on a loaded computer)
 // while the base drives at 0.3 m/s: /odom stays on the base's true pose, because the pose is
-// taken as valid when its request was sent (the fake base's pose when it answered). Before
-// session 7 it was taken as valid when read: /odom put the base 0.3 x 0.15 = 4.5 cm back.
+// taken as valid when its request was sent (the fake base's pose when it answered). Taken as
+// valid when read instead, /odom would put the base 0.3 x 0.15 = 4.5 cm back.
 TEST(Water2BaseBridge, AStatusReplyReadLateIsAppliedAtTheTimeItWasValid) {
   LockStep ls;
   ls.makeBridge();

@@ -1,11 +1,11 @@
 // bench_sim: simulator speed (issue bars: physics + state publication >= 1 kHz; image + cloud
-// >= 30 Hz at 640x480 / 80x60 rays). One JSON object per line (ehc_control/bench_util.h).
+// >= 30 Hz at 640x480 / 80x60 rays). One JSON object per line (ehc_common/bench_util.h).
 // "State publication" = filling and serialising /joint_states, /odom, /tf, /sim/object_poses
 // and /sim/status (what the node does per step, minus the socket write).
 
 #include "sim_ros_conversions.h"
 
-#include "ehc_control/bench_util.h"
+#include "ehc_common/bench_util.h"
 
 #include <ros/serialization.h>
 #include <tf2_msgs/TFMessage.h>
@@ -24,11 +24,14 @@ std::size_t serialise(const M& m, std::vector<uint8_t>* buf) {
   return n;
 }
 
-std::string hz(double mean_us, double bar_hz) {
-  char b[128];
-  std::snprintf(b, sizeof(b), "\"rate_hz\":%.1f,\"bar_hz\":%.0f,\"meets_bar\":%s", 1e6 / mean_us,
-                bar_hz, 1e6 / mean_us >= bar_hz ? "true" : "false");
-  return b;
+/// One JSON line {"bench": name, "rate_hz", "bar_hz", "meets_bar"}.
+void printRate(const std::string& name, double mean_us, double bar_hz) {
+  ehc_common::Json line;
+  line["bench"] = name;
+  line["rate_hz"] = ehc_common::jsonNumber(1e6 / mean_us);
+  line["bar_hz"] = bar_hz;
+  line["meets_bar"] = 1e6 / mean_us >= bar_hz;
+  std::printf("%s\n", ehc_common::jsonLine(line).c_str());
 }
 
 }  // namespace
@@ -48,10 +51,11 @@ int main() {
     return cmd;
   };
   const int n = 5000;
-  const std::string setting = "\"scene\":\"table_three_objects\",\"dt\":" + std::to_string(cfg.fake_robot.dt) +
-                              ",\"substeps\":" + std::to_string(cfg.substeps());
+  const ehc_common::Json setting = {{"scene", "table_three_objects"},
+                                    {"dt", ehc_common::jsonNumber(cfg.fake_robot.dt)},
+                                    {"substeps", cfg.substeps()}};
 
-  ehc_control::benchReport("sim_physics_step", n, [&](int i) { world.step(command(i)); }, setting);
+  ehc_common::benchReport("sim_physics_step", n, [&](int i) { world.step(command(i)); }, setting);
 
   world.reset(1);
   std::vector<uint8_t> buf;
@@ -60,7 +64,7 @@ int main() {
   tf2_msgs::TFMessage tf;
   ehc_msgs::SimObjectPoses objects;
   ehc_msgs::SimStatus status;
-  const auto s = ehc_control::benchReport(
+  const auto s = ehc_common::benchReport(
       "sim_step_and_state_publication", n,
       [&](int i) {
         world.step(command(i));
@@ -77,7 +81,7 @@ int main() {
         serialise(status, &buf);
       },
       setting);
-  std::printf("{\"bench\":\"sim_step_and_state_publication_rate\",%s}\n", hz(s.mean_us, 1000).c_str());
+  printRate("sim_step_and_state_publication_rate", s.mean_us, 1000);
 
   // Camera: ready pose in front of the table (three tags in view), 640x480, 80x60 rays.
   world.reset(1);
@@ -86,17 +90,19 @@ int main() {
   vpImage<unsigned char> image;
   std::vector<Eigen::Vector3f> points;
   const int m = 200;
-  const std::string cam_setting = "\"width\":640,\"height\":480,\"rays\":\"" +
-                                  std::to_string(cfg.camera.ray_cols) + "x" +
-                                  std::to_string(cfg.camera.ray_rows) + "\",\"faces\":" +
-                                  std::to_string(camera.faceCount());
-  ehc_control::benchReport("sim_image_render", m, [&](int) { camera.render(world, &image); }, cam_setting);
+  const ehc_common::Json cam_setting = {
+      {"width", 640},
+      {"height", 480},
+      {"rays", std::to_string(cfg.camera.ray_cols) + "x" + std::to_string(cfg.camera.ray_rows)},
+      {"faces", camera.faceCount()}};
+  ehc_common::Json cloud_setting = cam_setting;
+  ehc_common::benchReport("sim_image_render", m, [&](int) { camera.render(world, &image); }, cam_setting);
   camera.cloud(world, &points);
-  ehc_control::benchReport("sim_cloud_raycast", m, [&](int) { camera.cloud(world, &points); },
-                           cam_setting + ",\"points\":" + std::to_string(points.size()));
+  cloud_setting["points"] = points.size();
+  ehc_common::benchReport("sim_cloud_raycast", m, [&](int) { camera.cloud(world, &points); }, cloud_setting);
   sensor_msgs::Image img;
   sensor_msgs::PointCloud2 cloud;
-  const auto c = ehc_control::benchReport(
+  const auto c = ehc_common::benchReport(
       "sim_image_and_cloud", m,
       [&](int) {
         const ros::Time stamp = rosStamp(world.timeNs());
@@ -108,6 +114,6 @@ int main() {
         serialise(cloud, &buf);
       },
       cam_setting);
-  std::printf("{\"bench\":\"sim_image_and_cloud_rate\",%s}\n", hz(c.mean_us, 30).c_str());
+  printRate("sim_image_and_cloud_rate", c.mean_us, 30);
   return 0;
 }

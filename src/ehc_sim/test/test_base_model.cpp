@@ -3,7 +3,7 @@
 // odometry (status rate, dead reckoning between statuses, bounded error), the ideal model
 // unchanged, and the configuration (files document the struct's defaults; unknown keys fail).
 
-#include "ehc_control/config_node.h"
+#include "ehc_common/config_node.h"
 #include "ehc_sim/base_model.h"
 #include "ehc_sim/fake_robot_config.h"
 #include "ehc_sim/kinematic_fake_robot.h"
@@ -237,7 +237,7 @@ OdometryErrors odometryErrors(const BaseModelConfig& model, double duration, Pro
 }
 }  // namespace
 
-// The rehearsal's finding (session 7): /odom jumped by up to 11.4 cm at a robot_status, because
+// The rehearsal's finding: /odom jumped by up to 11.4 cm at a robot_status, because
 // the bridge dead-reckoned the COMMANDED twist between the 2 Hz statuses while the base follows
 // it through latency, lag, an acceleration ramp and a 0.95 gain. The bridge now dead-reckons
 // through the base's own response model (ehc_realman::Water2VelocityResponse, the one the
@@ -317,7 +317,7 @@ TEST(Water2Base, ConfigFilesDocumentTheDefaultsAndUnknownKeysFail) {
   }
   const std::string robot_file = std::string(EHC_CONFIG_DIR) + "/robots/realman_rm65_water2/robot.yaml";
   auto load = [&](const std::string& extra) {
-    const auto root = ehc_control::ConfigNode::loadString("sim:\n  robot: " + robot_file + "\n" + extra,
+    const auto root = ehc_common::ConfigNode::loadString("sim:\n  robot: " + robot_file + "\n" + extra,
                                                           "test.yaml", "FakeRobotConfig");
     return ehc_sim::loadFakeRobotConfig(root.child("sim"));
   };

@@ -4,7 +4,7 @@
 // frame convention.
 
 #include "ehc_control/pinhole_camera.h"
-#include "ehc_control/config_node.h"
+#include "ehc_common/config_node.h"
 #include "ehc_sim/scene_config.h"
 #include "ehc_sim/sim_config.h"
 
@@ -222,7 +222,7 @@ TEST(FakeRobotConfig, BothSimulatorsReadTheSameSchema) {
   EXPECT_FALSE(kin.summary().empty());
 
   const FakeRobotConfig moved = loadFakeRobotConfig(
-      ehc_control::ConfigNode::loadString("sim:\n  robot: r.yaml\n  robot_start: {x: 1.5, yaw: 0.3}\n",
+      ehc_common::ConfigNode::loadString("sim:\n  robot: r.yaml\n  robot_start: {x: 1.5, yaw: 0.3}\n",
                                           "k.yaml", "FakeRobotConfig").child("sim"));
   EXPECT_EQ(moved.robot_start, Eigen::Vector3d(1.5, 0.0, 0.3));
 }
@@ -230,7 +230,7 @@ TEST(FakeRobotConfig, BothSimulatorsReadTheSameSchema) {
 TEST(FakeRobotConfig, FormerKinematicKeysAreErrorsNamingFileAndField) {
   auto expectError = [](const std::string& body, const std::string& field, const std::string& hint) {
     try {
-      loadFakeRobotConfig(ehc_control::ConfigNode::loadString("sim:\n  robot: r.yaml\n" + body, "old_kin.yaml",
+      loadFakeRobotConfig(ehc_common::ConfigNode::loadString("sim:\n  robot: r.yaml\n" + body, "old_kin.yaml",
                                                               "FakeRobotConfig").child("sim"));
       ADD_FAILURE() << body;
     } catch (const std::invalid_argument& e) {

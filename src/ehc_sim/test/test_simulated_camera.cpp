@@ -9,11 +9,11 @@
 
 #include <gtest/gtest.h>
 
-#include "ehc_control/config_node.h"
+#include "ehc_common/config_node.h"
 #include "ehc_perception/tag_detector.h"
 
 // The perception tests' helpers (lookAt).
-#include "../../ehc_perception/test/perception_test_helpers.h"
+#include "ehc_test/perception_fixtures.h"
 
 #include <algorithm>
 #include <cmath>
@@ -310,7 +310,7 @@ TEST(SimulatedCamera, TagInViewIsFalseOnlyWhenTheDetectorFindsNoTag) {
   }
   ASSERT_EQ(tags.size(), 3u);
   const ehc_perception::TagDetectorConfig dcfg = ehc_perception::loadTagDetectorConfig(
-      ehc_control::ConfigNode::loadFile(kConfig + "/demo/tag_front.yaml", "test").child("tag_detector"));
+      ehc_common::ConfigNode::loadFile(kConfig + "/demo/tag_front.yaml", "test").child("tag_detector"));
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(-1.0, 1.0), r01(0.0, 1.0);
   int in_view = 0, found_in_view = 0, cut = 0, behind = 0, checked = 0;

@@ -83,7 +83,7 @@ TEST(StepScheduler, LockStepNeverAdvancesWithoutAnAnswer) {
 }
 
 TEST(StepScheduler, AckGateHoldsAStepUntilEveryNodeIsDoneWithTheImage) {
-  // Issue 18: perception in the lock-step. Two tag nodes; an image with the state at kT0.
+  // Perception in the lock-step. Two tag nodes; an image with the state at kT0.
   StepScheduler s(robot(), config(false));
   s.setAckGate({AckNode::parse("ehc_tag_a"), AckNode::parse("ehc_tag_b:image")}, 0);
   auto answer = [&](double wall, std::int64_t t) {

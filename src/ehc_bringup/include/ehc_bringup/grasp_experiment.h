@@ -1,7 +1,7 @@
 #pragma once
 // GraspExperiment: paper Exp-2 (Table III: grasp three objects on a table in sequence) and Exp-3
 // (Table IV: one object, forward / downward / sideways grasps, TfM with and without MPBS) as
-// deterministic in-process protocols on GraspPipeline (issue 14 items 2-5). No ROS master.
+// deterministic in-process protocols on GraspPipeline. No ROS master.
 //
 // Exp-2 (`table`): config/scenes/table_three_objects.yaml, the demo's sequencer (front, middle,
 //   back; 30 s per object), one run per (method, set). Exp-3 (`poses`):

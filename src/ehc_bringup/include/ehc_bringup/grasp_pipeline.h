@@ -1,6 +1,6 @@
 #pragma once
-// GraspPipeline: the grasping pipeline of `make demo` in-process, without a ROS master (issue 14
-// item 1; DESIGN.md section 9). The cores the nodes wrap, stepped in lock-step on sim time:
+// GraspPipeline: the grasping pipeline of `make demo` in-process, without a ROS master
+// (docs/DESIGN.md, simulation). The cores the nodes wrap, stepped in lock-step on sim time:
 //
 //   SimWorld (Bullet)            ehc_sim_node
 //   SimulatedCamera              ehc_sim_node: image / depth cloud when due (StreamClock), only

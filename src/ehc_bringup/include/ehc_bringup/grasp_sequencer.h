@@ -1,6 +1,6 @@
 #pragma once
 // GraspSequencer: the per-object grasp state machine behind `make demo` (ROS-free; the node
-// ehc_grasp_sequencer_node only converts messages and calls it). Issue 6 item 4.
+// ehc_grasp_sequencer_node only converts messages and calls it).
 //
 // For every object in order:
 //   WAIT_TARGET  until a fresh perceived pose (tag target) of the object arrives; meanwhile, if
@@ -72,8 +72,11 @@
 #include <string>
 #include <vector>
 
-namespace ehc_control {
+namespace ehc_common {
 class ConfigNode;
+}  // namespace ehc_common
+
+namespace ehc_control {
 }
 
 namespace ehc_bringup {
@@ -103,7 +106,7 @@ struct GraspSequencerParams {
   /// move to the grasp brings the fingers in along the axis. A TCP that entered the position
   /// tolerance from the side (downward and sideways approaches come in across the axis) went on
   /// with 2-3 cm of lateral error; on the way in a finger then swept into a 5 cm box (1 cm of
-  /// clearance a side in the 7 cm gripper) and pushed it away (Exp-3, session 10).
+  /// clearance a side in the 7 cm gripper) and pushed it away (Exp-3).
   double pregrasp_lateral_tolerance = 0.01;
   double pregrasp_orientation_tolerance_deg = 5.0;
   double grasp_position_tolerance = 0.01;         ///< m
@@ -116,7 +119,7 @@ struct GraspSequencerParams {
   double stall_time = 1.0;                ///< s
   double stall_tolerance_factor = 2.5;
   /// m: the gripper never closes farther than this from the locked grasp position, stalled or
-  /// not (issue 18: a grasp closed 2.4 cm short closed on nothing). A stall in GRASP beyond it
+  /// not (a grasp closed 2.4 cm short closed on nothing). A stall in GRASP beyond it
   /// keeps waiting; the object time limit then fails it and says how far the TCP stalled.
   double max_close_offset = 0.01;
   /// TfM counts the approach until sig(w) reaches this (the arm takes over), see above.
@@ -138,7 +141,7 @@ struct GraspSequencerParams {
 };
 /// Reads `sequencer:` (scalars, `selection:` child) and `objects:` (list of {name, approach})
 /// from the node's YAML; errors name the file and the field.
-GraspSequencerParams loadGraspSequencerParams(const ehc_control::ConfigNode& root);
+GraspSequencerParams loadGraspSequencerParams(const ehc_common::ConfigNode& root);
 
 /// Everything the sequencer reads each cycle (one controller status).
 struct SequencerInput {

@@ -5,6 +5,7 @@
 // time; a target is reached when the TCP is within the arrival tolerance (1 cm, 2 deg) and
 // failed after the time limit (30 s); the next target starts from where the last one ended.
 
+#include "ehc_common/json.h"
 #include "ehc_control/control_cycle.h"
 #include "ehc_sim/kinematic_fake_robot.h"
 
@@ -155,6 +156,8 @@ class ReachExperiment {
 /// Writes summary.json, table.md (paper Table II layout) and trials.csv into `dir`.
 void writeReachResults(const std::string& dir, const std::vector<ReachSummary>& summaries,
                        const std::vector<ReachTrial>& trials, const std::string& notes);
+/// One method's summary as JSON (summary.json, the runner's stdout), the project's number format.
+ehc_common::Json summaryJsonValue(const ReachSummary& s);
 std::string summaryJson(const ReachSummary& s);
 
 }  // namespace ehc_bringup

@@ -1,6 +1,6 @@
 #include "ehc_bringup/grasp_pipeline.h"
 
-#include "ehc_control/config_node.h"
+#include "ehc_common/config_node.h"
 #include "ehc_perception/rate_limiter.h"
 #include "ehc_sim/sim_world.h"
 #include "ehc_sim/simulated_camera.h"
@@ -52,17 +52,17 @@ GraspPipelineConfig loadGraspPipelineConfig(const GraspPipelineFiles& files) {
   if (scene.empty()) throw std::invalid_argument("[GraspPipeline] no scene: the sim file names none and none was given");
   c.scene = ehc_sim::loadSceneConfig(scene);
   {
-    const auto root = ehc_control::ConfigNode::loadFile(files.controller, "GraspPipeline");
+    const auto root = ehc_common::ConfigNode::loadFile(files.controller, "GraspPipeline");
     c.cycle = ehc_control::loadControlCycleParams(root);
     root.ignore("node");
     root.rejectUnknownKeys();
   }
-  c.sequencer = loadGraspSequencerParams(ehc_control::ConfigNode::loadFile(files.sequencer, "GraspPipeline"));
+  c.sequencer = loadGraspSequencerParams(ehc_common::ConfigNode::loadFile(files.sequencer, "GraspPipeline"));
   if (files.tags.size() != c.sequencer.objects.size())
     throw std::invalid_argument("[GraspPipeline] " + std::to_string(files.tags.size()) + " tag file(s) for " +
                                 std::to_string(c.sequencer.objects.size()) + " sequencer object(s) in " + files.sequencer);
   for (std::size_t i = 0; i < files.tags.size(); ++i) {
-    const auto root = ehc_control::ConfigNode::loadFile(files.tags[i], "GraspPipeline");
+    const auto root = ehc_common::ConfigNode::loadFile(files.tags[i], "GraspPipeline");
     const auto detector = ehc_perception::loadTagDetectorConfig(root.childOrEmpty("tag_detector"));
     if (i == 0) c.detector = detector;
     else if (detector.summary() != c.detector.summary())
@@ -71,18 +71,18 @@ GraspPipelineConfig loadGraspPipelineConfig(const GraspPipelineFiles& files) {
     c.tag_targets.push_back(ehc_perception::loadTagTargetConfig(root.childOrEmpty("target")));
   }
   {
-    const auto root = ehc_control::ConfigNode::loadFile(files.grasp, "GraspPipeline");
+    const auto root = ehc_common::ConfigNode::loadFile(files.grasp, "GraspPipeline");
     c.targeting = ehc_perception::loadGraspTargetingParams(root.childOrEmpty("node"));
     c.generator = ehc_perception::loadGraspGeneratorConfig(root.childOrEmpty("grasp_generator"));
   }
   c.obstacles = !files.obstacles.empty();
   if (c.obstacles) {
-    const auto root = ehc_control::ConfigNode::loadFile(files.obstacles, "GraspPipeline");
+    const auto root = ehc_common::ConfigNode::loadFile(files.obstacles, "GraspPipeline");
     const auto n = root.child("node");
     n.ignore("robot_config");  // in-process the obstacle field checks the simulator's robot
     c.monitor = ehc_perception::loadObstacleMonitorParams(n);
     c.obstacle_rate_hz = n.get("publish_rate_hz", c.obstacle_rate_hz);
-    ehc_control::requireRange("GraspPipeline", "node.publish_rate_hz", c.obstacle_rate_hz, 0.1, 1000.0);
+    ehc_common::requireRange("GraspPipeline", "node.publish_rate_hz", c.obstacle_rate_hz, 0.1, 1000.0);
     c.map = ehc_perception::loadObstacleMapConfig(root.childOrEmpty("obstacle_map"));
   }
   if (!files.robot.empty()) {

@@ -1,6 +1,6 @@
 #include "ehc_bringup/grasp_sequencer.h"
 
-#include "ehc_control/config_node.h"
+#include "ehc_common/config_node.h"
 #include "ehc_control/control_status.h"
 
 #include <algorithm>
@@ -124,9 +124,9 @@ std::string GraspSequencerParams::summary() const {
   return s.str();
 }
 
-GraspSequencerParams loadGraspSequencerParams(const ehc_control::ConfigNode& root) {
+GraspSequencerParams loadGraspSequencerParams(const ehc_common::ConfigNode& root) {
   GraspSequencerParams p;
-  const ehc_control::ConfigNode s = root.childOrEmpty("sequencer");
+  const ehc_common::ConfigNode s = root.childOrEmpty("sequencer");
   p.object_time_limit = s.get("object_time_limit", p.object_time_limit);
   p.perception_hold = s.get("perception_hold", p.perception_hold);
   p.search_distance = s.get("search_distance", p.search_distance);
@@ -153,7 +153,7 @@ GraspSequencerParams loadGraspSequencerParams(const ehc_control::ConfigNode& roo
   p.retreat_raise = s.get("retreat_raise", p.retreat_raise);
   p.retreat_tolerance = s.get("retreat_tolerance", p.retreat_tolerance);
   p.retreat_timeout = s.get("retreat_timeout", p.retreat_timeout);
-  const ehc_control::ConfigNode sel = s.childOrEmpty("selection");
+  const ehc_common::ConfigNode sel = s.childOrEmpty("selection");
   p.selection.candidate_gate = sel.get("candidate_gate", p.selection.candidate_gate);
   p.selection.max_angle_deg = sel.get("max_angle_deg", p.selection.max_angle_deg);
   p.selection.max_width = sel.get("max_width", p.selection.max_width);
@@ -169,7 +169,7 @@ GraspSequencerParams loadGraspSequencerParams(const ehc_control::ConfigNode& roo
 
   if (!root.has("objects")) root.fail("objects", "is required: a list of {name, approach}");
   for (std::size_t i = 0; i < root.listSize("objects"); ++i) {
-    const ehc_control::ConfigNode o = root.element("objects", i);
+    const ehc_common::ConfigNode o = root.element("objects", i);
     GraspObjectSpec spec;
     spec.name = o.require<std::string>("name");
     const std::string a = o.get<std::string>("approach", "forward");

@@ -1,7 +1,7 @@
 #include "ehc_bringup/reach_experiment.h"
 
-#include "ehc_control/bench_util.h"
-#include "ehc_control/enum_names.h"
+#include "ehc_common/bench_util.h"
+#include "ehc_common/enum_names.h"
 
 #include <chrono>
 #include <cmath>
@@ -18,11 +18,11 @@ using ehc_control::Vector6d;
 
 namespace {
 const char* kOwner = "ReachExperiment";
-constexpr ehc_control::EnumNames<ReachProtocol, 2> kProtocolNames = {{
+constexpr ehc_common::EnumNames<ReachProtocol, 2> kProtocolNames = {{
     {ReachProtocol::Sequence, "sequence"},
     {ReachProtocol::Reset, "reset"},
 }};
-constexpr ehc_control::EnumNames<ReachFailure, 8> kFailureNames = {{
+constexpr ehc_common::EnumNames<ReachFailure, 8> kFailureNames = {{
     {ReachFailure::None, "none"},
     {ReachFailure::Unreachable, "unreachable"},
     {ReachFailure::Converging, "converging"},
@@ -34,15 +34,15 @@ constexpr ehc_control::EnumNames<ReachFailure, 8> kFailureNames = {{
 }};
 }  // namespace
 
-std::string toString(ReachProtocol p) { return ehc_control::enumName(kProtocolNames, p, kOwner); }
+std::string toString(ReachProtocol p) { return ehc_common::enumName(kProtocolNames, p, kOwner); }
 ReachProtocol reachProtocolFromString(const std::string& s) {
-  return ehc_control::enumValue(kProtocolNames, s, kOwner, "protocol");
+  return ehc_common::enumValue(kProtocolNames, s, kOwner, "protocol");
 }
-std::string toString(ReachFailure f) { return ehc_control::enumName(kFailureNames, f, kOwner); }
+std::string toString(ReachFailure f) { return ehc_common::enumName(kFailureNames, f, kOwner); }
 ReachFailure reachFailureFromString(const std::string& s) {
-  return ehc_control::enumValue(kFailureNames, s, kOwner, "failure cause");
+  return ehc_common::enumValue(kFailureNames, s, kOwner, "failure cause");
 }
-std::vector<ReachFailure> reachFailures() { return ehc_control::enumValues(kFailureNames); }
+std::vector<ReachFailure> reachFailures() { return ehc_common::enumValues(kFailureNames); }
 
 void ReachExperimentParams::validate() const {
   auto bad = [](const std::string& w) { throw std::invalid_argument("[ReachExperiment] " + w); };
@@ -245,41 +245,48 @@ ReachSummary ReachExperiment::run(const std::vector<std::vector<Eigen::Isometry3
   s.distant = meanSpeed(distant);
   s.close = meanSpeed(close);
   s.cycles = distant.cycles + close.cycles;
-  const ehc_control::BenchStats st = ehc_control::benchStats(step_us);
+  const ehc_common::BenchStats st = ehc_common::benchStats(step_us);
   s.controller_median_us = st.median_us;
   s.controller_p99_us = st.p99_us;
   s.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   return s;
 }
 
-std::string summaryJson(const ReachSummary& s) {
-  std::ostringstream os;
-  os << std::setprecision(6) << "{\"method\":\"" << s.method << "\",\"targets\":" << s.targets
-     << ",\"failed\":" << s.failed << ",\"mean_time_s\":" << s.mean_time_s
-     << ",\"distant\":{\"base_t\":" << s.distant.base_t << ",\"base_r\":" << s.distant.base_r
-     << ",\"arm\":" << s.distant.arm << ",\"cycles\":" << s.distant.cycles << "}"
-     << ",\"close\":{\"base_t\":" << s.close.base_t << ",\"base_r\":" << s.close.base_r
-     << ",\"arm\":" << s.close.arm << ",\"cycles\":" << s.close.cycles << "}"
-     << ",\"qp_failures\":" << s.qp_failures << ",\"min_joint_limit_margin_rad\":"
-     << s.min_joint_limit_margin << ",\"controller_step_median_us\":" << s.controller_median_us
-     << ",\"controller_step_p99_us\":" << s.controller_p99_us << ",\"wall_time_s\":"
-     << s.wall_time_s << ",\"failure_causes\":{";
-  bool first = true;
+namespace {
+ehc_common::Json speedJson(const SpeedMeans& m) {
+  return {{"base_t", ehc_common::jsonNumber(m.base_t)},
+          {"base_r", ehc_common::jsonNumber(m.base_r)},
+          {"arm", ehc_common::jsonNumber(m.arm)},
+          {"cycles", m.cycles}};
+}
+}  // namespace
+
+ehc_common::Json summaryJsonValue(const ReachSummary& s) {
+  using ehc_common::jsonNumber;
+  ehc_common::Json j;
+  j["method"] = s.method;
+  j["targets"] = s.targets;
+  j["failed"] = s.failed;
+  j["mean_time_s"] = jsonNumber(s.mean_time_s);
+  j["distant"] = speedJson(s.distant);
+  j["close"] = speedJson(s.close);
+  j["qp_failures"] = s.qp_failures;
+  j["min_joint_limit_margin_rad"] = jsonNumber(s.min_joint_limit_margin);
+  j["controller_step_median_us"] = jsonNumber(s.controller_median_us);
+  j["controller_step_p99_us"] = jsonNumber(s.controller_p99_us);
+  j["wall_time_s"] = jsonNumber(s.wall_time_s);
+  ehc_common::Json& causes = j["failure_causes"] = ehc_common::Json::object();
   for (const ReachFailure f : reachFailures()) {
     if (f == ReachFailure::None) continue;
     const auto it = s.failures.find(f);
-    os << (first ? "" : ",") << "\"" << toString(f) << "\":" << (it == s.failures.end() ? 0 : it->second);
-    first = false;
+    causes[toString(f)] = it == s.failures.end() ? 0 : it->second;
   }
-  os << "},\"pinned_joints\":{";
-  first = true;
-  for (const auto& [joint, n] : s.pinned_joints) {
-    os << (first ? "" : ",") << "\"" << joint << "\":" << n;
-    first = false;
-  }
-  os << "}}";
-  return os.str();
+  ehc_common::Json& pinned = j["pinned_joints"] = ehc_common::Json::object();
+  for (const auto& [joint, n] : s.pinned_joints) pinned[joint] = n;
+  return j;
 }
+
+std::string summaryJson(const ReachSummary& s) { return ehc_common::jsonLine(summaryJsonValue(s)); }
 
 void writeReachResults(const std::string& dir, const std::vector<ReachSummary>& summaries,
                        const std::vector<ReachTrial>& trials, const std::string& notes) {
@@ -294,9 +301,9 @@ void writeReachResults(const std::string& dir, const std::vector<ReachSummary>& 
     if (summaries.size() == 1) {
       f << summaryJson(summaries[0]) << "\n";
     } else {
-      f << "[";
-      for (std::size_t i = 0; i < summaries.size(); ++i) f << (i ? ",\n " : "") << summaryJson(summaries[i]);
-      f << "]\n";
+      ehc_common::Json all = ehc_common::Json::array();
+      for (const ReachSummary& m : summaries) all.push_back(summaryJsonValue(m));
+      f << ehc_common::jsonLine(all) << "\n";
     }
   }
   {

@@ -15,8 +15,8 @@
 #include "ehc_bringup/grasp_experiment.h"
 #include "ehc_bringup/reach_experiment.h"
 #include "ehc_bringup/reach_targets.h"
-#include "ehc_control/command_line.h"
-#include "ehc_control/config_node.h"
+#include "ehc_common/command_line.h"
+#include "ehc_common/config_node.h"
 #include "ehc_control/control_cycle.h"
 
 #include <chrono>
@@ -60,7 +60,7 @@ Args parse(int argc, char** argv) {
   if (argc < 2) throw std::invalid_argument("missing command (reach)");
   a.command = argv[1];
   if (a.command != "reach") throw std::invalid_argument("unknown command '" + a.command + "' (reach, grasp, poses)");
-  const ehc_control::CommandLine cli(argc, argv,
+  const ehc_common::CommandLine cli(argc, argv,
                                      {"robot", "method", "out", "sets", "points", "seed", "targets",
                                       "config", "map", "trace", "noise", "base-model", "protocol"},
                                      {"all-targets"}, /*first=*/2);
@@ -92,7 +92,7 @@ int runGrasp(int argc, char** argv) {
   std::vector<std::string> options = {"robot", "method", "out", "sets", "seed", "scene", "jobs", "config-dir",
                                       "jitter-xy", "jitter-yaw", "base-model"};
   if (p.protocol == ehc_bringup::GraspProtocol::Poses) options.push_back("per-set");
-  const ehc_control::CommandLine cli(argc, argv, options, {}, /*first=*/2);
+  const ehc_common::CommandLine cli(argc, argv, options, {}, /*first=*/2);
   const std::string method = cli.text("method", "all");
   const std::string out = cli.text("out");
   p.sets = static_cast<int>(cli.integer("sets", p.sets, 1, 100000));
@@ -167,7 +167,7 @@ int main(int argc, char** argv) {
     const auto robot_cfg = ehc_control::loadRobotConfig(a.robot);
     auto model = std::make_shared<const ehc_control::WholeBodyModel>(robot_cfg);
     const std::string cfg_path = a.config.empty() ? defaultConfig() : a.config;
-    const auto cfg = ehc_control::ConfigNode::loadFile(cfg_path, "ehc_experiment");
+    const auto cfg = ehc_common::ConfigNode::loadFile(cfg_path, "ehc_experiment");
     ehc_control::QpControllerParams ctrl = ehc_control::loadQpControllerParams(cfg.childOrEmpty("controller"));
     const auto wparams = ehc_control::loadEhcWeightingParams(cfg.childOrEmpty("weighting"));
     // The whole controller file is validated as the controller node reads it (the experiment

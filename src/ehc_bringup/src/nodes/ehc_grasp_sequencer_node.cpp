@@ -1,4 +1,4 @@
-// ehc_grasp_sequencer_node: thin ROS wrapper of ehc_bringup::GraspSequencer (issue 6 item 4).
+// ehc_grasp_sequencer_node: thin ROS wrapper of ehc_bringup::GraspSequencer.
 //   rosrun ehc_bringup ehc_grasp_sequencer_node _config:=config/demo/grasp_sequencer.yaml
 //       [_summary:=results/demo/summary.json] [_trace:=results/demo/trace.csv]
 //
@@ -15,14 +15,15 @@
 // When every object is handled it writes the JSON summary (and the CSV trace) and exits 0.
 // Any exception: log, stop publishing goals (the controller then stops on TARGET_LOST), exit 1.
 
+#include "ehc_common/logging.h"
 #include "ehc_bringup/grasp_sequencer.h"
 #include "ehc_msgs/ControllerStatus.h"
 #include "ehc_msgs/GraspCandidates.h"
 #include "ehc_msgs/ObstacleExclusion.h"
-#include "ehc_control/config_node.h"
+#include "ehc_common/config_node.h"
 #include "ehc_control/robot_config.h"
 #include "ehc_msgs/SimStatus.h"
-#include "ehc_msgs/lockstep_ack.h"
+#include "ehc_common/lockstep_ack.h"
 
 #include <geometry_msgs/PointStamped.h>
 #include <geometry_msgs/PoseStamped.h>
@@ -48,7 +49,7 @@ namespace {
 
 using ehc_bringup::GraspSequencer;
 
-constexpr double kLogThrottle = 2.0;  ///< s, period of every throttled log line
+using ehc_common::kLogThrottle;
 
 struct NodeParams {
   /// Frames: the robot's (robot.yaml frames.world / tcp / camera_optical) unless the file sets them.
@@ -75,7 +76,7 @@ struct NodeParams {
   }
 };
 
-NodeParams loadNodeParams(const ehc_control::ConfigNode& root) {
+NodeParams loadNodeParams(const ehc_common::ConfigNode& root) {
   NodeParams p;
   const auto n = root.childOrEmpty("node");
   p.robot_file = n.has("robot") ? ehc_control::robotFileField(n, "robot") : ehc_control::resolveRobotFile("realman_rm65_water2");
@@ -95,7 +96,7 @@ NodeParams loadNodeParams(const ehc_control::ConfigNode& root) {
   for (const char* k : {"world_frame", "tcp_frame", "goal_topic", "status_topic", "gripper_service"})
     if (n.has(k) && n.get<std::string>(k, "").empty()) n.fail(k, "must not be empty");
   for (std::size_t i = 0; i < root.listSize("objects"); ++i) {
-    const ehc_control::ConfigNode o = root.element("objects", i);
+    const ehc_common::ConfigNode o = root.element("objects", i);
     p.pose_topics.push_back(o.require<std::string>("pose_topic"));
     if (p.pose_topics.back().empty()) o.fail("pose_topic", "must not be empty");
   }
@@ -128,7 +129,7 @@ class SequencerNode {
       throw std::invalid_argument("missing parameter _config:=<grasp_sequencer.yaml>");
     pnh.param<std::string>("summary", summary_file_, "");
     pnh.param<std::string>("trace", trace_file_, "");
-    const auto root = ehc_control::ConfigNode::loadFile(config, "GraspSequencerNode");
+    const auto root = ehc_common::ConfigNode::loadFile(config, "GraspSequencerNode");
     node_ = loadNodeParams(root);
     pnh.param("exit_when_done", node_.exit_when_done, node_.exit_when_done);
     std::string robot;  // the one robot switch: the frames not set in the file come from robot.yaml
@@ -144,7 +145,7 @@ class SequencerNode {
     for (const auto& t : {node_.status_topic, node_.candidates_topic, node_.sim_status_topic, node_.camera_info_topic,
                           std::string("/tf")})
       inputs.push_back(t);
-    ack_ = std::make_unique<ehc_msgs::LockstepAck>(pnh, inputs);
+    ack_ = std::make_unique<ehc_common::LockstepAck>(pnh, inputs);
     ROS_INFO_STREAM("ehc_grasp_sequencer_node (" << config << ")\n" << sp.summary() << "\n" << node_.summary()
                                                   << (ack_->topic().empty() ? "" : "\n  each status acknowledged on " + ack_->topic()));
     if (!trace_file_.empty()) {
@@ -211,7 +212,7 @@ class SequencerNode {
   /// world -> `frame` at `stamp` (the status's: in lock-step its tf came with the state), else
   /// the latest (a real robot's tf may lag the controller's clock a little).
   std::optional<Eigen::Isometry3d> lookup(const std::string& frame, const ros::Time& stamp) {
-    if (!ack_->topic().empty()) ehc_msgs::waitForTransformWall(tf_, node_.world_frame, frame, stamp, 1.0);  // lock-step
+    if (!ack_->topic().empty()) ehc_common::waitForTransformWall(tf_, node_.world_frame, frame, stamp, 1.0);  // lock-step
     for (const ros::Time& t : {stamp, ros::Time(0)}) {
       try {
         return tf2::transformToEigen(tf_.lookupTransform(node_.world_frame, frame, t));
@@ -373,13 +374,13 @@ class SequencerNode {
   std::size_t published_results_ = 0;
   ros::ServiceClient gripper_;
   std::vector<ros::Subscriber> subs_;
-  std::unique_ptr<ehc_msgs::LockstepAck> ack_;  ///< _ack_topic (lock-step acknowledgement gate)
+  std::unique_ptr<ehc_common::LockstepAck> ack_;  ///< _ack_topic (lock-step acknowledgement gate)
   /// Inputs taken at the first status after their stamp: object poses (source = object index),
   /// grasp candidates, the simulator's gripper status, the trace's speeds.
   static constexpr int kCandidates = 1000000, kSimStatus = 1000001, kJoints = 1000002, kOdom = 1000003;
-  ehc_msgs::StampedInbox inbox_;
+  ehc_common::StampedInbox inbox_;
   ros::CallbackQueue inputs_queue_;  ///< every input but the status (taken in onStatus)
-  ehc_msgs::PollPassBarrier poll_pass_;
+  ehc_common::PollPassBarrier poll_pass_;
   static constexpr double kPollPassWall = 1.0;  ///< wall s: a receive pass takes far less
   std::string summary_file_, trace_file_, mode_;
   std::ofstream trace_;

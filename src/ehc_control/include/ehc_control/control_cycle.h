@@ -28,9 +28,11 @@
 #include <string>
 #include <vector>
 
-namespace ehc_control {
-
+namespace ehc_common {
 class ConfigNode;
+}  // namespace ehc_common
+
+namespace ehc_control {
 
 enum class ServoType { Proportional, Pbvs };
 std::string toString(ServoType type);
@@ -52,7 +54,7 @@ struct ControlCycleParams {
 };
 /// Reads the whole controller.yaml (`root`); `robot` defaults to the RealMan robot.yaml next to
 /// it and is resolved against the file's folder. Unknown sections (e.g. `node`) are ignored.
-ControlCycleParams loadControlCycleParams(const ConfigNode& root);
+ControlCycleParams loadControlCycleParams(const ehc_common::ConfigNode& root);
 
 /// What one cycle did: the fields of /ehc/status (without header). The QP step's figures
 /// (errors, omega, sig, base weight, solve time, obstacle rows) are 0 unless the QP ran.

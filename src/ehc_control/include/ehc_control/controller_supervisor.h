@@ -16,9 +16,11 @@
 #include <string>
 #include <vector>
 
-namespace ehc_control {
-
+namespace ehc_common {
 class ConfigNode;
+}  // namespace ehc_common
+
+namespace ehc_control {
 
 struct SupervisorParams {
   double state_timeout = 0.2;      ///< s: joint state / odometry older than this stops the robot
@@ -36,7 +38,7 @@ struct SupervisorParams {
   void validate() const;           ///< throws "[SupervisorParams] ..."
   std::string summary() const;
 };
-SupervisorParams loadSupervisorParams(const ConfigNode& node);
+SupervisorParams loadSupervisorParams(const ehc_common::ConfigNode& node);
 
 struct SupervisorDecision {
   bool run = false;

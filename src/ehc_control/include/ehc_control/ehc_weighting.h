@@ -11,9 +11,11 @@
 #include <memory>
 #include <string>
 
-namespace ehc_control {
-
+namespace ehc_common {
 class ConfigNode;
+}  // namespace ehc_common
+
+namespace ehc_control {
 
 struct EhcWeightingParams {
   double reach_threshold = 0.95;  ///< R above this defines r_td
@@ -30,7 +32,7 @@ struct EhcWeightingParams {
   std::string ray_origin = "arm_base";
   void validate() const;          ///< throws "[EhcWeighting] ..."
 };
-EhcWeightingParams loadEhcWeightingParams(const ConfigNode& node);
+EhcWeightingParams loadEhcWeightingParams(const ehc_common::ConfigNode& node);
 
 struct EhcWeight {
   double omega = 0.0;   ///< |e*| / |e|

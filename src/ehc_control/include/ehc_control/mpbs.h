@@ -18,9 +18,11 @@
 
 #include <string>
 
-namespace ehc_control {
-
+namespace ehc_common {
 class ConfigNode;
+}  // namespace ehc_common
+
+namespace ehc_control {
 
 struct MpbsParams {
   bool enabled = true;                ///< false: plain PBVS to the grasp pose
@@ -33,7 +35,7 @@ struct MpbsParams {
   void validate() const;              ///< throws "[MpbsParams] ..."
   std::string summary() const;
 };
-MpbsParams loadMpbsParams(const ConfigNode& node);
+MpbsParams loadMpbsParams(const ehc_common::ConfigNode& node);
 
 /// SE(3) interpolation: translation (1 - s) a.t + s b.t, rotation slerp(a.R, b.R, s) along the
 /// shorter arc. s is clamped to [0, 1]. Throws "[Mpbs] ..." on non-finite input.

@@ -20,9 +20,11 @@
 #include <memory>
 #include <string>
 
-namespace ehc_control {
-
+namespace ehc_common {
 class ConfigNode;
+}  // namespace ehc_common
+
+namespace ehc_control {
 
 struct PbvsServoParams {
   /// vpAdaptiveGain lambda(x) = (l0 - linf) exp(-l0' x / (l0 - linf)) + linf, with (as vpServo
@@ -37,7 +39,7 @@ struct PbvsServoParams {
   std::string summary() const;
 };
 /// Reads the `servo` section (shared fields max_linear, max_angular, unwind_roll).
-PbvsServoParams loadPbvsServoParams(const ConfigNode& node);
+PbvsServoParams loadPbvsServoParams(const ehc_common::ConfigNode& node);
 
 class PbvsServo {
  public:

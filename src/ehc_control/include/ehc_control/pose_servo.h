@@ -7,9 +7,12 @@
 
 #include <cmath>
 
+namespace ehc_common {
+class ConfigNode;
+}  // namespace ehc_common
+
 namespace ehc_control {
 
-class ConfigNode;
 class WholeBodyModel;
 
 struct PoseServoParams {
@@ -20,7 +23,7 @@ struct PoseServoParams {
   double max_angular = 2.0;         ///< rad/s, |w| saturation of the desired twist
   void validate() const;            ///< throws "[PoseServoParams] ..."
 };
-PoseServoParams loadPoseServoParams(const ConfigNode& node);
+PoseServoParams loadPoseServoParams(const ehc_common::ConfigNode& node);
 
 /// The arm joint that rolls the TCP about its approach (z) axis, e.g. joint6 of the RM65-B.
 /// A finite-range roll joint winds up when targets come with random rolls; the servo then

@@ -42,9 +42,12 @@
 #include <string>
 #include <vector>
 
+namespace ehc_common {
+class ConfigNode;
+}  // namespace ehc_common
+
 namespace ehc_control {
 
-class ConfigNode;
 using Vector6d = Eigen::Matrix<double, 6, 1>;
 
 enum class ControlMode { Ehc, NeoE, NeoC, Tsmm };
@@ -113,7 +116,7 @@ struct QpControllerParams {
   void validate() const;               ///< throws "[QpControllerParams] ..."
   std::string summary() const;
 };
-QpControllerParams loadQpControllerParams(const ConfigNode& node);
+QpControllerParams loadQpControllerParams(const ehc_common::ConfigNode& node);
 
 /// One link-obstacle closest-point pair (world frame). normal: unit, obstacle -> link.
 struct ObstaclePair {

@@ -14,9 +14,11 @@
 #include <utility>
 #include <vector>
 
-namespace ehc_control {
-
+namespace ehc_common {
 class ConfigNode;
+}  // namespace ehc_common
+
+namespace ehc_control {
 
 enum class BaseType {
   Holonomic,     ///< base twist columns v_x, v_y, w_z (base frame)
@@ -101,6 +103,6 @@ std::string robotsDirectory();
 std::string resolveRobotFile(const std::string& name_or_path);
 /// The robot field `key` of a config file (e.g. controller.yaml's `robot`): a robot name as
 /// resolveRobotFile, or a path relative to that file's folder. Errors name file and field.
-std::string robotFileField(const ConfigNode& node, const std::string& key);
+std::string robotFileField(const ehc_common::ConfigNode& node, const std::string& key);
 
 }  // namespace ehc_control

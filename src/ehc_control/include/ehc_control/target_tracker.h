@@ -16,9 +16,11 @@
 
 #include <string>
 
-namespace ehc_control {
-
+namespace ehc_common {
 class ConfigNode;
+}  // namespace ehc_common
+
+namespace ehc_control {
 
 struct TargetTrackerParams {
   std::string camera_file;           ///< camera_info YAML (resolved path), overrides robot.yaml's robot.camera_info; "" = the robot's (none: PinholeCamera defaults)
@@ -27,7 +29,7 @@ struct TargetTrackerParams {
   std::string summary() const;
 };
 /// Reads the `tracking` section; `camera` is resolved against the YAML file's folder.
-TargetTrackerParams loadTargetTrackerParams(const ConfigNode& node);
+TargetTrackerParams loadTargetTrackerParams(const ehc_common::ConfigNode& node);
 
 class TargetTracker {
  public:

@@ -1,5 +1,5 @@
 #pragma once
-// WristFlip: the joint-limit escape of the EHC QP (issue 17, item 2). ROS-free.
+// WristFlip: the joint-limit escape of the EHC QP. ROS-free.
 //
 // The trap it removes (Exp-1 traces, RealMan RM65-B): while the base still drives towards a
 // far target, the orientation task rolls the forearm joint (joint4, range +-178 deg) the short
@@ -31,9 +31,11 @@
 #include <string>
 #include <vector>
 
-namespace ehc_control {
-
+namespace ehc_common {
 class ConfigNode;
+}  // namespace ehc_common
+
+namespace ehc_control {
 
 struct WristFlipParams {
   /// rad: an outer flip joint this close to a limit starts a flip; 0 = off.

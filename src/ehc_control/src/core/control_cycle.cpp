@@ -1,7 +1,7 @@
 #include "ehc_control/control_cycle.h"
 
-#include "ehc_control/config_node.h"
-#include "ehc_control/enum_names.h"
+#include "ehc_common/config_node.h"
+#include "ehc_common/enum_names.h"
 
 #include <sstream>
 #include <stdexcept>
@@ -9,11 +9,11 @@
 namespace ehc_control {
 
 namespace {
-constexpr EnumNames<ServoType, 2> kServoTypeNames = {{{ServoType::Proportional, "proportional"}, {ServoType::Pbvs, "pbvs"}}};
+constexpr ehc_common::EnumNames<ServoType, 2> kServoTypeNames = {{{ServoType::Proportional, "proportional"}, {ServoType::Pbvs, "pbvs"}}};
 }  // namespace
 
-std::string toString(ServoType type) { return enumName(kServoTypeNames, type, "ControlCycle"); }
-ServoType servoTypeFromString(const std::string& s) { return enumValue(kServoTypeNames, s, "ControlCycle", "servo type"); }
+std::string toString(ServoType type) { return ehc_common::enumName(kServoTypeNames, type, "ControlCycle"); }
+ServoType servoTypeFromString(const std::string& s) { return ehc_common::enumValue(kServoTypeNames, s, "ControlCycle", "servo type"); }
 
 void ControlCycleParams::validate() const {
   controller.validate();
@@ -23,15 +23,15 @@ void ControlCycleParams::validate() const {
   mpbs.validate();
   tracking.validate();
   watchdog.validate();
-  requireRange("ControlCycleParams", "tracking.centre_timeout", centre_timeout, 1e-3, 3600.0);
+  ehc_common::requireRange("ControlCycleParams", "tracking.centre_timeout", centre_timeout, 1e-3, 3600.0);
 }
 
-ControlCycleParams loadControlCycleParams(const ConfigNode& root) {
+ControlCycleParams loadControlCycleParams(const ehc_common::ConfigNode& root) {
   ControlCycleParams p;
   p.robot_file = root.has("robot") ? robotFileField(root, "robot") : resolveRobotFile("realman_rm65_water2");
   p.controller = loadQpControllerParams(root.childOrEmpty("controller"));
   p.weighting = loadEhcWeightingParams(root.childOrEmpty("weighting"));
-  const ConfigNode servo = root.childOrEmpty("servo");
+  const ehc_common::ConfigNode servo = root.childOrEmpty("servo");
   const std::string type = servo.get<std::string>("type", toString(p.servo_type));
   try {
     p.servo_type = servoTypeFromString(type);
@@ -41,7 +41,7 @@ ControlCycleParams loadControlCycleParams(const ConfigNode& root) {
   p.servo = loadPoseServoParams(servo);
   p.pbvs = loadPbvsServoParams(servo);
   p.mpbs = loadMpbsParams(root.childOrEmpty("mpbs"));
-  const ConfigNode tracking = root.childOrEmpty("tracking");
+  const ehc_common::ConfigNode tracking = root.childOrEmpty("tracking");
   p.tracking = loadTargetTrackerParams(tracking);
   p.centre_timeout = tracking.get("centre_timeout", p.centre_timeout);
   p.watchdog = loadSupervisorParams(root.childOrEmpty("watchdog"));

@@ -1,13 +1,13 @@
 #include "ehc_control/control_status.h"
 
-#include "ehc_control/enum_names.h"
+#include "ehc_common/enum_names.h"
 
 namespace ehc_control {
 
 namespace {
 
 // The one string map of each enum.
-constexpr EnumNames<ControlPhase, 9> kPhaseNames = {{
+constexpr ehc_common::EnumNames<ControlPhase, 9> kPhaseNames = {{
     {ControlPhase::Idle, "IDLE"},
     {ControlPhase::Tracking, "TRACKING"},
     {ControlPhase::Arrived, "ARRIVED"},
@@ -18,7 +18,7 @@ constexpr EnumNames<ControlPhase, 9> kPhaseNames = {{
     {ControlPhase::QpFailed, "QP_FAILED"},
     {ControlPhase::ObstaclesStale, "OBSTACLES_STALE"},
 }};
-constexpr EnumNames<QpStatus, 3> kQpStatusNames = {{
+constexpr ehc_common::EnumNames<QpStatus, 3> kQpStatusNames = {{
     {QpStatus::Ok, "OK"},
     {QpStatus::Failed, "QP_FAILED"},
     {QpStatus::NotRun, "NOT_RUN"},
@@ -27,11 +27,11 @@ const char* kOwner = "ControlStatus";
 
 }  // namespace
 
-std::string toString(ControlPhase phase) { return enumName(kPhaseNames, phase, kOwner); }
-std::string toString(QpStatus status) { return enumName(kQpStatusNames, status, kOwner); }
-ControlPhase controlPhaseFromString(const std::string& s) { return enumValue(kPhaseNames, s, kOwner, "control phase"); }
-QpStatus qpStatusFromString(const std::string& s) { return enumValue(kQpStatusNames, s, kOwner, "QP status"); }
-std::vector<ControlPhase> controlPhases() { return enumValues(kPhaseNames); }
-std::vector<QpStatus> qpStatuses() { return enumValues(kQpStatusNames); }
+std::string toString(ControlPhase phase) { return ehc_common::enumName(kPhaseNames, phase, kOwner); }
+std::string toString(QpStatus status) { return ehc_common::enumName(kQpStatusNames, status, kOwner); }
+ControlPhase controlPhaseFromString(const std::string& s) { return ehc_common::enumValue(kPhaseNames, s, kOwner, "control phase"); }
+QpStatus qpStatusFromString(const std::string& s) { return ehc_common::enumValue(kQpStatusNames, s, kOwner, "QP status"); }
+std::vector<ControlPhase> controlPhases() { return ehc_common::enumValues(kPhaseNames); }
+std::vector<QpStatus> qpStatuses() { return ehc_common::enumValues(kQpStatusNames); }
 
 }  // namespace ehc_control

@@ -1,6 +1,6 @@
 #include "ehc_control/controller_supervisor.h"
 
-#include "ehc_control/config_node.h"
+#include "ehc_common/config_node.h"
 #include "ehc_control/joint_state.h"
 
 #include <algorithm>
@@ -10,10 +10,10 @@
 namespace ehc_control {
 
 void SupervisorParams::validate() const {
-  requireRange("SupervisorParams", "state_timeout", state_timeout, 1e-3, 10.0);
-  requireRange("SupervisorParams", "target_timeout", target_timeout, 1e-3, 60.0);
-  requireRange("SupervisorParams", "obstacle_timeout", obstacle_timeout, 1e-3, 60.0);
-  requireRange("SupervisorParams", "max_solve_time", max_solve_time, 1e-6, 1.0);
+  ehc_common::requireRange("SupervisorParams", "state_timeout", state_timeout, 1e-3, 10.0);
+  ehc_common::requireRange("SupervisorParams", "target_timeout", target_timeout, 1e-3, 60.0);
+  ehc_common::requireRange("SupervisorParams", "obstacle_timeout", obstacle_timeout, 1e-3, 60.0);
+  ehc_common::requireRange("SupervisorParams", "max_solve_time", max_solve_time, 1e-6, 1.0);
 }
 
 std::string SupervisorParams::summary() const {
@@ -32,7 +32,7 @@ bool isStale(const std::optional<double>& t, double now, double timeout) {
 }
 }  // namespace
 
-SupervisorParams loadSupervisorParams(const ConfigNode& n) {
+SupervisorParams loadSupervisorParams(const ehc_common::ConfigNode& n) {
   SupervisorParams p;
   p.state_timeout = n.get("state_timeout", p.state_timeout);
   p.target_timeout = n.get("target_timeout", p.target_timeout);

@@ -1,6 +1,6 @@
 #include "ehc_control/mpbs.h"
 
-#include "ehc_control/config_node.h"
+#include "ehc_common/config_node.h"
 
 #include <algorithm>
 #include <cmath>
@@ -10,7 +10,7 @@
 namespace ehc_control {
 
 void MpbsParams::validate() const {
-  requireRange("MpbsParams", "min_monitor_distance", min_monitor_distance, 1e-3, 10.0);
+  ehc_common::requireRange("MpbsParams", "min_monitor_distance", min_monitor_distance, 1e-3, 10.0);
   if (!target_centre.allFinite()) throw std::invalid_argument("[MpbsParams] target_centre must be finite");
 }
 
@@ -21,7 +21,7 @@ std::string MpbsParams::summary() const {
   return os.str();
 }
 
-MpbsParams loadMpbsParams(const ConfigNode& n) {
+MpbsParams loadMpbsParams(const ehc_common::ConfigNode& n) {
   MpbsParams p;
   p.enabled = n.get("enabled", p.enabled);
   p.min_monitor_distance = n.get("min_monitor_distance", p.min_monitor_distance);

@@ -1,6 +1,6 @@
 #include "ehc_control/pbvs_servo.h"
 
-#include "ehc_control/config_node.h"
+#include "ehc_common/config_node.h"
 
 #include <visp3/core/vpHomogeneousMatrix.h>
 #include <visp3/core/vpVelocityTwistMatrix.h>
@@ -27,13 +27,13 @@ vpHomogeneousMatrix toVisp(const Eigen::Isometry3d& T) {
 }  // namespace
 
 void PbvsServoParams::validate() const {
-  requireRange(kOwner, "gain_at_zero", gain_at_zero, 1e-3, 100.0);
-  requireRange(kOwner, "gain_at_infinity", gain_at_infinity, 1e-3, 100.0);
+  ehc_common::requireRange(kOwner, "gain_at_zero", gain_at_zero, 1e-3, 100.0);
+  ehc_common::requireRange(kOwner, "gain_at_infinity", gain_at_infinity, 1e-3, 100.0);
   if (gain_at_infinity > gain_at_zero)
     throw std::invalid_argument("[PbvsServoParams] gain_at_infinity must be <= gain_at_zero");
-  requireRange(kOwner, "slope_at_zero", slope_at_zero, 0.0, 1000.0);
-  requireRange(kOwner, "max_linear", max_linear, 1e-3, 100.0);
-  requireRange(kOwner, "max_angular", max_angular, 1e-3, 100.0);
+  ehc_common::requireRange(kOwner, "slope_at_zero", slope_at_zero, 0.0, 1000.0);
+  ehc_common::requireRange(kOwner, "max_linear", max_linear, 1e-3, 100.0);
+  ehc_common::requireRange(kOwner, "max_angular", max_angular, 1e-3, 100.0);
 }
 
 std::string PbvsServoParams::summary() const {
@@ -44,7 +44,7 @@ std::string PbvsServoParams::summary() const {
   return os.str();
 }
 
-PbvsServoParams loadPbvsServoParams(const ConfigNode& n) {
+PbvsServoParams loadPbvsServoParams(const ehc_common::ConfigNode& n) {
   PbvsServoParams p;
   p.gain_at_zero = n.get("gain_at_zero", p.gain_at_zero);
   p.gain_at_infinity = n.get("gain_at_infinity", p.gain_at_infinity);

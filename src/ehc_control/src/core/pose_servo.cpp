@@ -1,19 +1,19 @@
 #include "ehc_control/pose_servo.h"
 
-#include "ehc_control/config_node.h"
+#include "ehc_common/config_node.h"
 #include "ehc_control/qp_controller.h"
 #include "ehc_control/whole_body_model.h"
 
 namespace ehc_control {
 
 void PoseServoParams::validate() const {
-  requireRange("PoseServoParams", "gain", gain, 1e-3, 100.0);
-  requireRange("PoseServoParams", "rotation_gain_ratio", rotation_gain_ratio, 1e-3, 100.0);
-  requireRange("PoseServoParams", "max_linear", max_linear, 1e-3, 100.0);
-  requireRange("PoseServoParams", "max_angular", max_angular, 1e-3, 100.0);
+  ehc_common::requireRange("PoseServoParams", "gain", gain, 1e-3, 100.0);
+  ehc_common::requireRange("PoseServoParams", "rotation_gain_ratio", rotation_gain_ratio, 1e-3, 100.0);
+  ehc_common::requireRange("PoseServoParams", "max_linear", max_linear, 1e-3, 100.0);
+  ehc_common::requireRange("PoseServoParams", "max_angular", max_angular, 1e-3, 100.0);
 }
 
-PoseServoParams loadPoseServoParams(const ConfigNode& n) {
+PoseServoParams loadPoseServoParams(const ehc_common::ConfigNode& n) {
   PoseServoParams p;
   p.gain = n.get("gain", p.gain);
   p.rotation_gain_ratio = n.get("rotation_gain_ratio", p.rotation_gain_ratio);

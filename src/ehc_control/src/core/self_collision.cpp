@@ -1,6 +1,6 @@
 #include "ehc_control/self_collision.h"
 
-#include "ehc_control/config_node.h"
+#include "ehc_common/config_node.h"
 #include "ehc_control/fcl_geometry.h"
 
 #include <fcl/geometry/shape/box.h>
@@ -32,7 +32,7 @@ std::shared_ptr<fcl::CollisionGeometry<double>> makeFclGeometry(const CollisionS
 }
 
 void SelfCollisionSampling::validate() const {
-  requireRange("SelfCollisionSampling", "samples", samples, 1, 1e7);
+  ehc_common::requireRange("SelfCollisionSampling", "samples", samples, 1, 1e7);
 }
 
 namespace {

@@ -1,6 +1,6 @@
 #include "ehc_control/target_tracker.h"
 
-#include "ehc_control/config_node.h"
+#include "ehc_common/config_node.h"
 
 #include <sstream>
 #include <stdexcept>
@@ -8,7 +8,7 @@
 namespace ehc_control {
 
 void TargetTrackerParams::validate() const {
-  requireRange("TargetTrackerParams", "new_target_distance", new_target_distance, 1e-4, 100.0);
+  ehc_common::requireRange("TargetTrackerParams", "new_target_distance", new_target_distance, 1e-4, 100.0);
 }
 
 std::string TargetTrackerParams::summary() const {
@@ -18,7 +18,7 @@ std::string TargetTrackerParams::summary() const {
   return os.str();
 }
 
-TargetTrackerParams loadTargetTrackerParams(const ConfigNode& n) {
+TargetTrackerParams loadTargetTrackerParams(const ehc_common::ConfigNode& n) {
   TargetTrackerParams p;
   const std::string camera = n.get<std::string>("camera", "");
   if (!camera.empty()) p.camera_file = n.resolvePath(camera);

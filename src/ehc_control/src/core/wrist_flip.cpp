@@ -1,6 +1,6 @@
 #include "ehc_control/wrist_flip.h"
 
-#include "ehc_control/config_node.h"
+#include "ehc_common/config_node.h"
 
 #include <algorithm>
 #include <cmath>
@@ -12,10 +12,10 @@ namespace ehc_control {
 
 void WristFlipParams::validate() const {
   const char* owner = "WristFlipParams";
-  requireRange(owner, "margin", margin, 0.0, 1.5);
-  requireRange(owner, "speed", speed, 0.05, 20.0);
-  requireRange(owner, "gain", gain, 0.1, 100.0);
-  requireRange(owner, "tolerance", tolerance, 1e-4, 0.5);
+  ehc_common::requireRange(owner, "margin", margin, 0.0, 1.5);
+  ehc_common::requireRange(owner, "speed", speed, 0.05, 20.0);
+  ehc_common::requireRange(owner, "gain", gain, 0.1, 100.0);
+  ehc_common::requireRange(owner, "tolerance", tolerance, 1e-4, 0.5);
 }
 
 std::string WristFlipParams::summary() const {

@@ -22,8 +22,9 @@
 #include "ehc_msgs/ControllerStatus.h"
 #include "ehc_msgs/JointVelocityCommand.h"
 #include "ehc_msgs/ObstacleArray.h"
-#include "ehc_msgs/lockstep_ack.h"
-#include "ehc_control/config_node.h"
+#include "ehc_common/logging.h"
+#include "ehc_common/lockstep_ack.h"
+#include "ehc_common/config_node.h"
 #include "ehc_control/control_cycle.h"
 
 #include <geometry_msgs/PointStamped.h>
@@ -42,7 +43,7 @@ namespace {
 
 using namespace ehc_control;
 
-constexpr double kLogThrottle = 1.0;  ///< s between repeats of one log message
+using ehc_common::kLogThrottle;
 
 struct NodeParams {
   std::string trigger = "state";  ///< state | timer
@@ -52,19 +53,19 @@ struct NodeParams {
   double wall_timeout = 0.5;
 };
 
-NodeParams loadNodeParams(const ConfigNode& n) {
+NodeParams loadNodeParams(const ehc_common::ConfigNode& n) {
   NodeParams p;
   p.trigger = n.get<std::string>("trigger", p.trigger);
   if (p.trigger != "state" && p.trigger != "timer") n.fail("trigger", "must be 'state' or 'timer'");
   p.rate = n.get("rate", p.rate);
   p.wall_timeout = n.get("wall_timeout", p.wall_timeout);
-  requireRange("ControllerNode", "node.rate", p.rate, 1.0, 1000.0);
-  requireRange("ControllerNode", "node.wall_timeout", p.wall_timeout, 0.01, 10.0);
+  ehc_common::requireRange("ControllerNode", "node.rate", p.rate, 1.0, 1000.0);
+  ehc_common::requireRange("ControllerNode", "node.wall_timeout", p.wall_timeout, 0.01, 10.0);
   return p;
 }
 
 /// controller.yaml with the node's private overrides applied.
-ControlCycleParams loadParams(const ConfigNode& cfg, ros::NodeHandle& pnh) {
+ControlCycleParams loadParams(const ehc_common::ConfigNode& cfg, ros::NodeHandle& pnh) {
   ControlCycleParams p = loadControlCycleParams(cfg);
   std::string s;
   if (pnh.getParam("robot", s) && !s.empty()) p.robot_file = ehc_control::resolveRobotFile(s);  // name or path
@@ -82,7 +83,7 @@ Eigen::Vector3d toEigen(const XYZ& p) { return Eigen::Vector3d(p.x, p.y, p.z); }
 
 class ControllerNode {
  public:
-  ControllerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh, const ConfigNode& cfg)
+  ControllerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh, const ehc_common::ConfigNode& cfg)
       : cycle_(loadParams(cfg, pnh)), node_(loadNodeParams(cfg.childOrEmpty("node"))),
         world_frame_(cycle_.model().config().world_frame) {
     ROS_INFO_STREAM("ehc_controller_node\n" << cycle_.summary() << "\n  trigger " << node_.trigger
@@ -305,7 +306,7 @@ class ControllerNode {
   ros::Time last_ros_time_;               ///< ROS time seen by the wall-clock watchdog
   ros::WallTime last_ros_advance_wall_;   ///< wall time at which ROS time last moved
   ros::CallbackQueue inputs_queue_;       ///< lock-step: target, target centre, obstacles (taken per state)
-  ehc_msgs::PollPassBarrier poll_pass_;
+  ehc_common::PollPassBarrier poll_pass_;
   static constexpr double kPollPassWall = 1.0;  ///< wall s: a receive pass takes far less
 };
 
@@ -317,7 +318,7 @@ int main(int argc, char** argv) {
   try {
     std::string config;
     if (!pnh.getParam("config", config)) throw std::invalid_argument("missing parameter _config:=<controller.yaml>");
-    const ConfigNode cfg = ConfigNode::loadFile(config, "ControllerNode");
+    const ehc_common::ConfigNode cfg = ehc_common::ConfigNode::loadFile(config, "ControllerNode");
     ControllerNode node(nh, pnh, cfg);
     cfg.rejectUnknownKeys();  // every loader has run: a key none of them read is a misspelling
     ros::spin();

@@ -8,7 +8,8 @@
 // robot.yaml's calibration applied (robot_description for robot_state_publisher, run_realman.sh).
 // Errors: stderr, exit code 2.
 
-#include "ehc_control/command_line.h"
+#include "ehc_common/command_line.h"
+#include "ehc_common/json.h"
 #include "ehc_control/whole_body_model.h"
 
 #include <cstdio>
@@ -29,14 +30,14 @@ struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-void printMatrix(std::ostream& os, const Eigen::MatrixXd& m) {
-  os << "[";
+ehc_common::Json matrixJson(const Eigen::MatrixXd& m) {
+  ehc_common::Json rows = ehc_common::Json::array();
   for (int r = 0; r < m.rows(); ++r) {
-    os << (r ? "," : "") << "[";
-    for (int c = 0; c < m.cols(); ++c) os << (c ? "," : "") << m(r, c);
-    os << "]";
+    ehc_common::Json row = ehc_common::Json::array();
+    for (int c = 0; c < m.cols(); ++c) row.push_back(ehc_common::jsonNumber(m(r, c)));
+    rows.push_back(row);
   }
-  os << "]";
+  return rows;
 }
 
 void printSummary(const ehc_control::WholeBodyModel& model, const Eigen::Vector3d& base,
@@ -65,7 +66,7 @@ void printSummary(const ehc_control::WholeBodyModel& model, const Eigen::Vector3
 
 int main(int argc, char** argv) {
   try {
-    const ehc_control::CommandLine cli(argc, argv, {"robot", "q", "base", "link"},
+    const ehc_common::CommandLine cli(argc, argv, {"robot", "q", "base", "link"},
                                        {"summary", "urdf", "help"});
     if (cli.has("help")) {
       std::cout << kUsage;
@@ -87,7 +88,7 @@ int main(int argc, char** argv) {
 
     Eigen::VectorXd q = cfg.arm_ready;
     if (!q_arg.empty() && q_arg != "ready") {
-      const std::vector<double> v = ehc_control::CommandLine::parseReals("--q", q_arg);
+      const std::vector<double> v = ehc_common::CommandLine::parseReals("--q", q_arg);
       if (static_cast<int>(v.size()) != model.nArm())
         throw UsageError("--q needs " + std::to_string(model.nArm()) + " values, got " +
                          std::to_string(v.size()));
@@ -101,17 +102,14 @@ int main(int argc, char** argv) {
     }
     Eigen::Isometry3d T;
     const ehc_control::Matrix6Xd J = model.jacobian(base, q, link, &T);
-    std::ostringstream os;
-    os << std::setprecision(12) << "{\"joint_names\":[";
-    for (int i = 0; i < model.nArm(); ++i)
-      os << (i ? "," : "") << "\"" << cfg.arm_joints[static_cast<std::size_t>(i)] << "\"";
-    os << "],\"base_type\":\"" << ehc_control::toString(cfg.base_type) << "\",\"link\":\"" << link
-       << "\",\"T\":";
-    printMatrix(os, T.matrix());
-    os << ",\"J\":";
-    printMatrix(os, J);
-    os << ",\"manipulability\":" << model.manipulability(q) << "}";
-    std::cout << os.str() << std::endl;
+    ehc_common::Json out;
+    out["joint_names"] = cfg.arm_joints;
+    out["base_type"] = ehc_control::toString(cfg.base_type);
+    out["link"] = link;
+    out["T"] = matrixJson(T.matrix());
+    out["J"] = matrixJson(J);
+    out["manipulability"] = ehc_common::jsonNumber(model.manipulability(q));
+    std::cout << ehc_common::jsonLine(out) << std::endl;
     return 0;
   } catch (const UsageError& e) {
     std::cerr << "ehc_kinematics: " << e.what() << "\n" << kUsage;

@@ -3,7 +3,7 @@
 //       [--seed S] [--resolution 0.05] [--direction-bins 32]
 // Progress and ETA on stderr; a summary line on stdout. Errors: stderr, exit code 2.
 
-#include "ehc_control/command_line.h"
+#include "ehc_common/command_line.h"
 #include "ehc_control/reachability_map.h"
 
 #include <chrono>
@@ -16,7 +16,7 @@ int main(int argc, char** argv) {
       "usage: ehc_reachability --robot <name|robot.yaml> --samples N --out <file> [--seed S]\n"
       "                        [--resolution m] [--direction-bins B (default 6)]\n";
   try {
-    const ehc_control::CommandLine cli(
+    const ehc_common::CommandLine cli(
         argc, argv, {"robot", "samples", "out", "seed", "resolution", "direction-bins"}, {"help"});
     if (cli.has("help")) {
       std::cout << usage;

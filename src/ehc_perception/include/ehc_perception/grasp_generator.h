@@ -26,7 +26,7 @@
 // (max_depth_shift reached) there is no back-off. Refined grasps are rescored, and as
 // several candidates can converge onto the same deep pose, suppressed again.
 //
-// Single-view clouds of objects on a support (issue 18 item 3). Besides the antipodal pairs and
+// Single-view clouds of objects on a support. Besides the antipodal pairs and
 // the single-contact hypotheses, the closing axes parallel to the support along the object's
 // footprint (its points projected onto the support; least-area rectangle) are hypotheses of
 // quality footprint_weight: for a convex object the extreme points along such an axis carry it
@@ -61,8 +61,11 @@
 #include <string>
 #include <vector>
 
-namespace ehc_control {
+namespace ehc_common {
 class ConfigNode;
+}  // namespace ehc_common
+
+namespace ehc_control {
 }
 
 namespace ehc_perception {
@@ -142,7 +145,7 @@ struct GraspGeneratorConfig {
 };
 
 /// Reads a `grasp_generator` mapping (all fields optional; gripper: sub-mapping).
-GraspGeneratorConfig loadGraspGeneratorConfig(const ehc_control::ConfigNode& node);
+GraspGeneratorConfig loadGraspGeneratorConfig(const ehc_common::ConfigNode& node);
 
 struct Grasp {
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();  ///< grasp frame in the cloud frame
@@ -210,7 +213,7 @@ struct GraspTargetingParams {
   std::string summary() const;
 };
 /// Reads max_rate_hz, target_timeout and target_gate of a `node` mapping (all optional).
-GraspTargetingParams loadGraspTargetingParams(const ehc_control::ConfigNode& node);
+GraspTargetingParams loadGraspTargetingParams(const ehc_common::ConfigNode& node);
 
 /// generateFromScene near `target` (every object without one), then the gate: if the nearest
 /// object's centroid is farther than `target_gate` from the target there are no grasps (the

@@ -19,8 +19,11 @@
 #include <string>
 #include <vector>
 
-namespace ehc_control {
+namespace ehc_common {
 class ConfigNode;
+}  // namespace ehc_common
+
+namespace ehc_control {
 class WholeBodyModel;
 }  // namespace ehc_control
 
@@ -45,7 +48,7 @@ struct ObstacleMapConfig {
 };
 
 /// Reads an `obstacle_map` mapping (all fields optional).
-ObstacleMapConfig loadObstacleMapConfig(const ehc_control::ConfigNode& node);
+ObstacleMapConfig loadObstacleMapConfig(const ehc_common::ConfigNode& node);
 
 struct LinkObstacleDistance {
   std::string link;

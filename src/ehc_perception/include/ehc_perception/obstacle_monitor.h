@@ -20,8 +20,11 @@
 #include <string>
 #include <vector>
 
-namespace ehc_control {
+namespace ehc_common {
 class ConfigNode;
+}  // namespace ehc_common
+
+namespace ehc_control {
 }
 
 namespace ehc_perception {
@@ -46,7 +49,7 @@ struct ObstacleMonitorParams {
 
 /// Reads state_timeout, exclusion_timeout, max_insert_rate_hz, cloud_voxel and
 /// max_cloud_points of the obstacle node's `node` mapping (all optional).
-ObstacleMonitorParams loadObstacleMonitorParams(const ehc_control::ConfigNode& node);
+ObstacleMonitorParams loadObstacleMonitorParams(const ehc_common::ConfigNode& node);
 
 /// What ObstacleMonitor::update decided.
 struct ObstacleReport {

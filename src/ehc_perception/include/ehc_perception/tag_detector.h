@@ -32,8 +32,11 @@
 #include <string>
 #include <vector>
 
-namespace ehc_control {
+namespace ehc_common {
 class ConfigNode;
+}  // namespace ehc_common
+
+namespace ehc_control {
 }
 
 namespace ehc_perception {
@@ -68,7 +71,7 @@ struct TagDetectorConfig {
 };
 
 /// Reads a `tag_detector` mapping (every field optional, defaults above) and validates it.
-TagDetectorConfig loadTagDetectorConfig(const ehc_control::ConfigNode& node);
+TagDetectorConfig loadTagDetectorConfig(const ehc_common::ConfigNode& node);
 
 struct TagDetection {
   int id = -1;
@@ -147,7 +150,7 @@ struct TagTargetConfig {
   void validate() const;  ///< throws std::invalid_argument "[TagTarget] ..."
   std::string summary() const;
 };
-TagTargetConfig loadTagTargetConfig(const ehc_control::ConfigNode& node);
+TagTargetConfig loadTagTargetConfig(const ehc_common::ConfigNode& node);
 
 /// T_cam_target = T_cam_tag * T_tag_target for the configured tag; false if it is not among
 /// the detections.

@@ -1,7 +1,7 @@
 // GraspGenerator (PCL translation unit 1 of 2). See grasp_generator.h for the method.
 #include "ehc_perception/grasp_generator.h"
 
-#include "ehc_control/config_node.h"
+#include "ehc_common/config_node.h"
 
 #include <Eigen/Eigenvalues>
 #include <pcl/common/centroid.h>
@@ -444,7 +444,7 @@ double rotationAngle(const Eigen::Matrix3d& A, const Eigen::Matrix3d& B) {
 
 void GraspGeneratorConfig::validate() const {
   auto range = [](const std::string& f, double v, double lo, double hi) {
-    ehc_control::requireRange(kOwner, f, v, lo, hi);
+    ehc_common::requireRange(kOwner, f, v, lo, hi);
   };
   const GripperGeometry& g = gripper;
   range("gripper.max_width", g.max_width, 0.005, 0.5);
@@ -520,9 +520,9 @@ std::string GraspGeneratorConfig::summary() const {
   return os.str();
 }
 
-GraspGeneratorConfig loadGraspGeneratorConfig(const ehc_control::ConfigNode& n) {
+GraspGeneratorConfig loadGraspGeneratorConfig(const ehc_common::ConfigNode& n) {
   GraspGeneratorConfig c;
-  const ehc_control::ConfigNode g = n.childOrEmpty("gripper");
+  const ehc_common::ConfigNode g = n.childOrEmpty("gripper");
   GripperGeometry& gg = c.gripper;
   gg.max_width = g.get("max_width", gg.max_width);
   gg.finger_length = g.get("finger_length", gg.finger_length);
@@ -1110,9 +1110,9 @@ GraspResult GraspGenerator::generateFromScene(const PointList& scene,
 }
 
 void GraspTargetingParams::validate() const {
-  ehc_control::requireRange("GraspTargeting", "max_rate_hz", max_rate_hz, 0.01, 100.0);
-  ehc_control::requireRange("GraspTargeting", "target_timeout", target_timeout, 0.0, 1e6);
-  ehc_control::requirePositive("GraspTargeting", "target_gate", target_gate);
+  ehc_common::requireRange("GraspTargeting", "max_rate_hz", max_rate_hz, 0.01, 100.0);
+  ehc_common::requireRange("GraspTargeting", "target_timeout", target_timeout, 0.0, 1e6);
+  ehc_common::requirePositive("GraspTargeting", "target_gate", target_gate);
 }
 
 std::string GraspTargetingParams::summary() const {
@@ -1122,7 +1122,7 @@ std::string GraspTargetingParams::summary() const {
   return os.str();
 }
 
-GraspTargetingParams loadGraspTargetingParams(const ehc_control::ConfigNode& n) {
+GraspTargetingParams loadGraspTargetingParams(const ehc_common::ConfigNode& n) {
   GraspTargetingParams p;
   p.max_rate_hz = n.get("max_rate_hz", p.max_rate_hz);
   p.target_timeout = n.get("target_timeout", p.target_timeout);

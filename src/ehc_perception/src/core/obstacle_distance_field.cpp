@@ -1,6 +1,6 @@
 #include "ehc_perception/obstacle_distance_field.h"
 
-#include "ehc_control/config_node.h"
+#include "ehc_common/config_node.h"
 #include "ehc_control/fcl_geometry.h"
 #include "ehc_control/whole_body_model.h"
 
@@ -27,17 +27,17 @@ const char* kOwner = "ObstacleDistanceField";
 // ------------------------------------------------------------------------------ config
 
 void ObstacleMapConfig::validate() const {
-  ehc_control::requireRange(kOwner, "resolution", resolution, 0.005, 0.2);
-  ehc_control::requireRange(kOwner, "max_range", max_range, 0.1, 50.0);
-  ehc_control::requireRange(kOwner, "prob_hit", prob_hit, 0.5001, 0.9999);
-  ehc_control::requireRange(kOwner, "prob_miss", prob_miss, 0.0001, 0.4999);
-  ehc_control::requireRange(kOwner, "clamp_min", clamp_min, 0.0001, 0.4999);
-  ehc_control::requireRange(kOwner, "clamp_max", clamp_max, 0.5001, 0.9999);
-  ehc_control::requireRange(kOwner, "occupancy_threshold", occupancy_threshold, clamp_min,
+  ehc_common::requireRange(kOwner, "resolution", resolution, 0.005, 0.2);
+  ehc_common::requireRange(kOwner, "max_range", max_range, 0.1, 50.0);
+  ehc_common::requireRange(kOwner, "prob_hit", prob_hit, 0.5001, 0.9999);
+  ehc_common::requireRange(kOwner, "prob_miss", prob_miss, 0.0001, 0.4999);
+  ehc_common::requireRange(kOwner, "clamp_min", clamp_min, 0.0001, 0.4999);
+  ehc_common::requireRange(kOwner, "clamp_max", clamp_max, 0.5001, 0.9999);
+  ehc_common::requireRange(kOwner, "occupancy_threshold", occupancy_threshold, clamp_min,
                             clamp_max);
-  ehc_control::requireRange(kOwner, "min_height", min_height, -10.0, 10.0);
-  ehc_control::requireRange(kOwner, "self_filter_padding", self_filter_padding, 0.0, 0.5);
-  ehc_control::requireRange(kOwner, "influence_distance", influence_distance, resolution, 5.0);
+  ehc_common::requireRange(kOwner, "min_height", min_height, -10.0, 10.0);
+  ehc_common::requireRange(kOwner, "self_filter_padding", self_filter_padding, 0.0, 0.5);
+  ehc_common::requireRange(kOwner, "influence_distance", influence_distance, resolution, 5.0);
 }
 
 std::string ObstacleMapConfig::summary() const {
@@ -50,7 +50,7 @@ std::string ObstacleMapConfig::summary() const {
   return os.str();
 }
 
-ObstacleMapConfig loadObstacleMapConfig(const ehc_control::ConfigNode& n) {
+ObstacleMapConfig loadObstacleMapConfig(const ehc_common::ConfigNode& n) {
   ObstacleMapConfig c;
   c.resolution = n.get("resolution", c.resolution);
   c.max_range = n.get("max_range", c.max_range);

@@ -1,6 +1,6 @@
 #include "ehc_perception/obstacle_monitor.h"
 
-#include "ehc_control/config_node.h"
+#include "ehc_common/config_node.h"
 #include "ehc_control/joint_state.h"
 
 #include <algorithm>
@@ -14,12 +14,12 @@ namespace ehc_perception {
 
 void ObstacleMonitorParams::validate() const {
   const char* o = "ObstacleMonitorParams";
-  ehc_control::requirePositive(o, "node.state_timeout", state_timeout);
-  ehc_control::requireRange(o, "node.exclusion_timeout", exclusion_timeout, 0.01, 10.0);
-  ehc_control::requireRange(o, "node.max_insert_rate_hz", max_insert_rate_hz, 0.01, 100.0);
-  ehc_control::requireRange(o, "node.cloud_voxel", cloud_voxel, 0.0, 1.0);
-  ehc_control::requireRange(o, "node.max_cloud_points", max_cloud_points, 1, 1000000);
-  ehc_control::requireRange(o, "node.points_per_update", points_per_update, 1, 1000000);
+  ehc_common::requirePositive(o, "node.state_timeout", state_timeout);
+  ehc_common::requireRange(o, "node.exclusion_timeout", exclusion_timeout, 0.01, 10.0);
+  ehc_common::requireRange(o, "node.max_insert_rate_hz", max_insert_rate_hz, 0.01, 100.0);
+  ehc_common::requireRange(o, "node.cloud_voxel", cloud_voxel, 0.0, 1.0);
+  ehc_common::requireRange(o, "node.max_cloud_points", max_cloud_points, 1, 1000000);
+  ehc_common::requireRange(o, "node.points_per_update", points_per_update, 1, 1000000);
 }
 
 std::string ObstacleMonitorParams::summary() const {
@@ -31,7 +31,7 @@ std::string ObstacleMonitorParams::summary() const {
   return os.str();
 }
 
-ObstacleMonitorParams loadObstacleMonitorParams(const ehc_control::ConfigNode& n) {
+ObstacleMonitorParams loadObstacleMonitorParams(const ehc_common::ConfigNode& n) {
   ObstacleMonitorParams p;
   p.state_timeout = n.get("state_timeout", p.state_timeout);
   p.exclusion_timeout = n.get("exclusion_timeout", p.exclusion_timeout);

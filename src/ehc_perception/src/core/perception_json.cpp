@@ -1,56 +1,53 @@
 #include "ehc_perception/perception_json.h"
 
-#include <cstdio>
-#include <sstream>
+#include "ehc_common/json.h"
 
 namespace ehc_perception {
 
-namespace {
-std::string num(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%.9g", v);
-  return buf;
-}
-}  // namespace
+using ehc_common::Json;
+using ehc_common::jsonNumber;
 
 std::string tagDetectionsToJson(const std::vector<TagDetection>& dets) {
-  std::ostringstream os;
-  os << "[";
-  for (std::size_t i = 0; i < dets.size(); ++i) {
-    const TagDetection& d = dets[i];
-    os << (i ? "," : "") << "{\"id\":" << d.id << ",\"tag_size\":" << num(d.tag_size)
-       << ",\"T_cam_tag\":[";
+  Json out = Json::array();
+  for (const TagDetection& d : dets) {
+    Json j;
+    j["id"] = d.id;
+    j["tag_size"] = jsonNumber(d.tag_size);
     const Eigen::Matrix4d M = d.T_cam_tag.matrix();
+    Json T = Json::array();
     for (int r = 0; r < 4; ++r) {
-      os << (r ? "," : "") << "[";
-      for (int c = 0; c < 4; ++c) os << (c ? "," : "") << num(M(r, c));
-      os << "]";
+      Json row = Json::array();
+      for (int c = 0; c < 4; ++c) row.push_back(jsonNumber(M(r, c)));
+      T.push_back(row);
     }
-    os << "],\"corners\":[";
+    j["T_cam_tag"] = T;
+    Json corners = Json::array();
     for (std::size_t k = 0; k < 4; ++k)
-      os << (k ? "," : "") << "[" << num(d.corners[k].x()) << "," << num(d.corners[k].y()) << "]";
-    os << "],\"reprojection_error\":" << num(d.reprojection_error) << "}";
+      corners.push_back({jsonNumber(d.corners[k].x()), jsonNumber(d.corners[k].y())});
+    j["corners"] = corners;
+    j["reprojection_error"] = jsonNumber(d.reprojection_error);
+    out.push_back(j);
   }
-  os << "]";
-  return os.str();
+  return ehc_common::jsonLine(out);
 }
 
 std::string graspsToJson(const std::vector<Grasp>& grasps) {
-  std::ostringstream os;
-  os << "[";
-  for (std::size_t i = 0; i < grasps.size(); ++i) {
-    const Grasp& g = grasps[i];
+  Json out = Json::array();
+  for (const Grasp& g : grasps) {
     const Eigen::Vector3d p = g.pose.translation();
     const Eigen::Quaterniond q(g.pose.linear());
-    os << (i ? ",\n " : "") << "{\"position\":[" << num(p.x()) << "," << num(p.y()) << ","
-       << num(p.z()) << "],\"orientation\":[" << num(q.x()) << "," << num(q.y()) << ","
-       << num(q.z()) << "," << num(q.w()) << "],\"width\":" << num(g.width)
-       << ",\"score\":" << num(g.score) << ",\"object\":" << g.object
-       << ",\"antipodal\":" << num(g.antipodal) << ",\"centroid_weight\":"
-       << num(g.centroid_weight) << ",\"pca_weight\":" << num(g.pca_weight) << "}";
+    Json j;
+    j["position"] = {jsonNumber(p.x()), jsonNumber(p.y()), jsonNumber(p.z())};
+    j["orientation"] = {jsonNumber(q.x()), jsonNumber(q.y()), jsonNumber(q.z()), jsonNumber(q.w())};
+    j["width"] = jsonNumber(g.width);
+    j["score"] = jsonNumber(g.score);
+    j["object"] = g.object;
+    j["antipodal"] = jsonNumber(g.antipodal);
+    j["centroid_weight"] = jsonNumber(g.centroid_weight);
+    j["pca_weight"] = jsonNumber(g.pca_weight);
+    out.push_back(j);
   }
-  os << "]";
-  return os.str();
+  return ehc_common::jsonLine(out);
 }
 
 }  // namespace ehc_perception

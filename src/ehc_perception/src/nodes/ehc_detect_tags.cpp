@@ -2,8 +2,8 @@
 //   ehc_detect_tags --image <png|pgm|jpg> --camera <camera_info yaml> --tag-size <m>
 //                   [--family 36h11] [--config <yaml with a tag_detector section>]
 // Prints [{"id":…, "T_cam_tag":[[4x4]], "corners":[[u,v]…], …}]. Errors: stderr, exit 2.
-#include "ehc_control/command_line.h"
-#include "ehc_control/config_node.h"
+#include "ehc_common/command_line.h"
+#include "ehc_common/config_node.h"
 #include "ehc_perception/perception_json.h"
 #include "ehc_perception/tag_detector.h"
 
@@ -19,7 +19,7 @@ const char* kUsage =
 int main(int argc, char** argv) {
   using namespace ehc_perception;
   try {
-    const ehc_control::CommandLine cli(
+    const ehc_common::CommandLine cli(
         argc, argv, {"image", "camera", "tag-size", "family", "config"}, {"help"});
     if (cli.has("help")) {
       std::cout << kUsage;
@@ -29,7 +29,7 @@ int main(int argc, char** argv) {
     const std::string camera_path = cli.text("camera");
     TagDetectorConfig cfg;
     if (cli.has("config")) {
-      const auto root = ehc_control::ConfigNode::loadFile(cli.text("config"), "TagDetector");
+      const auto root = ehc_common::ConfigNode::loadFile(cli.text("config"), "TagDetector");
       cfg = loadTagDetectorConfig(root.childOrEmpty("tag_detector"));
       root.ignore("node");  // the node sections are the ROS nodes'
       root.ignore("target");

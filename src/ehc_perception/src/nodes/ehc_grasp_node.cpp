@@ -5,7 +5,7 @@
 // for the object nearest the latest /ehc/target_pose (or every object without a fresh
 // target) and published best first (ehc_msgs/GraspCandidates, world frame). A cloud
 // without a usable grasp publishes an empty candidate list (reason in the log). A cloud waits
-// for the camera pose at its stamp on the wall clock (ehc_msgs::waitForTransformWall: at most
+// for the camera pose at its stamp on the wall clock (ehc_common::waitForTransformWall: at most
 // tf_timeout s, in lock-step kTfWallWait s; a lookup with a timeout would wait on lock-step sim
 // time, which stands still until this node is done), then is dropped with a logged reason.
 // No tf2_ros::MessageFilter: it held a cloud forever when the cloud's transformable request
@@ -15,14 +15,15 @@
 // Time is the clouds' and the target's stamps (the rate limit, the target's age), so which
 // cloud is processed with which target does not depend on when messages arrive; the target
 // used for a cloud is the newest one stamped before it (in lock-step every target published
-// before the cloud is taken first, ehc_msgs::PollPassBarrier; one that still comes after the
+// before the cloud is taken first, ehc_common::PollPassBarrier; one that still comes after the
 // cloud that should have used it is logged). With _ack_topic:=<topic> every cloud
 // received is acknowledged there exactly once, whatever came of it (processed and its
 // candidates published, skipped by the rate limit, or dropped with a logged reason): a
-// lock-step simulator's acknowledgement gate (ehc_msgs::LockstepAck, demo.sh).
+// lock-step simulator's acknowledgement gate (ehc_common::LockstepAck, demo.sh).
 #include "ehc_msgs/GraspCandidates.h"
-#include "ehc_msgs/lockstep_ack.h"
-#include "ehc_control/config_node.h"
+#include "ehc_common/logging.h"
+#include "ehc_common/lockstep_ack.h"
+#include "ehc_common/config_node.h"
 #include "ehc_perception/grasp_generator.h"
 #include "ehc_perception/rate_limiter.h"
 #include "ros_conversions.h"
@@ -39,7 +40,7 @@ namespace {
 
 using namespace ehc_perception;
 
-constexpr double kLogThrottle = 2.0;  ///< s, period of every throttled log line
+using ehc_common::kLogThrottle;
 
 struct GraspNodeConfig {
   std::string cloud_topic = "/camera/depth/points";
@@ -60,7 +61,7 @@ struct GraspNodeConfig {
 };
 
 GraspNodeConfig loadGraspNodeConfig(const std::string& path) {
-  const auto root = ehc_control::ConfigNode::loadFile(path, "GraspNode");
+  const auto root = ehc_common::ConfigNode::loadFile(path, "GraspNode");
   GraspNodeConfig c;
   const auto n = root.childOrEmpty("node");
   c.cloud_topic = n.get("cloud_topic", c.cloud_topic);
@@ -69,9 +70,9 @@ GraspNodeConfig loadGraspNodeConfig(const std::string& path) {
   c.world_frame = n.get("world_frame", c.world_frame);
   c.targeting = loadGraspTargetingParams(n);
   c.tf_timeout = n.get("tf_timeout", c.tf_timeout);
-  ehc_control::requireRange("GraspNode", "node.tf_timeout", c.tf_timeout, 0.0, 5.0);
+  ehc_common::requireRange("GraspNode", "node.tf_timeout", c.tf_timeout, 0.0, 5.0);
   c.cloud_queue = n.get("cloud_queue", c.cloud_queue);
-  ehc_control::requireRange("GraspNode", "node.cloud_queue", c.cloud_queue, 1, 100);
+  ehc_common::requireRange("GraspNode", "node.cloud_queue", c.cloud_queue, 1, 100);
   c.generator = loadGraspGeneratorConfig(root.childOrEmpty("grasp_generator"));
   root.rejectUnknownKeys();  // a key no loader read is a misspelling
   return c;
@@ -144,7 +145,7 @@ class GraspNode {
 
   void process(const sensor_msgs::PointCloud2& msg) {
     if (!limiter_.accept(msg.header.stamp.toSec())) return;  // skipped: inside the rate limit
-    if (!ehc_msgs::waitForTransformWall(tf_, cfg_.world_frame, msg.header.frame_id, msg.header.stamp,
+    if (!ehc_common::waitForTransformWall(tf_, cfg_.world_frame, msg.header.frame_id, msg.header.stamp,
                                         lockstep_ ? kTfWallWait : cfg_.tf_timeout)) {
       ROS_WARN_STREAM_THROTTLE(kLogThrottle, "ehc_grasp_node: cloud at " << msg.header.stamp << " dropped: no camera pose ('"
                                                 << msg.header.frame_id << "' in '" << cfg_.world_frame << "') at its stamp after "
@@ -184,9 +185,9 @@ class GraspNode {
   RateLimiter limiter_;  ///< targeting.max_rate_hz on the clouds' stamps
   static constexpr std::size_t kMaxTargets = 200;  ///< targets kept (the sequencer sends one per cycle)
   std::deque<std::pair<ros::Time, Eigen::Vector3d>> targets_;  ///< by stamp, newest last
-  ehc_msgs::PollPassBarrier poll_pass_;
+  ehc_common::PollPassBarrier poll_pass_;
   ros::Time last_cloud_, last_cloud_target_;  ///< the last processed cloud's stamp and its target's
-  ehc_msgs::LockstepAck ack_;
+  ehc_common::LockstepAck ack_;
   bool lockstep_ = false;  ///< _ack_topic set: the simulator waits for this node
   static constexpr double kTfWallWait = 1.0;  ///< lock-step: wall s a cloud's camera pose is waited for
 };

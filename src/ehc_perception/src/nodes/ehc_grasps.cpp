@@ -4,8 +4,8 @@
 //              --out grasps.json
 // Exit 0: grasps written. Exit 3: no grasp ("[]" written, reason on stderr).
 // Exit 2: bad arguments, unreadable cloud or config.
-#include "ehc_control/command_line.h"
-#include "ehc_control/config_node.h"
+#include "ehc_common/command_line.h"
+#include "ehc_common/config_node.h"
 #include "ehc_perception/grasp_generator.h"
 #include "ehc_perception/perception_json.h"
 
@@ -23,7 +23,7 @@ const char* kUsage =
 int main(int argc, char** argv) {
   using namespace ehc_perception;
   try {
-    const ehc_control::CommandLine cli(
+    const ehc_common::CommandLine cli(
         argc, argv, {"cloud", "out", "viewpoint", "top", "up", "mode", "config"}, {"help"});
     if (cli.has("help")) {
       std::cout << kUsage;
@@ -33,7 +33,7 @@ int main(int argc, char** argv) {
     const std::string out_path = cli.text("out");
     GraspGeneratorConfig cfg;
     if (cli.has("config")) {
-      const auto root = ehc_control::ConfigNode::loadFile(cli.text("config"), "GraspGenerator");
+      const auto root = ehc_common::ConfigNode::loadFile(cli.text("config"), "GraspGenerator");
       cfg = loadGraspGeneratorConfig(root.childOrEmpty("grasp_generator"));
       root.ignore("node");  // the node sections are the ROS nodes'
       root.ignore("target");

@@ -15,15 +15,16 @@
 // Exclusion spheres (ehc_msgs/ObstacleExclusion on exclusion_topic, e.g. the object being
 // grasped, sent by the grasp sequencer) are ignored by the distance queries while the list is
 // younger than exclusion_timeout; an older list is dropped (the object is an obstacle again).
-// Lock-step (_ack_topic:=<topic>, demo.sh; ehc_msgs::LockstepAck): no timer; each state (the
+// Lock-step (_ack_topic:=<topic>, demo.sh; ehc_common::LockstepAck): no timer; each state (the
 // /joint_states + /odom pair of one stamp t) first takes the clouds and exclusion lists stamped
 // before t (in stamp order, whenever they arrived), then publishes the distances at t when due
 // (publish_rate_hz on the stamps), then acknowledges t; times are the stamps. So the distances
 // do not depend on when messages arrive, and the simulator steps on only once they are out.
 #include "ehc_msgs/ObstacleArray.h"
 #include "ehc_msgs/ObstacleExclusion.h"
-#include "ehc_msgs/lockstep_ack.h"
-#include "ehc_control/config_node.h"
+#include "ehc_common/logging.h"
+#include "ehc_common/lockstep_ack.h"
+#include "ehc_common/config_node.h"
 #include "ehc_perception/obstacle_monitor.h"
 #include "ehc_perception/rate_limiter.h"
 #include "ros_conversions.h"
@@ -41,7 +42,7 @@ namespace {
 
 using namespace ehc_perception;
 
-constexpr double kLogThrottle = 2.0;  ///< s between repeats of a throttled log message
+using ehc_common::kLogThrottle;
 
 struct ObstacleNodeConfig {
   std::string robot_config;  ///< robot.yaml (relative paths: to this file's folder)
@@ -66,7 +67,7 @@ struct ObstacleNodeConfig {
 };
 
 ObstacleNodeConfig loadObstacleNodeConfig(const std::string& path) {
-  const auto root = ehc_control::ConfigNode::loadFile(path, "ObstacleNode");
+  const auto root = ehc_common::ConfigNode::loadFile(path, "ObstacleNode");
   ObstacleNodeConfig c;
   const auto n = root.child("node");
   c.robot_config = ehc_control::robotFileField(n, "robot_config");  // a robot name or a robot.yaml path
@@ -78,8 +79,8 @@ ObstacleNodeConfig loadObstacleNodeConfig(const std::string& path) {
   c.world_frame = n.get("world_frame", c.world_frame);
   c.publish_rate_hz = n.get("publish_rate_hz", c.publish_rate_hz);
   c.tf_timeout = n.get("tf_timeout", c.tf_timeout);
-  ehc_control::requireRange("ObstacleNode", "node.publish_rate_hz", c.publish_rate_hz, 0.1, 1000.0);
-  ehc_control::requireRange("ObstacleNode", "node.tf_timeout", c.tf_timeout, 0.0, 5.0);
+  ehc_common::requireRange("ObstacleNode", "node.publish_rate_hz", c.publish_rate_hz, 0.1, 1000.0);
+  ehc_common::requireRange("ObstacleNode", "node.tf_timeout", c.tf_timeout, 0.0, 5.0);
   c.monitor = loadObstacleMonitorParams(n);
   c.map = loadObstacleMapConfig(root.childOrEmpty("obstacle_map"));
   root.rejectUnknownKeys();  // a key no loader read is a misspelling
@@ -119,7 +120,7 @@ class ObstacleNode {
   /// In lock-step the stamp (the simulator's time, which stands still until this node is done).
   double receiptTime(const ros::Time& stamp) const { return lockstep_ ? stamp.toSec() : ros::Time::now().toSec(); }
 
-  /// The inputs the node needs before it takes part in a lock-step (ehc_msgs::LockstepAck).
+  /// The inputs the node needs before it takes part in a lock-step (ehc_common::LockstepAck).
   static std::vector<std::string> lockstepInputs(const ObstacleNodeConfig& c) {
     std::vector<std::string> in{c.cloud_topic, c.joint_states_topic, c.odom_topic, "/tf"};
     if (!c.exclusion_topic.empty()) in.push_back(c.exclusion_topic);
@@ -190,7 +191,7 @@ class ObstacleNode {
   void onCloud(const sensor_msgs::PointCloud2ConstPtr& msg) {
     if (lockstep_) {
       inbox_.add(msg->header.stamp, kCloudSource, [this, msg] {
-        if (!ehc_msgs::waitForTransformWall(tf_, cfg_.world_frame, msg->header.frame_id, msg->header.stamp, kTfWallWait)) {
+        if (!ehc_common::waitForTransformWall(tf_, cfg_.world_frame, msg->header.frame_id, msg->header.stamp, kTfWallWait)) {
           ROS_WARN_STREAM_THROTTLE(kLogThrottle, "ehc_obstacle_node: cloud at " << msg->header.stamp << " waits for its camera pose");
           return false;
         }
@@ -263,12 +264,12 @@ class ObstacleNode {
   ros::Publisher pub_;
   ros::Subscriber cloud_sub_, joints_sub_, odom_sub_, exclusion_sub_;
   ros::Timer timer_;
-  ehc_msgs::LockstepAck ack_;
+  ehc_common::LockstepAck ack_;
   bool lockstep_ = false;
   RateLimiter publish_limiter_;  ///< lock-step: publish_rate_hz on the states' stamps
   ros::Time joints_stamp_, odom_stamp_;
   /// Lock-step: clouds and exclusion lists, taken at the first state after their stamp.
-  ehc_msgs::StampedInbox inbox_;
+  ehc_common::StampedInbox inbox_;
   static constexpr int kExclusionSource = 0, kCloudSource = 1;
   static constexpr double kMaxCloudWait = 1.0;  ///< s of stamps; then the cloud is dropped
   static constexpr double kTfWallWait = 1.0;    ///< wall s a cloud's camera pose is waited for per state

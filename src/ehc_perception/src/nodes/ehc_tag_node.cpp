@@ -4,16 +4,17 @@
 // (odom) with tf2 at the image time stamp and published as geometry_msgs/PoseStamped. Nothing
 // is published for an image without the target (the controller's watchdog handles that).
 // An image waits for the camera pose at its stamp on the wall clock
-// (ehc_msgs::waitForTransformWall: at most tf_timeout s, in lock-step kTfWallWait s), then is
-// dropped with a logged reason (issue 18: with a lock-step simulator under CPU load the /tf of
+// (ehc_common::waitForTransformWall: at most tf_timeout s, in lock-step kTfWallWait s), then is
+// dropped with a logged reason (with a lock-step simulator under CPU load the /tf of
 // an image's stamp can reach the listener after the image; a tf2 lookup with a timeout waits on
 // sim time, which stands still until this node is done). No tf2_ros::MessageFilter: it held a
 // message forever when its transformable request was registered just after the transform
 // arrived (found in the grasp node, which stalled the lock-step simulator; see ehc_grasp_node).
 // With _ack_topic:=<topic> every image is acknowledged there once done with (after its pose is
-// published): a lock-step simulator's acknowledgement gate (ehc_msgs::LockstepAck, demo.sh).
-#include "ehc_control/config_node.h"
-#include "ehc_msgs/lockstep_ack.h"
+// published): a lock-step simulator's acknowledgement gate (ehc_common::LockstepAck, demo.sh).
+#include "ehc_common/logging.h"
+#include "ehc_common/config_node.h"
+#include "ehc_common/lockstep_ack.h"
 #include "ehc_perception/tag_detector.h"
 #include "ros_conversions.h"
 
@@ -28,7 +29,7 @@ namespace {
 using namespace ehc_perception;
 using ehc_control::PinholeCamera;
 
-constexpr double kLogThrottle = 2.0;  ///< s, period of every throttled log line
+using ehc_common::kLogThrottle;
 
 struct TagNodeConfig {
   std::string image_topic = "/camera/color/image_raw";
@@ -54,7 +55,7 @@ struct TagNodeConfig {
 };
 
 TagNodeConfig loadTagNodeConfig(const std::string& path) {
-  const auto root = ehc_control::ConfigNode::loadFile(path, "TagNode");
+  const auto root = ehc_common::ConfigNode::loadFile(path, "TagNode");
   TagNodeConfig c;
   const auto n = root.childOrEmpty("node");
   c.image_topic = n.get("image_topic", c.image_topic);
@@ -65,9 +66,9 @@ TagNodeConfig loadTagNodeConfig(const std::string& path) {
   c.camera_file = n.get("camera_file", c.camera_file);
   if (!c.camera_file.empty()) c.camera_file = root.resolvePath(c.camera_file);
   c.tf_timeout = n.get("tf_timeout", c.tf_timeout);
-  ehc_control::requireRange("TagNode", "node.tf_timeout", c.tf_timeout, 0.0, 5.0);
+  ehc_common::requireRange("TagNode", "node.tf_timeout", c.tf_timeout, 0.0, 5.0);
   c.image_queue = n.get("image_queue", c.image_queue);
-  ehc_control::requireRange("TagNode", "node.image_queue", c.image_queue, 1, 100);
+  ehc_common::requireRange("TagNode", "node.image_queue", c.image_queue, 1, 100);
   if (c.world_frame.empty()) n.fail("world_frame", "must not be empty");
   c.detector = loadTagDetectorConfig(root.childOrEmpty("tag_detector"));
   c.target = loadTagTargetConfig(root.childOrEmpty("target"));
@@ -75,7 +76,7 @@ TagNodeConfig loadTagNodeConfig(const std::string& path) {
   return c;
 }
 
-/// The inputs the node needs before it takes part in a lock-step (ehc_msgs::LockstepAck).
+/// The inputs the node needs before it takes part in a lock-step (ehc_common::LockstepAck).
 std::vector<std::string> lockstepInputs(const TagNodeConfig& c) {
   std::vector<std::string> in{c.image_topic, "/tf"};
   if (c.camera_file.empty()) in.push_back(c.camera_info_topic);
@@ -150,7 +151,7 @@ class TagNode {
     // target in the world.
     const std::string cam_frame = cfg_.camera_frame.empty() ? msg.header.frame_id : cfg_.camera_frame;
     const double wait = lockstep_ ? kTfWallWait : cfg_.tf_timeout;
-    if (!ehc_msgs::waitForTransformWall(tf_, cfg_.world_frame, cam_frame, msg.header.stamp, wait)) {
+    if (!ehc_common::waitForTransformWall(tf_, cfg_.world_frame, cam_frame, msg.header.stamp, wait)) {
       ROS_WARN_STREAM_THROTTLE(kLogThrottle, "ehc_tag_node: image at " << msg.header.stamp << " dropped: no camera pose ('"
                                                 << cam_frame << "' in '" << cfg_.world_frame << "') at its stamp after "
                                                 << wait << " wall s");
@@ -186,7 +187,7 @@ class TagNode {
   bool lockstep_ = false;  ///< _ack_topic set: a lock-step simulator waits for every image
   static constexpr double kTfWallWait = 1.0;  ///< lock-step: wall s an image's camera pose is waited for
   ros::Publisher pub_;
-  ehc_msgs::LockstepAck ack_;
+  ehc_common::LockstepAck ack_;
   sensor_msgs::ImageConstPtr waiting_image_;  ///< an image that came before the first camera_info
   ros::Subscriber info_sub_;
 };

@@ -10,11 +10,11 @@
 //    execute: the twists sent, through Water2VelocityResponse (latency, 0.5 s hold, velocity
 //    loop, acceleration limits, gain; base_response in the config), the model the simulators'
 //    Water2 base runs. Dead reckoning with the commanded twist instead made /odom jump by up to
-//    11 cm at a status in the rehearsal (session 7). No estimate once the status is older than
+//    11 cm at a status in the rehearsal. No estimate once the status is older than
 //    status_timeout (stale data is never published as fresh). The bridge takes a robot_status pose as valid when its
 //    request was sent, not when the reply was read: a reply read late (a loaded computer, the
 //    network thread descheduled) otherwise puts the base where it was up to that delay ago and
-//    /odom and tf jump back by v x delay (session 7, REALMAN.md "Rehearsal").
+//    /odom and tf jump back by v x delay (REALMAN.md "Rehearsal").
 //  - Water2BaseBridge: owns a Water2Client; spinOnce() does one bounded cycle of network work.
 
 #include "ehc_realman/water2_client.h"

@@ -18,8 +18,11 @@
 #include <deque>
 #include <string>
 
-namespace ehc_control {
+namespace ehc_common {
 class ConfigNode;
+}  // namespace ehc_common
+
+namespace ehc_control {
 }
 
 namespace ehc_realman {
@@ -42,7 +45,7 @@ struct Water2ResponseParams {
   double angular_gain = 0.95;
 
   /// The base executes each command at once and exactly (no latency, lag, ramp or gain error):
-  /// dead reckoning with the commanded velocity, the bridge's behaviour before session 8; also
+  /// dead reckoning with the commanded velocity (a bridge without a response model); also
   /// what a base that follows commands ideally (the loopback tests' fake server) does.
   static Water2ResponseParams commandedVelocity();
 
@@ -54,7 +57,7 @@ struct Water2ResponseParams {
 /// Reads the keys above from `n` when present (defaults otherwise). Unknown keys are left to
 /// the caller's rejectUnknownKeys() (the sim reads them from its flat `water2` mapping, the
 /// bridge from `water2_base_bridge.base_response`).
-void readWater2ResponseParams(const ehc_control::ConfigNode& n, Water2ResponseParams* params);
+void readWater2ResponseParams(const ehc_common::ConfigNode& n, Water2ResponseParams* params);
 
 class Water2VelocityResponse {
  public:

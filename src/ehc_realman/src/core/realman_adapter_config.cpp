@@ -1,6 +1,6 @@
 #include "ehc_realman/realman_adapter_config.h"
 
-#include "ehc_control/config_node.h"
+#include "ehc_common/config_node.h"
 #include "ehc_control/robot_config.h"
 
 #include <sstream>
@@ -16,7 +16,7 @@ void RmArmAdapterConfig::validate() const {
   limits.validate();
   stream.validate();
   gripper.validate();
-  ehc_control::requireRange(kOwner, "status_rate_hz", status_rate_hz, 0.1, 100.0);
+  ehc_common::requireRange(kOwner, "status_rate_hz", status_rate_hz, 0.1, 100.0);
 }
 
 std::string RmArmAdapterConfig::summary() const {
@@ -37,7 +37,7 @@ std::string RmArmAdapterConfig::summary() const {
 }
 
 RmArmAdapterConfig loadRmArmAdapterConfig(const std::string& path) {
-  const auto root = ehc_control::ConfigNode::loadFile(path, kOwner);
+  const auto root = ehc_common::ConfigNode::loadFile(path, kOwner);
   const auto a = root.child("rm_arm_adapter");
   RmArmAdapterConfig c;
   c.source_file = path;

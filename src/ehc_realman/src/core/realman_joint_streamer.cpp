@@ -1,6 +1,6 @@
 #include "ehc_realman/realman_joint_streamer.h"
 
-#include "ehc_control/config_node.h"
+#include "ehc_common/config_node.h"
 #include "ehc_control/joint_state.h"
 
 #include <algorithm>
@@ -32,15 +32,15 @@ double uniformScale(const Eigen::VectorXd& x, const Eigen::VectorXd& bound) {
 
 void JointStreamerConfig::validate() const {
   const std::string o = "JointStreamerConfig";
-  ehc_control::requireRange(o, "rate_hz", rate_hz, 1.0, 1000.0);
-  ehc_control::requireRange(o, "max_step_deg", max_step_deg, 0.01, 10.0);
-  ehc_control::requireRange(o, "driver_max_speed_deg", driver_max_speed_deg, 1.0, 180.0);
-  ehc_control::requireRange(o, "speed_scale", speed_scale, 1e-3, 1.0);
-  ehc_control::requireRange(o, "command_timeout", command_timeout, 1e-3, 5.0);
-  ehc_control::requireRange(o, "hold_duration", hold_duration, 0.0, 60.0);
-  ehc_control::requireRange(o, "state_timeout", state_timeout, 1e-3, 5.0);
-  ehc_control::requireRange(o, "max_tracking_error", max_tracking_error, 1e-3, 1.0);
-  ehc_control::requireRange(o, "limit_margin", limit_margin, 0.0, 0.5);
+  ehc_common::requireRange(o, "rate_hz", rate_hz, 1.0, 1000.0);
+  ehc_common::requireRange(o, "max_step_deg", max_step_deg, 0.01, 10.0);
+  ehc_common::requireRange(o, "driver_max_speed_deg", driver_max_speed_deg, 1.0, 180.0);
+  ehc_common::requireRange(o, "speed_scale", speed_scale, 1e-3, 1.0);
+  ehc_common::requireRange(o, "command_timeout", command_timeout, 1e-3, 5.0);
+  ehc_common::requireRange(o, "hold_duration", hold_duration, 0.0, 60.0);
+  ehc_common::requireRange(o, "state_timeout", state_timeout, 1e-3, 5.0);
+  ehc_common::requireRange(o, "max_tracking_error", max_tracking_error, 1e-3, 1.0);
+  ehc_common::requireRange(o, "limit_margin", limit_margin, 0.0, 0.5);
 }
 
 void ArmJointLimits::validate() const {
@@ -246,11 +246,11 @@ std::string JointPositionStreamer::summary() const {
 // ------------------------------------------------------------------ gripper
 void GripperConfig::validate() const {
   const std::string o = "GripperConfig";
-  ehc_control::requireRange(o, "max_opening", max_opening, 1e-3, 1.0);
-  ehc_control::requireRange(o, "open_position", open_position, 1, 1000);
-  ehc_control::requireRange(o, "close_position", close_position, 1, 1000);
-  ehc_control::requireRange(o, "pick_speed", pick_speed, 1, 1000);
-  ehc_control::requireRange(o, "pick_force", pick_force, 1, 1000);
+  ehc_common::requireRange(o, "max_opening", max_opening, 1e-3, 1.0);
+  ehc_common::requireRange(o, "open_position", open_position, 1, 1000);
+  ehc_common::requireRange(o, "close_position", close_position, 1, 1000);
+  ehc_common::requireRange(o, "pick_speed", pick_speed, 1, 1000);
+  ehc_common::requireRange(o, "pick_force", pick_force, 1, 1000);
 }
 
 GripperRequest gripperRequestFromCommand(const std::string& command, const GripperConfig& config) {

@@ -1,6 +1,6 @@
 #include "ehc_realman/water2_protocol.h"
 
-#include <yaml-cpp/yaml.h>
+#include "ehc_common/json.h"
 
 #include <cctype>
 #include <cmath>
@@ -15,131 +15,20 @@ namespace {
   throw std::runtime_error("[Water2Protocol] malformed reply: " + what);
 }
 
-std::string optionalString(const YAML::Node& map, const char* key) {
-  const YAML::Node n = map[key];
-  if (!n || n.IsNull()) return "";
-  if (!n.IsScalar()) malformed(std::string("field '") + key + "' is not a string");
-  return n.Scalar();
+/// A string field; missing or null reads as "", a number or boolean as its JSON text.
+std::string optionalString(const ehc_common::Json& map, const char* key) {
+  const auto it = map.find(key);
+  if (it == map.end() || it->is_null()) return "";
+  if (it->is_string()) return it->get<std::string>();
+  if (it->is_structured()) malformed(std::string("field '") + key + "' is not a string");
+  return it->dump();
 }
 
-/// Strict RFC 8259 syntax check (yaml-cpp, used to read the fields, accepts more than JSON).
-class JsonValidator {
- public:
-  explicit JsonValidator(const std::string& s) : s_(s) {}
-  bool valid() {
-    ws();
-    if (!value(0)) return false;
-    ws();
-    return i_ == s_.size();
-  }
-
- private:
-  void ws() {
-    while (i_ < s_.size() && (s_[i_] == ' ' || s_[i_] == '\t' || s_[i_] == '\n' || s_[i_] == '\r')) ++i_;
-  }
-  bool lit(const char* word) {
-    const std::size_t n = std::char_traits<char>::length(word);
-    if (s_.compare(i_, n, word) != 0) return false;
-    i_ += n;
-    return true;
-  }
-  bool value(int depth) {
-    if (depth > 64 || i_ >= s_.size()) return false;
-    const char c = s_[i_];
-    if (c == '{') return object(depth);
-    if (c == '[') return array(depth);
-    if (c == '"') return string();
-    if (c == 't') return lit("true");
-    if (c == 'f') return lit("false");
-    if (c == 'n') return lit("null");
-    return number();
-  }
-  bool object(int depth) {
-    ++i_;
-    ws();
-    if (i_ < s_.size() && s_[i_] == '}') return ++i_, true;
-    for (;;) {
-      ws();
-      if (i_ >= s_.size() || s_[i_] != '"' || !string()) return false;
-      ws();
-      if (i_ >= s_.size() || s_[i_] != ':') return false;
-      ++i_;
-      ws();
-      if (!value(depth + 1)) return false;
-      ws();
-      if (i_ >= s_.size()) return false;
-      if (s_[i_] == '}') return ++i_, true;
-      if (s_[i_] != ',') return false;
-      ++i_;
-    }
-  }
-  bool array(int depth) {
-    ++i_;
-    ws();
-    if (i_ < s_.size() && s_[i_] == ']') return ++i_, true;
-    for (;;) {
-      ws();
-      if (!value(depth + 1)) return false;
-      ws();
-      if (i_ >= s_.size()) return false;
-      if (s_[i_] == ']') return ++i_, true;
-      if (s_[i_] != ',') return false;
-      ++i_;
-    }
-  }
-  bool string() {
-    ++i_;  // opening quote
-    while (i_ < s_.size()) {
-      const unsigned char c = static_cast<unsigned char>(s_[i_++]);
-      if (c == '"') return true;
-      if (c < 0x20) return false;
-      if (c == '\\') {
-        if (i_ >= s_.size()) return false;
-        const char e = s_[i_++];
-        if (e == 'u') {
-          for (int k = 0; k < 4; ++k, ++i_)
-            if (i_ >= s_.size() || !std::isxdigit(static_cast<unsigned char>(s_[i_]))) return false;
-        } else if (std::string("\"\\/bfnrt").find(e) == std::string::npos) {
-          return false;
-        }
-      }
-    }
-    return false;
-  }
-  bool digits() {
-    const std::size_t start = i_;
-    while (i_ < s_.size() && std::isdigit(static_cast<unsigned char>(s_[i_]))) ++i_;
-    return i_ > start;
-  }
-  bool number() {
-    if (i_ < s_.size() && s_[i_] == '-') ++i_;
-    if (i_ < s_.size() && s_[i_] == '0') ++i_;
-    else if (!digits()) return false;
-    if (i_ < s_.size() && s_[i_] == '.') {
-      ++i_;
-      if (!digits()) return false;
-    }
-    if (i_ < s_.size() && (s_[i_] == 'e' || s_[i_] == 'E')) {
-      ++i_;
-      if (i_ < s_.size() && (s_[i_] == '+' || s_[i_] == '-')) ++i_;
-      if (!digits()) return false;
-    }
-    return true;
-  }
-
-  const std::string& s_;
-  std::size_t i_ = 0;
-};
-
-double requireNumber(const YAML::Node& map, const char* key) {
-  const YAML::Node n = map[key];
-  if (!n || !n.IsScalar()) malformed(std::string("current_pose.") + key + " missing");
-  double v = 0.0;
-  try {
-    v = n.as<double>();
-  } catch (const YAML::Exception&) {
-    malformed(std::string("current_pose.") + key + " is not a number");
-  }
+double requireNumber(const ehc_common::Json& map, const char* key) {
+  const auto it = map.find(key);
+  if (it == map.end()) malformed(std::string("current_pose.") + key + " missing");
+  if (!it->is_number()) malformed(std::string("current_pose.") + key + " is not a number");
+  const double v = it->get<double>();
   if (!std::isfinite(v)) malformed(std::string("current_pose.") + key + " is not finite");
   return v;
 }
@@ -157,14 +46,13 @@ std::string joyControlRequest(double linear_velocity, double angular_velocity) {
 std::string robotStatusRequest() { return "/api/robot_status"; }
 
 Water2Reply parseWater2Reply(const std::string& json) {
-  if (!JsonValidator(json).valid()) malformed("invalid JSON syntax");
-  YAML::Node root;
+  ehc_common::Json root;
   try {
-    root = YAML::Load(json);
-  } catch (const YAML::Exception& e) {
-    malformed(std::string("not JSON (") + e.what() + ")");
+    root = ehc_common::Json::parse(json);  // strict RFC 8259
+  } catch (const ehc_common::Json::exception& e) {  // syntax, or a number out of range (1e999)
+    malformed(std::string("invalid JSON (") + e.what() + ")");
   }
-  if (!root.IsMap()) malformed("not a JSON object");
+  if (!root.is_object()) malformed("not a JSON object");
   Water2Reply r;
   r.type = optionalString(root, "type");
   if (r.type.empty()) malformed("no 'type'");
@@ -172,15 +60,15 @@ Water2Reply parseWater2Reply(const std::string& json) {
   r.uuid = optionalString(root, "uuid");
   r.status = optionalString(root, "status");
   r.error_message = optionalString(root, "error_message");
-  const YAML::Node results = root["results"];
-  if (results && results.IsMap()) {
-    const YAML::Node pose = results["current_pose"];
-    if (pose) {
-      if (!pose.IsMap()) malformed("current_pose is not an object");
+  const auto results = root.find("results");
+  if (results != root.end() && results->is_object()) {
+    const auto pose = results->find("current_pose");
+    if (pose != results->end()) {
+      if (!pose->is_object()) malformed("current_pose is not an object");
       Water2Pose p;
-      p.x = requireNumber(pose, "x");
-      p.y = requireNumber(pose, "y");
-      p.theta = requireNumber(pose, "theta");
+      p.x = requireNumber(*pose, "x");
+      p.y = requireNumber(*pose, "y");
+      p.theta = requireNumber(*pose, "theta");
       r.pose = p;
     }
   }
@@ -329,25 +217,23 @@ bool Water2RequestSplitter::next(std::string& request) {
 
 std::string water2ResponseJson(const std::string& command, const std::string& status,
                                const std::string& error_message, const std::optional<Water2Pose>& pose) {
-  const auto quoted = [](const std::string& s) {
-    std::string out = "\"";
-    for (const char c : s) {
-      if (c == '"' || c == '\\') out += '\\';
-      if (static_cast<unsigned char>(c) >= 0x20) out += c;
-    }
-    return out + "\"";
-  };
-  std::string out = R"({"type":"response","command":)" + quoted(command) + R"(,"uuid":"","status":)" +
-                    quoted(status) + R"(,"error_message":)" + quoted(error_message);
+  ehc_common::Json j;
+  j["type"] = "response";
+  j["command"] = command;
+  j["uuid"] = "";
+  j["status"] = status;
+  j["error_message"] = error_message;
   if (pose) {
-    char buf[192];
-    std::snprintf(buf, sizeof(buf),
-                  R"(,"results":{"move_status":"idle","charge_state":false,"power_percent":87,)"
-                  R"("current_pose":{"x":%.6f,"y":%.6f,"theta":%.6f}})",
-                  pose->x, pose->y, pose->theta);
-    out += buf;
+    ehc_common::Json& results = j["results"];
+    results["move_status"] = "idle";
+    results["charge_state"] = false;
+    results["power_percent"] = 87;
+    results["current_pose"] = {{"x", ehc_common::jsonNumber(pose->x)},
+                               {"y", ehc_common::jsonNumber(pose->y)},
+                               {"theta", ehc_common::jsonNumber(pose->theta)}};
   }
-  return out + "}";
+  // Bytes the JSON text could not carry (invalid UTF-8 from a fuzzed command) are replaced.
+  return j.dump(-1, ' ', false, ehc_common::Json::error_handler_t::replace);
 }
 
 }  // namespace ehc_realman

@@ -1,6 +1,6 @@
 #include "ehc_realman/water2_velocity_response.h"
 
-#include "ehc_control/config_node.h"
+#include "ehc_common/config_node.h"
 
 #include <algorithm>
 #include <cmath>
@@ -27,7 +27,7 @@ Water2ResponseParams Water2ResponseParams::commandedVelocity() {
 
 void Water2ResponseParams::validate(const std::string& owner, const std::string& field_prefix) const {
   const auto requireRange = [&](const char* field, double value, double lo, double hi) {
-    ehc_control::requireRange(owner, field_prefix + field, value, lo, hi);
+    ehc_common::requireRange(owner, field_prefix + field, value, lo, hi);
   };
   requireRange("command_lifetime", command_lifetime, 1e-3, 10.0);
   requireRange("command_latency", command_latency, 0.0, 1.0);
@@ -49,7 +49,7 @@ std::string Water2ResponseParams::summary() const {
   return os.str();
 }
 
-void readWater2ResponseParams(const ehc_control::ConfigNode& n, Water2ResponseParams* p) {
+void readWater2ResponseParams(const ehc_common::ConfigNode& n, Water2ResponseParams* p) {
   auto get = [&](const char* key, double& field) { field = n.get<double>(key, field); };
   get("command_lifetime", p->command_lifetime);
   get("command_latency", p->command_latency);

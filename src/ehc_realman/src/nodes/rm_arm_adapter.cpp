@@ -19,6 +19,7 @@
 // stream step and after every command (a lock-step test's handshake: "frames" says what that
 // step published, "commands" + "rejected_commands" that a command was taken).
 
+#include "ehc_common/logging.h"
 #include "ehc_realman/realman_adapter_config.h"
 #include "ehc_realman/realman_joint_streamer.h"
 #include "node_clock.h"
@@ -48,7 +49,7 @@
 
 namespace {
 
-constexpr double kLogThrottle = 1.0;  ///< s between repeats of a throttled log message
+using ehc_common::kLogThrottle;
 
 using SteadyClock = std::chrono::steady_clock;
 using ehc_realman_nodes::nodeNow;

@@ -16,6 +16,7 @@
 // /cmd_vel (a lock-step test's handshake: the request counters say what that cycle sent,
 // "commands" + "rejected_commands" that a command was taken).
 
+#include "ehc_common/logging.h"
 #include "ehc_realman/water2_base_bridge.h"
 #include "node_clock.h"
 
@@ -36,7 +37,7 @@
 
 namespace {
 
-constexpr double kLogThrottle = 1.0;  ///< s between repeats of a throttled log message
+using ehc_common::kLogThrottle;
 constexpr double kSimCyclePeriod = 0.01;  ///< s of ROS time per network cycle under sim time
 
 diagnostic_msgs::KeyValue kv(const std::string& key, const std::string& value) {

@@ -29,8 +29,11 @@
 #include <random>
 #include <string>
 
-namespace ehc_control {
+namespace ehc_common {
 class ConfigNode;
+}  // namespace ehc_common
+
+namespace ehc_control {
 }
 
 namespace ehc_sim {
@@ -63,11 +66,11 @@ struct Water2BaseParams {
   ehc_realman::Water2ResponseParams response;
   /// What the modelled bridge believes the response is (its base_response), when it differs
   /// from `response`: a mis-identified model, or Water2ResponseParams::commandedVelocity() for
-  /// the bridge before session 8 (dead reckoning with the commanded twist). Unset = `response`.
+  /// a bridge that dead-reckons with the commanded twist. Unset = `response`.
   std::optional<ehc_realman::Water2ResponseParams> bridge_response;
   /// s from the base sampling its pose to the bridge receiving the robot_status reply.
   /// ASSUMPTION (not measured). The bridge takes the pose as valid when it sent the request
-  /// (session 7), i.e. at the sample time here.
+  /// (not when it reads the reply), i.e. at the sample time here.
   double status_latency = 0.05;
   /// Error of the robot_status map pose: first-order Gauss-Markov per axis (x, y, heading) with
   /// this stationary sigma and correlation time, zero at reset. ASSUMPTION (lidar localisation;
@@ -91,7 +94,7 @@ struct BaseModelConfig {
 };
 
 /// The `water2` mapping (every key optional; unknown keys are errors naming file and field).
-Water2BaseParams loadWater2BaseParams(const ehc_control::ConfigNode& n);
+Water2BaseParams loadWater2BaseParams(const ehc_common::ConfigNode& n);
 
 /// What the bridge publishes on /odom: pose in odom (x, y, yaw), the predicted base velocity.
 struct BaseOdometryEstimate {

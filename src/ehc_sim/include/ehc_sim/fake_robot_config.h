@@ -29,8 +29,11 @@
 #include <cstdint>
 #include <string>
 
-namespace ehc_control {
+namespace ehc_common {
 class ConfigNode;
+}  // namespace ehc_common
+
+namespace ehc_control {
 }
 
 namespace ehc_sim {
@@ -59,15 +62,15 @@ struct FakeRobotConfig {
 
 /// Reads the shared keys of a simulator's `sim` mapping (see the file comment). `water2` is read
 /// and checked whichever base_model is selected.
-FakeRobotConfig loadFakeRobotConfig(const ehc_control::ConfigNode& sim);
+FakeRobotConfig loadFakeRobotConfig(const ehc_common::ConfigNode& sim);
 /// Reads a kinematic simulator file: only the keys above, under `sim` (anything else, e.g. a
 /// Bullet simulator key, is an error naming the file and the field).
 FakeRobotConfig loadFakeRobotConfigFile(const std::string& path);
 
 /// `noise` mapping: enabled, base_translation, base_rotation, arm (all optional).
-ActuationNoise loadActuationNoise(const ehc_control::ConfigNode& n);
+ActuationNoise loadActuationNoise(const ehc_common::ConfigNode& n);
 /// A planar base pose mapping {x, y, yaw} (each optional, default 0): the scenes'
 /// robot_start and FakeRobotConfig::robot_start.
-Eigen::Vector3d loadBasePose(const ehc_control::ConfigNode& n);
+Eigen::Vector3d loadBasePose(const ehc_common::ConfigNode& n);
 
 }  // namespace ehc_sim

@@ -17,8 +17,8 @@
 //     base runs out its last joy_control (0.5 s lifetime) and stops, the arm reaches its last
 //     set-point and holds. Only after a stall longer than max_catch_up_steps steps (default
 //     kDefaultMaxCatchUpSteps = 10 s at dt 0.01: a suspended process) is the rest skipped
-//     (counted: the world then lags the wall clock by that much). Until session 7 the default
-//     was 1 s: on a loaded machine (load 15-25) the stand-in then froze the world for seconds
+//     (counted: the world then lags the wall clock by that much). With a 1 s default,
+//     on a loaded machine (load 15-25) the stand-in then froze the world for seconds
 //     per run (1212 steps in one rehearsal) while the bridge dead-reckoned the commanded motion
 //     on the wall clock and the adapter streamed set-points ahead of a frozen arm: odometry off
 //     by cm and JointPos frames ignored as "more than 10 deg" jumps, artefacts no robot has.

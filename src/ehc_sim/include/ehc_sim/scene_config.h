@@ -2,7 +2,7 @@
 // SceneConfig: the content of a simulated world, loaded from a scene YAML under config/scenes/.
 // Floor (always present, z = 0), tables (top box + four legs), graspable objects (box or
 // cylinder with a mass, optional AprilTag 36h11 on one face) and static obstacles, plus the
-// robot's start pose. ROS-free (yaml-cpp via ehc_control::ConfigNode); every error names the
+// robot's start pose. ROS-free (yaml-cpp via ehc_common::ConfigNode); every error names the
 // file and the field.
 
 #include <Eigen/Core>

@@ -17,8 +17,11 @@
 #include <utility>
 #include <vector>
 
-namespace ehc_control {
+namespace ehc_common {
 class ConfigNode;
+}  // namespace ehc_common
+
+namespace ehc_control {
 }
 
 namespace ehc_sim {
@@ -79,8 +82,8 @@ std::string simCameraFile(const SimConfig& sim, const ehc_control::RobotConfig& 
 SimConfig loadSimConfig(const std::string& path);
 SimConfig loadSimConfigString(const std::string& text, const std::string& origin);
 
-CollisionConfig loadCollisionConfig(const ehc_control::ConfigNode& n);
-GripperConfig loadGripperConfig(const ehc_control::ConfigNode& n);
-SimulatedCameraConfig loadSimulatedCameraConfig(const ehc_control::ConfigNode& n);
+CollisionConfig loadCollisionConfig(const ehc_common::ConfigNode& n);
+GripperConfig loadGripperConfig(const ehc_common::ConfigNode& n);
+SimulatedCameraConfig loadSimulatedCameraConfig(const ehc_common::ConfigNode& n);
 
 }  // namespace ehc_sim

@@ -16,7 +16,7 @@
 //     message, or whose answer (or half of it) was lost while its publishers were connecting; with max_real_time_factor > 0 an
 //     answered step waits until dt / max_real_time_factor wall seconds have passed since the
 //     state was published (pacing for tests whose other inputs come on wall-clock timers).
-// Acknowledgement gate (lock-step only, off unless setAckGate names nodes; issue 18): nodes
+// Acknowledgement gate (lock-step only, off unless setAckGate names nodes): nodes
 // outside the controller's handshake that must be done with what the simulator published before
 // sim time moves on. Each listed node consumes one stream: the images, the depth clouds or the
 // fresh states (e.g. the grasp sequencer, which turns each controller status into the next
@@ -24,7 +24,7 @@
 // or a later one) by every node of its stream before a step takes sim time past s + max_lag.
 // A node joins the gate with its first acknowledgement (one that has not started yet, or has
 // not subscribed yet, holds nothing back: it could never acknowledge the frames before it);
-// ehc_sim_node waits for every node's "ready" acknowledgement (notJoined, ehc_msgs::LockstepAck)
+// ehc_sim_node waits for every node's "ready" acknowledgement (notJoined, ehc_common::LockstepAck)
 // before its first state, so in practice every node is there from the start.
 // Without the gate a loaded machine let these nodes fall behind sim time (fewer images
 // processed per sim second: the back object's tag, detectable only from close, was never seen

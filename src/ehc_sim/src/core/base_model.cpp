@@ -1,7 +1,7 @@
 #include "ehc_sim/base_model.h"
 
-#include "ehc_control/config_node.h"
-#include "ehc_control/enum_names.h"
+#include "ehc_common/config_node.h"
+#include "ehc_common/enum_names.h"
 
 #include <algorithm>
 #include <cmath>
@@ -10,10 +10,10 @@
 
 namespace ehc_sim {
 
-using ehc_control::ConfigNode;
+using ehc_common::ConfigNode;
 
 namespace {
-constexpr ehc_control::EnumNames<BaseModelType, 2> kBaseModelNames = {
+constexpr ehc_common::EnumNames<BaseModelType, 2> kBaseModelNames = {
     {{BaseModelType::Ideal, "ideal"}, {BaseModelType::Water2, "water2"}}};
 constexpr double kEps = 1e-9;  ///< s: sim times are sums of dt
 
@@ -23,27 +23,27 @@ const ehc_realman::Water2BridgeConfig& bridgeDefaults() {
 }
 }  // namespace
 
-std::string toString(BaseModelType type) { return ehc_control::enumName(kBaseModelNames, type, "BaseModel"); }
+std::string toString(BaseModelType type) { return ehc_common::enumName(kBaseModelNames, type, "BaseModel"); }
 
 BaseModelType baseModelTypeFromString(const std::string& name) {
-  return ehc_control::enumValue(kBaseModelNames, name, "BaseModel", "base model");
+  return ehc_common::enumValue(kBaseModelNames, name, "BaseModel", "base model");
 }
 
 // ------------------------------------------------------------------ parameters
 void Water2BaseParams::validate() const {
   const char* o = "Water2BaseParams";
-  ehc_control::requireRange(o, "max_linear_velocity", max_linear_velocity, 1e-3, 0.5);
-  ehc_control::requireRange(o, "max_angular_velocity", max_angular_velocity, 1e-3, 1.0);
-  ehc_control::requireRange(o, "resend_rate", resend_rate, 10.0, 1000.0);  // >= 10 Hz: 0.5 s hold
-  ehc_control::requireRange(o, "bridge_command_timeout", bridge_command_timeout, 1e-3, 10.0);
-  ehc_control::requireRange(o, "status_period", status_period, 1e-3, 1.0);
-  ehc_control::requireRange(o, "max_extrapolation", max_extrapolation, 0.0, 10.0);
+  ehc_common::requireRange(o, "max_linear_velocity", max_linear_velocity, 1e-3, 0.5);
+  ehc_common::requireRange(o, "max_angular_velocity", max_angular_velocity, 1e-3, 1.0);
+  ehc_common::requireRange(o, "resend_rate", resend_rate, 10.0, 1000.0);  // >= 10 Hz: 0.5 s hold
+  ehc_common::requireRange(o, "bridge_command_timeout", bridge_command_timeout, 1e-3, 10.0);
+  ehc_common::requireRange(o, "status_period", status_period, 1e-3, 1.0);
+  ehc_common::requireRange(o, "max_extrapolation", max_extrapolation, 0.0, 10.0);
   response.validate(o);
   if (bridge_response) bridge_response->validate(o, "bridge_response.");
-  ehc_control::requireRange(o, "status_latency", status_latency, 0.0, 1.0);
-  ehc_control::requireRange(o, "localisation_position_sigma", localisation_position_sigma, 0.0, 1.0);
-  ehc_control::requireRange(o, "localisation_heading_sigma", localisation_heading_sigma, 0.0, 1.0);
-  ehc_control::requireRange(o, "localisation_correlation_time", localisation_correlation_time, 1e-3, 1e6);
+  ehc_common::requireRange(o, "status_latency", status_latency, 0.0, 1.0);
+  ehc_common::requireRange(o, "localisation_position_sigma", localisation_position_sigma, 0.0, 1.0);
+  ehc_common::requireRange(o, "localisation_heading_sigma", localisation_heading_sigma, 0.0, 1.0);
+  ehc_common::requireRange(o, "localisation_correlation_time", localisation_correlation_time, 1e-3, 1e6);
   if (status_period + status_latency >= bridgeDefaults().status_timeout)
     throw std::invalid_argument("[Water2BaseParams] status_period + status_latency must be below the "
                                 "bridge's status_timeout (" +
@@ -67,7 +67,7 @@ std::string BaseModelConfig::summary() const {
   return type == BaseModelType::Ideal ? std::string("ideal") : water2.summary();
 }
 
-Water2BaseParams loadWater2BaseParams(const ConfigNode& n) {
+Water2BaseParams loadWater2BaseParams(const ehc_common::ConfigNode& n) {
   Water2BaseParams p;
   auto get = [&](const char* key, double& field) { field = n.get<double>(key, field); };
   get("max_linear_velocity", p.max_linear_velocity);

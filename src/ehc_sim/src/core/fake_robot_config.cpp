@@ -1,6 +1,6 @@
 #include "ehc_sim/fake_robot_config.h"
 
-#include "ehc_control/config_node.h"
+#include "ehc_common/config_node.h"
 #include "ehc_control/robot_config.h"
 
 #include <algorithm>
@@ -11,19 +11,19 @@
 
 namespace ehc_sim {
 
-using ehc_control::ConfigNode;
+using ehc_common::ConfigNode;
 
 std::int64_t FakeRobotConfig::dtNs() const { return static_cast<std::int64_t>(std::llround(dt * 1e9)); }
 
 void FakeRobotConfig::validate() const {
   const char* o = "FakeRobotConfig";
   if (robot_file.empty()) throw std::invalid_argument("[FakeRobotConfig] sim.robot: no robot.yaml given");
-  ehc_control::requireRange(o, "sim.dt", dt, 1e-4, 0.1);
+  ehc_common::requireRange(o, "sim.dt", dt, 1e-4, 0.1);
   if (std::abs(dt * 1e9 - std::round(dt * 1e9)) > 1e-3)
     throw std::invalid_argument("[FakeRobotConfig] sim.dt must be a whole number of nanoseconds");
-  ehc_control::requirePositive(o, "sim.state_republish_period", state_republish_period);
-  ehc_control::requirePositive(o, "sim.command_timeout", command_timeout);
-  ehc_control::requireRange(o, "sim.max_real_time_factor", max_real_time_factor, 0.0, 1e6);
+  ehc_common::requirePositive(o, "sim.state_republish_period", state_republish_period);
+  ehc_common::requirePositive(o, "sim.command_timeout", command_timeout);
+  ehc_common::requireRange(o, "sim.max_real_time_factor", max_real_time_factor, 0.0, 1e6);
   if (!robot_start.allFinite()) throw std::invalid_argument("[FakeRobotConfig] sim.robot_start must be finite");
   noise.validate();
   base_model.validate();
@@ -45,7 +45,7 @@ std::string FakeRobotConfig::summary() const {
   return os.str();
 }
 
-ActuationNoise loadActuationNoise(const ConfigNode& n) {
+ActuationNoise loadActuationNoise(const ehc_common::ConfigNode& n) {
   ActuationNoise a;
   a.enabled = n.get<bool>("enabled", a.enabled);
   a.base_translation = n.get<double>("base_translation", a.base_translation);
@@ -58,11 +58,11 @@ ActuationNoise loadActuationNoise(const ConfigNode& n) {
   return a;
 }
 
-Eigen::Vector3d loadBasePose(const ConfigNode& n) {
+Eigen::Vector3d loadBasePose(const ehc_common::ConfigNode& n) {
   return Eigen::Vector3d(n.get<double>("x", 0.0), n.get<double>("y", 0.0), n.get<double>("yaw", 0.0));
 }
 
-FakeRobotConfig loadFakeRobotConfig(const ConfigNode& s) {
+FakeRobotConfig loadFakeRobotConfig(const ehc_common::ConfigNode& s) {
   // The kinematic simulator's former keys: an error naming the replacement, never ignored.
   static const std::pair<const char*, const char*> kReplaced[] = {
       {"lockstep", "was replaced by sim.free_run (free_run: false = lock-step)"},
@@ -107,7 +107,7 @@ FakeRobotConfig loadFakeRobotConfig(const ConfigNode& s) {
 }
 
 FakeRobotConfig loadFakeRobotConfigFile(const std::string& path) {
-  const ConfigNode root = ConfigNode::loadFile(path, "FakeRobotConfig");
+  const ehc_common::ConfigNode root = ehc_common::ConfigNode::loadFile(path, "FakeRobotConfig");
   if (root.has("robot")) root.fail("robot", "was moved to sim.robot");
   FakeRobotConfig c = loadFakeRobotConfig(root.child("sim"));  // the former keys fail here, with their replacement
   root.rejectUnknownKeys();  // a Bullet simulator key, or a typo

@@ -1,6 +1,6 @@
 #include "ehc_sim/simulated_camera.h"
 
-#include "ehc_control/config_node.h"
+#include "ehc_common/config_node.h"
 #include "ehc_sim/sim_world.h"
 
 #include <apriltag/apriltag.h>
@@ -111,10 +111,10 @@ SimulatedCamera::SimulatedCamera(const ehc_control::PinholeCamera& intrinsics,
     : intrinsics_(intrinsics), cfg_(cfg), impl_(std::make_unique<Impl>()) {
   intrinsics_.validate();
   // The simulator's own limits on the camera it renders.
-  ehc_control::requireRange("SimulatedCamera", "image_width", intrinsics_.width, 16, 8192);
-  ehc_control::requireRange("SimulatedCamera", "image_height", intrinsics_.height, 16, 8192);
-  ehc_control::requireRange("SimulatedCamera", "fx", intrinsics_.fx, 1.0, 1e5);
-  ehc_control::requireRange("SimulatedCamera", "fy", intrinsics_.fy, 1.0, 1e5);
+  ehc_common::requireRange("SimulatedCamera", "image_width", intrinsics_.width, 16, 8192);
+  ehc_common::requireRange("SimulatedCamera", "image_height", intrinsics_.height, 16, 8192);
+  ehc_common::requireRange("SimulatedCamera", "fx", intrinsics_.fx, 1.0, 1e5);
+  ehc_common::requireRange("SimulatedCamera", "fy", intrinsics_.fy, 1.0, 1e5);
   cfg_.validate();
   impl_->cam.initPersProjWithoutDistortion(intrinsics_.fx, intrinsics_.fy, intrinsics_.cx,
                                            intrinsics_.cy);

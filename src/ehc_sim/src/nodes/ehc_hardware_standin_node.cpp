@@ -38,7 +38,7 @@
 
 namespace {
 
-using ehc_sim::kLogThrottle;
+using ehc_common::kLogThrottle;
 constexpr double kMaxServeWait = 0.002;  ///< s the loop blocks on the Water2 socket per turn
 
 class HardwareStandInNode {

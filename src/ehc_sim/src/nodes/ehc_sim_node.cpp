@@ -37,7 +37,7 @@
 
 namespace {
 
-using ehc_sim::kLogThrottle;
+using ehc_common::kLogThrottle;
 
 class SimNode {
  public:

@@ -5,6 +5,7 @@
 // decides. Header-only; the policy itself is the core's StepScheduler.
 
 #include "ehc_msgs/JointVelocityCommand.h"
+#include "ehc_common/logging.h"
 #include "ehc_sim/step_scheduler.h"
 
 #include <geometry_msgs/Twist.h>
@@ -17,8 +18,7 @@
 
 namespace ehc_sim {
 
-/// s between repeats of a throttled log message, in both simulator nodes.
-constexpr double kLogThrottle = 1.0;
+using ehc_common::kLogThrottle;
 
 /// Private parameters _robot (a robot name or a robot.yaml), _free_run and _seed override the
 /// configuration file.

@@ -2,6 +2,7 @@
 // Shared fixtures for ehc_control tests: the RealMan robot config and random configurations.
 
 #include "ehc_control/whole_body_model.h"
+#include "ehc_test/errors.h"
 
 #include <cmath>
 #include <random>
@@ -10,16 +11,7 @@
 
 namespace ehc_control::test {
 
-/// The message of the std::invalid_argument `f` throws ("" if it throws none).
-template <class F>
-std::string errorOf(F f) {
-  try {
-    f();
-  } catch (const std::invalid_argument& e) {
-    return e.what();
-  }
-  return "";
-}
+using ehc_test::errorOf;
 
 inline std::string realmanYaml() {
   return std::string(EHC_CONFIG_DIR) + "/robots/realman_rm65_water2/robot.yaml";

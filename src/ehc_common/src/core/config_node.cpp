@@ -1,9 +1,9 @@
-#include "ehc_control/config_node.h"
+#include "ehc_common/config_node.h"
 
 #include <algorithm>
 #include <sstream>
 
-namespace ehc_control {
+namespace ehc_common {
 
 namespace {
 std::string folderOf(const std::string& path) {
@@ -287,4 +287,4 @@ void requirePositive(const std::string& owner, const std::string& field, double 
   }
 }
 
-}  // namespace ehc_control
+}  // namespace ehc_common

@@ -1,6 +1,9 @@
 #pragma once
 // Tiny benchmark helper shared by the bench_* executables: times `n` calls of `fn(i)` one by
-// one with steady_clock and prints one JSON line with the median, p99 and mean in microseconds.
+// one with steady_clock and prints one JSON line with the median, p99 and mean in microseconds
+// (ehc_common::Json, the project's one number format).
+
+#include "ehc_common/json.h"
 
 #include <algorithm>
 #include <chrono>
@@ -8,7 +11,7 @@
 #include <string>
 #include <vector>
 
-namespace ehc_control {
+namespace ehc_common {
 
 struct BenchStats {
   double median_us = 0, p99_us = 0, mean_us = 0, max_us = 0;
@@ -27,17 +30,23 @@ inline BenchStats benchStats(std::vector<double> us) {
   return s;
 }
 
+/// Prints one JSON line {"bench", "n", "median_us", "p99_us", "mean_us", "max_us", ...extra}.
 inline void benchPrint(const std::string& name, std::size_t n, const BenchStats& s,
-                       const std::string& extra_json = "") {
-  std::printf("{\"bench\":\"%s\",\"n\":%zu,\"median_us\":%.3f,\"p99_us\":%.3f,\"mean_us\":%.3f,"
-              "\"max_us\":%.3f%s%s}\n",
-              name.c_str(), n, s.median_us, s.p99_us, s.mean_us, s.max_us,
-              extra_json.empty() ? "" : ",", extra_json.c_str());
+                       const Json& extra = Json::object()) {
+  Json line;
+  line["bench"] = name;
+  line["n"] = n;
+  line["median_us"] = jsonNumber(s.median_us);
+  line["p99_us"] = jsonNumber(s.p99_us);
+  line["mean_us"] = jsonNumber(s.mean_us);
+  line["max_us"] = jsonNumber(s.max_us);
+  for (const auto& [key, value] : extra.items()) line[key] = value;
+  std::printf("%s\n", jsonLine(line).c_str());
   std::fflush(stdout);
 }
 
 template <class Fn>
-BenchStats benchReport(const std::string& name, int n, Fn&& fn, const std::string& extra_json = "") {
+BenchStats benchReport(const std::string& name, int n, Fn&& fn, const Json& extra = Json::object()) {
   std::vector<double> us;
   us.reserve(static_cast<std::size_t>(n));
   for (int i = 0; i < n; ++i) {
@@ -47,8 +56,8 @@ BenchStats benchReport(const std::string& name, int n, Fn&& fn, const std::strin
     us.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
   }
   const BenchStats s = benchStats(us);
-  benchPrint(name, us.size(), s, extra_json);
+  benchPrint(name, us.size(), s, extra);
   return s;
 }
 
-}  // namespace ehc_control
+}  // namespace ehc_common

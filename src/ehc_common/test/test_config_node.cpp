@@ -1,17 +1,17 @@
 // ConfigNode: unknown keys are errors (with the nearest known key), list elements and sections
 // read by another program.
-#include "ehc_control/config_node.h"
-#include "test_helpers.h"
+#include "ehc_common/config_node.h"
+#include "ehc_test/errors.h"
 
 #include <gtest/gtest.h>
 
 #include <functional>
 
-using ehc_control::ConfigNode;
+using ehc_common::ConfigNode;
 
 namespace {
 
-using ehc_control::test::errorOf;
+using ehc_test::errorOf;
 
 }  // namespace
 

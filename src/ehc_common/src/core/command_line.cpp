@@ -1,4 +1,4 @@
-#include "ehc_control/command_line.h"
+#include "ehc_common/command_line.h"
 
 #include <algorithm>
 #include <cerrno>
@@ -6,7 +6,7 @@
 #include <cstdlib>
 #include <stdexcept>
 
-namespace ehc_control {
+namespace ehc_common {
 
 namespace {
 [[noreturn]] void fail(const std::string& flag, const std::string& what) {
@@ -137,4 +137,4 @@ std::vector<double> CommandLine::parseReals(const std::string& flag, const std::
   return out;
 }
 
-}  // namespace ehc_control
+}  // namespace ehc_common

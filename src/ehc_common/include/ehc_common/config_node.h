@@ -20,7 +20,7 @@
 
 #include <yaml-cpp/yaml.h>
 
-namespace ehc_control {
+namespace ehc_common {
 
 class ConfigNode {
  public:
@@ -138,4 +138,4 @@ void requireRange(const std::string& owner, const std::string& field, double val
                   double hi);
 void requirePositive(const std::string& owner, const std::string& field, double value);
 
-}  // namespace ehc_control
+}  // namespace ehc_common

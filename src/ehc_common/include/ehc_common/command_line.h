@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-namespace ehc_control {
+namespace ehc_common {
 
 class CommandLine {
  public:
@@ -47,4 +47,4 @@ class CommandLine {
   std::map<std::string, std::string> values_;
 };
 
-}  // namespace ehc_control
+}  // namespace ehc_common

@@ -1,18 +1,18 @@
 // CommandLine: the one strict parser of the command-line tools. Every unparsable value, unknown
-// flag, repeated flag or missing value is an error naming the flag (issue 16 defect 7:
-// `ehc_reachability --samples 1e6` ran one sample and exited 0). The tools' own tests
+// flag, repeated flag or missing value is an error naming the flag (a loose
+// parser once read `ehc_reachability --samples 1e6` as one sample and exited 0). The tools' own tests
 // (test_ehc_tools_cli, test_perception_cli, test_experiment_cli) run the binaries.
 
-#include "ehc_control/command_line.h"
-#include "test_helpers.h"
+#include "ehc_common/command_line.h"
+#include "ehc_test/errors.h"
 
 #include <gtest/gtest.h>
 
 #include <string>
 #include <vector>
 
-using ehc_control::CommandLine;
-using ehc_control::test::errorOf;
+using ehc_common::CommandLine;
+using ehc_test::errorOf;
 
 namespace {
 CommandLine parse(std::vector<const char*> words) {

@@ -30,7 +30,7 @@
 #include <utility>
 #include <vector>
 
-namespace ehc_msgs {
+namespace ehc_common {
 
 class LockstepAck {
  public:
@@ -164,4 +164,4 @@ inline bool waitForTransformWall(const tf2_ros::Buffer& buffer, const std::strin
   return true;
 }
 
-}  // namespace ehc_msgs
+}  // namespace ehc_common

@@ -10,7 +10,7 @@
 #include <utility>
 #include <vector>
 
-namespace ehc_control {
+namespace ehc_common {
 
 template <class E, std::size_t N>
 using EnumNames = std::array<std::pair<E, const char*>, N>;
@@ -42,4 +42,4 @@ std::vector<E> enumValues(const EnumNames<E, N>& names) {
   return out;
 }
 
-}  // namespace ehc_control
+}  // namespace ehc_common
