@@ -12,6 +12,7 @@
 // arrived (found in the grasp node, which stalled the lock-step simulator; see ehc_grasp_node).
 // With _ack_topic:=<topic> every image is acknowledged there once done with (after its pose is
 // published): a lock-step simulator's acknowledgement gate (ehc_msgs::LockstepAck, demo.sh).
+#include "ehc_control/camera_info_msg.h"
 #include "ehc_control/config_node.h"
 #include "ehc_msgs/lockstep_ack.h"
 #include "ehc_perception/tag_detector.h"
@@ -110,13 +111,9 @@ class TagNode {
 
   void onInfo(const sensor_msgs::CameraInfo& msg) {
     try {
-      const PinholeCamera cam = ros_conv::cameraInfoToCamera(msg);
-      if (detector_) {
-        const PinholeCamera& old = detector_->camera();
-        if (old.width == cam.width && old.height == cam.height && old.fx == cam.fx &&
-            old.fy == cam.fy && old.cx == cam.cx && old.cy == cam.cy)
-          return;
-      }
+      const PinholeCamera cam = ehc_control::cameraFromInfo(msg);
+      cam.validate();
+      if (detector_ && detector_->camera().sameIntrinsics(cam)) return;
       build(cam);
     } catch (const std::exception& e) {
       ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "ehc_tag_node: bad camera_info: " << e.what());
