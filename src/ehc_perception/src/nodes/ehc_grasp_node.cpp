@@ -1,5 +1,6 @@
 // ehc_grasp_node: depth cloud -> grasp candidates on /ehc/grasp_candidates.
 //   rosrun ehc_perception ehc_grasp_node _config:=config/perception/grasp_node.yaml
+// Its parameters: ehc_perception::GraspNodeConfig (node_config.h).
 // Each processed cloud (at most max_rate_hz) is transformed into the world frame (tf2 at the
 // cloud stamp), the support plane removed and the objects clustered; grasps are generated
 // for the object nearest the latest /ehc/target_pose (or every object without a fresh
@@ -22,8 +23,8 @@
 // lock-step simulator's acknowledgement gate (ehc_msgs::LockstepAck, demo.sh).
 #include "ehc_msgs/GraspCandidates.h"
 #include "ehc_msgs/lockstep_ack.h"
-#include "ehc_control/config_node.h"
 #include "ehc_perception/grasp_generator.h"
+#include "ehc_perception/node_config.h"
 #include "ehc_perception/rate_limiter.h"
 #include "ros_conversions.h"
 
@@ -41,42 +42,6 @@ using namespace ehc_perception;
 
 constexpr double kLogThrottle = 2.0;  ///< s, period of every throttled log line
 
-struct GraspNodeConfig {
-  std::string cloud_topic = "/camera/depth/points";
-  std::string target_topic = "/ehc/target_pose";  ///< "" = no target: every object
-  std::string output_topic = "/ehc/grasp_candidates";
-  std::string world_frame = "odom";
-  GraspTargetingParams targeting;  ///< max rate, target timeout and gate
-  double tf_timeout = 0.1;       ///< wall s a cloud waits for its camera pose (lock-step: kTfWallWait)
-  int cloud_queue = 3;           ///< clouds waiting to be processed (the oldest is dropped)
-  GraspGeneratorConfig generator;
-
-  std::string summary() const {
-    return "ehc_grasp_node: " + cloud_topic + " -> " + output_topic + " in '" + world_frame +
-           "', target " + (target_topic.empty() ? std::string("<none>") : target_topic) + ", " +
-           targeting.summary() + ", " + std::to_string(cloud_queue) + " clouds queued, camera pose waited for " + std::to_string(tf_timeout) + " wall s\n  " +
-           generator.summary();
-  }
-};
-
-GraspNodeConfig loadGraspNodeConfig(const std::string& path) {
-  const auto root = ehc_control::ConfigNode::loadFile(path, "GraspNode");
-  GraspNodeConfig c;
-  const auto n = root.childOrEmpty("node");
-  c.cloud_topic = n.get("cloud_topic", c.cloud_topic);
-  c.target_topic = n.get("target_topic", c.target_topic);
-  c.output_topic = n.get("output_topic", c.output_topic);
-  c.world_frame = n.get("world_frame", c.world_frame);
-  c.targeting = loadGraspTargetingParams(n);
-  c.tf_timeout = n.get("tf_timeout", c.tf_timeout);
-  ehc_control::requireRange("GraspNode", "node.tf_timeout", c.tf_timeout, 0.0, 5.0);
-  c.cloud_queue = n.get("cloud_queue", c.cloud_queue);
-  ehc_control::requireRange("GraspNode", "node.cloud_queue", c.cloud_queue, 1, 100);
-  c.generator = loadGraspGeneratorConfig(root.childOrEmpty("grasp_generator"));
-  root.rejectUnknownKeys();  // a key no loader read is a misspelling
-  return c;
-}
-
 class GraspNode {
  public:
   GraspNode(ros::NodeHandle& nh, const ros::NodeHandle& pnh, const GraspNodeConfig& cfg)
@@ -84,8 +49,7 @@ class GraspNode {
         gen_(cfg.generator),
         listener_(tf_),
         limiter_(cfg.targeting.max_rate_hz),
-        ack_(pnh, cfg.target_topic.empty() ? std::vector<std::string>{cfg.cloud_topic, "/tf"}
-                                            : std::vector<std::string>{cfg.cloud_topic, cfg.target_topic, "/tf"}) {
+        ack_(pnh, cfg.lockstepInputs()) {
     pub_ = nh.advertise<ehc_msgs::GraspCandidates>(cfg_.output_topic, 2);
     lockstep_ = !ack_.topic().empty();
     const ros::TransportHints fast = ros::TransportHints().tcpNoDelay();  // no Nagle delay (lock-step order)

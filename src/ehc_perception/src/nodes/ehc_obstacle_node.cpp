@@ -4,6 +4,7 @@
 // ehc_perception::ObstacleMonitor; this node loads parameters, converts messages (clouds, tf),
 // runs the timer and publishes.
 //   rosrun ehc_perception ehc_obstacle_node _config:=config/perception/obstacle_node.yaml
+// Its parameters: ehc_perception::ObstacleNodeConfig (node_config.h).
 // Clouds (at most max_insert_rate_hz) are transformed into the world frame with tf2 at their
 // stamp, bounded (one point per cloud_voxel voxel, then at most max_cloud_points: the work per
 // cloud does not grow with the camera's resolution) and queued with the robot's pose; each
@@ -23,7 +24,8 @@
 #include "ehc_msgs/ObstacleArray.h"
 #include "ehc_msgs/ObstacleExclusion.h"
 #include "ehc_msgs/lockstep_ack.h"
-#include "ehc_control/config_node.h"
+#include "ehc_control/robot_config.h"
+#include "ehc_perception/node_config.h"
 #include "ehc_perception/obstacle_monitor.h"
 #include "ehc_perception/rate_limiter.h"
 #include "ros_conversions.h"
@@ -43,56 +45,13 @@ using namespace ehc_perception;
 
 constexpr double kLogThrottle = 2.0;  ///< s between repeats of a throttled log message
 
-struct ObstacleNodeConfig {
-  std::string robot_config;  ///< robot.yaml (relative paths: to this file's folder)
-  std::string cloud_topic = "/camera/depth/points";
-  std::string joint_states_topic = "/joint_states";
-  std::string odom_topic = "/odom";
-  std::string output_topic = "/ehc/obstacles";
-  std::string exclusion_topic = "/ehc/obstacle_exclusion";  ///< "" = no exclusions
-  std::string world_frame = "odom";
-  double publish_rate_hz = 50.0;
-  double tf_timeout = 0.05;    ///< s
-  ObstacleMonitorParams monitor;  ///< state / exclusion timeouts, insert rate
-  ObstacleMapConfig map;
-
-  std::string summary() const {
-    return "ehc_obstacle_node: robot " + robot_config + ", " + cloud_topic + " + " + joint_states_topic +
-           " + " + odom_topic + " -> " + output_topic + " at " + std::to_string(publish_rate_hz) +
-           " Hz in '" + world_frame + "', exclusions " +
-           (exclusion_topic.empty() ? std::string("off") : exclusion_topic) + "\n  " + monitor.summary() +
-           "\n  " + map.summary();
-  }
-};
-
-ObstacleNodeConfig loadObstacleNodeConfig(const std::string& path) {
-  const auto root = ehc_control::ConfigNode::loadFile(path, "ObstacleNode");
-  ObstacleNodeConfig c;
-  const auto n = root.child("node");
-  c.robot_config = ehc_control::robotFileField(n, "robot_config");  // a robot name or a robot.yaml path
-  c.cloud_topic = n.get("cloud_topic", c.cloud_topic);
-  c.joint_states_topic = n.get("joint_states_topic", c.joint_states_topic);
-  c.odom_topic = n.get("odom_topic", c.odom_topic);
-  c.output_topic = n.get("output_topic", c.output_topic);
-  c.exclusion_topic = n.get("exclusion_topic", c.exclusion_topic);
-  c.world_frame = n.get("world_frame", c.world_frame);
-  c.publish_rate_hz = n.get("publish_rate_hz", c.publish_rate_hz);
-  c.tf_timeout = n.get("tf_timeout", c.tf_timeout);
-  ehc_control::requireRange("ObstacleNode", "node.publish_rate_hz", c.publish_rate_hz, 0.1, 1000.0);
-  ehc_control::requireRange("ObstacleNode", "node.tf_timeout", c.tf_timeout, 0.0, 5.0);
-  c.monitor = loadObstacleMonitorParams(n);
-  c.map = loadObstacleMapConfig(root.childOrEmpty("obstacle_map"));
-  root.rejectUnknownKeys();  // a key no loader read is a misspelling
-  return c;
-}
-
 class ObstacleNode {
  public:
   ObstacleNode(ros::NodeHandle& nh, const ros::NodeHandle& pnh, const ObstacleNodeConfig& cfg)
       : cfg_(cfg),
         monitor_(ehc_control::loadRobotConfig(cfg.robot_config), cfg.map, cfg.monitor),
         listener_(tf_),
-        ack_(pnh, lockstepInputs(cfg)),
+        ack_(pnh, cfg.lockstepInputs()),
         publish_limiter_(cfg.publish_rate_hz) {
     ROS_INFO_STREAM("  " << monitor_.field().summary());
     pub_ = nh.advertise<ehc_msgs::ObstacleArray>(cfg_.output_topic, 5);
@@ -118,13 +77,6 @@ class ObstacleNode {
   /// look fresh or a live one stale.
   /// In lock-step the stamp (the simulator's time, which stands still until this node is done).
   double receiptTime(const ros::Time& stamp) const { return lockstep_ ? stamp.toSec() : ros::Time::now().toSec(); }
-
-  /// The inputs the node needs before it takes part in a lock-step (ehc_msgs::LockstepAck).
-  static std::vector<std::string> lockstepInputs(const ObstacleNodeConfig& c) {
-    std::vector<std::string> in{c.cloud_topic, c.joint_states_topic, c.odom_topic, "/tf"};
-    if (!c.exclusion_topic.empty()) in.push_back(c.exclusion_topic);
-    return in;
-  }
 
   void onJoints(const sensor_msgs::JointState& msg) {
     const std::string why = monitor_.setJointState(receiptTime(msg.header.stamp), msg.name, msg.position);
