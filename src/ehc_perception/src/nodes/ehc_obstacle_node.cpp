@@ -19,15 +19,15 @@
 // Lock-step (_ack_topic:=<topic>, demo.sh; ehc_msgs::LockstepAck): no timer; each state (the
 // /joint_states + /odom pair of one stamp t) first takes the clouds and exclusion lists stamped
 // before t (in stamp order, whenever they arrived), then publishes the distances at t when due
-// (publish_rate_hz on the stamps), then acknowledges t; times are the stamps. So the distances
-// do not depend on when messages arrive, and the simulator steps on only once they are out.
+// (publish_rate_hz on the stamps; ehc_perception::ObstacleLockstepCycle), then acknowledges t;
+// times are the stamps. So the distances do not depend on when messages arrive, and the
+// simulator steps on only once they are out.
 #include "ehc_msgs/ObstacleArray.h"
 #include "ehc_msgs/ObstacleExclusion.h"
 #include "ehc_msgs/lockstep_ack.h"
 #include "ehc_control/robot_config.h"
 #include "ehc_perception/node_config.h"
 #include "ehc_perception/obstacle_monitor.h"
-#include "ehc_perception/rate_limiter.h"
 #include "ros_conversions.h"
 
 #include <nav_msgs/Odometry.h>
@@ -38,6 +38,7 @@
 #include <cmath>
 #include <functional>
 #include <memory>
+#include <optional>
 
 namespace {
 
@@ -52,7 +53,7 @@ class ObstacleNode {
         monitor_(ehc_control::loadRobotConfig(cfg.robot_config), cfg.map, cfg.monitor),
         listener_(tf_),
         ack_(pnh, cfg.lockstepInputs()),
-        publish_limiter_(cfg.publish_rate_hz) {
+        cycle_(cfg.publish_rate_hz) {
     ROS_INFO_STREAM("  " << monitor_.field().summary());
     pub_ = nh.advertise<ehc_msgs::ObstacleArray>(cfg_.output_topic, 5);
     lockstep_ = !ack_.topic().empty();
@@ -81,21 +82,18 @@ class ObstacleNode {
   void onJoints(const sensor_msgs::JointState& msg) {
     const std::string why = monitor_.setJointState(receiptTime(msg.header.stamp), msg.name, msg.position);
     if (!why.empty()) ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "ehc_obstacle_node: /joint_states rejected: " << why);
-    if (lockstep_) {
-      joints_stamp_ = msg.header.stamp;
-      tryLockstepCycle();
-    }
+    if (lockstep_) lockstepCycle(cycle_.jointState(static_cast<StampNs>(msg.header.stamp.toNSec())));
   }
 
-  /// Lock-step: once /joint_states and /odom of one stamp t are in, the clouds and exclusion
-  /// lists stamped before t, the distances at t (when due), then the acknowledgement of t.
-  void tryLockstepCycle() {
-    if (joints_stamp_.isZero() || joints_stamp_ != odom_stamp_) return;
-    const ros::Time t = joints_stamp_;
-    joints_stamp_ = ros::Time();
-    if (!inbox_.last().isZero() && t < inbox_.last()) publish_limiter_.reset();  // simulator reset
+  /// Lock-step, a state at t complete (/joint_states and /odom of one stamp): the clouds and
+  /// exclusion lists stamped before t, the distances at t (when due), then the acknowledgement
+  /// of t.
+  void lockstepCycle(const std::optional<ObstacleLockstepCycle::State>& state) {
+    if (!state) return;
+    ros::Time t;
+    t.fromNSec(static_cast<std::uint64_t>(state->stamp));
     inbox_.takeBefore(t, kMaxCloudWait);  // a cloud without its camera pose yet waits for the next state
-    if (publish_limiter_.accept(t.toSec())) publishDistances(t.toSec());
+    if (state->publish) publishDistances(t.toSec());
     ack_.done(t);
   }
 
@@ -107,10 +105,7 @@ class ObstacleNode {
     std::string why = qn.norm() < 1e-6 ? "zero orientation quaternion" : "";
     if (why.empty()) why = monitor_.setBasePose(receiptTime(msg.header.stamp), Eigen::Vector3d(p.position.x, p.position.y, yaw));
     if (!why.empty()) ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "ehc_obstacle_node: odometry rejected: " << why);
-    if (lockstep_) {
-      odom_stamp_ = msg.header.stamp;
-      tryLockstepCycle();
-    }
+    if (lockstep_) lockstepCycle(cycle_.odometry(static_cast<StampNs>(msg.header.stamp.toNSec())));
   }
 
   void onExclusion(const ehc_msgs::ObstacleExclusion& msg) {
@@ -217,8 +212,7 @@ class ObstacleNode {
   ros::Timer timer_;
   ehc_msgs::LockstepAck ack_;
   bool lockstep_ = false;
-  RateLimiter publish_limiter_;  ///< lock-step: publish_rate_hz on the states' stamps
-  ros::Time joints_stamp_, odom_stamp_;
+  ObstacleLockstepCycle cycle_;  ///< lock-step: when a state is complete and its distances due
   /// Lock-step: clouds and exclusion lists, taken at the first state after their stamp.
   ehc_msgs::StampedInbox inbox_;
   static constexpr int kExclusionSource = 0, kCloudSource = 1;
