@@ -144,5 +144,24 @@ TEST(PinholeCamera, ValidationAndCameraInfoConversion) {
   EXPECT_NO_THROW(c.validate());
 }
 
+TEST(PinholeCamera, SameIntrinsicsComparesSizeAndIntrinsicsOnly) {
+  const PinholeCamera a;
+  PinholeCamera b = a;
+  b.name = "other";
+  b.distortion_model = "equidistant";
+  b.distortion = Eigen::VectorXd::Ones(4);
+  b.min_depth = 0.5;
+  EXPECT_TRUE(a.sameIntrinsics(b));  // what a projection uses is the same
+  for (void (*edit)(PinholeCamera&) :
+       {+[](PinholeCamera& c) { c.width = 641; }, +[](PinholeCamera& c) { c.height = 479; },
+        +[](PinholeCamera& c) { c.fx += 1e-9; }, +[](PinholeCamera& c) { c.fy += 1e-9; },
+        +[](PinholeCamera& c) { c.cx += 1e-9; }, +[](PinholeCamera& c) { c.cy += 1e-9; }}) {
+    PinholeCamera c = a;
+    edit(c);
+    EXPECT_FALSE(a.sameIntrinsics(c));
+    EXPECT_FALSE(c.sameIntrinsics(a));
+  }
+}
+
 }  // namespace
 }  // namespace ehc_control

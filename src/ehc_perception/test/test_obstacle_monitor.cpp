@@ -2,7 +2,9 @@
 // while the joint state or odometry is missing, stale or rejected; the distances carry the
 // newest state stamp; exclusion lists expire; cloud insertions are rate-limited; the robot's own
 // points are removed only with a fresh state; the work per cloud is bounded (voxel decimation,
-// point budget) for a full 640x480 D435 frame. Times are plain numbers: nothing is timed.
+// point budget) for a full 640x480 D435 frame. ObstacleLockstepCycle: in lock-step a state is
+// the joint state and odometry of one stamp, its distances due at publish_rate_hz of the stamps.
+// Times are plain numbers: nothing is timed.
 
 #include "ehc_common/config_node.h"
 #include "ehc_perception/obstacle_monitor.h"
@@ -207,3 +209,64 @@ TEST(ObstacleMonitor, AQueuedCloudIsRayCastInBoundedChunksPerUpdate) {
   EXPECT_EQ(q2.replaced, q.queued - budget);
   EXPECT_THROW(r.monitor.queueCloud(2.0, frame, Eigen::Vector3d(std::nan(""), 0.0, 1.0)), std::invalid_argument);
 }
+
+namespace {
+
+constexpr StampNs kMs = 1000000;
+
+TEST(ObstacleLockstepCycle, AStateIsCompleteOnceJointsAndOdometryOfOneStampAreIn) {
+  ObstacleLockstepCycle c(50.0);
+  EXPECT_FALSE(c.jointState(1000 * kMs));
+  EXPECT_FALSE(c.odometry(980 * kMs));  // another stamp: not a pair
+  auto s = c.odometry(1000 * kMs);
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->stamp, 1000 * kMs);
+  EXPECT_TRUE(s->publish);  // the first state publishes
+  // Odometry first works too.
+  EXPECT_FALSE(c.odometry(1020 * kMs));
+  s = c.jointState(1020 * kMs);
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->stamp, 1020 * kMs);
+  // A zero stamp never completes a state.
+  ObstacleLockstepCycle z(50.0);
+  EXPECT_FALSE(z.jointState(0));
+  EXPECT_FALSE(z.odometry(0));
+}
+
+TEST(ObstacleLockstepCycle, EachJointStateCompletesAtMostOneState) {
+  ObstacleLockstepCycle c(50.0);
+  c.jointState(1000 * kMs);
+  ASSERT_TRUE(c.odometry(1000 * kMs));
+  EXPECT_FALSE(c.odometry(1000 * kMs));  // a repeated odometry: the joint state was used
+  EXPECT_TRUE(c.jointState(1000 * kMs));  // a repeated joint state pairs with the odometry again
+}
+
+TEST(ObstacleLockstepCycle, DistancesAreDueAtThePublishRateOfTheStamps) {
+  ObstacleLockstepCycle c(50.0);  // every 20 ms of stamps
+  std::vector<StampNs> published;
+  for (StampNs t = 1000 * kMs; t <= 1100 * kMs; t += 6 * kMs) {  // states every 6 ms
+    c.jointState(t);
+    const auto s = c.odometry(t);
+    ASSERT_TRUE(s);
+    if (s->publish) published.push_back(t);
+  }
+  // The first state at least 20 ms after the last published one.
+  EXPECT_EQ(published, (std::vector<StampNs>{1000 * kMs, 1024 * kMs, 1048 * kMs, 1072 * kMs, 1096 * kMs}));
+}
+
+TEST(ObstacleLockstepCycle, AStateStampedBeforeThePreviousOneRestartsTheRate) {
+  ObstacleLockstepCycle c(50.0);
+  c.jointState(5000 * kMs);
+  EXPECT_TRUE(c.odometry(5000 * kMs)->publish);
+  c.jointState(5010 * kMs);
+  EXPECT_FALSE(c.odometry(5010 * kMs)->publish);  // 10 ms after the last published
+  // Simulator reset: 5005 ms is before the previous state (5010) though 5 ms after the last
+  // published one; the rate restarts, so it publishes.
+  c.jointState(5005 * kMs);
+  EXPECT_TRUE(c.odometry(5005 * kMs)->publish);
+  c.jointState(5015 * kMs);
+  EXPECT_FALSE(c.odometry(5015 * kMs)->publish);
+  EXPECT_THROW(ObstacleLockstepCycle(0.0), std::invalid_argument);
+}
+
+}  // namespace

@@ -20,6 +20,7 @@
 #include "ehc_msgs/ControllerStatus.h"
 #include "ehc_msgs/GraspCandidates.h"
 #include "ehc_msgs/ObstacleExclusion.h"
+#include "ehc_control/camera_info_msg.h"
 #include "ehc_common/config_node.h"
 #include "ehc_control/robot_config.h"
 #include "ehc_msgs/SimStatus.h"
@@ -241,11 +242,7 @@ class SequencerNode {
     exclusion_pub_.publish(m);
   }
   void onCameraInfo(const sensor_msgs::CameraInfo& m) {
-    const ehc_control::PinholeCamera c = ehc_control::PinholeCamera::fromCameraInfo(
-        m.header.frame_id, static_cast<int>(m.width), static_cast<int>(m.height),
-        Eigen::Map<const Eigen::Matrix<double, 9, 1>>(m.K.data()), m.distortion_model,
-        Eigen::Map<const Eigen::VectorXd>(m.D.data(), static_cast<Eigen::Index>(m.D.size())));
-    if (!seq_->setCamera(c))
+    if (!seq_->setCamera(ehc_control::cameraFromInfo(m)))
       ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "[ehc_grasp_sequencer_node] invalid camera_info ignored");
   }
   void onSimStatus(const ehc_msgs::SimStatus& m) {

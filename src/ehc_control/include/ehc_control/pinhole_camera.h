@@ -5,8 +5,8 @@
 // an ideal pinhole, i.e. rectified images), projection of a point in the optical frame and the
 // in-image test. Loaded from a ROS camera_info YAML file (camera_calibration format:
 // camera_name, image_width, image_height, camera_matrix, distortion_model,
-// distortion_coefficients); nodes build it from sensor_msgs/CameraInfo with fromCameraInfo().
-// ROS-free.
+// distortion_coefficients); nodes convert it from and to sensor_msgs/CameraInfo with
+// src/nodes/ehc_control/camera_info_msg.h (cameraFromInfo, fillCameraInfo). ROS-free.
 
 #include <Eigen/Core>
 
@@ -35,6 +35,11 @@ struct PinholeCamera {
   /// the depth test passes.
   bool projectsInside(const Eigen::Vector3d& p_camera, Eigen::Vector2d* uv = nullptr) const;
   std::string summary() const;
+  /// Same image size and intrinsics (fx, fy, cx, cy) as `o`: what a projection uses (name and
+  /// distortion are not compared).
+  bool sameIntrinsics(const PinholeCamera& o) const {
+    return width == o.width && height == o.height && fx == o.fx && fy == o.fy && cx == o.cx && cy == o.cy;
+  }
 
   /// The camera of ROS camera_info fields (YAML file or sensor_msgs/CameraInfo): K row-major
   /// [fx 0 cx; 0 fy cy; 0 0 1] (the other entries are not read), distortion model and

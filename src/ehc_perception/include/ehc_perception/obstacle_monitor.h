@@ -8,17 +8,22 @@
 // stops the robot). Times are seconds of one clock: the node passes each input's receipt time
 // on its own ROS clock, never a header stamp (a sender's clock offset must not make a dead state
 // look fresh), as the controller's watchdogs do.
+// ObstacleLockstepCycle (below): when the node publishes in lock-step, on the states' stamps.
 
 #include "ehc_control/robot_config.h"
 #include "ehc_control/whole_body_model.h"
 #include "ehc_perception/obstacle_distance_field.h"
 #include "ehc_perception/rate_limiter.h"
+#include "ehc_perception/stamp.h"
 
 #include <Eigen/Core>
 
 #include <optional>
 #include <string>
 #include <vector>
+
+namespace ehc_common {
+}  // namespace ehc_common
 
 namespace ehc_common {
 class ConfigNode;
@@ -135,6 +140,35 @@ class ObstacleMonitor {
     Eigen::Vector3d origin = Eigen::Vector3d::Zero();
     std::optional<std::vector<Eigen::Isometry3d>> link_poses;  ///< none: no fresh state
   } queue_;
+};
+
+/// ehc_obstacle_node in lock-step (a simulator waits for it; no timer, times are the stamps): a
+/// state is the joint state and the odometry of one stamp t. When the second of the pair comes
+/// in, the state is complete: the node takes the clouds and exclusion lists stamped before t,
+/// publishes the distances at t if `publish` (due: publish_rate_hz on the states' stamps,
+/// RateLimiter; a state stamped before the previous one, a simulator reset, restarts the rate),
+/// then acknowledges t. A zero stamp never completes a state. A joint state completes at most one
+/// state: a second odometry of the same stamp does not complete another, a second joint state
+/// does. ROS-free; stamps in ns (stamp.h).
+class ObstacleLockstepCycle {
+ public:
+  /// Throws std::invalid_argument "[ObstacleLockstepCycle] ..." unless publish_rate_hz > 0.
+  explicit ObstacleLockstepCycle(double publish_rate_hz);
+  struct State {
+    StampNs stamp = 0;
+    bool publish = false;  ///< the distances at `stamp` are due
+  };
+  /// A joint state stamped `stamp` was accepted or not (the pair completes either way); the
+  /// completed state, if this completes one.
+  std::optional<State> jointState(StampNs stamp);
+  /// An odometry stamped `stamp`; as jointState.
+  std::optional<State> odometry(StampNs stamp);
+
+ private:
+  std::optional<State> complete();
+  RateLimiter publish_limiter_;
+  StampNs joints_ = 0, odom_ = 0;  ///< the pending pair's stamps
+  StampNs last_ = 0;               ///< the last completed state's stamp
 };
 
 }  // namespace ehc_perception

@@ -181,4 +181,31 @@ ObstacleReport ObstacleMonitor::update(double now) {
   return r;
 }
 
+ObstacleLockstepCycle::ObstacleLockstepCycle(double publish_rate_hz) : publish_limiter_(publish_rate_hz) {
+  if (!(std::isfinite(publish_rate_hz) && publish_rate_hz > 0.0))
+    throw std::invalid_argument("[ObstacleLockstepCycle] publish_rate_hz " + std::to_string(publish_rate_hz) +
+                                " must be finite and > 0");
+}
+
+std::optional<ObstacleLockstepCycle::State> ObstacleLockstepCycle::jointState(StampNs stamp) {
+  joints_ = stamp;
+  return complete();
+}
+
+std::optional<ObstacleLockstepCycle::State> ObstacleLockstepCycle::odometry(StampNs stamp) {
+  odom_ = stamp;
+  return complete();
+}
+
+std::optional<ObstacleLockstepCycle::State> ObstacleLockstepCycle::complete() {
+  if (joints_ == 0 || joints_ != odom_) return std::nullopt;
+  State s;
+  s.stamp = joints_;
+  joints_ = 0;
+  if (last_ != 0 && s.stamp < last_) publish_limiter_.reset();  // simulator reset
+  last_ = s.stamp;
+  s.publish = publish_limiter_.accept(stampSeconds(s.stamp));
+  return s;
+}
+
 }  // namespace ehc_perception

@@ -1,5 +1,6 @@
 // ehc_grasp_node: depth cloud -> grasp candidates on /ehc/grasp_candidates.
 //   rosrun ehc_perception ehc_grasp_node _config:=config/perception/grasp_node.yaml
+// Its parameters: ehc_perception::GraspNodeConfig (node_config.h).
 // Each processed cloud (at most max_rate_hz) is transformed into the world frame (tf2 at the
 // cloud stamp), the support plane removed and the objects clustered; grasps are generated
 // for the object nearest the latest /ehc/target_pose (or every object without a fresh
@@ -14,17 +15,18 @@
 // lock-step no later transform comes until the cloud is acknowledged: the simulator stalled.
 // Time is the clouds' and the target's stamps (the rate limit, the target's age), so which
 // cloud is processed with which target does not depend on when messages arrive; the target
-// used for a cloud is the newest one stamped before it (in lock-step every target published
-// before the cloud is taken first, ehc_common::PollPassBarrier; one that still comes after the
-// cloud that should have used it is logged). With _ack_topic:=<topic> every cloud
-// received is acknowledged there exactly once, whatever came of it (processed and its
-// candidates published, skipped by the rate limit, or dropped with a logged reason): a
-// lock-step simulator's acknowledgement gate (ehc_common::LockstepAck, demo.sh).
+// used for a cloud is the newest one stamped before it (ehc_perception::GraspTargetHistory; in
+// lock-step every target published before the cloud is taken first, ehc_common::PollPassBarrier;
+// one that still comes after the cloud that should have used it is logged). With
+// _ack_topic:=<topic> every cloud received is acknowledged there exactly once, whatever came
+// of it (processed and its candidates published, skipped by the rate limit, or dropped with a
+// logged reason): a lock-step simulator's acknowledgement gate (ehc_common::LockstepAck, demo.sh).
 #include "ehc_msgs/GraspCandidates.h"
 #include "ehc_common/logging.h"
 #include "ehc_common/lockstep_ack.h"
-#include "ehc_common/config_node.h"
 #include "ehc_perception/grasp_generator.h"
+#include "ehc_perception/grasp_target_history.h"
+#include "ehc_perception/node_config.h"
 #include "ehc_perception/rate_limiter.h"
 #include "ros_conversions.h"
 
@@ -33,50 +35,13 @@
 #include <ros/ros.h>
 #include <tf2_ros/transform_listener.h>
 
-#include <deque>
-#include <utility>
+#include <optional>
 
 namespace {
 
 using namespace ehc_perception;
 
 using ehc_common::kLogThrottle;
-
-struct GraspNodeConfig {
-  std::string cloud_topic = "/camera/depth/points";
-  std::string target_topic = "/ehc/target_pose";  ///< "" = no target: every object
-  std::string output_topic = "/ehc/grasp_candidates";
-  std::string world_frame = "odom";
-  GraspTargetingParams targeting;  ///< max rate, target timeout and gate
-  double tf_timeout = 0.1;       ///< wall s a cloud waits for its camera pose (lock-step: kTfWallWait)
-  int cloud_queue = 3;           ///< clouds waiting to be processed (the oldest is dropped)
-  GraspGeneratorConfig generator;
-
-  std::string summary() const {
-    return "ehc_grasp_node: " + cloud_topic + " -> " + output_topic + " in '" + world_frame +
-           "', target " + (target_topic.empty() ? std::string("<none>") : target_topic) + ", " +
-           targeting.summary() + ", " + std::to_string(cloud_queue) + " clouds queued, camera pose waited for " + std::to_string(tf_timeout) + " wall s\n  " +
-           generator.summary();
-  }
-};
-
-GraspNodeConfig loadGraspNodeConfig(const std::string& path) {
-  const auto root = ehc_common::ConfigNode::loadFile(path, "GraspNode");
-  GraspNodeConfig c;
-  const auto n = root.childOrEmpty("node");
-  c.cloud_topic = n.get("cloud_topic", c.cloud_topic);
-  c.target_topic = n.get("target_topic", c.target_topic);
-  c.output_topic = n.get("output_topic", c.output_topic);
-  c.world_frame = n.get("world_frame", c.world_frame);
-  c.targeting = loadGraspTargetingParams(n);
-  c.tf_timeout = n.get("tf_timeout", c.tf_timeout);
-  ehc_common::requireRange("GraspNode", "node.tf_timeout", c.tf_timeout, 0.0, 5.0);
-  c.cloud_queue = n.get("cloud_queue", c.cloud_queue);
-  ehc_common::requireRange("GraspNode", "node.cloud_queue", c.cloud_queue, 1, 100);
-  c.generator = loadGraspGeneratorConfig(root.childOrEmpty("grasp_generator"));
-  root.rejectUnknownKeys();  // a key no loader read is a misspelling
-  return c;
-}
 
 class GraspNode {
  public:
@@ -85,8 +50,8 @@ class GraspNode {
         gen_(cfg.generator),
         listener_(tf_),
         limiter_(cfg.targeting.max_rate_hz),
-        ack_(pnh, cfg.target_topic.empty() ? std::vector<std::string>{cfg.cloud_topic, "/tf"}
-                                            : std::vector<std::string>{cfg.cloud_topic, cfg.target_topic, "/tf"}) {
+        targets_(cfg.targeting.target_timeout, kMaxTargets),
+        ack_(pnh, cfg.lockstepInputs()) {
     pub_ = nh.advertise<ehc_msgs::GraspCandidates>(cfg_.output_topic, 2);
     lockstep_ = !ack_.topic().empty();
     const ros::TransportHints fast = ros::TransportHints().tcpNoDelay();  // no Nagle delay (lock-step order)
@@ -104,20 +69,19 @@ class GraspNode {
  private:
   void onTarget(const geometry_msgs::PoseStamped& msg) {
     const Eigen::Vector3d p(msg.pose.position.x, msg.pose.position.y, msg.pose.position.z);
-    if (!p.allFinite() || msg.header.frame_id != cfg_.world_frame) {
+    const GraspTargetHistory::Added added = msg.header.frame_id != cfg_.world_frame
+                                                ? GraspTargetHistory::Added::Rejected
+                                                : targets_.add(stampNs(msg.header.stamp), p);
+    if (added == GraspTargetHistory::Added::Rejected)
       ROS_ERROR_THROTTLE(kLogThrottle, "ehc_grasp_node: target ignored (non-finite or frame '%s' != '%s')",
                          msg.header.frame_id.c_str(), cfg_.world_frame.c_str());
-      return;
-    }
-    // Kept in stamp order (a target stamped before an older one is dropped); a clock that
-    // jumped back (simulator reset) starts the list again.
-    if (!targets_.empty() && msg.header.stamp < targets_.back().first) targets_.clear();
-    else if (msg.header.stamp < last_cloud_ && msg.header.stamp > last_cloud_target_)
+    else if (added == GraspTargetHistory::Added::Late)
       ROS_WARN_STREAM_THROTTLE(kLogThrottle, "ehc_grasp_node: target at " << msg.header.stamp << " came after the cloud at "
-                                                << last_cloud_ << ", which used an older one (receipt order)");
-    targets_.emplace_back(msg.header.stamp, p);
-    if (targets_.size() > kMaxTargets) targets_.pop_front();
+                                                << ros::Time().fromNSec(static_cast<std::uint64_t>(targets_.lastCloud()))
+                                                << ", which used an older one (receipt order)");
   }
+
+  static StampNs stampNs(const ros::Time& t) { return static_cast<StampNs>(t.toNSec()); }
 
   /// Every cloud: processed, skipped or dropped (reason logged), then acknowledged once.
   /// In lock-step the targets published before the cloud (by the sequencer, before its
@@ -128,19 +92,6 @@ class GraspNode {
     target_queue_.callAvailable();
     process(*cloud);
     ack_.done(cloud->header.stamp);  // after the candidates: the simulator steps on
-  }
-
-  /// The newest target stamped before `stamp` and at most targeting.target_timeout older; null
-  /// if none. Noted for the receipt-order warning (onTarget).
-  const Eigen::Vector3d* targetFor(const ros::Time& stamp) {
-    last_cloud_ = stamp;
-    last_cloud_target_ = ros::Time();
-    for (auto it = targets_.rbegin(); it != targets_.rend(); ++it)
-      if (it->first < stamp) {
-        last_cloud_target_ = it->first;
-        return (stamp - it->first).toSec() <= cfg_.targeting.target_timeout ? &it->second : nullptr;
-      }
-    return nullptr;
   }
 
   void process(const sensor_msgs::PointCloud2& msg) {
@@ -157,7 +108,8 @@ class GraspNode {
           tf_.lookupTransform(cfg_.world_frame, msg.header.frame_id, msg.header.stamp);  // there: waited for above
       const Eigen::Isometry3d T = tf2::transformToEigen(tf);
       const PointList pts = ros_conv::transformPoints(ros_conv::cloudToPoints(msg), T);
-      const GraspResult res = generateForTarget(gen_, pts, T.translation(), targetFor(msg.header.stamp),
+      const std::optional<Eigen::Vector3d> target = targets_.targetFor(stampNs(msg.header.stamp));
+      const GraspResult res = generateForTarget(gen_, pts, T.translation(), target ? &*target : nullptr,
                                                 cfg_.targeting.target_gate);
       ehc_msgs::GraspCandidates out;
       out.header.stamp = msg.header.stamp;
@@ -183,10 +135,9 @@ class GraspNode {
   ros::CallbackQueue target_queue_;  ///< the target subscription's, run when a cloud comes (outlives it)
   ros::Subscriber cloud_sub_, target_sub_;
   RateLimiter limiter_;  ///< targeting.max_rate_hz on the clouds' stamps
-  static constexpr std::size_t kMaxTargets = 200;  ///< targets kept (the sequencer sends one per cycle)
-  std::deque<std::pair<ros::Time, Eigen::Vector3d>> targets_;  ///< by stamp, newest last
+  static constexpr std::size_t kMaxTargets = GraspTargetHistory::kDefaultCapacity;  ///< also the target queue
+  GraspTargetHistory targets_;  ///< which target serves which cloud, on their stamps
   ehc_common::PollPassBarrier poll_pass_;
-  ros::Time last_cloud_, last_cloud_target_;  ///< the last processed cloud's stamp and its target's
   ehc_common::LockstepAck ack_;
   bool lockstep_ = false;  ///< _ack_topic set: the simulator waits for this node
   static constexpr double kTfWallWait = 1.0;  ///< lock-step: wall s a cloud's camera pose is waited for

@@ -4,6 +4,7 @@
 // ehc_perception::ObstacleMonitor; this node loads parameters, converts messages (clouds, tf),
 // runs the timer and publishes.
 //   rosrun ehc_perception ehc_obstacle_node _config:=config/perception/obstacle_node.yaml
+// Its parameters: ehc_perception::ObstacleNodeConfig (node_config.h).
 // Clouds (at most max_insert_rate_hz) are transformed into the world frame with tf2 at their
 // stamp, bounded (one point per cloud_voxel voxel, then at most max_cloud_points: the work per
 // cloud does not grow with the camera's resolution) and queued with the robot's pose; each
@@ -18,15 +19,16 @@
 // Lock-step (_ack_topic:=<topic>, demo.sh; ehc_common::LockstepAck): no timer; each state (the
 // /joint_states + /odom pair of one stamp t) first takes the clouds and exclusion lists stamped
 // before t (in stamp order, whenever they arrived), then publishes the distances at t when due
-// (publish_rate_hz on the stamps), then acknowledges t; times are the stamps. So the distances
-// do not depend on when messages arrive, and the simulator steps on only once they are out.
+// (publish_rate_hz on the stamps; ehc_perception::ObstacleLockstepCycle), then acknowledges t;
+// times are the stamps. So the distances do not depend on when messages arrive, and the
+// simulator steps on only once they are out.
 #include "ehc_msgs/ObstacleArray.h"
 #include "ehc_msgs/ObstacleExclusion.h"
 #include "ehc_common/logging.h"
 #include "ehc_common/lockstep_ack.h"
-#include "ehc_common/config_node.h"
+#include "ehc_control/robot_config.h"
+#include "ehc_perception/node_config.h"
 #include "ehc_perception/obstacle_monitor.h"
-#include "ehc_perception/rate_limiter.h"
 #include "ros_conversions.h"
 
 #include <nav_msgs/Odometry.h>
@@ -37,6 +39,7 @@
 #include <cmath>
 #include <functional>
 #include <memory>
+#include <optional>
 
 namespace {
 
@@ -44,57 +47,14 @@ using namespace ehc_perception;
 
 using ehc_common::kLogThrottle;
 
-struct ObstacleNodeConfig {
-  std::string robot_config;  ///< robot.yaml (relative paths: to this file's folder)
-  std::string cloud_topic = "/camera/depth/points";
-  std::string joint_states_topic = "/joint_states";
-  std::string odom_topic = "/odom";
-  std::string output_topic = "/ehc/obstacles";
-  std::string exclusion_topic = "/ehc/obstacle_exclusion";  ///< "" = no exclusions
-  std::string world_frame = "odom";
-  double publish_rate_hz = 50.0;
-  double tf_timeout = 0.05;    ///< s
-  ObstacleMonitorParams monitor;  ///< state / exclusion timeouts, insert rate
-  ObstacleMapConfig map;
-
-  std::string summary() const {
-    return "ehc_obstacle_node: robot " + robot_config + ", " + cloud_topic + " + " + joint_states_topic +
-           " + " + odom_topic + " -> " + output_topic + " at " + std::to_string(publish_rate_hz) +
-           " Hz in '" + world_frame + "', exclusions " +
-           (exclusion_topic.empty() ? std::string("off") : exclusion_topic) + "\n  " + monitor.summary() +
-           "\n  " + map.summary();
-  }
-};
-
-ObstacleNodeConfig loadObstacleNodeConfig(const std::string& path) {
-  const auto root = ehc_common::ConfigNode::loadFile(path, "ObstacleNode");
-  ObstacleNodeConfig c;
-  const auto n = root.child("node");
-  c.robot_config = ehc_control::robotFileField(n, "robot_config");  // a robot name or a robot.yaml path
-  c.cloud_topic = n.get("cloud_topic", c.cloud_topic);
-  c.joint_states_topic = n.get("joint_states_topic", c.joint_states_topic);
-  c.odom_topic = n.get("odom_topic", c.odom_topic);
-  c.output_topic = n.get("output_topic", c.output_topic);
-  c.exclusion_topic = n.get("exclusion_topic", c.exclusion_topic);
-  c.world_frame = n.get("world_frame", c.world_frame);
-  c.publish_rate_hz = n.get("publish_rate_hz", c.publish_rate_hz);
-  c.tf_timeout = n.get("tf_timeout", c.tf_timeout);
-  ehc_common::requireRange("ObstacleNode", "node.publish_rate_hz", c.publish_rate_hz, 0.1, 1000.0);
-  ehc_common::requireRange("ObstacleNode", "node.tf_timeout", c.tf_timeout, 0.0, 5.0);
-  c.monitor = loadObstacleMonitorParams(n);
-  c.map = loadObstacleMapConfig(root.childOrEmpty("obstacle_map"));
-  root.rejectUnknownKeys();  // a key no loader read is a misspelling
-  return c;
-}
-
 class ObstacleNode {
  public:
   ObstacleNode(ros::NodeHandle& nh, const ros::NodeHandle& pnh, const ObstacleNodeConfig& cfg)
       : cfg_(cfg),
         monitor_(ehc_control::loadRobotConfig(cfg.robot_config), cfg.map, cfg.monitor),
         listener_(tf_),
-        ack_(pnh, lockstepInputs(cfg)),
-        publish_limiter_(cfg.publish_rate_hz) {
+        ack_(pnh, cfg.lockstepInputs()),
+        cycle_(cfg.publish_rate_hz) {
     ROS_INFO_STREAM("  " << monitor_.field().summary());
     pub_ = nh.advertise<ehc_msgs::ObstacleArray>(cfg_.output_topic, 5);
     lockstep_ = !ack_.topic().empty();
@@ -120,31 +80,21 @@ class ObstacleNode {
   /// In lock-step the stamp (the simulator's time, which stands still until this node is done).
   double receiptTime(const ros::Time& stamp) const { return lockstep_ ? stamp.toSec() : ros::Time::now().toSec(); }
 
-  /// The inputs the node needs before it takes part in a lock-step (ehc_common::LockstepAck).
-  static std::vector<std::string> lockstepInputs(const ObstacleNodeConfig& c) {
-    std::vector<std::string> in{c.cloud_topic, c.joint_states_topic, c.odom_topic, "/tf"};
-    if (!c.exclusion_topic.empty()) in.push_back(c.exclusion_topic);
-    return in;
-  }
-
   void onJoints(const sensor_msgs::JointState& msg) {
     const std::string why = monitor_.setJointState(receiptTime(msg.header.stamp), msg.name, msg.position);
     if (!why.empty()) ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "ehc_obstacle_node: /joint_states rejected: " << why);
-    if (lockstep_) {
-      joints_stamp_ = msg.header.stamp;
-      tryLockstepCycle();
-    }
+    if (lockstep_) lockstepCycle(cycle_.jointState(static_cast<StampNs>(msg.header.stamp.toNSec())));
   }
 
-  /// Lock-step: once /joint_states and /odom of one stamp t are in, the clouds and exclusion
-  /// lists stamped before t, the distances at t (when due), then the acknowledgement of t.
-  void tryLockstepCycle() {
-    if (joints_stamp_.isZero() || joints_stamp_ != odom_stamp_) return;
-    const ros::Time t = joints_stamp_;
-    joints_stamp_ = ros::Time();
-    if (!inbox_.last().isZero() && t < inbox_.last()) publish_limiter_.reset();  // simulator reset
+  /// Lock-step, a state at t complete (/joint_states and /odom of one stamp): the clouds and
+  /// exclusion lists stamped before t, the distances at t (when due), then the acknowledgement
+  /// of t.
+  void lockstepCycle(const std::optional<ObstacleLockstepCycle::State>& state) {
+    if (!state) return;
+    ros::Time t;
+    t.fromNSec(static_cast<std::uint64_t>(state->stamp));
     inbox_.takeBefore(t, kMaxCloudWait);  // a cloud without its camera pose yet waits for the next state
-    if (publish_limiter_.accept(t.toSec())) publishDistances(t.toSec());
+    if (state->publish) publishDistances(t.toSec());
     ack_.done(t);
   }
 
@@ -156,10 +106,7 @@ class ObstacleNode {
     std::string why = qn.norm() < 1e-6 ? "zero orientation quaternion" : "";
     if (why.empty()) why = monitor_.setBasePose(receiptTime(msg.header.stamp), Eigen::Vector3d(p.position.x, p.position.y, yaw));
     if (!why.empty()) ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "ehc_obstacle_node: odometry rejected: " << why);
-    if (lockstep_) {
-      odom_stamp_ = msg.header.stamp;
-      tryLockstepCycle();
-    }
+    if (lockstep_) lockstepCycle(cycle_.odometry(static_cast<StampNs>(msg.header.stamp.toNSec())));
   }
 
   void onExclusion(const ehc_msgs::ObstacleExclusion& msg) {
@@ -266,8 +213,7 @@ class ObstacleNode {
   ros::Timer timer_;
   ehc_common::LockstepAck ack_;
   bool lockstep_ = false;
-  RateLimiter publish_limiter_;  ///< lock-step: publish_rate_hz on the states' stamps
-  ros::Time joints_stamp_, odom_stamp_;
+  ObstacleLockstepCycle cycle_;  ///< lock-step: when a state is complete and its distances due
   /// Lock-step: clouds and exclusion lists, taken at the first state after their stamp.
   ehc_common::StampedInbox inbox_;
   static constexpr int kExclusionSource = 0, kCloudSource = 1;

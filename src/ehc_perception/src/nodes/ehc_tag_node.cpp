@@ -1,5 +1,6 @@
 // ehc_tag_node: camera image + camera_info -> AprilTag target pose on /ehc/target_pose.
 //   rosrun ehc_perception ehc_tag_node _config:=config/perception/tag_node.yaml
+// Its parameters: ehc_perception::TagNodeConfig (node_config.h).
 // The pose of the configured tag, with its grasp offset, is transformed into the world frame
 // (odom) with tf2 at the image time stamp and published as geometry_msgs/PoseStamped. Nothing
 // is published for an image without the target (the controller's watchdog handles that).
@@ -13,8 +14,9 @@
 // With _ack_topic:=<topic> every image is acknowledged there once done with (after its pose is
 // published): a lock-step simulator's acknowledgement gate (ehc_common::LockstepAck, demo.sh).
 #include "ehc_common/logging.h"
-#include "ehc_common/config_node.h"
+#include "ehc_control/camera_info_msg.h"
 #include "ehc_common/lockstep_ack.h"
+#include "ehc_perception/node_config.h"
 #include "ehc_perception/tag_detector.h"
 #include "ros_conversions.h"
 
@@ -31,64 +33,12 @@ using ehc_control::PinholeCamera;
 
 using ehc_common::kLogThrottle;
 
-struct TagNodeConfig {
-  std::string image_topic = "/camera/color/image_raw";
-  std::string camera_info_topic = "/camera/color/camera_info";
-  std::string target_topic = "/ehc/target_pose";
-  std::string world_frame = "odom";
-  std::string camera_frame;  ///< "" = the image's header.frame_id
-  std::string camera_file;   ///< optional camera_info YAML; "" = use the camera_info topic
-  double tf_timeout = 0.05;  ///< wall s an image waits for its camera pose (lock-step: kTfWallWait)
-  int image_queue = 5;       ///< images queued for processing (the oldest is dropped)
-  TagDetectorConfig detector;
-  TagTargetConfig target;
-
-  std::string summary() const {
-    return "ehc_tag_node: image " + image_topic + ", camera_info " +
-           (camera_file.empty() ? camera_info_topic : camera_file) + " -> " + target_topic +
-           " in '" + world_frame + "' (camera frame '" +
-           (camera_frame.empty() ? "<image header>" : camera_frame) + "', tf timeout " +
-           std::to_string(tf_timeout) + " wall s, " + std::to_string(image_queue) +
-           " images queued" +
-           ")\n  " + detector.summary() + "\n  " + target.summary();
-  }
-};
-
-TagNodeConfig loadTagNodeConfig(const std::string& path) {
-  const auto root = ehc_common::ConfigNode::loadFile(path, "TagNode");
-  TagNodeConfig c;
-  const auto n = root.childOrEmpty("node");
-  c.image_topic = n.get("image_topic", c.image_topic);
-  c.camera_info_topic = n.get("camera_info_topic", c.camera_info_topic);
-  c.target_topic = n.get("target_topic", c.target_topic);
-  c.world_frame = n.get("world_frame", c.world_frame);
-  c.camera_frame = n.get("camera_frame", c.camera_frame);
-  c.camera_file = n.get("camera_file", c.camera_file);
-  if (!c.camera_file.empty()) c.camera_file = root.resolvePath(c.camera_file);
-  c.tf_timeout = n.get("tf_timeout", c.tf_timeout);
-  ehc_common::requireRange("TagNode", "node.tf_timeout", c.tf_timeout, 0.0, 5.0);
-  c.image_queue = n.get("image_queue", c.image_queue);
-  ehc_common::requireRange("TagNode", "node.image_queue", c.image_queue, 1, 100);
-  if (c.world_frame.empty()) n.fail("world_frame", "must not be empty");
-  c.detector = loadTagDetectorConfig(root.childOrEmpty("tag_detector"));
-  c.target = loadTagTargetConfig(root.childOrEmpty("target"));
-  root.rejectUnknownKeys();  // a key no loader read is a misspelling
-  return c;
-}
-
-/// The inputs the node needs before it takes part in a lock-step (ehc_common::LockstepAck).
-std::vector<std::string> lockstepInputs(const TagNodeConfig& c) {
-  std::vector<std::string> in{c.image_topic, "/tf"};
-  if (c.camera_file.empty()) in.push_back(c.camera_info_topic);
-  return in;
-}
-
 class TagNode {
  public:
   TagNode(ros::NodeHandle& nh, const ros::NodeHandle& pnh, const TagNodeConfig& cfg)
       : cfg_(cfg),
         listener_(tf_),
-        ack_(pnh, lockstepInputs(cfg)) {
+        ack_(pnh, cfg.lockstepInputs()) {
     if (!cfg_.camera_file.empty()) build(ehc_control::loadPinholeCamera(cfg_.camera_file));
     pub_ = nh.advertise<geometry_msgs::PoseStamped>(cfg_.target_topic, 10);
     lockstep_ = !ack_.topic().empty();
@@ -111,13 +61,9 @@ class TagNode {
 
   void onInfo(const sensor_msgs::CameraInfo& msg) {
     try {
-      const PinholeCamera cam = ros_conv::cameraInfoToCamera(msg);
-      if (detector_) {
-        const PinholeCamera& old = detector_->camera();
-        if (old.width == cam.width && old.height == cam.height && old.fx == cam.fx &&
-            old.fy == cam.fy && old.cx == cam.cx && old.cy == cam.cy)
-          return;
-      }
+      const PinholeCamera cam = ehc_control::cameraFromInfo(msg);
+      cam.validate();
+      if (detector_ && detector_->camera().sameIntrinsics(cam)) return;
       build(cam);
     } catch (const std::exception& e) {
       ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "ehc_tag_node: bad camera_info: " << e.what());

@@ -1,13 +1,12 @@
 #pragma once
 // Message <-> core conversions shared by the perception nodes (node side only: roscpp types).
+// CameraInfo <-> PinholeCamera: ehc_control/camera_info_msg.h (every package's nodes).
 
-#include "ehc_control/pinhole_camera.h"
 #include "ehc_perception/grasp_generator.h"
 #include "ehc_perception/point_cloud_layout.h"
 
 #include <geometry_msgs/Pose.h>
 #include <geometry_msgs/TransformStamped.h>
-#include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <sensor_msgs/image_encodings.h>
@@ -50,16 +49,6 @@ inline void imageToGray(const sensor_msgs::Image& msg, vpImage<unsigned char>* o
       vpImageConvert::BGRaToGrey(const_cast<unsigned char*>(row), dst, msg.width, 1, false);
     }
   }
-}
-
-/// sensor_msgs/CameraInfo to a validated camera (K; distortion kept for information).
-inline ehc_control::PinholeCamera cameraInfoToCamera(const sensor_msgs::CameraInfo& msg) {
-  const ehc_control::PinholeCamera c = ehc_control::PinholeCamera::fromCameraInfo(
-      msg.header.frame_id, static_cast<int>(msg.width), static_cast<int>(msg.height),
-      Eigen::Map<const Eigen::Matrix<double, 9, 1>>(msg.K.data()), msg.distortion_model,
-      Eigen::Map<const Eigen::VectorXd>(msg.D.data(), static_cast<Eigen::Index>(msg.D.size())));
-  c.validate();
-  return c;
 }
 
 /// The finite x, y, z points of a PointCloud2: the message's layout is copied into a

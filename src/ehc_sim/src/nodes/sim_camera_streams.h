@@ -65,7 +65,7 @@ class SimCameraStreams {
       sensor_msgs::Image img;
       fillImage(image_, frame_, stamp, &img);
       sensor_msgs::CameraInfo info;
-      fillCameraInfo(camera_.intrinsics(), frame_, stamp, &info);
+      ehc_control::fillCameraInfo(camera_.intrinsics(), frame_, stamp, &info);  // an ideal pinhole
       if (before_publish) before_publish(AckStream::Image, static_cast<std::int64_t>(stamp.toNSec()));
       image_pub_.publish(img);
       info_pub_.publish(info);

@@ -3,6 +3,7 @@
 // by bench_sim): KinematicFakeRobot / SimWorld state -> sensor_msgs / nav_msgs / tf / ehc_msgs
 // messages. Header-only, no logic beyond copying.
 
+#include "ehc_control/camera_info_msg.h"  // fillCameraInfo (the camera streams)
 #include "ehc_msgs/SimObjectPoses.h"
 #include "ehc_msgs/SimStatus.h"
 #include "ehc_sim/command_gate.h"
@@ -12,7 +13,6 @@
 #include <geometry_msgs/TransformStamped.h>
 #include <nav_msgs/Odometry.h>
 #include <rosgraph_msgs/Clock.h>
-#include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/JointState.h>
 #include <sensor_msgs/PointCloud2.h>
@@ -139,20 +139,6 @@ inline void fillImage(const vpImage<unsigned char>& I, const std::string& frame,
   m->step = I.getWidth();
   m->data.resize(I.getSize());
   std::memcpy(m->data.data(), I.bitmap, I.getSize());
-}
-
-/// The simulated camera renders an ideal pinhole: zero plumb_bob distortion whatever `k` carries.
-inline void fillCameraInfo(const ehc_control::PinholeCamera& k, const std::string& frame, const ros::Time& stamp,
-                           sensor_msgs::CameraInfo* m) {
-  m->header.stamp = stamp;
-  m->header.frame_id = frame;
-  m->width = static_cast<uint32_t>(k.width);
-  m->height = static_cast<uint32_t>(k.height);
-  m->distortion_model = "plumb_bob";
-  m->D.assign(5, 0.0);
-  m->K = {k.fx, 0, k.cx, 0, k.fy, k.cy, 0, 0, 1};
-  m->R = {1, 0, 0, 0, 1, 0, 0, 0, 1};
-  m->P = {k.fx, 0, k.cx, 0, 0, k.fy, k.cy, 0, 0, 0, 1, 0};
 }
 
 inline void fillCloud(const std::vector<Eigen::Vector3f>& pts, const std::string& frame,
