@@ -2,6 +2,7 @@
 
 #include "ehc_control/config_node.h"
 #include "ehc_control/control_status.h"
+#include "ehc_control/geometry.h"
 
 #include <algorithm>
 #include <array>
@@ -327,7 +328,7 @@ bool GraspSequencer::within(const SequencerInput& in, const Eigen::Isometry3d& g
                             double ori_deg) const {
   if (!in.tcp || !isValidPose(*in.tcp)) return false;
   return (in.tcp->translation() - goal.translation()).norm() <= pos &&
-         rotationAngle(in.tcp->linear(), goal.linear()) <= ori_deg * M_PI / 180.0;
+         ehc_control::rotationAngle(in.tcp->linear(), goal.linear()) <= ori_deg * M_PI / 180.0;
 }
 
 std::optional<GraspChoice> GraspSequencer::currentChoice(const SequencerInput& in) const {

@@ -2,6 +2,7 @@
 #include "ehc_perception/grasp_generator.h"
 
 #include "ehc_control/config_node.h"
+#include "ehc_control/geometry.h"
 
 #include <Eigen/Eigenvalues>
 #include <pcl/common/centroid.h>
@@ -431,11 +432,6 @@ std::string num(double v) {
   std::ostringstream os;
   os << v;
   return os.str();
-}
-
-double rotationAngle(const Eigen::Matrix3d& A, const Eigen::Matrix3d& B) {
-  const double c = 0.5 * ((A.transpose() * B).trace() - 1.0);
-  return std::acos(std::max(-1.0, std::min(1.0, c)));
 }
 
 }  // namespace
@@ -879,7 +875,7 @@ GraspResult GraspGenerator::generate(const PointList& object, const Eigen::Vecto
       bool dup = false;
       for (const Candidate& k : out) {
         if ((cd.c - k.c).norm() > cfg.nms_distance) continue;
-        const double ang = std::min(rotationAngle(cd.R, k.R), rotationAngle(cd.R * flip, k.R));
+        const double ang = std::min(ehc_control::rotationAngle(cd.R, k.R), ehc_control::rotationAngle(cd.R * flip, k.R));
         if (ang < cfg.nms_angle_deg * kDeg) {
           dup = true;
           break;
