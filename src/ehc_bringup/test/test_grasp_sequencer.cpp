@@ -1,6 +1,7 @@
 // GraspSequencer + grasp selection (ROS-free): phase order, timeouts, failure paths, bad input.
 #include "ehc_bringup/grasp_sequencer.h"
 #include "ehc_common/config_node.h"
+#include "ehc_control/geometry.h"
 
 #include <gtest/gtest.h>
 
@@ -1009,7 +1010,7 @@ TEST(GraspSelection, ChosenCandidateIsTurnedOntoTheWantedApproachAboutItsCentre)
   p.align_approach = false;
   const auto raw = chooseGrasp({{tilted, 0.05, 0.8}}, ApproachDirection::Downward, tag, tilted.linear(), p);
   ASSERT_TRUE(raw);
-  EXPECT_LT(rotationAngle(raw->pose.linear(), tilted.linear()), 1e-9);
+  EXPECT_LT(ehc_control::rotationAngle(raw->pose.linear(), tilted.linear()), 1e-9);
   // Sideways: onto the horizontal side direction nearest the candidate's own side.
   Eigen::Isometry3d side = Eigen::Isometry3d::Identity();
   side.linear().col(0) = Eigen::Vector3d(0, 0, 1);
@@ -1213,10 +1214,10 @@ TEST(GraspSelection, HalfTurnClosestToTheReferenceForTopGrasps) {
   GraspSelectionParams p;
   const auto a = chooseGrasp({}, ApproachDirection::Tag, tag, flipped, p);
   ASSERT_TRUE(a);
-  EXPECT_LT(rotationAngle(a->pose.linear(), flipped), 1e-9);
+  EXPECT_LT(ehc_control::rotationAngle(a->pose.linear(), flipped), 1e-9);
   EXPECT_TRUE(a->pose.linear().col(2).isApprox(tag.linear().col(2)));  // same approach
   const auto b = chooseGrasp({}, ApproachDirection::Tag, tag, tag.linear(), p);
-  EXPECT_LT(rotationAngle(b->pose.linear(), tag.linear()), 1e-9);
+  EXPECT_LT(ehc_control::rotationAngle(b->pose.linear(), tag.linear()), 1e-9);
 }
 
 TEST(GraspSelection, SideGraspRollKeepsTheCameraUpWhateverTheReference) {

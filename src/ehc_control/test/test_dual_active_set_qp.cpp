@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <memory>
 #include <random>
 #include <sstream>
 #include <string>
@@ -230,4 +231,29 @@ TEST(DualActiveSetQp, InfeasibleAndBadInput) {
   EXPECT_THROW(qp.solve(G, g, none, Eigen::VectorXd(0), C, Eigen::Vector2d::Zero(), &x, 50), std::invalid_argument);
   EXPECT_THROW(qp.solve(G, g, none, Eigen::VectorXd(0), C, Eigen::Vector3d::Zero(), &x, 0), std::invalid_argument);
   EXPECT_EQ(ehc_control::toString(QpSolveResult::IterationLimit), "iteration limit");
+}
+
+// The factory behind the controller's qp_solver parameter: the dual active-set solver by name
+// (the same solution through the QpSolver interface as called directly), an unknown name an
+// error that lists the known ones.
+TEST(QpSolverFactory, MakesTheDualActiveSetSolverAndRejectsUnknownNames) {
+  EXPECT_EQ(ehc_control::qpSolverNames(), std::vector<std::string>{"dual_active_set"});
+  const std::unique_ptr<ehc_control::QpSolver> solver = ehc_control::makeQpSolver("dual_active_set");
+  ASSERT_TRUE(solver);
+  EXPECT_EQ(solver->name(), "dual_active_set");
+  const QpProblem p = loadProblem(kCycling);
+  Eigen::VectorXd through_interface, direct;
+  ASSERT_EQ(solver->solve(p, &through_interface, 200), QpSolveResult::Solved);
+  DualActiveSetQp qp;
+  ASSERT_EQ(qp.solve(p.G, p.g, p.A, p.b, p.C, p.d, &direct, 200), QpSolveResult::Solved);
+  EXPECT_EQ(through_interface, direct);
+  EXPECT_EQ(solver->iterations(), qp.iterations());
+  for (const std::string bad : {"", "qpoases", "Dual_Active_Set"}) {
+    try {
+      ehc_control::makeQpSolver(bad);
+      FAIL() << bad;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_EQ(std::string(e.what()), "[QpSolverFactory] unknown QP solver '" + bad + "' (known: dual_active_set)");
+    }
+  }
 }

@@ -3,6 +3,7 @@
 // obstacle dampers keep d >= d_s, failures give a zero command with QP_FAILED.
 
 #include "ehc_common/config_node.h"
+#include "ehc_control/dual_active_set_qp.h"
 #include "ehc_control/pose_servo.h"
 #include "ehc_control/qp_controller.h"
 #include "ehc_test/control_fixtures.h"
@@ -12,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <memory>
 
 using namespace ehc_control;
 
@@ -221,6 +223,88 @@ TEST(QpControllerParams, ValidationAndLoading) {
   EXPECT_EQ(loadQpControllerParams(ok.child("controller")).mode, ControlMode::Ehc);
   EXPECT_THROW(EhcQpController(std::make_shared<const WholeBodyModel>(realmanWithoutStopDistances()), QpControllerParams{}, nullptr),
                std::invalid_argument);  // ehc needs a map
+}
+
+namespace {
+/// A QpSolver back end for the interface test: hands every problem to DualActiveSetQp and
+/// records its size, or reports every problem infeasible.
+class RecordingSolver : public QpSolver {
+ public:
+  explicit RecordingSolver(bool infeasible) : infeasible_(infeasible) {}
+  std::string name() const override { return "recording"; }
+  QpSolveResult solve(const QpProblemView& p, Eigen::VectorXd* x, int max_iterations) override {
+    ++solves;
+    variables = static_cast<int>(p.G.rows());
+    equalities = static_cast<int>(p.A.rows());
+    inequalities = static_cast<int>(p.C.rows());
+    if (infeasible_) return QpSolveResult::Infeasible;
+    return inner_.solve(p, x, max_iterations);
+  }
+  int iterations() const override { return inner_.iterations(); }
+  int solves = 0, variables = 0, equalities = 0, inequalities = 0;
+
+ private:
+  bool infeasible_;
+  DualActiveSetQp inner_;
+};
+}  // namespace
+
+// The controller reaches its QP back end only through QpSolver: made by name from
+// params.qp_solver (an unknown name is an error), replaceable, and a back end's answer
+// (the same problem solved by the same method gives the same command, an infeasible one a
+// safe stop) is what the command is made of.
+TEST(EhcQpController, SolvesThroughTheQpSolverInterface) {
+  auto model = std::make_shared<const WholeBodyModel>(realmanWithoutStopDistances());
+  const Eigen::VectorXd q = model->config().arm_ready;
+  const Eigen::Isometry3d target = approachPose(1.5, 0.5, 0.8, Eigen::Vector3d(0, 0, -1));
+  const Vector6d nu = (Vector6d() << 0.3, 0.1, -0.1, 0.1, 0.0, 0.2).finished();
+  EhcQpController plain(model, QpControllerParams{}, weighting());
+  EXPECT_EQ(plain.qpSolver().name(), "dual_active_set");
+  const ControllerCommand expected = plain.step(Eigen::Vector3d::Zero(), q, target, nu);
+  ASSERT_TRUE(expected.ok) << expected.failure;
+
+  EhcQpController swapped(model, QpControllerParams{}, weighting());
+  auto recording = std::make_unique<RecordingSolver>(false);
+  RecordingSolver* seen = recording.get();
+  swapped.setQpSolver(std::move(recording));
+  EXPECT_EQ(swapped.qpSolver().name(), "recording");
+  const ControllerCommand c = swapped.step(Eigen::Vector3d::Zero(), q, target, nu);
+  ASSERT_TRUE(c.ok) << c.failure;
+  EXPECT_EQ(seen->solves, 1);
+  EXPECT_EQ(seen->variables, model->nDof());  // the slack is eliminated: one variable per DOF
+  EXPECT_EQ(seen->equalities, 0);
+  EXPECT_EQ(seen->inequalities, 2 * model->nDof() + 12);  // bounds and slack bounds, no obstacle
+  EXPECT_EQ(c.velocity, expected.velocity);
+  EXPECT_EQ(c.slack, expected.slack);
+  EXPECT_EQ(c.qp_iterations, expected.qp_iterations);
+
+  swapped.setQpSolver(std::make_unique<RecordingSolver>(true));
+  const ControllerCommand failed = swapped.step(Eigen::Vector3d::Zero(), q, target, nu);
+  EXPECT_FALSE(failed.ok);
+  EXPECT_EQ(failed.qp_status, QpStatus::Failed);
+  EXPECT_EQ(failed.failure, "QP infeasible");
+  EXPECT_TRUE(failed.velocity.isZero(0.0));
+  EXPECT_THROW(swapped.setQpSolver(nullptr), std::invalid_argument);
+
+  QpControllerParams unknown;
+  unknown.qp_solver = "qpoases";
+  try {
+    EhcQpController bad(model, unknown, weighting());
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()), "[QpControllerParams] qp_solver must be one of: dual_active_set (got 'qpoases')");
+  }
+  const auto cfg = ehc_common::ConfigNode::loadString("controller: {qp_solver: qpoases}", "test.yaml", "Test");
+  try {
+    loadQpControllerParams(cfg.child("controller"));
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("qp_solver must be one of: dual_active_set (got 'qpoases')"), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("test.yaml"), std::string::npos) << e.what();
+  }
+  const auto shipped = ehc_common::ConfigNode::loadFile(std::string(EHC_CONFIG_DIR) + "/control/controller.yaml", "Test");
+  EXPECT_EQ(loadQpControllerParams(shipped.child("controller")).qp_solver, "dual_active_set");
 }
 
 TEST(EhcQpController, PerLinkStopDistanceLetsTheHandNearTheTable) {

@@ -111,8 +111,6 @@ std::optional<GraspChoice> chooseGrasp(const std::vector<GraspCandidate>& candid
 Eigen::Isometry3d turnedTagGrasp(const Eigen::Isometry3d& tag_target, const Eigen::Vector3d& approach,
                                  double backoff);
 
-/// Angle (rad) between two rotations.
-double rotationAngle(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b);
 /// True if every entry is finite and R is a rotation (orthonormal, det +1, within 1e-6).
 bool isValidPose(const Eigen::Isometry3d& T);
 

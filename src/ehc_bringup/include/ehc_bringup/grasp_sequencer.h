@@ -73,6 +73,9 @@
 #include <vector>
 
 namespace ehc_common {
+}  // namespace ehc_common
+
+namespace ehc_common {
 class ConfigNode;
 }  // namespace ehc_common
 
@@ -232,6 +235,18 @@ class GraspSequencer {
   void startObject(double t, SequencerOutput* out);
   /// The phase logic of one cycle (update() without the bookkeeping and the time limit).
   void advance(const SequencerInput& in, SequencerOutput* out);
+  // One function per phase (advance()'s cases): `fresh` = the object pose is younger than
+  // perception_hold, `in_phase` = s since the phase began, `centre_was_sent` = last cycle's
+  // goal was the object centre (tsmm).
+  void advanceWaitTarget(const SequencerInput& in, bool fresh, SequencerOutput* out);
+  void advanceApproach(const SequencerInput& in, bool fresh, bool centre_was_sent, SequencerOutput* out);
+  void advancePreGrasp(const SequencerInput& in, SequencerOutput* out);
+  void advanceGrasp(const SequencerInput& in, SequencerOutput* out);
+  void advanceClose(const SequencerInput& in, double in_phase, SequencerOutput* out);
+  void advanceLift(const SequencerInput& in, double in_phase, SequencerOutput* out);
+  void advancePlace(const SequencerInput& in, double in_phase, SequencerOutput* out);
+  void advanceRelease(const SequencerInput& in, double in_phase, SequencerOutput* out);
+  void advanceRetreat(const SequencerInput& in, double in_phase, SequencerOutput* out);
   /// SequencerOutput::exclusions for the phase reached this cycle (every cycle, whatever ended it).
   std::vector<ExclusionSphere> obstacleExclusions(const SequencerInput& in) const;
   void enter(GraspPhase p, double t, SequencerOutput* out, const std::string& why = "");

@@ -431,131 +431,161 @@ std::string graspSummaryJson(const GraspMethodSummary& s) {
   return os.str();
 }
 
-void writeGraspResults(const std::string& dir, const GraspExperimentParams& params,
-                       const GraspExperimentResult& result, const std::string& notes) {
-  ::mkdir(dir.c_str(), 0755);
-  auto open = [&](const std::string& name) {
-    std::ofstream f(dir + "/" + name);
-    if (!f) throw std::runtime_error("[GraspExperiment] cannot write " + dir + "/" + name);
-    return f;
-  };
-  {
-    std::ofstream f = open("summary.json");
-    f << "{\"protocol\":\"" << (params.protocol == GraspProtocol::Table ? "grasp" : "poses") << "\",\"sets\":"
-      << params.sets << ",\"per_set\":" << params.per_set << ",\"seed\":" << params.seed
-      << ",\"jitter_xy\":" << params.jitter_xy << ",\"jitter_yaw_deg\":" << params.jitter_yaw_deg
-      << ",\"sim_time_s\":" << result.sim_time_s << ",\"methods\":[";
-    for (std::size_t i = 0; i < result.summaries.size(); ++i)
-      f << (i ? ",\n " : "") << graspSummaryJson(result.summaries[i]);
-    f << "]}\n";
+namespace {
+
+std::ofstream openResultFile(const std::string& dir, const std::string& name) {
+  std::ofstream f(dir + "/" + name);
+  if (!f) throw std::runtime_error("[GraspExperiment] cannot write " + dir + "/" + name);
+  return f;
+}
+
+void writeSummaryJson(const std::string& dir, const GraspExperimentParams& params, const GraspExperimentResult& result) {
+  std::ofstream f = openResultFile(dir, "summary.json");
+  f << "{\"protocol\":\"" << (params.protocol == GraspProtocol::Table ? "grasp" : "poses") << "\",\"sets\":"
+    << params.sets << ",\"per_set\":" << params.per_set << ",\"seed\":" << params.seed
+    << ",\"jitter_xy\":" << params.jitter_xy << ",\"jitter_yaw_deg\":" << params.jitter_yaw_deg
+    << ",\"sim_time_s\":" << result.sim_time_s << ",\"methods\":[";
+  for (std::size_t i = 0; i < result.summaries.size(); ++i)
+    f << (i ? ",\n " : "") << graspSummaryJson(result.summaries[i]);
+  f << "]}\n";
+}
+
+double percent(int a, int b) { return b ? 100.0 * a / b : 0.0; }
+
+/// Table III (Exp-2) rows beside the paper's.
+void writeTable3(std::ostream& f, const GraspExperimentResult& result) {
+  f << "Table III (Exp-2): sequentially grasping three objects. Measured (in-process sim) | paper (real robot)\n\n"
+    << "| Method | Time(s) | Distant(Base-T/Base-R/Arm) | Close(Base-T/Base-R/Arm) | Success Rate (%) "
+       "| paper Time(s) | paper Distant | paper Close | paper Success (%) |\n|---|---|---|---|---|---|---|---|---|\n";
+  for (const auto& s : result.summaries) {
+    const PaperRow* p = nullptr;
+    for (const auto& r : kPaperTable3)
+      if (s.method == r.method) p = &r;
+    f << "| " << s.method << " | " << std::setprecision(2) << s.mean_time_s << " | " << std::setprecision(3)
+      << s.distant.base_t << "/" << s.distant.base_r << "/" << s.distant.arm << " | " << s.close.base_t << "/"
+      << s.close.base_r << "/" << s.close.arm << " | " << std::setprecision(1) << percent(s.successes, s.grasps)
+      << " (" << s.successes << "/" << s.grasps << ") | " << (p ? p->time : "") << " | " << (p ? p->distant : "")
+      << " | " << (p ? p->close : "") << " | " << (p ? p->success : "") << " |\n";
   }
-  {
-    std::ofstream f = open("table.md");
-    f << std::fixed;
-    auto pct = [](int a, int b) { return b ? 100.0 * a / b : 0.0; };
-    auto where = [](const ObstacleExtreme& d, bool margin) {
-      std::ostringstream os;
-      if (!d.found) return std::string("none within the influence distance");
-      os << std::fixed << std::setprecision(1);
-      if (margin) os << d.margin() * 1000.0 << " (" << d.link << " - " << d.body << ", " << d.phase << "; d "
-                     << d.distance * 1000.0 << ", d_s " << d.stop * 1000.0 << ")";
-      else os << d.distance * 1000.0 << " (" << d.link << " - " << d.body << ", " << d.phase << ")";
-      return os.str();
-    };
-    if (params.protocol == GraspProtocol::Table) {
-      f << "Table III (Exp-2): sequentially grasping three objects. Measured (in-process sim) | paper (real robot)\n\n"
-        << "| Method | Time(s) | Distant(Base-T/Base-R/Arm) | Close(Base-T/Base-R/Arm) | Success Rate (%) "
-           "| paper Time(s) | paper Distant | paper Close | paper Success (%) |\n|---|---|---|---|---|---|---|---|---|\n";
-      for (const auto& s : result.summaries) {
-        const PaperRow* p = nullptr;
-        for (const auto& r : kPaperTable3)
-          if (s.method == r.method) p = &r;
-        f << "| " << s.method << " | " << std::setprecision(2) << s.mean_time_s << " | " << std::setprecision(3)
-          << s.distant.base_t << "/" << s.distant.base_r << "/" << s.distant.arm << " | " << s.close.base_t << "/"
-          << s.close.base_r << "/" << s.close.arm << " | " << std::setprecision(1) << pct(s.successes, s.grasps)
-          << " (" << s.successes << "/" << s.grasps << ") | " << (p ? p->time : "") << " | " << (p ? p->distant : "")
-          << " | " << (p ? p->close : "") << " | " << (p ? p->success : "") << " |\n";
-      }
-    } else {
-      f << "Table IV (Exp-3): grasping one object with different poses, TfM (%). Measured (in-process sim) | paper\n\n"
-        << "| Method | Forward | Downward | Sideways | Success (%) | paper Forward | paper Downward | paper Sideways |\n"
-           "|---|---|---|---|---|---|---|---|\n";
-      for (const auto& s : result.summaries) {
-        const PaperTfm* p = nullptr;
-        for (const auto& r : kPaperTable4)
-          if (s.method == r.method) p = &r;
-        f << "| " << s.method;
-        for (const char* a : kApproaches) {
-          const auto it = s.tfm.find(a);
-          f << " | " << std::setprecision(1) << (it == s.tfm.end() ? 0.0 : 100.0 * it->second.first);
-        }
-        f << " | " << pct(s.successes, s.grasps) << " (" << s.successes << "/" << s.grasps << ") | "
-          << (p ? p->forward : "") << " | " << (p ? p->downward : "") << " | " << (p ? p->sideways : "") << " |\n";
-      }
+}
+
+/// Table IV (Exp-3) rows beside the paper's.
+void writeTable4(std::ostream& f, const GraspExperimentResult& result) {
+  f << "Table IV (Exp-3): grasping one object with different poses, TfM (%). Measured (in-process sim) | paper\n\n"
+    << "| Method | Forward | Downward | Sideways | Success (%) | paper Forward | paper Downward | paper Sideways |\n"
+       "|---|---|---|---|---|---|---|---|\n";
+  for (const auto& s : result.summaries) {
+    const PaperTfm* p = nullptr;
+    for (const auto& r : kPaperTable4)
+      if (s.method == r.method) p = &r;
+    f << "| " << s.method;
+    for (const char* a : kApproaches) {
+      const auto it = s.tfm.find(a);
+      f << " | " << std::setprecision(1) << (it == s.tfm.end() ? 0.0 : 100.0 * it->second.first);
     }
-    f << "\nSafety (not in the paper; contacts and violations must be zero, every perceived distance at "
-         "least its link's stop distance d_s):\n\n"
-      << "| Method | sim steps with robot-scene contact (Bullet) | joint-limit violations "
-         "| min perceived robot-obstacle distance d, mm (link - nearest scene body, phase) "
-         "| min margin d - d_s, mm (link - body, phase; d, d_s) | object being grasped, PRE_GRASP on: min d, mm "
-         "| sim time (s) |\n"
-         "|---|---|---|---|---|---|---|\n";
-    for (const auto& s : result.summaries)
-      f << "| " << s.method << " | " << s.contact_steps << " | " << s.joint_limit_violations << " | "
-        << where(s.nearest, false) << " | " << where(s.tightest, true) << " | " << where(s.grasped, false) << " | "
-        << std::setprecision(1) << s.sim_time_s
-        << " |\n";
-    f << "\nPerceived distances are those the controller received (ehc_obstacle_node's: octomap of the depth "
-         "clouds, robot points filtered, the grasped object's sphere excluded from the descent to the end of the "
-         "retreat); the scene body is the ground-truth body nearest to the perceived obstacle point. The object "
-         "being grasped is scene until the grasp is locked; from PRE_GRASP on the hand must come close to it (the "
-         "controller still keeps its dampers until GRASP, d_s 10 mm for the fingers), so its pairs are listed "
-         "apart.\n";
-    if (!notes.empty()) f << "\n" << notes << "\n";
+    f << " | " << percent(s.successes, s.grasps) << " (" << s.successes << "/" << s.grasps << ") | "
+      << (p ? p->forward : "") << " | " << (p ? p->downward : "") << " | " << (p ? p->sideways : "") << " |\n";
   }
-  {
-    std::ofstream f = open("trials.csv");
-    f << "method,set,index,seed,object,approach,success,time_s,tfm,tfm_until_switch,controller_tfm,failed_phase,"
-         "reason,close_offset_m,contact_steps,joint_limit_violations,min_obstacle_distance_m,min_obstacle_link,min_obstacle_body,"
-         "min_obstacle_phase,min_margin_m,min_margin_link,min_margin_body,min_margin_phase,min_grasped_object_m,"
-         "min_grasped_object_link,min_grasped_object_phase,lock_centre_in_grasp_x_m,lock_centre_in_grasp_y_m,"
-         "lock_centre_in_grasp_z_m,close_centre_in_tcp_x_m,close_centre_in_tcp_y_m,close_centre_in_tcp_z_m,"
-         "lock_closing_axis_error_deg\n";
-    // An empty field: no pair within the influence distance (a distance <= 0 is a penetration).
-    auto csvValue = [](const ObstacleExtreme& e, double v) {
-      std::ostringstream os;
-      if (e.found) os << v;
-      return os.str();
-    };
-    for (const auto& t : result.trials) {
-      std::string reason = t.reason;
-      std::replace(reason.begin(), reason.end(), '"', '\'');
-      f << t.method << "," << t.set << "," << t.index << "," << t.seed << "," << t.object << "," << t.approach << ","
-        << (t.success ? 1 : 0) << "," << t.time_s << "," << t.tfm << "," << t.tfm_until_switch << ","
-        << t.controller_tfm << "," << t.failed_phase << ",\"" << reason << "\"," << t.close_offset << "," << t.contact_steps << ","
-        << t.joint_limit_violations << "," << csvValue(t.nearest, t.nearest.distance) << "," << t.nearest.link << ","
-        << t.nearest.body << "," << t.nearest.phase << "," << csvValue(t.tightest, t.tightest.margin()) << ","
-        << t.tightest.link << "," << t.tightest.body << "," << t.tightest.phase << ","
-        << csvValue(t.grasped, t.grasped.distance) << ","
-        << t.grasped.link << "," << t.grasped.phase;
+}
+
+/// An obstacle extreme for the safety table: d (or the margin d - d_s) in mm, where, when.
+std::string obstacleCell(const ObstacleExtreme& d, bool margin) {
+  std::ostringstream os;
+  if (!d.found) return std::string("none within the influence distance");
+  os << std::fixed << std::setprecision(1);
+  if (margin) os << d.margin() * 1000.0 << " (" << d.link << " - " << d.body << ", " << d.phase << "; d "
+                 << d.distance * 1000.0 << ", d_s " << d.stop * 1000.0 << ")";
+  else os << d.distance * 1000.0 << " (" << d.link << " - " << d.body << ", " << d.phase << ")";
+  return os.str();
+}
+
+/// The safety table (contacts, joint limits, perceived obstacle distances) and its notes.
+void writeSafetyTable(std::ostream& f, const GraspExperimentResult& result, const std::string& notes) {
+  f << "\nSafety (not in the paper; contacts and violations must be zero, every perceived distance at "
+       "least its link's stop distance d_s):\n\n"
+    << "| Method | sim steps with robot-scene contact (Bullet) | joint-limit violations "
+       "| min perceived robot-obstacle distance d, mm (link - nearest scene body, phase) "
+       "| min margin d - d_s, mm (link - body, phase; d, d_s) | object being grasped, PRE_GRASP on: min d, mm "
+       "| sim time (s) |\n"
+       "|---|---|---|---|---|---|---|\n";
+  for (const auto& s : result.summaries)
+    f << "| " << s.method << " | " << s.contact_steps << " | " << s.joint_limit_violations << " | "
+      << obstacleCell(s.nearest, false) << " | " << obstacleCell(s.tightest, true) << " | "
+      << obstacleCell(s.grasped, false) << " | " << std::setprecision(1) << s.sim_time_s << " |\n";
+  f << "\nPerceived distances are those the controller received (ehc_obstacle_node's: octomap of the depth "
+       "clouds, robot points filtered, the grasped object's sphere excluded from the descent to the end of the "
+       "retreat); the scene body is the ground-truth body nearest to the perceived obstacle point. The object "
+       "being grasped is scene until the grasp is locked; from PRE_GRASP on the hand must come close to it (the "
+       "controller still keeps its dampers until GRASP, d_s 10 mm for the fingers), so its pairs are listed "
+       "apart.\n";
+  if (!notes.empty()) f << "\n" << notes << "\n";
+}
+
+void writeTableMd(const std::string& dir, const GraspExperimentParams& params, const GraspExperimentResult& result,
+                  const std::string& notes) {
+  std::ofstream f = openResultFile(dir, "table.md");
+  f << std::fixed;
+  if (params.protocol == GraspProtocol::Table) writeTable3(f, result);
+  else writeTable4(f, result);
+  writeSafetyTable(f, result, notes);
+}
+
+/// A CSV value of an obstacle extreme; empty: no pair within the influence distance (a distance
+/// <= 0 is a penetration).
+std::string obstacleCsvValue(const ObstacleExtreme& e, double v) {
+  std::ostringstream os;
+  if (e.found) os << v;
+  return os.str();
+}
+
+void writeTrialsCsv(const std::string& dir, const GraspExperimentResult& result) {
+  std::ofstream f = openResultFile(dir, "trials.csv");
+  f << "method,set,index,seed,object,approach,success,time_s,tfm,tfm_until_switch,controller_tfm,failed_phase,"
+       "reason,close_offset_m,contact_steps,joint_limit_violations,min_obstacle_distance_m,min_obstacle_link,min_obstacle_body,"
+       "min_obstacle_phase,min_margin_m,min_margin_link,min_margin_body,min_margin_phase,min_grasped_object_m,"
+       "min_grasped_object_link,min_grasped_object_phase,lock_centre_in_grasp_x_m,lock_centre_in_grasp_y_m,"
+       "lock_centre_in_grasp_z_m,close_centre_in_tcp_x_m,close_centre_in_tcp_y_m,close_centre_in_tcp_z_m,"
+       "lock_closing_axis_error_deg\n";
+  for (const auto& t : result.trials) {
+    std::string reason = t.reason;
+    std::replace(reason.begin(), reason.end(), '"', '\'');
+    f << t.method << "," << t.set << "," << t.index << "," << t.seed << "," << t.object << "," << t.approach << ","
+      << (t.success ? 1 : 0) << "," << t.time_s << "," << t.tfm << "," << t.tfm_until_switch << ","
+      << t.controller_tfm << "," << t.failed_phase << ",\"" << reason << "\"," << t.close_offset << "," << t.contact_steps << ","
+      << t.joint_limit_violations << "," << obstacleCsvValue(t.nearest, t.nearest.distance) << "," << t.nearest.link << ","
+      << t.nearest.body << "," << t.nearest.phase << "," << obstacleCsvValue(t.tightest, t.tightest.margin()) << ","
+      << t.tightest.link << "," << t.tightest.body << "," << t.tightest.phase << ","
+      << obstacleCsvValue(t.grasped, t.grasped.distance) << ","
+      << t.grasped.link << "," << t.grasped.phase;
     for (int a = 0; a < 3; ++a) writeFiniteField(f, t.lock_centre_in_grasp[a]);
     for (int a = 0; a < 3; ++a) writeFiniteField(f, t.close_centre_in_tcp[a]);
     writeFiniteField(f, t.lock_closing_axis_error_deg);
     f << "\n";
-    }
   }
-  {
-    std::ofstream f = open("trace.csv");
-    f << "method,set,index,object,t,distance,base_speed,base_turn,arm_speed,phase,tcp_in_grasp_x,tcp_in_grasp_y,"
-         "tcp_in_grasp_z,object_moved\n"
-      << std::setprecision(5);
-    for (const auto& s : result.trace) {
-      f << s.method << "," << s.set << "," << s.index << "," << s.object << "," << s.t << "," << s.distance << ","
-        << s.base_speed << "," << s.base_turn << "," << s.arm_speed << "," << s.phase;
-      for (int a = 0; a < 3; ++a) writeFiniteField(f, s.tcp_in_grasp[a]);
-      f << "," << s.object_moved << "\n";
-    }
+}
+
+void writeTraceCsv(const std::string& dir, const GraspExperimentResult& result) {
+  std::ofstream f = openResultFile(dir, "trace.csv");
+  f << "method,set,index,object,t,distance,base_speed,base_turn,arm_speed,phase,tcp_in_grasp_x,tcp_in_grasp_y,"
+       "tcp_in_grasp_z,object_moved\n"
+    << std::setprecision(5);
+  for (const auto& s : result.trace) {
+    f << s.method << "," << s.set << "," << s.index << "," << s.object << "," << s.t << "," << s.distance << ","
+      << s.base_speed << "," << s.base_turn << "," << s.arm_speed << "," << s.phase;
+    for (int a = 0; a < 3; ++a) writeFiniteField(f, s.tcp_in_grasp[a]);
+    f << "," << s.object_moved << "\n";
   }
+}
+
+}  // namespace
+
+void writeGraspResults(const std::string& dir, const GraspExperimentParams& params,
+                       const GraspExperimentResult& result, const std::string& notes) {
+  ::mkdir(dir.c_str(), 0755);
+  writeSummaryJson(dir, params, result);
+  writeTableMd(dir, params, result, notes);
+  writeTrialsCsv(dir, result);
+  writeTraceCsv(dir, result);
 }
 
 }  // namespace ehc_bringup

@@ -1,5 +1,7 @@
 #include "ehc_bringup/grasp_selection.h"
 
+#include "ehc_control/geometry.h"
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -48,11 +50,6 @@ bool isValidPose(const Eigen::Isometry3d& T) {
   const Eigen::Matrix3d R = T.linear();
   return (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() < 1e-6 &&
          std::abs(R.determinant() - 1.0) < 1e-6;
-}
-
-double rotationAngle(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
-  const double c = std::clamp(((a.transpose() * b).trace() - 1.0) / 2.0, -1.0, 1.0);
-  return std::acos(c);
 }
 
 namespace {
@@ -138,7 +135,7 @@ namespace {
 Eigen::Matrix3d closerHalfTurn(const Eigen::Matrix3d& R, const Eigen::Matrix3d& reference) {
   const Eigen::Matrix3d flipped = R * Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   if (std::abs(R.col(2).z()) < kShallow) return R.col(0).z() >= 0.0 ? R : flipped;
-  return rotationAngle(flipped, reference) < rotationAngle(R, reference) ? flipped : R;
+  return ehc_control::rotationAngle(flipped, reference) < ehc_control::rotationAngle(R, reference) ? flipped : R;
 }
 /// The tag fallback's back-off along the approach (m) for a wanted direction.
 double fallbackBackoff(ApproachDirection direction, const GraspSelectionParams& p) {

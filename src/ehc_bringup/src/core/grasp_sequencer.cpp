@@ -2,6 +2,7 @@
 
 #include "ehc_common/config_node.h"
 #include "ehc_control/control_status.h"
+#include "ehc_control/geometry.h"
 
 #include <algorithm>
 #include <array>
@@ -327,7 +328,7 @@ bool GraspSequencer::within(const SequencerInput& in, const Eigen::Isometry3d& g
                             double ori_deg) const {
   if (!in.tcp || !isValidPose(*in.tcp)) return false;
   return (in.tcp->translation() - goal.translation()).norm() <= pos &&
-         rotationAngle(in.tcp->linear(), goal.linear()) <= ori_deg * M_PI / 180.0;
+         ehc_control::rotationAngle(in.tcp->linear(), goal.linear()) <= ori_deg * M_PI / 180.0;
 }
 
 std::optional<GraspChoice> GraspSequencer::currentChoice(const SequencerInput& in) const {
@@ -456,165 +457,183 @@ void GraspSequencer::advance(const SequencerInput& in, SequencerOutput* out) {
   if (object_pose_ && !locked_) out->object_pose = *object_pose_;
 
   switch (phase_) {
-    case GraspPhase::WaitTarget: {
-      if (!fresh) {
-        const auto& seen = object_pose_ ? object_pose_ : remembered_[current_];
-        if (seen && params_.search_distance > 0.0) {
-          Eigen::Isometry3d look = *seen;
-          look.translation() -= params_.search_distance * seen->linear().col(2);
-          out->goal = look;
-        }
-        break;
-      }
-      const auto choice = currentChoice(in);
-      if (!choice) break;  // require_candidate and none yet
-      enter(GraspPhase::Approach, t, out,
-            choice->from_candidate ? "grasp candidate" : "tag grasp (no candidate yet)");
-      out->goal = approachGoal(in, choice->pose);
-      break;
-    }
-    case GraspPhase::Approach: {
-      if (!fresh) {  // perception lost: search again
-        enter(GraspPhase::WaitTarget, t, out, "object pose older than " + num(params_.perception_hold, 1) + " s");
-        break;
-      }
-      const auto choice = currentChoice(in);
-      if (!choice) break;
-      // tsmm: the base has stopped d from the object once the controller reports its arm stage
-      // for the object centre sent as the goal. No lock before: the lock makes the pre-grasp the
-      // goal, which ended the base stage where the lock happened (0.25 m from the grasp, 3-D:
-      // ~0.24-0.29 m horizontally from a middle or back object), or never started it when the arm
-      // stage of the search pose was still on (the arm alone then stalled 1-3 cm short).
-      if (centre_was_sent && in.controller_phase == ehc_control::toString(ehc_control::ControlPhase::TsmmArm))
-        tsmm_at_d_ = true;
-      out->goal = approachGoal(in, choice->pose);
-      const bool tsmm_base_pending = tsmmController(in) && !tsmm_at_d_;
-      if (!tsmm_base_pending && within(in, choice->pose, params_.pregrasp_switch_distance, 180.0)) {
-        locked_object_centre_ = *objectCentre();  // frozen from here (before locked_ is set)
-        locked_ = choice;
-        out->goal = preGrasp(choice->pose);
-        enter(GraspPhase::PreGrasp, t, out,
-              std::string("grasp locked: ") + (choice->from_candidate ? "perception candidate" : "tag fallback"));
-      }
-      break;
-    }
-    case GraspPhase::PreGrasp: {
-      const Eigen::Isometry3d pre = preGrasp(locked_->pose);
-      out->goal = pre;
-      // Lateral: the TCP's offset across the approach axis (the grasp's z) through the pre-grasp
-      // (within() has checked the TCP).
-      const auto lateral = [&](double factor) {
-        const Eigen::Vector3d e = in.tcp->translation() - pre.translation();
-        const Eigen::Vector3d axis = pre.linear().col(2);
-        return (e - e.dot(axis) * axis).norm() <= factor * params_.pregrasp_lateral_tolerance;
-      };
-      const bool there = within(in, pre, params_.pregrasp_position_tolerance, params_.pregrasp_orientation_tolerance_deg) &&
-                         lateral(1.0);
-      if (there || (nearEnoughWhenStalled(in, pre, params_.pregrasp_position_tolerance,
-                                          params_.pregrasp_orientation_tolerance_deg) &&
-                    lateral(params_.stall_tolerance_factor))) {
-        enter(GraspPhase::Grasp, t, out,
-              there ? "" : "stalled " + num((in.tcp->translation() - pre.translation()).norm() * 100.0, 1) +
-                               " cm from the pre-grasp: going on");
-        out->goal = locked_->pose;
-      }
-      break;
-    }
-    case GraspPhase::Grasp: {
-      out->goal = locked_->pose;
-      const bool there = within(in, locked_->pose, params_.grasp_position_tolerance, params_.grasp_orientation_tolerance_deg);
-      const double stall_tolerance =
-          std::min(params_.stall_tolerance_factor * params_.grasp_position_tolerance, params_.max_close_offset) /
-          params_.stall_tolerance_factor;
-      if (there || nearEnoughWhenStalled(in, locked_->pose, stall_tolerance, params_.grasp_orientation_tolerance_deg)) {
-        enter(GraspPhase::Close, t, out,
-              there ? "" : "stalled " + num((in.tcp->translation() - locked_->pose.translation()).norm() * 100.0, 1) +
-                               " cm from the grasp: closing there");
-        counting_tfm_ = false;
-        out->gripper_command = true;
-        cur_.close_offset = (in.tcp->translation() - locked_->pose.translation()).norm();
-        centre_in_tcp_ = in.tcp->inverse() * locked_object_centre_;  // within() checked the TCP
-      }
-      break;
-    }
-    case GraspPhase::Close: {
-      out->goal = locked_->pose;
-      if (in.gripper_state == "holding") {
-        enter(GraspPhase::Lift, t, out, "object held");
-        Eigen::Isometry3d lift = locked_->pose;
-        lift.translation().z() += params_.lift_height;
-        out->goal = lift;
-      } else if (in.gripper_state == "closed_empty") {
-        finishObject(t, false, "gripper closed on nothing", in, out);
-      } else if (in_phase > params_.gripper_timeout) {
-        finishObject(t, false, "gripper did not close within " + std::to_string(params_.gripper_timeout) + " s (state '" +
-                                   in.gripper_state + "')", in, out);
-      }
-      break;
-    }
-    case GraspPhase::Lift: {
-      Eigen::Isometry3d lift = locked_->pose;
-      lift.translation().z() += params_.lift_height;
-      out->goal = lift;
-      if (in.grasp_succeeded && in.gripper_state == "holding") {
-        finishObject(t, true, "", in, out);
-      } else if (in.gripper_state != "holding" && in_phase > 0.0) {
-        finishObject(t, false, "object lost while lifting (gripper '" + in.gripper_state + "')", in, out);
-      }
-      break;
-    }
-    case GraspPhase::Place: {
-      const Eigen::Isometry3d place = placePose();
-      out->goal = place;
-      const bool there = within(in, place, params_.place_tolerance, 180.0);
-      const bool dropped = in.gripper_state != "holding";
-      if (there || dropped || stalled(in, place) || in_phase > params_.place_timeout) {
-        std::string why = there ? "placed" : dropped ? "object no longer held" : "placing stopped";
-        if (!there && !dropped && in.tcp && isValidPose(*in.tcp))
-          why += " " + num((in.tcp->translation() - place.translation()).norm() * 100.0, 1) + " cm from its place";
-        startRelease(t, in, out, why);
-        if (hold_goal_) out->goal = *hold_goal_;
-      }
-      break;
-    }
-    case GraspPhase::Release: {
-      if (hold_goal_) out->goal = *hold_goal_;
-      if (in.gripper_state == "open" || in_phase > params_.release_timeout) {
-        if (hold_goal_) {
-          Eigen::Isometry3d back = *hold_goal_;
-          back.translation() -= params_.retreat_distance * last_approach_;
-          back.translation().z() += params_.retreat_raise;
-          hold_goal_ = back;
-          out->goal = back;
-        }
-        enter(GraspPhase::Retreat, t, out);
-      }
-      break;
-    }
-    case GraspPhase::Retreat: {
-      if (hold_goal_) out->goal = *hold_goal_;
-      const bool there = hold_goal_ && in.tcp && isValidPose(*in.tcp) &&
-                         (in.tcp->translation() - hold_goal_->translation()).norm() <= params_.retreat_tolerance;
-      if (there || !hold_goal_ || in_phase > params_.retreat_timeout) {
-        if (current_ + 1 < params_.objects.size()) {
-          enter(GraspPhase::WaitTarget, t, out);
-          ++current_;
-          object_pose_.reset();
-          object_pose_t_ = -1.0;
-          candidates_.clear();
-          startObject(t, out);
-        } else {
-          enter(GraspPhase::Done, t, out);
-          out->goal.reset();
-          int ok = 0;
-          for (const auto& r : results_) ok += r.success ? 1 : 0;
-          out->events.push_back("all objects handled: " + std::to_string(ok) + "/" +
-                               std::to_string(results_.size()) + " grasped");
-        }
-      }
-      break;
-    }
+    case GraspPhase::WaitTarget: advanceWaitTarget(in, fresh, out); break;
+    case GraspPhase::Approach: advanceApproach(in, fresh, centre_was_sent, out); break;
+    case GraspPhase::PreGrasp: advancePreGrasp(in, out); break;
+    case GraspPhase::Grasp: advanceGrasp(in, out); break;
+    case GraspPhase::Close: advanceClose(in, in_phase, out); break;
+    case GraspPhase::Lift: advanceLift(in, in_phase, out); break;
+    case GraspPhase::Place: advancePlace(in, in_phase, out); break;
+    case GraspPhase::Release: advanceRelease(in, in_phase, out); break;
+    case GraspPhase::Retreat: advanceRetreat(in, in_phase, out); break;
     case GraspPhase::Done: break;
+  }
+}
+
+void GraspSequencer::advanceWaitTarget(const SequencerInput& in, bool fresh, SequencerOutput* out) {
+  const double t = in.t;
+  if (!fresh) {
+    const auto& seen = object_pose_ ? object_pose_ : remembered_[current_];
+    if (seen && params_.search_distance > 0.0) {
+      Eigen::Isometry3d look = *seen;
+      look.translation() -= params_.search_distance * seen->linear().col(2);
+      out->goal = look;
+    }
+    return;
+  }
+  const auto choice = currentChoice(in);
+  if (!choice) return;  // require_candidate and none yet
+  enter(GraspPhase::Approach, t, out,
+        choice->from_candidate ? "grasp candidate" : "tag grasp (no candidate yet)");
+  out->goal = approachGoal(in, choice->pose);
+}
+
+void GraspSequencer::advanceApproach(const SequencerInput& in, bool fresh, bool centre_was_sent, SequencerOutput* out) {
+  const double t = in.t;
+  if (!fresh) {  // perception lost: search again
+    enter(GraspPhase::WaitTarget, t, out, "object pose older than " + num(params_.perception_hold, 1) + " s");
+    return;
+  }
+  const auto choice = currentChoice(in);
+  if (!choice) return;
+  // tsmm: the base has stopped d from the object once the controller reports its arm stage
+  // for the object centre sent as the goal. No lock before: the lock makes the pre-grasp the
+  // goal, which ended the base stage where the lock happened (0.25 m from the grasp, 3-D:
+  // ~0.24-0.29 m horizontally from a middle or back object), or never started it when the arm
+  // stage of the search pose was still on (the arm alone then stalled 1-3 cm short).
+  if (centre_was_sent && in.controller_phase == ehc_control::toString(ehc_control::ControlPhase::TsmmArm))
+    tsmm_at_d_ = true;
+  out->goal = approachGoal(in, choice->pose);
+  const bool tsmm_base_pending = tsmmController(in) && !tsmm_at_d_;
+  if (!tsmm_base_pending && within(in, choice->pose, params_.pregrasp_switch_distance, 180.0)) {
+    locked_object_centre_ = *objectCentre();  // frozen from here (before locked_ is set)
+    locked_ = choice;
+    out->goal = preGrasp(choice->pose);
+    enter(GraspPhase::PreGrasp, t, out,
+          std::string("grasp locked: ") + (choice->from_candidate ? "perception candidate" : "tag fallback"));
+  }
+}
+
+void GraspSequencer::advancePreGrasp(const SequencerInput& in, SequencerOutput* out) {
+  const double t = in.t;
+  const Eigen::Isometry3d pre = preGrasp(locked_->pose);
+  out->goal = pre;
+  // Lateral: the TCP's offset across the approach axis (the grasp's z) through the pre-grasp
+  // (within() has checked the TCP).
+  const auto lateral = [&](double factor) {
+    const Eigen::Vector3d e = in.tcp->translation() - pre.translation();
+    const Eigen::Vector3d axis = pre.linear().col(2);
+    return (e - e.dot(axis) * axis).norm() <= factor * params_.pregrasp_lateral_tolerance;
+  };
+  const bool there = within(in, pre, params_.pregrasp_position_tolerance, params_.pregrasp_orientation_tolerance_deg) &&
+                     lateral(1.0);
+  if (there || (nearEnoughWhenStalled(in, pre, params_.pregrasp_position_tolerance,
+                                      params_.pregrasp_orientation_tolerance_deg) &&
+                lateral(params_.stall_tolerance_factor))) {
+    enter(GraspPhase::Grasp, t, out,
+          there ? "" : "stalled " + num((in.tcp->translation() - pre.translation()).norm() * 100.0, 1) +
+                           " cm from the pre-grasp: going on");
+    out->goal = locked_->pose;
+  }
+}
+
+void GraspSequencer::advanceGrasp(const SequencerInput& in, SequencerOutput* out) {
+  const double t = in.t;
+  out->goal = locked_->pose;
+  const bool there = within(in, locked_->pose, params_.grasp_position_tolerance, params_.grasp_orientation_tolerance_deg);
+  const double stall_tolerance =
+      std::min(params_.stall_tolerance_factor * params_.grasp_position_tolerance, params_.max_close_offset) /
+      params_.stall_tolerance_factor;
+  if (there || nearEnoughWhenStalled(in, locked_->pose, stall_tolerance, params_.grasp_orientation_tolerance_deg)) {
+    enter(GraspPhase::Close, t, out,
+          there ? "" : "stalled " + num((in.tcp->translation() - locked_->pose.translation()).norm() * 100.0, 1) +
+                           " cm from the grasp: closing there");
+    counting_tfm_ = false;
+    out->gripper_command = true;
+    cur_.close_offset = (in.tcp->translation() - locked_->pose.translation()).norm();
+    centre_in_tcp_ = in.tcp->inverse() * locked_object_centre_;  // within() checked the TCP
+  }
+}
+
+void GraspSequencer::advanceClose(const SequencerInput& in, double in_phase, SequencerOutput* out) {
+  const double t = in.t;
+  out->goal = locked_->pose;
+  if (in.gripper_state == "holding") {
+    enter(GraspPhase::Lift, t, out, "object held");
+    Eigen::Isometry3d lift = locked_->pose;
+    lift.translation().z() += params_.lift_height;
+    out->goal = lift;
+  } else if (in.gripper_state == "closed_empty") {
+    finishObject(t, false, "gripper closed on nothing", in, out);
+  } else if (in_phase > params_.gripper_timeout) {
+    finishObject(t, false, "gripper did not close within " + std::to_string(params_.gripper_timeout) + " s (state '" +
+                               in.gripper_state + "')", in, out);
+  }
+}
+
+void GraspSequencer::advanceLift(const SequencerInput& in, double in_phase, SequencerOutput* out) {
+  const double t = in.t;
+  Eigen::Isometry3d lift = locked_->pose;
+  lift.translation().z() += params_.lift_height;
+  out->goal = lift;
+  if (in.grasp_succeeded && in.gripper_state == "holding") {
+    finishObject(t, true, "", in, out);
+  } else if (in.gripper_state != "holding" && in_phase > 0.0) {
+    finishObject(t, false, "object lost while lifting (gripper '" + in.gripper_state + "')", in, out);
+  }
+}
+
+void GraspSequencer::advancePlace(const SequencerInput& in, double in_phase, SequencerOutput* out) {
+  const double t = in.t;
+  const Eigen::Isometry3d place = placePose();
+  out->goal = place;
+  const bool there = within(in, place, params_.place_tolerance, 180.0);
+  const bool dropped = in.gripper_state != "holding";
+  if (there || dropped || stalled(in, place) || in_phase > params_.place_timeout) {
+    std::string why = there ? "placed" : dropped ? "object no longer held" : "placing stopped";
+    if (!there && !dropped && in.tcp && isValidPose(*in.tcp))
+      why += " " + num((in.tcp->translation() - place.translation()).norm() * 100.0, 1) + " cm from its place";
+    startRelease(t, in, out, why);
+    if (hold_goal_) out->goal = *hold_goal_;
+  }
+}
+
+void GraspSequencer::advanceRelease(const SequencerInput& in, double in_phase, SequencerOutput* out) {
+  const double t = in.t;
+  if (hold_goal_) out->goal = *hold_goal_;
+  if (in.gripper_state == "open" || in_phase > params_.release_timeout) {
+    if (hold_goal_) {
+      Eigen::Isometry3d back = *hold_goal_;
+      back.translation() -= params_.retreat_distance * last_approach_;
+      back.translation().z() += params_.retreat_raise;
+      hold_goal_ = back;
+      out->goal = back;
+    }
+    enter(GraspPhase::Retreat, t, out);
+  }
+}
+
+void GraspSequencer::advanceRetreat(const SequencerInput& in, double in_phase, SequencerOutput* out) {
+  const double t = in.t;
+  if (hold_goal_) out->goal = *hold_goal_;
+  const bool there = hold_goal_ && in.tcp && isValidPose(*in.tcp) &&
+                     (in.tcp->translation() - hold_goal_->translation()).norm() <= params_.retreat_tolerance;
+  if (there || !hold_goal_ || in_phase > params_.retreat_timeout) {
+    if (current_ + 1 < params_.objects.size()) {
+      enter(GraspPhase::WaitTarget, t, out);
+      ++current_;
+      object_pose_.reset();
+      object_pose_t_ = -1.0;
+      candidates_.clear();
+      startObject(t, out);
+    } else {
+      enter(GraspPhase::Done, t, out);
+      out->goal.reset();
+      int ok = 0;
+      for (const auto& r : results_) ok += r.success ? 1 : 0;
+      out->events.push_back("all objects handled: " + std::to_string(ok) + "/" +
+                           std::to_string(results_.size()) + " grasped");
+    }
   }
 }
 

@@ -19,32 +19,19 @@
 // number of add/drop steps is therefore bounded and the solve then reports IterationLimit.
 // Once the workspace has the problem's size, solve() allocates nothing. ROS-free.
 
+#include "ehc_control/qp_solver.h"
+
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 
-#include <iosfwd>
+#include <optional>
 #include <string>
 #include <vector>
 
 namespace ehc_control {
 
-enum class QpSolveResult {
-  Solved,          ///< x is the solution
-  Infeasible,      ///< the constraints have no common point (x unspecified)
-  IterationLimit,  ///< not solved within max_iterations add/drop steps (x unspecified)
-};
-std::string toString(QpSolveResult r);
-
-/// One QP in DualActiveSetQp's form, as plain text (write/read round-trip exactly, %.17g):
-/// for capturing a problem and replaying it in a test.
-struct QpProblem {
-  Eigen::MatrixXd G, A, C;
-  Eigen::VectorXd g, b, d;
-  void write(std::ostream& os) const;
-  static QpProblem read(std::istream& is);  ///< throws std::runtime_error "[QpProblem] ..."
-};
-
-class DualActiveSetQp {
+/// QpSolver "dual_active_set".
+class DualActiveSetQp : public QpSolver {
  public:
   /// Feasibility tolerance: a constraint is met when C_i x - d_i <= tolerance |C_i| (for an
   /// equality |A_i x - b_i| <= tolerance |A_i|), i.e. within `tolerance` in the units of x.
@@ -58,13 +45,14 @@ class DualActiveSetQp {
                       const Eigen::Ref<const Eigen::MatrixXd>& A, const Eigen::Ref<const Eigen::VectorXd>& b,
                       const Eigen::Ref<const Eigen::MatrixXd>& C, const Eigen::Ref<const Eigen::VectorXd>& d,
                       Eigen::VectorXd* x, int max_iterations, double tolerance = kDefaultTolerance);
-  QpSolveResult solve(const QpProblem& p, Eigen::VectorXd* x, int max_iterations,
-                      double tolerance = kDefaultTolerance) {
-    return solve(p.G, p.g, p.A, p.b, p.C, p.d, x, max_iterations, tolerance);
+  /// QpSolver: the solve above with the default tolerance.
+  QpSolveResult solve(const QpProblemView& p, Eigen::VectorXd* x, int max_iterations) override {
+    return solve(p.G, p.g, p.A, p.b, p.C, p.d, x, max_iterations);
   }
+  std::string name() const override { return "dual_active_set"; }
 
   /// Add and drop steps of the last solve.
-  int iterations() const { return iterations_; }
+  int iterations() const override { return iterations_; }
   /// Rows of C active at the last solution (ascending), valid after Solved.
   std::vector<int> activeInequalities() const;
   /// Lagrange multiplier of each row of C at the last solution (0 for inactive rows), valid
@@ -72,6 +60,25 @@ class DualActiveSetQp {
   Eigen::VectorXd inequalityMultipliers() const;
 
  private:
+  /// Checks the sizes, factorises G, sizes the workspace (empty active set) and sets x to the
+  /// unconstrained minimum -G^-1 g.
+  void start(const Eigen::Ref<const Eigen::MatrixXd>& G, const Eigen::Ref<const Eigen::VectorXd>& g,
+             const Eigen::Ref<const Eigen::MatrixXd>& A, const Eigen::Ref<const Eigen::VectorXd>& b,
+             const Eigen::Ref<const Eigen::MatrixXd>& C, const Eigen::Ref<const Eigen::VectorXd>& d,
+             Eigen::VectorXd* x, int max_iterations);
+  /// Step 1: the constraint to add next, the equalities first (from *next_equality on), then
+  /// the most violated inequality (index n_eq + i); sets np_, *p and *bp. Returns Solved when
+  /// x violates nothing, Infeasible for a zero row that cannot be met, else nothing.
+  std::optional<QpSolveResult> pickConstraint(const Eigen::Ref<const Eigen::MatrixXd>& A,
+                                              const Eigen::Ref<const Eigen::VectorXd>& b,
+                                              const Eigen::Ref<const Eigen::MatrixXd>& C,
+                                              const Eigen::Ref<const Eigen::VectorXd>& d, const Eigen::VectorXd& x,
+                                              double tolerance, int* next_equality, int* p, double* bp);
+  /// Step 2: primal and dual steps (dropping the active inequalities whose multiplier reaches
+  /// 0) until constraint p (normal np_, right-hand side bp) is active, or skipped when it is an
+  /// equality already met that depends on the active ones. Returns nothing then, else
+  /// Infeasible or IterationLimit.
+  std::optional<QpSolveResult> makeActive(int p, double bp, Eigen::VectorXd* x, int max_iterations, double tolerance);
   /// Adds constraint `p` (normal np_) to the active set with multiplier u: J, R from d_.
   void addToActiveSet(int p, double u);
   /// Removes the active constraint at position `l` of the active set.

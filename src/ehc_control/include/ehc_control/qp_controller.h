@@ -1,7 +1,8 @@
 #pragma once
-// EhcQpController: the whole-body QP of DESIGN.md section 6 (paper eq. 6-13), solved with
-// DualActiveSetQp (Goldfarb-Idnani dual active set, dual_active_set_qp.h) with an iteration
-// limit, after eliminating the slack delta = nu_e - J_e qd (see step()).
+// EhcQpController: the whole-body QP of DESIGN.md section 6 (paper eq. 6-13), solved through the
+// QpSolver interface (qp_solver.h; by default DualActiveSetQp, the Goldfarb-Idnani dual active
+// set of dual_active_set_qp.h) with an iteration limit, after eliminating the slack
+// delta = nu_e - J_e qd (see step()).
 //
 //   x = [qd_base; qd_arm; delta]            (delta in R^6: slack of the end-effector task)
 //   min 1/2 x^T Q x + C^T x
@@ -31,6 +32,7 @@
 
 #include "ehc_control/control_status.h"
 #include "ehc_control/ehc_weighting.h"
+#include "ehc_control/qp_solver.h"
 #include "ehc_control/whole_body_model.h"
 #include "ehc_control/wrist_flip.h"
 
@@ -41,6 +43,9 @@
 #include <memory>
 #include <string>
 #include <vector>
+
+namespace ehc_common {
+}  // namespace ehc_common
 
 namespace ehc_common {
 class ConfigNode;
@@ -110,6 +115,8 @@ struct QpControllerParams {
   /// sets (ViSP's vpQuadProg, used before, cycled forever on one); at the limit the cycle fails
   /// safely (zero command, QP_FAILED). Normal solves take 0 to about 15.
   int max_qp_iterations = 200;
+  /// QP back end, by name (makeQpSolver, qp_solver.h): "dual_active_set" (DualActiveSetQp).
+  std::string qp_solver = "dual_active_set";
   double tsmm_switch_distance = 0.2;   ///< m: tsmm switches to the arm stage here
   double arrival_position = 0.01;      ///< m
   double arrival_orientation = 2.0 * M_PI / 180.0;  ///< rad
@@ -193,6 +200,11 @@ class EhcQpController {
   void setMode(ControlMode m);
   const WholeBodyModel& model() const { return *model_; }
   const WristFlip& wristFlip() const { return *flip_; }
+  /// The QP back end (made from params().qp_solver).
+  const QpSolver& qpSolver() const;
+  /// Replaces the QP back end (e.g. a packaged solver, or a test double); throws
+  /// std::invalid_argument "[EhcQpController] ..." for a null solver.
+  void setQpSolver(std::unique_ptr<QpSolver> solver);
 
   /// The obstacle pairs step() turns into rows: those within obstacle_influence, nearest
   /// (distance - d_s) first, at most max_obstacle_rows. A non-finite, zero-normal or
@@ -205,8 +217,37 @@ class EhcQpController {
                             std::vector<std::pair<double, const ObstaclePair*>>* ranked, std::string* bad_pair) const;
 
  private:
-  struct Solver;
+  /// The QP solver and every per-cycle matrix (qp_controller.cpp).
+  struct Workspace;
+  /// DOF groups a mode holds out of the QP this cycle (tsmm stages).
+  struct HeldGroups {
+    bool base = false, arm = false;
+  };
   ControllerCommand fail(ControllerCommand c, const std::string& why) const;
+  // The stages of step(), in order; a std::string result is the failure ("" = none).
+  /// One FK pass: TCP pose (returned), whole-body Jacobian, manipulability gradient.
+  Eigen::Isometry3d updateKinematics(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q);
+  /// omega and sig(omega) of this cycle (given, evaluated, or none without a weighting).
+  void reportWeighting(const Eigen::Vector3d& base_pose, const Eigen::Isometry3d& T_tcp,
+                       const Eigen::Isometry3d& target, const EhcWeight* weight, ControllerCommand* out) const;
+  /// The mode's base weight and held groups (tsmm stage switch), and the arrival phase.
+  HeldGroups applyMode(const Vector6d& e, const Eigen::Isometry3d& target, double e_floor, ControllerCommand* out);
+  /// The turn term's TCP bearing in the base frame (unwound, see base_turn_unwinding).
+  double turnBearing(const Eigen::VectorXd& q);
+  /// Cost diagonal h and linear term c of [qd; delta].
+  void buildCost(const Eigen::VectorXd& q, double e_floor, const ControllerCommand& out);
+  /// Velocity and slack bounds, the held variables, the joint dampers as tightened bounds.
+  std::string buildBounds(const Eigen::VectorXd& q, const HeldGroups& held, ControllerCommand* out);
+  /// Obstacle damper rows (nearest pairs first, parallel rows merged).
+  std::string buildObstacleRows(const std::vector<ObstaclePair>& obstacles, ControllerCommand* out);
+  /// WristFlip: prescribes the wrist triple's rates (held) when a flip runs; true then.
+  bool applyWristFlip(const Eigen::VectorXd& q, const HeldGroups& held, ControllerCommand* out);
+  /// The free DOFs, the task rows over them and the QP's cost G, g (slack eliminated).
+  void buildTaskAndCost(const Vector6d& nu_e, bool release_orientation);
+  /// The QP's inequality rows C, d (bounds, slack bounds, obstacle dampers); returns their count.
+  int buildInequalities();
+  /// The command from the QP solution: held values, slack, bounds check and clamp.
+  std::string assembleCommand(ControllerCommand* out);
 
   std::shared_ptr<const WholeBodyModel> model_;
   QpControllerParams params_;
@@ -220,7 +261,7 @@ class EhcQpController {
   double last_bearing_ = 0.0;  ///< the turn term's unwound TCP bearing of the previous step
   bool have_bearing_ = false;
   Eigen::Vector3d tsmm_stage_target_ = Eigen::Vector3d::Zero();  ///< target position at the arm-stage switch
-  std::unique_ptr<Solver> solver_;
+  std::unique_ptr<Workspace> ws_;
   std::unique_ptr<WristFlip> flip_;
 };
 

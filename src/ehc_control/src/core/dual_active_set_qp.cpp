@@ -14,22 +14,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <iomanip>
-#include <istream>
 #include <limits>
-#include <ostream>
+#include <optional>
 #include <stdexcept>
 
 namespace ehc_control {
-
-std::string toString(QpSolveResult r) {
-  switch (r) {
-    case QpSolveResult::Solved: return "solved";
-    case QpSolveResult::Infeasible: return "infeasible";
-    case QpSolveResult::IterationLimit: return "iteration limit";
-  }
-  return "unknown";
-}
 
 namespace {
 
@@ -37,32 +26,6 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 /// n_p counts as linearly dependent on the active normals when the part of d = J^T n_p outside
 /// the active span is below this fraction of |d|.
 constexpr double kDependent = 1e-10;
-
-void writeMatrix(std::ostream& os, const char* name, const Eigen::MatrixXd& m) {
-  os << name << ' ' << m.rows() << ' ' << m.cols() << '\n';
-  for (Eigen::Index i = 0; i < m.rows(); ++i) {
-    for (Eigen::Index j = 0; j < m.cols(); ++j) os << (j ? " " : "") << m(i, j);
-    os << '\n';
-  }
-}
-
-void readMatrix(std::istream& is, const char* name, Eigen::MatrixXd& m) {
-  std::string tag;
-  Eigen::Index rows = 0, cols = 0;
-  if (!(is >> tag >> rows >> cols) || tag != name || rows < 0 || cols < 0)
-    throw std::runtime_error(std::string("[QpProblem] expected matrix '") + name + "', got '" + tag + "'");
-  m.resize(rows, cols);
-  for (Eigen::Index i = 0; i < rows; ++i)
-    for (Eigen::Index j = 0; j < cols; ++j)
-      if (!(is >> m(i, j))) throw std::runtime_error(std::string("[QpProblem] short matrix '") + name + "'");
-}
-
-void readVector(std::istream& is, const char* name, Eigen::VectorXd& v) {
-  Eigen::MatrixXd m;
-  readMatrix(is, name, m);
-  if (m.cols() != 1) throw std::runtime_error(std::string("[QpProblem] '") + name + "' must have 1 column");
-  v = m.col(0);
-}
 
 /// Givens rotation (c, s) with [c s; -s c] [a; b] = [h; 0]; returns h.
 double givens(double a, double b, double* c, double* s) {
@@ -87,31 +50,6 @@ void rotateColumns(Eigen::MatrixXd& M, Eigen::Index i, Eigen::Index j, double c,
 }
 
 }  // namespace
-
-void QpProblem::write(std::ostream& os) const {
-  const auto flags = os.flags();
-  const auto precision = os.precision();
-  os << std::setprecision(17);
-  writeMatrix(os, "G", G);
-  writeMatrix(os, "g", g);
-  writeMatrix(os, "A", A);
-  writeMatrix(os, "b", b);
-  writeMatrix(os, "C", C);
-  writeMatrix(os, "d", d);
-  os.flags(flags);
-  os.precision(precision);
-}
-
-QpProblem QpProblem::read(std::istream& is) {
-  QpProblem p;
-  readMatrix(is, "G", p.G);
-  readVector(is, "g", p.g);
-  readMatrix(is, "A", p.A);
-  readVector(is, "b", p.b);
-  readMatrix(is, "C", p.C);
-  readVector(is, "d", p.d);
-  return p;
-}
 
 std::vector<int> DualActiveSetQp::activeInequalities() const {
   std::vector<int> rows;
@@ -175,6 +113,20 @@ QpSolveResult DualActiveSetQp::solve(const Eigen::Ref<const Eigen::MatrixXd>& G,
                                      const Eigen::Ref<const Eigen::MatrixXd>& C,
                                      const Eigen::Ref<const Eigen::VectorXd>& d, Eigen::VectorXd* x,
                                      int max_iterations, double tolerance) {
+  start(G, g, A, b, C, d, x, max_iterations);
+  int next_equality = 0;
+  for (;;) {
+    int p = -1;
+    double bp = 0.0;
+    if (const auto done = pickConstraint(A, b, C, d, *x, tolerance, &next_equality, &p, &bp)) return *done;
+    if (const auto done = makeActive(p, bp, x, max_iterations, tolerance)) return *done;
+  }
+}
+
+void DualActiveSetQp::start(const Eigen::Ref<const Eigen::MatrixXd>& G, const Eigen::Ref<const Eigen::VectorXd>& g,
+                            const Eigen::Ref<const Eigen::MatrixXd>& A, const Eigen::Ref<const Eigen::VectorXd>& b,
+                            const Eigen::Ref<const Eigen::MatrixXd>& C, const Eigen::Ref<const Eigen::VectorXd>& d,
+                            Eigen::VectorXd* x, int max_iterations) {
   const Eigen::Index n = G.rows();
   if (n < 1 || G.cols() != n || g.size() != n || A.cols() != n || b.size() != A.rows() || C.cols() != n ||
       d.size() != C.rows())
@@ -205,89 +157,96 @@ QpSolveResult DualActiveSetQp::solve(const Eigen::Ref<const Eigen::MatrixXd>& G,
   // Unconstrained minimum.
   *x = -g;
   llt_.solveInPlace(*x);
+}
 
-  int next_equality = 0;
+std::optional<QpSolveResult> DualActiveSetQp::pickConstraint(const Eigen::Ref<const Eigen::MatrixXd>& A,
+                                                             const Eigen::Ref<const Eigen::VectorXd>& b,
+                                                             const Eigen::Ref<const Eigen::MatrixXd>& C,
+                                                             const Eigen::Ref<const Eigen::VectorXd>& d,
+                                                             const Eigen::VectorXd& x, double tolerance,
+                                                             int* next_equality, int* p_out, double* bp) {
+  int p = -1;
+  while (*next_equality < n_eq_ && p < 0) {
+    const int i = (*next_equality)++;
+    const double a_norm = A.row(i).norm();
+    const double residual = A.row(i).dot(x) - b[i];
+    if (a_norm == 0.0) {
+      if (std::abs(residual) > tolerance) return QpSolveResult::Infeasible;
+      continue;  // 0 = 0
+    }
+    // Violated with the sign that makes s_p < 0 (a satisfied equality is still added: it
+    // must stay satisfied while inequalities enter).
+    const double sign = residual > 0.0 ? -1.0 : 1.0;
+    np_ = sign * A.row(i).transpose();
+    *bp = sign * b[i];
+    p = i;
+  }
+  if (p < 0) {
+    double worst = tolerance;
+    for (int i = 0; i < n_in_; ++i) {
+      if (in_active_[static_cast<std::size_t>(i)] || row_norm_[i] == 0.0) {
+        if (row_norm_[i] == 0.0 && d[i] < -tolerance) return QpSolveResult::Infeasible;  // 0 <= d_i
+        continue;
+      }
+      const double violation = (C.row(i).dot(x) - d[i]) / row_norm_[i];
+      if (violation > worst) {
+        worst = violation;
+        p = n_eq_ + i;
+      }
+    }
+    if (p < 0) return QpSolveResult::Solved;
+    np_ = -C.row(p - n_eq_).transpose();
+    *bp = -d[p - n_eq_];
+  }
+  *p_out = p;
+  return std::nullopt;
+}
+
+std::optional<QpSolveResult> DualActiveSetQp::makeActive(int p, double bp, Eigen::VectorXd* x, int max_iterations,
+                                                         double tolerance) {
+  const bool p_equality = p < n_eq_;
+  const Eigen::Index n = n_;
+  double u_p = 0.0;  // multiplier of p
   for (;;) {
-    // --- step 1: the constraint p to add (equalities first, then the most violated inequality)
-    int p = -1;
-    double bp = 0.0;
-    while (next_equality < n_eq_ && p < 0) {
-      const int i = next_equality++;
-      const double a_norm = A.row(i).norm();
-      const double residual = A.row(i).dot(*x) - b[i];
-      if (a_norm == 0.0) {
-        if (std::abs(residual) > tolerance) return QpSolveResult::Infeasible;
-        continue;  // 0 = 0
-      }
-      // Violated with the sign that makes s_p < 0 (a satisfied equality is still added: it
-      // must stay satisfied while inequalities enter).
-      const double sign = residual > 0.0 ? -1.0 : 1.0;
-      np_ = sign * A.row(i).transpose();
-      bp = sign * b[i];
-      p = i;
+    if (iterations_ >= max_iterations) return QpSolveResult::IterationLimit;
+    const double s_p = np_.dot(*x) - bp;
+    d_.noalias() = J_.transpose() * np_;
+    const Eigen::Index free = n - k_;
+    const double d_norm2 = d_.squaredNorm();
+    const double d2_norm2 = d_.tail(free).squaredNorm();
+    const bool dependent = free == 0 || d2_norm2 <= kDependent * kDependent * d_norm2;
+    if (dependent) {
+      z_.setZero();
+    } else {
+      z_.noalias() = J_.rightCols(free) * d_.tail(free);
     }
-    if (p < 0) {
-      double worst = tolerance;
-      for (int i = 0; i < n_in_; ++i) {
-        if (in_active_[static_cast<std::size_t>(i)] || row_norm_[i] == 0.0) {
-          if (row_norm_[i] == 0.0 && d[i] < -tolerance) return QpSolveResult::Infeasible;  // 0 <= d_i
-          continue;
-        }
-        const double violation = (C.row(i).dot(*x) - d[i]) / row_norm_[i];
-        if (violation > worst) {
-          worst = violation;
-          p = n_eq_ + i;
-        }
-      }
-      if (p < 0) return QpSolveResult::Solved;
-      np_ = -C.row(p - n_eq_).transpose();
-      bp = -d[p - n_eq_];
-    }
-    const bool p_equality = p < n_eq_;
+    r_.head(k_) = d_.head(k_);
+    R_.topLeftCorner(k_, k_).triangularView<Eigen::Upper>().solveInPlace(r_.head(k_));
 
-    // --- step 2: primal/dual steps until p is active
-    double u_p = 0.0;  // multiplier of p
-    for (;;) {
-      if (iterations_ >= max_iterations) return QpSolveResult::IterationLimit;
-      const double s_p = np_.dot(*x) - bp;
-      d_.noalias() = J_.transpose() * np_;
-      const Eigen::Index free = n - k_;
-      const double d_norm2 = d_.squaredNorm();
-      const double d2_norm2 = d_.tail(free).squaredNorm();
-      const bool dependent = free == 0 || d2_norm2 <= kDependent * kDependent * d_norm2;
-      if (dependent) {
-        z_.setZero();
-      } else {
-        z_.noalias() = J_.rightCols(free) * d_.tail(free);
+    double t1 = kInf;  // partial step: an active inequality's multiplier reaches 0
+    int l = -1;
+    for (int j = 0; j < k_; ++j)
+      if (active_[static_cast<std::size_t>(j)] >= n_eq_ && r_[j] > 0.0 && u_[j] / r_[j] < t1) {
+        t1 = u_[j] / r_[j];
+        l = j;
       }
-      r_.head(k_) = d_.head(k_);
-      R_.topLeftCorner(k_, k_).triangularView<Eigen::Upper>().solveInPlace(r_.head(k_));
-
-      double t1 = kInf;  // partial step: an active inequality's multiplier reaches 0
-      int l = -1;
-      for (int j = 0; j < k_; ++j)
-        if (active_[static_cast<std::size_t>(j)] >= n_eq_ && r_[j] > 0.0 && u_[j] / r_[j] < t1) {
-          t1 = u_[j] / r_[j];
-          l = j;
-        }
-      const double t2 = dependent ? kInf : -s_p / d2_norm2;  // z^T n_p = |d2|^2
-      const double t = std::min(t1, t2);
-      if (t == kInf) {
-        // p depends on the active normals and no multiplier limits the dual step: no point
-        // meets p and the active constraints (a dependent equality already met is skipped).
-        if (p_equality && std::abs(s_p) <= tolerance * np_.norm()) break;
-        return QpSolveResult::Infeasible;
-      }
-      ++iterations_;
-      if (!dependent) *x += t * z_;
-      u_.head(k_) -= t * r_.head(k_);
-      u_p += t;
-      if (t2 <= t1) {
-        addToActiveSet(p, u_p);
-        break;
-      }
-      dropFromActiveSet(l);  // and step again towards p
+    const double t2 = dependent ? kInf : -s_p / d2_norm2;  // z^T n_p = |d2|^2
+    const double t = std::min(t1, t2);
+    if (t == kInf) {
+      // p depends on the active normals and no multiplier limits the dual step: no point
+      // meets p and the active constraints (a dependent equality already met is skipped).
+      if (p_equality && std::abs(s_p) <= tolerance * np_.norm()) return std::nullopt;
+      return QpSolveResult::Infeasible;
     }
+    ++iterations_;
+    if (!dependent) *x += t * z_;
+    u_.head(k_) -= t * r_.head(k_);
+    u_p += t;
+    if (t2 <= t1) {
+      addToActiveSet(p, u_p);
+      return std::nullopt;
+    }
+    dropFromActiveSet(l);  // and step again towards p
   }
 }
 

@@ -1,7 +1,7 @@
 #include "ehc_control/qp_controller.h"
 
 #include "ehc_common/config_node.h"
-#include "ehc_control/dual_active_set_qp.h"
+#include "ehc_control/qp_solver.h"
 #include "ehc_control/joint_limit_centring.h"
 
 #include <algorithm>
@@ -15,7 +15,13 @@ namespace ehc_control {
 
 namespace {
 const char* kOwner = "QpControllerParams";
+
+std::string knownQpSolvers() {
+  std::string known;
+  for (const std::string& n : qpSolverNames()) known += (known.empty() ? "" : ", ") + n;
+  return known;
 }
+}  // namespace
 
 std::string toString(ControlMode m) {
   switch (m) {
@@ -67,6 +73,10 @@ void QpControllerParams::validate() const {
   ehc_common::requireRange(kOwner, "obstacle_damper_gain", obstacle_damper_gain, 1e-3, 100.0);
   ehc_common::requireRange(kOwner, "max_obstacle_rows", max_obstacle_rows, 0, 1000);
   ehc_common::requireRange(kOwner, "max_qp_iterations", max_qp_iterations, 1, 100000);
+  const std::vector<std::string> solvers = qpSolverNames();
+  if (std::find(solvers.begin(), solvers.end(), qp_solver) == solvers.end())
+    throw std::invalid_argument("[QpControllerParams] qp_solver must be one of: " + knownQpSolvers() + " (got '" +
+                                qp_solver + "')");
   ehc_common::requireRange(kOwner, "tsmm_switch_distance", tsmm_switch_distance, 0.0, 5.0);
   ehc_common::requireRange(kOwner, "arrival_position", arrival_position, 1e-5, 1.0);
   ehc_common::requireRange(kOwner, "arrival_orientation", arrival_orientation, 1e-5, M_PI);
@@ -86,7 +96,7 @@ std::string QpControllerParams::summary() const {
      << " m, d_s " << obstacle_stop << " m";
   for (const auto& [link, d] : obstacle_stop_links) os << " (" << link << " " << d << " m)";
   os << ", gain " << obstacle_damper_gain << ", at most " << max_obstacle_rows << " rows (nearest first)"
-     << "; QP at most " << max_qp_iterations << " active-set iterations"
+     << "; QP " << qp_solver << ", at most " << max_qp_iterations << " iterations"
      << "; tsmm switch " << tsmm_switch_distance << " m; arrival " << arrival_position << " m / "
      << arrival_orientation * 180.0 / M_PI << " deg";
   return os.str();
@@ -131,6 +141,7 @@ QpControllerParams loadQpControllerParams(const ehc_common::ConfigNode& n) {
   p.obstacle_damper_gain = n.get("obstacle_damper_gain", p.obstacle_damper_gain);
   p.max_obstacle_rows = n.get("max_obstacle_rows", p.max_obstacle_rows);
   p.max_qp_iterations = n.get("max_qp_iterations", p.max_qp_iterations);
+  p.qp_solver = n.get("qp_solver", p.qp_solver);
   p.tsmm_switch_distance = n.get("tsmm_switch_distance", p.tsmm_switch_distance);
   p.arrival_position = n.get("arrival_position", p.arrival_position);
   p.arrival_orientation = n.get("arrival_orientation_deg", p.arrival_orientation * 180.0 / M_PI) * M_PI / 180.0;
@@ -148,8 +159,8 @@ Vector6d poseError(const Eigen::Isometry3d& tcp, const Eigen::Isometry3d& target
 
 /// The QP solver and every per-cycle matrix, sized on first use: once warm, step() allocates
 /// nothing but the returned command.
-struct EhcQpController::Solver {
-  DualActiveSetQp qp;                 ///< Goldfarb-Idnani, at most max_qp_iterations steps
+struct EhcQpController::Workspace {
+  std::unique_ptr<QpSolver> qp;       ///< params.qp_solver, at most max_qp_iterations steps
   Eigen::MatrixXd G, C;               ///< QP in the free rates: cost, inequality rows (top-left blocks used)
   Eigen::VectorXd g, d, x_free;
   Eigen::MatrixXd no_rows;            ///< 0 x nd: the QP has no equality rows
@@ -185,7 +196,7 @@ EhcQpController::EhcQpController(std::shared_ptr<const WholeBodyModel> model,
                                  const QpControllerParams& params,
                                  std::shared_ptr<const EhcWeighting> weighting)
     : model_(std::move(model)), params_(params), weighting_(std::move(weighting)),
-      solver_(std::make_unique<Solver>()) {
+      ws_(std::make_unique<Workspace>()) {
   if (!model_) throw std::invalid_argument("[EhcQpController] no whole-body model");
   // Per-link stop distances: robot.yaml's robot.obstacle_stop_distances, unless set in params.
   for (const auto& kv : model_->config().obstacle_stop_distances) params_.obstacle_stop_links.insert(kv);
@@ -199,15 +210,23 @@ EhcQpController::EhcQpController(std::shared_ptr<const WholeBodyModel> model,
   const RobotConfig& rc = model_->config();
   base_T_arm_ = model_->linkPoseInBase(rc.arm_ready, rc.arm_base_frame);
   vmax_ = rc.velocityLimits();
-  solver_->tcp_link = model_->linkIndex(rc.tcp_frame);
+  ws_->tcp_link = model_->linkIndex(rc.tcp_frame);
   yaw_joint_ = armYawJoint(*model_);
   flip_ = std::make_unique<WristFlip>(*model_, params_.wrist_flip);
-  solver_->last_arm_rates = Eigen::VectorXd::Zero(model_->nArm());
-  solver_->no_rows.resize(0, model_->nDof());
-  solver_->free.reserve(static_cast<std::size_t>(model_->nDof()));
+  ws_->last_arm_rates = Eigen::VectorXd::Zero(model_->nArm());
+  ws_->no_rows.resize(0, model_->nDof());
+  ws_->free.reserve(static_cast<std::size_t>(model_->nDof()));
+  ws_->qp = makeQpSolver(params_.qp_solver);
 }
 
 EhcQpController::~EhcQpController() = default;
+
+const QpSolver& EhcQpController::qpSolver() const { return *ws_->qp; }
+
+void EhcQpController::setQpSolver(std::unique_ptr<QpSolver> solver) {
+  if (!solver) throw std::invalid_argument("[EhcQpController] no QP solver");
+  ws_->qp = std::move(solver);
+}
 
 int armYawJoint(const WholeBodyModel& model) {
   const RobotConfig& rc = model.config();
@@ -307,9 +326,7 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
                                         const std::vector<ObstaclePair>& obstacles,
                                         const EhcWeight* weight) {
   const auto t0 = std::chrono::steady_clock::now();
-  const WholeBodyModel& m = *model_;
-  const RobotConfig& rc = m.config();
-  const int nb = m.nBase(), na = m.nArm(), nd = m.nDof(), nx = nd + 6;
+  const int na = model_->nArm(), nd = model_->nDof();
   ControllerCommand out;
   out.velocity = Eigen::VectorXd::Zero(nd);
 
@@ -319,15 +336,7 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
   if (!nu_e.allFinite()) return fail(out, "non-finite desired twist");
 
   // --- model: one FK pass; TCP pose, whole-body Jacobian, manipulability gradient
-  Solver& s = *solver_;
-  // The previous command's arm rates (for WristFlip); zero unless this step succeeds.
-  s.prev_arm_rates.swap(s.last_arm_rates);
-  s.last_arm_rates.setZero(na);
-  m.updateKinematics(base_pose, q, &s.kinematics);
-  const Eigen::Isometry3d T_tcp = s.kinematics.linkPose(s.tcp_link);
-  m.jacobian(s.kinematics, s.tcp_link, &s.J, &s.J_arm);
-  const Matrix6Xd& J = s.J;
-  m.manipulabilityGradientFromJacobian(s.J_arm, s.Jm);
+  const Eigen::Isometry3d T_tcp = updateKinematics(base_pose, q);
 
   // --- errors and weighting
   const Vector6d e = poseError(T_tcp, target);
@@ -335,25 +344,81 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
   out.orientation_error = e.tail<3>().norm();
   out.error_norm = e.cwiseAbs().sum();
   const double e_floor = std::max(out.error_norm, params_.min_error);
+  reportWeighting(base_pose, T_tcp, target, weight, &out);
+  const HeldGroups held = applyMode(e, target, e_floor, &out);
+
+  // --- cost, bounds and joint dampers, obstacle dampers, wrist flip
+  buildCost(q, e_floor, out);
+  std::string failure = buildBounds(q, held, &out);
+  if (!failure.empty()) return fail(out, failure);
+  failure = buildObstacleRows(obstacles, &out);
+  if (!failure.empty()) return fail(out, failure);
+  const bool flip = applyWristFlip(q, held, &out);
+
+  // --- the QP in the rates alone (see buildTaskAndCost), solved through the QpSolver interface
+  buildTaskAndCost(nu_e, held.arm || flip);
+  const int rows = buildInequalities();
+  Workspace& s = *ws_;
+  const int nf = static_cast<int>(s.free.size());
+  QpSolveResult solved = QpSolveResult::Infeasible;
+  try {
+    const QpProblemView problem(s.G.topLeftCorner(nf, nf), s.g.head(nf), s.no_rows.leftCols(nf), s.no_rhs,
+                                s.C.topLeftCorner(rows, nf), s.d.head(rows));
+    solved = s.qp->solve(problem, &s.x_free, params_.max_qp_iterations);
+  } catch (const std::invalid_argument& ex) {  // a cost that is not positive definite (not finite)
+    out.solve_time_us = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count();
+    return fail(out, std::string("QP: ") + ex.what());
+  }
+  out.solve_time_us = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count();
+  out.qp_iterations = s.qp->iterations();
+  if (solved == QpSolveResult::IterationLimit)
+    return fail(out, "QP iteration limit (" + std::to_string(params_.max_qp_iterations) +
+                         " active-set iterations, degenerate constraints)");
+  if (solved != QpSolveResult::Solved) return fail(out, "QP infeasible");
+  failure = assembleCommand(&out);
+  if (!failure.empty()) return fail(out, failure);
+  return out;
+}
+
+Eigen::Isometry3d EhcQpController::updateKinematics(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q) {
+  const WholeBodyModel& m = *model_;
+  Workspace& s = *ws_;
+  // The previous command's arm rates (for WristFlip); zero unless this step succeeds.
+  s.prev_arm_rates.swap(s.last_arm_rates);
+  s.last_arm_rates.setZero(m.nArm());
+  m.updateKinematics(base_pose, q, &s.kinematics);
+  const Eigen::Isometry3d T_tcp = s.kinematics.linkPose(s.tcp_link);
+  m.jacobian(s.kinematics, s.tcp_link, &s.J, &s.J_arm);
+  m.manipulabilityGradientFromJacobian(s.J_arm, s.Jm);
+  return T_tcp;
+}
+
+void EhcQpController::reportWeighting(const Eigen::Vector3d& base_pose, const Eigen::Isometry3d& T_tcp,
+                                      const Eigen::Isometry3d& target, const EhcWeight* weight,
+                                      ControllerCommand* out) const {
   if (weight) {
-    out.omega = weight->omega;
-    out.sig = weight->sig;
+    out->omega = weight->omega;
+    out->sig = weight->sig;
   } else if (weighting_) {
     const EhcWeight w = this->weight(base_pose, T_tcp.translation(), target.translation());
-    out.omega = w.omega;
-    out.sig = w.sig;
+    out->omega = w.omega;
+    out->sig = w.sig;
   }
-  bool lock_base = false, lock_arm = false;
+}
+
+EhcQpController::HeldGroups EhcQpController::applyMode(const Vector6d& e, const Eigen::Isometry3d& target,
+                                                       double e_floor, ControllerCommand* out) {
+  HeldGroups held;
   switch (params_.mode) {
     case ControlMode::Ehc:
-      out.base_weight = params_.ehc_base_weight_min +
-                        (params_.ehc_base_weight_max - params_.ehc_base_weight_min) * out.sig;
+      out->base_weight = params_.ehc_base_weight_min +
+                         (params_.ehc_base_weight_max - params_.ehc_base_weight_min) * out->sig;
       break;
     case ControlMode::NeoE:
-      out.base_weight = params_.arm_weight / e_floor;
+      out->base_weight = params_.arm_weight / e_floor;
       break;
     case ControlMode::NeoC:
-      out.base_weight = params_.neo_c_base_weight;
+      out->base_weight = params_.neo_c_base_weight;
       break;
     case ControlMode::Tsmm: {
       const double horizontal = e.head<2>().norm();
@@ -364,24 +429,21 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
         tsmm_arm_stage_ = true;
         tsmm_stage_target_ = target.translation();
       }
-      out.base_weight = params_.arm_weight;
-      lock_arm = !tsmm_arm_stage_;
-      lock_base = tsmm_arm_stage_;
-      out.phase = tsmm_arm_stage_ ? ControlPhase::TsmmArm : ControlPhase::TsmmBase;
+      out->base_weight = params_.arm_weight;
+      held.arm = !tsmm_arm_stage_;
+      held.base = tsmm_arm_stage_;
+      out->phase = tsmm_arm_stage_ ? ControlPhase::TsmmArm : ControlPhase::TsmmBase;
       break;
     }
   }
-  if (out.position_error < params_.arrival_position && out.orientation_error < params_.arrival_orientation)
-    out.phase = ControlPhase::Arrived;
+  if (out->position_error < params_.arrival_position && out->orientation_error < params_.arrival_orientation)
+    out->phase = ControlPhase::Arrived;
+  return held;
+}
 
-  // --- cost: Q diagonal, C
-  Eigen::VectorXd& h = s.h;
-  Eigen::VectorXd& c = s.c;
-  h.resize(nx);
-  c.setZero(nx);
-  h.head(nb).setConstant(out.base_weight);
-  h.segment(nb, na).setConstant(params_.arm_weight);
-  h.tail(6).setConstant(1.0 / e_floor);
+double EhcQpController::turnBearing(const Eigen::VectorXd& q) {
+  const Workspace& s = *ws_;
+  const RobotConfig& rc = model_->config();
   const Eigen::Vector3d tcp_in_base = s.kinematics.linkPoseInBase(s.tcp_link).translation();
   double bearing = std::atan2(tcp_in_base.y(), tcp_in_base.x());
   if (params_.base_turn_unwinding && yaw_joint_ >= 0) {
@@ -397,6 +459,21 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
     last_bearing_ = bearing;
     have_bearing_ = true;
   }
+  return bearing;
+}
+
+void EhcQpController::buildCost(const Eigen::VectorXd& q, double e_floor, const ControllerCommand& out) {
+  const RobotConfig& rc = model_->config();
+  const int nb = model_->nBase(), na = model_->nArm(), nx = model_->nDof() + 6;
+  Workspace& s = *ws_;
+  Eigen::VectorXd& h = s.h;
+  Eigen::VectorXd& c = s.c;
+  h.resize(nx);
+  c.setZero(nx);
+  h.head(nb).setConstant(out.base_weight);
+  h.segment(nb, na).setConstant(params_.arm_weight);
+  h.tail(6).setConstant(1.0 / e_floor);
+  const double bearing = turnBearing(q);
   c[nb - 1] = -params_.base_turn_gain * bearing;
   const double fade = params_.manipulability_fade_distance > 0.0
                           ? std::min(1.0, out.position_error / params_.manipulability_fade_distance)
@@ -405,8 +482,12 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
   if (params_.limit_centring_gain > 0.0)
     JointLimitCentring{params_.limit_centring_gain, params_.joint_influence, params_.joint_stop}
         .addGradient(q, rc.arm_lower, rc.arm_upper, c.segment(nb, na));
+}
 
-  // --- bounds
+std::string EhcQpController::buildBounds(const Eigen::VectorXd& q, const HeldGroups& groups, ControllerCommand* out) {
+  const RobotConfig& rc = model_->config();
+  const int nb = model_->nBase(), na = model_->nArm(), nd = model_->nDof(), nx = nd + 6;
+  Workspace& s = *ws_;
   Eigen::VectorXd& ub = s.ub;
   Eigen::VectorXd& lb = s.lb;
   ub.resize(nx);
@@ -418,7 +499,7 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
   // active at once, a degenerate active set.)
   std::vector<char>& held = s.held;
   held.assign(static_cast<std::size_t>(nx), 0);
-  for (int i = 0; i < nd; ++i) held[static_cast<std::size_t>(i)] = i < nb ? lock_base : lock_arm;
+  for (int i = 0; i < nd; ++i) held[static_cast<std::size_t>(i)] = i < nb ? groups.base : groups.arm;
 
   // --- joint-position velocity dampers (arm joints within the influence angle). A damper
   // constrains a single joint rate, so it is applied as a tightened bound (identical feasible
@@ -429,32 +510,39 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
     const double to_lower = q[i] - rc.arm_lower[i], to_upper = rc.arm_upper[i] - q[i];
     if (to_lower < pi) {
       lb[nb + i] = std::max(lb[nb + i], -params_.joint_damper_gain * (to_lower - ps) / (pi - ps));
-      ++out.joint_damper_rows;
+      ++out->joint_damper_rows;
     }
     if (to_upper < pi) {
       ub[nb + i] = std::min(ub[nb + i], params_.joint_damper_gain * (to_upper - ps) / (pi - ps));
-      ++out.joint_damper_rows;
+      ++out->joint_damper_rows;
     }
-    if (lb[nb + i] > ub[nb + i]) return fail(out, "joint " + rc.arm_joints[static_cast<std::size_t>(i)] + " dampers are contradictory");
+    if (lb[nb + i] > ub[nb + i]) return "joint " + rc.arm_joints[static_cast<std::size_t>(i)] + " dampers are contradictory";
   }
+  return std::string();
+}
 
+std::string EhcQpController::buildObstacleRows(const std::vector<ObstaclePair>& obstacles, ControllerCommand* out) {
+  const WholeBodyModel& m = *model_;
+  const int nd = m.nDof(), nx = nd + 6;
+  Workspace& s = *ws_;
+  const std::vector<char>& held = s.held;
   // --- obstacle velocity dampers, one row per link-obstacle pair closer than d_i
   std::string bad_pair;
   nearestObstaclePairs(obstacles, &s.nearest, &bad_pair);
-  if (!bad_pair.empty()) return fail(out, bad_pair);
+  if (!bad_pair.empty()) return bad_pair;
   const std::size_t n_pairs = s.nearest.size();  // <= max_obstacle_rows: buffers grow only
   if (s.row_a.rows() != nx || s.row_a.cols() < static_cast<Eigen::Index>(n_pairs))
     s.row_a.resize(nx, static_cast<Eigen::Index>(std::max<std::size_t>(n_pairs, 1)));
   if (s.row_b.size() < n_pairs) s.row_b.resize(n_pairs);
   if (s.pair_links.size() < n_pairs) {
     s.pair_links.resize(n_pairs);
-    for (Solver::PairLink& link : s.pair_links) link.name.reserve(64);  // a name change copies, no allocation
+    for (Workspace::PairLink& link : s.pair_links) link.name.reserve(64);  // a name change copies, no allocation
   }
   s.n_rows = 0;
   const double di = params_.obstacle_influence;
   for (std::size_t k = 0; k < n_pairs; ++k) {
     const ObstaclePair& o = *s.nearest[k].second;
-    Solver::PairLink& link = s.pair_links[k];  // link index and d_s, cached per row
+    Workspace::PairLink& link = s.pair_links[k];  // link index and d_s, cached per row
     if (link.index < 0 || link.name != o.link) {
       link.name = o.link;
       link.index = m.linkIndex(o.link);
@@ -474,7 +562,7 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
       if (held[static_cast<std::size_t>(i)]) a[i] = 0.0;
     double b = params_.obstacle_damper_gain * (o.distance - ds) / (di - ds);
     const double norm = a.norm();
-    ++out.obstacle_rows;
+    ++out->obstacle_rows;
     if (norm < 1e-9) continue;  // the link point cannot move along n: nothing to constrain
     a /= norm;
     b /= norm;
@@ -488,22 +576,37 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
       }
     if (!merged) s.row_b[static_cast<std::size_t>(s.n_rows++)] = b;
   }
+  return std::string();
+}
 
+bool EhcQpController::applyWristFlip(const Eigen::VectorXd& q, const HeldGroups& groups, ControllerCommand* out) {
+  const int nb = model_->nBase(), nx = model_->nDof() + 6;
+  Workspace& s = *ws_;
   // --- wrist flip (WristFlip): the triple's rates are prescribed (held at the flip rate, within
   // the bounds and dampers), the orientation rows go to the slack; not when arrived, with the
   // arm held, or with an obstacle within influence (the flip sweeps the hand).
-  const bool flip = flip_->update(q, s.prev_arm_rates, !lock_arm && out.phase != ControlPhase::Arrived && n_pairs == 0);
+  const bool flip =
+      flip_->update(q, s.prev_arm_rates, !groups.arm && out->phase != ControlPhase::Arrived && s.nearest.empty());
   s.fixed.setZero(nx);
   if (flip) {
     for (int k = 0; k < 3; ++k) {
       const int i = nb + flip_->first() + k;
-      held[static_cast<std::size_t>(i)] = 1;
-      s.fixed[i] = std::clamp(flip_->rates()[k], lb[i], ub[i]);
+      s.held[static_cast<std::size_t>(i)] = 1;
+      s.fixed[i] = std::clamp(flip_->rates()[k], s.lb[i], s.ub[i]);
     }
-    out.wrist_flip = true;
-    out.event = flip_->event();
+    out->wrist_flip = true;
+    out->event = flip_->event();
   }
+  return flip;
+}
 
+void EhcQpController::buildTaskAndCost(const Vector6d& nu_e, bool release_orientation) {
+  const int nd = model_->nDof();
+  Workspace& s = *ws_;
+  const Matrix6Xd& J = s.J;
+  const std::vector<char>& held = s.held;
+  const Eigen::VectorXd& h = s.h;
+  const Eigen::VectorXd& c = s.c;
   // --- the QP in the rates alone. The slack is what the task rows leave, delta = nu_e - J qd,
   // so its cost and bounds become terms in qd (the same optimum as with delta as variables and
   // [J I] x = nu_e as equality rows, in n_dof instead of n_dof + 6 variables, no equality rows):
@@ -521,7 +624,7 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
   for (int r = 0; r < 6; ++r) {
     // The tsmm base stage only brings the TCP to the target position (orientation comes with
     // the arm stage), and so does a wrist flip: their orientation rows are left to the slack.
-    s.task_released[r] = (lock_arm || flip) && r >= 3;
+    s.task_released[r] = release_orientation && r >= 3;
     double br = s.task_released[r] ? 0.0 : nu_e[r];
     if (!s.task_released[r])
       for (int k = 0; k < nd; ++k) {
@@ -541,6 +644,13 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
     s.G(a, a) += h[ia];
     s.g[a] = c[ia] - w_slack * s.task.col(ia).dot(s.task_rhs);
   }
+}
+
+int EhcQpController::buildInequalities() {
+  const int nd = model_->nDof();
+  Workspace& s = *ws_;
+  const std::vector<char>& held = s.held;
+  const int nf = static_cast<int>(s.free.size());
   const int n_in = 2 * nf + 12 + s.n_rows;
   if (s.C.rows() < n_in || s.C.cols() < nd) s.C.resize(std::max<Eigen::Index>(n_in, s.C.rows()), nd);
   if (s.d.size() < n_in) s.d.resize(s.C.rows());
@@ -549,9 +659,9 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
   for (int a = 0; a < nf; ++a) {  // velocity bounds and dampers
     const int i = s.free[static_cast<std::size_t>(a)];
     s.C(row, a) = 1.0;
-    s.d[row++] = ub[i];
+    s.d[row++] = s.ub[i];
     s.C(row, a) = -1.0;
-    s.d[row++] = -lb[i];
+    s.d[row++] = -s.lb[i];
   }
   for (int r = 0; r < 6; ++r) {  // slack bounds: |nu_e - J qd| <= delta+
     if (s.task_released[r]) continue;
@@ -569,22 +679,17 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
     for (int a = 0; a < nf; ++a) s.C(row, a) = s.row_a(s.free[static_cast<std::size_t>(a)], r);
     s.d[row++] = dr;
   }
+  return row;
+}
 
-  QpSolveResult solved = QpSolveResult::Infeasible;
-  try {
-    solved = s.qp.solve(s.G.topLeftCorner(nf, nf), s.g.head(nf), s.no_rows.leftCols(nf), s.no_rhs,
-                        s.C.topLeftCorner(row, nf), s.d.head(row), &s.x_free, params_.max_qp_iterations);
-  } catch (const std::invalid_argument& ex) {  // a cost that is not positive definite (not finite)
-    out.solve_time_us = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count();
-    return fail(out, std::string("QP: ") + ex.what());
-  }
-  out.solve_time_us = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count();
-  out.qp_iterations = s.qp.iterations();
-  if (solved == QpSolveResult::IterationLimit)
-    return fail(out, "QP iteration limit (" + std::to_string(params_.max_qp_iterations) +
-                         " active-set iterations, degenerate constraints)");
-  if (solved != QpSolveResult::Solved) return fail(out, "QP infeasible");
-  if (!s.x_free.allFinite()) return fail(out, "QP solution is not finite");
+std::string EhcQpController::assembleCommand(ControllerCommand* out) {
+  const int nb = model_->nBase(), na = model_->nArm(), nd = model_->nDof(), nx = nd + 6;
+  Workspace& s = *ws_;
+  const std::vector<char>& held = s.held;
+  const Eigen::VectorXd& lb = s.lb;
+  const Eigen::VectorXd& ub = s.ub;
+  const int nf = static_cast<int>(s.free.size());
+  if (!s.x_free.allFinite()) return "QP solution is not finite";
   Eigen::VectorXd& x = s.x_eigen;  // [qd; delta]
   x.resize(nx);
   for (int i = 0; i < nd; ++i) x[i] = s.fixed[i];
@@ -595,15 +700,15 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
   bool violates = false;  // held variables are not in the problem (their value is set above)
   for (int i = 0; i < nx; ++i)
     violates = violates || (!held[static_cast<std::size_t>(i)] && (x[i] - ub[i] > tol || lb[i] - x[i] > tol));
-  if (violates) return fail(out, "QP solution violates the velocity bounds");
+  if (violates) return "QP solution violates the velocity bounds";
   for (int i = 0; i < nx; ++i)
     if (!held[static_cast<std::size_t>(i)]) x[i] = std::clamp(x[i], lb[i], ub[i]);
-  out.velocity = x.head(nd);
-  s.last_arm_rates = out.velocity.segment(nb, na);
-  out.slack = x.tail<6>();
-  out.ok = true;
-  out.qp_status = QpStatus::Ok;
-  return out;
+  out->velocity = x.head(nd);
+  s.last_arm_rates = out->velocity.segment(nb, na);
+  out->slack = x.tail<6>();
+  out->ok = true;
+  out->qp_status = QpStatus::Ok;
+  return std::string();
 }
 
 }  // namespace ehc_control

@@ -2,6 +2,7 @@
 #include "ehc_perception/grasp_generator.h"
 
 #include "ehc_common/config_node.h"
+#include "ehc_control/geometry.h"
 
 #include <Eigen/Eigenvalues>
 #include <pcl/common/centroid.h>
@@ -433,11 +434,6 @@ std::string num(double v) {
   return os.str();
 }
 
-double rotationAngle(const Eigen::Matrix3d& A, const Eigen::Matrix3d& B) {
-  const double c = 0.5 * ((A.transpose() * B).trace() - 1.0);
-  return std::acos(std::max(-1.0, std::min(1.0, c)));
-}
-
 }  // namespace
 
 // ------------------------------------------------------------------------------ config
@@ -583,43 +579,63 @@ GraspGenerator::GraspGenerator(const GraspGeneratorConfig& config) : config_(con
 
 GraspGenerator::~GraspGenerator() = default;
 
-GraspResult GraspGenerator::generate(const PointList& object, const Eigen::Vector3d& viewpoint,
-                                     const Eigen::Vector4d* support_plane,
-                                     const PointList* collision_cloud) const {
-  const GraspGeneratorConfig& cfg = config_;
-  const GripperGeometry& g = cfg.gripper;
-  GraspResult res;
-  res.objects = 1;
-  res.input_points = static_cast<int>(object.size());
+namespace {
+
+/// One object prepared for the grasp search: its filtered cloud with normals and search tree,
+/// the collision environment, the centre of gravity, the principal subspaces and the support.
+struct PreparedObject {
+  Cloud::Ptr raw, cloud;
+  Normals::Ptr normals;
+  pcl::search::KdTree<pcl::PointXYZ>::Ptr tree;
+  Cloud::Ptr env;  ///< collision environment (the object, plus other geometry if given)
+  pcl::search::KdTree<pcl::PointXYZ>::Ptr env_tree;
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  std::vector<Eigen::MatrixXd> subspaces;
+  Eigen::Vector4d plane = Eigen::Vector4d::Zero();
+  bool has_plane = false;
+};
+
+/// Input checks and the voxel filter: false (and res->reason) if there is nothing to grasp.
+bool filterObject(const GraspGeneratorConfig& cfg, const PointList& object, const Eigen::Vector3d& viewpoint,
+                  PreparedObject* po, GraspResult* res) {
+  GraspResult& r = *res;
+  r.objects = 1;
+  r.input_points = static_cast<int>(object.size());
   if (object.empty()) {
-    res.reason = "empty cloud";
-    return res;
+    r.reason = "empty cloud";
+    return false;
   }
-  Cloud::Ptr raw = toCloud(object, &res.finite_points);
-  if (res.finite_points == 0) {
-    res.reason = "no finite points (" + std::to_string(object.size()) + " points, all NaN/Inf)";
-    return res;
+  po->raw = toCloud(object, &r.finite_points);
+  if (r.finite_points == 0) {
+    r.reason = "no finite points (" + std::to_string(object.size()) + " points, all NaN/Inf)";
+    return false;
   }
   if (!viewpoint.allFinite()) {
-    res.reason = "viewpoint is not finite";
-    return res;
+    r.reason = "viewpoint is not finite";
+    return false;
   }
-  Cloud::Ptr cloud = voxelFilter(raw, cfg.voxel_size);
-  if (static_cast<int>(cloud->size()) < cfg.min_object_points) {
-    res.reason = "only " + std::to_string(cloud->size()) + " points after the " +
-                 std::to_string(cfg.voxel_size) + " m voxel filter (min_object_points " +
-                 std::to_string(cfg.min_object_points) + ")";
-    return res;
+  po->cloud = voxelFilter(po->raw, cfg.voxel_size);
+  if (static_cast<int>(po->cloud->size()) < cfg.min_object_points) {
+    r.reason = "only " + std::to_string(po->cloud->size()) + " points after the " +
+               std::to_string(cfg.voxel_size) + " m voxel filter (min_object_points " +
+               std::to_string(cfg.min_object_points) + ")";
+    return false;
   }
+  return true;
+}
 
+/// Centre of gravity, principal axes and support plane (given, or the lowest point along up if
+/// assume_support_below): false (and res->reason) for a support plane that is not finite.
+bool describeObject(const GraspGeneratorConfig& cfg, const Eigen::Vector4d* support_plane, PreparedObject* po,
+                    GraspResult* res) {
+  const Cloud& cloud = *po->cloud;
   // Centre of gravity and principal axes.
   Eigen::Matrix3f covf = Eigen::Matrix3f::Zero();
   Eigen::Vector4f cenf = Eigen::Vector4f::Zero();
-  pcl::computeMeanAndCovarianceMatrix(*cloud, covf, cenf);
-  const Eigen::Vector3d centroid = cenf.head<3>().cast<double>();
-  res.centroids.push_back(centroid);
-  const std::vector<Eigen::MatrixXd> subspaces =
-      principalSubspaces(covf.cast<double>(), cfg.pca_isotropy_ratio);
+  pcl::computeMeanAndCovarianceMatrix(cloud, covf, cenf);
+  po->centroid = cenf.head<3>().cast<double>();
+  res->centroids.push_back(po->centroid);
+  po->subspaces = principalSubspaces(covf.cast<double>(), cfg.pca_isotropy_ratio);
 
   // Support plane.
   const Eigen::Vector3d up = cfg.up;
@@ -627,45 +643,53 @@ GraspResult GraspGenerator::generate(const PointList& object, const Eigen::Vecto
   bool has_plane = false;
   if (support_plane) {
     if (!support_plane->allFinite() || support_plane->head<3>().norm() < 1e-9) {
-      res.reason = "support plane is not finite";
-      return res;
+      res->reason = "support plane is not finite";
+      return false;
     }
     plane = *support_plane / support_plane->head<3>().norm();
     if (plane.head<3>().dot(up) < 0) plane = -plane;
     has_plane = true;
   } else if (cfg.assume_support_below) {
     double lowest = std::numeric_limits<double>::max();
-    for (const auto& p : *cloud) lowest = std::min(lowest, up.dot(p.getVector3fMap().cast<double>()));
+    for (const auto& p : cloud) lowest = std::min(lowest, up.dot(p.getVector3fMap().cast<double>()));
     plane << up, -lowest;
     has_plane = true;
   }
-  res.support_plane_found = has_plane;
-  res.support_plane = plane;
+  res->support_plane_found = has_plane;
+  res->support_plane = plane;
+  po->plane = plane;
+  po->has_plane = has_plane;
+  return true;
+}
 
-  // Normals (sign-free use: antipodality is tested with |n . y|).
+/// Normals (sign-free use: antipodality is tested with |n . y|) and the collision environment
+/// (the object, plus `collision_cloud` if given, voxel-filtered together).
+void estimateNormalsAndEnvironment(const GraspGeneratorConfig& cfg, const PointList* collision_cloud,
+                                   PreparedObject* po) {
   // Unsorted radius results: the neighbourhoods here are large and their order is irrelevant.
-  pcl::search::KdTree<pcl::PointXYZ>::Ptr tree(new pcl::search::KdTree<pcl::PointXYZ>(false));
-  tree->setInputCloud(cloud);
-  Normals::Ptr normals(new Normals);
+  po->tree.reset(new pcl::search::KdTree<pcl::PointXYZ>(false));
+  po->tree->setInputCloud(po->cloud);
+  po->normals.reset(new Normals);
   pcl::NormalEstimation<pcl::PointXYZ, pcl::Normal> ne;
-  ne.setInputCloud(cloud);
-  ne.setSearchMethod(tree);
+  ne.setInputCloud(po->cloud);
+  ne.setSearchMethod(po->tree);
   ne.setRadiusSearch(cfg.normal_radius);
-  ne.compute(*normals);
+  ne.compute(*po->normals);
 
   // Collision environment (the object, plus other geometry if given).
-  Cloud::Ptr env = cloud;
-  pcl::search::KdTree<pcl::PointXYZ>::Ptr env_tree = tree;
+  po->env = po->cloud;
+  po->env_tree = po->tree;
   if (collision_cloud && !collision_cloud->empty()) {
     Cloud::Ptr both = toCloud(*collision_cloud);
-    *both += *raw;
-    env = voxelFilter(both, cfg.voxel_size);
-    env_tree.reset(new pcl::search::KdTree<pcl::PointXYZ>(false));
-    env_tree->setInputCloud(env);
+    *both += *po->raw;
+    po->env = voxelFilter(both, cfg.voxel_size);
+    po->env_tree.reset(new pcl::search::KdTree<pcl::PointXYZ>(false));
+    po->env_tree->setInputCloud(po->env);
   }
+}
 
-  // Seeds.
-  const int n = static_cast<int>(cloud->size());
+/// Contact seeds: every point of the filtered cloud, or max_seeds of them (shuffled with `seed`).
+std::vector<int> sampleSeeds(int n, const GraspGeneratorConfig& cfg) {
   std::vector<int> seeds(static_cast<std::size_t>(n));
   std::iota(seeds.begin(), seeds.end(), 0);
   std::mt19937 rng(cfg.seed);
@@ -673,149 +697,210 @@ GraspResult GraspGenerator::generate(const PointList& object, const Eigen::Vecto
     std::shuffle(seeds.begin(), seeds.end(), rng);
     seeds.resize(static_cast<std::size_t>(cfg.max_seeds));
   }
+  return seeds;
+}
 
-  const double cos_fc = std::cos(cfg.friction_cone_deg * kDeg);
-  const double cos_tilt = std::cos(cfg.max_approach_tilt_deg * kDeg);
-  const Eigen::Vector3d ref = Eigen::Vector3d(0.31, 0.52, 0.79).normalized();
-  const double check_radius =
-      std::sqrt(std::pow(0.5 * std::max(g.palm_width, g.max_width + 2 * g.finger_thickness), 2) +
-                std::pow(0.5 * std::max(g.palm_breadth, g.finger_breadth), 2) +
-                std::pow(g.finger_length + g.palm_height, 2));
-  const double sigma = cfg.centroid_sigma_deg * kDeg;
+/// Hypotheses: (closing axis, centre, antipodal quality). Antipodal contact pairs; and the
+/// seed's own normal as closing axis with the far contact unseen (single-view clouds): the
+/// object's extent along that axis stands in for the unseen side (penalised quality).
+struct Hyp {
+  Eigen::Vector3d y, c0, u, v;
+  double q;
+  bool single;
+  ExtentHint hint;
+};
 
-  GripperCheck check(cfg, plane, has_plane);
-  std::vector<int> idx;
-  std::vector<float> d2;
-  std::vector<Eigen::Vector3d> nbrs;
+/// A (hypothesis, approach step) with its optimistic score (before the collision checks).
+struct Pending {
+  double prescore;
+  int hyp, step;
+};
 
-  auto score = [&](Candidate& cd) {
-    const Eigen::Vector3d a = cd.R.col(2);
-    const Eigen::Vector3d o = cd.c - cfg.approach_standoff * a;
-    const Eigen::Vector3d to_g = centroid - o;
-    const double th = std::acos(std::max(-1.0, std::min(1.0, a.dot(to_g.normalized()))));
-    cd.wc = std::exp(-0.5 * (th / sigma) * (th / sigma));
-    cd.wp = std::pow(alignment(subspaces, cd.R.col(1)), cfg.pca_power) *
-            std::pow(alignment(subspaces, a), cfg.pca_approach_power);
-    cd.score = cd.antipodal * cd.wc * cd.wp;
-  };
+/// The grasp search on one prepared object: hypotheses, approaches, collision checks, scoring,
+/// non-maximum suppression and refinement. Holds the search's constants and its neighbourhood
+/// buffers (shared by the stages).
+class GraspSearch {
+ public:
+  GraspSearch(const GraspGeneratorConfig& cfg, const PreparedObject& po)
+      : cfg_(cfg), g_(cfg.gripper), po_(po), check_(cfg, po.plane, po.has_plane),
+        cos_fc_(std::cos(cfg.friction_cone_deg * kDeg)),
+        cos_tilt_(std::cos(cfg.max_approach_tilt_deg * kDeg)),
+        check_radius_(std::sqrt(
+            std::pow(0.5 * std::max(g_.palm_width, g_.max_width + 2 * g_.finger_thickness), 2) +
+            std::pow(0.5 * std::max(g_.palm_breadth, g_.finger_breadth), 2) +
+            std::pow(g_.finger_length + g_.palm_height, 2))),
+        sigma_(cfg.centroid_sigma_deg * kDeg) {}
 
-  // Hypotheses: (closing axis, centre, antipodal quality). Antipodal contact pairs; and the
-  // seed's own normal as closing axis with the far contact unseen (single-view clouds): the
-  // object's extent along that axis stands in for the unseen side (penalised quality).
-  struct Hyp {
-    Eigen::Vector3d y, c0, u, v;
-    double q;
-    bool single;
-    ExtentHint hint;
-  };
+  /// Antipodal pairs and single-contact hypotheses of the seeds; *any_pair: a pair was found.
+  std::vector<Hyp> contactHypotheses(const std::vector<int>& seeds, bool* any_pair);
+  /// Footprint hypotheses (object on a support), and the round-section hints of every hypothesis.
+  void addFootprintHypotheses(std::vector<Hyp>* hyps);
+  /// The margin rule's "too wide" reason ("" if the footprint fits the opening, or no footprint).
+  std::string tooWide() const;
+  /// Every (hypothesis, approach) within the tilt limit, best optimistic score first; sets each
+  /// hypothesis's approach basis (u, v).
+  std::vector<Pending> rankApproaches(std::vector<Hyp>* hyps);
+  /// Collision checks best first, until enough candidates pass or max_evaluations.
+  std::vector<Candidate> checkCandidates(const std::vector<Hyp>& hyps, const std::vector<Pending>& pending);
+  /// GS-Net*-style score of a candidate (antipodal x centroid x PCA weight).
+  void score(Candidate& cd) const;
+  /// Non-maximum suppression of `in` (best first): at most `limit`.
+  std::vector<Candidate> suppress(const std::vector<Candidate>& in, std::size_t limit) const;
+  /// Refinement: move along the finger breadth axis (x) onto the centroid's projection.
+  void refineOntoCentroid(std::vector<Candidate>* kept);
+  /// Depth refinement: push along the approach axis while the check passes (see the header).
+  void refineDepth(std::vector<Candidate>* kept);
+
+ private:
+  /// Environment points within `radius` of `centre` into nbrs_.
+  void gather(const Eigen::Vector3d& centre, double radius);
+  /// The gripper with cd's rotation, centred near c0 (re-centred along the closing axis by
+  /// evaluate), approach unchanged ((cphi, sphi) = (1, 0)). nbrs_ must hold the environment
+  /// within check_radius_ of c0.
+  bool checkAt(const Candidate& cd, const Eigen::Vector3d& c0, Candidate* out);
+
+  const GraspGeneratorConfig& cfg_;
+  const GripperGeometry& g_;
+  const PreparedObject& po_;
+  GripperCheck check_;
+  const double cos_fc_, cos_tilt_;
+  const Eigen::Vector3d ref_ = Eigen::Vector3d(0.31, 0.52, 0.79).normalized();
+  const double check_radius_;
+  const double sigma_;
+  Footprint footprint_;
+  bool use_footprint_ = false;
+  std::vector<int> idx_;
+  std::vector<float> d2_;
+  std::vector<Eigen::Vector3d> nbrs_;
+};
+
+void GraspSearch::score(Candidate& cd) const {
+  const Eigen::Vector3d a = cd.R.col(2);
+  const Eigen::Vector3d o = cd.c - cfg_.approach_standoff * a;
+  const Eigen::Vector3d to_g = po_.centroid - o;
+  const double th = std::acos(std::max(-1.0, std::min(1.0, a.dot(to_g.normalized()))));
+  cd.wc = std::exp(-0.5 * (th / sigma_) * (th / sigma_));
+  cd.wp = std::pow(alignment(po_.subspaces, cd.R.col(1)), cfg_.pca_power) *
+          std::pow(alignment(po_.subspaces, a), cfg_.pca_approach_power);
+  cd.score = cd.antipodal * cd.wc * cd.wp;
+}
+
+std::vector<Hyp> GraspSearch::contactHypotheses(const std::vector<int>& seeds, bool* any_pair) {
+  const Cloud& cloud = *po_.cloud;
+  const Normals& normals = *po_.normals;
   std::vector<Hyp> hyps;
-  bool any_pair = false;
   for (int i : seeds) {
-    const Eigen::Vector3d pi = pt(*cloud, i);
-    const Eigen::Vector3d ni = (*normals)[static_cast<std::size_t>(i)].getNormalVector3fMap().cast<double>();
+    const Eigen::Vector3d pi = pt(cloud, i);
+    const Eigen::Vector3d ni = normals[static_cast<std::size_t>(i)].getNormalVector3fMap().cast<double>();
     if (!ni.allFinite() || ni.norm() < 0.5) continue;
-    tree->radiusSearch((*cloud)[static_cast<std::size_t>(i)], g.max_width, idx, d2);
+    po_.tree->radiusSearch(cloud[static_cast<std::size_t>(i)], g_.max_width, idx_, d2_);
     std::vector<std::pair<double, int>> partners;
-    for (int j : idx) {
-      const Eigen::Vector3d d = pt(*cloud, j) - pi;
+    for (int j : idx_) {
+      const Eigen::Vector3d d = pt(cloud, j) - pi;
       const double L = d.norm();
-      if (L < 2.0 * cfg.voxel_size || L + 2.0 * g.clearance > g.max_width) continue;
+      if (L < 2.0 * cfg_.voxel_size || L + 2.0 * g_.clearance > g_.max_width) continue;
       const Eigen::Vector3d y = d / L;
-      const Eigen::Vector3d nj = (*normals)[static_cast<std::size_t>(j)].getNormalVector3fMap().cast<double>();
+      const Eigen::Vector3d nj = normals[static_cast<std::size_t>(j)].getNormalVector3fMap().cast<double>();
       if (!nj.allFinite()) continue;
       const double q = std::min(std::abs(ni.dot(y)), std::abs(nj.dot(y)));
-      if (q >= cos_fc) partners.emplace_back(q, j);
+      if (q >= cos_fc_) partners.emplace_back(q, j);
     }
-    const std::size_t keep = std::min(partners.size(), static_cast<std::size_t>(cfg.pairs_per_seed));
+    const std::size_t keep = std::min(partners.size(), static_cast<std::size_t>(cfg_.pairs_per_seed));
     std::partial_sort(partners.begin(), partners.begin() + static_cast<long>(keep), partners.end(),
                       [](const auto& a, const auto& b) { return a.first > b.first; });
-    if (keep > 0) any_pair = true;
+    if (keep > 0) *any_pair = true;
     for (std::size_t k = 0; k < keep; ++k) {
-      const Eigen::Vector3d pj = pt(*cloud, partners[k].second);
+      const Eigen::Vector3d pj = pt(cloud, partners[k].second);
       hyps.push_back({(pj - pi).normalized(), 0.5 * (pi + pj), {}, {}, partners[k].first, false, {}});
     }
-    if (cfg.single_contact_weight > 0.0) {
+    if (cfg_.single_contact_weight > 0.0) {
       // Renormalised in double: the float normal's unit length is only float-accurate,
       // and this axis becomes a column of the grasp rotation.
       const Eigen::Vector3d n_out =
-          (ni.dot(pi - centroid) >= 0 ? ni : Eigen::Vector3d(-ni)).normalized();
-      hyps.push_back({n_out, pi - n_out * (0.5 * g.max_width - g.clearance), {}, {},
-                      cfg.single_contact_weight, true, {}});
+          (ni.dot(pi - po_.centroid) >= 0 ? ni : Eigen::Vector3d(-ni)).normalized();
+      hyps.push_back({n_out, pi - n_out * (0.5 * g_.max_width - g_.clearance), {}, {},
+                      cfg_.single_contact_weight, true, {}});
     }
   }
+  return hyps;
+}
+
+void GraspSearch::addFootprintHypotheses(std::vector<Hyp>* hyps) {
   // Footprint hypotheses (object on a support): close along the axes of the footprint's
   // least-area rectangle, parallel to the support, width = the object's extent (see
   // supportFootprint). They find the grasp across a lying cylinder, whose single-view cloud
   // shows its sides only at grazing angles (no antipodal pair there, normals tilted up).
-  Footprint footprint;
-  const bool use_footprint = has_plane && cfg.footprint_weight > 0.0;
-  if (use_footprint) {
-    footprint = supportFootprint(*cloud, plane, static_cast<std::size_t>(cfg.max_collision_points),
-                                 centroid);
-    // An upright round object (its footprint a circle, the far side unseen): the circle gives
-    // its width across every axis parallel to the support, for every hypothesis (a closing on
-    // a chord short of the diameter would push it until the diameter is between the fingers).
-    const ExtentHint upright = roundCrossSection(*cloud, *normals, plane, footprint.axis[0], plane.head<3>(),
-                                                 centroid, cfg.round_fit_tolerance);
-    if (upright.valid) {
-      const Eigen::Vector3d c = 0.5 * (upright.a + upright.b);
-      const double r = 0.5 * (upright.b - upright.a).norm();
-      for (Hyp& h : hyps) {
-        const Eigen::Vector3d yh = h.y - h.y.dot(plane.head<3>()) * plane.head<3>();
-        if (yh.norm() < 0.5) continue;  // closing across the support: not this section
-        h.hint = {true, c - r * yh.normalized(), c + r * yh.normalized()};
-      }
-    }
-    for (int a = 0; a < 2; ++a) {
-      // A round cross-section across this axis (a cylinder lying along the other axis, seen
-      // from one side down to grazing angles) is completed by its circle likewise.
-      ExtentHint hint = roundCrossSection(*cloud, *normals, plane, footprint.axis[a], footprint.axis[1 - a],
-                                          centroid, cfg.round_fit_tolerance);
-      if (!hint.valid && upright.valid) {
-        const Eigen::Vector3d c = 0.5 * (upright.a + upright.b);
-        const double r = 0.5 * (upright.b - upright.a).norm();
-        hint = {true, c - r * footprint.axis[a], c + r * footprint.axis[a]};
-      }
-      if (hint.valid) {
-        footprint.width[a] = std::max(footprint.width[a], footprint.axis[a].dot(hint.b - hint.a));
-        // Centre the hypothesis on the completed section.
-        footprint.centre += footprint.axis[a] * (0.5 * footprint.axis[a].dot(hint.a + hint.b) -
-                                                 footprint.axis[a].dot(footprint.centre));
-      }
-      hyps.push_back({footprint.axis[a], footprint.centre, {}, {}, cfg.footprint_weight, true, hint});
+  use_footprint_ = po_.has_plane && cfg_.footprint_weight > 0.0;
+  if (!use_footprint_) return;
+  const Cloud& cloud = *po_.cloud;
+  const Normals& normals = *po_.normals;
+  const Eigen::Vector4d& plane = po_.plane;
+  Footprint& footprint = footprint_;
+  footprint = supportFootprint(cloud, plane, static_cast<std::size_t>(cfg_.max_collision_points), po_.centroid);
+  // An upright round object (its footprint a circle, the far side unseen): the circle gives
+  // its width across every axis parallel to the support, for every hypothesis (a closing on
+  // a chord short of the diameter would push it until the diameter is between the fingers).
+  const ExtentHint upright = roundCrossSection(cloud, normals, plane, footprint.axis[0], plane.head<3>(),
+                                               po_.centroid, cfg_.round_fit_tolerance);
+  if (upright.valid) {
+    const Eigen::Vector3d c = 0.5 * (upright.a + upright.b);
+    const double r = 0.5 * (upright.b - upright.a).norm();
+    for (Hyp& h : *hyps) {
+      const Eigen::Vector3d yh = h.y - h.y.dot(plane.head<3>()) * plane.head<3>();
+      if (yh.norm() < 0.5) continue;  // closing across the support: not this section
+      h.hint = {true, c - r * yh.normalized(), c + r * yh.normalized()};
     }
   }
+  for (int a = 0; a < 2; ++a) {
+    // A round cross-section across this axis (a cylinder lying along the other axis, seen
+    // from one side down to grazing angles) is completed by its circle likewise.
+    ExtentHint hint = roundCrossSection(cloud, normals, plane, footprint.axis[a], footprint.axis[1 - a],
+                                        po_.centroid, cfg_.round_fit_tolerance);
+    if (!hint.valid && upright.valid) {
+      const Eigen::Vector3d c = 0.5 * (upright.a + upright.b);
+      const double r = 0.5 * (upright.b - upright.a).norm();
+      hint = {true, c - r * footprint.axis[a], c + r * footprint.axis[a]};
+    }
+    if (hint.valid) {
+      footprint.width[a] = std::max(footprint.width[a], footprint.axis[a].dot(hint.b - hint.a));
+      // Centre the hypothesis on the completed section.
+      footprint.centre += footprint.axis[a] * (0.5 * footprint.axis[a].dot(hint.a + hint.b) -
+                                               footprint.axis[a].dot(footprint.centre));
+    }
+    hyps->push_back({footprint.axis[a], footprint.centre, {}, {}, cfg_.footprint_weight, true, hint});
+  }
+}
+
+std::string GraspSearch::tooWide() const {
   // The margin rule's "too wide" reason: the footprint's narrowest side needs more than the
   // opening (only used when no grasp is found).
-  auto tooWide = [&]() -> std::string {
-    if (!use_footprint) return "";
-    const double narrowest = std::min(footprint.width[0], footprint.width[1]);
-    if (narrowest + 2.0 * g.clearance <= g.max_width) return "";
-    return "too wide: the object measures " + num(narrowest) +
-           " m across its narrowest axis parallel to the support; the gripper opens " +
-           num(g.max_width) + " m and needs " + num(g.clearance) +
-           " m clearance each side (objects up to " + num(g.max_width - 2.0 * g.clearance) +
-           " m)";
-  };
+  if (!use_footprint_) return "";
+  const double narrowest = std::min(footprint_.width[0], footprint_.width[1]);
+  if (narrowest + 2.0 * g_.clearance <= g_.max_width) return "";
+  return "too wide: the object measures " + num(narrowest) +
+         " m across its narrowest axis parallel to the support; the gripper opens " +
+         num(g_.max_width) + " m and needs " + num(g_.clearance) +
+         " m clearance each side (objects up to " + num(g_.max_width - 2.0 * g_.clearance) +
+         " m)";
+}
+
+std::vector<Pending> GraspSearch::rankApproaches(std::vector<Hyp>* hyps) {
   // Every (hypothesis, approach) with an optimistic score (before the collision checks,
   // which are the expensive part): candidates are checked best first until enough pass.
-  struct Pending {
-    double prescore;
-    int hyp, step;
-  };
+  const Eigen::Vector3d up = cfg_.up;
   std::vector<Pending> pending;
-  for (std::size_t h = 0; h < hyps.size(); ++h) {
-    Hyp& hp = hyps[h];
-    if (hp.y.dot(ref) < 0) hp.y = -hp.y;
+  for (std::size_t h = 0; h < hyps->size(); ++h) {
+    Hyp& hp = (*hyps)[h];
+    if (hp.y.dot(ref_) < 0) hp.y = -hp.y;
     // Approach basis perpendicular to y, u = the most downward direction.
     Eigen::Vector3d u = -up - (-up).dot(hp.y) * hp.y;
     if (u.norm() < 1e-6) u = hp.y.unitOrthogonal();
     hp.u = u.normalized();
     hp.v = hp.y.cross(hp.u);
-    for (int s = 0; s < cfg.approach_steps; ++s) {
-      const double phi = 2.0 * M_PI * s / cfg.approach_steps;
+    for (int s = 0; s < cfg_.approach_steps; ++s) {
+      const double phi = 2.0 * M_PI * s / cfg_.approach_steps;
       const Eigen::Vector3d a = std::cos(phi) * hp.u + std::sin(phi) * hp.v;
-      if (a.dot(-up) < cos_tilt - 1e-12) continue;
+      if (a.dot(-up) < cos_tilt_ - 1e-12) continue;
       Candidate cd;
       cd.R.col(2) = a;
       cd.R.col(1) = hp.y;
@@ -828,12 +913,16 @@ GraspResult GraspGenerator::generate(const PointList& object, const Eigen::Vecto
   }
   std::stable_sort(pending.begin(), pending.end(),
                    [](const Pending& a, const Pending& b) { return a.prescore > b.prescore; });
+  return pending;
+}
+
+std::vector<Candidate> GraspSearch::checkCandidates(const std::vector<Hyp>& hyps, const std::vector<Pending>& pending) {
   std::vector<Candidate> cands;
   std::map<int, GripperCheck::Prepared> prepared;
-  const std::size_t enough = static_cast<std::size_t>(std::max(4 * cfg.top_k, 40));
+  const std::size_t enough = static_cast<std::size_t>(std::max(4 * cfg_.top_k, 40));
   int evaluations = 0;
   for (const Pending& pd : pending) {
-    if (cands.size() >= enough || evaluations >= cfg.max_evaluations) break;
+    if (cands.size() >= enough || evaluations >= cfg_.max_evaluations) break;
     ++evaluations;
     const Hyp& hp = hyps[static_cast<std::size_t>(pd.hyp)];
     auto it = prepared.find(pd.hyp);
@@ -841,23 +930,154 @@ GraspResult GraspGenerator::generate(const PointList& object, const Eigen::Vecto
       // Neighbourhood of the grasp for the collision checks (shared by all approaches).
       pcl::PointXYZ pc(static_cast<float>(hp.c0.x()), static_cast<float>(hp.c0.y()),
                        static_cast<float>(hp.c0.z()));
-      env_tree->radiusSearch(pc, check_radius, idx, d2);
-      nbrs.clear();
-      for (int e : idx) nbrs.push_back(pt(*env, e));
+      po_.env_tree->radiusSearch(pc, check_radius_, idx_, d2_);
+      nbrs_.clear();
+      for (int e : idx_) nbrs_.push_back(pt(*po_.env, e));
       it = prepared.emplace(pd.hyp, GripperCheck::Prepared()).first;
-      check.prepare(hp.c0, hp.y, hp.u, nbrs, hp.single ? cloud.get() : nullptr, hp.hint, &it->second);
+      check_.prepare(hp.c0, hp.y, hp.u, nbrs_, hp.single ? po_.cloud.get() : nullptr, hp.hint, &it->second);
     }
-    const double phi = 2.0 * M_PI * pd.step / cfg.approach_steps;
+    const double phi = 2.0 * M_PI * pd.step / cfg_.approach_steps;
     Candidate cd;
-    if (!check.evaluate(it->second, std::cos(phi), std::sin(phi), &cd.R, &cd.c, &cd.width))
+    if (!check_.evaluate(it->second, std::cos(phi), std::sin(phi), &cd.R, &cd.c, &cd.width))
       continue;
     cd.antipodal = hp.q;
     cd.single = hp.single;
     cd.hint = hp.hint;
     cands.push_back(cd);
   }
+  return cands;
+}
+
+std::vector<Candidate> GraspSearch::suppress(const std::vector<Candidate>& in, std::size_t limit) const {
+  // Non-maximum suppression (a grasp and its 180 deg turn about z are the same grasp).
+  const Eigen::Matrix3d flip = Eigen::Vector3d(-1, -1, 1).asDiagonal();
+  std::vector<Candidate> out;
+  for (const Candidate& cd : in) {
+    if (out.size() >= limit) break;
+    bool dup = false;
+    for (const Candidate& k : out) {
+      if ((cd.c - k.c).norm() > cfg_.nms_distance) continue;
+      const double ang = std::min(ehc_control::rotationAngle(cd.R, k.R), ehc_control::rotationAngle(cd.R * flip, k.R));
+      if (ang < cfg_.nms_angle_deg * kDeg) {
+        dup = true;
+        break;
+      }
+    }
+    if (!dup) out.push_back(cd);
+  }
+  return out;
+}
+
+void GraspSearch::gather(const Eigen::Vector3d& centre, double radius) {
+  pcl::PointXYZ pc(static_cast<float>(centre.x()), static_cast<float>(centre.y()),
+                   static_cast<float>(centre.z()));
+  po_.env_tree->radiusSearch(pc, radius, idx_, d2_);
+  nbrs_.clear();
+  for (int e : idx_) nbrs_.push_back(pt(*po_.env, e));
+}
+
+bool GraspSearch::checkAt(const Candidate& cd, const Eigen::Vector3d& c0, Candidate* out) {
+  GripperCheck::Prepared pr;
+  check_.prepare(c0, cd.R.col(1), cd.R.col(2), nbrs_, cd.single ? po_.cloud.get() : nullptr, cd.hint, &pr);
+  *out = cd;
+  return check_.evaluate(pr, 1.0, 0.0, &out->R, &out->c, &out->width);
+}
+
+void GraspSearch::refineOntoCentroid(std::vector<Candidate>* kept) {
+  for (Candidate& cd : *kept) {
+    const Eigen::Vector3d x = cd.R.col(0);
+    const double shift =
+        std::max(-cfg_.max_refine_shift, std::min(cfg_.max_refine_shift, x.dot(po_.centroid - cd.c)));
+    if (std::abs(shift) < 1e-6) continue;
+    const Eigen::Vector3d c0 = cd.c + shift * x;
+    gather(c0, check_radius_);
+    Candidate r;
+    if (checkAt(cd, c0, &r)) {
+      score(r);
+      cd = r;
+    }
+  }
+}
+
+void GraspSearch::refineDepth(std::vector<Candidate>* kept) {
+  // Push the grasp along its approach axis (z) while the check passes, stop at the first
+  // failing step, back off by depth_margin if a step failed (see the header). One
+  // neighbourhood covers every step: radius check_radius + max/2 around the middle of the
+  // search segment.
+  const double smax = cfg_.max_depth_shift;
+  std::vector<std::pair<double, Candidate>> passed;  // (shift, checked pose), increasing
+  for (Candidate& cd : *kept) {
+    const Eigen::Vector3d a = cd.R.col(2);
+    const Eigen::Vector3d base = cd.c;
+    gather(base + 0.5 * smax * a, check_radius_ + 0.5 * smax);
+    passed.clear();
+    bool blocked = false;
+    for (int k = 1;; ++k) {
+      const double s = k * cfg_.depth_step >= smax - 1e-9 ? smax : k * cfg_.depth_step;
+      Candidate r;
+      if (!checkAt(cd, base + s * a, &r)) {
+        blocked = true;
+        break;
+      }
+      passed.emplace_back(s, r);
+      if (s >= smax) break;
+    }
+    if (passed.empty()) continue;  // the first step already fails: depth kept
+    const double target = passed.back().first - (blocked ? cfg_.depth_margin : 0.0);
+    if (target <= 1e-9) continue;  // never behind the original depth
+    // The target pose if it is a checked step or passes the check; else the deepest
+    // checked step in front of it.
+    const Candidate* best = nullptr;
+    bool checked = false;
+    for (const auto& sp : passed)
+      if (sp.first <= target + 1e-9) {
+        best = &sp.second;
+        checked = std::abs(sp.first - target) < 1e-9;
+      }
+    Candidate r;
+    if (!checked && checkAt(cd, base + target * a, &r)) best = &r;
+    if (!best) continue;
+    cd = *best;
+    score(cd);
+  }
+}
+
+Grasp toGrasp(const Candidate& cd) {
+  Grasp gr;
+  gr.pose.linear() = cd.R;
+  gr.pose.translation() = cd.c;
+  gr.width = cd.width;
+  gr.score = cd.score;
+  gr.antipodal = cd.antipodal;
+  gr.centroid_weight = cd.wc;
+  gr.pca_weight = cd.wp;
+  return gr;
+}
+
+}  // namespace
+
+GraspResult GraspGenerator::generate(const PointList& object, const Eigen::Vector3d& viewpoint,
+                                     const Eigen::Vector4d* support_plane,
+                                     const PointList* collision_cloud) const {
+  const GraspGeneratorConfig& cfg = config_;
+  const GripperGeometry& g = cfg.gripper;
+  GraspResult res;
+  PreparedObject po;
+  if (!filterObject(cfg, object, viewpoint, &po, &res)) return res;
+  if (!describeObject(cfg, support_plane, &po, &res)) return res;
+  estimateNormalsAndEnvironment(cfg, collision_cloud, &po);
+  const std::vector<int> seeds = sampleSeeds(static_cast<int>(po.cloud->size()), cfg);
+
+  // Hypotheses (contact pairs, single contacts, footprint axes), their approaches best
+  // first, and the collision checks.
+  GraspSearch search(cfg, po);
+  bool any_pair = false;
+  std::vector<Hyp> hyps = search.contactHypotheses(seeds, &any_pair);
+  search.addFootprintHypotheses(&hyps);
+  const std::vector<Pending> pending = search.rankApproaches(&hyps);
+  std::vector<Candidate> cands = search.checkCandidates(hyps, pending);
   if (!any_pair && cands.empty()) {
-    res.reason = tooWide();
+    res.reason = search.tooWide();
     if (!res.reason.empty()) return res;
     res.reason = "no antipodal contact pair within the gripper opening (" +
                  std::to_string(g.max_width) + " m, friction cone " +
@@ -865,125 +1085,22 @@ GraspResult GraspGenerator::generate(const PointList& object, const Eigen::Vecto
     return res;
   }
 
-  for (Candidate& cd : cands) score(cd);
+  // Score, suppress, refine (onto the centroid, then in depth), suppress again.
+  for (Candidate& cd : cands) search.score(cd);
   std::sort(cands.begin(), cands.end(),
             [](const Candidate& a, const Candidate& b) { return a.score > b.score; });
-
-  // Non-maximum suppression (a grasp and its 180 deg turn about z are the same grasp).
-  // `in` best first; keeps at most `limit`.
-  const Eigen::Matrix3d flip = Eigen::Vector3d(-1, -1, 1).asDiagonal();
-  auto suppress = [&](const std::vector<Candidate>& in, std::size_t limit) {
-    std::vector<Candidate> out;
-    for (const Candidate& cd : in) {
-      if (out.size() >= limit) break;
-      bool dup = false;
-      for (const Candidate& k : out) {
-        if ((cd.c - k.c).norm() > cfg.nms_distance) continue;
-        const double ang = std::min(rotationAngle(cd.R, k.R), rotationAngle(cd.R * flip, k.R));
-        if (ang < cfg.nms_angle_deg * kDeg) {
-          dup = true;
-          break;
-        }
-      }
-      if (!dup) out.push_back(cd);
-    }
-    return out;
-  };
   const std::size_t want = static_cast<std::size_t>(cfg.top_k);
-  std::vector<Candidate> kept = suppress(cands, 3 * want);
-
-  // Refinement checks: the gripper with cd's rotation, centred near c0 (re-centred along the
-  // closing axis by evaluate), approach unchanged ((cphi, sphi) = (1, 0)). `nbrs` must hold
-  // the environment within check_radius of c0.
-  auto gather = [&](const Eigen::Vector3d& centre, double radius) {
-    pcl::PointXYZ pc(static_cast<float>(centre.x()), static_cast<float>(centre.y()),
-                     static_cast<float>(centre.z()));
-    env_tree->radiusSearch(pc, radius, idx, d2);
-    nbrs.clear();
-    for (int e : idx) nbrs.push_back(pt(*env, e));
-  };
-  auto checkAt = [&](const Candidate& cd, const Eigen::Vector3d& c0, Candidate* out) {
-    GripperCheck::Prepared pr;
-    check.prepare(c0, cd.R.col(1), cd.R.col(2), nbrs, cd.single ? cloud.get() : nullptr, cd.hint, &pr);
-    *out = cd;
-    return check.evaluate(pr, 1.0, 0.0, &out->R, &out->c, &out->width);
-  };
-
-  // Refinement: move along the finger breadth axis (x) onto the centroid's projection.
-  for (Candidate& cd : kept) {
-    const Eigen::Vector3d x = cd.R.col(0);
-    const double shift =
-        std::max(-cfg.max_refine_shift, std::min(cfg.max_refine_shift, x.dot(centroid - cd.c)));
-    if (std::abs(shift) < 1e-6) continue;
-    const Eigen::Vector3d c0 = cd.c + shift * x;
-    gather(c0, check_radius);
-    Candidate r;
-    if (checkAt(cd, c0, &r)) {
-      score(r);
-      cd = r;
-    }
-  }
-
-  // Depth refinement: push the grasp along its approach axis (z) while the check passes,
-  // stop at the first failing step, back off by depth_margin if a step failed (see the
-  // header). One neighbourhood covers every step: radius check_radius + max/2 around the
-  // middle of the search segment.
-  if (cfg.max_depth_shift > 0.0) {
-    const double smax = cfg.max_depth_shift;
-    std::vector<std::pair<double, Candidate>> passed;  // (shift, checked pose), increasing
-    for (Candidate& cd : kept) {
-      const Eigen::Vector3d a = cd.R.col(2);
-      const Eigen::Vector3d base = cd.c;
-      gather(base + 0.5 * smax * a, check_radius + 0.5 * smax);
-      passed.clear();
-      bool blocked = false;
-      for (int k = 1;; ++k) {
-        const double s = k * cfg.depth_step >= smax - 1e-9 ? smax : k * cfg.depth_step;
-        Candidate r;
-        if (!checkAt(cd, base + s * a, &r)) {
-          blocked = true;
-          break;
-        }
-        passed.emplace_back(s, r);
-        if (s >= smax) break;
-      }
-      if (passed.empty()) continue;  // the first step already fails: depth kept
-      const double target = passed.back().first - (blocked ? cfg.depth_margin : 0.0);
-      if (target <= 1e-9) continue;  // never behind the original depth
-      // The target pose if it is a checked step or passes the check; else the deepest
-      // checked step in front of it.
-      const Candidate* best = nullptr;
-      bool checked = false;
-      for (const auto& sp : passed)
-        if (sp.first <= target + 1e-9) {
-          best = &sp.second;
-          checked = std::abs(sp.first - target) < 1e-9;
-        }
-      Candidate r;
-      if (!checked && checkAt(cd, base + target * a, &r)) best = &r;
-      if (!best) continue;
-      cd = *best;
-      score(cd);
-    }
-  }
+  std::vector<Candidate> kept = search.suppress(cands, 3 * want);
+  search.refineOntoCentroid(&kept);
+  if (cfg.max_depth_shift > 0.0) search.refineDepth(&kept);
   std::stable_sort(kept.begin(), kept.end(),
                    [](const Candidate& a, const Candidate& b) { return a.score > b.score; });
   // Refined candidates can converge onto the same pose (e.g. several contact pairs at
   // different heights along one approach, all pushed to the deepest pose): suppress again.
-  kept = suppress(kept, want);
+  kept = search.suppress(kept, want);
 
-  for (const Candidate& cd : kept) {
-    Grasp gr;
-    gr.pose.linear() = cd.R;
-    gr.pose.translation() = cd.c;
-    gr.width = cd.width;
-    gr.score = cd.score;
-    gr.antipodal = cd.antipodal;
-    gr.centroid_weight = cd.wc;
-    gr.pca_weight = cd.wp;
-    res.grasps.push_back(gr);
-  }
-  if (res.grasps.empty()) res.reason = tooWide();
+  for (const Candidate& cd : kept) res.grasps.push_back(toGrasp(cd));
+  if (res.grasps.empty()) res.reason = search.tooWide();
   if (res.grasps.empty() && res.reason.empty())
     res.reason = "every grasp candidate collides with the cloud or the support, or needs more "
                  "than the " + std::to_string(g.max_width) + " m opening";
