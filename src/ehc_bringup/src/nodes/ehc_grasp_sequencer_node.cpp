@@ -248,7 +248,15 @@ class SequencerNode {
       ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "[ehc_grasp_sequencer_node] invalid camera_info ignored");
   }
   void onSimStatus(const ehc_msgs::SimStatus& m) {
-    inbox_.add(m.header.stamp, kSimStatus, [this, state = m.gripper_state, ok = m.grasp_succeeded] {
+    ehc_control::GripperState state;
+    try {
+      state = ehc_control::gripperStateFromString(m.gripper_state);
+    } catch (const std::invalid_argument& e) {
+      ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "[ehc_grasp_sequencer_node] " << node_.sim_status_topic
+                                                                           << " ignored: " << e.what());
+      return;
+    }
+    inbox_.add(m.header.stamp, kSimStatus, [this, state, ok = m.grasp_succeeded] {
       gripper_state_ = state;
       grasp_succeeded_ = ok;
       return true;
@@ -383,7 +391,7 @@ class SequencerNode {
   static constexpr double kPollPassWall = 1.0;  ///< wall s: a receive pass takes far less
   std::string summary_file_, trace_file_, mode_;
   std::ofstream trace_;
-  std::string gripper_state_ = "open";
+  ehc_control::GripperState gripper_state_ = ehc_control::GripperState::Open;
   bool grasp_succeeded_ = false, finished_ = false, failed_ = false, excluding_ = false;
   double arm_speed_ = 0.0, base_speed_ = 0.0, base_turn_ = 0.0, t_start_ = -1.0;
 };

@@ -166,8 +166,9 @@ class SimNode {
   bool onGripper(std_srvs::SetBool::Request& req, std_srvs::SetBool::Response& res) {
     world_->commandGripper(req.data);
     res.success = true;
-    res.message = std::string(req.data ? "closing" : "opening") + " (state " +
-                  ehc_sim::toString(world_->gripper().state()) + ")";
+    using ehc_control::GripperState;
+    res.message = ehc_control::toString(req.data ? GripperState::Closing : GripperState::Opening) + " (state " +
+                  ehc_control::toString(world_->gripper().state()) + ")";
     return true;
   }
 
