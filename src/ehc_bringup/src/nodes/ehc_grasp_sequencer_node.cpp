@@ -20,6 +20,7 @@
 #include "ehc_msgs/GraspCandidates.h"
 #include "ehc_msgs/ObstacleExclusion.h"
 #include "ehc_control/config_node.h"
+#include "ehc_control/pose_math.h"
 #include "ehc_control/robot_config.h"
 #include "ehc_msgs/SimStatus.h"
 #include "ehc_msgs/lockstep_ack.h"
@@ -104,11 +105,10 @@ NodeParams loadNodeParams(const ehc_control::ConfigNode& root) {
 
 Eigen::Isometry3d toEigen(const geometry_msgs::Pose& p) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  const Eigen::Quaterniond q(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z);
   T.translation() << p.position.x, p.position.y, p.position.z;
-  // A non-unit quaternion is bad input: make the pose invalid so the core rejects it.
-  if (!std::isfinite(q.norm()) || std::abs(q.norm() - 1.0) > 1e-3) T.linear().setConstant(std::nan(""));
-  else T.linear() = q.normalized().toRotationMatrix();
+  // A non-unit quaternion gives a NaN rotation: the core rejects the pose.
+  T.linear() = ehc_control::rotationFromQuaternion(
+      Eigen::Quaterniond(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z));
   return T;
 }
 

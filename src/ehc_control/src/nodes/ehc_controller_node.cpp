@@ -25,6 +25,7 @@
 #include "ehc_msgs/lockstep_ack.h"
 #include "ehc_control/config_node.h"
 #include "ehc_control/control_cycle.h"
+#include "ehc_control/pose_math.h"
 
 #include <geometry_msgs/PointStamped.h>
 #include <geometry_msgs/PoseStamped.h>
@@ -79,6 +80,7 @@ ControlCycleParams loadParams(const ConfigNode& cfg, ros::NodeHandle& pnh) {
 
 template <class XYZ>
 Eigen::Vector3d toEigen(const XYZ& p) { return Eigen::Vector3d(p.x, p.y, p.z); }
+Eigen::Quaterniond toEigen(const geometry_msgs::Quaternion& q) { return Eigen::Quaterniond(q.w, q.x, q.y, q.z); }
 
 class ControllerNode {
  public:
@@ -151,25 +153,17 @@ class ControllerNode {
   }
   void onOdom(const nav_msgs::Odometry& m) {
     const auto& p = m.pose.pose;
-    const Eigen::Quaterniond qn(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z);
-    // A non-unit (e.g. all-zero) quaternion is bad input, as for the target: the yaw atan2
-    // would still give a number (0 for a zero quaternion) and the robot would move on it.
-    const double yaw = std::abs(qn.norm() - 1.0) > 1e-3 || !std::isfinite(qn.norm())
-                           ? std::nan("")
-                           : std::atan2(2.0 * (p.orientation.w * p.orientation.z + p.orientation.x * p.orientation.y),
-                                        1.0 - 2.0 * (p.orientation.y * p.orientation.y + p.orientation.z * p.orientation.z));
+    // A non-unit (e.g. all-zero) quaternion gives a NaN yaw, which the cycle rejects.
+    const double yaw = yawFromQuaternion(toEigen(p.orientation));
     const std::string err = cycle_.setBasePose(ros::Time::now().toSec(), Eigen::Vector3d(p.position.x, p.position.y, yaw));  // receipt time
     if (!err.empty()) ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "[ehc_controller_node] rejected /odom: " << err);
     odom_stamp_ = m.header.stamp;
     if (node_.trigger == "state") tryCycle();
   }
   void onTarget(const geometry_msgs::PoseStamped& m) {
-    const auto& o = m.pose.orientation;
-    const Eigen::Quaterniond qn(o.w, o.x, o.y, o.z);
     Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
     T.translation() = toEigen(m.pose.position);
-    if (std::abs(qn.norm() - 1.0) > 1e-3 || !std::isfinite(qn.norm())) T.linear().setConstant(std::nan(""));
-    else T.linear() = qn.normalized().toRotationMatrix();
+    T.linear() = rotationFromQuaternion(toEigen(m.pose.orientation));  // NaN (rejected) unless a rotation
     // Receipt time (ROS time): a target is fresh while it keeps arriving.
     std::string err = frameError(m.header.frame_id);
     if (err.empty()) err = cycle_.setTarget(ros::Time::now().toSec(), T);
