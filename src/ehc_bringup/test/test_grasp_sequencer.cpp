@@ -1,7 +1,7 @@
 // GraspSequencer + grasp selection (ROS-free): phase order, timeouts, failure paths, bad input.
 #include "ehc_bringup/grasp_sequencer.h"
 #include "ehc_common/config_node.h"
-#include "ehc_control/geometry.h"
+#include "ehc_control/pose_math.h"
 
 #include <gtest/gtest.h>
 
@@ -9,6 +9,7 @@
 #include <fstream>
 
 using namespace ehc_bringup;
+using ehc_control::GripperState;
 
 namespace {
 
@@ -43,12 +44,12 @@ struct Harness {
   GraspSequencer seq;
   double t = 1.0, dt = 0.01;
   Eigen::Isometry3d tcp = Eigen::Isometry3d::Identity();
-  std::string gripper = "open";
+  GripperState gripper = GripperState::Open;
   bool succeeded = false;
   bool in_fov = true;
   std::string controller_phase = "TRACKING";
   bool follow = true;                       ///< the TCP follows the goal
-  std::string close_result = "holding";     ///< what closing ends in
+  GripperState close_result = GripperState::Holding;  ///< what closing ends in
   int close_cycles = 50, lift_cycles = 100;
   int closing_for = -1, lifting_for = -1;
   std::vector<std::string> events;
@@ -80,22 +81,22 @@ struct Harness {
     if (out.gripper_command) {
       if (*out.gripper_command) {
         ++gripper_closes;
-        gripper = "closing";
+        gripper = GripperState::Closing;
         closing_for = 0;
         succeeded = false;
       } else {
         ++gripper_opens;
-        gripper = "opening";
+        gripper = GripperState::Opening;
         closing_for = -1;
         lifting_for = -1;
       }
-    } else if (gripper == "opening") {
-      gripper = "open";
+    } else if (gripper == GripperState::Opening) {
+      gripper = GripperState::Open;
     }
     if (closing_for >= 0 && ++closing_for >= close_cycles) {
       gripper = close_result;
       closing_for = -1;
-      if (gripper == "holding") lifting_for = 0;
+      if (gripper == GripperState::Holding) lifting_for = 0;
     }
     if (lifting_for >= 0 && ++lifting_for >= lift_cycles) {
       succeeded = true;
@@ -486,7 +487,7 @@ TEST(GraspSequencer, TimeLimitWhileApproachingAConfiguredLimit) {
 
 TEST(GraspSequencer, GripperClosingOnNothingFails) {
   Harness h(twoObjects());
-  h.close_result = "closed_empty";
+  h.close_result = GripperState::ClosedEmpty;
   h.seq.setObjectPose(0, h.t, forwardTarget());
   h.run(3.0);
   ASSERT_GE(h.seq.results().size(), 1u);
@@ -514,7 +515,7 @@ TEST(GraspSequencer, ObjectDroppedWhileLiftingFails) {
   h.seq.setObjectPose(0, h.t, forwardTarget());
   h.run(1.0);
   ASSERT_EQ(h.seq.phase(), GraspPhase::Lift);
-  h.gripper = "closed_empty";  // slipped out
+  h.gripper = GripperState::ClosedEmpty;  // slipped out
   h.step();
   ASSERT_EQ(h.seq.results().size(), 1u);
   EXPECT_EQ(h.seq.results()[0].failed_phase, "LIFT");
@@ -764,7 +765,7 @@ TEST(GraspSequencer, TheExclusionHasNoGapFromTheDescentToTheEndOfTheRetreatWhate
     Harness h(p);
     const Eigen::Vector3d centre(1.5, 0.0, 0.76);
     h.perceive = forwardTarget(centre.x(), centre.y(), centre.z());
-    if (end == End::ClosedEmpty) h.close_result = "closed_empty";
+    if (end == End::ClosedEmpty) h.close_result = GripperState::ClosedEmpty;
     while (h.seq.phase() != GraspPhase::Grasp && h.t < 20) h.step();
     ASSERT_EQ(h.seq.phase(), GraspPhase::Grasp);
     if (end == End::TimeLimit) {  // stalled 3 cm short of the grasp: never closes

@@ -1,7 +1,7 @@
 // Rotation helpers (geometry.h). rotationAngle is the one formula behind the grasp generator's
 // non-maximum suppression and the grasp sequencer's orientation checks; the two formulas those
 // used before (written out below) give the same bits on rotations.
-#include "ehc_control/geometry.h"
+#include "ehc_control/pose_math.h"
 
 #include <gtest/gtest.h>
 

@@ -13,6 +13,7 @@
 
 #include "water2_fake_server.h"
 
+#include "ehc_control/pose_math.h"
 #include "ehc_realman/water2_base_bridge.h"
 
 #include <diagnostic_msgs/DiagnosticStatus.h>
@@ -190,7 +191,8 @@ TEST(Water2BaseBridgeNode, PublishesOdometryFromTheStatusStream) {
     EXPECT_EQ(o.child_frame_id, "base_link");
     EXPECT_NEAR(o.pose.pose.position.x, 1.0, 1e-6);
     EXPECT_NEAR(o.pose.pose.position.y, 2.0, 1e-6);
-    EXPECT_NEAR(2.0 * std::atan2(o.pose.pose.orientation.z, o.pose.pose.orientation.w), 0.5, 1e-6);
+    const auto& q = o.pose.pose.orientation;
+    EXPECT_NEAR(ehc_control::yawFromQuaternion(Eigen::Quaterniond(q.w, q.x, q.y, q.z)), 0.5, 1e-6);
   }
   EXPECT_EQ(r.level(), diagnostic_msgs::DiagnosticStatus::OK);
 }

@@ -245,6 +245,21 @@ TEST(OdometryEstimator, DeadReckonsBetweenStatusRepliesAndGoesStale) {
   EXPECT_NEAR(e.estimate(20.6)->x, 3.0, 1e-12) << "a status resets the estimate";
 }
 
+// /odom's pose covariance: the variances grow with the age of the status the estimate rests on.
+TEST(OdometryEstimator, PoseVariancesGrowWithTheStatusAge) {
+  OdometryEstimator e(1.5, 0.6, Water2ResponseParams::commandedVelocity());
+  e.onStatus({1.0, 2.0, 0.0}, 10.0);
+  const auto fresh = e.estimate(10.0);
+  ASSERT_TRUE(fresh);
+  EXPECT_DOUBLE_EQ(fresh->positionVariance(), 1e-4);
+  EXPECT_DOUBLE_EQ(fresh->yawVariance(), 1e-4);
+  const auto old = e.estimate(11.0);
+  ASSERT_TRUE(old);
+  EXPECT_NEAR(old->positionVariance(), 1e-4 + 0.25, 1e-12);  // (0.5 m/s x 1 s)^2
+  EXPECT_NEAR(old->yawVariance(), 1e-4 + 1.0, 1e-12);        // (1 rad/s x 1 s)^2
+  EXPECT_GT(e.estimate(11.4)->positionVariance(), old->positionVariance());
+}
+
 // A status pose applied at the time it was valid, after twists were already sent: they are
 // replayed from it (taken as valid when applied instead, the twists sent in between would be
 // lost: the base put back by v x delay).

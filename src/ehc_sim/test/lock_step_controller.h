@@ -5,6 +5,7 @@
 // stamped with the state's stamp, as the lock-step contract (ehc_sim::StepScheduler) requires.
 // Wall-time guards only stop a hung test; no assertion depends on wall time.
 
+#include "ehc_control/pose_math.h"
 #include "ehc_msgs/JointVelocityCommand.h"
 #include "ehc_msgs/SimStatus.h"
 
@@ -123,7 +124,7 @@ class LockStepController {
     odom_.x = m->pose.pose.position.x;
     odom_.y = m->pose.pose.position.y;
     const auto& o = m->pose.pose.orientation;
-    odom_.yaw = std::atan2(2 * (o.w * o.z + o.x * o.y), 1 - 2 * (o.y * o.y + o.z * o.z));
+    odom_.yaw = ehc_control::yawFromQuaternion(Eigen::Quaterniond(o.w, o.x, o.y, o.z));
   }
   void onStatus(const ehc_msgs::SimStatus::ConstPtr& m) { status_ = *m; }
   void onClock(const rosgraph_msgs::Clock::ConstPtr& m) { clock_ = m->clock; }

@@ -8,6 +8,7 @@
 
 #include "lock_step_controller.h"
 
+#include "ehc_control/gripper_state.h"
 #include "ehc_control/whole_body_model.h"
 #include "ehc_msgs/ResetScene.h"
 #include "ehc_msgs/SimObjectPoses.h"
@@ -38,6 +39,8 @@
 #include <memory>
 
 namespace {
+
+using ehc_control::GripperState;
 
 Eigen::Isometry3d toEigen(const geometry_msgs::Pose& p) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
@@ -193,9 +196,11 @@ TEST(SimNode, GraspAtTheCentreSucceedsAndTenCentimetresOffFails) {
     const double z0 = ctl->objects_.poses.at(0).position.z;
     ASSERT_TRUE(ctl->gripper(true));
     ctl->run(1, zeroPolicy);
-    EXPECT_EQ(ctl->status_.gripper_state, "closing");
-    for (int i = 0; i < 150 && ctl->status_.gripper_state == "closing"; ++i) ctl->run(1, zeroPolicy);
-    EXPECT_EQ(ctl->status_.gripper_state, centre ? "holding" : "closed_empty");
+    // /sim/status carries the one string map of ehc_control::GripperState.
+    auto gripperState = [&] { return ehc_control::gripperStateFromString(ctl->status_.gripper_state); };
+    EXPECT_EQ(gripperState(), GripperState::Closing);
+    for (int i = 0; i < 150 && gripperState() == GripperState::Closing; ++i) ctl->run(1, zeroPolicy);
+    EXPECT_EQ(gripperState(), centre ? GripperState::Holding : GripperState::ClosedEmpty);
     ctl->run(120, lift);  // 12 cm
     ctl->run(1, zeroPolicy);
     const double z1 = ctl->objects_.poses.at(0).position.z;

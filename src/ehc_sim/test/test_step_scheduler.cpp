@@ -268,3 +268,55 @@ TEST(StepScheduler, ActionNames) {
   EXPECT_STREQ(ehc_sim::toString(StepAction::Step), "step");
   EXPECT_STREQ(ehc_sim::toString(StepAction::RepublishState), "republish_state");
 }
+
+// The simulator node's _lockstep_acks / _lockstep_max_lag, parsed in the core: a YAML list or
+// rosrun's one string; empty means no gate; a malformed entry or lag is a [StepScheduler] error
+// naming it.
+TEST(AckGateConfig, ParsesTheNodeParameters) {
+  EXPECT_EQ(ehc_sim::splitAckSpecs("[ehc_tag_node, ehc_grasp_node:cloud,ehc_grasp_sequencer_node:state]"),
+            (std::vector<std::string>{"ehc_tag_node", "ehc_grasp_node:cloud", "ehc_grasp_sequencer_node:state"}));
+  EXPECT_EQ(ehc_sim::splitAckSpecs("a b"), (std::vector<std::string>{"a", "b"}));
+  const ehc_sim::AckGateConfig gate =
+      ehc_sim::parseAckGate(ehc_sim::splitAckSpecs("[tag, /grasp:cloud, sequencer:state]"), 0.02);
+  ASSERT_EQ(gate.nodes.size(), 3u);
+  EXPECT_EQ(gate.nodes[0].name, "tag");
+  EXPECT_EQ(gate.nodes[0].stream, AckStream::Image);
+  EXPECT_EQ(gate.nodes[1].name, "grasp");
+  EXPECT_EQ(gate.nodes[1].stream, AckStream::Cloud);
+  EXPECT_EQ(gate.nodes[2].stream, AckStream::State);
+  EXPECT_EQ(gate.maxLagNs(), 20'000'000);
+  EXPECT_EQ(gate.summary(), " tag (image) grasp (cloud) sequencer (state)");
+  StepScheduler s(robot(), config(false));
+  s.setAckGate(gate.nodes, gate.maxLagNs());
+  EXPECT_EQ(s.notJoined(), "tag grasp sequencer");
+}
+
+TEST(AckGateConfig, EmptyMeansNoGate) {
+  for (const std::string text : {"", "[]", " , [ ] "}) {
+    EXPECT_TRUE(ehc_sim::splitAckSpecs(text).empty()) << text;
+    EXPECT_TRUE(ehc_sim::parseAckGate(ehc_sim::splitAckSpecs(text), 0.0).nodes.empty()) << text;
+  }
+  EXPECT_EQ(ehc_sim::parseAckGate({}, 0.0).summary(), "");
+}
+
+TEST(AckGateConfig, MalformedEntriesAreClearErrors) {
+  auto error = [](const std::vector<std::string>& specs, double lag) {
+    try {
+      ehc_sim::parseAckGate(specs, lag);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const std::string stream = error(ehc_sim::splitAckSpecs("[tag, grasp:depth]"), 0.0);
+  EXPECT_EQ(stream.rfind("[StepScheduler] ", 0), 0u) << stream;
+  EXPECT_NE(stream.find("unknown stream 'depth' in 'grasp:depth'"), std::string::npos) << stream;
+  const std::string name = error({"tag", ":cloud"}, 0.0);
+  EXPECT_NE(name.find("[StepScheduler] acknowledgement gate: empty node name in ':cloud'"), std::string::npos) << name;
+  EXPECT_NE(error({""}, 0.0).find("empty node name"), std::string::npos);  // an empty YAML list element
+  for (const double lag : {-0.1, 11.0, std::numeric_limits<double>::quiet_NaN()}) {
+    const std::string why = error({"tag"}, lag);
+    EXPECT_EQ(why.rfind("[StepScheduler] acknowledgement gate: max lag ", 0), 0u) << why;
+    EXPECT_NE(why.find("outside [0, 10] s"), std::string::npos) << why;
+  }
+}

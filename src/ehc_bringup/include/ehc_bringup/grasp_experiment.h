@@ -104,7 +104,8 @@ struct GraspTrial {
   double lock_closing_axis_error_deg = std::numeric_limits<double>::quiet_NaN();
 };
 
-/// ‖TCP - object‖ (ground truth) and speeds, sampled every trace_period of an object's attempt.
+/// ‖TCP - object‖ (ground truth) and the commanded speeds (commandSpeeds), sampled every
+/// trace_period of an object's attempt.
 struct GraspTraceSample {
   std::string method;
   int set = 0, index = 0;

@@ -62,6 +62,7 @@
 // is reported as controller_tfm (from the first pose until the gripper closes).
 
 #include "ehc_bringup/grasp_selection.h"
+#include "ehc_control/gripper_state.h"
 #include "ehc_control/pinhole_camera.h"
 #include "ehc_control/target_tracker.h"
 
@@ -71,6 +72,9 @@
 #include <optional>
 #include <string>
 #include <vector>
+
+namespace ehc_common {
+}  // namespace ehc_common
 
 namespace ehc_common {
 }  // namespace ehc_common
@@ -154,7 +158,7 @@ struct SequencerInput {
   std::string controller_phase;                    ///< /ehc/status phase ("" if none yet)
   bool target_in_fov = false;                      ///< /ehc/status target_in_fov
   std::optional<double> sig;                       ///< /ehc/status sig_omega, if any
-  std::string gripper_state;                       ///< /sim/status: open|closing|holding|closed_empty|opening
+  ehc_control::GripperState gripper_state = ehc_control::GripperState::Open;  ///< /sim/status gripper_state
   bool grasp_succeeded = false;                    ///< /sim/status grasp_succeeded
 };
 

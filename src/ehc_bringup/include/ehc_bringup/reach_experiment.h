@@ -78,6 +78,14 @@ struct SpeedMeans {
   long cycles = 0;
 };
 
+/// The absolute speeds of one commanded velocity [base twist; arm rates] (nb base DOFs): the
+/// experiments' one definition (SpeedMeans, the Exp-3 trace's GraspTraceSample).
+struct CommandSpeeds {
+  double base_t = 0.0;  ///< m/s, |base translation|
+  double base_r = 0.0;  ///< rad/s, |base rotation|
+  double arm = 0.0;     ///< rad/s, sum of |qd_i|
+};
+CommandSpeeds commandSpeeds(const Eigen::VectorXd& v, int nb);
 /// Adds one commanded velocity [base twist; arm rates] (nb base DOFs) to the sums.
 void accumulateSpeed(SpeedMeans& s, const Eigen::VectorXd& v, int nb);
 /// The sums divided by the cycle count (unchanged without cycles).

@@ -228,9 +228,10 @@ GraspExperiment::RunOutput GraspExperiment::runOne(const RunSpec& spec) const {
       s.phase = toString(c.phase);
       if (pipe.sequencer().lockedGrasp()) s.tcp_in_grasp = pipe.sequencer().lockedGrasp()->pose.inverse() * tcp.translation();
       s.object_moved = (object - object_start[k]).norm();
-      s.base_speed = nb == 3 ? std::hypot(c.command[0], c.command[1]) : std::abs(c.command[0]);
-      s.base_turn = std::abs(c.command[nb - 1]);
-      s.arm_speed = c.command.tail(c.command.size() - nb).cwiseAbs().sum();
+      const CommandSpeeds speeds = commandSpeeds(c.command, nb);
+      s.base_speed = speeds.base_t;
+      s.base_turn = speeds.base_r;
+      s.arm_speed = speeds.arm;
       out.trace.push_back(s);
     }
   }

@@ -279,7 +279,7 @@ const PipelineCycle& GraspPipeline::step() {
     in.controller_phase = ehc_control::toString(out.status.phase);
     in.target_in_fov = out.status.target_in_fov;
     in.sig = out.status.sig;
-    in.gripper_state = ehc_sim::toString(world_->gripper().state());
+    in.gripper_state = world_->gripper().state();
     in.grasp_succeeded = world_->gripper().graspSucceeded();
     in.tcp = stackView(world_->linkPose(cycle_->model().config().tcp_frame));
     in.camera = stackView(world_->cameraPose());

@@ -1,6 +1,6 @@
 #include "ehc_bringup/grasp_selection.h"
 
-#include "ehc_control/geometry.h"
+#include "ehc_control/pose_math.h"
 
 #include <algorithm>
 #include <cmath>

@@ -2,7 +2,7 @@
 
 #include "ehc_common/config_node.h"
 #include "ehc_control/control_status.h"
-#include "ehc_control/geometry.h"
+#include "ehc_control/pose_math.h"
 
 #include <algorithm>
 #include <array>
@@ -12,6 +12,8 @@
 #include <stdexcept>
 
 namespace ehc_bringup {
+
+using ehc_control::GripperState;
 
 std::string toString(GraspPhase p) {
   switch (p) {
@@ -366,7 +368,7 @@ void GraspSequencer::startRelease(double t, const SequencerInput& in, SequencerO
   // RELEASE holds the TCP where it is; RETREAT backs off along the approach from there.
   hold_goal_ = (in.tcp && isValidPose(*in.tcp)) ? std::optional<Eigen::Isometry3d>(*in.tcp) : std::nullopt;
   enter(GraspPhase::Release, t, out, why);
-  if (in.gripper_state != "open") out->gripper_command = false;
+  if (in.gripper_state != GripperState::Open) out->gripper_command = false;
 }
 
 Eigen::Isometry3d GraspSequencer::placePose() const {
@@ -558,16 +560,16 @@ void GraspSequencer::advanceGrasp(const SequencerInput& in, SequencerOutput* out
 void GraspSequencer::advanceClose(const SequencerInput& in, double in_phase, SequencerOutput* out) {
   const double t = in.t;
   out->goal = locked_->pose;
-  if (in.gripper_state == "holding") {
+  if (in.gripper_state == GripperState::Holding) {
     enter(GraspPhase::Lift, t, out, "object held");
     Eigen::Isometry3d lift = locked_->pose;
     lift.translation().z() += params_.lift_height;
     out->goal = lift;
-  } else if (in.gripper_state == "closed_empty") {
+  } else if (in.gripper_state == GripperState::ClosedEmpty) {
     finishObject(t, false, "gripper closed on nothing", in, out);
   } else if (in_phase > params_.gripper_timeout) {
     finishObject(t, false, "gripper did not close within " + std::to_string(params_.gripper_timeout) + " s (state '" +
-                               in.gripper_state + "')", in, out);
+                               toString(in.gripper_state) + "')", in, out);
   }
 }
 
@@ -576,10 +578,10 @@ void GraspSequencer::advanceLift(const SequencerInput& in, double in_phase, Sequ
   Eigen::Isometry3d lift = locked_->pose;
   lift.translation().z() += params_.lift_height;
   out->goal = lift;
-  if (in.grasp_succeeded && in.gripper_state == "holding") {
+  if (in.grasp_succeeded && in.gripper_state == GripperState::Holding) {
     finishObject(t, true, "", in, out);
-  } else if (in.gripper_state != "holding" && in_phase > 0.0) {
-    finishObject(t, false, "object lost while lifting (gripper '" + in.gripper_state + "')", in, out);
+  } else if (in.gripper_state != GripperState::Holding && in_phase > 0.0) {
+    finishObject(t, false, "object lost while lifting (gripper '" + toString(in.gripper_state) + "')", in, out);
   }
 }
 
@@ -588,7 +590,7 @@ void GraspSequencer::advancePlace(const SequencerInput& in, double in_phase, Seq
   const Eigen::Isometry3d place = placePose();
   out->goal = place;
   const bool there = within(in, place, params_.place_tolerance, 180.0);
-  const bool dropped = in.gripper_state != "holding";
+  const bool dropped = in.gripper_state != GripperState::Holding;
   if (there || dropped || stalled(in, place) || in_phase > params_.place_timeout) {
     std::string why = there ? "placed" : dropped ? "object no longer held" : "placing stopped";
     if (!there && !dropped && in.tcp && isValidPose(*in.tcp))
@@ -601,7 +603,7 @@ void GraspSequencer::advancePlace(const SequencerInput& in, double in_phase, Seq
 void GraspSequencer::advanceRelease(const SequencerInput& in, double in_phase, SequencerOutput* out) {
   const double t = in.t;
   if (hold_goal_) out->goal = *hold_goal_;
-  if (in.gripper_state == "open" || in_phase > params_.release_timeout) {
+  if (in.gripper_state == GripperState::Open || in_phase > params_.release_timeout) {
     if (hold_goal_) {
       Eigen::Isometry3d back = *hold_goal_;
       back.translation() -= params_.retreat_distance * last_approach_;

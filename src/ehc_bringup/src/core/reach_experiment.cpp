@@ -74,10 +74,18 @@ ReachExperiment::ReachExperiment(std::shared_ptr<const ehc_control::WholeBodyMod
   ready_manipulability_ = model_->manipulability(model_->config().arm_ready);
 }
 
+CommandSpeeds commandSpeeds(const Eigen::VectorXd& v, int nb) {
+  CommandSpeeds c;
+  c.base_t = nb == 3 ? std::hypot(v[0], v[1]) : std::abs(v[0]);
+  c.base_r = std::abs(v[nb - 1]);
+  c.arm = v.tail(v.size() - nb).cwiseAbs().sum();
+  return c;
+}
 void accumulateSpeed(SpeedMeans& s, const Eigen::VectorXd& v, int nb) {
-  s.base_t += nb == 3 ? std::hypot(v[0], v[1]) : std::abs(v[0]);
-  s.base_r += std::abs(v[nb - 1]);
-  s.arm += v.tail(v.size() - nb).cwiseAbs().sum();
+  const CommandSpeeds c = commandSpeeds(v, nb);
+  s.base_t += c.base_t;
+  s.base_r += c.base_r;
+  s.arm += c.arm;
   ++s.cycles;
 }
 SpeedMeans meanSpeed(const SpeedMeans& s) {

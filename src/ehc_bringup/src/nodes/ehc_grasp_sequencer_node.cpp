@@ -1,4 +1,5 @@
-// ehc_grasp_sequencer_node: thin ROS wrapper of ehc_bringup::GraspSequencer.
+// ehc_grasp_sequencer_node: thin ROS wrapper of ehc_bringup::GraspSequencer (its parameters:
+// SequencerNodeParams; its trace and summary files: GraspTraceWriter, grasp_trace.h).
 //   rosrun ehc_bringup ehc_grasp_sequencer_node _config:=config/demo/grasp_sequencer.yaml
 //       [_summary:=results/demo/summary.json] [_trace:=results/demo/trace.csv]
 //
@@ -17,11 +18,14 @@
 
 #include "ehc_common/logging.h"
 #include "ehc_bringup/grasp_sequencer.h"
+#include "ehc_bringup/grasp_sequencer_node_config.h"
+#include "ehc_bringup/grasp_trace.h"
 #include "ehc_msgs/ControllerStatus.h"
 #include "ehc_msgs/GraspCandidates.h"
 #include "ehc_msgs/ObstacleExclusion.h"
 #include "ehc_control/camera_info_msg.h"
 #include "ehc_common/config_node.h"
+#include "ehc_control/pose_math.h"
 #include "ehc_control/robot_config.h"
 #include "ehc_msgs/SimStatus.h"
 #include "ehc_common/lockstep_ack.h"
@@ -39,7 +43,6 @@
 #include <tf2_ros/transform_listener.h>
 
 #include <cmath>
-#include <fstream>
 #include <functional>
 #include <iomanip>
 #include <memory>
@@ -52,65 +55,12 @@ using ehc_bringup::GraspSequencer;
 
 using ehc_common::kLogThrottle;
 
-struct NodeParams {
-  /// Frames: the robot's (robot.yaml frames.world / tcp / camera_optical) unless the file sets them.
-  std::string robot_file;  ///< node.robot (a name or a robot.yaml), _robot:= overrides
-  std::string world_frame, tcp_frame, camera_frame;
-  std::string camera_info_topic = "/camera/color/camera_info";
-  std::string goal_topic = "/ehc/target_pose";
-  std::string object_pose_topic = "/ehc/sequencer/object_pose";
-  std::string target_centre_topic = "/ehc/target_centre";  ///< point the controller's camera watches
-  std::string candidates_topic = "/ehc/grasp_candidates";
-  std::string status_topic = "/ehc/status";
-  std::string sim_status_topic = "/sim/status";
-  std::string gripper_service = "/sim/gripper";
-  std::string exclusion_topic = "/ehc/obstacle_exclusion";  ///< "" = none sent
-  std::vector<std::string> pose_topics;  ///< per object (objects[i].pose_topic)
-  bool exit_when_done = true;
-  std::string summary() const {
-    std::string s = "  goal -> " + goal_topic + ", object pose -> " + object_pose_topic + ", candidates <- " +
-                    candidates_topic + ", status <- " + status_topic + ", gripper <- " + sim_status_topic +
-                    " / -> " + gripper_service + "\n  TCP " + world_frame + " -> " + tcp_frame + ", camera " + camera_frame + " (tf) + " + camera_info_topic + " (TfM)\n  pose topics:";
-    for (const auto& t : pose_topics) s += " " + t;
-    s += "\n  obstacle exclusion (the object while touched) -> " + (exclusion_topic.empty() ? std::string("off") : exclusion_topic);
-    return s;
-  }
-};
-
-NodeParams loadNodeParams(const ehc_common::ConfigNode& root) {
-  NodeParams p;
-  const auto n = root.childOrEmpty("node");
-  p.robot_file = n.has("robot") ? ehc_control::robotFileField(n, "robot") : ehc_control::resolveRobotFile("realman_rm65_water2");
-  p.world_frame = n.get("world_frame", p.world_frame);
-  p.tcp_frame = n.get("tcp_frame", p.tcp_frame);
-  p.camera_frame = n.get("camera_frame", p.camera_frame);
-  p.camera_info_topic = n.get("camera_info_topic", p.camera_info_topic);
-  p.goal_topic = n.get("goal_topic", p.goal_topic);
-  p.object_pose_topic = n.get("object_pose_topic", p.object_pose_topic);
-  p.target_centre_topic = n.get("target_centre_topic", p.target_centre_topic);
-  p.candidates_topic = n.get("candidates_topic", p.candidates_topic);
-  p.status_topic = n.get("status_topic", p.status_topic);
-  p.sim_status_topic = n.get("sim_status_topic", p.sim_status_topic);
-  p.gripper_service = n.get("gripper_service", p.gripper_service);
-  p.exclusion_topic = n.get("exclusion_topic", p.exclusion_topic);
-  p.exit_when_done = n.get("exit_when_done", p.exit_when_done);
-  for (const char* k : {"world_frame", "tcp_frame", "goal_topic", "status_topic", "gripper_service"})
-    if (n.has(k) && n.get<std::string>(k, "").empty()) n.fail(k, "must not be empty");
-  for (std::size_t i = 0; i < root.listSize("objects"); ++i) {
-    const ehc_common::ConfigNode o = root.element("objects", i);
-    p.pose_topics.push_back(o.require<std::string>("pose_topic"));
-    if (p.pose_topics.back().empty()) o.fail("pose_topic", "must not be empty");
-  }
-  return p;
-}
-
 Eigen::Isometry3d toEigen(const geometry_msgs::Pose& p) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  const Eigen::Quaterniond q(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z);
   T.translation() << p.position.x, p.position.y, p.position.z;
-  // A non-unit quaternion is bad input: make the pose invalid so the core rejects it.
-  if (!std::isfinite(q.norm()) || std::abs(q.norm() - 1.0) > 1e-3) T.linear().setConstant(std::nan(""));
-  else T.linear() = q.normalized().toRotationMatrix();
+  // A non-unit quaternion gives a NaN rotation: the core rejects the pose.
+  T.linear() = ehc_control::rotationFromQuaternion(
+      Eigen::Quaterniond(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z));
   return T;
 }
 
@@ -131,14 +81,13 @@ class SequencerNode {
     pnh.param<std::string>("summary", summary_file_, "");
     pnh.param<std::string>("trace", trace_file_, "");
     const auto root = ehc_common::ConfigNode::loadFile(config, "GraspSequencerNode");
-    node_ = loadNodeParams(root);
+    node_ = ehc_bringup::loadSequencerNodeParams(root);
     pnh.param("exit_when_done", node_.exit_when_done, node_.exit_when_done);
     std::string robot;  // the one robot switch: the frames not set in the file come from robot.yaml
     if (pnh.getParam("robot", robot) && !robot.empty()) node_.robot_file = ehc_control::resolveRobotFile(robot);
     const ehc_control::RobotConfig rc = ehc_control::loadRobotConfig(node_.robot_file);
-    if (node_.world_frame.empty()) node_.world_frame = rc.world_frame;
-    if (node_.tcp_frame.empty()) node_.tcp_frame = rc.tcp_frame;
-    if (node_.camera_frame.empty()) node_.camera_frame = rc.camera_frame;
+    node_.applyRobotFrames(rc);
+    arm_joints_ = rc.arm_joints;  // the trace's arm speed
     const ehc_bringup::GraspSequencerParams sp = ehc_bringup::loadGraspSequencerParams(root);
     root.rejectUnknownKeys();  // both loaders have run: a key neither read is a misspelling
     seq_ = std::make_unique<GraspSequencer>(sp);
@@ -149,12 +98,7 @@ class SequencerNode {
     ack_ = std::make_unique<ehc_common::LockstepAck>(pnh, inputs);
     ROS_INFO_STREAM("ehc_grasp_sequencer_node (" << config << ")\n" << sp.summary() << "\n" << node_.summary()
                                                   << (ack_->topic().empty() ? "" : "\n  each status acknowledged on " + ack_->topic()));
-    if (!trace_file_.empty()) {
-      trace_.open(trace_file_);
-      if (!trace_) throw std::runtime_error("cannot write the trace file " + trace_file_);
-      trace_ << "t,object,phase,controller_phase,error_norm,position_error,sig_omega,base_speed,base_turn_rate,"
-                "arm_speed,target_in_fov,obstacle_rows,qp_status\n";
-    }
+    if (!trace_file_.empty()) trace_ = std::make_unique<ehc_bringup::GraspTraceWriter>(trace_file_);
     goal_pub_ = nh.advertise<geometry_msgs::PoseStamped>(node_.goal_topic, 10);
     object_pub_ = nh.advertise<geometry_msgs::PoseStamped>(node_.object_pose_topic, 10);
     centre_pub_ = nh.advertise<geometry_msgs::PointStamped>(node_.target_centre_topic, 10);
@@ -246,17 +190,22 @@ class SequencerNode {
       ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "[ehc_grasp_sequencer_node] invalid camera_info ignored");
   }
   void onSimStatus(const ehc_msgs::SimStatus& m) {
-    inbox_.add(m.header.stamp, kSimStatus, [this, state = m.gripper_state, ok = m.grasp_succeeded] {
+    ehc_control::GripperState state;
+    try {
+      state = ehc_control::gripperStateFromString(m.gripper_state);
+    } catch (const std::invalid_argument& e) {
+      ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "[ehc_grasp_sequencer_node] " << node_.sim_status_topic
+                                                                           << " ignored: " << e.what());
+      return;
+    }
+    inbox_.add(m.header.stamp, kSimStatus, [this, state, ok = m.grasp_succeeded] {
       gripper_state_ = state;
       grasp_succeeded_ = ok;
       return true;
     });
   }
-  void onJoints(const sensor_msgs::JointState& m) {  // the trace's arm speed
-    double s = 0.0;
-    for (std::size_t i = 0; i < m.velocity.size() && i < m.name.size(); ++i)
-      if (m.name[i].rfind("joint", 0) == 0 && std::isfinite(m.velocity[i])) s += m.velocity[i] * m.velocity[i];
-    inbox_.add(m.header.stamp, kJoints, [this, speed = std::sqrt(s)] {
+  void onJoints(const sensor_msgs::JointState& m) {  // the trace's arm speed, over the robot's arm joints
+    inbox_.add(m.header.stamp, kJoints, [this, speed = ehc_bringup::jointStateArmSpeed(arm_joints_, m.name, m.velocity)] {
       arm_speed_ = speed;
       return true;
     });
@@ -331,14 +280,7 @@ class SequencerNode {
         ROS_ERROR_STREAM("[ehc_grasp_sequencer_node] gripper " << (srv.request.data ? "close" : "open")
                                                                << " failed (" << node_.gripper_service << ")");
     }
-    if (trace_) {
-      const auto& objs = seq_->params().objects;
-      const std::size_t k = std::min(seq_->currentObject(), objs.size() - 1);
-      trace_ << std::fixed << std::setprecision(3) << in.t << "," << objs[k].name << ","
-             << ehc_bringup::toString(seq_->phase()) << "," << m.phase << "," << std::setprecision(5) << m.error_norm
-             << "," << m.position_error << "," << m.sig_omega << "," << base_speed_ << "," << base_turn_ << ","
-             << arm_speed_ << "," << (m.target_in_fov ? 1 : 0) << "," << m.obstacle_rows << "," << m.qp_status << "\n";
-    }
+    if (trace_) trace_->write(traceRow(m, in.t));
     mode_ = m.mode;
     if (seq_->results().size() != published_results_) {
       published_results_ = seq_->results().size();
@@ -349,21 +291,38 @@ class SequencerNode {
     if (seq_->done()) finish(in.t);
   }
 
+  ehc_bringup::GraspTraceRow traceRow(const ehc_msgs::ControllerStatus& m, double t) const {
+    const auto& objs = seq_->params().objects;
+    ehc_bringup::GraspTraceRow r;
+    r.t = t;
+    r.object = objs[std::min(seq_->currentObject(), objs.size() - 1)].name;
+    r.phase = seq_->phase();
+    r.controller_phase = m.phase;
+    r.error_norm = m.error_norm;
+    r.position_error = m.position_error;
+    r.sig_omega = m.sig_omega;
+    r.base_speed = base_speed_;
+    r.base_turn = base_turn_;
+    r.arm_speed = arm_speed_;
+    r.target_in_fov = m.target_in_fov;
+    r.obstacle_rows = m.obstacle_rows;
+    r.qp_status = m.qp_status;
+    return r;
+  }
+
   void finish(double t) {
     finished_ = true;
     const std::string json = ehc_bringup::graspResultsToJson(seq_->results(), mode_, t - t_start_);
     for (const auto& r : seq_->results()) ROS_INFO_STREAM("[grasp] summary " << ehc_bringup::graspResultLine(r));
     ROS_INFO_STREAM("[grasp] json " << json);
-    if (!summary_file_.empty()) {
-      std::ofstream f(summary_file_);
-      f << json << "\n";
-      if (!f) ROS_ERROR_STREAM("[ehc_grasp_sequencer_node] cannot write " << summary_file_);
-    }
-    if (trace_) trace_.flush();
+    if (!summary_file_.empty() && !ehc_bringup::writeGraspSummaryFile(summary_file_, json))
+      ROS_ERROR_STREAM("[ehc_grasp_sequencer_node] cannot write " << summary_file_);
+    if (trace_) trace_->flush();
     if (node_.exit_when_done) ros::shutdown();
   }
 
-  NodeParams node_;
+  ehc_bringup::SequencerNodeParams node_;
+  std::vector<std::string> arm_joints_;  ///< the robot's (robot.yaml arm.joints)
   std::unique_ptr<GraspSequencer> seq_;
   tf2_ros::Buffer tf_;
   tf2_ros::TransformListener listener_;
@@ -380,8 +339,8 @@ class SequencerNode {
   ehc_common::PollPassBarrier poll_pass_;
   static constexpr double kPollPassWall = 1.0;  ///< wall s: a receive pass takes far less
   std::string summary_file_, trace_file_, mode_;
-  std::ofstream trace_;
-  std::string gripper_state_ = "open";
+  std::unique_ptr<ehc_bringup::GraspTraceWriter> trace_;  ///< _trace:=, else none
+  ehc_control::GripperState gripper_state_ = ehc_control::GripperState::Open;
   bool grasp_succeeded_ = false, finished_ = false, failed_ = false, excluding_ = false;
   double arm_speed_ = 0.0, base_speed_ = 0.0, base_turn_ = 0.0, t_start_ = -1.0;
 };

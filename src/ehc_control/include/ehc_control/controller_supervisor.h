@@ -17,6 +17,9 @@
 #include <vector>
 
 namespace ehc_common {
+}  // namespace ehc_common
+
+namespace ehc_common {
 class ConfigNode;
 }  // namespace ehc_common
 
@@ -90,6 +93,41 @@ class ControllerSupervisor {
   std::vector<ObstaclePair> obstacles_;
   std::optional<double> t_joints_, t_base_, t_target_, t_obstacles_;
   long rejected_ = 0;
+};
+
+/// The watchdogs for the time when NO control cycle runs (ControllerSupervisor judges the inputs
+/// of a cycle that does run). The node reports every cycle (cycleRan) and asks on its timers
+/// whether to publish a zero command (ControlCycle::stopped) instead:
+///   - ROS-time watchdog (lock-step, checkRosTime): no cycle for more than state_timeout of ROS
+///     time, either way (a clock that jumped back counts too): the state was lost while /clock
+///     runs;
+///   - wall-clock watchdog (every mode, checkWallClock, called periodically): no cycle for more
+///     than wall_timeout wall seconds while ROS time has stood still as long (a dead simulator
+///     stops /clock as well). While ROS time moves, however slowly (a lock-step simulator under
+///     load), only the ROS-time rules decide.
+/// Neither fires before the first cycle. Times in seconds of the ROS clock and of the wall clock
+/// (any origins).
+class CycleWatchdog {
+ public:
+  /// Throws std::invalid_argument "[CycleWatchdog] ..." unless both timeouts are > 0.
+  CycleWatchdog(double state_timeout, double wall_timeout);
+
+  /// A control cycle ran at ROS time `ros_now`, wall time `wall_now`.
+  void cycleRan(double ros_now, double wall_now);
+  /// "" while the last cycle is within state_timeout of `ros_now` (or none ran yet), else why
+  /// the robot must stop: "no control cycle for <s> s (lock-step: no joint state + odometry pair)".
+  std::string checkRosTime(double ros_now) const;
+  /// "" unless no cycle ran for more than wall_timeout wall seconds and ROS time has not moved
+  /// for as long (since the first call that saw it at `ros_now`), else why the robot must stop:
+  /// "no control cycle for <s> wall s (ROS time <t> stands still? simulator dead?)". Remembers
+  /// when ROS time last moved: call it periodically.
+  std::string checkWallClock(double wall_now, double ros_now);
+
+ private:
+  double state_timeout_, wall_timeout_;
+  std::optional<double> last_cycle_ros_, last_cycle_wall_;
+  double last_ros_time_ = 0.0;          ///< ROS time seen by the last checkWallClock
+  double last_ros_advance_wall_ = 0.0;  ///< wall time at which ROS time last moved
 };
 
 }  // namespace ehc_control

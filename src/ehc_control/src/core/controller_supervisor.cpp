@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <stdexcept>
 
 namespace ehc_control {
 
@@ -145,6 +146,41 @@ double ControllerSupervisor::stateAge(double now) const {
 std::vector<ObstaclePair> ControllerSupervisor::obstacles(double now) const {
   if (isStale(t_obstacles_, now, params_.obstacle_timeout)) return {};
   return obstacles_;
+}
+
+CycleWatchdog::CycleWatchdog(double state_timeout, double wall_timeout)
+    : state_timeout_(state_timeout), wall_timeout_(wall_timeout) {
+  if (!(state_timeout > 0.0) || !(wall_timeout > 0.0))
+    throw std::invalid_argument("[CycleWatchdog] the state and wall-clock timeouts must be > 0");
+}
+
+void CycleWatchdog::cycleRan(double ros_now, double wall_now) {
+  last_cycle_ros_ = ros_now;
+  last_cycle_wall_ = wall_now;
+}
+
+std::string CycleWatchdog::checkRosTime(double ros_now) const {
+  if (!last_cycle_ros_) return "";
+  const double idle = ros_now - *last_cycle_ros_;
+  if (idle <= state_timeout_ && idle >= -state_timeout_) return "";
+  std::ostringstream why;
+  why << "no control cycle for " << idle << " s (lock-step: no joint state + odometry pair)";
+  return why.str();
+}
+
+std::string CycleWatchdog::checkWallClock(double wall_now, double ros_now) {
+  if (ros_now != last_ros_time_) {
+    last_ros_time_ = ros_now;
+    last_ros_advance_wall_ = wall_now;
+    return "";
+  }
+  if (!last_cycle_wall_) return "";
+  const double idle = wall_now - *last_cycle_wall_;
+  const double frozen = wall_now - last_ros_advance_wall_;
+  if (idle <= wall_timeout_ || frozen <= wall_timeout_) return "";
+  std::ostringstream why;
+  why << "no control cycle for " << idle << " wall s (ROS time " << ros_now << " stands still? simulator dead?)";
+  return why.str();
 }
 
 }  // namespace ehc_control

@@ -9,7 +9,8 @@
 // odometry of the same stamp is in (node.trigger: state, lock-step sim) or on a timer (real robot).
 // Every input's age is its RECEIPT time on this node's ROS clock (a sender's clock offset cannot
 // stretch a timeout; header stamps only pair joint state and odometry in lock-step and stamp
-// the answers). Watchdogs, so zeros go out even when no cycle runs:
+// the answers). Watchdogs, so zeros go out even when no cycle runs (ehc_control::CycleWatchdog
+// decides, the node's timers ask it):
 //   - lock-step: a ROS-time timer publishes zeros (STOPPED) when no cycle ran for
 //     watchdog.state_timeout (state lost while /clock runs);
 //   - every mode: a wall-clock timer publishes zeros when no cycle ran for node.wall_timeout
@@ -26,6 +27,8 @@
 #include "ehc_common/lockstep_ack.h"
 #include "ehc_common/config_node.h"
 #include "ehc_control/control_cycle.h"
+#include "ehc_control/controller_node_config.h"
+#include "ehc_control/pose_math.h"
 
 #include <geometry_msgs/PointStamped.h>
 #include <geometry_msgs/PoseStamped.h>
@@ -35,34 +38,13 @@
 #include <ros/ros.h>
 #include <sensor_msgs/JointState.h>
 
-#include <cmath>
 #include <deque>
-#include <sstream>
 
 namespace {
 
 using namespace ehc_control;
 
 using ehc_common::kLogThrottle;
-
-struct NodeParams {
-  std::string trigger = "state";  ///< state | timer
-  double rate = 100.0;            ///< Hz, timer trigger
-  /// wall s: no control cycle for this long on the wall clock -> zeros (STOPPED). Catches what
-  /// the ROS-time watchdogs cannot: ROS time standing still (sim time of a dead simulator).
-  double wall_timeout = 0.5;
-};
-
-NodeParams loadNodeParams(const ehc_common::ConfigNode& n) {
-  NodeParams p;
-  p.trigger = n.get<std::string>("trigger", p.trigger);
-  if (p.trigger != "state" && p.trigger != "timer") n.fail("trigger", "must be 'state' or 'timer'");
-  p.rate = n.get("rate", p.rate);
-  p.wall_timeout = n.get("wall_timeout", p.wall_timeout);
-  ehc_common::requireRange("ControllerNode", "node.rate", p.rate, 1.0, 1000.0);
-  ehc_common::requireRange("ControllerNode", "node.wall_timeout", p.wall_timeout, 0.01, 10.0);
-  return p;
-}
 
 /// controller.yaml with the node's private overrides applied.
 ControlCycleParams loadParams(const ehc_common::ConfigNode& cfg, ros::NodeHandle& pnh) {
@@ -80,15 +62,15 @@ ControlCycleParams loadParams(const ehc_common::ConfigNode& cfg, ros::NodeHandle
 
 template <class XYZ>
 Eigen::Vector3d toEigen(const XYZ& p) { return Eigen::Vector3d(p.x, p.y, p.z); }
+Eigen::Quaterniond toEigen(const geometry_msgs::Quaternion& q) { return Eigen::Quaterniond(q.w, q.x, q.y, q.z); }
 
 class ControllerNode {
  public:
   ControllerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh, const ehc_common::ConfigNode& cfg)
-      : cycle_(loadParams(cfg, pnh)), node_(loadNodeParams(cfg.childOrEmpty("node"))),
+      : cycle_(loadParams(cfg, pnh)), node_(loadControllerNodeParams(cfg)),
+        watchdog_(cycle_.params().watchdog.state_timeout, node_.wall_timeout),
         world_frame_(cycle_.model().config().world_frame) {
-    ROS_INFO_STREAM("ehc_controller_node\n" << cycle_.summary() << "\n  trigger " << node_.trigger
-                                            << (node_.trigger == "timer" ? " at " + std::to_string(node_.rate) + " Hz" : "")
-                                            << ", wall-clock watchdog " << node_.wall_timeout << " s");
+    ROS_INFO_STREAM("ehc_controller_node\n" << cycle_.summary() << "\n  " << node_.summary());
     // After the solve the watchdog is checked again on the ROS clock (ControlCycle::update).
     cycle_.setClock([] { return ros::Time::now().toSec(); });
     cmd_vel_ = nh.advertise<geometry_msgs::Twist>("cmd_vel", 1);
@@ -100,40 +82,23 @@ class ControllerNode {
     // acknowledgements that let the simulator publish it, but on other connections; they are
     // taken when the state comes, after one receive pass (tryCycle), on their own queue.
     ros::NodeHandle inputs_nh(nh);
-    if (node_.trigger == "state") inputs_nh.setCallbackQueue(&inputs_queue_);
+    if (node_.trigger == CycleTrigger::State) inputs_nh.setCallbackQueue(&inputs_queue_);
     subs_.push_back(inputs_nh.subscribe("ehc/target_pose", 10, &ControllerNode::onTarget, this, ros::TransportHints().tcpNoDelay()));
     subs_.push_back(inputs_nh.subscribe("ehc/target_centre", 10, &ControllerNode::onTargetCentre, this, ros::TransportHints().tcpNoDelay()));
     subs_.push_back(inputs_nh.subscribe("ehc/obstacles", 10, &ControllerNode::onObstacles, this, ros::TransportHints().tcpNoDelay()));
     const double state_timeout = cycle_.params().watchdog.state_timeout;
-    if (node_.trigger == "timer")
+    if (node_.trigger == CycleTrigger::Timer)
       timer_ = nh.createTimer(ros::Duration(1.0 / node_.rate), [this](const ros::TimerEvent&) { cycle(ros::Time::now()); });
     else  // lock-step: no state, no cycle; this timer (ROS time) stops the robot instead
-      timer_ = nh.createTimer(ros::Duration(state_timeout / 10.0), [this, state_timeout](const ros::TimerEvent&) {
+      timer_ = nh.createTimer(ros::Duration(state_timeout / 10.0), [this](const ros::TimerEvent&) {
         const ros::Time now = ros::Time::now();
-        const double idle = (now - last_cycle_).toSec();
-        if (last_cycle_.isZero() || (idle <= state_timeout && idle >= -state_timeout)) return;
-        std::ostringstream why;
-        why << "no control cycle for " << idle << " s (lock-step: no joint state + odometry pair)";
-        publish(cycle_.stopped(now.toSec(), why.str()), now, false);
+        const std::string why = watchdog_.checkRosTime(now.toSec());
+        if (!why.empty()) publish(cycle_.stopped(now.toSec(), why), now, false);
       });
     wall_timer_ = nh.createWallTimer(ros::WallDuration(node_.wall_timeout / 10.0), [this](const ros::WallTimerEvent&) {
-      // Only while ROS time stands still: when it runs (however slowly, e.g. a lock-step
-      // simulator under load) the ROS-time watchdogs above decide, on ROS time.
-      const ros::WallTime wall = ros::WallTime::now();
-      const ros::Time ros_now = ros::Time::now();
-      if (ros_now != last_ros_time_) {
-        last_ros_time_ = ros_now;
-        last_ros_advance_wall_ = wall;
-        return;
-      }
-      const double idle = (wall - last_cycle_wall_).toSec();
-      const double frozen = (wall - last_ros_advance_wall_).toSec();
-      if (last_cycle_wall_.isZero() || idle <= node_.wall_timeout || frozen <= node_.wall_timeout) return;
-      std::ostringstream why;
-      why << "no control cycle for " << idle << " wall s (ROS time " << ros::Time::now().toSec()
-          << " stands still? simulator dead?)";
       const ros::Time now = ros::Time::now();
-      publish(cycle_.stopped(now.toSec(), why.str()), now, false);
+      const std::string why = watchdog_.checkWallClock(ros::WallTime::now().toSec(), now.toSec());
+      if (!why.empty()) publish(cycle_.stopped(now.toSec(), why), now, false);
     });
   }
 
@@ -145,32 +110,24 @@ class ControllerNode {
   void onJoints(const sensor_msgs::JointState& m) {
     const std::string err = cycle_.setJointState(ros::Time::now().toSec(), m.name, m.position);  // receipt time
     if (!err.empty()) ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "[ehc_controller_node] rejected /joint_states: " << err);
-    if (node_.trigger == "state") {
+    if (node_.trigger == CycleTrigger::State) {
       pending_ = m.header.stamp;
       tryCycle();
     }
   }
   void onOdom(const nav_msgs::Odometry& m) {
     const auto& p = m.pose.pose;
-    const Eigen::Quaterniond qn(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z);
-    // A non-unit (e.g. all-zero) quaternion is bad input, as for the target: the yaw atan2
-    // would still give a number (0 for a zero quaternion) and the robot would move on it.
-    const double yaw = std::abs(qn.norm() - 1.0) > 1e-3 || !std::isfinite(qn.norm())
-                           ? std::nan("")
-                           : std::atan2(2.0 * (p.orientation.w * p.orientation.z + p.orientation.x * p.orientation.y),
-                                        1.0 - 2.0 * (p.orientation.y * p.orientation.y + p.orientation.z * p.orientation.z));
+    // A non-unit (e.g. all-zero) quaternion gives a NaN yaw, which the cycle rejects.
+    const double yaw = yawFromQuaternion(toEigen(p.orientation));
     const std::string err = cycle_.setBasePose(ros::Time::now().toSec(), Eigen::Vector3d(p.position.x, p.position.y, yaw));  // receipt time
     if (!err.empty()) ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "[ehc_controller_node] rejected /odom: " << err);
     odom_stamp_ = m.header.stamp;
-    if (node_.trigger == "state") tryCycle();
+    if (node_.trigger == CycleTrigger::State) tryCycle();
   }
   void onTarget(const geometry_msgs::PoseStamped& m) {
-    const auto& o = m.pose.orientation;
-    const Eigen::Quaterniond qn(o.w, o.x, o.y, o.z);
     Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
     T.translation() = toEigen(m.pose.position);
-    if (std::abs(qn.norm() - 1.0) > 1e-3 || !std::isfinite(qn.norm())) T.linear().setConstant(std::nan(""));
-    else T.linear() = qn.normalized().toRotationMatrix();
+    T.linear() = rotationFromQuaternion(toEigen(m.pose.orientation));  // NaN (rejected) unless a rotation
     // Receipt time (ROS time): a target is fresh while it keeps arriving.
     std::string err = frameError(m.header.frame_id);
     if (err.empty()) err = cycle_.setTarget(ros::Time::now().toSec(), T);
@@ -185,7 +142,7 @@ class ControllerNode {
     std::vector<ObstaclePair> pairs;
     for (const auto& o : m.obstacles)
       pairs.push_back({o.link, toEigen(o.link_point), toEigen(o.obstacle_point), toEigen(o.normal), o.distance});
-    if (node_.trigger == "state") {
+    if (node_.trigger == CycleTrigger::State) {
       // A stamp older than the last one kept: the clock jumped back (simulator reset).
       if (!pending_obstacles_.empty() && m.header.stamp < pending_obstacles_.back().stamp) pending_obstacles_.clear();
       if (pending_obstacles_.size() >= kMaxPendingObstacles) pending_obstacles_.pop_front();
@@ -229,10 +186,10 @@ class ControllerNode {
   }
 
   void cycle(const ros::Time& stamp) {
-    last_cycle_ = ros::Time::now();
-    last_cycle_wall_ = ros::WallTime::now();
+    const double now = ros::Time::now().toSec();
+    watchdog_.cycleRan(now, ros::WallTime::now().toSec());
     answered_ = stamp;
-    publish(cycle_.update(last_cycle_.toSec()), stamp, true);
+    publish(cycle_.update(now), stamp, true);
   }
 
   /// Publishes one cycle's (or a watchdog's) command and status. `stamp`: the joint state
@@ -288,7 +245,8 @@ class ControllerNode {
   }
 
   ControlCycle cycle_;
-  NodeParams node_;
+  ControllerNodeParams node_;
+  CycleWatchdog watchdog_;  ///< decides the two watchdog timers
   std::string world_frame_;
   ros::Publisher cmd_vel_, arm_cmd_, status_;
   std::vector<ros::Subscriber> subs_;
@@ -301,10 +259,7 @@ class ControllerNode {
   };
   std::deque<PendingObstacles> pending_obstacles_;  ///< lock-step: lists by arrival, not yet taken
   static constexpr std::size_t kMaxPendingObstacles = 100;  ///< no state for long: the oldest go
-  ros::Time last_cycle_, answered_;  ///< ROS time of the last cycle; the stamp it answered
-  ros::WallTime last_cycle_wall_;
-  ros::Time last_ros_time_;               ///< ROS time seen by the wall-clock watchdog
-  ros::WallTime last_ros_advance_wall_;   ///< wall time at which ROS time last moved
+  ros::Time answered_;  ///< the stamp the last cycle answered
   ros::CallbackQueue inputs_queue_;       ///< lock-step: target, target centre, obstacles (taken per state)
   ehc_common::PollPassBarrier poll_pass_;
   static constexpr double kPollPassWall = 1.0;  ///< wall s: a receive pass takes far less

@@ -2,7 +2,7 @@
 #include "ehc_perception/grasp_generator.h"
 
 #include "ehc_common/config_node.h"
-#include "ehc_control/geometry.h"
+#include "ehc_control/pose_math.h"
 
 #include <Eigen/Eigenvalues>
 #include <pcl/common/centroid.h>

@@ -27,6 +27,7 @@
 #include "ehc_common/logging.h"
 #include "ehc_common/lockstep_ack.h"
 #include "ehc_control/robot_config.h"
+#include "ehc_control/pose_math.h"
 #include "ehc_perception/node_config.h"
 #include "ehc_perception/obstacle_monitor.h"
 #include "ros_conversions.h"
@@ -101,9 +102,8 @@ class ObstacleNode {
   void onOdom(const nav_msgs::Odometry& msg) {
     const auto& p = msg.pose.pose;
     const Eigen::Quaterniond qn(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z);
-    const double yaw = std::atan2(2.0 * (qn.w() * qn.z() + qn.x() * qn.y()),
-                                  1.0 - 2.0 * (qn.y() * qn.y() + qn.z() * qn.z()));
-    std::string why = qn.norm() < 1e-6 ? "zero orientation quaternion" : "";
+    const double yaw = ehc_control::yawFromQuaternion(qn);  // NaN unless a unit quaternion
+    std::string why = std::isfinite(yaw) ? "" : "orientation is not a unit quaternion";
     if (why.empty()) why = monitor_.setBasePose(receiptTime(msg.header.stamp), Eigen::Vector3d(p.position.x, p.position.y, yaw));
     if (!why.empty()) ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "ehc_obstacle_node: odometry rejected: " << why);
     if (lockstep_) lockstepCycle(cycle_.odometry(static_cast<StampNs>(msg.header.stamp.toNSec())));

@@ -98,6 +98,10 @@ struct BaseOdometry {
   double x = 0.0, y = 0.0, theta = 0.0;  ///< m, m, rad (odom frame)
   double linear = 0.0, angular = 0.0;    ///< m/s, rad/s (base frame), predicted base velocity
   double status_age = 0.0;               ///< s since the status the pose is based on
+  /// Variances of /odom's pose (dead reckoning: they grow with status_age): x and y,
+  /// 1e-4 + (0.5 m/s * age)^2 m^2; yaw, 1e-4 + (1 rad/s * age)^2 rad^2.
+  double positionVariance() const;
+  double yawVariance() const;
 };
 
 class OdometryEstimator {

@@ -218,6 +218,9 @@ double OdometryEstimator::statusAge(double now) const {
   return status_pose_ ? now - status_time_ : kInf;
 }
 
+double BaseOdometry::positionVariance() const { return 1e-4 + std::pow(0.5 * status_age, 2); }
+double BaseOdometry::yawVariance() const { return 1e-4 + std::pow(1.0 * status_age, 2); }
+
 std::optional<BaseOdometry> OdometryEstimator::estimate(double now) const {
   if (!status_pose_ || now - status_time_ > status_timeout_ || model_time_ > status_time_) return std::nullopt;
   BaseOdometry o;

@@ -110,13 +110,9 @@ class Water2BaseBridgeNode {
     o.pose.pose.orientation.w = std::cos(0.5 * odom->theta);
     o.twist.twist.linear.x = odom->linear;
     o.twist.twist.angular.z = odom->angular;
-    // Uncertainty grows with the age of the status the pose is based on (dead reckoning).
-    const double age = odom->status_age;
-    const double pos_var = 1e-4 + std::pow(0.5 * age, 2);
-    const double yaw_var = 1e-4 + std::pow(1.0 * age, 2);
-    o.pose.covariance[0] = o.pose.covariance[7] = pos_var;
+    o.pose.covariance[0] = o.pose.covariance[7] = odom->positionVariance();
     o.pose.covariance[14] = o.pose.covariance[21] = o.pose.covariance[28] = 1e6;  // z, roll, pitch
-    o.pose.covariance[35] = yaw_var;
+    o.pose.covariance[35] = odom->yawVariance();
     o.twist.covariance[0] = 0.01;
     o.twist.covariance[35] = 0.01;
     odom_pub_.publish(o);

@@ -5,6 +5,7 @@
 // lifted by `lift_height` above where it was grasped is a successful grasp. Opening releases
 // it. Pure logic: SimWorld moves the finger bodies and reports the finger contacts. ROS-free.
 
+#include "ehc_control/gripper_state.h"
 #include "ehc_sim/sim_config.h"
 
 #include <set>
@@ -12,9 +13,9 @@
 
 namespace ehc_sim {
 
-enum class GripperState { Open, Closing, Holding, ClosedEmpty, Opening };
-
-std::string toString(GripperState s);
+/// The gripper states and their strings (/sim/status gripper_state) are ehc_control's, which the
+/// grasp sequencer reads too.
+using ehc_control::GripperState;
 
 class ParallelGripper {
  public:

@@ -64,6 +64,23 @@ struct AckNode {
   static AckNode parse(const std::string& spec);
 };
 
+/// The acknowledgement gate as the simulator node's parameters give it (_lockstep_acks,
+/// _lockstep_max_lag), parsed and checked here so that the node only reads parameters.
+struct AckGateConfig {
+  std::vector<AckNode> nodes;  ///< empty: no gate
+  double max_lag = 0.0;        ///< s, [0, 10]: how far sim time may pass a frame not yet acknowledged
+  std::int64_t maxLagNs() const;
+  /// " name (stream)" for every node, e.g. " ehc_tag_node (image) ehc_grasp_node (cloud)".
+  std::string summary() const;
+};
+/// Splits one string of specs separated by commas, blanks or brackets, as rosrun passes a list
+/// (`_lockstep_acks:=[a,b:cloud]` stays a string): {"a", "b:cloud"}. Empty pieces are skipped:
+/// "" and "[]" give no specs.
+std::vector<std::string> splitAckSpecs(const std::string& text);
+/// AckNode::parse of every spec and the lag. Throws std::invalid_argument "[StepScheduler] ..."
+/// naming the bad spec (an empty name, an unknown stream) or a lag outside [0, 10] s.
+AckGateConfig parseAckGate(const std::vector<std::string>& specs, double max_lag_s);
+
 enum class StepAction {
   Wait,            ///< nothing to do yet: keep serving callbacks
   Step,            ///< step once with command(), then publish the new state (fresh)

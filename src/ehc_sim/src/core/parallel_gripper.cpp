@@ -6,17 +6,6 @@
 
 namespace ehc_sim {
 
-std::string toString(GripperState s) {
-  switch (s) {
-    case GripperState::Open: return "open";
-    case GripperState::Closing: return "closing";
-    case GripperState::Holding: return "holding";
-    case GripperState::ClosedEmpty: return "closed_empty";
-    case GripperState::Opening: return "opening";
-  }
-  return "?";
-}
-
 ParallelGripper::ParallelGripper(const GripperConfig& cfg, double max_opening)
     : cfg_(cfg), max_opening_(max_opening) {
   cfg_.validate();

@@ -1,6 +1,7 @@
 #include "ehc_sim/step_scheduler.h"
 
 #include <algorithm>
+#include <cmath>
 #include <sstream>
 #include <stdexcept>
 
@@ -39,6 +40,40 @@ AckNode AckNode::parse(const std::string& spec) {
     }
   throw std::invalid_argument("[StepScheduler] acknowledgement gate: unknown stream '" + stream + "' in '" + spec +
                               "' (state | image | cloud)");
+}
+
+std::int64_t AckGateConfig::maxLagNs() const { return static_cast<std::int64_t>(std::llround(max_lag * 1e9)); }
+
+std::string AckGateConfig::summary() const {
+  std::string s;
+  for (const AckNode& n : nodes) s += " " + n.name + " (" + toString(n.stream) + ")";
+  return s;
+}
+
+std::vector<std::string> splitAckSpecs(const std::string& text) {
+  std::vector<std::string> specs;
+  std::string spec;
+  for (const char ch : text + ",") {
+    if (ch == ',' || ch == ' ' || ch == '[' || ch == ']') {
+      if (!spec.empty()) specs.push_back(spec);
+      spec.clear();
+    } else {
+      spec += ch;
+    }
+  }
+  return specs;
+}
+
+AckGateConfig parseAckGate(const std::vector<std::string>& specs, double max_lag_s) {
+  if (!(max_lag_s >= 0.0 && max_lag_s <= 10.0)) {
+    std::ostringstream os;
+    os << "[StepScheduler] acknowledgement gate: max lag " << max_lag_s << " s is outside [0, 10] s";
+    throw std::invalid_argument(os.str());
+  }
+  AckGateConfig gate;
+  gate.max_lag = max_lag_s;
+  for (const std::string& spec : specs) gate.nodes.push_back(AckNode::parse(spec));
+  return gate;
 }
 
 StepScheduler::StepScheduler(const ehc_control::RobotConfig& robot, const FakeRobotConfig& config)

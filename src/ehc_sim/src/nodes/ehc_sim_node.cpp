@@ -53,36 +53,21 @@ class SimNode {
     tf_pub_ = nh_.advertise<tf2_msgs::TFMessage>("/tf", 100);
     objects_pub_ = nh_.advertise<ehc_msgs::SimObjectPoses>("/sim/object_poses", 10);
     status_pub_ = nh_.advertise<ehc_msgs::SimStatus>("/sim/status", 10);
-    // A YAML list, or (rosrun _lockstep_acks:=[a,b:cloud]: roscpp keeps it a string) specs
-    // separated by commas, blanks or brackets.
+    // A YAML list, or one string of specs (rosrun _lockstep_acks:=[a,b:cloud]: roscpp keeps it a string).
     std::vector<std::string> specs;
     if (!pnh.getParam("lockstep_acks", specs)) {
       std::string text;
       pnh.param<std::string>("lockstep_acks", text, "");
-      std::string spec;
-      for (const char ch : text + ",") {
-        if (ch == ',' || ch == ' ' || ch == '[' || ch == ']') {
-          if (!spec.empty()) specs.push_back(spec);
-          spec.clear();
-        } else {
-          spec += ch;
-        }
-      }
+      specs = ehc_sim::splitAckSpecs(text);
     }
     double max_lag = 0.0;
     pnh.param("lockstep_max_lag", max_lag, max_lag);
-    if (!(max_lag >= 0.0 && max_lag <= 10.0))
-      throw std::invalid_argument("[ehc_sim_node] _lockstep_max_lag must be in [0, 10] s");
-    if (!specs.empty()) {
-      std::vector<ehc_sim::AckNode> nodes;
-      std::string names;
-      for (const auto& spec : specs) {
-        nodes.push_back(ehc_sim::AckNode::parse(spec));
-        names += " " + nodes.back().name + " (" + ehc_sim::toString(nodes.back().stream) + ")";
-      }
-      lock_step_->scheduler().setAckGate(nodes, static_cast<std::int64_t>(std::llround(max_lag * 1e9)));
+    const ehc_sim::AckGateConfig gate = ehc_sim::parseAckGate(specs, max_lag);
+    if (!gate.nodes.empty()) {
+      lock_step_->scheduler().setAckGate(gate.nodes, gate.maxLagNs());
       ROS_INFO_STREAM("[ehc_sim_node] lock-step acknowledgement gate on /sim/lockstep_ack:"
-                      << names << "; sim time passes a frame by at most " << max_lag << " s before they are done with it");
+                      << gate.summary() << "; sim time passes a frame by at most " << gate.max_lag
+                      << " s before they are done with it");
     }
     ack_sub_ = nh_.subscribe("/sim/lockstep_ack", 50, &SimNode::onAck, this, ros::TransportHints().tcpNoDelay());
     reset_srv_ = nh_.advertiseService("/sim/reset", &SimNode::onReset, this);
@@ -166,8 +151,9 @@ class SimNode {
   bool onGripper(std_srvs::SetBool::Request& req, std_srvs::SetBool::Response& res) {
     world_->commandGripper(req.data);
     res.success = true;
-    res.message = std::string(req.data ? "closing" : "opening") + " (state " +
-                  ehc_sim::toString(world_->gripper().state()) + ")";
+    using ehc_control::GripperState;
+    res.message = ehc_control::toString(req.data ? GripperState::Closing : GripperState::Opening) + " (state " +
+                  ehc_control::toString(world_->gripper().state()) + ")";
     return true;
   }
 

@@ -208,7 +208,7 @@ inline void fillStatus(const SimWorld& w, const CommandGate& gate, bool lock_ste
   m->colliding_pairs.clear();
   for (const auto& c : r.collisions) m->colliding_pairs.push_back(c.a + "|" + c.b);
   const ParallelGripper& g = w.gripper();
-  m->gripper_state = toString(g.state());
+  m->gripper_state = ehc_control::toString(g.state());  // the one string map
   m->gripper_opening = g.opening();
   m->held_object = g.heldObject() >= 0 ? w.scene().objects[static_cast<std::size_t>(g.heldObject())].name : "";
   m->grasp_succeeded = g.graspSucceeded();

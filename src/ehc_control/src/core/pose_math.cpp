@@ -1,0 +1,23 @@
+#include "ehc_control/pose_math.h"
+
+#include <cmath>
+#include <limits>
+
+namespace ehc_control {
+
+bool isRotationQuaternion(const Eigen::Quaterniond& q) {
+  const double n = q.norm();
+  return std::isfinite(n) && std::abs(n - 1.0) <= kQuaternionNormTolerance;
+}
+
+double yawFromQuaternion(const Eigen::Quaterniond& q) {
+  if (!isRotationQuaternion(q)) return std::numeric_limits<double>::quiet_NaN();
+  return std::atan2(2.0 * (q.w() * q.z() + q.x() * q.y()), 1.0 - 2.0 * (q.y() * q.y() + q.z() * q.z()));
+}
+
+Eigen::Matrix3d rotationFromQuaternion(const Eigen::Quaterniond& q) {
+  if (!isRotationQuaternion(q)) return Eigen::Matrix3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  return q.normalized().toRotationMatrix();
+}
+
+}  // namespace ehc_control
