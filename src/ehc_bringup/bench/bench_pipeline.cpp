@@ -9,6 +9,7 @@
 // its rate (GraspPipeline::perceive): the counts of images (and of images skipped with no tag in
 // view) and clouds are in the stage line.
 #include "ehc_bringup/grasp_experiment.h"
+#include "ehc_common/bench_util.h"
 
 #include <chrono>
 #include <cstdio>
@@ -34,11 +35,18 @@ void bench(const char* name, ehc_bringup::GraspProtocol protocol) {
   if (getloadavg(load, 1) != 1) load[0] = -1.0;
   int ok = 0;
   for (const auto& t : r.trials) ok += t.success;
-  std::printf("{\"bench\":\"%s\",\"grasps\":%zu,\"successes\":%d,\"sim_s\":%.2f,\"cpu_s\":%.2f,\"wall_s\":%.2f,"
-              "\"load_1min\":%.2f,\"cpu_real_time_factor\":%.2f,\"wall_real_time_factor\":%.2f,\"stages\":%s}\n",
-              name, r.trials.size(), ok, r.sim_time_s, cpu, wall, load[0], r.sim_time_s / std::max(1e-9, cpu),
-              r.sim_time_s / std::max(1e-9, wall), ehc_bringup::pipelineStageCosts(r.counters, r.sim_time_s).c_str());
-  std::fflush(stdout);
+  using ehc_common::jsonNumber;
+  ehc_common::Json line;
+  line["grasps"] = r.trials.size();
+  line["successes"] = ok;
+  line["sim_s"] = jsonNumber(r.sim_time_s);
+  line["cpu_s"] = jsonNumber(cpu);
+  line["wall_s"] = jsonNumber(wall);
+  line["load_1min"] = jsonNumber(load[0]);
+  line["cpu_real_time_factor"] = jsonNumber(r.sim_time_s / std::max(1e-9, cpu));
+  line["wall_real_time_factor"] = jsonNumber(r.sim_time_s / std::max(1e-9, wall));
+  line["stages"] = ehc_common::Json::parse(ehc_bringup::pipelineStageCosts(r.counters, r.sim_time_s));
+  ehc_common::benchPrintValues(name, line);
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 // GraspSequencer + grasp selection (ROS-free): phase order, timeouts, failure paths, bad input.
 #include "ehc_bringup/grasp_sequencer.h"
 #include "ehc_common/config_node.h"
+#include "ehc_common/json.h"
 #include "ehc_control/pose_math.h"
 
 #include <gtest/gtest.h>
@@ -617,8 +618,8 @@ TEST(GraspSequencer, TfmCountsTheApproachUntilTheArmTakesOver) {
   EXPECT_DOUBLE_EQ(r.tfm, 1.0);
   // Until the pre-grasp switch: the 250 cycles + 2 to the lock, 100 in view.
   EXPECT_NEAR(r.tfm_until_switch, 100.0 / 252.0, 1e-12);
-  const std::string j = graspResultsToJson(h.seq.results(), "ehc", 1.0);
-  EXPECT_NE(j.find("\"tfm_until_switch\": 0.3968"), std::string::npos) << j;
+  const ehc_common::Json j = ehc_common::Json::parse(graspResultsToJson(h.seq.results(), "ehc", 1.0));
+  EXPECT_NEAR(j["objects"][0]["tfm_until_switch"].get<double>(), 100.0 / 252.0, 1e-6) << j;
   // 250 cycles at a constant sig, the first 100 in view, then on to the grasp: the TfM result.
   auto constantSig = [](const GraspSequencerParams& q, double sig) {
     Harness w(q);
@@ -1244,12 +1245,15 @@ TEST(GraspReport, JsonAndLines) {
   f.name = "back\"x";
   f.reason = "time limit";
   f.failed_phase = "APPROACH";
-  const std::string j = graspResultsToJson({r, f}, "ehc", 40.0);
-  EXPECT_NE(j.find("\"successes\": 1"), std::string::npos) << j;
-  EXPECT_NE(j.find("\"time_s\": 12.35"), std::string::npos) << j;  // rounded to 0.01
-  EXPECT_NE(j.find("\"tfm\": 0.9876"), std::string::npos) << j;
-  EXPECT_NE(j.find("back\\\"x"), std::string::npos) << j;
-  EXPECT_NE(j.find("\"APPROACH\": 8.00"), std::string::npos) << j;
+  const std::string text = graspResultsToJson({r, f}, "ehc", 40.0);
+  const ehc_common::Json j = ehc_common::Json::parse(text);  // valid JSON, quotes escaped
+  EXPECT_EQ(j["successes"], 1) << text;
+  EXPECT_EQ(j["objects_total"], 2) << text;
+  EXPECT_DOUBLE_EQ(j["objects"][0]["time_s"].get<double>(), 12.345) << text;  // 6 significant digits
+  EXPECT_DOUBLE_EQ(j["objects"][0]["tfm"].get<double>(), 0.9876) << text;
+  EXPECT_EQ(j["objects"][1]["name"], "back\"x") << text;
+  EXPECT_DOUBLE_EQ(j["objects"][0]["phase_times"]["APPROACH"].get<double>(), 8.0) << text;
+  EXPECT_TRUE(j["objects"][1]["close_offset_m"].is_null() || j["objects"][1]["close_offset_m"].is_number()) << text;
   EXPECT_NE(graspResultLine(r).find("SUCCESS"), std::string::npos);
   EXPECT_NE(graspResultLine(f).find("FAILED"), std::string::npos);
   EXPECT_NE(graspResultLine(f).find("time limit"), std::string::npos);

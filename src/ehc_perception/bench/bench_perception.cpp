@@ -52,8 +52,7 @@ void benchTags() {
     const auto d = det.detect(images[static_cast<std::size_t>(i % 5)]);
     found += static_cast<int>(d.size());
   });
-  std::printf("{\"bench\":\"perception.tag_detect_pose_640x480.detections\",\"found\":%d,"
-              "\"expected\":200}\n", found);
+  ehc_common::benchPrintValues("perception.tag_detect_pose_640x480.detections", {{"found", found}, {"expected", 200}});
   // A stream: one tag crossing the view 0.6 m away (1 cm, 1 deg a frame) with the simulator's
   // pixel noise (config/sim/bullet_sim.yaml camera.image_noise: 2 grey levels, i.i.d.),
   // searched whole every image, then with the tracking window of config/demo/tag_*.yaml.
@@ -74,9 +73,10 @@ void benchTags() {
     ehc_common::benchReport(name, 100, [&](int i) {
       n += static_cast<int>(tracker.detect(stream[static_cast<std::size_t>(i % 20)]).size());
     });
-    std::printf("{\"bench\":\"%s.detections\",\"found\":%d,\"expected\":100,"
-                "\"whole_images\":%ld,\"windows\":%ld}\n",
-                name.c_str(), n, tracker.fullFrameSearches(), tracker.windowSearches());
+    ehc_common::benchPrintValues(name + ".detections", {{"found", n},
+                                                        {"expected", 100},
+                                                        {"whole_images", tracker.fullFrameSearches()},
+                                                        {"windows", tracker.windowSearches()}});
   }
 }
 
@@ -96,7 +96,7 @@ void benchGrasps(double* sink) {
   std::size_t n_grasps = 0;
   ehc_common::benchReport("perception.grasps_object_20k", 30, [&](int i) {
     n_grasps += gen.generate(objects[static_cast<std::size_t>(i % 3)], view).grasps.size();
-  }, "\"points\":20000");
+  }, {{"points", 20000}});
   *sink += static_cast<double>(n_grasps);
 
   Surface scene = tableSurface(0.7, 0.0, 0.6, 0.8, 0.7, 0.005);
@@ -110,7 +110,7 @@ void benchGrasps(double* sink) {
   const Eigen::Vector3d near(0.75, -0.15, 0.76);
   ehc_common::benchReport("perception.grasps_scene", 10, [&](int) {
     *sink += static_cast<double>(gen.generateFromScene(scene_cloud, Eigen::Vector3d(0.2, 0, 1.3), &near).grasps.size());
-  }, "\"points\":" + std::to_string(scene_cloud.size()));
+  }, {{"points", scene_cloud.size()}});
 }
 
 /// Obstacle distances on a 2 cm OctoMap, ray insertion, and ObstacleMonitor on a D435 frame.
@@ -140,10 +140,9 @@ void benchObstacles() {
   std::size_t pairs = 0;
   ehc_common::benchReport("perception.obstacle_distances_2cm", 2000, [&](int i) {
     pairs += field.distances(poses[static_cast<std::size_t>(i % 50)]).size();
-  }, "\"links\":" + std::to_string(robot.links().size()) + ",\"occupied_voxels\":" +
-         std::to_string(field.occupiedLeafCount()));
-  std::printf("{\"bench\":\"perception.obstacle_distances_2cm.pairs_per_cycle\",\"mean\":%.2f}\n",
-              static_cast<double>(pairs) / 2000.0);
+  }, {{"links", robot.links().size()}, {"occupied_voxels", field.occupiedLeafCount()}});
+  ehc_common::benchPrintValues("perception.obstacle_distances_2cm.pairs_per_cycle",
+                               {{"mean", ehc_common::jsonNumber(static_cast<double>(pairs) / 2000.0)}});
 
   // Depth cloud of a wall + table seen from 1 m: ray insertion cost.
   PointList cloud;
@@ -153,7 +152,7 @@ void benchObstacles() {
   ObstacleDistanceField field2(cfg, robot);
   ehc_common::benchReport("perception.octomap_insert_cloud", 20, [&](int) {
     field2.insertCloud(cloud, Eigen::Vector3d(0.3, 0.0, 1.2));
-  }, "\"points\":20000,\"range_m\":1.3");
+  }, {{"points", 20000}, {"range_m", 1.3}});
 
   // A full D435 frame through ObstacleMonitor (the node's path): bounded, then inserted.
   const PointList frame = fullD435Wall();
@@ -161,10 +160,10 @@ void benchObstacles() {
   std::size_t kept = 0;
   ehc_common::benchReport("perception.obstacle_monitor_bound_d435", 20, [&](int) {
     kept = monitor.boundCloud(frame).size();
-  }, "\"points\":307200");
+  }, {{"points", 307200}});
   ehc_common::benchReport("perception.obstacle_monitor_insert_d435", 20, [&](int) {
     monitor.insertCloud(0.0, frame, Eigen::Vector3d(0.0, 0.0, 1.0));
-  }, "\"points\":307200,\"inserted\":" + std::to_string(kept));
+  }, {{"points", 307200}, {"inserted", kept}});
 }
 
 }  // namespace

@@ -26,12 +26,9 @@ std::size_t serialise(const M& m, std::vector<uint8_t>* buf) {
 
 /// One JSON line {"bench": name, "rate_hz", "bar_hz", "meets_bar"}.
 void printRate(const std::string& name, double mean_us, double bar_hz) {
-  ehc_common::Json line;
-  line["bench"] = name;
-  line["rate_hz"] = ehc_common::jsonNumber(1e6 / mean_us);
-  line["bar_hz"] = bar_hz;
-  line["meets_bar"] = 1e6 / mean_us >= bar_hz;
-  std::printf("%s\n", ehc_common::jsonLine(line).c_str());
+  ehc_common::benchPrintValues(name, {{"rate_hz", ehc_common::jsonNumber(1e6 / mean_us)},
+                                      {"bar_hz", bar_hz},
+                                      {"meets_bar", 1e6 / mean_us >= bar_hz}});
 }
 
 }  // namespace

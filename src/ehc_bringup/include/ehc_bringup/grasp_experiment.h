@@ -169,7 +169,8 @@ void writeGraspResults(const std::string& dir, const GraspExperimentParams& para
                        const GraspExperimentResult& result, const std::string& notes);
 /// Wall seconds per pipeline stage and per sim second, one line (`make bench`, stderr).
 std::string pipelineStageCosts(const PipelineCounters& c, double sim_time_s);
-/// One JSON object per method summary.
+/// One JSON object per method summary (summary.json "methods"), the project's number format.
+ehc_common::Json graspSummaryJsonValue(const GraspMethodSummary& s);
 std::string graspSummaryJson(const GraspMethodSummary& s);
 
 }  // namespace ehc_bringup

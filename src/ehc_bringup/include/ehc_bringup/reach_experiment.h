@@ -90,6 +90,8 @@ CommandSpeeds commandSpeeds(const Eigen::VectorXd& v, int nb);
 void accumulateSpeed(SpeedMeans& s, const Eigen::VectorXd& v, int nb);
 /// The sums divided by the cycle count (unchanged without cycles).
 SpeedMeans meanSpeed(const SpeedMeans& sums);
+/// {"base_t", "base_r", "arm", "cycles"} of mean speeds, the project's JSON number format.
+ehc_common::Json speedJson(const SpeedMeans& m);
 
 struct ReachTrial {
   std::string method;

@@ -377,30 +377,34 @@ GraspExperimentResult GraspExperiment::run(const Progress& progress) const {
 }
 
 std::string pipelineStageCosts(const PipelineCounters& c, double sim_time_s) {
-  std::ostringstream os;
-  os << std::fixed << std::setprecision(3);
+  using ehc_common::jsonNumber;
   const double per = sim_time_s > 0.0 ? 1.0 / sim_time_s : 0.0;
   const double total = c.wall_image + c.wall_depth + c.wall_tags + c.wall_grasps + c.wall_obstacles + c.wall_control +
                        c.wall_sequencer + c.wall_physics;
-  os << "{\"sim_time_s\":" << sim_time_s << ",\"cycles\":" << c.cycles << ",\"images\":" << c.images
-     << ",\"images_without_tags\":" << c.images_without_tags
-     << ",\"tag_searches\":{\"whole\":" << c.tag_whole_searches << ",\"window\":" << c.tag_window_searches << "}"
-     << ",\"clouds\":" << c.clouds << ",\"grasp_runs\":" << c.grasp_runs << ",\"obstacle_updates\":" << c.obstacle_updates
-     << ",\"wall_s_per_sim_s\":{\"image\":" << c.wall_image * per << ",\"depth\":" << c.wall_depth * per << ",\"tags\":" << c.wall_tags * per
-     << ",\"grasps\":" << c.wall_grasps * per << ",\"obstacles\":" << c.wall_obstacles * per
-     << ",\"control\":" << c.wall_control * per << ",\"sequencer\":" << c.wall_sequencer * per
-     << ",\"physics\":" << c.wall_physics * per << ",\"total\":" << total * per << "}}";
-  return os.str();
+  ehc_common::Json j;
+  j["sim_time_s"] = jsonNumber(sim_time_s);
+  j["cycles"] = c.cycles;
+  j["images"] = c.images;
+  j["images_without_tags"] = c.images_without_tags;
+  j["tag_searches"] = {{"whole", c.tag_whole_searches}, {"window", c.tag_window_searches}};
+  j["clouds"] = c.clouds;
+  j["grasp_runs"] = c.grasp_runs;
+  j["obstacle_updates"] = c.obstacle_updates;
+  j["wall_s_per_sim_s"] = {{"image", jsonNumber(c.wall_image * per)},         {"depth", jsonNumber(c.wall_depth * per)},
+                           {"tags", jsonNumber(c.wall_tags * per)},           {"grasps", jsonNumber(c.wall_grasps * per)},
+                           {"obstacles", jsonNumber(c.wall_obstacles * per)}, {"control", jsonNumber(c.wall_control * per)},
+                           {"sequencer", jsonNumber(c.wall_sequencer * per)}, {"physics", jsonNumber(c.wall_physics * per)},
+                           {"total", jsonNumber(total * per)}};
+  return ehc_common::jsonLine(j);
 }
 
 namespace {
-std::string obstacleJson(const ObstacleExtreme& e) {
-  std::ostringstream os;
-  if (!e.found) return "{\"distance\":null,\"stop\":null,\"margin\":null,\"link\":\"\",\"body\":\"\",\"phase\":\"\"}";
-  os << std::setprecision(6) << "{\"distance\":" << e.distance << ",\"stop\":" << e.stop << ",\"margin\":"
-     << e.margin() << ",\"link\":\"" << e.link << "\",\"body\":\"" << e.body
-     << "\",\"phase\":\"" << e.phase << "\"}";
-  return os.str();
+ehc_common::Json obstacleJson(const ObstacleExtreme& e) {
+  using ehc_common::jsonNumber;
+  if (!e.found)
+    return {{"distance", nullptr}, {"stop", nullptr}, {"margin", nullptr}, {"link", ""}, {"body", ""}, {"phase", ""}};
+  return {{"distance", jsonNumber(e.distance)}, {"stop", jsonNumber(e.stop)}, {"margin", jsonNumber(e.margin())},
+          {"link", e.link}, {"body", e.body}, {"phase", e.phase}};
 }
 /// ",value" for a finite value, "," (an empty CSV field) for NaN (not measured).
 void writeFiniteField(std::ostream& f, double v) {
@@ -409,28 +413,31 @@ void writeFiniteField(std::ostream& f, double v) {
 }
 }  // namespace
 
-std::string graspSummaryJson(const GraspMethodSummary& s) {
-  std::ostringstream os;
-  os << std::setprecision(10);
+ehc_common::Json graspSummaryJsonValue(const GraspMethodSummary& s) {
+  using ehc_common::jsonNumber;
   const GraspMethod m = graspMethod(s.method);
-  os << "{\"method\":\"" << s.method << "\",\"mode\":\"" << ehc_control::toString(m.mode)
-     << "\",\"mpbs\":" << (m.mpbs ? "true" : "false") << ",\"grasps\":" << s.grasps << ",\"successes\":" << s.successes
-     << ",\"success_rate\":" << (s.grasps ? 100.0 * s.successes / s.grasps : 0.0)
-     << ",\"mean_time_s\":" << s.mean_time_s << ",\"distant\":{\"base_t\":" << s.distant.base_t
-     << ",\"base_r\":" << s.distant.base_r << ",\"arm\":" << s.distant.arm << ",\"cycles\":" << s.distant.cycles
-     << "},\"close\":{\"base_t\":" << s.close.base_t << ",\"base_r\":" << s.close.base_r << ",\"arm\":" << s.close.arm
-     << ",\"cycles\":" << s.close.cycles << "},\"tfm\":{";
-  bool first = true;
-  for (const auto& e : s.tfm) {
-    os << (first ? "" : ",") << "\"" << e.first << "\":" << 100.0 * e.second.first;
-    first = false;
-  }
-  os << "},\"contact_steps\":" << s.contact_steps << ",\"joint_limit_violations\":" << s.joint_limit_violations
-     << ",\"min_obstacle\":" << obstacleJson(s.nearest) << ",\"min_obstacle_margin\":" << obstacleJson(s.tightest)
-     << ",\"min_grasped_object\":" << obstacleJson(s.grasped)
-     << ",\"sim_time_s\":" << s.sim_time_s << "}";
-  return os.str();
+  ehc_common::Json j;
+  j["method"] = s.method;
+  j["mode"] = ehc_control::toString(m.mode);
+  j["mpbs"] = m.mpbs;
+  j["grasps"] = s.grasps;
+  j["successes"] = s.successes;
+  j["success_rate"] = jsonNumber(s.grasps ? 100.0 * s.successes / s.grasps : 0.0);
+  j["mean_time_s"] = jsonNumber(s.mean_time_s);
+  j["distant"] = speedJson(s.distant);
+  j["close"] = speedJson(s.close);
+  ehc_common::Json& tfm = j["tfm"] = ehc_common::Json::object();
+  for (const auto& e : s.tfm) tfm[e.first] = jsonNumber(100.0 * e.second.first);
+  j["contact_steps"] = s.contact_steps;
+  j["joint_limit_violations"] = s.joint_limit_violations;
+  j["min_obstacle"] = obstacleJson(s.nearest);
+  j["min_obstacle_margin"] = obstacleJson(s.tightest);
+  j["min_grasped_object"] = obstacleJson(s.grasped);
+  j["sim_time_s"] = jsonNumber(s.sim_time_s);
+  return j;
 }
+
+std::string graspSummaryJson(const GraspMethodSummary& s) { return ehc_common::jsonLine(graspSummaryJsonValue(s)); }
 
 namespace {
 
@@ -441,14 +448,18 @@ std::ofstream openResultFile(const std::string& dir, const std::string& name) {
 }
 
 void writeSummaryJson(const std::string& dir, const GraspExperimentParams& params, const GraspExperimentResult& result) {
-  std::ofstream f = openResultFile(dir, "summary.json");
-  f << "{\"protocol\":\"" << (params.protocol == GraspProtocol::Table ? "grasp" : "poses") << "\",\"sets\":"
-    << params.sets << ",\"per_set\":" << params.per_set << ",\"seed\":" << params.seed
-    << ",\"jitter_xy\":" << params.jitter_xy << ",\"jitter_yaw_deg\":" << params.jitter_yaw_deg
-    << ",\"sim_time_s\":" << result.sim_time_s << ",\"methods\":[";
-  for (std::size_t i = 0; i < result.summaries.size(); ++i)
-    f << (i ? ",\n " : "") << graspSummaryJson(result.summaries[i]);
-  f << "]}\n";
+  using ehc_common::jsonNumber;
+  ehc_common::Json j;
+  j["protocol"] = params.protocol == GraspProtocol::Table ? "grasp" : "poses";
+  j["sets"] = params.sets;
+  j["per_set"] = params.per_set;
+  j["seed"] = params.seed;
+  j["jitter_xy"] = jsonNumber(params.jitter_xy);
+  j["jitter_yaw_deg"] = jsonNumber(params.jitter_yaw_deg);
+  j["sim_time_s"] = jsonNumber(result.sim_time_s);
+  j["methods"] = ehc_common::Json::array();
+  for (const GraspMethodSummary& m : result.summaries) j["methods"].push_back(graspSummaryJsonValue(m));
+  openResultFile(dir, "summary.json") << ehc_common::jsonLine(j) << "\n";
 }
 
 double percent(int a, int b) { return b ? 100.0 * a / b : 0.0; }

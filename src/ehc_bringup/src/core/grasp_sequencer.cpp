@@ -2,6 +2,7 @@
 
 #include "ehc_common/config_node.h"
 #include "ehc_control/control_status.h"
+#include "ehc_common/json.h"
 #include "ehc_control/pose_math.h"
 
 #include <algorithm>
@@ -32,7 +33,13 @@ std::string toString(GraspPhase p) {
 }
 
 namespace {
-std::string num(double v, int precision = 3);
+/// `v` with `precision` decimals for messages ("null" when not finite).
+std::string num(double v, int precision = 3) {
+  if (!std::isfinite(v)) return "null";
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(precision) << v;
+  return s.str();
+}
 }  // namespace
 
 // ---------------------------------------------------------------- parameters
@@ -652,51 +659,40 @@ std::vector<ExclusionSphere> GraspSequencer::obstacleExclusions(const SequencerI
 
 // ---------------------------------------------------------------- reporting
 
-namespace {
-std::string jsonString(const std::string& s) {
-  std::string o = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') { o += '\\'; o += c; }
-    else if (c == '\n') o += "\\n";
-    else if (static_cast<unsigned char>(c) < 0x20) o += ' ';
-    else o += c;
-  }
-  return o + "\"";
-}
-std::string num(double v, int precision) {
-  if (!std::isfinite(v)) return "null";
-  std::ostringstream s;
-  s << std::fixed << std::setprecision(precision) << v;
-  return s.str();
-}
-}  // namespace
-
 std::string graspResultsToJson(const std::vector<GraspResult>& results, const std::string& mode,
                                double total_time_s) {
-  std::ostringstream s;
+  using ehc_common::jsonNumber;
   int ok = 0;
   for (const auto& r : results) ok += r.success ? 1 : 0;
-  s << "{\"mode\": " << jsonString(mode) << ", \"successes\": " << ok << ", \"objects_total\": " << results.size()
-    << ", \"total_time_s\": " << num(total_time_s, 2) << ", \"objects\": [";
-  for (std::size_t i = 0; i < results.size(); ++i) {
-    const GraspResult& r = results[i];
-    s << (i ? ", " : "") << "{\"name\": " << jsonString(r.name) << ", \"success\": " << (r.success ? "true" : "false")
-      << ", \"time_s\": " << num(r.time_s, 2) << ", \"tfm\": " << num(r.tfm, 4) << ", \"tfm_cycles\": " << r.cycles
-      << ", \"tfm_until_switch\": " << num(r.tfm_until_switch, 4)
-      << ", \"tfm_until_close\": " << num(r.tfm_until_close, 4) << ", \"controller_tfm\": " << num(r.controller_tfm, 4)
-      << ", \"approach\": " << jsonString(r.approach) << ", \"grasp_from_candidate\": "
-      << (r.used_candidate ? "true" : "false") << ", \"failed_phase\": " << jsonString(r.failed_phase)
-      << ", \"reason\": " << jsonString(r.reason) << ", \"close_offset_m\": " << num(r.close_offset, 4)
-      << ", \"phase_times\": {";
-    for (std::size_t k = 0; k < r.phase_times.size(); ++k)
-      s << (k ? ", " : "") << jsonString(r.phase_times[k].first) << ": " << num(r.phase_times[k].second, 2);
-    s << "}, \"controller_phase_cycles\": {";
-    for (std::size_t k = 0; k < r.controller_phases.size(); ++k)
-      s << (k ? ", " : "") << jsonString(r.controller_phases[k].first) << ": " << r.controller_phases[k].second;
-    s << "}}";
+  ehc_common::Json j;
+  j["mode"] = mode;
+  j["successes"] = ok;
+  j["objects_total"] = results.size();
+  j["total_time_s"] = jsonNumber(total_time_s);
+  j["objects"] = ehc_common::Json::array();
+  for (const GraspResult& r : results) {
+    ehc_common::Json o;
+    o["name"] = r.name;
+    o["success"] = r.success;
+    o["time_s"] = jsonNumber(r.time_s);
+    o["tfm"] = jsonNumber(r.tfm);
+    o["tfm_cycles"] = r.cycles;
+    o["tfm_until_switch"] = jsonNumber(r.tfm_until_switch);
+    o["tfm_until_close"] = jsonNumber(r.tfm_until_close);
+    o["controller_tfm"] = jsonNumber(r.controller_tfm);
+    o["approach"] = r.approach;
+    o["grasp_from_candidate"] = r.used_candidate;
+    o["failed_phase"] = r.failed_phase;
+    o["reason"] = r.reason;
+    o["close_offset_m"] = jsonNumber(r.close_offset);
+    ehc_common::Json& phases = o["phase_times"] = ehc_common::Json::object();
+    for (const auto& [phase, time] : r.phase_times) phases[phase] = jsonNumber(time);
+    ehc_common::Json& cycles = o["controller_phase_cycles"] = ehc_common::Json::object();
+    for (const auto& [phase, n] : r.controller_phases) cycles[phase] = n;
+    j["objects"].push_back(o);
   }
-  s << "]}";
-  return s.str();
+  // Text that is not valid UTF-8 (an object name from a user's file) is replaced, not thrown on.
+  return j.dump(-1, ' ', false, ehc_common::Json::error_handler_t::replace);
 }
 
 std::string graspResultLine(const GraspResult& r) {

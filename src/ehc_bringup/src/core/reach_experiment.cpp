@@ -260,14 +260,12 @@ ReachSummary ReachExperiment::run(const std::vector<std::vector<Eigen::Isometry3
   return s;
 }
 
-namespace {
 ehc_common::Json speedJson(const SpeedMeans& m) {
   return {{"base_t", ehc_common::jsonNumber(m.base_t)},
           {"base_r", ehc_common::jsonNumber(m.base_r)},
           {"arm", ehc_common::jsonNumber(m.arm)},
           {"cycles", m.cycles}};
 }
-}  // namespace
 
 ehc_common::Json summaryJsonValue(const ReachSummary& s) {
   using ehc_common::jsonNumber;

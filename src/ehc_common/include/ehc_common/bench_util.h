@@ -30,19 +30,26 @@ inline BenchStats benchStats(std::vector<double> us) {
   return s;
 }
 
+/// Prints one JSON line {"bench": name, ...values} (counts, rates, settings beside the timings).
+inline void benchPrintValues(const std::string& name, const Json& values) {
+  Json line;
+  line["bench"] = name;
+  for (const auto& [key, value] : values.items()) line[key] = value;
+  std::printf("%s\n", jsonLine(line).c_str());
+  std::fflush(stdout);
+}
+
 /// Prints one JSON line {"bench", "n", "median_us", "p99_us", "mean_us", "max_us", ...extra}.
 inline void benchPrint(const std::string& name, std::size_t n, const BenchStats& s,
                        const Json& extra = Json::object()) {
-  Json line;
-  line["bench"] = name;
-  line["n"] = n;
-  line["median_us"] = jsonNumber(s.median_us);
-  line["p99_us"] = jsonNumber(s.p99_us);
-  line["mean_us"] = jsonNumber(s.mean_us);
-  line["max_us"] = jsonNumber(s.max_us);
-  for (const auto& [key, value] : extra.items()) line[key] = value;
-  std::printf("%s\n", jsonLine(line).c_str());
-  std::fflush(stdout);
+  Json values;
+  values["n"] = n;
+  values["median_us"] = jsonNumber(s.median_us);
+  values["p99_us"] = jsonNumber(s.p99_us);
+  values["mean_us"] = jsonNumber(s.mean_us);
+  values["max_us"] = jsonNumber(s.max_us);
+  for (const auto& [key, value] : extra.items()) values[key] = value;
+  benchPrintValues(name, values);
 }
 
 template <class Fn>
