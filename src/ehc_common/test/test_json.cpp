@@ -48,3 +48,10 @@ TEST(Json, KeepsInsertionOrderOnOneLine) {
   j["m"] = jsonNumber(0.5);
   EXPECT_EQ(jsonLine(j), "{\"z\":1,\"a\":\"x\",\"m\":0.5}");
 }
+
+TEST(Json, InvalidUtf8IsReplacedNotThrown) {
+  Json j;
+  j["name"] = std::string("mug\xff\xfe");
+  const std::string line = jsonLine(j);
+  EXPECT_EQ(Json::parse(line)["name"].get<std::string>().substr(0, 3), "mug") << line;
+}

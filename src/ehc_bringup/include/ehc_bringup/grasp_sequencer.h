@@ -74,17 +74,8 @@
 #include <vector>
 
 namespace ehc_common {
-}  // namespace ehc_common
-
-namespace ehc_common {
-}  // namespace ehc_common
-
-namespace ehc_common {
 class ConfigNode;
 }  // namespace ehc_common
-
-namespace ehc_control {
-}
 
 namespace ehc_bringup {
 

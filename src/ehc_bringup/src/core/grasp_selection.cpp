@@ -1,5 +1,6 @@
 #include "ehc_bringup/grasp_selection.h"
 
+#include "ehc_common/enum_names.h"
 #include "ehc_control/pose_math.h"
 
 #include <algorithm>
@@ -8,25 +9,18 @@
 
 namespace ehc_bringup {
 
-std::string toString(ApproachDirection d) {
-  switch (d) {
-    case ApproachDirection::Tag: return "tag";
-    case ApproachDirection::Forward: return "forward";
-    case ApproachDirection::Downward: return "downward";
-    case ApproachDirection::Sideways: return "sideways";
-    case ApproachDirection::Any: return "any";
-  }
-  return "?";
-}
+namespace {
+constexpr ehc_common::EnumNames<ApproachDirection, 5> kApproachNames = {{{ApproachDirection::Tag, "tag"},
+                                                                          {ApproachDirection::Forward, "forward"},
+                                                                          {ApproachDirection::Downward, "downward"},
+                                                                          {ApproachDirection::Sideways, "sideways"},
+                                                                          {ApproachDirection::Any, "any"}}};
+}  // namespace
+
+std::string toString(ApproachDirection d) { return ehc_common::enumName(kApproachNames, d, "GraspSelection"); }
 
 ApproachDirection approachDirectionFromString(const std::string& s) {
-  if (s == "tag") return ApproachDirection::Tag;
-  if (s == "forward") return ApproachDirection::Forward;
-  if (s == "downward") return ApproachDirection::Downward;
-  if (s == "sideways") return ApproachDirection::Sideways;
-  if (s == "any") return ApproachDirection::Any;
-  throw std::invalid_argument("[GraspSelection] unknown approach direction '" + s +
-                              "' (tag | forward | downward | sideways | any)");
+  return ehc_common::enumValue(kApproachNames, s, "GraspSelection", "approach direction");
 }
 
 void GraspSelectionParams::validate() const {

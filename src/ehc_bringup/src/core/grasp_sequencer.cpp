@@ -2,6 +2,7 @@
 
 #include "ehc_common/config_node.h"
 #include "ehc_control/control_status.h"
+#include "ehc_common/enum_names.h"
 #include "ehc_common/json.h"
 #include "ehc_control/pose_math.h"
 
@@ -16,21 +17,20 @@ namespace ehc_bringup {
 
 using ehc_control::GripperState;
 
-std::string toString(GraspPhase p) {
-  switch (p) {
-    case GraspPhase::WaitTarget: return "WAIT_TARGET";
-    case GraspPhase::Approach: return "APPROACH";
-    case GraspPhase::PreGrasp: return "PRE_GRASP";
-    case GraspPhase::Grasp: return "GRASP";
-    case GraspPhase::Close: return "CLOSE";
-    case GraspPhase::Lift: return "LIFT";
-    case GraspPhase::Place: return "PLACE";
-    case GraspPhase::Release: return "RELEASE";
-    case GraspPhase::Retreat: return "RETREAT";
-    case GraspPhase::Done: return "DONE";
-  }
-  return "?";
-}
+namespace {
+constexpr ehc_common::EnumNames<GraspPhase, 10> kGraspPhaseNames = {{{GraspPhase::WaitTarget, "WAIT_TARGET"},
+                                                                      {GraspPhase::Approach, "APPROACH"},
+                                                                      {GraspPhase::PreGrasp, "PRE_GRASP"},
+                                                                      {GraspPhase::Grasp, "GRASP"},
+                                                                      {GraspPhase::Close, "CLOSE"},
+                                                                      {GraspPhase::Lift, "LIFT"},
+                                                                      {GraspPhase::Place, "PLACE"},
+                                                                      {GraspPhase::Release, "RELEASE"},
+                                                                      {GraspPhase::Retreat, "RETREAT"},
+                                                                      {GraspPhase::Done, "DONE"}}};
+}  // namespace
+
+std::string toString(GraspPhase p) { return ehc_common::enumName(kGraspPhaseNames, p, "GraspSequencer"); }
 
 namespace {
 /// `v` with `precision` decimals for messages ("null" when not finite).
@@ -691,8 +691,7 @@ std::string graspResultsToJson(const std::vector<GraspResult>& results, const st
     for (const auto& [phase, n] : r.controller_phases) cycles[phase] = n;
     j["objects"].push_back(o);
   }
-  // Text that is not valid UTF-8 (an object name from a user's file) is replaced, not thrown on.
-  return j.dump(-1, ' ', false, ehc_common::Json::error_handler_t::replace);
+  return ehc_common::jsonLine(j);
 }
 
 std::string graspResultLine(const GraspResult& r) {

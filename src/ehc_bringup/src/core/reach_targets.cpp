@@ -1,5 +1,7 @@
 #include "ehc_bringup/reach_targets.h"
 
+#include "ehc_control/pose_math.h"
+
 #include <cmath>
 #include <fstream>
 #include <iomanip>
@@ -95,7 +97,7 @@ std::vector<Eigen::Isometry3d> readReachTargetsCsv(const std::string& path) {
     for (double x : v)
       if (!std::isfinite(x)) throw std::invalid_argument(where + "values must be finite");
     const Eigen::Quaterniond q(v[6], v[3], v[4], v[5]);
-    if (std::abs(q.norm() - 1.0) > 1e-3)
+    if (!ehc_control::isRotationQuaternion(q))
       throw std::invalid_argument(where + "quaternion is not unit length");
     Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
     T.linear() = q.normalized().toRotationMatrix();

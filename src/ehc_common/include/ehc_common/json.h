@@ -16,7 +16,7 @@ using Json = nlohmann::ordered_json;
 /// `v` rounded to 6 significant digits (the printed value of "%.6g"), or null if not finite.
 Json jsonNumber(double v);
 
-/// One line of compact JSON (no spaces, no trailing newline).
+/// One line of compact JSON (no spaces, no trailing newline); invalid UTF-8 is replaced.
 std::string jsonLine(const Json& j);
 
 }  // namespace ehc_common

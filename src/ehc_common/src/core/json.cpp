@@ -13,6 +13,10 @@ Json jsonNumber(double v) {
   return Json(std::strtod(text, nullptr));
 }
 
-std::string jsonLine(const Json& j) { return j.dump(); }
+std::string jsonLine(const Json& j) {
+  // Text that is not valid UTF-8 (a name from a user's file, a fuzzed request) is replaced
+  // with U+FFFD rather than thrown on: output never fails on content.
+  return j.dump(-1, ' ', false, Json::error_handler_t::replace);
+}
 
 }  // namespace ehc_common

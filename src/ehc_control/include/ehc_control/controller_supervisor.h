@@ -17,9 +17,6 @@
 #include <vector>
 
 namespace ehc_common {
-}  // namespace ehc_common
-
-namespace ehc_common {
 class ConfigNode;
 }  // namespace ehc_common
 

@@ -1,5 +1,7 @@
 #include "ehc_control/qp_controller.h"
 
+#include "ehc_common/enum_names.h"
+
 #include "ehc_common/config_node.h"
 #include "ehc_control/qp_solver.h"
 #include "ehc_control/joint_limit_centring.h"
@@ -23,22 +25,17 @@ std::string knownQpSolvers() {
 }
 }  // namespace
 
-std::string toString(ControlMode m) {
-  switch (m) {
-    case ControlMode::Ehc: return "ehc";
-    case ControlMode::NeoE: return "neo_e";
-    case ControlMode::NeoC: return "neo_c";
-    case ControlMode::Tsmm: return "tsmm";
-  }
-  return "?";
-}
+namespace {
+constexpr ehc_common::EnumNames<ControlMode, 4> kControlModeNames = {{{ControlMode::Ehc, "ehc"},
+                                                                      {ControlMode::NeoE, "neo_e"},
+                                                                      {ControlMode::NeoC, "neo_c"},
+                                                                      {ControlMode::Tsmm, "tsmm"}}};
+}  // namespace
+
+std::string toString(ControlMode m) { return ehc_common::enumName(kControlModeNames, m, "EhcQpController"); }
 
 ControlMode controlModeFromString(const std::string& s) {
-  if (s == "ehc") return ControlMode::Ehc;
-  if (s == "neo_e") return ControlMode::NeoE;
-  if (s == "neo_c") return ControlMode::NeoC;
-  if (s == "tsmm") return ControlMode::Tsmm;
-  throw std::invalid_argument("[EhcQpController] mode must be ehc, neo_e, neo_c or tsmm (got '" + s + "')");
+  return ehc_common::enumValue(kControlModeNames, s, "EhcQpController", "mode");
 }
 
 void QpControllerParams::validate() const {

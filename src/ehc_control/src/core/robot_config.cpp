@@ -1,6 +1,7 @@
 #include "ehc_control/robot_config.h"
 
 #include "ehc_common/config_node.h"
+#include "ehc_common/enum_names.h"
 
 #include <cmath>
 #include <cstdlib>
@@ -19,14 +20,15 @@ const char* kOwner = "RobotConfig";
 }
 }  // namespace
 
-std::string toString(BaseType t) {
-  return t == BaseType::Holonomic ? "holonomic" : "differential";
-}
+namespace {
+constexpr ehc_common::EnumNames<BaseType, 2> kBaseTypeNames = {
+    {{BaseType::Holonomic, "holonomic"}, {BaseType::Differential, "differential"}}};
+}  // namespace
+
+std::string toString(BaseType t) { return ehc_common::enumName(kBaseTypeNames, t, kOwner); }
 
 BaseType baseTypeFromString(const std::string& s) {
-  if (s == "holonomic") return BaseType::Holonomic;
-  if (s == "differential") return BaseType::Differential;
-  fail("base type must be 'holonomic' or 'differential' (got '" + s + "')");
+  return ehc_common::enumValue(kBaseTypeNames, s, kOwner, "base type");
 }
 
 Eigen::VectorXd RobotConfig::velocityLimits() const {

@@ -65,9 +65,6 @@ namespace ehc_common {
 class ConfigNode;
 }  // namespace ehc_common
 
-namespace ehc_control {
-}
-
 namespace ehc_perception {
 
 using PointList = std::vector<Eigen::Vector3f>;

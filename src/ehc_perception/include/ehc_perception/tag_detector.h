@@ -36,9 +36,6 @@ namespace ehc_common {
 class ConfigNode;
 }  // namespace ehc_common
 
-namespace ehc_control {
-}
-
 namespace ehc_perception {
 
 struct TagDetectorConfig {

@@ -22,9 +22,6 @@ namespace ehc_common {
 class ConfigNode;
 }  // namespace ehc_common
 
-namespace ehc_control {
-}
-
 namespace ehc_realman {
 
 struct Water2ResponseParams {

@@ -232,8 +232,7 @@ std::string water2ResponseJson(const std::string& command, const std::string& st
                                {"y", ehc_common::jsonNumber(pose->y)},
                                {"theta", ehc_common::jsonNumber(pose->theta)}};
   }
-  // Bytes the JSON text could not carry (invalid UTF-8 from a fuzzed command) are replaced.
-  return j.dump(-1, ' ', false, ehc_common::Json::error_handler_t::replace);
+  return ehc_common::jsonLine(j);
 }
 
 }  // namespace ehc_realman

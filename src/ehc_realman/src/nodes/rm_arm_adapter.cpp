@@ -22,6 +22,7 @@
 #include "ehc_common/logging.h"
 #include "ehc_realman/realman_adapter_config.h"
 #include "ehc_realman/realman_joint_streamer.h"
+#include "diagnostics.h"
 #include "node_clock.h"
 
 #include <diagnostic_msgs/DiagnosticStatus.h>
@@ -54,12 +55,7 @@ using ehc_common::kLogThrottle;
 using SteadyClock = std::chrono::steady_clock;
 using ehc_realman_nodes::nodeNow;
 
-diagnostic_msgs::KeyValue kv(const std::string& key, const std::string& value) {
-  diagnostic_msgs::KeyValue k;
-  k.key = key;
-  k.value = value;
-  return k;
-}
+using ehc_realman_nodes::kv;
 
 class RmArmAdapterNode {
  public:

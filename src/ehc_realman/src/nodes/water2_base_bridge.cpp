@@ -18,6 +18,7 @@
 
 #include "ehc_common/logging.h"
 #include "ehc_realman/water2_base_bridge.h"
+#include "diagnostics.h"
 #include "node_clock.h"
 
 #include <diagnostic_msgs/DiagnosticStatus.h>
@@ -40,12 +41,7 @@ namespace {
 using ehc_common::kLogThrottle;
 constexpr double kSimCyclePeriod = 0.01;  ///< s of ROS time per network cycle under sim time
 
-diagnostic_msgs::KeyValue kv(const std::string& key, const std::string& value) {
-  diagnostic_msgs::KeyValue k;
-  k.key = key;
-  k.value = value;
-  return k;
-}
+using ehc_realman_nodes::kv;
 
 class Water2BaseBridgeNode {
  public:

@@ -33,9 +33,6 @@ namespace ehc_common {
 class ConfigNode;
 }  // namespace ehc_common
 
-namespace ehc_control {
-}
-
 namespace ehc_sim {
 
 struct FakeRobotConfig {

@@ -21,9 +21,6 @@ namespace ehc_common {
 class ConfigNode;
 }  // namespace ehc_common
 
-namespace ehc_control {
-}
-
 namespace ehc_sim {
 
 /// Collision checking. The robot-specific parts live in robot.yaml (ehc_control::RobotConfig):

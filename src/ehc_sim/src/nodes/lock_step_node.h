@@ -93,7 +93,7 @@ class LockStepNode {
           if (wall - last_step > 2.0) {
             const std::string who = scheduler_.ackWait();
             if (!who.empty())
-              ROS_WARN_STREAM_THROTTLE(5.0, "[" << node_ << "] lock-step: sim time waits " << wall - last_step
+              ROS_WARN_STREAM_THROTTLE(kLogThrottle, "[" << node_ << "] lock-step: sim time waits " << wall - last_step
                                                 << " wall s for an acknowledgement: " << who);
           }
           break;

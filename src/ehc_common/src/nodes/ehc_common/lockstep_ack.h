@@ -11,6 +11,8 @@
 //     after what it made of the frame is published: the simulator steps on only then.
 // Without _ack_topic it does nothing. Header-only (roscpp, std_msgs).
 
+#include "ehc_common/logging.h"
+
 #include <ros/names.h>
 #include <ros/poll_manager.h>
 #include <ros/ros.h>
@@ -65,7 +67,7 @@ class LockstepAck {
     for (const auto& t : inputs_)
       if (ros::TopicManager::instance()->getNumPublishers(t) == 0) missing += " " + t;
     if (!missing.empty()) {
-      ROS_INFO_STREAM_THROTTLE(5.0, "[LockstepAck] not ready for the lock-step yet: no publisher on" << missing);
+      ROS_INFO_STREAM_THROTTLE(kLogThrottle, "[LockstepAck] not ready for the lock-step yet: no publisher on" << missing);
       return;
     }
     publish(ros::Time(0));

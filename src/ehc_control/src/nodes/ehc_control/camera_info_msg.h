@@ -2,7 +2,7 @@
 // PinholeCamera <-> sensor_msgs/CameraInfo: the one home of this conversion for the nodes of
 // every package (the tag node and the grasp sequencer read camera_info, the simulators publish
 // it). Node side only: it includes ROS message headers, so it sits beside ehc_control's nodes
-// (src/nodes/, exported to the nodes of the packages that depend on ehc_control, as ehc_msgs
+// (src/nodes/, exported to the nodes of the packages that depend on ehc_control, as ehc_common
 // exports its lockstep_ack.h), never in the ROS-free include/. Header-only.
 
 #include "ehc_control/pinhole_camera.h"
