@@ -198,8 +198,8 @@ TEST(ReachExperiment, ResetProtocolStartsEveryTargetFromTheReadyPose) {
 
 TEST(ReachExperiment, RunsOnTheSevenDofTestArm) {
   // The controller and the failure bookkeeping on a redundant (7-DOF) arm on the differential
-  // base: src/ehc_control/test/robots/arm7_differential (iiwa 14 kinematics).
-  const auto rc = ehc_control::loadRobotConfig(std::string(EHC_CONTROL_TEST_DIR) + "/robots/arm7_differential/robot.yaml");
+  // base: test/fixtures/robots/arm7_differential (iiwa 14 kinematics).
+  const auto rc = ehc_control::loadRobotConfig(std::string(EHC_TEST_FIXTURES_DIR) + "/robots/arm7_differential/robot.yaml");
   ExpSetup s = makeSetup(1);
   s.model = std::make_shared<const ehc_control::WholeBodyModel>(rc);
   const auto cfg = ehc_common::ConfigNode::loadFile(std::string(EHC_CONFIG_DIR) + "/control/controller.yaml", "test");

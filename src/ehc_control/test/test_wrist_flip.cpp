@@ -14,7 +14,7 @@ using namespace ehc_control;
 
 namespace {
 
-std::string arm7Yaml() { return std::string(EHC_TEST_DIR) + "/robots/arm7_differential/robot.yaml"; }
+std::string arm7Yaml() { return std::string(EHC_TEST_FIXTURES_DIR) + "/robots/arm7_differential/robot.yaml"; }
 
 struct LoopResult {
   double arrival_s = -1.0;  ///< -1: not within the limit
