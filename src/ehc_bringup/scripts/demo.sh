@@ -85,7 +85,11 @@ for o in "${OBJECTS[@]}"; do
 done
 
 mkdir -p "$OUT/logs"
-rm -f "$OUT/summary.json" "$OUT/trace.csv" "$OUT/demo.png" "$OUT"/logs/*.log
+rm -f "$OUT/summary.json" "$OUT/trace.csv" "$OUT/demo.png" "$OUT/meta.json" "$OUT"/logs/*.log
+# Provenance for docs/RESULTS.md (make results): command, seed, robot, code version, machine, dates.
+RESULTS=(/usr/bin/python3 src/ehc_bringup/scripts/make_results.py)
+"${RESULTS[@]}" meta "$OUT" --command "${ROBOT:+ROBOT=$ROBOT }MODE=$MODE SEED=$SEED src/ehc_bringup/scripts/demo.sh" \
+  --seed "$SEED" ${ROBOT:+--robot "$ROBOT"} >/dev/null || exit 2
 # Private master and ROS_HOME: never touches another ROS system on this machine.
 PORT="${EHC_DEMO_PORT:-$(sup_free_port 11411)}"
 sup_private_master "$PORT" "$OUT/ros_home"
@@ -171,6 +175,7 @@ echo "== summary (wall time ${wall} s)"
 /usr/bin/python3 "src/ehc_bringup/scripts/demo_report.py" "$OUT/summary.json" "$OUT/trace.csv" "$OUT/demo.png" \
   --controller-config "$CONTROLLER_CONFIG" ${MPBS:+--mpbs "$MPBS"} --wall "$wall" || status=2
 [ "$status" = 0 ] || exit "$status"
+"${RESULTS[@]}" meta "$OUT" --finish >/dev/null || exit 2
 # The run completed and reported every object: exit 0 even if a grasp failed (the summary says
 # so); EHC_DEMO_STRICT=1 makes a failed grasp exit 1 (for scripts and tests).
 if [ "${EHC_DEMO_STRICT:-0}" = 1 ]; then
