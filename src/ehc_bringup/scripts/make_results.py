@@ -30,24 +30,22 @@ ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)),
 BOOTSTRAP_SEED = 1
 BOOTSTRAP_RESAMPLES = 2000
 
-# The paper's figures (Tables II, III, IV). Table II is its simulation, Tables III and IV its
-# real robot. Speeds: Base-T m/s / Base-R rad/s / Arm rad/s.
-PAPER_TABLE2 = {
-    "neo_c": {"name": "NEO(c)", "time": "11.69", "distant": "1.644/0.691/5.879", "close": "0.091/0.062/0.641", "failed": "37"},
-    "neo_e": {"name": "NEO(e)", "time": "11.81", "distant": "1.630/0.683/5.870", "close": "0.087/0.056/0.607", "failed": "35"},
-    "ehc": {"name": "EHC", "time": "9.98", "distant": "1.716/0.733/7.068", "close": "0.080/0.042/0.870", "failed": "18"},
-}
-PAPER_TABLE3 = {
-    "tsmm": {"name": "TSMM", "time": "34.89", "distant": "NAN", "close": "NAN", "success": "80.0"},
-    "neo_c": {"name": "NEO(c)", "time": "30.03", "distant": "8.776/0.578/1.971", "close": "1.294/0.335/0.345", "success": "11.1"},
-    "neo_e": {"name": "NEO(e)", "time": "27.80", "distant": "8.709/0.517/2.284", "close": "1.270/0.416/0.638", "success": "51.1"},
-    "ehc": {"name": "EHC", "time": "13.54", "distant": "8.826/0.908/2.594", "close": "1.259/0.162/1.369", "success": "95.6"},
-}
-PAPER_TABLE4 = {
-    "neo_nompbs": {"name": "NEO (without MPBS)", "forward": "100.0", "downward": "31.6", "sideways": "38.7"},
-    "ehc_nompbs": {"name": "EHC (without MPBS)", "forward": "100.0", "downward": "34.3", "sideways": "36.2"},
-    "ehc": {"name": "EHC (MPBS)", "forward": "100.0", "downward": "100.0", "sideways": "100.0"},
-}
+# The paper's figures (Tables II, III, IV): config/paper/figures.yaml, the one copy (the C++
+# result writers print the same file's figures in table.md).
+PAPER_FILE = os.path.join(ROOT, "config", "paper", "figures.yaml")
+
+
+def load_paper_figures(path=PAPER_FILE):
+    """{table2, table3, table4}: method -> {field: text} from the paper-figures file."""
+    import yaml
+    with open(path) as f:
+        d = yaml.safe_load(f)
+    return {k: {m: {f: str(v) for f, v in row.items()} for m, row in d[k].items()}
+            for k in ("table2", "table3", "table4")}
+
+
+_PAPER = load_paper_figures()
+PAPER_TABLE2, PAPER_TABLE3, PAPER_TABLE4 = _PAPER["table2"], _PAPER["table3"], _PAPER["table4"]
 APPROACHES = ("forward", "downward", "sideways")
 # Design bars of the benchmarks (the paper reports no timings): bench name -> (field, op, bar, text).
 BENCH_BARS = {

@@ -1,5 +1,6 @@
 #include "ehc_bringup/grasp_experiment.h"
 
+#include "ehc_common/config_node.h"
 #include "ehc_sim/sim_world.h"
 
 #include <sys/stat.h>
@@ -10,6 +11,7 @@
 #include <cmath>
 #include <fstream>
 #include <iomanip>
+#include <map>
 #include <mutex>
 #include <random>
 #include <sstream>
@@ -20,32 +22,31 @@ namespace ehc_bringup {
 
 namespace {
 
-struct PaperRow {
-  const char* method;
-  const char* time;
-  const char* distant;
-  const char* close;
-  const char* success;
-};
-// Paper Table III (real robot, 15 sets x 3 objects).
-const PaperRow kPaperTable3[] = {
-    {"tsmm", "34.89", "NAN", "NAN", "80.0"},
-    {"neo_c", "30.03", "8.776/0.578/1.971", "1.294/0.335/0.345", "11.1"},
-    {"neo_e", "27.80", "8.709/0.517/2.284", "1.270/0.416/0.638", "51.1"},
-    {"ehc", "13.54", "8.826/0.908/2.594", "1.259/0.162/1.369", "95.6"},
-};
-// Paper Table IV: TfM % forward / downward / sideways.
-struct PaperTfm {
-  const char* method;
-  const char* forward;
-  const char* downward;
-  const char* sideways;
-};
-const PaperTfm kPaperTable4[] = {
-    {"neo_nompbs", "100.0", "31.6", "38.7"},
-    {"ehc_nompbs", "100.0", "34.3", "36.2"},
-    {"ehc", "100.0", "100.0", "100.0"},
-};
+/// The paper's figures of one table (config/paper/figures.yaml): method -> field -> text.
+using PaperTable = std::map<std::string, std::map<std::string, std::string>>;
+
+PaperTable loadPaperTable(const std::string& config_dir, const std::string& table) {
+  const auto root = ehc_common::ConfigNode::loadFile(config_dir + "/paper/figures.yaml", "GraspExperiment");
+  root.ignore("table2");
+  for (const char* t : {"table3", "table4"})
+    if (t != table) root.ignore(t);
+  PaperTable out;
+  const auto t = root.child(table);
+  for (const std::string& method : t.keys()) {
+    const auto row = t.child(method);
+    for (const std::string& field : row.keys()) out[method][field] = row.require<std::string>(field);
+  }
+  root.rejectUnknownKeys();
+  return out;
+}
+
+/// The paper's `field` for `method` ("" when the paper has no such row).
+std::string paperCell(const PaperTable& paper, const std::string& method, const std::string& field) {
+  const auto row = paper.find(method);
+  if (row == paper.end()) return "";
+  const auto cell = row->second.find(field);
+  return cell == row->second.end() ? "" : cell->second;
+}
 
 /// Name of the scene body (table part, object, obstacle) or "floor" nearest to `p`, by the
 /// distance to its bounding box at its current pose (ground truth; names a perceived obstacle
@@ -465,38 +466,34 @@ void writeSummaryJson(const std::string& dir, const GraspExperimentParams& param
 double percent(int a, int b) { return b ? 100.0 * a / b : 0.0; }
 
 /// Table III (Exp-2) rows beside the paper's.
-void writeTable3(std::ostream& f, const GraspExperimentResult& result) {
+void writeTable3(std::ostream& f, const GraspExperimentResult& result, const PaperTable& paper) {
   f << "Table III (Exp-2): sequentially grasping three objects. Measured (in-process sim) | paper (real robot)\n\n"
     << "| Method | Time(s) | Distant(Base-T/Base-R/Arm) | Close(Base-T/Base-R/Arm) | Success Rate (%) "
        "| paper Time(s) | paper Distant | paper Close | paper Success (%) |\n|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& s : result.summaries) {
-    const PaperRow* p = nullptr;
-    for (const auto& r : kPaperTable3)
-      if (s.method == r.method) p = &r;
     f << "| " << s.method << " | " << std::setprecision(2) << s.mean_time_s << " | " << std::setprecision(3)
       << s.distant.base_t << "/" << s.distant.base_r << "/" << s.distant.arm << " | " << s.close.base_t << "/"
       << s.close.base_r << "/" << s.close.arm << " | " << std::setprecision(1) << percent(s.successes, s.grasps)
-      << " (" << s.successes << "/" << s.grasps << ") | " << (p ? p->time : "") << " | " << (p ? p->distant : "")
-      << " | " << (p ? p->close : "") << " | " << (p ? p->success : "") << " |\n";
+      << " (" << s.successes << "/" << s.grasps << ") | " << paperCell(paper, s.method, "time") << " | "
+      << paperCell(paper, s.method, "distant") << " | " << paperCell(paper, s.method, "close") << " | "
+      << paperCell(paper, s.method, "success") << " |\n";
   }
 }
 
 /// Table IV (Exp-3) rows beside the paper's.
-void writeTable4(std::ostream& f, const GraspExperimentResult& result) {
+void writeTable4(std::ostream& f, const GraspExperimentResult& result, const PaperTable& paper) {
   f << "Table IV (Exp-3): grasping one object with different poses, TfM (%). Measured (in-process sim) | paper\n\n"
     << "| Method | Forward | Downward | Sideways | Success (%) | paper Forward | paper Downward | paper Sideways |\n"
        "|---|---|---|---|---|---|---|---|\n";
   for (const auto& s : result.summaries) {
-    const PaperTfm* p = nullptr;
-    for (const auto& r : kPaperTable4)
-      if (s.method == r.method) p = &r;
     f << "| " << s.method;
     for (const char* a : kApproaches) {
       const auto it = s.tfm.find(a);
       f << " | " << std::setprecision(1) << (it == s.tfm.end() ? 0.0 : 100.0 * it->second.first);
     }
     f << " | " << percent(s.successes, s.grasps) << " (" << s.successes << "/" << s.grasps << ") | "
-      << (p ? p->forward : "") << " | " << (p ? p->downward : "") << " | " << (p ? p->sideways : "") << " |\n";
+      << paperCell(paper, s.method, "forward") << " | " << paperCell(paper, s.method, "downward") << " | "
+      << paperCell(paper, s.method, "sideways") << " |\n";
   }
 }
 
@@ -537,8 +534,8 @@ void writeTableMd(const std::string& dir, const GraspExperimentParams& params, c
                   const std::string& notes) {
   std::ofstream f = openResultFile(dir, "table.md");
   f << std::fixed;
-  if (params.protocol == GraspProtocol::Table) writeTable3(f, result);
-  else writeTable4(f, result);
+  if (params.protocol == GraspProtocol::Table) writeTable3(f, result, loadPaperTable(params.config_dir, "table3"));
+  else writeTable4(f, result, loadPaperTable(params.config_dir, "table4"));
   writeSafetyTable(f, result, notes);
 }
 
