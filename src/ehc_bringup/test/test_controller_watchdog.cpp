@@ -25,8 +25,14 @@
 #include <rosgraph_msgs/Clock.h>
 #include <sensor_msgs/JointState.h>
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <cmath>
+#include <cstdio>
+#include <fstream>
 #include <functional>
+#include <string>
 
 namespace {
 
@@ -234,6 +240,30 @@ TEST(ControllerWatchdog, TimerModeStopIsOnReceiptTimeWhateverTheSendersClock) {
 }
 
 }  // namespace
+
+// A misspelled key is a start-up error naming the field, in both triggers, never an abort: with
+// `trigger: state` the node once threw after building its lock-step callback queue, which was
+// destroyed before the subscribers that used it (boost::lock_error, rc 134).
+TEST(ControllerNodeStartup, AMisspelledKeyIsAnErrorNamingTheFieldInBothTriggers) {
+  for (const std::string trigger : {"state", "timer"}) {
+    const std::string file = "/tmp/ehc_typo_" + std::to_string(::getpid()) + "_" + trigger + ".yaml";
+    std::ofstream(file) << "extends: " << EHC_CONFIG_DIR << "/control/controller.yaml\n"
+                        << "controller: {arm_wieght: 0.01}\nnode: {trigger: " << trigger << "}\n";
+    const std::string cmd = "rosrun ehc_control ehc_controller_node __name:=ehc_typo_check_" + trigger +
+                            " _config:=" + file + " 2>&1";
+    FILE* p = ::popen(cmd.c_str(), "r");
+    ASSERT_NE(p, nullptr);
+    std::string out;
+    char buf[512];
+    while (std::fgets(buf, sizeof(buf), p)) out += buf;
+    const int status = ::pclose(p);
+    std::remove(file.c_str());
+    ASSERT_TRUE(WIFEXITED(status)) << trigger << ": killed by a signal\n" << out;
+    EXPECT_EQ(WEXITSTATUS(status), 1) << trigger << "\n" << out;
+    EXPECT_NE(out.find("arm_wieght"), std::string::npos) << trigger << "\n" << out;
+    EXPECT_EQ(out.find("terminate called"), std::string::npos) << trigger << "\n" << out;
+  }
+}
 
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);

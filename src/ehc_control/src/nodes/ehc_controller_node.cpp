@@ -249,6 +249,10 @@ class ControllerNode {
   CycleWatchdog watchdog_;  ///< decides the two watchdog timers
   std::string world_frame_;
   ros::Publisher cmd_vel_, arm_cmd_, status_;
+  /// Lock-step: target, target centre, obstacles (taken per state). Declared before the
+  /// subscribers that use it, so it outlives them (destroyed first, their shutdown would lock
+  /// its destroyed mutex: an abort when start-up fails after they were made).
+  ros::CallbackQueue inputs_queue_;
   std::vector<ros::Subscriber> subs_;
   ros::Timer timer_;            ///< timer trigger: the cycle; lock-step: the ROS-time watchdog
   ros::WallTimer wall_timer_;   ///< wall-clock watchdog (every mode)
@@ -260,7 +264,6 @@ class ControllerNode {
   std::deque<PendingObstacles> pending_obstacles_;  ///< lock-step: lists by arrival, not yet taken
   static constexpr std::size_t kMaxPendingObstacles = 100;  ///< no state for long: the oldest go
   ros::Time answered_;  ///< the stamp the last cycle answered
-  ros::CallbackQueue inputs_queue_;       ///< lock-step: target, target centre, obstacles (taken per state)
   ehc_common::PollPassBarrier poll_pass_;
   static constexpr double kPollPassWall = 1.0;  ///< wall s: a receive pass takes far less
 };
