@@ -282,7 +282,7 @@ TEST_P(NearLimitWidths, TheStartViewShowsTheWholeTagAndTheDetectorFindsIt) {
   EXPECT_LT(error_deg, 10.0);
 }
 
-INSTANTIATE_TEST_SUITE_P(Issue18, NearLimitWidths, ::testing::ValuesIn(kWithinOpening), caseName);
+INSTANTIATE_TEST_SUITE_P(WithinTheOpening, NearLimitWidths, ::testing::ValuesIn(kWithinOpening), caseName);
 
 class HeldBackWidth : public ::testing::TestWithParam<WidthCase> {};
 
@@ -297,7 +297,7 @@ TEST_P(HeldBackWidth, IsTooWideWithTheMeasuredWidthAndTheOpeningInTheReason) {
   EXPECT_NE(o.first_reason.find("the gripper opens 0.07 m"), std::string::npos) << o.first_reason;
 }
 
-INSTANTIATE_TEST_SUITE_P(Issue18, HeldBackWidth,
+INSTANTIATE_TEST_SUITE_P(BeyondTheOpening, HeldBackWidth,
                          ::testing::Values(WidthCase{Shape::Box, 0.072, 0}, WidthCase{Shape::StandingCylinder, 0.072, 0},
                                            WidthCase{Shape::LyingCylinder, 0.072, 0}),
                          caseName);
