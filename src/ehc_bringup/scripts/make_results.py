@@ -293,6 +293,15 @@ def safety_text(methods, path):
     return "Safety (not in the paper; contacts and violations must be zero): " + "; ".join(parts) + "."
 
 
+def method_rows(rows, method, folder, path):
+    """The trials.csv rows of `method`; an error naming both files when there are none."""
+    mine = [r for r in rows if r["method"] == method]
+    if not mine:
+        raise ResultsError("%s: no trials of method '%s' listed in %s" % (
+            rel(os.path.join(folder, "trials.csv")), method, rel(path)))
+    return mine
+
+
 def exp2_section(folder, meta):
     summary, methods, path = grasp_summary(folder)
     rows = grasp_rows(folder)
@@ -303,10 +312,7 @@ def exp2_section(folder, meta):
             "|---|---|---|---|---|---|---|---|---|"]
     for s in methods:
         m = field(s, ["method"], path)
-        mine = [r for r in rows if r["method"] == m]
-        if not mine:
-            raise ResultsError("%s: no trials of method '%s' listed in %s" % (
-                rel(os.path.join(folder, "trials.csv")), m, rel(path)))
+        mine = method_rows(rows, m, folder, path)
         ok, t = success_and_time(mine)
         p = PAPER_TABLE3.get(m, {})
         n_ok = sum(r["_success"] for r in mine)
@@ -329,10 +335,7 @@ def exp3_section(folder, meta):
     out += ["", head + " Success (%) [95 % CI] | paper Success (%) |", "|---" * (2 * len(APPROACHES) + 3) + "|"]
     for s in methods:
         m = field(s, ["method"], path)
-        mine = [r for r in rows if r["method"] == m]
-        if not mine:
-            raise ResultsError("%s: no trials of method '%s' listed in %s" % (
-                rel(os.path.join(folder, "trials.csv")), m, rel(path)))
+        mine = method_rows(rows, m, folder, path)
         p = PAPER_TABLE4.get(m, {})
         line = "| %s |" % p.get("name", m)
         for a in APPROACHES:
