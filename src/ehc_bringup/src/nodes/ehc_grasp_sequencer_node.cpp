@@ -220,9 +220,9 @@ class SequencerNode {
   }
 
   void onStatus(const ehc_msgs::ControllerStatus& m) {
-    if (!poll_pass_.wait(kPollPassWall))
+    if (!poll_pass_.wait(ehc_common::kLockstepWallWait))
       ROS_WARN_STREAM_THROTTLE(kLogThrottle, "[ehc_grasp_sequencer_node] roscpp's receive thread did not pass within "
-                                                 << kPollPassWall << " wall s");
+                                                 << ehc_common::kLockstepWallWait << " wall s");
     inputs_queue_.callAvailable();
     // Done, or a second status for the state already handled (the controller's watchdog
     // answering a lock-step simulator that waits for a slow perception node, or a state the
@@ -337,7 +337,6 @@ class SequencerNode {
   ehc_common::StampedInbox inbox_;
   ros::CallbackQueue inputs_queue_;  ///< every input but the status (taken in onStatus)
   ehc_common::PollPassBarrier poll_pass_;
-  static constexpr double kPollPassWall = 1.0;  ///< wall s: a receive pass takes far less
   std::string summary_file_, trace_file_, mode_;
   std::unique_ptr<ehc_bringup::GraspTraceWriter> trace_;  ///< _trace:=, else none
   ehc_control::GripperState gripper_state_ = ehc_control::GripperState::Open;

@@ -177,9 +177,9 @@ class ControllerNode {
     // Everything that reached this process before the state is queued after one receive pass
     // (roscpp keeps the order per connection only): the sequencer's goal for the previous
     // status is then used in this cycle, whatever the CPU load.
-    if (!poll_pass_.wait(kPollPassWall))
+    if (!poll_pass_.wait(ehc_common::kLockstepWallWait))
       ROS_WARN_STREAM_THROTTLE(kLogThrottle, "[ehc_controller_node] roscpp's receive thread did not pass within "
-                                                 << kPollPassWall << " wall s");
+                                                 << ehc_common::kLockstepWallWait << " wall s");
     inputs_queue_.callAvailable();
     applyObstaclesBefore(stamp);
     cycle(stamp);
@@ -265,7 +265,6 @@ class ControllerNode {
   static constexpr std::size_t kMaxPendingObstacles = 100;  ///< no state for long: the oldest go
   ros::Time answered_;  ///< the stamp the last cycle answered
   ehc_common::PollPassBarrier poll_pass_;
-  static constexpr double kPollPassWall = 1.0;  ///< wall s: a receive pass takes far less
 };
 
 }  // namespace

@@ -7,7 +7,7 @@
 // target) and published best first (ehc_msgs/GraspCandidates, world frame). A cloud
 // without a usable grasp publishes an empty candidate list (reason in the log). A cloud waits
 // for the camera pose at its stamp on the wall clock (ehc_common::waitForTransformWall: at most
-// tf_timeout s, in lock-step kTfWallWait s; a lookup with a timeout would wait on lock-step sim
+// tf_timeout s, in lock-step ehc_common::kLockstepWallWait s; a lookup with a timeout would wait on lock-step sim
 // time, which stands still until this node is done), then is dropped with a logged reason.
 // No tf2_ros::MessageFilter: it held a cloud forever when the cloud's transformable request
 // was registered just after the transform arrived (tf2::BufferCore::addTransformableRequest
@@ -87,8 +87,8 @@ class GraspNode {
   /// In lock-step the targets published before the cloud (by the sequencer, before its
   /// acknowledgement let the simulator go on) are all taken first, whenever they arrived.
   void onCloud(const sensor_msgs::PointCloud2ConstPtr& cloud) {
-    if (lockstep_ && !cfg_.target_topic.empty() && !poll_pass_.wait(kTfWallWait))
-      ROS_WARN_STREAM_THROTTLE(kLogThrottle, "ehc_grasp_node: roscpp's poll thread did not pass within " << kTfWallWait << " wall s");
+    if (lockstep_ && !cfg_.target_topic.empty() && !poll_pass_.wait(ehc_common::kLockstepWallWait))
+      ROS_WARN_STREAM_THROTTLE(kLogThrottle, "ehc_grasp_node: roscpp's poll thread did not pass within " << ehc_common::kLockstepWallWait << " wall s");
     target_queue_.callAvailable();
     process(*cloud);
     ack_.done(cloud->header.stamp);  // after the candidates: the simulator steps on
@@ -97,10 +97,10 @@ class GraspNode {
   void process(const sensor_msgs::PointCloud2& msg) {
     if (!limiter_.accept(msg.header.stamp.toSec())) return;  // skipped: inside the rate limit
     if (!ehc_common::waitForTransformWall(tf_, cfg_.world_frame, msg.header.frame_id, msg.header.stamp,
-                                        lockstep_ ? kTfWallWait : cfg_.tf_timeout)) {
+                                        lockstep_ ? ehc_common::kLockstepWallWait : cfg_.tf_timeout)) {
       ROS_WARN_STREAM_THROTTLE(kLogThrottle, "ehc_grasp_node: cloud at " << msg.header.stamp << " dropped: no camera pose ('"
                                                 << msg.header.frame_id << "' in '" << cfg_.world_frame << "') at its stamp after "
-                                                << (lockstep_ ? kTfWallWait : cfg_.tf_timeout) << " wall s");
+                                                << (lockstep_ ? ehc_common::kLockstepWallWait : cfg_.tf_timeout) << " wall s");
       return;
     }
     try {
@@ -140,7 +140,6 @@ class GraspNode {
   ehc_common::PollPassBarrier poll_pass_;
   ehc_common::LockstepAck ack_;
   bool lockstep_ = false;  ///< _ack_topic set: the simulator waits for this node
-  static constexpr double kTfWallWait = 1.0;  ///< lock-step: wall s a cloud's camera pose is waited for
 };
 
 }  // namespace

@@ -138,7 +138,7 @@ class ObstacleNode {
   void onCloud(const sensor_msgs::PointCloud2ConstPtr& msg) {
     if (lockstep_) {
       inbox_.add(msg->header.stamp, kCloudSource, [this, msg] {
-        if (!ehc_common::waitForTransformWall(tf_, cfg_.world_frame, msg->header.frame_id, msg->header.stamp, kTfWallWait)) {
+        if (!ehc_common::waitForTransformWall(tf_, cfg_.world_frame, msg->header.frame_id, msg->header.stamp, ehc_common::kLockstepWallWait)) {
           ROS_WARN_STREAM_THROTTLE(kLogThrottle, "ehc_obstacle_node: cloud at " << msg->header.stamp << " waits for its camera pose");
           return false;
         }
@@ -218,7 +218,6 @@ class ObstacleNode {
   ehc_common::StampedInbox inbox_;
   static constexpr int kExclusionSource = 0, kCloudSource = 1;
   static constexpr double kMaxCloudWait = 1.0;  ///< s of stamps; then the cloud is dropped
-  static constexpr double kTfWallWait = 1.0;    ///< wall s a cloud's camera pose is waited for per state
 };
 
 }  // namespace

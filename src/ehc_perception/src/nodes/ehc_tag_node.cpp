@@ -5,7 +5,7 @@
 // (odom) with tf2 at the image time stamp and published as geometry_msgs/PoseStamped. Nothing
 // is published for an image without the target (the controller's watchdog handles that).
 // An image waits for the camera pose at its stamp on the wall clock
-// (ehc_common::waitForTransformWall: at most tf_timeout s, in lock-step kTfWallWait s), then is
+// (ehc_common::waitForTransformWall: at most tf_timeout s, in lock-step ehc_common::kLockstepWallWait s), then is
 // dropped with a logged reason (with a lock-step simulator under CPU load the /tf of
 // an image's stamp can reach the listener after the image; a tf2 lookup with a timeout waits on
 // sim time, which stands still until this node is done). No tf2_ros::MessageFilter: it held a
@@ -96,7 +96,7 @@ class TagNode {
     // The camera pose at the image stamp: the detector's prior for ambiguous tag poses, and the
     // target in the world.
     const std::string cam_frame = cfg_.camera_frame.empty() ? msg.header.frame_id : cfg_.camera_frame;
-    const double wait = lockstep_ ? kTfWallWait : cfg_.tf_timeout;
+    const double wait = lockstep_ ? ehc_common::kLockstepWallWait : cfg_.tf_timeout;
     if (!ehc_common::waitForTransformWall(tf_, cfg_.world_frame, cam_frame, msg.header.stamp, wait)) {
       ROS_WARN_STREAM_THROTTLE(kLogThrottle, "ehc_tag_node: image at " << msg.header.stamp << " dropped: no camera pose ('"
                                                 << cam_frame << "' in '" << cfg_.world_frame << "') at its stamp after "
@@ -131,7 +131,6 @@ class TagNode {
   vpImage<unsigned char> gray_;
   ros::Subscriber image_sub_;
   bool lockstep_ = false;  ///< _ack_topic set: a lock-step simulator waits for every image
-  static constexpr double kTfWallWait = 1.0;  ///< lock-step: wall s an image's camera pose is waited for
   ros::Publisher pub_;
   ehc_common::LockstepAck ack_;
   sensor_msgs::ImageConstPtr waiting_image_;  ///< an image that came before the first camera_info

@@ -152,6 +152,10 @@ class PollPassBarrier {
   std::uint64_t passes_ = 0;
 };
 
+/// Lock-step: wall s a node waits for a frame's camera pose (or one receive pass) before it drops
+/// the frame with a logged reason; far more than a loaded machine needs, far less than a hang.
+constexpr double kLockstepWallWait = 1.0;
+
 /// Waits on the wall clock (at most `wall_s`) until `buffer` can transform `source` into
 /// `target` at `stamp`. In lock-step a pose of the current stamp came with the state, but the
 /// tf listener's thread may lag under CPU load; a tf2 lookup with a timeout would wait on sim
