@@ -9,6 +9,8 @@
 #include <cmath>
 #include <fstream>
 
+using ehc_common::ConfigNode;
+
 using namespace ehc_bringup;
 using ehc_control::GripperState;
 
@@ -914,7 +916,7 @@ TEST(GraspSequencerParams, LoadsYamlAndNamesFileAndField) {
   const std::string ok =
       "sequencer: {object_time_limit: 20.0, lift_height: 0.12, selection: {max_angle_deg: 25.0}}\n"
       "objects:\n  - {name: front, approach: downward, pose_topic: /a}\n  - {name: back, pose_topic: /b}\n";
-  const auto p = loadGraspSequencerParams(ehc_common::ConfigNode::loadString(ok, "seq.yaml", "GraspSequencerNode"));
+  const auto p = loadGraspSequencerParams(ConfigNode::loadString(ok, "seq.yaml", "GraspSequencerNode"));
   ASSERT_EQ(p.objects.size(), 2u);
   EXPECT_EQ(p.objects[0].approach, ApproachDirection::Downward);
   EXPECT_EQ(p.objects[1].approach, ApproachDirection::Forward);
@@ -922,7 +924,7 @@ TEST(GraspSequencerParams, LoadsYamlAndNamesFileAndField) {
   EXPECT_DOUBLE_EQ(p.selection.max_angle_deg, 25.0);
   auto expectError = [](const std::string& yaml, const std::string& needle) {
     try {
-      loadGraspSequencerParams(ehc_common::ConfigNode::loadString(yaml, "seq.yaml", "GraspSequencerNode"));
+      loadGraspSequencerParams(ConfigNode::loadString(yaml, "seq.yaml", "GraspSequencerNode"));
       ADD_FAILURE() << "no error for " << yaml;
     } catch (const std::invalid_argument& e) {
       const std::string w = e.what();
@@ -936,7 +938,7 @@ TEST(GraspSequencerParams, LoadsYamlAndNamesFileAndField) {
   expectError("sequencer: {lift_height: -0.1}\nobjects: [{name: a}]\n", "lift_height");
   expectError("sequencer: {}\n", "objects");
   // Misspelled keys: the node calls rejectUnknownKeys() after its own and this loader.
-  const auto typo = ehc_common::ConfigNode::loadString(
+  const auto typo = ConfigNode::loadString(
       "sequencer: {lift_hieght: 0.1, selection: {max_angel_deg: 20}}\nobjects: [{name: a, aproach: downward}]\n",
       "seq.yaml", "GraspSequencerNode");
   loadGraspSequencerParams(typo);
@@ -959,7 +961,7 @@ TEST(GraspSequencerParams, DemoAndTestConfigsLoad) {
       ADD_FAILURE() << "missing " << path;
       continue;
     }
-    EXPECT_NO_THROW(loadGraspSequencerParams(ehc_common::ConfigNode::loadFile(path, "GraspSequencerNode"))) << path;
+    EXPECT_NO_THROW(loadGraspSequencerParams(ConfigNode::loadFile(path, "GraspSequencerNode"))) << path;
   }
 }
 

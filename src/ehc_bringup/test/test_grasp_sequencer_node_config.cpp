@@ -12,8 +12,9 @@
 #include <stdexcept>
 #include <string>
 
-using ehc_bringup::SequencerNodeParams;
 using ehc_common::ConfigNode;
+
+using ehc_bringup::SequencerNodeParams;
 
 namespace {
 
@@ -21,7 +22,7 @@ const std::string kConfigDir = EHC_CONFIG_DIR;
 
 std::string errorOf(const std::string& yaml) {
   try {
-    ehc_bringup::loadSequencerNodeParams(ehc_common::ConfigNode::loadString(yaml, "seq.yaml", "GraspSequencerNode"));
+    ehc_bringup::loadSequencerNodeParams(ConfigNode::loadString(yaml, "seq.yaml", "GraspSequencerNode"));
   } catch (const std::invalid_argument& e) {
     return e.what();
   }
@@ -29,7 +30,7 @@ std::string errorOf(const std::string& yaml) {
 }
 
 TEST(SequencerNodeParams, TheShippedDemoFileLoadsWithEveryKeyRead) {
-  const ehc_common::ConfigNode root = ehc_common::ConfigNode::loadFile(kConfigDir + "/demo/grasp_sequencer.yaml", "GraspSequencerNode");
+  const ConfigNode root = ConfigNode::loadFile(kConfigDir + "/demo/grasp_sequencer.yaml", "GraspSequencerNode");
   const SequencerNodeParams p = ehc_bringup::loadSequencerNodeParams(root);
   ehc_bringup::loadGraspSequencerParams(root);
   EXPECT_NO_THROW(root.rejectUnknownKeys());
@@ -41,7 +42,7 @@ TEST(SequencerNodeParams, TheShippedDemoFileLoadsWithEveryKeyRead) {
 }
 
 TEST(SequencerNodeParams, DefaultsAndTheRobotsFrames) {
-  const ehc_common::ConfigNode root = ehc_common::ConfigNode::loadString("objects: [{name: a, pose_topic: /a}]\n", "seq.yaml", "GraspSequencerNode");
+  const ConfigNode root = ConfigNode::loadString("objects: [{name: a, pose_topic: /a}]\n", "seq.yaml", "GraspSequencerNode");
   SequencerNodeParams p = ehc_bringup::loadSequencerNodeParams(root);
   const SequencerNodeParams d;
   EXPECT_EQ(p.robot_file, ehc_control::resolveRobotFile("realman_rm65_water2"));
@@ -71,7 +72,7 @@ TEST(SequencerNodeParams, ABadValueNamesItsField) {
 }
 
 TEST(SequencerNodeParams, AnUnknownKeyFailsOnceEveryLoaderHasRun) {
-  const ehc_common::ConfigNode root = ehc_common::ConfigNode::loadString(
+  const ConfigNode root = ConfigNode::loadString(
       "node: {goal_topc: /x}\nobjects: [{name: a, approach: forward, pose_topic: /a}]\n", "seq.yaml", "GraspSequencerNode");
   ehc_bringup::loadSequencerNodeParams(root);
   ehc_bringup::loadGraspSequencerParams(root);

@@ -15,6 +15,8 @@
 #include <cmath>
 #include <limits>
 
+using ehc_common::ConfigNode;
+
 namespace ehc_control {
 namespace {
 
@@ -403,7 +405,7 @@ TEST(ControlCycle, ANewTargetRestartsTheQp) {
 // ------------------------------------------------------------------ parameters
 
 TEST(ControlCycle, LoadsTheShippedControllerYamlAndChecksTheConfiguration) {
-  const ehc_common::ConfigNode cfg = ehc_common::ConfigNode::loadFile(kConfigDir + "/control/controller.yaml", "ControllerNode");
+  const ConfigNode cfg = ConfigNode::loadFile(kConfigDir + "/control/controller.yaml", "ControllerNode");
   const ControlCycleParams p = loadControlCycleParams(cfg);
   EXPECT_EQ(p.servo_type, ServoType::Pbvs);
   EXPECT_TRUE(p.mpbs.enabled);
@@ -430,13 +432,13 @@ TEST(ControlCycle, LoadsTheShippedControllerYamlAndChecksTheConfiguration) {
   // Every shipped controller.yaml (demo and real robot extend this one) builds a cycle.
   for (const char* file : {"/demo/controller.yaml", "/realman/controller.yaml"}) {
     SCOPED_TRACE(file);
-    const ControlCycleParams other = loadControlCycleParams(ehc_common::ConfigNode::loadFile(kConfigDir + file, "ControllerNode"));
+    const ControlCycleParams other = loadControlCycleParams(ConfigNode::loadFile(kConfigDir + file, "ControllerNode"));
     EXPECT_EQ(other.servo_type, ServoType::Pbvs);
     EXPECT_NO_THROW(ControlCycle{other});
   }
 
   auto load = [](const std::string& yaml) {
-    return loadControlCycleParams(ehc_common::ConfigNode::loadString(yaml, "/cfg/controller.yaml", "ControllerNode"));
+    return loadControlCycleParams(ConfigNode::loadString(yaml, "/cfg/controller.yaml", "ControllerNode"));
   };
   EXPECT_EQ(load("servo: {type: proportional}\n").servo_type, ServoType::Proportional);
   EXPECT_EQ(load("{}\n").robot_file, resolveRobotFile("realman_rm65_water2"));

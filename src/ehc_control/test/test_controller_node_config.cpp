@@ -11,6 +11,8 @@
 
 #include <string>
 
+using ehc_common::ConfigNode;
+
 namespace ehc_control {
 namespace {
 
@@ -19,7 +21,7 @@ using test::errorOf;
 const std::string kConfigDir = EHC_CONFIG_DIR;
 
 ControllerNodeParams load(const std::string& yaml) {
-  return loadControllerNodeParams(ehc_common::ConfigNode::loadString(yaml, "controller.yaml", "ControllerNode"));
+  return loadControllerNodeParams(ConfigNode::loadString(yaml, "controller.yaml", "ControllerNode"));
 }
 
 TEST(ControllerNodeParams, DefaultsWithoutANodeSection) {
@@ -34,9 +36,9 @@ TEST(ControllerNodeParams, DefaultsWithoutANodeSection) {
 }
 
 TEST(ControllerNodeParams, ReadsTheShippedFiles) {
-  const auto sim = loadControllerNodeParams(ehc_common::ConfigNode::loadFile(kConfigDir + "/control/controller.yaml", "ControllerNode"));
+  const auto sim = loadControllerNodeParams(ConfigNode::loadFile(kConfigDir + "/control/controller.yaml", "ControllerNode"));
   EXPECT_EQ(sim.trigger, CycleTrigger::State);
-  const auto robot = loadControllerNodeParams(ehc_common::ConfigNode::loadFile(kConfigDir + "/realman/controller.yaml", "ControllerNode"));
+  const auto robot = loadControllerNodeParams(ConfigNode::loadFile(kConfigDir + "/realman/controller.yaml", "ControllerNode"));
   EXPECT_EQ(robot.trigger, CycleTrigger::Timer);
   EXPECT_EQ(robot.rate, 50.0);
   EXPECT_EQ(robot.summary(), "trigger timer at 50.000000 Hz, wall-clock watchdog 0.5 s");
@@ -54,12 +56,12 @@ TEST(ControllerNodeParams, ABadValueNamesItsField) {
 }
 
 TEST(ControllerNodeParams, AnUnknownKeyFailsOnceEveryLoaderHasRun) {
-  const ehc_common::ConfigNode root = ehc_common::ConfigNode::loadFile(kConfigDir + "/control/controller.yaml", "ControllerNode");
+  const ConfigNode root = ConfigNode::loadFile(kConfigDir + "/control/controller.yaml", "ControllerNode");
   loadControlCycleParams(root);
   loadControllerNodeParams(root);
   EXPECT_NO_THROW(root.rejectUnknownKeys());  // the shipped file: every key is read
 
-  const ehc_common::ConfigNode typo = ehc_common::ConfigNode::loadString("node: {trigger: state, wall_timout: 1.0}\n", "controller.yaml", "ControllerNode");
+  const ConfigNode typo = ConfigNode::loadString("node: {trigger: state, wall_timout: 1.0}\n", "controller.yaml", "ControllerNode");
   loadControllerNodeParams(typo);
   const std::string why = errorOf([&] { typo.rejectUnknownKeys(); });
   EXPECT_NE(why.find("unknown field 'node.wall_timout'"), std::string::npos) << why;

@@ -12,6 +12,8 @@
 
 #include <random>
 
+using ehc_common::ConfigNode;
+
 namespace ehc_control {
 namespace {
 
@@ -218,9 +220,9 @@ TEST(PbvsServo, BadParametersAndInputsThrowWithTheClassName) {
   Eigen::Isometry3d nan = Eigen::Isometry3d::Identity();
   nan.translation().x() = std::nan("");
   EXPECT_THROW(servo.twist(nan, Eigen::Isometry3d::Identity()), std::invalid_argument);
-  const ehc_common::ConfigNode bad = ehc_common::ConfigNode::loadString("gain_at_zero: -1\n", "servo.yaml", "ControllerNode");
+  const ConfigNode bad = ConfigNode::loadString("gain_at_zero: -1\n", "servo.yaml", "ControllerNode");
   EXPECT_THROW(loadPbvsServoParams(bad), std::invalid_argument);
-  const ehc_common::ConfigNode good = ehc_common::ConfigNode::loadString("gain_at_zero: 3\ngain_at_infinity: 1\nslope_at_zero: 5\nmax_linear: 1\n",
+  const ConfigNode good = ConfigNode::loadString("gain_at_zero: 3\ngain_at_infinity: 1\nslope_at_zero: 5\nmax_linear: 1\n",
                                                  "servo.yaml", "ControllerNode");
   const PbvsServoParams q = loadPbvsServoParams(good);
   EXPECT_EQ(q.gain_at_zero, 3.0);

@@ -15,6 +15,8 @@
 #include <cstdlib>
 #include <memory>
 
+using ehc_common::ConfigNode;
+
 using namespace ehc_control;
 
 namespace {
@@ -211,7 +213,7 @@ TEST(QpControllerParams, ValidationAndLoading) {
   p.joint_stop = 1.0;
   p.joint_influence = 0.5;
   EXPECT_THROW(p.validate(), std::invalid_argument);
-  const auto cfg = ehc_common::ConfigNode::loadString("controller: {mode: walk}", "test.yaml", "Test");
+  const auto cfg = ConfigNode::loadString("controller: {mode: walk}", "test.yaml", "Test");
   try {
     loadQpControllerParams(cfg.child("controller"));
     FAIL();
@@ -219,7 +221,7 @@ TEST(QpControllerParams, ValidationAndLoading) {
     EXPECT_NE(std::string(e.what()).find("field 'controller.mode' must be ehc, neo_e, neo_c or tsmm"), std::string::npos)
         << e.what();
   }
-  const auto ok = ehc_common::ConfigNode::loadFile(std::string(EHC_CONFIG_DIR) + "/control/controller.yaml", "Test");
+  const auto ok = ConfigNode::loadFile(std::string(EHC_CONFIG_DIR) + "/control/controller.yaml", "Test");
   EXPECT_EQ(loadQpControllerParams(ok.child("controller")).mode, ControlMode::Ehc);
   EXPECT_THROW(EhcQpController(std::make_shared<const WholeBodyModel>(realmanWithoutStopDistances()), QpControllerParams{}, nullptr),
                std::invalid_argument);  // ehc needs a map
@@ -294,7 +296,7 @@ TEST(EhcQpController, SolvesThroughTheQpSolverInterface) {
   } catch (const std::invalid_argument& e) {
     EXPECT_EQ(std::string(e.what()), "[QpControllerParams] qp_solver must be one of: dual_active_set (got 'qpoases')");
   }
-  const auto cfg = ehc_common::ConfigNode::loadString("controller: {qp_solver: qpoases}", "test.yaml", "Test");
+  const auto cfg = ConfigNode::loadString("controller: {qp_solver: qpoases}", "test.yaml", "Test");
   try {
     loadQpControllerParams(cfg.child("controller"));
     FAIL();
@@ -303,7 +305,7 @@ TEST(EhcQpController, SolvesThroughTheQpSolverInterface) {
         << e.what();
     EXPECT_NE(std::string(e.what()).find("test.yaml"), std::string::npos) << e.what();
   }
-  const auto shipped = ehc_common::ConfigNode::loadFile(std::string(EHC_CONFIG_DIR) + "/control/controller.yaml", "Test");
+  const auto shipped = ConfigNode::loadFile(std::string(EHC_CONFIG_DIR) + "/control/controller.yaml", "Test");
   EXPECT_EQ(loadQpControllerParams(shipped.child("controller")).qp_solver, "dual_active_set");
 }
 
@@ -378,7 +380,7 @@ TEST(EhcQpController, ManipulabilityFadeStopsNullSpaceDriftAtTheTarget) {
   const ControllerCommand f1 = faded.step(base, q, far, nu, {});
   EXPECT_LT((f0.velocity - f1.velocity).norm(), 1e-9);
   // Validation: a negative fade distance fails naming the field.
-  const auto bad = ehc_common::ConfigNode::loadString("controller: {manipulability_fade_distance: -0.1}", "test.yaml", "Test");
+  const auto bad = ConfigNode::loadString("controller: {manipulability_fade_distance: -0.1}", "test.yaml", "Test");
   try {
     loadQpControllerParams(bad.child("controller"));
     FAIL() << "negative fade distance accepted";

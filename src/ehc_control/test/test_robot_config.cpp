@@ -11,6 +11,8 @@
 #include <sstream>
 #include <regex>
 
+using ehc_common::ConfigNode;
+
 using namespace ehc_control;
 
 namespace {
@@ -95,7 +97,7 @@ TEST(RobotConfig, YamlSyntaxError) {
 TEST(ConfigNode, ExtendsMergesOverTheBaseFile) {
   std::ofstream("/tmp/ehc_base.yaml") << "a: {x: 1, y: 2, list: [1, 2, 3]}\nb: base\n";
   std::ofstream("/tmp/ehc_over.yaml") << "extends: ehc_base.yaml\na: {y: 20, list: [9]}\nc: new\n";
-  const auto n = ehc_common::ConfigNode::loadFile("/tmp/ehc_over.yaml", "Test");
+  const auto n = ConfigNode::loadFile("/tmp/ehc_over.yaml", "Test");
   EXPECT_EQ(n.child("a").require<int>("x"), 1);    // kept from the base
   EXPECT_EQ(n.child("a").require<int>("y"), 20);   // overridden
   EXPECT_EQ(n.child("a").requireVector("list").size(), 1);  // lists are replaced
@@ -103,10 +105,10 @@ TEST(ConfigNode, ExtendsMergesOverTheBaseFile) {
   EXPECT_EQ(n.require<std::string>("c"), "new");
   EXPECT_FALSE(n.has("extends"));
   std::ofstream("/tmp/ehc_loop.yaml") << "extends: ehc_loop.yaml\n";
-  EXPECT_THROW(ehc_common::ConfigNode::loadFile("/tmp/ehc_loop.yaml", "Test"), std::invalid_argument);
+  EXPECT_THROW(ConfigNode::loadFile("/tmp/ehc_loop.yaml", "Test"), std::invalid_argument);
   std::ofstream("/tmp/ehc_missing.yaml") << "extends: no_such_file.yaml\n";
   try {
-    ehc_common::ConfigNode::loadFile("/tmp/ehc_missing.yaml", "Test");
+    ConfigNode::loadFile("/tmp/ehc_missing.yaml", "Test");
     FAIL();
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("cannot read config file '/tmp/no_such_file.yaml'"), std::string::npos) << e.what();
@@ -114,8 +116,8 @@ TEST(ConfigNode, ExtendsMergesOverTheBaseFile) {
 }
 
 TEST(ConfigNode, RealmanControllerConfigIsTheSimConfigWithATimer) {
-  const auto real = ehc_common::ConfigNode::loadFile(std::string(EHC_CONFIG_DIR) + "/realman/controller.yaml", "Test");
-  const auto sim = ehc_common::ConfigNode::loadFile(std::string(EHC_CONFIG_DIR) + "/control/controller.yaml", "Test");
+  const auto real = ConfigNode::loadFile(std::string(EHC_CONFIG_DIR) + "/realman/controller.yaml", "Test");
+  const auto sim = ConfigNode::loadFile(std::string(EHC_CONFIG_DIR) + "/control/controller.yaml", "Test");
   EXPECT_EQ(real.child("node").require<std::string>("trigger"), "timer");
   EXPECT_EQ(sim.child("node").require<std::string>("trigger"), "state");
   // Everything else comes from the same file: the controller tuning cannot drift apart.

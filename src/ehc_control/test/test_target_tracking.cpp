@@ -9,6 +9,8 @@
 
 #include <gtest/gtest.h>
 
+using ehc_common::ConfigNode;
+
 
 namespace ehc_control {
 namespace {
@@ -105,12 +107,12 @@ TEST(TargetTracker, MovingTargetsPausedWindowsAndNewIntrinsics) {
 }
 
 TEST(TargetTracker, ParamsLoadAndResolveTheCameraPath) {
-  const ehc_common::ConfigNode n = ehc_common::ConfigNode::loadString("camera: ../robots/x/camera.yaml\nnew_target_distance: 0.2\n",
+  const ConfigNode n = ConfigNode::loadString("camera: ../robots/x/camera.yaml\nnew_target_distance: 0.2\n",
                                               "/a/b/controller.yaml", "ControllerNode");
   const TargetTrackerParams p = loadTargetTrackerParams(n);
   EXPECT_EQ(p.camera_file, "/a/b/../robots/x/camera.yaml");
   EXPECT_EQ(p.new_target_distance, 0.2);
-  EXPECT_THROW(loadTargetTrackerParams(ehc_common::ConfigNode::loadString("new_target_distance: -1\n", "c.yaml", "X")),
+  EXPECT_THROW(loadTargetTrackerParams(ConfigNode::loadString("new_target_distance: -1\n", "c.yaml", "X")),
                std::invalid_argument);
 }
 

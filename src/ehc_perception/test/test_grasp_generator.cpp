@@ -11,6 +11,8 @@
 #include <fstream>
 #include <limits>
 
+using ehc_common::ConfigNode;
+
 using namespace ehc_perception;
 using namespace ehc_perception::test;
 
@@ -219,13 +221,13 @@ TEST(GraspGenerator, IsDeterministic) {
 }
 
 TEST(GraspGenerator, ConfigLoadsAndBadValuesFailNamingTheField) {
-  const auto ok = ehc_common::ConfigNode::loadString(
+  const auto ok = ConfigNode::loadString(
       "grasp_generator: {top_k: 3, voxel_size: 0.005, gripper: {max_width: 0.08}}", "ok.yaml",
       "GraspGenerator");
   const GraspGeneratorConfig c = loadGraspGeneratorConfig(ok.child("grasp_generator"));
   EXPECT_EQ(c.top_k, 3);
   EXPECT_DOUBLE_EQ(c.gripper.max_width, 0.08);
-  const auto depth = ehc_common::ConfigNode::loadString(
+  const auto depth = ConfigNode::loadString(
       "grasp_generator: {max_depth_shift: 0.03, depth_step: 0.0025, depth_margin: 0.004}",
       "ok.yaml", "GraspGenerator");
   const GraspGeneratorConfig cd = loadGraspGeneratorConfig(depth.child("grasp_generator"));
@@ -235,7 +237,7 @@ TEST(GraspGenerator, ConfigLoadsAndBadValuesFailNamingTheField) {
   EXPECT_NE(cd.summary().find("depth shift <= 0.03 m"), std::string::npos) << cd.summary();
 
   auto expectFails = [](const std::string& yaml, const std::string& needle) {
-    const auto n = ehc_common::ConfigNode::loadString(yaml, "bad.yaml", "GraspGenerator");
+    const auto n = ConfigNode::loadString(yaml, "bad.yaml", "GraspGenerator");
     try {
       loadGraspGeneratorConfig(n.childOrEmpty("grasp_generator"));
       ADD_FAILURE() << "no error for " << yaml;
@@ -263,7 +265,7 @@ TEST(GraspGenerator, ConfigLoadsAndBadValuesFailNamingTheField) {
   expectFails("grasp_generator: {max_depth_shift: 0.01, depth_margin: 0.01}", "'depth_margin'");
   expectFails("grasp_generator: {depth_margin: .inf}", "depth_margin");
   // Disabled (max_depth_shift 0): step and margin are not constrained by it.
-  const auto off = ehc_common::ConfigNode::loadString(
+  const auto off = ConfigNode::loadString(
       "grasp_generator: {max_depth_shift: 0, depth_step: 0, depth_margin: 0.01}", "off.yaml",
       "GraspGenerator");
   const GraspGeneratorConfig c_off = loadGraspGeneratorConfig(off.child("grasp_generator"));

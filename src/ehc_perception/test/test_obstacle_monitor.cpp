@@ -14,6 +14,8 @@
 
 #include <limits>
 
+using ehc_common::ConfigNode;
+
 using namespace ehc_perception;
 
 namespace {
@@ -122,7 +124,7 @@ TEST(ObstacleMonitor, ParamsAndLinksAreValidated) {
   map.links.push_back("no_such_link");
   EXPECT_THROW(ObstacleMonitor(robot, map, ObstacleMonitorParams()), std::invalid_argument);
   try {
-    loadObstacleMonitorParams(ehc_common::ConfigNode::loadString("node: {max_insert_rate_hz: 0}\n", "obst.yaml",
+    loadObstacleMonitorParams(ConfigNode::loadString("node: {max_insert_rate_hz: 0}\n", "obst.yaml",
                                                                   "ObstacleNode").child("node"));
     FAIL();
   } catch (const std::invalid_argument& e) {
@@ -130,7 +132,7 @@ TEST(ObstacleMonitor, ParamsAndLinksAreValidated) {
     EXPECT_NE(std::string(e.what()).find("obst.yaml"), std::string::npos) << e.what();
   }
   const ObstacleMonitorParams p = loadObstacleMonitorParams(
-      ehc_common::ConfigNode::loadString("node: {state_timeout: 0.3}\n", "obst.yaml", "ObstacleNode").child("node"));
+      ConfigNode::loadString("node: {state_timeout: 0.3}\n", "obst.yaml", "ObstacleNode").child("node"));
   EXPECT_EQ(p.state_timeout, 0.3);
   EXPECT_EQ(p.exclusion_timeout, 0.5);
 }
@@ -171,10 +173,10 @@ TEST(ObstacleMonitor, AFullD435FrameIsBoundedByVoxelDecimationAndThePointBudget)
   EXPECT_EQ(raw.boundCloud(with_nan).size(), 2u);
   EXPECT_EQ(r.monitor.boundCloud(with_nan).size(), 1u);  // the same voxel twice
   // Parameters: the budget must be positive and is read from the node mapping.
-  EXPECT_THROW(loadObstacleMonitorParams(ehc_common::ConfigNode::loadString("node: {max_cloud_points: 0}\n",
+  EXPECT_THROW(loadObstacleMonitorParams(ConfigNode::loadString("node: {max_cloud_points: 0}\n",
                                                                              "obst.yaml", "ObstacleNode").child("node")),
                std::invalid_argument);
-  const ObstacleMonitorParams q = loadObstacleMonitorParams(ehc_common::ConfigNode::loadString(
+  const ObstacleMonitorParams q = loadObstacleMonitorParams(ConfigNode::loadString(
       "node: {cloud_voxel: 0.05, max_cloud_points: 500}\n", "obst.yaml", "ObstacleNode").child("node"));
   EXPECT_EQ(q.cloud_voxel, 0.05);
   EXPECT_EQ(q.max_cloud_points, 500);

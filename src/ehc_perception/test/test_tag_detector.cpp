@@ -13,6 +13,8 @@
 #include <cstdio>
 #include <random>
 
+using ehc_common::ConfigNode;
+
 using namespace ehc_perception;
 using ehc_perception::test::pose;
 
@@ -330,7 +332,7 @@ TEST(TagDetector, TheTrackingWindowFollowsATagAndRecoversFromAJump) {
 TEST(TagDetector, ConfigsAndCamerasAreValidated) {
   const ehc_control::PinholeCamera cam = d435();
   auto expectFails = [&](const std::string& yaml, const std::string& needle) {
-    const auto n = ehc_common::ConfigNode::loadString(yaml, "tags.yaml", "TagDetector");
+    const auto n = ConfigNode::loadString(yaml, "tags.yaml", "TagDetector");
     try {
       loadTagDetectorConfig(n.childOrEmpty("tag_detector"));
       ADD_FAILURE() << "no error for " << yaml;
@@ -349,7 +351,7 @@ TEST(TagDetector, ConfigsAndCamerasAreValidated) {
   expectFails("tag_detector: {pose_prior: {world_direction: [0, 1]}}", "world_direction");
   expectFails("tag_detector: {pose_prior: {ambiguity_margin: -1}}", "pose_prior.ambiguity_margin");
   {
-    const auto n = ehc_common::ConfigNode::loadString(
+    const auto n = ConfigNode::loadString(
         "tag_detector: {pose_prior: {tag_axes: [0, 1, 0]}}", "tags.yaml", "TagDetector");
     loadTagDetectorConfig(n.childOrEmpty("tag_detector"));
     EXPECT_THROW(n.rejectUnknownKeys(), std::invalid_argument) << "misspelled pose_prior key";
@@ -358,21 +360,21 @@ TEST(TagDetector, ConfigsAndCamerasAreValidated) {
   expectFails("tag_detector: {roi_margin: -5}", "roi_margin");
   expectFails("tag_detector: {roi_full_frame_every: 0}", "roi_full_frame_every");
 
-  const auto ok = ehc_common::ConfigNode::loadString(
+  const auto ok = ConfigNode::loadString(
       "tag_detector: {family: 36h11, default_tag_size: 0.04, tag_sizes: {2: 0.1}}", "ok.yaml",
       "TagDetector");
   const TagDetectorConfig c = loadTagDetectorConfig(ok.child("tag_detector"));
   EXPECT_DOUBLE_EQ(c.tagSize(2), 0.1);
   EXPECT_DOUBLE_EQ(c.tagSize(7), 0.04);
 
-  const auto tn = ehc_common::ConfigNode::loadString(
+  const auto tn = ConfigNode::loadString(
       "target: {tag_id: 2, grasp_offset: {xyz: [0, 0, 0.03], rpy: [3.14159, 0, 0]}}", "t.yaml",
       "TagTarget");
   EXPECT_EQ(loadTagTargetConfig(tn.child("target")).tag_id, 2);
-  const auto bad_target = ehc_common::ConfigNode::loadString(
+  const auto bad_target = ConfigNode::loadString(
       "target: {tag_id: -1}", "t.yaml", "TagTarget");
   EXPECT_THROW(loadTagTargetConfig(bad_target.child("target")), std::invalid_argument);
-  const auto bad_offset = ehc_common::ConfigNode::loadString(
+  const auto bad_offset = ConfigNode::loadString(
       "target: {grasp_offset: {xyz: [0, 0]}}", "t.yaml", "TagTarget");
   EXPECT_THROW(loadTagTargetConfig(bad_offset.child("target")), std::invalid_argument);
 

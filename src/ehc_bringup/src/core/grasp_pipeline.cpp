@@ -9,6 +9,8 @@
 #include <sstream>
 #include <stdexcept>
 
+using ehc_common::ConfigNode;
+
 namespace ehc_bringup {
 
 namespace {
@@ -52,17 +54,17 @@ GraspPipelineConfig loadGraspPipelineConfig(const GraspPipelineFiles& files) {
   if (scene.empty()) throw std::invalid_argument("[GraspPipeline] no scene: the sim file names none and none was given");
   c.scene = ehc_sim::loadSceneConfig(scene);
   {
-    const auto root = ehc_common::ConfigNode::loadFile(files.controller, "GraspPipeline");
+    const auto root = ConfigNode::loadFile(files.controller, "GraspPipeline");
     c.cycle = ehc_control::loadControlCycleParams(root);
     root.ignore("node");
     root.rejectUnknownKeys();
   }
-  c.sequencer = loadGraspSequencerParams(ehc_common::ConfigNode::loadFile(files.sequencer, "GraspPipeline"));
+  c.sequencer = loadGraspSequencerParams(ConfigNode::loadFile(files.sequencer, "GraspPipeline"));
   if (files.tags.size() != c.sequencer.objects.size())
     throw std::invalid_argument("[GraspPipeline] " + std::to_string(files.tags.size()) + " tag file(s) for " +
                                 std::to_string(c.sequencer.objects.size()) + " sequencer object(s) in " + files.sequencer);
   for (std::size_t i = 0; i < files.tags.size(); ++i) {
-    const auto root = ehc_common::ConfigNode::loadFile(files.tags[i], "GraspPipeline");
+    const auto root = ConfigNode::loadFile(files.tags[i], "GraspPipeline");
     const auto detector = ehc_perception::loadTagDetectorConfig(root.childOrEmpty("tag_detector"));
     if (i == 0) c.detector = detector;
     else if (detector.summary() != c.detector.summary())
@@ -71,13 +73,13 @@ GraspPipelineConfig loadGraspPipelineConfig(const GraspPipelineFiles& files) {
     c.tag_targets.push_back(ehc_perception::loadTagTargetConfig(root.childOrEmpty("target")));
   }
   {
-    const auto root = ehc_common::ConfigNode::loadFile(files.grasp, "GraspPipeline");
+    const auto root = ConfigNode::loadFile(files.grasp, "GraspPipeline");
     c.targeting = ehc_perception::loadGraspTargetingParams(root.childOrEmpty("node"));
     c.generator = ehc_perception::loadGraspGeneratorConfig(root.childOrEmpty("grasp_generator"));
   }
   c.obstacles = !files.obstacles.empty();
   if (c.obstacles) {
-    const auto root = ehc_common::ConfigNode::loadFile(files.obstacles, "GraspPipeline");
+    const auto root = ConfigNode::loadFile(files.obstacles, "GraspPipeline");
     const auto n = root.child("node");
     n.ignore("robot_config");  // in-process the obstacle field checks the simulator's robot
     c.monitor = ehc_perception::loadObstacleMonitorParams(n);

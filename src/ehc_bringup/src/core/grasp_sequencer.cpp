@@ -13,6 +13,8 @@
 #include <sstream>
 #include <stdexcept>
 
+using ehc_common::ConfigNode;
+
 namespace ehc_bringup {
 
 using ehc_control::GripperState;
@@ -134,9 +136,9 @@ std::string GraspSequencerParams::summary() const {
   return s.str();
 }
 
-GraspSequencerParams loadGraspSequencerParams(const ehc_common::ConfigNode& root) {
+GraspSequencerParams loadGraspSequencerParams(const ConfigNode& root) {
   GraspSequencerParams p;
-  const ehc_common::ConfigNode s = root.childOrEmpty("sequencer");
+  const ConfigNode s = root.childOrEmpty("sequencer");
   p.object_time_limit = s.get("object_time_limit", p.object_time_limit);
   p.perception_hold = s.get("perception_hold", p.perception_hold);
   p.search_distance = s.get("search_distance", p.search_distance);
@@ -163,7 +165,7 @@ GraspSequencerParams loadGraspSequencerParams(const ehc_common::ConfigNode& root
   p.retreat_raise = s.get("retreat_raise", p.retreat_raise);
   p.retreat_tolerance = s.get("retreat_tolerance", p.retreat_tolerance);
   p.retreat_timeout = s.get("retreat_timeout", p.retreat_timeout);
-  const ehc_common::ConfigNode sel = s.childOrEmpty("selection");
+  const ConfigNode sel = s.childOrEmpty("selection");
   p.selection.candidate_gate = sel.get("candidate_gate", p.selection.candidate_gate);
   p.selection.max_angle_deg = sel.get("max_angle_deg", p.selection.max_angle_deg);
   p.selection.max_width = sel.get("max_width", p.selection.max_width);
@@ -179,7 +181,7 @@ GraspSequencerParams loadGraspSequencerParams(const ehc_common::ConfigNode& root
 
   if (!root.has("objects")) root.fail("objects", "is required: a list of {name, approach}");
   for (std::size_t i = 0; i < root.listSize("objects"); ++i) {
-    const ehc_common::ConfigNode o = root.element("objects", i);
+    const ConfigNode o = root.element("objects", i);
     GraspObjectSpec spec;
     spec.name = o.require<std::string>("name");
     const std::string a = o.get<std::string>("approach", "forward");

@@ -6,6 +6,8 @@
 #include <sstream>
 #include <stdexcept>
 
+using ehc_common::ConfigNode;
+
 namespace ehc_control {
 
 namespace {
@@ -26,12 +28,12 @@ void ControlCycleParams::validate() const {
   ehc_common::requireRange("ControlCycleParams", "tracking.centre_timeout", centre_timeout, 1e-3, 3600.0);
 }
 
-ControlCycleParams loadControlCycleParams(const ehc_common::ConfigNode& root) {
+ControlCycleParams loadControlCycleParams(const ConfigNode& root) {
   ControlCycleParams p;
   p.robot_file = root.has("robot") ? robotFileField(root, "robot") : resolveRobotFile("realman_rm65_water2");
   p.controller = loadQpControllerParams(root.childOrEmpty("controller"));
   p.weighting = loadEhcWeightingParams(root.childOrEmpty("weighting"));
-  const ehc_common::ConfigNode servo = root.childOrEmpty("servo");
+  const ConfigNode servo = root.childOrEmpty("servo");
   const std::string type = servo.get<std::string>("type", toString(p.servo_type));
   try {
     p.servo_type = servoTypeFromString(type);
@@ -41,7 +43,7 @@ ControlCycleParams loadControlCycleParams(const ehc_common::ConfigNode& root) {
   p.servo = loadPoseServoParams(servo);
   p.pbvs = loadPbvsServoParams(servo);
   p.mpbs = loadMpbsParams(root.childOrEmpty("mpbs"));
-  const ehc_common::ConfigNode tracking = root.childOrEmpty("tracking");
+  const ConfigNode tracking = root.childOrEmpty("tracking");
   p.tracking = loadTargetTrackerParams(tracking);
   p.centre_timeout = tracking.get("centre_timeout", p.centre_timeout);
   p.watchdog = loadSupervisorParams(root.childOrEmpty("watchdog"));

@@ -8,13 +8,15 @@
 #include <sstream>
 #include <stdexcept>
 
+using ehc_common::requireRange;
+
 namespace ehc_control {
 
 void SupervisorParams::validate() const {
-  ehc_common::requireRange("SupervisorParams", "state_timeout", state_timeout, 1e-3, 10.0);
-  ehc_common::requireRange("SupervisorParams", "target_timeout", target_timeout, 1e-3, 60.0);
-  ehc_common::requireRange("SupervisorParams", "obstacle_timeout", obstacle_timeout, 1e-3, 60.0);
-  ehc_common::requireRange("SupervisorParams", "max_solve_time", max_solve_time, 1e-6, 1.0);
+  requireRange("SupervisorParams", "state_timeout", state_timeout, 1e-3, 10.0);
+  requireRange("SupervisorParams", "target_timeout", target_timeout, 1e-3, 60.0);
+  requireRange("SupervisorParams", "obstacle_timeout", obstacle_timeout, 1e-3, 60.0);
+  requireRange("SupervisorParams", "max_solve_time", max_solve_time, 1e-6, 1.0);
 }
 
 std::string SupervisorParams::summary() const {

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <stdexcept>
 
+using ehc_common::requireRange;
+
 namespace ehc_control {
 
 namespace {
@@ -12,11 +14,11 @@ const char* kOwner = "EhcWeighting";
 }
 
 void EhcWeightingParams::validate() const {
-  ehc_common::requireRange(kOwner, "reach_threshold", reach_threshold, 0.0, 1.0);
-  ehc_common::requireRange(kOwner, "sigmoid_gain", sigmoid_gain, 0.1, 1000.0);
-  ehc_common::requireRange(kOwner, "max_ray_length", max_ray_length, 0.1, 10.0);
-  ehc_common::requireRange(kOwner, "ray_step", ray_step, 0.0, 0.5);
-  ehc_common::requireRange(kOwner, "omega_max", omega_max, 1.0, 1e6);
+  requireRange(kOwner, "reach_threshold", reach_threshold, 0.0, 1.0);
+  requireRange(kOwner, "sigmoid_gain", sigmoid_gain, 0.1, 1000.0);
+  requireRange(kOwner, "max_ray_length", max_ray_length, 0.1, 10.0);
+  requireRange(kOwner, "ray_step", ray_step, 0.0, 0.5);
+  requireRange(kOwner, "omega_max", omega_max, 1.0, 1e6);
   if (ray_origin != "arm_base" && ray_origin != "tcp" && ray_origin != "target")
     throw std::invalid_argument("[EhcWeighting] ray_origin must be 'arm_base', 'tcp' or 'target' (got '" +
                                 ray_origin + "')");

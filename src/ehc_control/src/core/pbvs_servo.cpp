@@ -13,6 +13,8 @@
 #include <sstream>
 #include <stdexcept>
 
+using ehc_common::requireRange;
+
 namespace ehc_control {
 
 namespace {
@@ -27,13 +29,13 @@ vpHomogeneousMatrix toVisp(const Eigen::Isometry3d& T) {
 }  // namespace
 
 void PbvsServoParams::validate() const {
-  ehc_common::requireRange(kOwner, "gain_at_zero", gain_at_zero, 1e-3, 100.0);
-  ehc_common::requireRange(kOwner, "gain_at_infinity", gain_at_infinity, 1e-3, 100.0);
+  requireRange(kOwner, "gain_at_zero", gain_at_zero, 1e-3, 100.0);
+  requireRange(kOwner, "gain_at_infinity", gain_at_infinity, 1e-3, 100.0);
   if (gain_at_infinity > gain_at_zero)
     throw std::invalid_argument("[PbvsServoParams] gain_at_infinity must be <= gain_at_zero");
-  ehc_common::requireRange(kOwner, "slope_at_zero", slope_at_zero, 0.0, 1000.0);
-  ehc_common::requireRange(kOwner, "max_linear", max_linear, 1e-3, 100.0);
-  ehc_common::requireRange(kOwner, "max_angular", max_angular, 1e-3, 100.0);
+  requireRange(kOwner, "slope_at_zero", slope_at_zero, 0.0, 1000.0);
+  requireRange(kOwner, "max_linear", max_linear, 1e-3, 100.0);
+  requireRange(kOwner, "max_angular", max_angular, 1e-3, 100.0);
 }
 
 std::string PbvsServoParams::summary() const {

@@ -4,6 +4,9 @@
 
 #include <sstream>
 
+using ehc_common::ConfigNode;
+using ehc_common::requireRange;
+
 namespace ehc_control {
 
 namespace {
@@ -11,14 +14,14 @@ const char* kOwner = "PinholeCamera";
 }
 
 void PinholeCamera::validate() const {
-  ehc_common::requireRange(kOwner, "image_width", width, 1, 10000);
-  ehc_common::requireRange(kOwner, "image_height", height, 1, 10000);
-  ehc_common::requireRange(kOwner, "fx", fx, 1e-3, 1e6);
-  ehc_common::requireRange(kOwner, "fy", fy, 1e-3, 1e6);
-  ehc_common::requireRange(kOwner, "cx", cx, 0.0, width);
-  ehc_common::requireRange(kOwner, "cy", cy, 0.0, height);
+  requireRange(kOwner, "image_width", width, 1, 10000);
+  requireRange(kOwner, "image_height", height, 1, 10000);
+  requireRange(kOwner, "fx", fx, 1e-3, 1e6);
+  requireRange(kOwner, "fy", fy, 1e-3, 1e6);
+  requireRange(kOwner, "cx", cx, 0.0, width);
+  requireRange(kOwner, "cy", cy, 0.0, height);
   if (!distortion.allFinite()) throw std::invalid_argument("[PinholeCamera] distortion coefficients must be finite");
-  ehc_common::requireRange(kOwner, "min_depth", min_depth, 0.0, 10.0);
+  requireRange(kOwner, "min_depth", min_depth, 0.0, 10.0);
 }
 
 Eigen::Vector2d PinholeCamera::pixel(const Eigen::Vector3d& p) const {
@@ -56,11 +59,11 @@ PinholeCamera PinholeCamera::fromCameraInfo(const std::string& name, int width, 
 }
 
 PinholeCamera loadPinholeCamera(const std::string& path) {
-  const ehc_common::ConfigNode root = ehc_common::ConfigNode::loadFile(path, kOwner);
+  const ConfigNode root = ConfigNode::loadFile(path, kOwner);
   const PinholeCamera defaults;
   const int width = root.require<int>("image_width");
   const int height = root.require<int>("image_height");
-  const ehc_common::ConfigNode matrix = root.child("camera_matrix");
+  const ConfigNode matrix = root.child("camera_matrix");
   const Eigen::Matrix<double, 9, 1> K = matrix.requireVector("data", 9);
   if (!(K[1] == 0.0 && K[3] == 0.0 && K[6] == 0.0 && K[7] == 0.0 && K[8] == 1.0))
     matrix.fail("data", "must be [fx 0 cx 0 fy cy 0 0 1] (no skew)");

@@ -4,13 +4,15 @@
 #include "ehc_control/qp_controller.h"
 #include "ehc_control/whole_body_model.h"
 
+using ehc_common::requireRange;
+
 namespace ehc_control {
 
 void PoseServoParams::validate() const {
-  ehc_common::requireRange("PoseServoParams", "gain", gain, 1e-3, 100.0);
-  ehc_common::requireRange("PoseServoParams", "rotation_gain_ratio", rotation_gain_ratio, 1e-3, 100.0);
-  ehc_common::requireRange("PoseServoParams", "max_linear", max_linear, 1e-3, 100.0);
-  ehc_common::requireRange("PoseServoParams", "max_angular", max_angular, 1e-3, 100.0);
+  requireRange("PoseServoParams", "gain", gain, 1e-3, 100.0);
+  requireRange("PoseServoParams", "rotation_gain_ratio", rotation_gain_ratio, 1e-3, 100.0);
+  requireRange("PoseServoParams", "max_linear", max_linear, 1e-3, 100.0);
+  requireRange("PoseServoParams", "max_angular", max_angular, 1e-3, 100.0);
 }
 
 PoseServoParams loadPoseServoParams(const ehc_common::ConfigNode& n) {

@@ -13,6 +13,8 @@
 #include <sstream>
 #include <stdexcept>
 
+using ehc_common::requireRange;
+
 namespace ehc_control {
 
 namespace {
@@ -39,44 +41,44 @@ ControlMode controlModeFromString(const std::string& s) {
 }
 
 void QpControllerParams::validate() const {
-  ehc_common::requireRange(kOwner, "arm_weight", arm_weight, 1e-6, 1e3);
-  ehc_common::requireRange(kOwner, "ehc_base_weight_min", ehc_base_weight_min, 1e-6, 1e4);
-  ehc_common::requireRange(kOwner, "ehc_base_weight_max", ehc_base_weight_max, 1e-6, 1e4);
+  requireRange(kOwner, "arm_weight", arm_weight, 1e-6, 1e3);
+  requireRange(kOwner, "ehc_base_weight_min", ehc_base_weight_min, 1e-6, 1e4);
+  requireRange(kOwner, "ehc_base_weight_max", ehc_base_weight_max, 1e-6, 1e4);
   if (ehc_base_weight_max < ehc_base_weight_min)
     throw std::invalid_argument("[QpControllerParams] ehc_base_weight_max must be >= ehc_base_weight_min");
-  ehc_common::requireRange(kOwner, "neo_c_base_weight", neo_c_base_weight, 1e-6, 1e4);
-  ehc_common::requireRange(kOwner, "min_error", min_error, 1e-6, 1.0);
-  ehc_common::requireRange(kOwner, "slack_bound", slack_bound, 1e-3, 1e3);
-  ehc_common::requireRange(kOwner, "base_turn_gain", base_turn_gain, 0.0, 100.0);
-  ehc_common::requireRange(kOwner, "manipulability_gain", manipulability_gain, 0.0, 100.0);
-  ehc_common::requireRange(kOwner, "manipulability_fade_distance", manipulability_fade_distance, 0.0, 5.0);
-  ehc_common::requireRange(kOwner, "posture_gain", posture_gain, 0.0, 100.0);
-  ehc_common::requireRange(kOwner, "limit_centring_gain", limit_centring_gain, 0.0, 100.0);
+  requireRange(kOwner, "neo_c_base_weight", neo_c_base_weight, 1e-6, 1e4);
+  requireRange(kOwner, "min_error", min_error, 1e-6, 1.0);
+  requireRange(kOwner, "slack_bound", slack_bound, 1e-3, 1e3);
+  requireRange(kOwner, "base_turn_gain", base_turn_gain, 0.0, 100.0);
+  requireRange(kOwner, "manipulability_gain", manipulability_gain, 0.0, 100.0);
+  requireRange(kOwner, "manipulability_fade_distance", manipulability_fade_distance, 0.0, 5.0);
+  requireRange(kOwner, "posture_gain", posture_gain, 0.0, 100.0);
+  requireRange(kOwner, "limit_centring_gain", limit_centring_gain, 0.0, 100.0);
   wrist_flip.validate();
-  ehc_common::requireRange(kOwner, "joint_stop", joint_stop, 0.0, 1.0);
-  ehc_common::requireRange(kOwner, "joint_influence", joint_influence, 0.0, 3.0);
+  requireRange(kOwner, "joint_stop", joint_stop, 0.0, 1.0);
+  requireRange(kOwner, "joint_influence", joint_influence, 0.0, 3.0);
   if (joint_influence <= joint_stop)
     throw std::invalid_argument("[QpControllerParams] joint_influence must be > joint_stop");
-  ehc_common::requireRange(kOwner, "joint_damper_gain", joint_damper_gain, 1e-3, 100.0);
-  ehc_common::requireRange(kOwner, "obstacle_stop", obstacle_stop, 0.0, 1.0);
-  ehc_common::requireRange(kOwner, "obstacle_influence", obstacle_influence, 0.0, 5.0);
+  requireRange(kOwner, "joint_damper_gain", joint_damper_gain, 1e-3, 100.0);
+  requireRange(kOwner, "obstacle_stop", obstacle_stop, 0.0, 1.0);
+  requireRange(kOwner, "obstacle_influence", obstacle_influence, 0.0, 5.0);
   if (obstacle_influence <= obstacle_stop)
     throw std::invalid_argument("[QpControllerParams] obstacle_influence must be > obstacle_stop");
   for (const auto& [link, d] : obstacle_stop_links) {
-    ehc_common::requireRange(kOwner, "obstacle_stop_links." + link, d, 0.0, 1.0);
+    requireRange(kOwner, "obstacle_stop_links." + link, d, 0.0, 1.0);
     if (obstacle_influence <= d)
       throw std::invalid_argument("[QpControllerParams] obstacle_influence must be > obstacle_stop_links." + link);
   }
-  ehc_common::requireRange(kOwner, "obstacle_damper_gain", obstacle_damper_gain, 1e-3, 100.0);
-  ehc_common::requireRange(kOwner, "max_obstacle_rows", max_obstacle_rows, 0, 1000);
-  ehc_common::requireRange(kOwner, "max_qp_iterations", max_qp_iterations, 1, 100000);
+  requireRange(kOwner, "obstacle_damper_gain", obstacle_damper_gain, 1e-3, 100.0);
+  requireRange(kOwner, "max_obstacle_rows", max_obstacle_rows, 0, 1000);
+  requireRange(kOwner, "max_qp_iterations", max_qp_iterations, 1, 100000);
   const std::vector<std::string> solvers = qpSolverNames();
   if (std::find(solvers.begin(), solvers.end(), qp_solver) == solvers.end())
     throw std::invalid_argument("[QpControllerParams] qp_solver must be one of: " + knownQpSolvers() + " (got '" +
                                 qp_solver + "')");
-  ehc_common::requireRange(kOwner, "tsmm_switch_distance", tsmm_switch_distance, 0.0, 5.0);
-  ehc_common::requireRange(kOwner, "arrival_position", arrival_position, 1e-5, 1.0);
-  ehc_common::requireRange(kOwner, "arrival_orientation", arrival_orientation, 1e-5, M_PI);
+  requireRange(kOwner, "tsmm_switch_distance", tsmm_switch_distance, 0.0, 5.0);
+  requireRange(kOwner, "arrival_position", arrival_position, 1e-5, 1.0);
+  requireRange(kOwner, "arrival_orientation", arrival_orientation, 1e-5, M_PI);
 }
 
 std::string QpControllerParams::summary() const {

@@ -10,6 +10,9 @@
 #include <sstream>
 #include <stdexcept>
 
+using ehc_common::ConfigNode;
+using ehc_common::requireRange;
+
 namespace ehc_control {
 
 namespace {
@@ -43,8 +46,8 @@ Eigen::VectorXd RobotConfig::velocityLimits() const {
 
 void RobotConfig::validate() const {
   if (urdf_path.empty()) fail("robot.urdf: no URDF file given");
-  ehc_common::requireRange(kOwner, "robot.base.max_linear_velocity", max_linear_velocity, 1e-3, 5.0);
-  ehc_common::requireRange(kOwner, "robot.base.max_angular_velocity", max_angular_velocity, 1e-3, 10.0);
+  requireRange(kOwner, "robot.base.max_linear_velocity", max_linear_velocity, 1e-3, 5.0);
+  requireRange(kOwner, "robot.base.max_angular_velocity", max_angular_velocity, 1e-3, 10.0);
   const int n = nArm();
   if (n < 1 || n > 7) fail("robot.arm.joints: need 1..7 arm joints (have " + std::to_string(n) + ")");
   std::set<std::string> unique(arm_joints.begin(), arm_joints.end());
@@ -67,7 +70,7 @@ void RobotConfig::validate() const {
       fail("robot.arm.ready: joint " + j + " ready position is outside its limits");
   }
   for (const auto& [link, d] : obstacle_stop_distances)
-    ehc_common::requireRange(kOwner, "robot.obstacle_stop_distances." + link, d, 0.0, 1.0);
+    requireRange(kOwner, "robot.obstacle_stop_distances." + link, d, 0.0, 1.0);
   for (const auto& [a, b] : ignore_pairs)
     if (a.empty() || b.empty() || a == b)
       fail("robot.collision.ignore_pairs: a pair needs two different link names");
@@ -111,8 +114,8 @@ std::string RobotConfig::summary() const {
 }
 
 RobotConfig loadRobotConfig(const std::string& path) {
-  const ehc_common::ConfigNode root = ehc_common::ConfigNode::loadFile(path, kOwner);
-  const ehc_common::ConfigNode r = root.child("robot");
+  const ConfigNode root = ConfigNode::loadFile(path, kOwner);
+  const ConfigNode r = root.child("robot");
   RobotConfig c;
   c.source_file = path;
   c.name = r.get<std::string>("name", c.name);
@@ -120,14 +123,14 @@ RobotConfig loadRobotConfig(const std::string& path) {
   if (r.has("reachability_map"))
     c.reachability_map_path = r.resolvePath(r.require<std::string>("reachability_map"));
 
-  const ehc_common::ConfigNode f = r.childOrEmpty("frames");
+  const ConfigNode f = r.childOrEmpty("frames");
   c.world_frame = f.get<std::string>("world", c.world_frame);
   c.base_frame = f.get<std::string>("base", c.base_frame);
   c.arm_base_frame = f.get<std::string>("arm_base", c.arm_base_frame);
   c.tcp_frame = f.get<std::string>("tcp", c.tcp_frame);
   c.camera_frame = f.get<std::string>("camera_optical", c.camera_frame);
 
-  const ehc_common::ConfigNode b = r.child("base");
+  const ConfigNode b = r.child("base");
   const std::string type = b.require<std::string>("type");
   if (type != "holonomic" && type != "differential")
     b.fail("type", "must be 'holonomic' or 'differential' (got '" + type + "')");
@@ -135,7 +138,7 @@ RobotConfig loadRobotConfig(const std::string& path) {
   c.max_linear_velocity = b.get<double>("max_linear_velocity", c.max_linear_velocity);
   c.max_angular_velocity = b.get<double>("max_angular_velocity", c.max_angular_velocity);
 
-  const ehc_common::ConfigNode a = r.child("arm");
+  const ConfigNode a = r.child("arm");
   c.arm_joints = a.getStrings("joints", {});
   if (c.arm_joints.size() != 6 && c.arm_joints.size() != 7)
     a.fail("joints", "must list the 6 or 7 arm joints in command order (has " +
@@ -146,10 +149,10 @@ RobotConfig loadRobotConfig(const std::string& path) {
   c.arm_velocity = a.requireVector("velocity", n);
   c.arm_ready = a.getVector("ready", 0.5 * (c.arm_lower + c.arm_upper), n);
 
-  const ehc_common::ConfigNode cal = r.childOrEmpty("calibration");
+  const ConfigNode cal = r.childOrEmpty("calibration");
   for (const char* key : {"tcp", "camera"}) {
     if (!cal.has(key)) continue;
-    const ehc_common::ConfigNode e = cal.child(key);
+    const ConfigNode e = cal.child(key);
     FrameOverride o;
     o.joint = e.require<std::string>("joint");
     o.xyz = e.requireVector("xyz", 3);
@@ -157,7 +160,7 @@ RobotConfig loadRobotConfig(const std::string& path) {
     c.calibration.push_back(o);
   }
   if (r.has("camera_info")) c.camera_info_path = r.resolvePath(r.require<std::string>("camera_info"));
-  const ehc_common::ConfigNode col = r.childOrEmpty("collision");
+  const ConfigNode col = r.childOrEmpty("collision");
   c.checked_links = col.getStrings("checked_links", {});
   c.floor_links = col.getStrings("floor_links", {});
   for (std::size_t i = 0; i < col.listSize("ignore_pairs"); ++i) {  // [link_a, link_b] lists
@@ -167,7 +170,7 @@ RobotConfig loadRobotConfig(const std::string& path) {
     c.ignore_pairs.emplace_back(p[0].as<std::string>(), p[1].as<std::string>());
   }
   col.ignore("ignore_pairs");
-  const ehc_common::ConfigNode stop = r.childOrEmpty("obstacle_stop_distances");
+  const ConfigNode stop = r.childOrEmpty("obstacle_stop_distances");
   for (const std::string& link : stop.keys()) c.obstacle_stop_distances[link] = stop.require<double>(link);
   root.rejectUnknownKeys();
   root.validate(c);  // errors name the file
@@ -194,7 +197,7 @@ bool isRobotName(const std::string& s) {
 }
 }  // namespace
 
-std::string robotFileField(const ehc_common::ConfigNode& node, const std::string& key) {
+std::string robotFileField(const ConfigNode& node, const std::string& key) {
   const std::string value = node.require<std::string>(key);
   if (!isRobotName(value)) return node.resolvePath(value);
   try {

@@ -8,14 +8,16 @@
 #include <sstream>
 #include <stdexcept>
 
+using ehc_common::requireRange;
+
 namespace ehc_control {
 
 void WristFlipParams::validate() const {
   const char* owner = "WristFlipParams";
-  ehc_common::requireRange(owner, "margin", margin, 0.0, 1.5);
-  ehc_common::requireRange(owner, "speed", speed, 0.05, 20.0);
-  ehc_common::requireRange(owner, "gain", gain, 0.1, 100.0);
-  ehc_common::requireRange(owner, "tolerance", tolerance, 1e-4, 0.5);
+  requireRange(owner, "margin", margin, 0.0, 1.5);
+  requireRange(owner, "speed", speed, 0.05, 20.0);
+  requireRange(owner, "gain", gain, 0.1, 100.0);
+  requireRange(owner, "tolerance", tolerance, 1e-4, 0.5);
 }
 
 std::string WristFlipParams::summary() const {

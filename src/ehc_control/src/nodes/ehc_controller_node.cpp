@@ -40,6 +40,8 @@
 
 #include <deque>
 
+using ehc_common::ConfigNode;
+
 namespace {
 
 using namespace ehc_control;
@@ -47,7 +49,7 @@ using namespace ehc_control;
 using ehc_common::kLogThrottle;
 
 /// controller.yaml with the node's private overrides applied.
-ControlCycleParams loadParams(const ehc_common::ConfigNode& cfg, ros::NodeHandle& pnh) {
+ControlCycleParams loadParams(const ConfigNode& cfg, ros::NodeHandle& pnh) {
   ControlCycleParams p = loadControlCycleParams(cfg);
   std::string s;
   if (pnh.getParam("robot", s) && !s.empty()) p.robot_file = ehc_control::resolveRobotFile(s);  // name or path
@@ -66,7 +68,7 @@ Eigen::Quaterniond toEigen(const geometry_msgs::Quaternion& q) { return Eigen::Q
 
 class ControllerNode {
  public:
-  ControllerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh, const ehc_common::ConfigNode& cfg)
+  ControllerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh, const ConfigNode& cfg)
       : cycle_(loadParams(cfg, pnh)), node_(loadControllerNodeParams(cfg)),
         watchdog_(cycle_.params().watchdog.state_timeout, node_.wall_timeout),
         world_frame_(cycle_.model().config().world_frame) {
@@ -275,7 +277,7 @@ int main(int argc, char** argv) {
   try {
     std::string config;
     if (!pnh.getParam("config", config)) throw std::invalid_argument("missing parameter _config:=<controller.yaml>");
-    const ehc_common::ConfigNode cfg = ehc_common::ConfigNode::loadFile(config, "ControllerNode");
+    const ConfigNode cfg = ConfigNode::loadFile(config, "ControllerNode");
     ControllerNode node(nh, pnh, cfg);
     cfg.rejectUnknownKeys();  // every loader has run: a key none of them read is a misspelling
     ros::spin();

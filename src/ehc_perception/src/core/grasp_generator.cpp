@@ -24,6 +24,9 @@
 #include <sstream>
 #include <stdexcept>
 
+using ehc_common::ConfigNode;
+using ehc_common::requireRange;
+
 namespace ehc_perception {
 
 namespace {
@@ -440,7 +443,7 @@ std::string num(double v) {
 
 void GraspGeneratorConfig::validate() const {
   auto range = [](const std::string& f, double v, double lo, double hi) {
-    ehc_common::requireRange(kOwner, f, v, lo, hi);
+    requireRange(kOwner, f, v, lo, hi);
   };
   const GripperGeometry& g = gripper;
   range("gripper.max_width", g.max_width, 0.005, 0.5);
@@ -516,9 +519,9 @@ std::string GraspGeneratorConfig::summary() const {
   return os.str();
 }
 
-GraspGeneratorConfig loadGraspGeneratorConfig(const ehc_common::ConfigNode& n) {
+GraspGeneratorConfig loadGraspGeneratorConfig(const ConfigNode& n) {
   GraspGeneratorConfig c;
-  const ehc_common::ConfigNode g = n.childOrEmpty("gripper");
+  const ConfigNode g = n.childOrEmpty("gripper");
   GripperGeometry& gg = c.gripper;
   gg.max_width = g.get("max_width", gg.max_width);
   gg.finger_length = g.get("finger_length", gg.finger_length);
@@ -1227,8 +1230,8 @@ GraspResult GraspGenerator::generateFromScene(const PointList& scene,
 }
 
 void GraspTargetingParams::validate() const {
-  ehc_common::requireRange("GraspTargeting", "max_rate_hz", max_rate_hz, 0.01, 100.0);
-  ehc_common::requireRange("GraspTargeting", "target_timeout", target_timeout, 0.0, 1e6);
+  requireRange("GraspTargeting", "max_rate_hz", max_rate_hz, 0.01, 100.0);
+  requireRange("GraspTargeting", "target_timeout", target_timeout, 0.0, 1e6);
   ehc_common::requirePositive("GraspTargeting", "target_gate", target_gate);
 }
 
@@ -1239,7 +1242,7 @@ std::string GraspTargetingParams::summary() const {
   return os.str();
 }
 
-GraspTargetingParams loadGraspTargetingParams(const ehc_common::ConfigNode& n) {
+GraspTargetingParams loadGraspTargetingParams(const ConfigNode& n) {
   GraspTargetingParams p;
   p.max_rate_hz = n.get("max_rate_hz", p.max_rate_hz);
   p.target_timeout = n.get("target_timeout", p.target_timeout);

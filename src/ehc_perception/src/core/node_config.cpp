@@ -5,14 +5,17 @@
 
 #include <stdexcept>
 
+using ehc_common::ConfigNode;
+using ehc_common::requireRange;
+
 namespace ehc_perception {
 
 // ---------------------------------------------------------------- ehc_tag_node
 
 void TagNodeConfig::validate() const {
   const char* o = "TagNodeConfig";
-  ehc_common::requireRange(o, "node.tf_timeout", tf_timeout, 0.0, 5.0);
-  ehc_common::requireRange(o, "node.image_queue", image_queue, 1, 100);
+  requireRange(o, "node.tf_timeout", tf_timeout, 0.0, 5.0);
+  requireRange(o, "node.image_queue", image_queue, 1, 100);
   if (world_frame.empty())
     throw std::invalid_argument(std::string("[") + o + "] parameter 'node.world_frame' must not be empty");
   detector.validate();
@@ -34,7 +37,7 @@ std::vector<std::string> TagNodeConfig::lockstepInputs() const {
 }
 
 TagNodeConfig loadTagNodeConfig(const std::string& path) {
-  const auto root = ehc_common::ConfigNode::loadFile(path, "TagNodeConfig");
+  const auto root = ConfigNode::loadFile(path, "TagNodeConfig");
   TagNodeConfig c;
   const auto n = root.childOrEmpty("node");
   c.image_topic = n.get("image_topic", c.image_topic);
@@ -57,8 +60,8 @@ TagNodeConfig loadTagNodeConfig(const std::string& path) {
 
 void GraspNodeConfig::validate() const {
   const char* o = "GraspNodeConfig";
-  ehc_common::requireRange(o, "node.tf_timeout", tf_timeout, 0.0, 5.0);
-  ehc_common::requireRange(o, "node.cloud_queue", cloud_queue, 1, 100);
+  requireRange(o, "node.tf_timeout", tf_timeout, 0.0, 5.0);
+  requireRange(o, "node.cloud_queue", cloud_queue, 1, 100);
   targeting.validate();
   generator.validate();
 }
@@ -76,7 +79,7 @@ std::vector<std::string> GraspNodeConfig::lockstepInputs() const {
 }
 
 GraspNodeConfig loadGraspNodeConfig(const std::string& path) {
-  const auto root = ehc_common::ConfigNode::loadFile(path, "GraspNodeConfig");
+  const auto root = ConfigNode::loadFile(path, "GraspNodeConfig");
   GraspNodeConfig c;
   const auto n = root.childOrEmpty("node");
   c.cloud_topic = n.get("cloud_topic", c.cloud_topic);
@@ -96,8 +99,8 @@ GraspNodeConfig loadGraspNodeConfig(const std::string& path) {
 
 void ObstacleNodeConfig::validate() const {
   const char* o = "ObstacleNodeConfig";
-  ehc_common::requireRange(o, "node.publish_rate_hz", publish_rate_hz, 0.1, 1000.0);
-  ehc_common::requireRange(o, "node.tf_timeout", tf_timeout, 0.0, 5.0);
+  requireRange(o, "node.publish_rate_hz", publish_rate_hz, 0.1, 1000.0);
+  requireRange(o, "node.tf_timeout", tf_timeout, 0.0, 5.0);
   monitor.validate();
   map.validate();
 }
@@ -116,7 +119,7 @@ std::vector<std::string> ObstacleNodeConfig::lockstepInputs() const {
 }
 
 ObstacleNodeConfig loadObstacleNodeConfig(const std::string& path) {
-  const auto root = ehc_common::ConfigNode::loadFile(path, "ObstacleNodeConfig");
+  const auto root = ConfigNode::loadFile(path, "ObstacleNodeConfig");
   ObstacleNodeConfig c;
   const auto n = root.child("node");
   c.robot_config = ehc_control::robotFileField(n, "robot_config");  // a robot name or a robot.yaml path

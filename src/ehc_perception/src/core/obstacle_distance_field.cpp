@@ -12,6 +12,8 @@
 #include <sstream>
 #include <stdexcept>
 
+using ehc_common::requireRange;
+
 namespace ehc_perception {
 
 using ehc_control::CollisionShape;
@@ -27,17 +29,17 @@ const char* kOwner = "ObstacleDistanceField";
 // ------------------------------------------------------------------------------ config
 
 void ObstacleMapConfig::validate() const {
-  ehc_common::requireRange(kOwner, "resolution", resolution, 0.005, 0.2);
-  ehc_common::requireRange(kOwner, "max_range", max_range, 0.1, 50.0);
-  ehc_common::requireRange(kOwner, "prob_hit", prob_hit, 0.5001, 0.9999);
-  ehc_common::requireRange(kOwner, "prob_miss", prob_miss, 0.0001, 0.4999);
-  ehc_common::requireRange(kOwner, "clamp_min", clamp_min, 0.0001, 0.4999);
-  ehc_common::requireRange(kOwner, "clamp_max", clamp_max, 0.5001, 0.9999);
-  ehc_common::requireRange(kOwner, "occupancy_threshold", occupancy_threshold, clamp_min,
+  requireRange(kOwner, "resolution", resolution, 0.005, 0.2);
+  requireRange(kOwner, "max_range", max_range, 0.1, 50.0);
+  requireRange(kOwner, "prob_hit", prob_hit, 0.5001, 0.9999);
+  requireRange(kOwner, "prob_miss", prob_miss, 0.0001, 0.4999);
+  requireRange(kOwner, "clamp_min", clamp_min, 0.0001, 0.4999);
+  requireRange(kOwner, "clamp_max", clamp_max, 0.5001, 0.9999);
+  requireRange(kOwner, "occupancy_threshold", occupancy_threshold, clamp_min,
                             clamp_max);
-  ehc_common::requireRange(kOwner, "min_height", min_height, -10.0, 10.0);
-  ehc_common::requireRange(kOwner, "self_filter_padding", self_filter_padding, 0.0, 0.5);
-  ehc_common::requireRange(kOwner, "influence_distance", influence_distance, resolution, 5.0);
+  requireRange(kOwner, "min_height", min_height, -10.0, 10.0);
+  requireRange(kOwner, "self_filter_padding", self_filter_padding, 0.0, 0.5);
+  requireRange(kOwner, "influence_distance", influence_distance, resolution, 5.0);
 }
 
 std::string ObstacleMapConfig::summary() const {

@@ -10,16 +10,18 @@
 #include <stdexcept>
 #include <unordered_set>
 
+using ehc_common::requireRange;
+
 namespace ehc_perception {
 
 void ObstacleMonitorParams::validate() const {
   const char* o = "ObstacleMonitorParams";
   ehc_common::requirePositive(o, "node.state_timeout", state_timeout);
-  ehc_common::requireRange(o, "node.exclusion_timeout", exclusion_timeout, 0.01, 10.0);
-  ehc_common::requireRange(o, "node.max_insert_rate_hz", max_insert_rate_hz, 0.01, 100.0);
-  ehc_common::requireRange(o, "node.cloud_voxel", cloud_voxel, 0.0, 1.0);
-  ehc_common::requireRange(o, "node.max_cloud_points", max_cloud_points, 1, 1000000);
-  ehc_common::requireRange(o, "node.points_per_update", points_per_update, 1, 1000000);
+  requireRange(o, "node.exclusion_timeout", exclusion_timeout, 0.01, 10.0);
+  requireRange(o, "node.max_insert_rate_hz", max_insert_rate_hz, 0.01, 100.0);
+  requireRange(o, "node.cloud_voxel", cloud_voxel, 0.0, 1.0);
+  requireRange(o, "node.max_cloud_points", max_cloud_points, 1, 1000000);
+  requireRange(o, "node.points_per_update", points_per_update, 1, 1000000);
 }
 
 std::string ObstacleMonitorParams::summary() const {

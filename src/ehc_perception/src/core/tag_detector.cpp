@@ -19,6 +19,9 @@
 #include <sstream>
 #include <stdexcept>
 
+using ehc_common::ConfigNode;
+using ehc_common::requireRange;
+
 namespace ehc_perception {
 
 namespace {
@@ -75,22 +78,22 @@ std::vector<std::string> TagDetectorConfig::poseMethodNames() {
 void TagDetectorConfig::validate() const {
   familyFromString(family);
   poseMethodFromString(pose_method);
-  ehc_common::requireRange(kOwner, "default_tag_size", default_tag_size, 1e-3, 5.0);
+  requireRange(kOwner, "default_tag_size", default_tag_size, 1e-3, 5.0);
   for (const auto& kv : tag_sizes) {
     if (kv.first < 0) fail("tag_sizes: tag id " + std::to_string(kv.first) + " is negative");
-    ehc_common::requireRange(kOwner, "tag_sizes[" + std::to_string(kv.first) + "]", kv.second,
+    requireRange(kOwner, "tag_sizes[" + std::to_string(kv.first) + "]", kv.second,
                               1e-3, 5.0);
   }
-  ehc_common::requireRange(kOwner, "quad_decimate", quad_decimate, 1.0, 8.0);
-  ehc_common::requireRange(kOwner, "threads", threads, 1, 64);
-  ehc_common::requireRange(kOwner, "roi_margin", roi_margin, 0, 10000);
-  ehc_common::requireRange(kOwner, "roi_full_frame_every", roi_full_frame_every, 1, 1000);
+  requireRange(kOwner, "quad_decimate", quad_decimate, 1.0, 8.0);
+  requireRange(kOwner, "threads", threads, 1, 64);
+  requireRange(kOwner, "roi_margin", roi_margin, 0, 10000);
+  requireRange(kOwner, "roi_full_frame_every", roi_full_frame_every, 1, 1000);
   ehc_common::requirePositive(kOwner, "max_reprojection_error", max_reprojection_error);
   if (!prior_tag_axis.allFinite() || prior_tag_axis.norm() < 1e-9)
     fail("pose_prior.tag_axis must be a finite, non-zero vector");
   if (!prior_world_direction.allFinite() || prior_world_direction.norm() < 1e-9)
     fail("pose_prior.world_direction must be a finite, non-zero vector");
-  ehc_common::requireRange(kOwner, "pose_prior.ambiguity_margin", ambiguity_margin, 0.0,
+  requireRange(kOwner, "pose_prior.ambiguity_margin", ambiguity_margin, 0.0,
                             max_reprojection_error);
 }
 
@@ -110,7 +113,7 @@ std::string TagDetectorConfig::summary() const {
   return os.str();
 }
 
-TagDetectorConfig loadTagDetectorConfig(const ehc_common::ConfigNode& n) {
+TagDetectorConfig loadTagDetectorConfig(const ConfigNode& n) {
   TagDetectorConfig c;
   c.family = n.get<std::string>("family", c.family);
   c.default_tag_size = n.get<double>("default_tag_size", c.default_tag_size);
@@ -138,7 +141,7 @@ TagDetectorConfig loadTagDetectorConfig(const ehc_common::ConfigNode& n) {
   c.pose_method = n.get<std::string>("pose_method", c.pose_method);
   c.max_reprojection_error = n.get<double>("max_reprojection_error", c.max_reprojection_error);
   if (n.has("pose_prior")) {
-    const ehc_common::ConfigNode p = n.child("pose_prior");
+    const ConfigNode p = n.child("pose_prior");
     c.prior_tag_axis = p.getVector("tag_axis", c.prior_tag_axis, 3);
     c.prior_world_direction = p.getVector("world_direction", c.prior_world_direction, 3);
     c.ambiguity_margin = p.get<double>("ambiguity_margin", c.ambiguity_margin);
@@ -427,11 +430,11 @@ std::string TagTargetConfig::summary() const {
   return os.str();
 }
 
-TagTargetConfig loadTagTargetConfig(const ehc_common::ConfigNode& n) {
+TagTargetConfig loadTagTargetConfig(const ConfigNode& n) {
   TagTargetConfig t;
   t.tag_id = n.get<int>("tag_id", t.tag_id);
   if (n.has("grasp_offset")) {
-    const ehc_common::ConfigNode g = n.child("grasp_offset");
+    const ConfigNode g = n.child("grasp_offset");
     t.offset_xyz = g.getVector("xyz", t.offset_xyz, 3);
     t.offset_rpy = g.getVector("rpy", t.offset_rpy, 3);
   }

@@ -10,6 +10,8 @@
 #include <sstream>
 #include <stdexcept>
 
+using ehc_common::requireRange;
+
 namespace ehc_realman {
 
 namespace {
@@ -32,15 +34,15 @@ double uniformScale(const Eigen::VectorXd& x, const Eigen::VectorXd& bound) {
 
 void JointStreamerConfig::validate() const {
   const std::string o = "JointStreamerConfig";
-  ehc_common::requireRange(o, "rate_hz", rate_hz, 1.0, 1000.0);
-  ehc_common::requireRange(o, "max_step_deg", max_step_deg, 0.01, 10.0);
-  ehc_common::requireRange(o, "driver_max_speed_deg", driver_max_speed_deg, 1.0, 180.0);
-  ehc_common::requireRange(o, "speed_scale", speed_scale, 1e-3, 1.0);
-  ehc_common::requireRange(o, "command_timeout", command_timeout, 1e-3, 5.0);
-  ehc_common::requireRange(o, "hold_duration", hold_duration, 0.0, 60.0);
-  ehc_common::requireRange(o, "state_timeout", state_timeout, 1e-3, 5.0);
-  ehc_common::requireRange(o, "max_tracking_error", max_tracking_error, 1e-3, 1.0);
-  ehc_common::requireRange(o, "limit_margin", limit_margin, 0.0, 0.5);
+  requireRange(o, "rate_hz", rate_hz, 1.0, 1000.0);
+  requireRange(o, "max_step_deg", max_step_deg, 0.01, 10.0);
+  requireRange(o, "driver_max_speed_deg", driver_max_speed_deg, 1.0, 180.0);
+  requireRange(o, "speed_scale", speed_scale, 1e-3, 1.0);
+  requireRange(o, "command_timeout", command_timeout, 1e-3, 5.0);
+  requireRange(o, "hold_duration", hold_duration, 0.0, 60.0);
+  requireRange(o, "state_timeout", state_timeout, 1e-3, 5.0);
+  requireRange(o, "max_tracking_error", max_tracking_error, 1e-3, 1.0);
+  requireRange(o, "limit_margin", limit_margin, 0.0, 0.5);
 }
 
 void ArmJointLimits::validate() const {
@@ -246,11 +248,11 @@ std::string JointPositionStreamer::summary() const {
 // ------------------------------------------------------------------ gripper
 void GripperConfig::validate() const {
   const std::string o = "GripperConfig";
-  ehc_common::requireRange(o, "max_opening", max_opening, 1e-3, 1.0);
-  ehc_common::requireRange(o, "open_position", open_position, 1, 1000);
-  ehc_common::requireRange(o, "close_position", close_position, 1, 1000);
-  ehc_common::requireRange(o, "pick_speed", pick_speed, 1, 1000);
-  ehc_common::requireRange(o, "pick_force", pick_force, 1, 1000);
+  requireRange(o, "max_opening", max_opening, 1e-3, 1.0);
+  requireRange(o, "open_position", open_position, 1, 1000);
+  requireRange(o, "close_position", close_position, 1, 1000);
+  requireRange(o, "pick_speed", pick_speed, 1, 1000);
+  requireRange(o, "pick_force", pick_force, 1, 1000);
 }
 
 GripperRequest gripperRequestFromCommand(const std::string& command, const GripperConfig& config) {

@@ -10,6 +10,8 @@
 #include <stdexcept>
 #include <thread>
 
+using ehc_common::requireRange;
+
 namespace ehc_realman {
 
 namespace {
@@ -39,25 +41,24 @@ void integrateUnicycle(double& x, double& y, double& theta, double v, double w, 
 
 // ------------------------------------------------------------------ config
 void Water2BridgeConfig::validate() const {
-  using ehc_common::requireRange;
   if (host.empty()) throw std::invalid_argument(std::string("[") + kOwner + "] host is empty");
-  ehc_common::requireRange(kOwner, "port", port, 1, 65535);
-  ehc_common::requireRange(kOwner, "connect_timeout", connect_timeout, 0.01, 10.0);
-  ehc_common::requireRange(kOwner, "max_linear_velocity", max_linear_velocity, 0.0, 0.5);
-  ehc_common::requireRange(kOwner, "max_angular_velocity", max_angular_velocity, 0.0, 1.0);
-  ehc_common::requireRange(kOwner, "resend_rate_hz", resend_rate_hz, 10.0, 100.0);
-  ehc_common::requireRange(kOwner, "command_timeout", command_timeout, 0.01, 0.5);
-  ehc_common::requireRange(kOwner, "stop_repeat_duration", stop_repeat_duration, 0.0, 10.0);
-  ehc_common::requireRange(kOwner, "status_period", status_period, 0.05, 10.0);
-  ehc_common::requireRange(kOwner, "status_timeout", status_timeout, status_period, 60.0);
-  ehc_common::requireRange(kOwner, "max_extrapolation", max_extrapolation, 0.0, 5.0);
+  requireRange(kOwner, "port", port, 1, 65535);
+  requireRange(kOwner, "connect_timeout", connect_timeout, 0.01, 10.0);
+  requireRange(kOwner, "max_linear_velocity", max_linear_velocity, 0.0, 0.5);
+  requireRange(kOwner, "max_angular_velocity", max_angular_velocity, 0.0, 1.0);
+  requireRange(kOwner, "resend_rate_hz", resend_rate_hz, 10.0, 100.0);
+  requireRange(kOwner, "command_timeout", command_timeout, 0.01, 0.5);
+  requireRange(kOwner, "stop_repeat_duration", stop_repeat_duration, 0.0, 10.0);
+  requireRange(kOwner, "status_period", status_period, 0.05, 10.0);
+  requireRange(kOwner, "status_timeout", status_timeout, status_period, 60.0);
+  requireRange(kOwner, "max_extrapolation", max_extrapolation, 0.0, 5.0);
   base_response.validate(kOwner, "base_response.");
-  ehc_common::requireRange(kOwner, "reply_timeout", reply_timeout, status_period, 60.0);
-  ehc_common::requireRange(kOwner, "backoff_initial", backoff_initial, 0.01, 60.0);
-  ehc_common::requireRange(kOwner, "backoff_max", backoff_max, backoff_initial, 600.0);
-  ehc_common::requireRange(kOwner, "max_object_bytes", max_object_bytes, 256, 16 * 1024 * 1024);
-  ehc_common::requireRange(kOwner, "odom_rate_hz", odom_rate_hz, 1.0, 1000.0);
-  ehc_common::requireRange(kOwner, "status_rate_hz", status_rate_hz, 0.1, 100.0);
+  requireRange(kOwner, "reply_timeout", reply_timeout, status_period, 60.0);
+  requireRange(kOwner, "backoff_initial", backoff_initial, 0.01, 60.0);
+  requireRange(kOwner, "backoff_max", backoff_max, backoff_initial, 600.0);
+  requireRange(kOwner, "max_object_bytes", max_object_bytes, 256, 16 * 1024 * 1024);
+  requireRange(kOwner, "odom_rate_hz", odom_rate_hz, 1.0, 1000.0);
+  requireRange(kOwner, "status_rate_hz", status_rate_hz, 0.1, 100.0);
   if (odom_frame.empty() || base_frame.empty() || odom_frame == base_frame)
     throw std::invalid_argument(std::string("[") + kOwner +
                                 "] odom_frame and base_frame must be set and differ");

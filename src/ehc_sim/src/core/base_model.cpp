@@ -8,6 +8,8 @@
 #include <sstream>
 #include <stdexcept>
 
+using ehc_common::requireRange;
+
 namespace ehc_sim {
 
 using ehc_common::ConfigNode;
@@ -32,18 +34,18 @@ BaseModelType baseModelTypeFromString(const std::string& name) {
 // ------------------------------------------------------------------ parameters
 void Water2BaseParams::validate() const {
   const char* o = "Water2BaseParams";
-  ehc_common::requireRange(o, "max_linear_velocity", max_linear_velocity, 1e-3, 0.5);
-  ehc_common::requireRange(o, "max_angular_velocity", max_angular_velocity, 1e-3, 1.0);
-  ehc_common::requireRange(o, "resend_rate", resend_rate, 10.0, 1000.0);  // >= 10 Hz: 0.5 s hold
-  ehc_common::requireRange(o, "bridge_command_timeout", bridge_command_timeout, 1e-3, 10.0);
-  ehc_common::requireRange(o, "status_period", status_period, 1e-3, 1.0);
-  ehc_common::requireRange(o, "max_extrapolation", max_extrapolation, 0.0, 10.0);
+  requireRange(o, "max_linear_velocity", max_linear_velocity, 1e-3, 0.5);
+  requireRange(o, "max_angular_velocity", max_angular_velocity, 1e-3, 1.0);
+  requireRange(o, "resend_rate", resend_rate, 10.0, 1000.0);  // >= 10 Hz: 0.5 s hold
+  requireRange(o, "bridge_command_timeout", bridge_command_timeout, 1e-3, 10.0);
+  requireRange(o, "status_period", status_period, 1e-3, 1.0);
+  requireRange(o, "max_extrapolation", max_extrapolation, 0.0, 10.0);
   response.validate(o);
   if (bridge_response) bridge_response->validate(o, "bridge_response.");
-  ehc_common::requireRange(o, "status_latency", status_latency, 0.0, 1.0);
-  ehc_common::requireRange(o, "localisation_position_sigma", localisation_position_sigma, 0.0, 1.0);
-  ehc_common::requireRange(o, "localisation_heading_sigma", localisation_heading_sigma, 0.0, 1.0);
-  ehc_common::requireRange(o, "localisation_correlation_time", localisation_correlation_time, 1e-3, 1e6);
+  requireRange(o, "status_latency", status_latency, 0.0, 1.0);
+  requireRange(o, "localisation_position_sigma", localisation_position_sigma, 0.0, 1.0);
+  requireRange(o, "localisation_heading_sigma", localisation_heading_sigma, 0.0, 1.0);
+  requireRange(o, "localisation_correlation_time", localisation_correlation_time, 1e-3, 1e6);
   if (status_period + status_latency >= bridgeDefaults().status_timeout)
     throw std::invalid_argument("[Water2BaseParams] status_period + status_latency must be below the "
                                 "bridge's status_timeout (" +

@@ -9,9 +9,10 @@
 #include <sstream>
 #include <stdexcept>
 
+using ehc_common::ConfigNode;
+
 namespace ehc_sim {
 
-using ehc_common::ConfigNode;
 
 std::int64_t FakeRobotConfig::dtNs() const { return static_cast<std::int64_t>(std::llround(dt * 1e9)); }
 
@@ -45,7 +46,7 @@ std::string FakeRobotConfig::summary() const {
   return os.str();
 }
 
-ActuationNoise loadActuationNoise(const ehc_common::ConfigNode& n) {
+ActuationNoise loadActuationNoise(const ConfigNode& n) {
   ActuationNoise a;
   a.enabled = n.get<bool>("enabled", a.enabled);
   a.base_translation = n.get<double>("base_translation", a.base_translation);
@@ -58,11 +59,11 @@ ActuationNoise loadActuationNoise(const ehc_common::ConfigNode& n) {
   return a;
 }
 
-Eigen::Vector3d loadBasePose(const ehc_common::ConfigNode& n) {
+Eigen::Vector3d loadBasePose(const ConfigNode& n) {
   return Eigen::Vector3d(n.get<double>("x", 0.0), n.get<double>("y", 0.0), n.get<double>("yaw", 0.0));
 }
 
-FakeRobotConfig loadFakeRobotConfig(const ehc_common::ConfigNode& s) {
+FakeRobotConfig loadFakeRobotConfig(const ConfigNode& s) {
   // The kinematic simulator's former keys: an error naming the replacement, never ignored.
   static const std::pair<const char*, const char*> kReplaced[] = {
       {"lockstep", "was replaced by sim.free_run (free_run: false = lock-step)"},
@@ -107,7 +108,7 @@ FakeRobotConfig loadFakeRobotConfig(const ehc_common::ConfigNode& s) {
 }
 
 FakeRobotConfig loadFakeRobotConfigFile(const std::string& path) {
-  const ehc_common::ConfigNode root = ehc_common::ConfigNode::loadFile(path, "FakeRobotConfig");
+  const ConfigNode root = ConfigNode::loadFile(path, "FakeRobotConfig");
   if (root.has("robot")) root.fail("robot", "was moved to sim.robot");
   FakeRobotConfig c = loadFakeRobotConfig(root.child("sim"));  // the former keys fail here, with their replacement
   root.rejectUnknownKeys();  // a Bullet simulator key, or a typo

@@ -8,9 +8,10 @@
 #include <sstream>
 #include <stdexcept>
 
+using ehc_common::ConfigNode;
+
 namespace ehc_sim {
 
-using ehc_common::ConfigNode;
 
 namespace {
 const char* kOwner = "SceneConfig";
@@ -25,7 +26,7 @@ Eigen::Isometry3d poseFromXyzRpy(const Eigen::Vector3d& xyz, const Eigen::Vector
   return T;
 }
 
-Face faceFromString(const ehc_common::ConfigNode& n, const std::string& key, const std::string& s) {
+Face faceFromString(const ConfigNode& n, const std::string& key, const std::string& s) {
   if (s == "+x") return Face::PosX;
   if (s == "-x") return Face::NegX;
   if (s == "+y") return Face::PosY;
@@ -35,13 +36,13 @@ Face faceFromString(const ehc_common::ConfigNode& n, const std::string& key, con
   n.fail(key, "must be one of +x, -x, +y, -y, +z, -z (got '" + s + "')");
 }
 
-ShapeType shapeFromString(const ehc_common::ConfigNode& n, const std::string& key, const std::string& s) {
+ShapeType shapeFromString(const ConfigNode& n, const std::string& key, const std::string& s) {
   if (s == "box") return ShapeType::Box;
   if (s == "cylinder") return ShapeType::Cylinder;
   n.fail(key, "must be 'box' or 'cylinder' (got '" + s + "')");
 }
 
-void checkRange(const ehc_common::ConfigNode& n, const std::string& key, double v, double lo, double hi) {
+void checkRange(const ConfigNode& n, const std::string& key, double v, double lo, double hi) {
   if (!(v >= lo && v <= hi)) {
     std::ostringstream os;
     os << "= " << v << " is outside [" << lo << ", " << hi << "]";
@@ -49,7 +50,7 @@ void checkRange(const ehc_common::ConfigNode& n, const std::string& key, double 
   }
 }
 
-BodyConfig loadBody(const ehc_common::ConfigNode& n, bool dynamic, int default_shade) {
+BodyConfig loadBody(const ConfigNode& n, bool dynamic, int default_shade) {
   BodyConfig b;
   b.name = n.require<std::string>("name");
   b.shape = shapeFromString(n, "shape", n.get<std::string>("shape", "box"));
@@ -76,7 +77,7 @@ BodyConfig loadBody(const ehc_common::ConfigNode& n, bool dynamic, int default_s
   b.shade = n.get<int>("shade", default_shade);
   checkRange(n, "shade", b.shade, 0, 255);
   if (n.has("tag")) {
-    const ehc_common::ConfigNode t = n.child("tag");
+    const ConfigNode t = n.child("tag");
     b.tag.enabled = true;
     b.tag.id = t.require<int>("id");
     checkRange(t, "id", b.tag.id, 0, 586);
@@ -106,7 +107,7 @@ BodyConfig loadBody(const ehc_common::ConfigNode& n, bool dynamic, int default_s
   return b;
 }
 
-TableConfig loadTable(const ehc_common::ConfigNode& n) {
+TableConfig loadTable(const ConfigNode& n) {
   TableConfig t;
   t.name = n.require<std::string>("name");
   t.size = n.requireVector("size", 2);
@@ -127,14 +128,14 @@ TableConfig loadTable(const ehc_common::ConfigNode& n) {
   return t;
 }
 
-SceneConfig loadScene(const ehc_common::ConfigNode& root) {
-  const ehc_common::ConfigNode s = root.child("scene");
+SceneConfig loadScene(const ConfigNode& root) {
+  const ConfigNode s = root.child("scene");
   SceneConfig c;
   c.source_file = root.file();
   c.name = s.get<std::string>("name", c.name);
   if (s.has("robot_start")) c.robot_start = loadBasePose(s.child("robot_start"));
   if (s.has("floor")) {
-    const ehc_common::ConfigNode f = s.child("floor");
+    const ConfigNode f = s.child("floor");
     c.floor_shade = f.get<int>("shade", c.floor_shade);
     checkRange(f, "shade", c.floor_shade, 0, 255);
     c.floor_friction = f.get<double>("friction", c.floor_friction);
@@ -256,11 +257,11 @@ int SceneConfig::objectIndex(const std::string& n) const {
 }
 
 SceneConfig loadSceneConfig(const std::string& path) {
-  return loadScene(ehc_common::ConfigNode::loadFile(path, kOwner));
+  return loadScene(ConfigNode::loadFile(path, kOwner));
 }
 
 SceneConfig loadSceneConfigString(const std::string& text, const std::string& origin) {
-  return loadScene(ehc_common::ConfigNode::loadString(text, origin, kOwner));
+  return loadScene(ConfigNode::loadString(text, origin, kOwner));
 }
 
 Eigen::Isometry3d tagPoseInBody(const BodyConfig& body) {

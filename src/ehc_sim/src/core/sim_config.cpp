@@ -6,43 +6,44 @@
 #include <sstream>
 #include <stdexcept>
 
-namespace ehc_sim {
-
 using ehc_common::ConfigNode;
 using ehc_common::requireRange;
 
+namespace ehc_sim {
+
+
 void CollisionConfig::validate() const {
-  ehc_common::requireRange("CollisionConfig", "sim.collision.tolerance", tolerance, 0.0, 0.05);
+  requireRange("CollisionConfig", "sim.collision.tolerance", tolerance, 0.0, 0.05);
   self_collision.validate();
 }
 
 void GripperConfig::validate() const {
-  ehc_common::requireRange("GripperConfig", "sim.gripper.speed", speed, 1e-3, 1.0);
-  ehc_common::requireRange("GripperConfig", "sim.gripper.contact_tolerance", contact_tolerance, 0.0, 0.01);
-  ehc_common::requireRange("GripperConfig", "sim.gripper.lift_height", lift_height, 0.005, 1.0);
+  requireRange("GripperConfig", "sim.gripper.speed", speed, 1e-3, 1.0);
+  requireRange("GripperConfig", "sim.gripper.contact_tolerance", contact_tolerance, 0.0, 0.01);
+  requireRange("GripperConfig", "sim.gripper.lift_height", lift_height, 0.005, 1.0);
 }
 
 void SimulatedCameraConfig::validate() const {
   const char* o = "SimulatedCameraConfig";
-  ehc_common::requireRange(o, "sim.camera.image_rate", image_rate, 0.0, 200.0);
-  ehc_common::requireRange(o, "sim.camera.cloud_rate", cloud_rate, 0.0, 200.0);
-  ehc_common::requireRange(o, "sim.camera.ray_cols", ray_cols, 2, 1280);
-  ehc_common::requireRange(o, "sim.camera.ray_rows", ray_rows, 2, 960);
-  ehc_common::requireRange(o, "sim.camera.min_range", min_range, 0.0, 10.0);
-  ehc_common::requireRange(o, "sim.camera.max_range", max_range, 0.1, 100.0);
+  requireRange(o, "sim.camera.image_rate", image_rate, 0.0, 200.0);
+  requireRange(o, "sim.camera.cloud_rate", cloud_rate, 0.0, 200.0);
+  requireRange(o, "sim.camera.ray_cols", ray_cols, 2, 1280);
+  requireRange(o, "sim.camera.ray_rows", ray_rows, 2, 960);
+  requireRange(o, "sim.camera.min_range", min_range, 0.0, 10.0);
+  requireRange(o, "sim.camera.max_range", max_range, 0.1, 100.0);
   if (!(min_range < max_range))
     throw std::invalid_argument("[SimulatedCameraConfig] sim.camera.min_range must be < max_range");
-  ehc_common::requireRange(o, "sim.camera.depth_noise_base", depth_noise_base, 0.0, 0.1);
-  ehc_common::requireRange(o, "sim.camera.depth_noise_quadratic", depth_noise_quadratic, 0.0, 0.1);
-  ehc_common::requireRange(o, "sim.camera.image_noise", image_noise, 0.0, 50.0);
-  ehc_common::requireRange(o, "sim.camera.background", background, -1, 255);
-  ehc_common::requireRange(o, "sim.camera.tag_pixels_per_cell", tag_pixels_per_cell, 1, 64);
+  requireRange(o, "sim.camera.depth_noise_base", depth_noise_base, 0.0, 0.1);
+  requireRange(o, "sim.camera.depth_noise_quadratic", depth_noise_quadratic, 0.0, 0.1);
+  requireRange(o, "sim.camera.image_noise", image_noise, 0.0, 50.0);
+  requireRange(o, "sim.camera.background", background, -1, 255);
+  requireRange(o, "sim.camera.tag_pixels_per_cell", tag_pixels_per_cell, 1, 64);
 }
 
 void SimConfig::validate() const {
   const char* o = "SimConfig";
   fake_robot.validate();
-  ehc_common::requireRange(o, "sim.max_physics_substep", max_physics_substep, 1e-4, 0.02);
+  requireRange(o, "sim.max_physics_substep", max_physics_substep, 1e-4, 0.02);
   collision.validate();
   gripper.validate();
   camera.validate();
@@ -76,7 +77,7 @@ std::string simCameraFile(const SimConfig& sim, const ehc_control::RobotConfig& 
   return f;
 }
 
-CollisionConfig loadCollisionConfig(const ehc_common::ConfigNode& n) {
+CollisionConfig loadCollisionConfig(const ConfigNode& n) {
   CollisionConfig c;
   c.tolerance = n.get<double>("tolerance", c.tolerance);
   if (c.tolerance < 0.0 || c.tolerance > 0.05) n.fail("tolerance", "must be in [0, 0.05] m");
@@ -88,7 +89,7 @@ CollisionConfig loadCollisionConfig(const ehc_common::ConfigNode& n) {
   return c;
 }
 
-GripperConfig loadGripperConfig(const ehc_common::ConfigNode& n) {
+GripperConfig loadGripperConfig(const ConfigNode& n) {
   GripperConfig g;
   g.speed = n.get<double>("speed", g.speed);
   if (!(g.speed > 0.0 && g.speed <= 1.0)) n.fail("speed", "must be in (0, 1] m/s");
@@ -101,7 +102,7 @@ GripperConfig loadGripperConfig(const ehc_common::ConfigNode& n) {
   return g;
 }
 
-SimulatedCameraConfig loadSimulatedCameraConfig(const ehc_common::ConfigNode& n) {
+SimulatedCameraConfig loadSimulatedCameraConfig(const ConfigNode& n) {
   SimulatedCameraConfig c;
   c.image_rate = n.get<double>("image_rate", c.image_rate);
   c.cloud_rate = n.get<double>("cloud_rate", c.cloud_rate);
@@ -115,7 +116,7 @@ SimulatedCameraConfig loadSimulatedCameraConfig(const ehc_common::ConfigNode& n)
   c.min_range = n.get<double>("min_range", c.min_range);
   c.max_range = n.get<double>("max_range", c.max_range);
   if (n.has("depth_noise")) {
-    const ehc_common::ConfigNode d = n.child("depth_noise");
+    const ConfigNode d = n.child("depth_noise");
     c.depth_noise_base = d.get<double>("base", c.depth_noise_base);
     c.depth_noise_quadratic = d.get<double>("quadratic", c.depth_noise_quadratic);
     if (c.depth_noise_base < 0 || c.depth_noise_base > 0.1) d.fail("base", "must be in [0, 0.1] m");
@@ -138,8 +139,8 @@ SimulatedCameraConfig loadSimulatedCameraConfig(const ehc_common::ConfigNode& n)
 }
 
 namespace {
-SimConfig loadSim(const ehc_common::ConfigNode& root) {
-  const ehc_common::ConfigNode s = root.child("sim");
+SimConfig loadSim(const ConfigNode& root) {
+  const ConfigNode s = root.child("sim");
   SimConfig c;
   c.source_file = root.file();
   c.fake_robot = loadFakeRobotConfig(s);
@@ -161,11 +162,11 @@ SimConfig loadSim(const ehc_common::ConfigNode& root) {
 }  // namespace
 
 SimConfig loadSimConfig(const std::string& path) {
-  return loadSim(ehc_common::ConfigNode::loadFile(path, "SimConfig"));
+  return loadSim(ConfigNode::loadFile(path, "SimConfig"));
 }
 
 SimConfig loadSimConfigString(const std::string& text, const std::string& origin) {
-  return loadSim(ehc_common::ConfigNode::loadString(text, origin, "SimConfig"));
+  return loadSim(ConfigNode::loadString(text, origin, "SimConfig"));
 }
 
 }  // namespace ehc_sim

@@ -20,6 +20,8 @@
 #include <limits>
 #include <stdexcept>
 
+using ehc_common::requireRange;
+
 namespace ehc_sim {
 
 namespace {
@@ -111,10 +113,10 @@ SimulatedCamera::SimulatedCamera(const ehc_control::PinholeCamera& intrinsics,
     : intrinsics_(intrinsics), cfg_(cfg), impl_(std::make_unique<Impl>()) {
   intrinsics_.validate();
   // The simulator's own limits on the camera it renders.
-  ehc_common::requireRange("SimulatedCamera", "image_width", intrinsics_.width, 16, 8192);
-  ehc_common::requireRange("SimulatedCamera", "image_height", intrinsics_.height, 16, 8192);
-  ehc_common::requireRange("SimulatedCamera", "fx", intrinsics_.fx, 1.0, 1e5);
-  ehc_common::requireRange("SimulatedCamera", "fy", intrinsics_.fy, 1.0, 1e5);
+  requireRange("SimulatedCamera", "image_width", intrinsics_.width, 16, 8192);
+  requireRange("SimulatedCamera", "image_height", intrinsics_.height, 16, 8192);
+  requireRange("SimulatedCamera", "fx", intrinsics_.fx, 1.0, 1e5);
+  requireRange("SimulatedCamera", "fy", intrinsics_.fy, 1.0, 1e5);
   cfg_.validate();
   impl_->cam.initPersProjWithoutDistortion(intrinsics_.fx, intrinsics_.fy, intrinsics_.cx,
                                            intrinsics_.cy);
