@@ -56,3 +56,26 @@ TEST(ExperimentCli, ReachTakesTheProtocolAndTheBaseModel) {
   EXPECT_EQ(bad.code, 2);
   EXPECT_NE(bad.out.find("--protocol:"), std::string::npos) << bad.out;
 }
+
+TEST(ExperimentCli, ReachTakesTheTargetGeneratorAndItsFields) {
+  const std::string out = "/tmp/ehc_cli_exp_generator";
+  const std::string base = std::string("reach --robot ") + EHC_CONFIG_DIR +
+                           "/robots/realman_rm65_water2/robot.yaml --method neo_e --sets 1 --points 1 --out " + out + " ";
+  const Result any = run(base + "--generator any --max-distance 2.5");
+  ASSERT_EQ(any.code, 0) << any.out;
+  FILE* f = std::fopen((out + "/table.md").c_str(), "r");
+  ASSERT_NE(f, nullptr);
+  std::string table;
+  std::array<char, 4096> buf{};
+  while (std::fgets(buf.data(), buf.size(), f)) table += buf.data();
+  std::fclose(f);
+  // The table names the distribution it was measured on, with the overridden field.
+  EXPECT_NE(table.find("targets 0-2.5 m apart"), std::string::npos) << table;
+  EXPECT_NE(table.find("tilt sphere up to 180 deg"), std::string::npos) << table;
+  const Result unknown = run(base + "--generator everywhere");
+  EXPECT_EQ(unknown.code, 2);
+  EXPECT_NE(unknown.out.find("--generator"), std::string::npos) << unknown.out;
+  const Result bad = run(base + "--min-distance 3 --max-distance 2");
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.out.find("min_distance"), std::string::npos) << bad.out;
+}
