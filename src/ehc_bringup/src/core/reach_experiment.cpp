@@ -48,6 +48,7 @@ void ReachExperimentParams::validate() const {
   auto bad = [](const std::string& w) { throw std::invalid_argument("[ReachExperiment] " + w); };
   if (!(control_rate >= 1.0 && control_rate <= 10000.0)) bad("control_rate must be in [1, 10000] Hz");
   if (!(time_limit > 0.0)) bad("time_limit must be > 0");
+  if (first_set < 0) bad("first_set must be >= 0");
   if (!(distant_threshold > 0.0)) bad("distant_threshold must be > 0");
   if (!(arrival_position > 0.0 && arrival_orientation > 0.0)) bad("arrival tolerances must be > 0");
   if (!(progress_window > 0.0 && progress_position > 0.0 && progress_orientation > 0.0))
@@ -219,17 +220,18 @@ ReachSummary ReachExperiment::run(const std::vector<std::vector<Eigen::Isometry3
   s.min_joint_limit_margin = 1e9;
   ControlCycle cycle(model_, weighting_, cycle_params_);
   for (std::size_t si = 0; si < sets.size(); ++si) {
-    const unsigned set_seed = seed + static_cast<unsigned>(si);
+    const int set_number = params_.first_set + static_cast<int>(si);
+    const unsigned set_seed = seed + static_cast<unsigned>(set_number);
     ehc_sim::KinematicFakeRobot robot(model_->config(), params_.noise, set_seed, params_.base_model);
     robot.reset(Eigen::Vector3d::Zero(), model_->config().arm_ready, set_seed);
     for (std::size_t ti = 0; ti < sets[si].size(); ++ti) {
       if (params_.protocol == ReachProtocol::Reset && ti > 0)  // a fresh noise stream per target
         robot.reset(Eigen::Vector3d::Zero(), model_->config().arm_ready, set_seed * 1000u + static_cast<unsigned>(ti));
-      trace_set_ = static_cast<int>(si);
+      trace_set_ = set_number;
       trace_index_ = static_cast<int>(ti);
       ReachTrial t = reach(robot, cycle, sets[si][ti], distant, close, step_us);
       t.method = s.method;
-      t.set = static_cast<int>(si);
+      t.set = set_number;
       t.index = static_cast<int>(ti);
       ++s.targets;
       if (t.reached) {

@@ -37,6 +37,8 @@ const char* kUsage =
     "                                          its default parameters; the controller sees its odometry)\n"
     "           [--config controller.yaml] [--map reachability_map.bin] [--trace cycles.csv]\n"
     "           [--protocol sequence|reset]   (reset: every target from the ready pose at the origin)\n"
+    "           [--first-set K]   (number of the first set: runs sets K..K+sets-1; set k's targets and noise\n"
+    "                              depend only on the seed and k, so one set of a run reruns alone)\n"
     "           [--all-targets]   (keep generated targets no whole-body IK solution reaches)\n"
     "           [--generator paper|any]   (target distribution: paper = 1.5-4 m apart, approach within +-45 deg\n"
     "                                      of the travel direction; any = 0-7 m apart, approach from any direction)\n"
@@ -51,7 +53,7 @@ const char* kUsage =
 
 struct Args {
   std::string command, robot, method = "ehc", out, targets_csv, config, map, trace;
-  int sets = 10, points = 50;
+  int sets = 10, points = 50, first_set = 0;
   unsigned seed = 1;
   bool noise = true;
   ehc_sim::BaseModelType base_model = ehc_sim::BaseModelType::Ideal;
@@ -84,13 +86,14 @@ Args parse(int argc, char** argv) {
                                      {"robot", "method", "out", "sets", "points", "seed", "targets",
                                       "config", "map", "trace", "noise", "base-model", "protocol", "generator",
                                       "min-distance", "max-distance", "min-height", "max-height", "max-tilt",
-                                      "azimuth-spread", "tilt-sampling"},
+                                      "azimuth-spread", "tilt-sampling", "first-set"},
                                      {"all-targets"}, /*first=*/2);
   a.robot = ehc_control::resolveRobotFile(cli.text("robot"));  // a robot name or a robot.yaml
   a.out = cli.text("out");
   a.method = cli.text("method", a.method);
   a.sets = static_cast<int>(cli.integer("sets", a.sets, 1, 1000000));
   a.points = static_cast<int>(cli.integer("points", a.points, 1, 1000000));
+  a.first_set = static_cast<int>(cli.integer("first-set", a.first_set, 0, 1000000));
   a.seed = static_cast<unsigned>(cli.integer("seed", a.seed, 0, 4294967295L));
   a.targets_csv = cli.text("targets", "");
   a.config = cli.text("config", "");
@@ -203,6 +206,7 @@ int main(int argc, char** argv) {
     ep.noise.enabled = a.noise;
     ep.base_model.type = a.base_model;
     ep.protocol = a.protocol;
+    ep.first_set = a.first_set;
     ep.arrival_position = ctrl.arrival_position;
     ep.arrival_orientation = ctrl.arrival_orientation;
 
@@ -225,7 +229,7 @@ int main(int argc, char** argv) {
       // floor for a 0.61 m arm on a 0.6 m base), or only with a joint inside the controller's
       // joint stop, are redrawn unless --all-targets.
       auto reachable = [&](const Eigen::Isometry3d& T) { return ehc_bringup::kinematicallyReachable(*model, T, ctrl.joint_stop); };
-      for (int s = 0; s < a.sets; ++s) {
+      for (int s = a.first_set; s < a.first_set + a.sets; ++s) {
         int rejected = 0;
         sets.push_back(gen.generate(a.points, a.seed * 1000u + static_cast<unsigned>(s), Eigen::Vector2d::Zero(),
                                     a.all_targets ? std::function<bool(const Eigen::Isometry3d&)>() : reachable, &rejected));
