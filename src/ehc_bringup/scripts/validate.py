@@ -3,7 +3,7 @@
 
   validate.py --out DIR [--seed S] [--robots all|NAME,...] [--generators paper,any]
               [--methods neo_c,neo_e,ehc] [--sets 4] [--points 50] [--jobs 2] [--bar 0.002]
-              [--devel devel]
+              [--devel devel] [--config controller.yaml]
 
 Draws a fresh random seed per run (or takes --seed) and prints it first, so that the whole run
 reproduces; then runs `ehc_experiment reach` (noise on, back to back, ideal base) for every
@@ -66,6 +66,7 @@ def parse_args(argv):
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--bar", type=float, default=1.0 / 500.0)
     ap.add_argument("--devel", default=os.path.join(ROOT, "devel"))
+    ap.add_argument("--config", default=None, help="controller.yaml for every run (default: the stack's)")
     a = ap.parse_args(argv)
     robots = shipped_robots()
     a.robots = robots if a.robots == "all" else a.robots.split(",")
@@ -101,7 +102,8 @@ def parse_args(argv):
 def reach_command(a, robot, generator, methods, first_set, sets, out):
     return [a.exe, "reach", "--robot", robot, "--generator", generator,
             "--method", methods[0] if len(methods) == 1 else "all", "--sets", str(sets),
-            "--points", str(a.points), "--seed", str(a.seed), "--first-set", str(first_set), "--out", out]
+            "--points", str(a.points), "--seed", str(a.seed), "--first-set", str(first_set), "--out", out] + \
+        (["--config", os.path.abspath(a.config)] if a.config else [])
 
 
 def run_all(a, runs):

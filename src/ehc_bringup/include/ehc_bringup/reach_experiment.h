@@ -106,6 +106,7 @@ struct ReachTrial {
   double min_joint_limit_margin = 0.0;  ///< rad, smallest distance to a joint limit seen
   ReachFailure failure = ReachFailure::None;
   std::string failure_joint;            ///< the pinned joint (RollWinding, JointLimit), else ""
+  int recoveries = 0;                   ///< joint-limit stall recoveries started (ReachRecovery)
 };
 
 struct ReachSummary {
@@ -114,6 +115,7 @@ struct ReachSummary {
   double mean_time_s = 0.0;  ///< over reached targets
   SpeedMeans distant, close;
   long qp_failures = 0;
+  long recoveries = 0;                           ///< stall recoveries started, all targets
   long cycles = 0;
   double controller_median_us = 0.0, controller_p99_us = 0.0;
   double min_joint_limit_margin = 0.0;

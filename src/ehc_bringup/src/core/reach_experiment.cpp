@@ -147,6 +147,7 @@ ReachTrial ReachExperiment::reach(ehc_sim::KinematicFakeRobot& robot, ControlCyc
   const int window = std::max(1, static_cast<int>(std::lround(params_.progress_window * params_.control_rate)));
   std::vector<Eigen::Vector3d> history(static_cast<std::size_t>(window), Eigen::Vector3d::Zero());
   std::vector<Eigen::Vector2d> base_history(static_cast<std::size_t>(window), Eigen::Vector2d::Zero());
+  bool recovering = false;
   for (int k = 0; k <= max_steps; ++k) {
     const Eigen::Isometry3d tcp = model_->fk(robot.basePose(), robot.armPositions(), rc.tcp_frame);
     const Vector6d e = ehc_control::poseError(tcp, target);
@@ -181,6 +182,8 @@ ReachTrial ReachExperiment::reach(ehc_sim::KinematicFakeRobot& robot, ControlCyc
     step_us.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
     sim_time_ += dt;
     const ehc_control::ControlCycleStatus& st = out.status;
+    if (st.recovering && !recovering) ++t.recoveries;  // a stall recovery (ReachRecovery) started
+    recovering = st.recovering;
     if (st.qp_status != ehc_control::QpStatus::Ok) ++t.qp_failures;  // any cycle without a good QP solve
     if (trace_) {
       std::ostream& o = *trace_;
@@ -242,6 +245,7 @@ ReachSummary ReachExperiment::run(const std::vector<std::vector<Eigen::Isometry3
         if (!t.failure_joint.empty()) ++s.pinned_joints[t.failure_joint];
       }
       s.qp_failures += t.qp_failures;
+      s.recoveries += t.recoveries;
       s.min_joint_limit_margin = std::min(s.min_joint_limit_margin, t.min_joint_limit_margin);
       if (trials) trials->push_back(t);
       if (progress) {
@@ -279,6 +283,7 @@ ehc_common::Json summaryJsonValue(const ReachSummary& s) {
   j["distant"] = speedJson(s.distant);
   j["close"] = speedJson(s.close);
   j["qp_failures"] = s.qp_failures;
+  j["recoveries"] = s.recoveries;
   j["min_joint_limit_margin_rad"] = jsonNumber(s.min_joint_limit_margin);
   j["controller_step_median_us"] = jsonNumber(s.controller_median_us);
   j["controller_step_p99_us"] = jsonNumber(s.controller_p99_us);
@@ -348,11 +353,11 @@ void writeReachResults(const std::string& dir, const std::vector<ReachSummary>& 
   {
     std::ofstream f = open("trials.csv");
     f << "method,set,index,reached,time_s,final_position_error_m,final_orientation_error_rad,qp_failures,"
-         "min_joint_limit_margin_rad,failure,failure_joint\n";
+         "min_joint_limit_margin_rad,failure,failure_joint,recoveries\n";
     for (const auto& t : trials)
       f << t.method << "," << t.set << "," << t.index << "," << (t.reached ? 1 : 0) << "," << t.time_s << ","
         << t.final_position_error << "," << t.final_orientation_error << "," << t.qp_failures << ","
-        << t.min_joint_limit_margin << "," << toString(t.failure) << "," << t.failure_joint << "\n";
+        << t.min_joint_limit_margin << "," << toString(t.failure) << "," << t.failure_joint << "," << t.recoveries << "\n";
   }
 }
 
