@@ -154,7 +154,7 @@ PerceptionOutcome perceive(Shape shape, double width) {
       ehc_perception::PointList points;
       for (const auto& p : cam_points) points.push_back(T_world_cam.cast<float>() * p);
       const ehc_perception::GraspResult res = ehc_perception::generateForTarget(
-          generator, points, eye, &centre, cfg.targeting.target_gate);
+          generator, points, eye, &centre, cfg.targeting);
       ++out.clouds;
       bool spans = false;
       double best_w = 0.0;

@@ -219,7 +219,7 @@ void GraspPipeline::perceive(double t) {
     StageTimer timer(timing_, &counters_.wall_grasps);
     const bool fresh = grasp_target_ && t - grasp_target_t_ <= cfg_.targeting.target_timeout;
     const ehc_perception::GraspResult res = ehc_perception::generateForTarget(
-        *generator_, points, T_world_cam.translation(), fresh ? &*grasp_target_ : nullptr, cfg_.targeting.target_gate);
+        *generator_, points, T_world_cam.translation(), fresh ? &*grasp_target_ : nullptr, cfg_.targeting);
     std::vector<GraspCandidate> candidates;
     for (const auto& g : res.grasps) candidates.push_back({g.pose, g.width, g.score});
     sequencer_->setGraspCandidates(t, candidates);

@@ -51,10 +51,11 @@ inline void imageToGray(const sensor_msgs::Image& msg, vpImage<unsigned char>* o
   }
 }
 
-/// The finite x, y, z points of a PointCloud2: the message's layout is copied into a
-/// PointCloudLayout and validated before any byte is read (FLOAT64 converted, NaN / Inf points
-/// dropped). Throws std::invalid_argument("[PointCloudLayout] ...") on a malformed cloud.
-inline PointList cloudToPoints(const sensor_msgs::PointCloud2& msg) {
+/// The finite x, y, z points of a PointCloud2, at most `max_points` of them read (PointBudget;
+/// 0 = every point): the message's layout is copied into a PointCloudLayout and validated before
+/// any byte is read (FLOAT64 converted, NaN / Inf points dropped). Throws
+/// std::invalid_argument("[PointCloudLayout] ...") on a malformed cloud.
+inline CloudPoints cloudToPoints(const sensor_msgs::PointCloud2& msg, std::size_t max_points) {
   PointCloudLayout layout;
   layout.width = msg.width;
   layout.height = msg.height;
@@ -63,7 +64,7 @@ inline PointList cloudToPoints(const sensor_msgs::PointCloud2& msg) {
   layout.is_bigendian = msg.is_bigendian;
   layout.point_step = msg.point_step;
   layout.row_step = msg.row_step;
-  return extractCloudPoints(layout, msg.data.data(), msg.data.size()).points;
+  return extractCloudPoints(layout, msg.data.data(), msg.data.size(), max_points);
 }
 
 inline PointList transformPoints(const PointList& in, const Eigen::Isometry3d& T) {
