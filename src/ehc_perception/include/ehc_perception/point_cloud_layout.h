@@ -21,6 +21,8 @@
 
 #include "ehc_perception/grasp_generator.h"  // PointList
 
+#include <Eigen/Geometry>
+
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -99,6 +101,9 @@ class PointBudget {
 
 /// At most `max_points` of `points` (0: all), as PointBudget reads an unorganised cloud.
 PointList budgetPoints(const PointList& points, std::size_t max_points);
+
+/// `points` moved by `T` (e.g. from the camera frame into the world), in float.
+PointList transformPoints(const PointList& points, const Eigen::Isometry3d& T);
 
 struct CloudPoints {
   PointList points;            ///< finite points, row-major

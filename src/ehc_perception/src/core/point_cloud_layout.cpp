@@ -143,6 +143,14 @@ PointList budgetPoints(const PointList& points, std::size_t max_points) {
   return out;
 }
 
+PointList transformPoints(const PointList& points, const Eigen::Isometry3d& T) {
+  const Eigen::Isometry3f Tf = T.cast<float>();
+  PointList out;
+  out.reserve(points.size());
+  for (const auto& p : points) out.push_back(Tf * p);
+  return out;
+}
+
 CloudPoints extractCloudPoints(const PointCloudLayout& layout, const std::uint8_t* data,
                                std::size_t data_size, std::size_t max_points) {
   const std::string problem = layout.problem(data_size);

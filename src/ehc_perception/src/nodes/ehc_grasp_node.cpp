@@ -138,7 +138,7 @@ class GraspNode {
       const geometry_msgs::TransformStamped tf =
           tf_.lookupTransform(cfg_.world_frame, msg.header.frame_id, msg.header.stamp);  // there: waited for above
       const Eigen::Isometry3d T = tf2::transformToEigen(tf);
-      const PointList pts = ros_conv::transformPoints(read.points, T);
+      const PointList pts = transformPoints(read.points, T);
       const std::optional<Eigen::Vector3d> target = targets_.targetFor(stampNs(msg.header.stamp));
       const GraspResult res = generateForTarget(gen_, pts, T.translation(), target ? &*target : nullptr, cfg_.targeting);
       ehc_msgs::GraspCandidates out;

@@ -192,7 +192,7 @@ class ObstacleNode {
     }
     try {
       const ObstacleMonitor::CloudInsertion r =
-          monitor_.queueCloud(now, ros_conv::transformPoints(read.points, T), T.translation());
+          monitor_.queueCloud(now, transformPoints(read.points, T), T.translation());
       if (!r.self_filtered)
         ROS_WARN_THROTTLE(kLogThrottle, "ehc_obstacle_node: no fresh robot state; cloud inserted without "
                                         "removing the robot's own points");

@@ -67,14 +67,6 @@ inline CloudPoints cloudToPoints(const sensor_msgs::PointCloud2& msg, std::size_
   return extractCloudPoints(layout, msg.data.data(), msg.data.size(), max_points);
 }
 
-inline PointList transformPoints(const PointList& in, const Eigen::Isometry3d& T) {
-  const Eigen::Isometry3f Tf = T.cast<float>();
-  PointList out;
-  out.reserve(in.size());
-  for (const auto& p : in) out.push_back(Tf * p);
-  return out;
-}
-
 inline geometry_msgs::Pose toPose(const Eigen::Isometry3d& T) { return tf2::toMsg(T); }
 
 }  // namespace ehc_perception::ros_conv
