@@ -31,7 +31,7 @@ class FrameCounts {
   /// `what`: the frames' name in the summary ("clouds", "images").
   explicit FrameCounts(std::string what) : what_(std::move(what)) {}
 
-  void count(FrameOutcome o) { ++counts_[static_cast<std::size_t>(o)]; }
+  void add(FrameOutcome o) { ++counts_[static_cast<std::size_t>(o)]; }
   /// A processed frame that had more points than the budget (read subsampled).
   void countSubsampled() { ++subsampled_; }
   long count(FrameOutcome o) const { return counts_[static_cast<std::size_t>(o)]; }
@@ -42,16 +42,16 @@ class FrameCounts {
   /// "clouds: 40 processed (3 over the point budget, subsampled), 120 rate_limited, 2 stale"
   /// (outcomes with a zero count left out).
   std::string summary() const;
-  /// The summary when a frame was dropped or subsampled since the last report and `now` is at
-  /// least `period` s after it (the node's clock), else "": a log line that stays quiet while
-  /// nothing is dropped.
+  /// The summary when a frame was dropped since the last report, or the first frame was
+  /// subsampled, and `now` is at least `period` s after the last report (the node's clock), else
+  /// "": a log line that stays quiet while nothing is dropped.
   std::string reportDue(double now, double period = kFrameReportPeriod);
 
  private:
   std::string what_;
   std::array<long, 8> counts_{};
   long subsampled_ = 0;
-  long reported_ = 0;  ///< dropped() + subsampled_ at the last report
+  long reported_ = 0;  ///< the events (reportDue) at the last report
   double reported_at_ = -1e300;
 };
 

@@ -33,7 +33,8 @@ std::string FrameCounts::summary() const {
 }
 
 std::string FrameCounts::reportDue(double now, double period) {
-  const long events = dropped() + subsampled_;
+  // Drops, and the first frame over the budget (a camera whose every frame is: not every 10 s).
+  const long events = dropped() + (subsampled_ > 0 ? 1 : 0);
   if (events == reported_ || now - reported_at_ < period) return "";
   reported_ = events;
   reported_at_ = now;

@@ -27,7 +27,7 @@
 // logged reason): a lock-step simulator's acknowledgement gate (ehc_common::LockstepAck, demo.sh).
 // What became of the clouds (processed, over the budget, rate-limited, stale, no camera pose,
 // malformed, failed: ehc_perception::FrameCounts) is logged at most every 10 s while clouds are
-// dropped or subsampled, and once at exit.
+// dropped (and at the first cloud over the point budget).
 #include "ehc_msgs/GraspCandidates.h"
 #include "ehc_common/logging.h"
 #include "ehc_common/lockstep_ack.h"
@@ -73,7 +73,6 @@ class GraspNode {
       target_sub_ = nh.subscribe(opts);
     }
   }
-  ~GraspNode() { ROS_INFO_STREAM("ehc_grasp_node: " << counts_.summary()); }
 
  private:
   void onTarget(const geometry_msgs::PoseStamped& msg) {
@@ -112,7 +111,7 @@ class GraspNode {
   }
 
   void count(FrameOutcome o) {
-    counts_.count(o);
+    counts_.add(o);
     const std::string report = counts_.reportDue(ros::WallTime::now().toSec());
     if (!report.empty()) ROS_WARN_STREAM("ehc_grasp_node: " << report);
   }

@@ -27,7 +27,7 @@
 // simulator steps on only once they are out.
 // What became of the clouds (processed, over the budget, rate-limited, stale, superseded, no
 // camera pose, malformed, failed: ehc_perception::FrameCounts) is logged at most every 10 s
-// while clouds are dropped or subsampled, and once at exit.
+// while clouds are dropped (and at the first cloud over the point budget).
 #include "ehc_msgs/ObstacleArray.h"
 #include "ehc_msgs/ObstacleExclusion.h"
 #include "ehc_common/logging.h"
@@ -79,7 +79,6 @@ class ObstacleNode {
     else
       timer_ = nh.createTimer(ros::Duration(1.0 / cfg_.publish_rate_hz), &ObstacleNode::onTimer, this);
   }
-  ~ObstacleNode() { ROS_INFO_STREAM("ehc_obstacle_node: " << counts_.summary()); }
 
  private:
   /// Freshness is judged by receipt time on this node's clock (ROS time: /clock in lock-step,
@@ -167,7 +166,7 @@ class ObstacleNode {
   }
 
   void count(FrameOutcome o) {
-    counts_.count(o);
+    counts_.add(o);
     const std::string report = counts_.reportDue(ros::WallTime::now().toSec());
     if (!report.empty()) ROS_WARN_STREAM("ehc_obstacle_node: " << report);
   }

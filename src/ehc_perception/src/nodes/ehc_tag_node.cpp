@@ -17,7 +17,7 @@
 // while the node is busy replaces the one waiting), an image that waited longer than stale_after
 // in the node is dropped (timer mode), and an image over max_image_pixels or of another size
 // than the camera's is dropped before any per-pixel work. What became of the images is logged
-// (ehc_perception::FrameCounts) at most every 10 s while images are dropped, and once at exit.
+// (ehc_perception::FrameCounts) at most every 10 s while images are dropped.
 #include "ehc_common/logging.h"
 #include "ehc_control/camera_info_msg.h"
 #include "ehc_common/lockstep_ack.h"
@@ -54,7 +54,6 @@ class TagNode {
     if (cfg_.camera_file.empty())
       info_sub_ = nh.subscribe(cfg_.camera_info_topic, 2, &TagNode::onInfo, this, ros::TransportHints().tcpNoDelay());
   }
-  ~TagNode() { ROS_INFO_STREAM("ehc_tag_node: " << counts_.summary()); }
 
  private:
   void build(const PinholeCamera& cam) {
@@ -97,7 +96,7 @@ class TagNode {
   }
 
   void count(FrameOutcome o) {
-    counts_.count(o);
+    counts_.add(o);
     const std::string report = counts_.reportDue(ros::WallTime::now().toSec());
     if (!report.empty()) ROS_WARN_STREAM("ehc_tag_node: " << report);
   }
