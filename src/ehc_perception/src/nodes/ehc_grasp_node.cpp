@@ -110,11 +110,7 @@ class GraspNode {
     ack_.done(cloud->header.stamp);  // after the candidates: the simulator steps on
   }
 
-  void count(FrameOutcome o) {
-    counts_.add(o);
-    const std::string report = counts_.reportDue(ros::WallTime::now().toSec());
-    if (!report.empty()) ROS_WARN_STREAM("ehc_grasp_node: " << report);
-  }
+  void count(FrameOutcome o) { ros_conv::countFrame(&counts_, o, "ehc_grasp_node"); }
 
   FrameOutcome process(const sensor_msgs::PointCloud2& msg) {
     if (!limiter_.accept(msg.header.stamp.toSec())) return FrameOutcome::RateLimited;

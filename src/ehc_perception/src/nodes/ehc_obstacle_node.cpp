@@ -165,11 +165,7 @@ class ObstacleNode {
     }
   }
 
-  void count(FrameOutcome o) {
-    counts_.add(o);
-    const std::string report = counts_.reportDue(ros::WallTime::now().toSec());
-    if (!report.empty()) ROS_WARN_STREAM("ehc_obstacle_node: " << report);
-  }
+  void count(FrameOutcome o) { ros_conv::countFrame(&counts_, o, "ehc_obstacle_node"); }
 
   void insertCloud(const sensor_msgs::PointCloud2& msg) {
     const double now = receiptTime(msg.header.stamp);

@@ -95,11 +95,7 @@ class TagNode {
     onImage(image);
   }
 
-  void count(FrameOutcome o) {
-    counts_.add(o);
-    const std::string report = counts_.reportDue(ros::WallTime::now().toSec());
-    if (!report.empty()) ROS_WARN_STREAM("ehc_tag_node: " << report);
-  }
+  void count(FrameOutcome o) { ros_conv::countFrame(&counts_, o, "ehc_tag_node"); }
 
   void onImage(const sensor_msgs::ImageConstPtr& image) {
     if (!detector_) {

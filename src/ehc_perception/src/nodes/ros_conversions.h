@@ -1,11 +1,15 @@
 #pragma once
-// Message <-> core conversions shared by the perception nodes (node side only: roscpp types).
+// Message <-> core conversions shared by the perception nodes (node side only: roscpp types),
+// and their log line of what became of their frames (countFrame).
 // CameraInfo <-> PinholeCamera: ehc_control/camera_info_msg.h (every package's nodes).
 
+#include "ehc_perception/frame_counts.h"
 #include "ehc_perception/grasp_generator.h"
 #include "ehc_perception/point_cloud_layout.h"
 
 #include <geometry_msgs/Pose.h>
+#include <ros/console.h>
+#include <ros/time.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/PointCloud2.h>
@@ -65,6 +69,16 @@ inline CloudPoints cloudToPoints(const sensor_msgs::PointCloud2& msg, std::size_
   layout.point_step = msg.point_step;
   layout.row_step = msg.row_step;
   return extractCloudPoints(layout, msg.data.data(), msg.data.size(), max_points);
+}
+
+/// Counts a frame's outcome and logs the counts when FrameCounts::reportDue says so (on the wall
+/// clock): WARN once frames were dropped, else INFO (the first frame over the point budget).
+inline void countFrame(FrameCounts* counts, FrameOutcome o, const char* node) {
+  counts->add(o);
+  const std::string report = counts->reportDue(ros::WallTime::now().toSec());
+  if (report.empty()) return;
+  if (counts->dropped() > 0) ROS_WARN_STREAM(node << ": " << report);
+  else ROS_INFO_STREAM(node << ": " << report);
 }
 
 inline geometry_msgs::Pose toPose(const Eigen::Isometry3d& T) { return tf2::toMsg(T); }
