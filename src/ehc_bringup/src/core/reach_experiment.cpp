@@ -221,9 +221,12 @@ ReachSummary ReachExperiment::run(const std::vector<std::vector<Eigen::Isometry3
   std::vector<double> step_us;
   double time_sum = 0.0;
   s.min_joint_limit_margin = 1e9;
-  ControlCycle cycle(model_, weighting_, cycle_params_);
   for (std::size_t si = 0; si < sets.size(); ++si) {
     const int set_number = params_.first_set + static_cast<int>(si);
+    // Each set starts from nothing (controller state, clock), so a set rerun alone with
+    // --first-set repeats it exactly.
+    ControlCycle cycle(model_, weighting_, cycle_params_);
+    sim_time_ = 0.0;
     const unsigned set_seed = seed + static_cast<unsigned>(set_number);
     ehc_sim::KinematicFakeRobot robot(model_->config(), params_.noise, set_seed, params_.base_model);
     robot.reset(Eigen::Vector3d::Zero(), model_->config().arm_ready, set_seed);
