@@ -163,8 +163,9 @@ print(x.ServerProxy(sys.argv[1]).getPid(sys.argv[2])[2])" "$ROS_MASTER_URI" "/$S
 }
 
 # sup_start_master: starts rosmaster (process "rosmaster", log rosmaster.log) on the port of
-# ROS_MASTER_URI and waits until it answers (100 tries, 0.1 s apart). Fails if it died or if
-# another master answers there (two runs started at the same instant can pick the same free port).
+# ROS_MASTER_URI and waits until it answers (100 tries, 0.1 s apart). Returns 0 when it answers,
+# 1 if another master answers there (two runs started at the same instant can pick the same free
+# port), 2 if ours exited or never answered (its log says why).
 sup_start_master() {
   local port="${ROS_MASTER_URI##*:}" master pid try
   port="${port%%/*}"
@@ -173,11 +174,12 @@ sup_start_master() {
   for ((try = 0; try < 100; try++)); do
     pid=$(sup_master_pid)
     [ "$pid" = "$master" ] && return 0
-    if [ -n "$pid" ] || ! kill -0 "$master" 2>/dev/null; then return 1; fi  # another master, or ours died
+    [ -n "$pid" ] && return 1                      # another master
+    kill -0 "$master" 2>/dev/null || return 2      # ours died
     # No XML-RPC answer yet (or a stand-in master that only serves parameters): the parameter
     # server answering is enough.
     rosparam list / >/dev/null 2>&1 && return 0
     sleep 0.1
   done
-  return 1
+  return 2
 }
