@@ -162,21 +162,21 @@ sup_start sequencer rosrun ehc_bringup ehc_grasp_sequencer_node _config:="$SEQUE
 SEQ_PID=$SUP_LAST_PID
 
 # Progress: the sequencer's "[grasp]" lines, without the ROS log prefix.
-# tail ends with the sequencer (--pid), so the pipeline never outlives the run.
-tail --pid="$SEQ_PID" -n +1 -F "$OUT/logs/sequencer.log" 2>/dev/null |
+# tail ends with the sequencer (--pid, checked every 0.2 s), so the pipeline never outlives the run.
+tail --pid="$SEQ_PID" -s 0.2 -n +1 -F "$OUT/logs/sequencer.log" 2>/dev/null |
   sed -u -n -e 's/\x1b\[[0-9;]*m//g' -e 's/^.*\[grasp\] //p' | grep --line-buffered -v '^json \|^summary ' &
 sup_adopt progress $!
 
 status=0
 sup_watch --until sequencer --ignore progress --limit "$WALL_LIMIT"
 case $? in
-  1) echo "demo.sh: $SUP_DEAD exited unexpectedly; last lines of $OUT/logs/$SUP_DEAD.log:" >&2
+  0) sleep 0.3 ;;  # the run's end: let the progress tail print the last lines
+  1) echo "demo.sh: $SUP_DEAD exited unexpectedly; stopping every process it started; last lines of $OUT/logs/$SUP_DEAD.log:" >&2
      sup_log_tail "$SUP_DEAD"
      status=2 ;;
   2) echo "demo.sh: wall-clock guard of $WALL_LIMIT s reached; stopping" >&2
      status=2 ;;
 esac
-sleep 0.3  # let the progress tail print the last lines
 sup_stop_all
 wall=$(/usr/bin/python3 -c "import time; print(f'{time.time() - $t0:.1f}')")
 
