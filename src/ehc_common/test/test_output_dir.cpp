@@ -43,3 +43,24 @@ TEST(OutputDir, UnwritableFoldersAreClearErrors) {
   EXPECT_NE(e.find("cannot write to '/proc/ehc_output_dir'"), std::string::npos) << e;
   std::filesystem::remove_all(root);
 }
+
+TEST(OutputDir, AnOutputFileIsCheckedWithoutTouchingAnExistingOne) {
+  const std::string root = ::testing::TempDir() + "/ehc_output_file_" + std::to_string(::getpid());
+  std::filesystem::remove_all(root);
+  ehc_common::prepareOutputFile(root + "/sub/map.bin");
+  EXPECT_TRUE(std::filesystem::is_directory(root + "/sub"));
+  EXPECT_FALSE(std::filesystem::exists(root + "/sub/map.bin"));
+  std::ofstream(root + "/sub/keep.bin") << "data";
+  ehc_common::prepareOutputFile(root + "/sub/keep.bin");
+  std::ifstream in(root + "/sub/keep.bin");
+  std::string text;
+  in >> text;
+  EXPECT_EQ(text, "data");
+  std::string e = errorOf([&] { ehc_common::prepareOutputFile(root + "/sub"); });
+  EXPECT_NE(e.find("cannot write to '" + root + "/sub': a folder"), std::string::npos) << e;
+  e = errorOf([&] { ehc_common::prepareOutputFile(root + "/sub/keep.bin/x"); });
+  EXPECT_NE(e.find("cannot write to '" + root + "/sub/keep.bin"), std::string::npos) << e;
+  e = errorOf([&] { ehc_common::prepareOutputFile("/proc/ehc_map.bin"); });
+  EXPECT_NE(e.find("cannot write to '/proc/ehc_map.bin'"), std::string::npos) << e;
+  std::filesystem::remove_all(root);
+}

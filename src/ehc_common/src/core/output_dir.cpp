@@ -29,4 +29,22 @@ void prepareOutputDir(const std::string& dir) {
   std::remove(probe.c_str());
 }
 
+void prepareOutputFile(const std::string& file) {
+  namespace fs = std::filesystem;
+  if (file.empty() || file.back() == '/') throw std::invalid_argument("[OutputDir] cannot write to '" + file + "': no file name");
+  const fs::path parent = fs::path(file).parent_path();
+  std::error_code ec;
+  if (!parent.empty()) fs::create_directories(parent, ec);
+  if (ec) throw std::invalid_argument("[OutputDir] cannot write to '" + file + "': " + ec.message());
+  if (fs::is_directory(file, ec)) throw std::invalid_argument("[OutputDir] cannot write to '" + file + "': a folder");
+  const bool existed = fs::exists(file, ec);
+  errno = 0;
+  {
+    std::ofstream f(file, std::ios::app);
+    if (!f) throw std::invalid_argument("[OutputDir] cannot write to '" + file + "': " +
+                                        (errno ? std::strerror(errno) : "cannot be opened"));
+  }
+  if (!existed) std::remove(file.c_str());
+}
+
 }  // namespace ehc_common
