@@ -293,8 +293,8 @@ def sweep_cases(tmp, quick):
                 prog = sweep_program(rel, path, tmp)
                 if prog is None:
                     continue
-                cases.append(dict(prog, name="sweep %s: %s = %s" % (rel, ".".join(keys), bad),
-                                  names=[path, "'" + ".".join(keys) + "'"]))
+                field = ".".join(str(k) for k in keys)
+                cases.append(dict(prog, name="sweep %s: %s = %s" % (rel, field, bad), names=[path, "'" + field + "'"]))
     return cases
 
 
