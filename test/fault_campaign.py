@@ -277,7 +277,8 @@ def sweep_program(rel, path, tmp):
 def sweep_cases(tmp, quick):
     """Every number / bool field of every shipped YAML file set to the wrong type, one at a time,
     through an overlay file; the error must name the overlay and the field. Quick: the first
-    field of each file."""
+    field of each file. Full: also every number set to NaN, and one misspelled key per file
+    (the first field's name with a typo)."""
     cases = []
     for root, _, files in os.walk(CONFIG):
         for f in sorted(files):
@@ -286,9 +287,16 @@ def sweep_cases(tmp, quick):
             rel = os.path.relpath(os.path.join(root, f), CONFIG)
             with open(os.path.join(CONFIG, rel)) as fh:
                 fields = leaves(yaml.safe_load(fh))
-            for i, (keys, value) in enumerate(fields[:1] if quick else fields):
+            variants = []
+            for keys, value in fields[:1] if quick else fields:
+                variants.append((keys, "maybe" if isinstance(value, bool) else "abc"))
+                if not quick and not isinstance(value, bool):
+                    variants.append((keys, float("nan")))
+            if fields and not quick:
+                keys = fields[0][0]
+                variants.append((keys[:-1] + (str(keys[-1]) + "_typo",), fields[0][1]))
+            for i, (keys, bad) in enumerate(variants):
                 path = os.path.join(tmp, "sweep", rel.replace("/", "__")[:-5] + "__%d.yaml" % i)
-                bad = "maybe" if isinstance(value, bool) else "abc"
                 overlay(path, os.path.join(CONFIG, rel), nested(keys, bad))
                 prog = sweep_program(rel, path, tmp)
                 if prog is None:

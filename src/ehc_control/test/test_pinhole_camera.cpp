@@ -106,7 +106,11 @@ TEST(PinholeCamera, BadFilesNameTheFileAndField) {
                      "distortion_coefficients: {rows: 1, cols: 5, data: [0, 0, 0, 0]}\n");
   e = errorOf([&] { loadPinholeCamera(d_cols); });
   EXPECT_NE(e.find("field 'distortion_coefficients.data' must have 5 elements"), std::string::npos) << e;
-  for (const auto& f : {no_k, bad_f, short_k, negative_f, skew, no_height, outside, distorted, k_rows, p_size, d_cols})
+  const std::string typo = writeTemp(
+      "typo.yaml", "image_width: 640\nimage_heigth: 480\nimage_height: 480\ncamera_matrix: {data: [615, 0, 320, 0, 615, 240, 0, 0, 1]}\n");
+  e = errorOf([&] { loadPinholeCamera(typo); });
+  EXPECT_NE(e.find(typo + ": unknown field 'image_heigth' (did you mean 'image_height'?)"), std::string::npos) << e;
+  for (const auto& f : {no_k, bad_f, short_k, negative_f, skew, no_height, outside, distorted, k_rows, p_size, d_cols, typo})
     std::remove(f.c_str());
 }
 

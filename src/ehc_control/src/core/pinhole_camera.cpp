@@ -89,6 +89,7 @@ PinholeCamera loadPinholeCamera(const std::string& path) {
   if (name.empty()) name = defaults.name;
   const PinholeCamera c = PinholeCamera::fromCameraInfo(
       name, width, height, K, root.get<std::string>("distortion_model", defaults.distortion_model), D);
+  root.rejectUnknownKeys();  // every camera_info field is read above: another key is a misspelling
   try {
     c.validate();
   } catch (const std::invalid_argument& e) {
