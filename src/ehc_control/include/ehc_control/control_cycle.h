@@ -17,6 +17,7 @@
 #include "ehc_control/mpbs.h"
 #include "ehc_control/pose_servo.h"
 #include "ehc_control/qp_controller.h"
+#include "ehc_control/reach_recovery.h"
 #include "ehc_control/target_tracker.h"
 #include "ehc_control/whole_body_model.h"
 
@@ -73,6 +74,7 @@ struct ControlCycleStatus : QpStepFigures {
   bool obstacles_required = true;
   bool controller_error = false;          ///< a core error (exception) stopped this cycle
   bool wrist_flip = false;                ///< the QP step prescribed a wrist flip (WristFlip)
+  bool recovering = false;                ///< the QP tracked a stall recovery's reference (ReachRecovery)
 };
 
 struct ControlCycleOutput {
@@ -153,6 +155,7 @@ class ControlCycle {
   std::shared_ptr<const WholeBodyModel> model_;
   std::shared_ptr<const EhcWeighting> weighting_;  ///< nullptr: no reachability map
   std::unique_ptr<EhcQpController> controller_;
+  std::unique_ptr<ReachRecovery> recovery_;
   std::unique_ptr<ControllerSupervisor> supervisor_;
   std::unique_ptr<MpbsServo> mpbs_;
   std::unique_ptr<TargetTracker> tracker_;
