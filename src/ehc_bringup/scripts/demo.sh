@@ -84,14 +84,22 @@ for o in "${OBJECTS[@]}"; do
   [ -f "config/demo/tag_$o.yaml" ] || { echo "demo.sh: file not found: config/demo/tag_$o.yaml" >&2; exit 2; }
 done
 
-mkdir -p "$OUT/logs"
-rm -f "$OUT/summary.json" "$OUT/trace.csv" "$OUT/demo.png" "$OUT/meta.json" "$OUT"/logs/*.log
+# The output folder must be writable before anything starts (the master's ROS_HOME is there too).
+if ! mkdir -p "$OUT/logs" 2>/dev/null || ! : 2>/dev/null >"$OUT/logs/.write_test"; then
+  echo "demo.sh: cannot write to the output folder OUT=$OUT (set OUT to a writable folder)" >&2
+  exit 2
+fi
+rm -f "$OUT/logs/.write_test" "$OUT/summary.json" "$OUT/trace.csv" "$OUT/demo.png" "$OUT/meta.json" "$OUT"/logs/*.log
 # Provenance for docs/RESULTS.md (make results): command, seed, robot, code version, machine, dates.
 RESULTS=(/usr/bin/python3 src/ehc_bringup/scripts/make_results.py)
 "${RESULTS[@]}" meta "$OUT" --command "${ROBOT:+ROBOT=$ROBOT }MODE=$MODE SEED=$SEED src/ehc_bringup/scripts/demo.sh" \
   --seed "$SEED" ${ROBOT:+--robot "$ROBOT"} >/dev/null || exit 2
 # Private master and ROS_HOME: never touches another ROS system on this machine.
 PORT="${EHC_DEMO_PORT:-$(sup_free_port 11411)}"
+if ! [[ "$PORT" =~ ^[0-9]+$ ]] || [ "${#PORT}" -gt 5 ] || [ "$PORT" -lt 1 ] || [ "$PORT" -gt 65535 ]; then
+  echo "demo.sh: EHC_DEMO_PORT must be a TCP port number 1-65535 (got '$PORT')" >&2
+  exit 2
+fi
 sup_private_master "$PORT" "$OUT/ros_home"
 sup_install_traps "interrupted, stopping every process it started" 130
 
@@ -100,10 +108,15 @@ echo "   master $ROS_MASTER_URI, logs in $OUT/logs/"
 t0=$(date +%s.%N)
 # Our master, not another one that took the port first (two demos started at the same instant
 # picked the same free port; the second one's nodes joined the first one's master).
-if ! sup_start_master; then
-  echo "demo.sh: the ROS master did not start on port $PORT (taken by another master? see $OUT/logs/rosmaster.log)" >&2
-  exit 2
-fi
+sup_start_master
+case $? in
+  0) ;;
+  1) echo "demo.sh: port $PORT is taken by another ROS master (unset EHC_DEMO_PORT to pick a free port)" >&2
+     exit 2 ;;
+  *) echo "demo.sh: the ROS master did not start on port $PORT; last lines of $OUT/logs/rosmaster.log:" >&2
+     sup_log_tail rosmaster
+     exit 2 ;;
+esac
 rosparam set /use_sim_time true >/dev/null 2>&1
 rosparam get /use_sim_time >/dev/null 2>&1 || { echo "demo.sh: the ROS master did not start (port $PORT)" >&2; exit 2; }
 TAG_NODES=()
@@ -149,21 +162,21 @@ sup_start sequencer rosrun ehc_bringup ehc_grasp_sequencer_node _config:="$SEQUE
 SEQ_PID=$SUP_LAST_PID
 
 # Progress: the sequencer's "[grasp]" lines, without the ROS log prefix.
-# tail ends with the sequencer (--pid), so the pipeline never outlives the run.
-tail --pid="$SEQ_PID" -n +1 -F "$OUT/logs/sequencer.log" 2>/dev/null |
+# tail ends with the sequencer (--pid, checked every 0.2 s), so the pipeline never outlives the run.
+tail --pid="$SEQ_PID" -s 0.2 -n +1 -F "$OUT/logs/sequencer.log" 2>/dev/null |
   sed -u -n -e 's/\x1b\[[0-9;]*m//g' -e 's/^.*\[grasp\] //p' | grep --line-buffered -v '^json \|^summary ' &
 sup_adopt progress $!
 
 status=0
 sup_watch --until sequencer --ignore progress --limit "$WALL_LIMIT"
 case $? in
-  1) echo "demo.sh: $SUP_DEAD exited unexpectedly; last lines of $OUT/logs/$SUP_DEAD.log:" >&2
+  0) sleep 0.3 ;;  # the run's end: let the progress tail print the last lines
+  1) echo "demo.sh: $SUP_DEAD exited unexpectedly; stopping every process it started; last lines of $OUT/logs/$SUP_DEAD.log:" >&2
      sup_log_tail "$SUP_DEAD"
      status=2 ;;
   2) echo "demo.sh: wall-clock guard of $WALL_LIMIT s reached; stopping" >&2
      status=2 ;;
 esac
-sleep 0.3  # let the progress tail print the last lines
 sup_stop_all
 wall=$(/usr/bin/python3 -c "import time; print(f'{time.time() - $t0:.1f}')")
 

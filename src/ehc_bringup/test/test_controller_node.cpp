@@ -120,6 +120,7 @@ TEST_F(ControllerNodeTest, NanTargetIsRejectedThenConvergesThenWatchdogStops) {
   EXPECT_LE(m_.max_v, 0.5 + 1e-9);
   EXPECT_LE(m_.max_w, 1.0 + 1e-9);
   EXPECT_LE(m_.max_arm, 3.92 + 1e-9);
+  EXPECT_FALSE(m_.status.obstacles_required) << "_require_obstacles:=false must be reported in every status";
 
   // --- 3. Target stops arriving: zero commands and TARGET_LOST within 0.2 s (+ margin: the
   // last target was sent up to a cycle before `stop`, and the test's spin adds delivery delay

@@ -6,6 +6,10 @@
 //     exited 2 ("no summary written") after a completed run.
 //   - Each node's private namespace is deleted before it starts (parameters
 //     of an earlier run on the same master never leak into this one).
+//   - A bad EHC_DEMO_PORT or an OUT that cannot be written is named (it was blamed on "another
+//     master").
+//   - When a node dies, the others get SIGINT and the master SIGTERM once they are gone (the
+//     master got SIGINT with them and could take until the SIGKILL 5 s later to exit).
 
 #include <gtest/gtest.h>
 
@@ -71,7 +75,7 @@ std::string makeStubs() {
 }
 
 int runDemo(const std::string& env, std::string* output) {
-  const std::string cmd = "cd / && " + env + " EHC_DEMO_PORT=1 TAG_OBJECTS=front WALL_LIMIT=60 bash " +
+  const std::string cmd = "cd / && EHC_DEMO_PORT=1 TAG_OBJECTS=front WALL_LIMIT=60 " + env + " bash " +
                           kWorkspace + "/src/ehc_bringup/scripts/demo.sh 2>&1";
   FILE* p = ::popen(cmd.c_str(), "r");
   std::array<char, 512> buf{};
@@ -116,4 +120,44 @@ TEST(DemoScript, EveryNodesPrivateParametersAreDeletedBeforeItStarts) {
   const auto started = calls.find("rosrun ehc_control ehc_controller_node");
   ASSERT_NE(started, std::string::npos) << calls;
   EXPECT_LT(deleted, started) << "deleted before the controller starts:\n" << calls;
+}
+
+TEST(DemoScript, ABadPortOrAnUnwritableOutIsNamed) {
+  const std::string dir = makeStubs();
+  std::string log;
+  EXPECT_EQ(runDemo("EHC_DEVEL=" + dir + "/devel OUT=" + dir + "/out EHC_DEMO_PORT=abc", &log), 2);
+  EXPECT_NE(log.find("EHC_DEMO_PORT must be a TCP port number 1-65535 (got 'abc')"), std::string::npos) << log;
+  log.clear();
+  EXPECT_EQ(runDemo("EHC_DEVEL=" + dir + "/devel OUT=" + dir + "/out EHC_DEMO_PORT=70000", &log), 2);
+  EXPECT_NE(log.find("got '70000'"), std::string::npos) << log;
+  log.clear();
+  std::ofstream(dir + "/a_file") << "x";
+  EXPECT_EQ(runDemo("EHC_DEVEL=" + dir + "/devel OUT=" + dir + "/a_file/out", &log), 2);
+  EXPECT_NE(log.find("cannot write to the output folder OUT=" + dir + "/a_file/out"), std::string::npos) << log;
+  EXPECT_EQ(log.find("another master"), std::string::npos) << log;
+}
+
+TEST(DemoScript, WhenANodeDiesTheNodesGetSigintAndTheMasterSigtermAfterThem) {
+  const std::string dir = makeStubs();
+  // Stubs that log the signal they get (python: a background child of a script starts with
+  // SIGINT ignored, which bash cannot trap; the real nodes install their own handler too).
+  const std::string stub = "#!/usr/bin/python3\nimport signal, sys, time\nname = sys.argv[1]\n"
+                           "def on(sig, _):\n    open('" + dir + "/signals.log', 'a').write('%s %s\\n' % (name, signal.Signals(sig).name))\n"
+                           "    sys.exit(0) if sig != signal.SIGINT or name != 'master' else None\n"
+                           "signal.signal(signal.SIGINT, on)\nsignal.signal(signal.SIGTERM, on)\n"
+                           "if name == 'ehc_controller_node':\n    time.sleep(1.0)\n    sys.exit(1)\n"
+                           "while True:\n    time.sleep(0.05)\n";
+  writeExecutable(dir + "/bin/stub_process", stub);
+  writeExecutable(dir + "/bin/rosmaster", "#!/bin/bash\nexec " + dir + "/bin/stub_process master\n");
+  writeExecutable(dir + "/bin/rosrun", "#!/bin/bash\nexec " + dir + "/bin/stub_process \"$2\"\n");
+  std::string log;
+  EXPECT_EQ(runDemo("EHC_DEVEL=" + dir + "/devel OUT=" + dir + "/out", &log), 2);
+  EXPECT_NE(log.find("demo.sh: controller exited unexpectedly"), std::string::npos) << log;
+  const std::string signals = slurp(dir + "/signals.log");
+  for (const char* node : {"ehc_sim_node", "ehc_tag_node", "ehc_grasp_node", "ehc_obstacle_node", "ehc_grasp_sequencer_node"})
+    EXPECT_NE(signals.find(std::string(node) + " SIGINT\n"), std::string::npos) << node << "\n" << signals;
+  const auto master = signals.find("master SIGTERM\n");
+  ASSERT_NE(master, std::string::npos) << "the master was not stopped with SIGTERM:\n" << signals;
+  EXPECT_EQ(signals.find("master SIGINT"), std::string::npos) << signals;
+  EXPECT_EQ(signals.rfind("SIGINT"), signals.rfind("SIGINT", master)) << "nodes after the master:\n" << signals;
 }

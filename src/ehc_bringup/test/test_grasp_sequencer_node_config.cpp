@@ -6,6 +6,7 @@
 #include "ehc_bringup/grasp_sequencer_node_config.h"
 #include "ehc_common/config_node.h"
 #include "ehc_control/robot_config.h"
+#include "ehc_control/whole_body_model.h"
 
 #include <gtest/gtest.h>
 
@@ -51,13 +52,29 @@ TEST(SequencerNodeParams, DefaultsAndTheRobotsFrames) {
   EXPECT_EQ(p.gripper_service, "/sim/gripper");
   EXPECT_EQ(p.pose_topics, std::vector<std::string>{"/a"});
   EXPECT_TRUE(p.world_frame.empty());  // not in the file: the robot's
-  const ehc_control::RobotConfig kuka = ehc_control::loadRobotConfig(ehc_control::resolveRobotFile("kuka_iiwa14_kmr"));
-  p.tcp_frame = "my_tcp";  // set in the file: kept
+  const ehc_control::WholeBodyModel kuka(ehc_control::loadRobotConfig(ehc_control::resolveRobotFile("kuka_iiwa14_kmr")));
+  p.tcp_frame = "gripper_base_link";  // set in the file: kept
   p.applyRobotFrames(kuka);
-  EXPECT_EQ(p.world_frame, kuka.world_frame);
-  EXPECT_EQ(p.camera_frame, kuka.camera_frame);
-  EXPECT_EQ(p.tcp_frame, "my_tcp");
+  EXPECT_EQ(p.world_frame, kuka.config().world_frame);
+  EXPECT_EQ(p.camera_frame, kuka.config().camera_frame);
+  EXPECT_EQ(p.tcp_frame, "gripper_base_link");
   EXPECT_NE(p.summary().find("pose topics: /a"), std::string::npos) << p.summary();
+}
+
+TEST(SequencerNodeParams, FramesThatAreNotLinksOfTheRobotAreStartUpErrorsNamingTheField) {
+  const ehc_control::WholeBodyModel kuka(ehc_control::loadRobotConfig(ehc_control::resolveRobotFile("kuka_iiwa14_kmr")));
+  for (const std::string field : {"tcp_frame", "camera_frame"}) {
+    SequencerNodeParams p = ehc_bringup::loadSequencerNodeParams(ConfigNode::loadString(
+        "node: {" + field + ": no_such_link}\nobjects: [{name: a, pose_topic: /a}]\n", "seq.yaml", "GraspSequencerNode"));
+    try {
+      p.applyRobotFrames(kuka);
+      FAIL() << field << " accepted";
+    } catch (const std::invalid_argument& e) {
+      const std::string w = e.what();
+      EXPECT_NE(w.find("seq.yaml: field 'node." + field + "' names link 'no_such_link' which is not in the URDF"),
+                std::string::npos) << w;
+    }
+  }
 }
 
 TEST(SequencerNodeParams, ABadValueNamesItsField) {

@@ -4,11 +4,13 @@
 Scans every .cpp/.h under src/<package>/src and src/<package>/include (cores, nodes and their
 headers; not tests or benchmarks) for parameter reads:
   - YAML keys read through ehc_common::ConfigNode: get, require, child, childOrEmpty, getVector,
-    requireVector, getStrings, listSize, element, has, ignore with a literal key; a lambda or a
+    requireVector, getStrings, listSize, element, has, ignore, getPath, requirePath, getInRange
+    with a literal key; a lambda or a
     function that takes the key and passes it on (`auto get = [&](const char* key, ...) {
     n.get(key, ...) }`, a NodeHandle helper taking the name); a range-for over a list of literal
     keys passed on the same way;
-  - private ROS parameters: NodeHandle param, getParam, hasParam, searchParam, getParamCached
+  - private ROS parameters: ehc_common::NodeParams get, getOptional, getParsed, getInRange,
+    requireText, getList, has; NodeHandle param, getParam, hasParam, searchParam, getParamCached
     and ros::param::get / param / has (a leading `~` is dropped).
 Calls on a CommandLine (the CLI tools' options) are not parameters. A key counts as documented
 when it appears as a word inside a `code span` of docs/NODES.md (`controller.rate`,
@@ -27,9 +29,11 @@ ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)),
 NODES_MD = os.path.join(ROOT, "docs", "NODES.md")
 
 CONFIG_METHODS = ("get", "require", "child", "childOrEmpty", "getVector", "requireVector", "getStrings",
-                  "listSize", "element", "has", "ignore")
+                  "listSize", "element", "has", "ignore", "getPath", "requirePath", "getInRange")
+# ehc_common::NodeParams (the nodes' private parameters) beside get / has / getInRange above.
+NODE_PARAM_METHODS = ("getOptional", "getParsed", "requireText", "getList")
 ROS_METHODS = ("param", "getParam", "hasParam", "searchParam", "getParamCached")
-METHODS = CONFIG_METHODS + ROS_METHODS
+METHODS = CONFIG_METHODS + NODE_PARAM_METHODS + ROS_METHODS
 KEY = r'"~?([A-Za-z_][A-Za-z0-9_]*)"'
 TEMPLATE = r'(?:<[^;(){}]*?>)?'
 # receiver.method<T>("key"  /  receiver->method("key"  /  call(...).method("key"
@@ -173,12 +177,16 @@ def test_scanner_finds_every_kind_of_read():
         if (pnh.hasParam(name)) pnh.getParam(name, *value);
       }
       override(pnh, "node_override", &p.x);
+      p.mode = params.getParsed<ControlMode>("node_param_parsed", controlModeFromString).value_or(p.mode);
+      const std::string cfg = params.requireText("node_param_text", "<x.yaml>");
+      p.path = n.getPath("config_path", p.path);
       void unrelated(const std::string& text) { log(text); }
       unrelated("not_a_key_either");
     '''
     keys = {k for k, _ in scan_text(src)}
     assert keys == {"plain", "section", "multi_line", "ack_topic", "private_name", "through_lambda", "loop_a",
-                    "loop_b", "through_function", "node_override"}
+                    "loop_b", "through_function", "node_override", "node_param_parsed", "node_param_text",
+                    "config_path"}
 
 
 def test_documented_words_are_code_spans_only():

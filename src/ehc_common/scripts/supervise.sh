@@ -7,9 +7,11 @@
 #   sup_start NAME COMMAND...                    # background, output to $SUP_LOG_DIR/NAME.log
 #   sup_watch --until NAME --limit SECONDS       # returns when a process ends or time is up
 #   sup_stop_all
-# Every process started (or adopted) here is stopped by its process id: SIGINT to each, newest
-# first (a private master, started first, last), then SIGKILL to those still alive after
-# SUP_GRACE_TENTHS tenths of a second.
+# Every process started (or adopted) here is stopped by its process id: SIGINT to each started
+# one (SIGTERM to an adopted one: a pipeline the caller started in the background ignores
+# SIGINT), newest first, then SIGKILL to those still alive after SUP_GRACE_TENTHS tenths of a second; a private
+# master (sup_start_master) is stopped last, with SIGTERM once the others are gone (after a
+# Ctrl-C rosmaster could take until the SIGKILL to exit on SIGINT: every stop took 5 s).
 # Functions set variables of the calling shell: call them directly, never inside $(...).
 
 SUP_TAG="${SUP_TAG:-$(basename "$0")}"  # prefix of the messages printed here
@@ -17,9 +19,11 @@ SUP_LOG_DIR="${SUP_LOG_DIR:-.}"         # sup_start writes $SUP_LOG_DIR/<name>.l
 SUP_GRACE_TENTHS="${SUP_GRACE_TENTHS:-50}"  # 5 s for a clean shutdown after SIGINT
 SUP_PIDS=()                             # the supervised processes, in start order
 SUP_NAMES=()                            # their names (log file names without .log)
+SUP_STOP_SIGNALS=()                     # the signal that stops each: INT (started) or TERM (adopted)
 SUP_LAST_PID=                           # the process sup_start started last
 SUP_DEAD=                               # sup_watch: the process that exited ...
 SUP_DEAD_RC=                            # ... and its exit code
+SUP_MASTER_PID=                         # the private master (sup_start_master), stopped last
 _sup_stopped=0
 
 # sup_start NAME COMMAND...: runs COMMAND in the background with line-buffered output (progress
@@ -32,12 +36,14 @@ sup_start() {
   SUP_LAST_PID=$!
   SUP_PIDS+=("$SUP_LAST_PID")
   SUP_NAMES+=("$name")
+  SUP_STOP_SIGNALS+=(INT)
 }
 
 # sup_adopt NAME PID: supervise a background process the caller started itself.
 sup_adopt() {
   SUP_NAMES+=("$1")
   SUP_PIDS+=("$2")
+  SUP_STOP_SIGNALS+=(TERM)
 }
 
 # sup_pid NAME: prints the process id of NAME.
@@ -55,22 +61,44 @@ sup_log_tail() {
 }
 
 # sup_stop_all: stops every supervised process (once; later calls return at once) and removes
-# the traps: SIGINT newest first, SIGKILL after the grace period, then reaps them.
+# the traps: SIGINT (adopted: SIGTERM) newest first (the master excepted), the master SIGTERM
+# once they are gone,
+# SIGKILL to anything alive after the grace period, then reaps them.
 sup_stop_all() {
   [ "$_sup_stopped" = 1 ] && return 0
   _sup_stopped=1
   trap - INT TERM EXIT
-  local i p alive
-  for ((i = ${#SUP_PIDS[@]} - 1; i >= 0; i--)); do kill -INT "${SUP_PIDS[$i]}" 2>/dev/null; done
-  for ((i = 0; i < SUP_GRACE_TENTHS; i++)); do
-    alive=0
-    for p in "${SUP_PIDS[@]}"; do kill -0 "$p" 2>/dev/null && alive=1; done
-    [ "$alive" = 0 ] && break
-    sleep 0.1
+  local i p others=()
+  for ((i = ${#SUP_PIDS[@]} - 1; i >= 0; i--)); do
+    [ "${SUP_PIDS[$i]}" = "$SUP_MASTER_PID" ] && continue
+    others+=("${SUP_PIDS[$i]}")
+    kill "-${SUP_STOP_SIGNALS[$i]}" "${SUP_PIDS[$i]}" 2>/dev/null
   done
+  _sup_wait_gone "${others[@]}"
+  if [ -n "$SUP_MASTER_PID" ]; then
+    kill -TERM "$SUP_MASTER_PID" 2>/dev/null
+    _sup_wait_gone "$SUP_MASTER_PID"
+  fi
   for p in "${SUP_PIDS[@]}"; do kill -KILL "$p" 2>/dev/null; done
   [ ${#SUP_PIDS[@]} -gt 0 ] && wait "${SUP_PIDS[@]}" 2>/dev/null
   return 0
+}
+
+# _sup_wait_gone PID...: returns once none of them is running (a zombie counts as gone), at most
+# SUP_GRACE_TENTHS tenths of a second.
+_sup_wait_gone() {
+  local i p line alive
+  for ((i = 0; i < SUP_GRACE_TENTHS; i++)); do
+    alive=0
+    for p in "$@"; do
+      # The state after the command name in /proc/PID/stat ("Z": exited, not yet reaped).
+      read -r line 2>/dev/null </proc/"$p"/stat || continue
+      line="${line##*) }"
+      [ "${line%% *}" != Z ] && alive=1
+    done
+    [ "$alive" = 0 ] && return 0
+    sleep 0.1
+  done
 }
 
 # sup_install_traps MESSAGE CODE: on SIGINT / SIGTERM print an empty line and
@@ -81,7 +109,7 @@ sup_install_traps() {
   trap 'sup_stop_all' EXIT
 }
 
-# sup_watch [--until NAME] [--ignore NAME]... [--limit SECONDS]: polls every 0.5 s. Returns
+# sup_watch [--until NAME] [--ignore NAME]... [--limit SECONDS]: polls every 0.2 s. Returns
 #   0 when NAME (--until) has exited (the run's normal end),
 #   1 when any other process that is not ignored has exited: SUP_DEAD is its name, SUP_DEAD_RC
 #     its exit code (the first one in start order),
@@ -116,7 +144,7 @@ sup_watch() {
     if [ -n "$deadline" ] && [ "$(date +%s)" -ge "$deadline" ]; then
       return 2
     fi
-    sleep 0.5
+    sleep 0.2
   done
 }
 
@@ -163,21 +191,24 @@ print(x.ServerProxy(sys.argv[1]).getPid(sys.argv[2])[2])" "$ROS_MASTER_URI" "/$S
 }
 
 # sup_start_master: starts rosmaster (process "rosmaster", log rosmaster.log) on the port of
-# ROS_MASTER_URI and waits until it answers (100 tries, 0.1 s apart). Fails if it died or if
-# another master answers there (two runs started at the same instant can pick the same free port).
+# ROS_MASTER_URI and waits until it answers (100 tries, 0.1 s apart). Returns 0 when it answers,
+# 1 if another master answers there (two runs started at the same instant can pick the same free
+# port), 2 if ours exited or never answered (its log says why).
 sup_start_master() {
   local port="${ROS_MASTER_URI##*:}" master pid try
   port="${port%%/*}"
   sup_start rosmaster rosmaster --core -p "$port"
   master=$SUP_LAST_PID
+  SUP_MASTER_PID=$master
   for ((try = 0; try < 100; try++)); do
     pid=$(sup_master_pid)
     [ "$pid" = "$master" ] && return 0
-    if [ -n "$pid" ] || ! kill -0 "$master" 2>/dev/null; then return 1; fi  # another master, or ours died
+    [ -n "$pid" ] && return 1                      # another master
+    kill -0 "$master" 2>/dev/null || return 2      # ours died
     # No XML-RPC answer yet (or a stand-in master that only serves parameters): the parameter
     # server answering is enough.
     rosparam list / >/dev/null 2>&1 && return 0
     sleep 0.1
   done
-  return 1
+  return 2
 }

@@ -5,7 +5,10 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
 #include <functional>
+
+#include <sys/stat.h>
 
 using ehc_common::ConfigNode;
 
@@ -95,4 +98,68 @@ TEST(ConfigNode, ValidateAppendsFileAndField) {
   const auto root = ConfigNode::loadString("sec: {x: -1}\n", "f.yaml", "O");
   const std::string e = errorOf([&] { root.child("sec").validate(P{}); });
   EXPECT_NE(e.find("[P] x must be >= 0 (in f.yaml, sec)"), std::string::npos) << e;
+}
+
+namespace {
+std::string writeFile(const std::string& path, const std::string& text) {
+  const auto slash = path.find_last_of('/');
+  ::mkdir(path.substr(0, slash).c_str(), 0755);
+  std::ofstream(path) << text;
+  return path;
+}
+}  // namespace
+
+TEST(ConfigNode, ExtendsResolvesEachRelativePathAgainstTheFileThatSetIt) {
+  // The base's relative path stays the base's, the extending file's own relative path is its own,
+  // whichever folder each lives in.
+  const std::string root = "/tmp/ehc_config_node_paths";
+  ::mkdir(root.c_str(), 0755);
+  writeFile(root + "/base/base.yaml", "robot: ../robots/r/robot.yaml\nsec: {camera: cam.yaml, other: 1}\nlist: [{p: a.yaml}]\n");
+  writeFile(root + "/user/over.yaml", "extends: ../base/base.yaml\nsec: {other: 2, mine: data.bin}\n");
+  const auto n = ConfigNode::loadFile(root + "/user/over.yaml", "Test");
+  const std::string base = root + "/user/../base";  // as the extends chain names it
+  EXPECT_EQ(n.requirePath("robot"), base + "/../robots/r/robot.yaml");
+  EXPECT_EQ(n.child("sec").requirePath("camera"), base + "/cam.yaml");
+  EXPECT_EQ(n.child("sec").requirePath("mine"), root + "/user/data.bin");
+  EXPECT_EQ(n.element("list", 0).requirePath("p"), base + "/a.yaml");
+  EXPECT_EQ(n.getPath("absent", "x"), "x");
+  EXPECT_EQ(n.fileOf("robot"), base + "/base.yaml");
+  EXPECT_EQ(n.fileOf("sec.other"), root + "/user/over.yaml");
+  // A list replaced by the extending file is the extending file's.
+  writeFile(root + "/user/over2.yaml", "extends: ../base/base.yaml\nlist: [{p: b.yaml}]\n");
+  const auto m = ConfigNode::loadFile(root + "/user/over2.yaml", "Test");
+  EXPECT_EQ(m.element("list", 0).requirePath("p"), root + "/user/b.yaml");
+  // Three files: each value resolves against its own file.
+  writeFile(root + "/third/top.yaml", "extends: ../user/over.yaml\nrobot: /abs/robot.yaml\n");
+  const auto t = ConfigNode::loadFile(root + "/third/top.yaml", "Test");
+  EXPECT_EQ(t.requirePath("robot"), "/abs/robot.yaml");
+  EXPECT_EQ(t.child("sec").requirePath("mine"), root + "/third/../user/data.bin");
+  EXPECT_EQ(t.child("sec").requirePath("camera"), root + "/third/../user/../base/cam.yaml");
+  writeFile(root + "/user/empty.yaml", "extends: ../base/base.yaml\nrobot: ''\n");
+  const std::string e = errorOf([&] { ConfigNode::loadFile(root + "/user/empty.yaml", "Test").requirePath("robot"); });
+  EXPECT_NE(e.find("empty.yaml: field 'robot' must not be empty"), std::string::npos) << e;
+}
+
+TEST(ConfigNode, ErrorsNameTheFileTheBadValueCameFrom) {
+  const std::string root = "/tmp/ehc_config_node_origin";
+  ::mkdir(root.c_str(), 0755);
+  writeFile(root + "/base.yaml", "a: {x: abc, y: 1}\n");
+  writeFile(root + "/over.yaml", "extends: base.yaml\na: {y: def}\nb: 2\n");
+  const auto n = ConfigNode::loadFile(root + "/over.yaml", "Test");
+  const std::string from_base = errorOf([&] { n.child("a").require<double>("x"); });
+  EXPECT_NE(from_base.find(root + "/base.yaml (through 'extends' of " + root + "/over.yaml): field 'a.x'"),
+            std::string::npos) << from_base;
+  const std::string from_over = errorOf([&] { n.child("a").require<double>("y"); });
+  EXPECT_NE(from_over.find("[Test] " + root + "/over.yaml: field 'a.y'"), std::string::npos) << from_over;
+  n.ignore("a");
+  const std::string unknown = errorOf([&] { n.rejectUnknownKeys(); });
+  EXPECT_NE(unknown.find(root + "/over.yaml: unknown field 'b'"), std::string::npos) << unknown;
+}
+
+TEST(ConfigNode, GetInRangeNamesFileAndField) {
+  const auto root = ConfigNode::loadString("node: {rate: 5000, ok: 50}\n", "f.yaml", "O");
+  EXPECT_EQ(root.child("node").getInRange("ok", 1.0, 1.0, 1000.0), 50.0);
+  EXPECT_EQ(root.child("node").getInRange("absent", 7, 1.0, 1000.0), 7);
+  const std::string e = errorOf([&] { root.child("node").getInRange("rate", 1.0, 1.0, 1000.0); });
+  EXPECT_NE(e.find("[O] f.yaml: field 'node.rate' = 5000 is outside [1, 1000]"), std::string::npos) << e;
 }

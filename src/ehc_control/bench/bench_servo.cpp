@@ -26,6 +26,7 @@ int main() {
     params.servo_type = ServoType::Pbvs;
     params.mpbs.enabled = mpbs;
     params.tracking.camera_file = dir + "camera.yaml";
+    params.watchdog.require_obstacles = false;  // no obstacle lists here
     ControlCycle cycle(params);
     const WholeBodyModel& model = cycle.model();
     const RobotConfig& rc = model.config();

@@ -30,6 +30,7 @@ ControlCycleParams cycleParams(ServoType servo = ServoType::Proportional, bool m
   p.servo_type = servo;
   p.mpbs.enabled = mpbs;
   p.tracking.camera_file = kConfigDir + "/robots/realman_rm65_water2/camera.yaml";
+  p.watchdog.require_obstacles = false;  // no obstacle lists in these loops (said in every status)
   return p;
 }
 
@@ -169,7 +170,11 @@ std::vector<ObstaclePair> manyPairs(const ControlCycle& cycle, int n) {
 
 TEST(ControlCycle, RequiredObstaclesMissingOrStaleStopWithObstaclesStale) {
   ControlCycleParams p = cycleParams();
-  p.watchdog.require_obstacles = true;
+  p.watchdog = SupervisorParams();  // the default: obstacle sensing required (safe unless a config says otherwise)
+  ASSERT_TRUE(p.watchdog.require_obstacles);
+  // A configuration that does not mention it requires it too.
+  EXPECT_TRUE(loadControlCycleParams(ConfigNode::loadString("controller: {mode: ehc}\n", "/cfg/c.yaml", "Test"))
+                  .watchdog.require_obstacles);
   Loop loop(p);
   const Eigen::Isometry3d target = approachPose(1.5, 0.0, 0.8, Eigen::Vector3d(1, 0, -1));
   // No obstacle list yet: stopped (not tracking blind), and the status says why.
@@ -178,6 +183,7 @@ TEST(ControlCycle, RequiredObstaclesMissingOrStaleStopWithObstaclesStale) {
   EXPECT_NE(out.status.reason.find("no obstacle list"), std::string::npos) << out.status.reason;
   EXPECT_TRUE(isZero(out.velocity));
   EXPECT_EQ(out.status.obstacles_age, -1.0);
+  EXPECT_TRUE(out.status.obstacles_required);
   // A fresh list (empty: nothing near) lets it track.
   const double t_list = loop.now();
   ASSERT_EQ(loop.cycle.setObstacles(t_list, {}), "");
@@ -191,6 +197,8 @@ TEST(ControlCycle, RequiredObstaclesMissingOrStaleStopWithObstaclesStale) {
     last = loop.step(&target);
     EXPECT_EQ(last.status.phase, ControlPhase::Tracking);
   }
+  // The first zero command comes within one cycle after the list turned obstacle_timeout old.
+  EXPECT_LE(loop.now() - t_list, p.watchdog.obstacle_timeout + loop.dt + 1e-9);
   out = loop.step(&target);
   EXPECT_EQ(out.status.phase, ControlPhase::ObstaclesStale);
   EXPECT_NE(out.status.reason.find("obstacle list is"), std::string::npos) << out.status.reason;
@@ -199,10 +207,16 @@ TEST(ControlCycle, RequiredObstaclesMissingOrStaleStopWithObstaclesStale) {
   // A fresh list resumes.
   ASSERT_EQ(loop.cycle.setObstacles(loop.now(), {}), "");
   EXPECT_EQ(loop.step(&target).status.phase, ControlPhase::Tracking);
-  // Not required (the default): the same stale list is dropped and the cycle tracks.
+  // Not required (a config says so): the same stale list is dropped and the cycle tracks, and
+  // every status says that obstacle sensing is off.
   Loop optional(cycleParams());
   ASSERT_EQ(optional.cycle.setObstacles(0.0, {}), "");
-  for (int i = 0; i < 80; ++i) EXPECT_EQ(optional.step(&target).status.phase, ControlPhase::Tracking);
+  for (int i = 0; i < 80; ++i) {
+    const ControlCycleOutput o = optional.step(&target);
+    EXPECT_EQ(o.status.phase, ControlPhase::Tracking);
+    EXPECT_FALSE(o.status.obstacles_required);
+  }
+  EXPECT_FALSE(optional.cycle.stopped(optional.now(), "test").status.obstacles_required);
 }
 
 TEST(ControlCycle, ACommandIsNeverComputedFromAStateOlderThanTheStateTimeout) {

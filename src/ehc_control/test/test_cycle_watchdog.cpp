@@ -76,6 +76,7 @@ TEST(CycleWatchdog, RejectsNonPositiveTimeouts) {
 TEST(CycleWatchdog, StaleStateGivesTheZeroCommandAndAFreshOneRuns) {
   ControlCycleParams p;
   p.robot_file = test::realmanYaml();
+  p.watchdog.require_obstacles = false;  // no obstacle lists here
   ControlCycle cycle(p);
   const RobotConfig& rc = cycle.model().config();
   CycleWatchdog w(p.watchdog.state_timeout, 0.5);

@@ -206,6 +206,7 @@ LoopResult runLoop(bool mpbs, const Eigen::Isometry3d& grasp, double time_limit)
   p.servo_type = ServoType::Pbvs;
   p.mpbs.enabled = mpbs;
   p.tracking.camera_file = std::string(EHC_CONFIG_DIR) + "/robots/realman_rm65_water2/camera.yaml";
+  p.watchdog.require_obstacles = false;  // no obstacle lists here
   ControlCycle cycle(p);
   const RobotConfig& rc = cycle.model().config();
   test::KinematicSim sim{Eigen::Vector3d::Zero(), rc.arm_ready};

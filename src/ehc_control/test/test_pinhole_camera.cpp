@@ -91,7 +91,27 @@ TEST(PinholeCamera, BadFilesNameTheFileAndField) {
   EXPECT_EQ(d.distortion_model, "rational_polynomial");
   ASSERT_EQ(d.distortion.size(), 8);
   EXPECT_EQ(d.distortion[1], -0.2);
-  for (const auto& f : {no_k, bad_f, short_k, negative_f, skew, no_height, outside, distorted}) std::remove(f.c_str());
+  // The matrices' shapes: rows / cols of the wrong type or size, a projection of the wrong size.
+  const std::string k_rows = writeTemp(
+      "k_rows.yaml", "image_width: 640\nimage_height: 480\ncamera_matrix: {rows: abc, cols: 3, data: [615, 0, 320, 0, 615, 240, 0, 0, 1]}\n");
+  e = errorOf([&] { loadPinholeCamera(k_rows); });
+  EXPECT_NE(e.find(k_rows + ": field 'camera_matrix.rows' has the wrong type"), std::string::npos) << e;
+  const std::string p_size = writeTemp(
+      "p_size.yaml", "image_width: 640\nimage_height: 480\ncamera_matrix: {data: [615, 0, 320, 0, 615, 240, 0, 0, 1]}\n"
+                     "projection_matrix: {rows: 3, cols: 4, data: [615, 0, 320, 0, 615, 240, 0, 0, 1]}\n");
+  e = errorOf([&] { loadPinholeCamera(p_size); });
+  EXPECT_NE(e.find("field 'projection_matrix.data' must have 12 elements"), std::string::npos) << e;
+  const std::string d_cols = writeTemp(
+      "d_cols.yaml", "image_width: 640\nimage_height: 480\ncamera_matrix: {data: [615, 0, 320, 0, 615, 240, 0, 0, 1]}\n"
+                     "distortion_coefficients: {rows: 1, cols: 5, data: [0, 0, 0, 0]}\n");
+  e = errorOf([&] { loadPinholeCamera(d_cols); });
+  EXPECT_NE(e.find("field 'distortion_coefficients.data' must have 5 elements"), std::string::npos) << e;
+  const std::string typo = writeTemp(
+      "typo.yaml", "image_width: 640\nimage_heigth: 480\nimage_height: 480\ncamera_matrix: {data: [615, 0, 320, 0, 615, 240, 0, 0, 1]}\n");
+  e = errorOf([&] { loadPinholeCamera(typo); });
+  EXPECT_NE(e.find(typo + ": unknown field 'image_heigth' (did you mean 'image_height'?)"), std::string::npos) << e;
+  for (const auto& f : {no_k, bad_f, short_k, negative_f, skew, no_height, outside, distorted, k_rows, p_size, d_cols, typo})
+    std::remove(f.c_str());
 }
 
 TEST(PinholeCamera, InViewMeansInsideTheImageAtPositiveDepth) {

@@ -127,9 +127,9 @@ TEST(ConfigNode, RealmanControllerConfigIsTheSimConfigWithATimer) {
     b << sim.child(section).yaml();
     EXPECT_EQ(a.str(), b.str()) << section;
   }
-  // ... but the real robot runs the obstacle node and stops without its distances.
+  // ... and both stop without obstacle distances (obstacle sensing required: safe by default).
   EXPECT_TRUE(real.child("watchdog").require<bool>("require_obstacles"));
-  EXPECT_FALSE(sim.child("watchdog").require<bool>("require_obstacles"));
+  EXPECT_TRUE(sim.child("watchdog").require<bool>("require_obstacles"));
   for (const char* key : {"state_timeout", "target_timeout", "obstacle_timeout"})
     EXPECT_EQ(real.child("watchdog").require<double>(key), sim.child("watchdog").require<double>(key)) << key;
 }

@@ -98,6 +98,31 @@ TEST(RobotSwitch, ResolvesNamesAndPathsAndNamesTheKnownRobots) {
   EXPECT_NE(e.find("realman_rm65_water2"), std::string::npos) << e;
 }
 
+TEST(RobotSwitch, AUsersRobotsFolderStillFindsTheShippedRobots) {
+  // EHC_ROBOTS_DIR with only the user's robot: its robot by name, and the shipped robot the
+  // generic configs name (before: looked up in the user's folder only, so every tool that
+  // loads config/control/controller.yaml failed, even with --robot <the user's robot>).
+  namespace fs = std::filesystem;
+  const std::string dir = ::testing::TempDir() + "/ehc_user_robots";
+  fs::remove_all(dir);
+  fs::create_directories(dir + "/my_robot");
+  for (const char* f : {"robot.yaml", "robot.urdf", "camera.yaml", "reachability_map.bin"})
+    fs::copy_file(kConfigDir + "/robots/kuka_iiwa14_kmr/" + f, dir + "/my_robot/" + f);
+  ::setenv("EHC_ROBOTS_DIR", dir.c_str(), 1);
+  EXPECT_EQ(resolveRobotFile("my_robot"), dir + "/my_robot/robot.yaml");
+  const std::string shipped = configDirectory() + "/robots";
+  EXPECT_EQ(resolveRobotFile("realman_rm65_water2"), shipped + "/realman_rm65_water2/robot.yaml");
+  ControlCycleParams p = loadControlCycleParams(ehc_common::ConfigNode::loadFile(kConfigDir + "/control/controller.yaml", "test"));
+  EXPECT_EQ(p.robot_file, shipped + "/realman_rm65_water2/robot.yaml");
+  p.robot_file = resolveRobotFile("my_robot");
+  EXPECT_EQ(ControlCycle(p).model().nBase(), 3);
+  const std::string e = errorOf([] { resolveRobotFile("nobody"); });
+  EXPECT_NE(e.find("robots in " + dir + ": my_robot"), std::string::npos) << e;
+  EXPECT_NE(e.find("robots in " + shipped + ": "), std::string::npos) << e;
+  ::unsetenv("EHC_ROBOTS_DIR");
+  fs::remove_all(dir);
+}
+
 TEST(MinimalRobotYaml, IsEnoughAndDefaultsTheLinkLists) {
   const RobotConfig rc = loadRobotConfig(writeTemp(minimalYaml(kIiwaJoints)));
   EXPECT_TRUE(rc.checked_links.empty());

@@ -451,39 +451,72 @@ TEST(WholeBodyModelErrors, UnreadableOrBrokenUrdf) {
     WholeBodyModel m(c);
     FAIL() << "no exception";
   } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("[WholeBodyModel] cannot read URDF file '/nonexistent/robot.urdf'"),
-              std::string::npos);
+    const std::string w = e.what();
+    EXPECT_NE(w.find("[WholeBodyModel] " + c.source_file + ": field 'robot.urdf' names a file that cannot be read "
+                     "(URDF /nonexistent/robot.urdf)"),
+              std::string::npos) << w;
   }
   EXPECT_THROW(WholeBodyModel(realmanConfig(), "<robot name='x'><link name="), std::invalid_argument);
 }
 
-TEST(WholeBodyModelErrors, ConfigThatDoesNotMatchTheUrdf) {
+TEST(WholeBodyModelErrors, ConfigThatDoesNotMatchTheUrdfNamesTheFileAndTheField) {
+  // Every robot-folder mismatch is a start-up error naming robot.yaml and the field (the
+  // simulators and the sequencer check the robot through this model too).
   const RobotConfig good = realmanConfig();
   const std::string xml = readText(good.urdf_path);
+  auto expectError = [&](const RobotConfig& c, const std::string& field, const std::string& what) {
+    try {
+      WholeBodyModel m(c, xml);
+      FAIL() << field << ": no exception";
+    } catch (const std::invalid_argument& e) {
+      const std::string w = e.what();
+      EXPECT_NE(w.find(good.source_file + ": field '" + field + "' "), std::string::npos) << w;
+      EXPECT_NE(w.find(what), std::string::npos) << w;
+    }
+  };
   {
     RobotConfig c = good;
     c.arm_joints[2] = "elbow";  // not in the URDF
-    EXPECT_THROW(WholeBodyModel(c, xml), std::invalid_argument);
+    expectError(c, "robot.arm.joints", "names joint 'elbow' which is not in the URDF");
   }
   {
     RobotConfig c = good;
-    std::swap(c.arm_joints[0], c.arm_joints[1]);  // wrong order
-    EXPECT_THROW(WholeBodyModel(c, xml), std::invalid_argument);
+    std::swap(c.arm_joints[0], c.arm_joints[1]);  // wrong order (each with its own limits)
+    std::swap(c.arm_lower[0], c.arm_lower[1]);
+    std::swap(c.arm_upper[0], c.arm_upper[1]);
+    std::swap(c.arm_velocity[0], c.arm_velocity[1]);
+    std::swap(c.arm_ready[0], c.arm_ready[1]);
+    expectError(c, "robot.arm.joints", "must be the movable joints");
   }
   {
     RobotConfig c = good;
     c.arm_upper[1] = 3.0;  // wider than the URDF's 130 deg
-    EXPECT_THROW(WholeBodyModel(c, xml), std::invalid_argument);
+    expectError(c, "robot.arm.lower/upper", "of joint 'joint2' are wider than the URDF's limits");
   }
   {
     RobotConfig c = good;
-    c.calibration.push_back({"joint3", Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()});
-    EXPECT_THROW(WholeBodyModel(c, xml), std::invalid_argument);  // not a fixed joint
+    c.calibration.push_back({"tcp", "joint3", Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()});
+    expectError(c, "robot.calibration.tcp.joint", "must be a fixed joint");
+  }
+  {
+    RobotConfig c = good;
+    c.calibration.push_back({"camera", "no_such_mount", Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()});
+    expectError(c, "robot.calibration.camera.joint", "names joint 'no_such_mount' which is not in the URDF");
   }
   {
     RobotConfig c = good;
     c.tcp_frame = "gripper_tip";  // no such link
-    EXPECT_THROW(WholeBodyModel(c, xml), std::invalid_argument);
+    expectError(c, "robot.frames.tcp", "names link 'gripper_tip' which is not in the URDF");
+  }
+  {
+    RobotConfig c = good;
+    c.camera_frame = "camera_typo";
+    expectError(c, "robot.frames.camera_optical", "names link 'camera_typo' which is not in the URDF");
+  }
+  {
+    RobotConfig c = good;
+    c.base_frame = "footprint";
+    expectError(c, "robot.frames.base", "the URDF's root link is 'base_link'");
   }
 }
 

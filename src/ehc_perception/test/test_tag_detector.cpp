@@ -346,6 +346,8 @@ TEST(TagDetector, ConfigsAndCamerasAreValidated) {
   expectFails("tag_detector: {default_tag_size: -0.05}", "default_tag_size");
   expectFails("tag_detector: {tag_sizes: {3: 0}}", "tag_sizes[3]");
   expectFails("tag_detector: {tag_sizes: [0.05]}", "tag_sizes");
+  expectFails("tag_detector: {tag_sizes: {3: abc}}", "tags.yaml: field 'tag_detector.tag_sizes.3' has the wrong type");
+  expectFails("tag_detector: {tag_sizes: {three: 0.04}}", "field 'tag_detector.tag_sizes.three' must be an integer tag id");
   expectFails("tag_detector: {pose_method: magic}", "pose_method");
   expectFails("tag_detector: {pose_prior: {tag_axis: [0, 0, 0]}}", "pose_prior.tag_axis");
   expectFails("tag_detector: {pose_prior: {world_direction: [0, 1]}}", "world_direction");

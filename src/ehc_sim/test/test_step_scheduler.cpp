@@ -4,6 +4,7 @@
 // that are counted and executed as zero. Free-run: one step per dt of wall time, stale
 // commands zeroed, no catching up. Wall times are plain numbers here: nothing is timed.
 
+#include "ehc_common/node_params.h"
 #include "ehc_sim/step_scheduler.h"
 
 #include <gtest/gtest.h>
@@ -199,6 +200,42 @@ TEST(StepScheduler, AckGateHoldsEachNodeOnlyToItsOwnStream) {
   EXPECT_THROW(twice.setAckGate({AckNode::parse("a"), AckNode::parse("a:cloud")}, 0), std::invalid_argument);
 }
 
+TEST(StepScheduler, AnAcknowledgementFromTheFutureIsIgnoredAndOpensNothing) {
+  // One stray far-future stamp (a wrong clock, a stray publisher) used to count as done with
+  // every frame up to it: the gate stayed open for the rest of the run. It is ignored, with the
+  // reason; acknowledgements of frames that exist still count, up to one step ahead.
+  StepScheduler s(robot(), config(false));
+  s.setAckGate({AckNode::parse("tag"), AckNode::parse("seq:state")}, 0);
+  const std::int64_t dt = kT1 - kT0;
+  EXPECT_EQ(s.onAck("tag", 0), "");  // "ready": joined
+  EXPECT_EQ(s.onAck("seq", 0), "");
+  for (int k = 0; k < 50; ++k) {
+    const std::int64_t t = kT0 + k * dt;
+    s.statePublished(0.0, t, true);
+    s.framePublished(AckStream::Image, t);
+    EXPECT_EQ(s.onBaseTwist(0.0, 0.0, 0.0, 0.0), "");
+    EXPECT_EQ(s.onArmCommand(0.0, t, kNames, kRates), "");
+    const std::string why = s.onAck("tag", t + 1000 * dt);  // 10 s ahead
+    EXPECT_NE(why.find("'tag' acknowledged"), std::string::npos) << why;
+    EXPECT_NE(why.find("ahead of the newest frame"), std::string::npos) << why;
+    EXPECT_NE(s.onAck("seq", std::numeric_limits<std::int64_t>::max()), "");
+    // Still held: neither node is done with the frame of t.
+    ASSERT_EQ(s.next(0.0), StepAction::Wait) << "step " << k;
+    EXPECT_NE(s.ackWait().find("tag (image"), std::string::npos) << s.ackWait();
+    EXPECT_EQ(s.onAck("tag", t), "");
+    EXPECT_EQ(s.next(0.0), StepAction::Wait);
+    EXPECT_EQ(s.onAck("seq", t), "");
+    ASSERT_EQ(s.next(0.0), StepAction::Step) << "step " << k;
+  }
+  EXPECT_EQ(s.onAck("seq", kT0 + 50 * dt), "");  // one step ahead of the newest frame: within the bound
+  // After a reset time restarts: an acknowledgement of a frame before it is from the future too.
+  s.reset();
+  s.statePublished(0.0, kT0, true);
+  s.framePublished(AckStream::Image, kT0);
+  EXPECT_NE(s.onAck("tag", kT0 + 40 * dt), "");
+  EXPECT_EQ(s.onAck("tag", kT0), "");
+}
+
 TEST(StepScheduler, RejectedCommandsAreCountedAnswersExecutedAsZero) {
   StepScheduler s(robot(), config(false));
   s.statePublished(0.0, kT0, true);
@@ -273,11 +310,11 @@ TEST(StepScheduler, ActionNames) {
 // rosrun's one string; empty means no gate; a malformed entry or lag is a [StepScheduler] error
 // naming it.
 TEST(AckGateConfig, ParsesTheNodeParameters) {
-  EXPECT_EQ(ehc_sim::splitAckSpecs("[ehc_tag_node, ehc_grasp_node:cloud,ehc_grasp_sequencer_node:state]"),
+  EXPECT_EQ(ehc_common::splitNameList("[ehc_tag_node, ehc_grasp_node:cloud,ehc_grasp_sequencer_node:state]"),
             (std::vector<std::string>{"ehc_tag_node", "ehc_grasp_node:cloud", "ehc_grasp_sequencer_node:state"}));
-  EXPECT_EQ(ehc_sim::splitAckSpecs("a b"), (std::vector<std::string>{"a", "b"}));
+  EXPECT_EQ(ehc_common::splitNameList("a b"), (std::vector<std::string>{"a", "b"}));
   const ehc_sim::AckGateConfig gate =
-      ehc_sim::parseAckGate(ehc_sim::splitAckSpecs("[tag, /grasp:cloud, sequencer:state]"), 0.02);
+      ehc_sim::parseAckGate(ehc_common::splitNameList("[tag, /grasp:cloud, sequencer:state]"), 0.02);
   ASSERT_EQ(gate.nodes.size(), 3u);
   EXPECT_EQ(gate.nodes[0].name, "tag");
   EXPECT_EQ(gate.nodes[0].stream, AckStream::Image);
@@ -293,8 +330,8 @@ TEST(AckGateConfig, ParsesTheNodeParameters) {
 
 TEST(AckGateConfig, EmptyMeansNoGate) {
   for (const std::string text : {"", "[]", " , [ ] "}) {
-    EXPECT_TRUE(ehc_sim::splitAckSpecs(text).empty()) << text;
-    EXPECT_TRUE(ehc_sim::parseAckGate(ehc_sim::splitAckSpecs(text), 0.0).nodes.empty()) << text;
+    EXPECT_TRUE(ehc_common::splitNameList(text).empty()) << text;
+    EXPECT_TRUE(ehc_sim::parseAckGate(ehc_common::splitNameList(text), 0.0).nodes.empty()) << text;
   }
   EXPECT_EQ(ehc_sim::parseAckGate({}, 0.0).summary(), "");
 }
@@ -308,7 +345,7 @@ TEST(AckGateConfig, MalformedEntriesAreClearErrors) {
     }
     return std::string();
   };
-  const std::string stream = error(ehc_sim::splitAckSpecs("[tag, grasp:depth]"), 0.0);
+  const std::string stream = error(ehc_common::splitNameList("[tag, grasp:depth]"), 0.0);
   EXPECT_EQ(stream.rfind("[StepScheduler] ", 0), 0u) << stream;
   EXPECT_NE(stream.find("unknown stream 'depth' in 'grasp:depth'"), std::string::npos) << stream;
   const std::string name = error({"tag", ":cloud"}, 0.0);

@@ -136,11 +136,17 @@ struct GraspExperimentResult {
   std::vector<GraspTraceSample> trace;
   PipelineCounters counters;          ///< summed over every run
   double sim_time_s = 0.0;
+  /// Runs planned and completed: fewer completed when a stop signal arrived
+  /// (ehc_common::stopRequested): the result then holds the completed runs only.
+  int runs_planned = 0, runs_done = 0;
+  bool partial() const { return runs_done < runs_planned; }
 };
 
 class GraspExperiment {
  public:
   /// progress(done, total, text) after every run (from the calling thread's view: serialised).
+  /// A stop signal (ehc_common::stopRequested) ends the runs in progress and starts no more:
+  /// run() returns the completed ones (GraspExperimentResult::partial).
   using Progress = std::function<void(int done, int total, const std::string& text)>;
 
   GraspExperiment(const GraspExperimentParams& params, std::vector<std::string> methods);

@@ -12,7 +12,7 @@ class ConfigNode;
 }  // namespace ehc_common
 
 namespace ehc_control {
-struct RobotConfig;
+class WholeBodyModel;
 }  // namespace ehc_control
 
 namespace ehc_bringup {
@@ -34,8 +34,12 @@ struct SequencerNodeParams {
   std::vector<std::string> pose_topics;  ///< per object (objects[i].pose_topic)
   bool exit_when_done = true;
 
-  /// Sets the frames the file left empty to the robot's.
-  void applyRobotFrames(const ehc_control::RobotConfig& robot);
+  std::string source_file;  ///< the YAML it was loaded from (for errors)
+
+  /// Sets the frames the file left empty to the robot's (`model`: robot.yaml checked against
+  /// its URDF). Throws std::invalid_argument naming the file and the field when node.tcp_frame
+  /// or node.camera_frame is not a link of the robot's URDF.
+  void applyRobotFrames(const ehc_control::WholeBodyModel& model);
   std::string summary() const;
 };
 

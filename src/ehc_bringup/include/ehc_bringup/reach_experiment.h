@@ -122,6 +122,8 @@ struct ReachSummary {
   double wall_time_s = 0.0;
   std::map<ReachFailure, int> failures;          ///< count per cause (failed targets only)
   std::map<std::string, int> pinned_joints;      ///< count per joint (RollWinding, JointLimit)
+  int targets_planned = 0;  ///< targets given to run(); `targets` were run
+  bool partial = false;     ///< a stop signal ended the run early (ehc_common::stopRequested)
 };
 
 class ReachExperiment {
@@ -134,7 +136,8 @@ class ReachExperiment {
                   const ReachExperimentParams& params);
 
   /// Runs every set from the ready pose at the origin; set s (numbered from params.first_set)
-  /// uses noise seed `seed + s`. With
+  /// uses noise seed `seed + s`. A stop signal (ehc_common::stopRequested) ends it before the
+  /// next target (ReachSummary::partial). With
   /// ReachProtocol::Reset every target starts from the ready pose at the origin, and targets
   /// are taken relative to the previous one (relativeToPrevious, reach_targets.h) by the caller.
   ReachSummary run(const std::vector<std::vector<Eigen::Isometry3d>>& sets, unsigned seed,

@@ -1,9 +1,9 @@
 #include "ehc_bringup/grasp_experiment.h"
 
 #include "ehc_common/config_node.h"
+#include "ehc_common/output_dir.h"
+#include "ehc_common/stop_signal.h"
 #include "ehc_sim/sim_world.h"
-
-#include <sys/stat.h>
 
 #include <algorithm>
 #include <atomic>
@@ -111,6 +111,7 @@ struct GraspExperiment::RunOutput {
   SpeedMeans distant, close;  ///< sums
   PipelineCounters counters;
   double sim_time_s = 0.0;
+  bool complete = false;  ///< false: stopped by a stop signal before its end (not counted)
 };
 
 GraspExperiment::GraspExperiment(const GraspExperimentParams& params, std::vector<std::string> methods)
@@ -179,6 +180,7 @@ GraspExperiment::RunOutput GraspExperiment::runOne(const RunSpec& spec) const {
                         cfg.sequencer.retreat_timeout + cfg.sequencer.gripper_timeout + 2.0);
   const double t_end = pipe.time() + limit;
   while (!pipe.done() && pipe.time() < t_end) {
+    if (ehc_common::stopRequested()) return out;  // incomplete: dropped by run()
     const PipelineCycle& c = pipe.step();
     const std::size_t k = std::min(c.object, n_objects - 1);
     contacts[k] += c.collision;
@@ -271,6 +273,7 @@ GraspExperiment::RunOutput GraspExperiment::runOne(const RunSpec& spec) const {
   }
   out.counters = pipe.counters();
   out.sim_time_s = pipe.time() - 1.0;
+  out.complete = true;
   return out;
 }
 
@@ -295,7 +298,7 @@ GraspExperimentResult GraspExperiment::run(const Progress& progress) const {
   auto worker = [&] {
     for (;;) {
       const std::size_t i = next++;
-      if (i >= specs.size()) return;
+      if (i >= specs.size() || ehc_common::stopRequested()) return;
       try {
         const auto w0 = std::chrono::steady_clock::now();
         outputs[i] = runOne(specs[i]);
@@ -307,6 +310,7 @@ GraspExperimentResult GraspExperiment::run(const Progress& progress) const {
         return;
       }
       std::lock_guard<std::mutex> lock(mutex);
+      if (!outputs[i].complete) return;  // stopped
       ++done;
       if (progress) {
         int ok = 0;
@@ -329,6 +333,8 @@ GraspExperimentResult GraspExperiment::run(const Progress& progress) const {
 
   // Assemble in spec order: the result does not depend on the job count.
   GraspExperimentResult res;
+  res.runs_planned = static_cast<int>(specs.size());
+  res.runs_done = done;
   for (const auto& m : methods_) {
     GraspMethodSummary s;
     s.method = m;
@@ -336,7 +342,7 @@ GraspExperimentResult GraspExperiment::run(const Progress& progress) const {
     double time_sum = 0.0;
     std::map<std::string, std::pair<double, int>> tfm;
     for (std::size_t i = 0; i < specs.size(); ++i) {
-      if (specs[i].method != m) continue;
+      if (specs[i].method != m || !outputs[i].complete) continue;
       const RunOutput& o = outputs[i];
       for (const auto& t : o.trials) {
         ++s.grasps;
@@ -458,6 +464,10 @@ void writeSummaryJson(const std::string& dir, const GraspExperimentParams& param
   j["jitter_xy"] = jsonNumber(params.jitter_xy);
   j["jitter_yaw_deg"] = jsonNumber(params.jitter_yaw_deg);
   j["sim_time_s"] = jsonNumber(result.sim_time_s);
+  // Interrupted (SIGINT / SIGTERM): the completed runs only.
+  j["partial"] = result.partial();
+  j["runs_done"] = result.runs_done;
+  j["runs_planned"] = result.runs_planned;
   j["methods"] = ehc_common::Json::array();
   for (const GraspMethodSummary& m : result.summaries) j["methods"].push_back(graspSummaryJsonValue(m));
   openResultFile(dir, "summary.json") << ehc_common::jsonLine(j) << "\n";
@@ -590,7 +600,7 @@ void writeTraceCsv(const std::string& dir, const GraspExperimentResult& result) 
 
 void writeGraspResults(const std::string& dir, const GraspExperimentParams& params,
                        const GraspExperimentResult& result, const std::string& notes) {
-  ::mkdir(dir.c_str(), 0755);
+  ehc_common::prepareOutputDir(dir);
   writeSummaryJson(dir, params, result);
   writeTableMd(dir, params, result, notes);
   writeTrialsCsv(dir, result);

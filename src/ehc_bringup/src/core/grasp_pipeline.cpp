@@ -1,4 +1,5 @@
 #include "ehc_bringup/grasp_pipeline.h"
+#include "ehc_control/controller_node_config.h"
 
 #include "ehc_common/config_node.h"
 #include "ehc_perception/point_cloud_layout.h"
@@ -57,7 +58,7 @@ GraspPipelineConfig loadGraspPipelineConfig(const GraspPipelineFiles& files) {
   {
     const auto root = ConfigNode::loadFile(files.controller, "GraspPipeline");
     c.cycle = ehc_control::loadControlCycleParams(root);
-    root.ignore("node");
+    ehc_control::loadControllerNodeParams(root);  // the node's section: checked as the node reads it, unused here
     root.rejectUnknownKeys();
   }
   c.sequencer = loadGraspSequencerParams(ConfigNode::loadFile(files.sequencer, "GraspPipeline"));
@@ -84,8 +85,7 @@ GraspPipelineConfig loadGraspPipelineConfig(const GraspPipelineFiles& files) {
     const auto n = root.child("node");
     n.ignore("robot_config");  // in-process the obstacle field checks the simulator's robot
     c.monitor = ehc_perception::loadObstacleMonitorParams(n);
-    c.obstacle_rate_hz = n.get("publish_rate_hz", c.obstacle_rate_hz);
-    ehc_common::requireRange("GraspPipeline", "node.publish_rate_hz", c.obstacle_rate_hz, 0.1, 1000.0);
+    c.obstacle_rate_hz = n.getInRange("publish_rate_hz", c.obstacle_rate_hz, 0.1, 1000.0);
     c.map = ehc_perception::loadObstacleMapConfig(root.childOrEmpty("obstacle_map"));
   }
   if (!files.robot.empty()) {

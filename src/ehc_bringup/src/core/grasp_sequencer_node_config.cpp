@@ -2,10 +2,21 @@
 
 #include "ehc_common/config_node.h"
 #include "ehc_control/robot_config.h"
+#include "ehc_control/whole_body_model.h"
+
+#include <stdexcept>
+#include <utility>
 
 namespace ehc_bringup {
 
-void SequencerNodeParams::applyRobotFrames(const ehc_control::RobotConfig& robot) {
+void SequencerNodeParams::applyRobotFrames(const ehc_control::WholeBodyModel& model) {
+  const ehc_control::RobotConfig& robot = model.config();
+  // The frames set in the file are links of the robot's URDF (the robot's own are checked by
+  // the model, naming robot.yaml's field).
+  for (const auto& [frame, field] : {std::make_pair(&tcp_frame, "node.tcp_frame"), std::make_pair(&camera_frame, "node.camera_frame")})
+    if (!frame->empty() && !model.hasLink(*frame))
+      throw std::invalid_argument("[SequencerNodeParams] " + source_file + ": field '" + field + "' names link '" + *frame +
+                                  "' which is not in the URDF " + robot.urdf_path + " (robot " + robot.source_file + ")");
   if (world_frame.empty()) world_frame = robot.world_frame;
   if (tcp_frame.empty()) tcp_frame = robot.tcp_frame;
   if (camera_frame.empty()) camera_frame = robot.camera_frame;
@@ -23,6 +34,7 @@ std::string SequencerNodeParams::summary() const {
 
 SequencerNodeParams loadSequencerNodeParams(const ehc_common::ConfigNode& root) {
   SequencerNodeParams p;
+  p.source_file = root.file();
   const auto n = root.childOrEmpty("node");
   p.robot_file = n.has("robot") ? ehc_control::robotFileField(n, "robot") : ehc_control::resolveRobotFile("realman_rm65_water2");
   p.world_frame = n.get("world_frame", p.world_frame);

@@ -1,4 +1,6 @@
 #include "ehc_bringup/reach_experiment.h"
+#include "ehc_common/output_dir.h"
+#include "ehc_common/stop_signal.h"
 
 #include "ehc_common/bench_util.h"
 #include "ehc_common/enum_names.h"
@@ -71,6 +73,7 @@ ReachExperiment::ReachExperiment(std::shared_ptr<const ehc_control::WholeBodyMod
   cycle_params_.controller = controller_;
   cycle_params_.servo_type = ehc_control::ServoType::Proportional;
   cycle_params_.servo = params_.servo;
+  cycle_params_.watchdog.require_obstacles = false;  // Exp-1 reaches in free space: no obstacle sensing
   roll_joint_ = ehc_control::findRollJoint(*model_);
   ready_manipulability_ = model_->manipulability(model_->config().arm_ready);
 }
@@ -221,7 +224,8 @@ ReachSummary ReachExperiment::run(const std::vector<std::vector<Eigen::Isometry3
   std::vector<double> step_us;
   double time_sum = 0.0;
   s.min_joint_limit_margin = 1e9;
-  for (std::size_t si = 0; si < sets.size(); ++si) {
+  s.targets_planned = total;
+  for (std::size_t si = 0; si < sets.size() && !s.partial; ++si) {
     const int set_number = params_.first_set + static_cast<int>(si);
     // Each set starts from nothing (controller state, clock), so a set rerun alone with
     // --first-set repeats it exactly.
@@ -231,6 +235,10 @@ ReachSummary ReachExperiment::run(const std::vector<std::vector<Eigen::Isometry3
     ehc_sim::KinematicFakeRobot robot(model_->config(), params_.noise, set_seed, params_.base_model);
     robot.reset(Eigen::Vector3d::Zero(), model_->config().arm_ready, set_seed);
     for (std::size_t ti = 0; ti < sets[si].size(); ++ti) {
+      if (ehc_common::stopRequested()) {  // SIGINT / SIGTERM: the targets reached so far
+        s.partial = true;
+        break;
+      }
       if (params_.protocol == ReachProtocol::Reset && ti > 0)  // a fresh noise stream per target
         robot.reset(Eigen::Vector3d::Zero(), model_->config().arm_ready, set_seed * 1000u + static_cast<unsigned>(ti));
       trace_set_ = set_number;
@@ -291,6 +299,8 @@ ehc_common::Json summaryJsonValue(const ReachSummary& s) {
   j["controller_step_median_us"] = jsonNumber(s.controller_median_us);
   j["controller_step_p99_us"] = jsonNumber(s.controller_p99_us);
   j["wall_time_s"] = jsonNumber(s.wall_time_s);
+  j["partial"] = s.partial;
+  j["targets_planned"] = s.targets_planned;
   ehc_common::Json& causes = j["failure_causes"] = ehc_common::Json::object();
   for (const ReachFailure f : reachFailures()) {
     if (f == ReachFailure::None) continue;
@@ -306,7 +316,7 @@ std::string summaryJson(const ReachSummary& s) { return ehc_common::jsonLine(sum
 
 void writeReachResults(const std::string& dir, const std::vector<ReachSummary>& summaries,
                        const std::vector<ReachTrial>& trials, const std::string& notes) {
-  ::mkdir(dir.c_str(), 0755);
+  ehc_common::prepareOutputDir(dir);
   auto open = [&](const std::string& name) {
     std::ofstream f(dir + "/" + name);
     if (!f) throw std::runtime_error("[ReachExperiment] cannot write " + dir + "/" + name);

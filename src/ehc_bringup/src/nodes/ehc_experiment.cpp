@@ -17,7 +17,10 @@
 #include "ehc_bringup/reach_targets.h"
 #include "ehc_common/command_line.h"
 #include "ehc_common/config_node.h"
+#include "ehc_common/output_dir.h"
+#include "ehc_common/stop_signal.h"
 #include "ehc_control/control_cycle.h"
+#include "ehc_control/controller_node_config.h"
 
 #include <chrono>
 #include <fstream>
@@ -107,6 +110,14 @@ Args parse(int argc, char** argv) {
   return a;
 }
 
+/// After the results are written: 0, or after a stop signal a note and 128 + the signal.
+int interrupted(int done, int planned, const char* what) {
+  if (!ehc_common::stopRequested()) return 0;
+  std::cerr << "[ehc_experiment] interrupted (signal " << ehc_common::stopSignal() << "): partial results of " << done
+            << " of " << planned << " " << what << " written (summary.json: \"partial\": true)\n";
+  return ehc_common::stopExitCode();
+}
+
 /// The stack's controller.yaml (absolute: works from any working directory).
 std::string defaultConfig() { return ehc_control::configDirectory() + "/control/controller.yaml"; }
 
@@ -121,6 +132,7 @@ int runGrasp(int argc, char** argv) {
   const ehc_common::CommandLine cli(argc, argv, options, {}, /*first=*/2);
   const std::string method = cli.text("method", "all");
   const std::string out = cli.text("out");
+  ehc_common::prepareOutputDir(out);  // before any work
   p.sets = static_cast<int>(cli.integer("sets", p.sets, 1, 100000));
   if (p.protocol == ehc_bringup::GraspProtocol::Poses)
     p.per_set = static_cast<int>(cli.integer("per-set", p.per_set, 1, 100000));
@@ -176,20 +188,25 @@ int runGrasp(int argc, char** argv) {
         << ". In-process pipeline (no ROS transport latency), "
         << res.sim_time_s << " s of sim time in " << wall << " s wall with " << p.jobs << " job(s) (real-time factor "
         << res.sim_time_s / std::max(1e-9, wall) << "; wall figures depend on the machine's load).";
+  if (res.partial())
+    notes << " PARTIAL: interrupted (signal " << ehc_common::stopSignal() << ") after " << res.runs_done << " of "
+          << res.runs_planned << " runs; the figures are those of the completed runs.";
   ehc_bringup::writeGraspResults(out, p, res, notes.str());
   for (const auto& s : res.summaries) std::cout << ehc_bringup::graspSummaryJson(s) << std::endl;
   std::cerr << "[ehc_experiment] pipeline stage cost: " << ehc_bringup::pipelineStageCosts(res.counters, res.sim_time_s)
             << std::endl;
   std::cerr << "[ehc_experiment] results in " << out << "/ (table.md, trials.csv, summary.json, trace.csv)\n";
-  return 0;
+  return interrupted(res.runs_done, res.runs_planned, "runs");
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
+  ehc_common::installStopSignals();  // SIGINT / SIGTERM: partial results, exit 130 / 143
   try {
     if (argc >= 2 && (std::string(argv[1]) == "grasp" || std::string(argv[1]) == "poses")) return runGrasp(argc, argv);
     const Args a = parse(argc, argv);
+    ehc_common::prepareOutputDir(a.out);  // before any work
     const auto robot_cfg = ehc_control::loadRobotConfig(a.robot);
     auto model = std::make_shared<const ehc_control::WholeBodyModel>(robot_cfg);
     const std::string cfg_path = a.config.empty() ? defaultConfig() : a.config;
@@ -199,7 +216,7 @@ int main(int argc, char** argv) {
     // The whole controller file is validated as the controller node reads it (the experiment
     // uses the controller, weighting and proportional-servo sections); a misspelled key is an error.
     ehc_control::loadControlCycleParams(cfg);
-    cfg.ignore("node");
+    ehc_control::loadControllerNodeParams(cfg);  // the node's section: checked as the node reads it
     cfg.rejectUnknownKeys();
     ehc_bringup::ReachExperimentParams ep;
     ep.servo = ehc_control::loadPoseServoParams(cfg.childOrEmpty("servo"));
@@ -285,13 +302,15 @@ int main(int argc, char** argv) {
                         (a.base_model == ehc_sim::BaseModelType::Ideal
                              ? std::string()
                              : ", base model " + ep.base_model.summary() + " (the controller sees its odometry)") +
-                        ". Speeds: mean |v| (m/s) / |w| (rad/s) / sum |qd_arm| (rad/s) of the commanded velocity; distant = position error > 0.5 m.";
+                        ". Speeds: mean |v| (m/s) / |w| (rad/s) / sum |qd_arm| (rad/s) of the commanded velocity; distant = position error > 0.5 m." +
+                        (ehc_common::stopRequested() ? " PARTIAL: interrupted; the figures are those of the targets run." : "");
     ehc_bringup::writeReachResults(a.out, summaries, trials, notes);
     std::vector<Eigen::Isometry3d> flat;
     for (const auto& s : run_sets) flat.insert(flat.end(), s.begin(), s.end());
     ehc_bringup::writeReachTargetsCsv(a.out + "/targets.csv", flat);
     std::cerr << "[ehc_experiment] results in " << a.out << "/ (summary.json, table.md, trials.csv, targets.csv)\n";
-    return 0;
+    return interrupted(static_cast<int>(trials.size()), summaries[0].targets_planned * static_cast<int>(methods.size()),
+                       "targets (over the methods)");
   } catch (const std::exception& e) {
     std::cerr << "ehc_experiment: " << e.what() << "\n" << kUsage;
     return 2;

@@ -27,8 +27,10 @@
 #include "ehc_common/config_node.h"
 #include "ehc_control/pose_math.h"
 #include "ehc_control/robot_config.h"
+#include "ehc_control/whole_body_model.h"
 #include "ehc_msgs/SimStatus.h"
 #include "ehc_common/lockstep_ack.h"
+#include "ehc_common/node_init.h"
 
 #include <geometry_msgs/PointStamped.h>
 #include <geometry_msgs/PoseStamped.h>
@@ -74,19 +76,17 @@ geometry_msgs::PoseStamped toMsg(const Eigen::Isometry3d& T, const std::string& 
 
 class SequencerNode {
  public:
-  SequencerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : listener_(tf_) {
-    std::string config;
-    if (!pnh.getParam("config", config))
-      throw std::invalid_argument("missing parameter _config:=<grasp_sequencer.yaml>");
-    pnh.param<std::string>("summary", summary_file_, "");
-    pnh.param<std::string>("trace", trace_file_, "");
+  SequencerNode(ros::NodeHandle& nh, const ehc_common::NodeParams& params) : listener_(tf_) {
+    const std::string config = params.requireText("config", "<grasp_sequencer.yaml>");
+    summary_file_ = params.get<std::string>("summary", "");
+    trace_file_ = params.get<std::string>("trace", "");
     const auto root = ehc_common::ConfigNode::loadFile(config, "GraspSequencerNode");
     node_ = ehc_bringup::loadSequencerNodeParams(root);
-    pnh.param("exit_when_done", node_.exit_when_done, node_.exit_when_done);
-    std::string robot;  // the one robot switch: the frames not set in the file come from robot.yaml
-    if (pnh.getParam("robot", robot) && !robot.empty()) node_.robot_file = ehc_control::resolveRobotFile(robot);
+    node_.exit_when_done = params.get("exit_when_done", node_.exit_when_done);
+    // The one robot switch: the frames not set in the file come from robot.yaml.
+    node_.robot_file = params.getParsed<std::string>("robot", ehc_control::resolveRobotFile).value_or(node_.robot_file);
     const ehc_control::RobotConfig rc = ehc_control::loadRobotConfig(node_.robot_file);
-    node_.applyRobotFrames(rc);
+    node_.applyRobotFrames(ehc_control::WholeBodyModel(rc));  // robot.yaml checked against its URDF, frames too
     arm_joints_ = rc.arm_joints;  // the trace's arm speed
     const ehc_bringup::GraspSequencerParams sp = ehc_bringup::loadGraspSequencerParams(root);
     root.rejectUnknownKeys();  // both loaders have run: a key neither read is a misspelling
@@ -95,7 +95,7 @@ class SequencerNode {
     for (const auto& t : {node_.status_topic, node_.candidates_topic, node_.sim_status_topic, node_.camera_info_topic,
                           std::string("/tf")})
       inputs.push_back(t);
-    ack_ = std::make_unique<ehc_common::LockstepAck>(pnh, inputs);
+    ack_ = std::make_unique<ehc_common::LockstepAck>(params, inputs);
     ROS_INFO_STREAM("ehc_grasp_sequencer_node (" << config << ")\n" << sp.summary() << "\n" << node_.summary()
                                                   << (ack_->topic().empty() ? "" : "\n  each status acknowledged on " + ack_->topic()));
     if (!trace_file_.empty()) trace_ = std::make_unique<ehc_bringup::GraspTraceWriter>(trace_file_);
@@ -347,16 +347,11 @@ class SequencerNode {
 }  // namespace
 
 int main(int argc, char** argv) {
-  ros::init(argc, argv, "ehc_grasp_sequencer_node");
-  ros::NodeHandle nh, pnh("~");
-  try {
-    SequencerNode node(nh, pnh);
+  // On an error no more goals come: the controller's target watchdog stops the robot (TARGET_LOST).
+  return ehc_common::runNode(argc, argv, "ehc_grasp_sequencer_node", 1, [](const ehc_common::NodeParams& params, ros::NodeHandle& nh) {
+    SequencerNode node(nh, params);
+    ehc_common::checkNodeParams(params);
     ros::spin();
-    if (node.failed()) return 1;
-  } catch (const std::exception& e) {
-    // No more goals: the controller's target watchdog stops the robot (TARGET_LOST).
-    ROS_FATAL_STREAM("[ehc_grasp_sequencer_node] " << e.what());
-    return 1;
-  }
-  return 0;
+    return node.failed() ? 1 : 0;
+  });
 }

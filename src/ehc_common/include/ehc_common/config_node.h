@@ -13,7 +13,9 @@
 
 #include <cmath>
 #include <memory>
+#include <map>
 #include <set>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -27,7 +29,9 @@ class ConfigNode {
   /// Parses `path`. `owner` is the class name used as the error prefix, e.g. "RobotConfig".
   /// A top-level `extends: <file>` (relative to this file) loads that file first and merges
   /// this one over it: mappings merge key by key, anything else (scalars, lists) is replaced.
-  /// Chains of up to 8 files; relative paths inside are resolved against `path`'s folder.
+  /// Chains of up to 8 files. A relative path in a file is resolved against that file's folder
+  /// (requirePath, getPath: the base file's `robot: ../robots/x/robot.yaml` stays the base's),
+  /// and errors name the file a field's value came from.
   static ConfigNode loadFile(const std::string& path, const std::string& owner);
   /// Parses YAML text (tests, embedded defaults). `origin` stands in for the file name.
   static ConfigNode loadString(const std::string& text, const std::string& origin,
@@ -68,13 +72,14 @@ class ConfigNode {
                                       const std::vector<std::string>& fallback) const;
 
   /// Runs `params.validate()`; a std::invalid_argument it throws is rethrown with this node's
-  /// file and field appended, so cross-field errors also say where they come from.
+  /// file (and the files it extends) and field appended, so cross-field errors also say where
+  /// they come from.
   template <class P>
   void validate(const P& params) const {
     try {
       params.validate();
     } catch (const std::invalid_argument& e) {
-      throw std::invalid_argument(std::string(e.what()) + " (in " + file_ +
+      throw std::invalid_argument(std::string(e.what()) + " (in " + fileChain() +
                                   (field_.empty() ? std::string() : ", " + field_) + ")");
     }
   }
@@ -82,8 +87,24 @@ class ConfigNode {
   /// Throws std::invalid_argument "[Owner] file: field 'a.b.key' <what>".
   [[noreturn]] void fail(const std::string& key, const std::string& what) const;
   std::string fieldName(const std::string& key) const;
-  /// Resolves a path relative to the folder of the file this node came from.
-  std::string resolvePath(const std::string& relative) const;
+  /// Required file path `key`: absolute as given, relative to the folder of the file the value
+  /// came from (through `extends:`, the base file's folder for a value set there). Not empty.
+  std::string requirePath(const std::string& key) const;
+  /// Optional file path `key` (as requirePath); `fallback` (unchanged) if absent.
+  std::string getPath(const std::string& key, const std::string& fallback) const;
+  /// The file `key`'s value came from (the loaded file, or a file it extends).
+  std::string fileOf(const std::string& key) const;
+  /// Optional number `key` in [lo, hi]; an error names the file and the field.
+  template <class T>
+  T getInRange(const std::string& key, const T& fallback, double lo, double hi) const {
+    const T v = get<T>(key, fallback);
+    if (!(static_cast<double>(v) >= lo && static_cast<double>(v) <= hi)) {
+      std::ostringstream os;
+      os << "= " << v << " is outside [" << lo << ", " << hi << "]";
+      fail(key, os.str());
+    }
+    return v;
+  }
 
   const std::string& file() const { return file_; }
   const std::string& owner() const { return owner_; }
@@ -106,8 +127,18 @@ class ConfigNode {
   /// 'a.b.other'?)" for the first unknown key; lists the rest in the same message.
   void rejectUnknownKeys() const;
 
+ /// Field name -> the file that set it, for a document merged through `extends:` (a field not
+  /// listed came from its nearest listed parent; "" is the first file of the chain).
+  using Origins = std::map<std::string, std::string>;
+
  private:
   YAML::Node value(const std::string& key) const;
+  ConfigNode sub(const YAML::Node& n, const std::string& field) const;
+  std::string originOf(const std::string& field) const;
+  /// "file" or "base.yaml (through 'extends' of file)" for `field`.
+  std::string where(const std::string& field) const;
+  /// "file" or "file (extends base.yaml, ...)": every file of the document.
+  std::string fileChain() const;
   static std::string dump(const YAML::Node& n);
   template <class T>
   void checkFinite(const std::string& key, const T& v) const {
@@ -131,6 +162,7 @@ class ConfigNode {
   std::string field_;
   std::string owner_;
   std::shared_ptr<Usage> usage_ = std::make_shared<Usage>();
+  std::shared_ptr<const Origins> origins_;  ///< null: one file, every field from file_
 };
 
 /// Helpers for validation rules shared by every parameter struct.

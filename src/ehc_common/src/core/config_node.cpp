@@ -1,6 +1,7 @@
 #include "ehc_common/config_node.h"
 
 #include <algorithm>
+#include <map>
 #include <sstream>
 
 namespace ehc_common {
@@ -10,22 +11,38 @@ std::string folderOf(const std::string& path) {
   const auto slash = path.find_last_of('/');
   return slash == std::string::npos ? std::string(".") : path.substr(0, slash);
 }
-}  // namespace
 
-namespace {
+std::string join(const std::string& field, const std::string& key) { return field.empty() ? key : field + "." + key; }
 
-/// `over` merged onto a copy of `base`: mappings key by key, everything else replaced.
-YAML::Node merged(const YAML::Node& base, const YAML::Node& over) {
-  if (!base.IsMap() || !over.IsMap()) return YAML::Clone(over);
+/// `over` (from `over_file`) merged onto a copy of `base`: mappings key by key, everything
+/// else replaced; `origins` records the fields `over` set.
+YAML::Node merged(const YAML::Node& base, const YAML::Node& over, const std::string& field,
+                  const std::string& over_file, ConfigNode::Origins* origins) {
+  if (!base.IsMap() || !over.IsMap()) {
+    // The subtree is replaced whole: forget what its fields came from.
+    for (const char* sep : {".", "["}) {
+      const std::string prefix = field + sep;
+      auto it = origins->lower_bound(prefix);
+      while (it != origins->end() && it->first.compare(0, prefix.size(), prefix) == 0) it = origins->erase(it);
+    }
+    (*origins)[field] = over_file;
+    return YAML::Clone(over);
+  }
   YAML::Node out = YAML::Clone(base);
   for (const auto& kv : over) {
     const std::string key = kv.first.as<std::string>();
-    out[key] = out[key] ? merged(out[key], kv.second) : YAML::Clone(kv.second);
+    const std::string f = join(field, key);
+    if (out[key]) {
+      out[key] = merged(out[key], kv.second, f, over_file, origins);
+    } else {
+      out[key] = YAML::Clone(kv.second);
+      (*origins)[f] = over_file;
+    }
   }
   return out;
 }
 
-YAML::Node loadWithExtends(const std::string& path, const std::string& owner, int depth) {
+YAML::Node loadWithExtends(const std::string& path, const std::string& owner, int depth, ConfigNode::Origins* origins) {
   YAML::Node root;
   try {
     root = YAML::LoadFile(path);
@@ -36,7 +53,10 @@ YAML::Node loadWithExtends(const std::string& path, const std::string& owner, in
   }
   if (!root.IsMap())
     throw std::invalid_argument("[" + owner + "] " + path + ": top level must be a mapping");
-  if (!root["extends"]) return root;
+  if (!root["extends"]) {
+    (*origins)[""] = path;
+    return root;
+  }
   if (depth >= 8)
     throw std::invalid_argument("[" + owner + "] " + path + ": 'extends' chain longer than 8 files (a cycle?)");
   if (!root["extends"].IsScalar())
@@ -44,13 +64,16 @@ YAML::Node loadWithExtends(const std::string& path, const std::string& owner, in
   std::string base = root["extends"].as<std::string>();
   if (!base.empty() && base[0] != '/') base = folderOf(path) + "/" + base;
   root.remove("extends");
-  return merged(loadWithExtends(base, owner, depth + 1), root);
+  return merged(loadWithExtends(base, owner, depth + 1, origins), root, "", path, origins);
 }
 
 }  // namespace
 
 ConfigNode ConfigNode::loadFile(const std::string& path, const std::string& owner) {
-  return ConfigNode(loadWithExtends(path, owner, 0), path, "", owner);
+  auto origins = std::make_shared<Origins>();
+  ConfigNode root(loadWithExtends(path, owner, 0, origins.get()), path, "", owner);
+  root.origins_ = origins;
+  return root;
 }
 
 ConfigNode ConfigNode::loadString(const std::string& text, const std::string& origin,
@@ -83,18 +106,19 @@ YAML::Node ConfigNode::value(const std::string& key) const {
 ConfigNode ConfigNode::child(const std::string& key) const {
   const YAML::Node n = value(key);
   if (!n.IsMap()) fail(key, "must be a mapping");
-  ConfigNode c(n, file_, fieldName(key), owner_);
-  c.usage_ = usage_;
-  return c;
+  return sub(n, fieldName(key));
 }
 
 ConfigNode ConfigNode::childOrEmpty(const std::string& key) const {
-  if (!has(key)) {
-    ConfigNode c(YAML::Node(YAML::NodeType::Map), file_, fieldName(key), owner_);
-    c.usage_ = usage_;
-    return c;
-  }
+  if (!has(key)) return sub(YAML::Node(YAML::NodeType::Map), fieldName(key));
   return child(key);
+}
+
+ConfigNode ConfigNode::sub(const YAML::Node& n, const std::string& field) const {
+  ConfigNode c(n, file_, field, owner_);
+  c.usage_ = usage_;
+  c.origins_ = origins_;
+  return c;
 }
 
 std::size_t ConfigNode::listSize(const std::string& key) const {
@@ -108,10 +132,8 @@ ConfigNode ConfigNode::element(const std::string& key, std::size_t i) const {
   const std::string field = fieldName(key) + "[" + std::to_string(i) + "]";
   const YAML::Node e = node_[key][i];
   if (!e.IsMap())
-    throw std::invalid_argument("[" + owner_ + "] " + file_ + ": field '" + field + "' must be a mapping");
-  ConfigNode c(e, file_, field, owner_);
-  c.usage_ = usage_;
-  return c;
+    throw std::invalid_argument("[" + owner_ + "] " + where(field) + ": field '" + field + "' must be a mapping");
+  return sub(e, field);
 }
 
 std::vector<std::string> ConfigNode::keys() const {
@@ -200,7 +222,7 @@ void ConfigNode::rejectUnknownKeys() const {
     }
   }
   std::ostringstream os;
-  os << "[" << owner_ << "] " << file_ << ": unknown field '" << f << "'";
+  os << "[" << owner_ << "] " << where(f) << ": unknown field '" << f << "'";
   if (!best.empty()) os << " (did you mean '" << best << "'?)";
   else os << " (no parameter of that name is read here)";
   if (unknown.size() > 1) {
@@ -249,18 +271,52 @@ std::vector<std::string> ConfigNode::getStrings(const std::string& key,
 }
 
 void ConfigNode::fail(const std::string& key, const std::string& what) const {
-  throw std::invalid_argument("[" + owner_ + "] " + file_ + ": field '" + fieldName(key) + "' " +
+  throw std::invalid_argument("[" + owner_ + "] " + where(fieldName(key)) + ": field '" + fieldName(key) + "' " +
                               what);
+}
+
+std::string ConfigNode::originOf(const std::string& field) const {
+  if (!origins_) return file_;
+  std::string f = field;
+  for (;;) {
+    const auto it = origins_->find(f);
+    if (it != origins_->end()) return it->second;
+    if (f.empty()) return file_;
+    const auto cut = f.find_last_of(".[");
+    f = cut == std::string::npos ? std::string() : f.substr(0, cut);
+  }
+}
+
+std::string ConfigNode::where(const std::string& field) const {
+  const std::string origin = originOf(field);
+  return origin == file_ ? file_ : origin + " (through 'extends' of " + file_ + ")";
+}
+
+std::string ConfigNode::fileChain() const {
+  std::string bases;
+  if (origins_)
+    for (const auto& kv : *origins_)
+      if (kv.second != file_ && bases.find("'" + kv.second + "'") == std::string::npos)
+        bases += (bases.empty() ? "'" : ", '") + kv.second + "'";
+  return bases.empty() ? file_ : file_ + " (extends " + bases + ")";
+}
+
+std::string ConfigNode::fileOf(const std::string& key) const { return originOf(fieldName(key)); }
+
+std::string ConfigNode::requirePath(const std::string& key) const {
+  const std::string value = require<std::string>(key);
+  if (value.empty()) fail(key, "must not be empty (a file path)");
+  if (value[0] == '/') return value;
+  return folderOf(fileOf(key)) + "/" + value;
+}
+
+std::string ConfigNode::getPath(const std::string& key, const std::string& fallback) const {
+  return has(key) ? requirePath(key) : fallback;
 }
 
 std::string ConfigNode::fieldName(const std::string& key) const {
   if (key.empty()) return field_;
   return field_.empty() ? key : field_ + "." + key;
-}
-
-std::string ConfigNode::resolvePath(const std::string& relative) const {
-  if (relative.empty() || relative[0] == '/') return relative;
-  return folderOf(file_) + "/" + relative;
 }
 
 std::string ConfigNode::dump(const YAML::Node& n) {

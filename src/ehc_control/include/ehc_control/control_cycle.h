@@ -69,6 +69,9 @@ struct ControlCycleStatus : QpStepFigures {
   double target_age = -1.0;               ///< s since the last good target pose; -1: none
   double state_age = -1.0;                ///< s since the older of joint state / odometry; -1: none
   double obstacles_age = -1.0;            ///< s since the last good obstacle list; -1: none
+  /// watchdog.require_obstacles: false = obstacle sensing off (the QP runs without obstacle
+  /// dampers whenever no fresh list is in), said in every status, never silently.
+  bool obstacles_required = true;
   bool controller_error = false;          ///< a core error (exception) stopped this cycle
   bool wrist_flip = false;                ///< the QP step prescribed a wrist flip (WristFlip)
   bool recovering = false;                ///< the QP tracked a stall recovery's reference (ReachRecovery)

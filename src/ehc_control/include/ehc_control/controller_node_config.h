@@ -17,6 +17,8 @@ enum class CycleTrigger {
   Timer,  ///< "timer": a timer at `rate` (real robot)
 };
 std::string toString(CycleTrigger trigger);
+/// "state" | "timer"; throws std::invalid_argument "[ControllerNodeParams] ..." otherwise.
+CycleTrigger cycleTriggerFromString(const std::string& s);
 
 struct ControllerNodeParams {
   CycleTrigger trigger = CycleTrigger::State;  ///< node.trigger: state | timer

@@ -26,10 +26,12 @@ struct SupervisorParams {
   double state_timeout = 0.2;      ///< s: joint state / odometry older than this stops the robot
   double target_timeout = 0.2;     ///< s: target older than this stops the robot (TARGET_LOST)
   double obstacle_timeout = 0.5;   ///< s: older obstacle lists are dropped
-  /// Obstacle sensing is configured (an obstacle node runs): a missing obstacle list, or one
-  /// older than obstacle_timeout, stops the robot (OBSTACLES_STALE) instead of tracking blind.
-  /// false: the controller tracks without obstacle dampers when no fresh list is in.
-  bool require_obstacles = false;
+  /// Obstacle sensing is required (the default: safe unless a config says otherwise): a missing
+  /// obstacle list, or one older than obstacle_timeout, stops the robot (OBSTACLES_STALE)
+  /// instead of tracking blind. false (no obstacle node, e.g. free-space experiments): the
+  /// controller tracks without obstacle dampers when no fresh list is in, and says so (node
+  /// start-up warning, ControlCycleStatus::obstacles_required in every status).
+  bool require_obstacles = true;
   /// s: a cycle (servo + QP build + solve) that took longer on the cycle's clock
   /// (ControlCycle::setClock; the node: ROS time) gives a zero command, QP_FAILED, "... over
   /// max_solve_time". The solve is bounded (controller.max_qp_iterations, DualActiveSetQp);

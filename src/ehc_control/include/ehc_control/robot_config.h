@@ -30,6 +30,7 @@ BaseType baseTypeFromString(const std::string& s);  ///< throws std::invalid_arg
 
 /// A fixed URDF joint whose origin is replaced by a calibrated value (TCP, camera mount).
 struct FrameOverride {
+  std::string key;    ///< "tcp" | "camera": the field robot.calibration.<key>
   std::string joint;
   Eigen::Vector3d xyz = Eigen::Vector3d::Zero();
   Eigen::Vector3d rpy = Eigen::Vector3d::Zero();
@@ -93,13 +94,16 @@ RobotConfig loadRobotConfig(const std::string& path);
 /// The stack's config folder (the checkout's config/, absolute; tools work from any working
 /// directory); the environment variable EHC_CONFIG_DIR overrides it.
 std::string configDirectory();
-/// Folder of the robots shipped with the stack (<configDirectory()>/robots); the environment
-/// variable EHC_ROBOTS_DIR overrides it.
+/// The user's robots folder: the environment variable EHC_ROBOTS_DIR, else the stack's
+/// (<configDirectory()>/robots).
 std::string robotsDirectory();
+/// Where a robot name is looked up, in order: robotsDirectory(), then the stack's robots (so a
+/// folder with only the user's robot still finds the shipped robots the configs name).
+std::vector<std::string> robotSearchPath();
 /// The one robot switch (--robot, _robot:=, ROBOT=): a robot name (no '/', not ending in
-/// .yaml, e.g. "kuka_iiwa14_kmr") -> <robotsDirectory()>/<name>/robot.yaml; anything else is a
-/// path to a robot.yaml, returned unchanged. Throws std::invalid_argument "[RobotConfig] ..."
-/// for an unknown robot name (listing the known ones).
+/// .yaml, e.g. "kuka_iiwa14_kmr") -> <dir>/<name>/robot.yaml, the first of robotSearchPath()
+/// that has it; anything else is a path to a robot.yaml, returned unchanged. Throws
+/// std::invalid_argument "[RobotConfig] ..." for an unknown robot name (listing the known ones).
 std::string resolveRobotFile(const std::string& name_or_path);
 /// The robot field `key` of a config file (e.g. controller.yaml's `robot`): a robot name as
 /// resolveRobotFile, or a path relative to that file's folder. Errors name file and field.

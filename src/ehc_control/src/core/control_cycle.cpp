@@ -141,6 +141,7 @@ ControlCycleOutput ControlCycle::zeroOutput(double now) const {
   out.velocity = Eigen::VectorXd::Zero(model_->nDof());
   ControlCycleStatus& st = out.status;
   st.mode = controller_->params().mode;
+  st.obstacles_required = params_.watchdog.require_obstacles;
   st.target_age = supervisor_->targetAge(now);
   st.state_age = supervisor_->stateAge(now);
   st.obstacles_age = supervisor_->obstaclesAge(now);

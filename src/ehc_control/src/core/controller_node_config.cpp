@@ -15,6 +15,7 @@ const char* kOwner = "ControllerNodeParams";
 }  // namespace
 
 std::string toString(CycleTrigger trigger) { return ehc_common::enumName(kTriggerNames, trigger, kOwner); }
+CycleTrigger cycleTriggerFromString(const std::string& s) { return ehc_common::enumValue(kTriggerNames, s, kOwner, "trigger"); }
 
 void ControllerNodeParams::validate() const {
   ehc_common::requireRange(kOwner, "node.rate", rate, 1.0, 1000.0);
@@ -34,7 +35,7 @@ ControllerNodeParams loadControllerNodeParams(const ehc_common::ConfigNode& root
   ControllerNodeParams p;
   const std::string trigger = n.get<std::string>("trigger", toString(p.trigger));
   try {
-    p.trigger = ehc_common::enumValue(kTriggerNames, trigger, kOwner, "trigger");
+    p.trigger = cycleTriggerFromString(trigger);
   } catch (const std::invalid_argument&) {
     n.fail("trigger", "must be 'state' or 'timer'");
   }

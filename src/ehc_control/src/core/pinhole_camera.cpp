@@ -58,22 +58,38 @@ PinholeCamera PinholeCamera::fromCameraInfo(const std::string& name, int width, 
   return c;
 }
 
+namespace {
+/// A camera_info matrix section {rows, cols, data}: rows and cols (when given) must be `rows` x
+/// `cols` (cols < 0: any), data rows * cols finite numbers.
+Eigen::VectorXd matrixData(const ConfigNode& root, const std::string& key, int rows, int cols) {
+  const ConfigNode m = root.child(key);
+  if (m.has("rows") && m.require<int>("rows") != rows) m.fail("rows", "must be " + std::to_string(rows));
+  const int c = m.has("cols") ? m.require<int>("cols") : cols;
+  if (cols >= 0 && c != cols) m.fail("cols", "must be " + std::to_string(cols));
+  if (c < 0) return m.requireVector("data");
+  return m.requireVector("data", rows * c);
+}
+}  // namespace
+
 PinholeCamera loadPinholeCamera(const std::string& path) {
   const ConfigNode root = ConfigNode::loadFile(path, kOwner);
   const PinholeCamera defaults;
   const int width = root.require<int>("image_width");
   const int height = root.require<int>("image_height");
   const ConfigNode matrix = root.child("camera_matrix");
-  const Eigen::Matrix<double, 9, 1> K = matrix.requireVector("data", 9);
+  const Eigen::Matrix<double, 9, 1> K = matrixData(root, "camera_matrix", 3, 3);
+  // Not used (no rectification), but a malformed one is an error, not a silent pass.
+  if (root.has("rectification_matrix")) matrixData(root, "rectification_matrix", 3, 3);
+  if (root.has("projection_matrix")) matrixData(root, "projection_matrix", 3, 4);
   if (!(K[1] == 0.0 && K[3] == 0.0 && K[6] == 0.0 && K[7] == 0.0 && K[8] == 1.0))
     matrix.fail("data", "must be [fx 0 cx 0 fy cy 0 0 1] (no skew)");
-  const Eigen::VectorXd D = root.has("distortion_coefficients")
-                                ? root.child("distortion_coefficients").requireVector("data")
-                                : defaults.distortion;
+  const Eigen::VectorXd D = root.has("distortion_coefficients") ? matrixData(root, "distortion_coefficients", 1, -1)
+                                                                : defaults.distortion;
   std::string name = root.get<std::string>("camera_name", "");
   if (name.empty()) name = defaults.name;
   const PinholeCamera c = PinholeCamera::fromCameraInfo(
       name, width, height, K, root.get<std::string>("distortion_model", defaults.distortion_model), D);
+  root.rejectUnknownKeys();  // every camera_info field is read above: another key is a misspelling
   try {
     c.validate();
   } catch (const std::invalid_argument& e) {

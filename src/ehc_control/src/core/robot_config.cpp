@@ -119,9 +119,9 @@ RobotConfig loadRobotConfig(const std::string& path) {
   RobotConfig c;
   c.source_file = path;
   c.name = r.get<std::string>("name", c.name);
-  c.urdf_path = r.resolvePath(r.require<std::string>("urdf"));
+  c.urdf_path = r.requirePath("urdf");
   if (r.has("reachability_map"))
-    c.reachability_map_path = r.resolvePath(r.require<std::string>("reachability_map"));
+    c.reachability_map_path = r.requirePath("reachability_map");
 
   const ConfigNode f = r.childOrEmpty("frames");
   c.world_frame = f.get<std::string>("world", c.world_frame);
@@ -154,12 +154,13 @@ RobotConfig loadRobotConfig(const std::string& path) {
     if (!cal.has(key)) continue;
     const ConfigNode e = cal.child(key);
     FrameOverride o;
+    o.key = key;
     o.joint = e.require<std::string>("joint");
     o.xyz = e.requireVector("xyz", 3);
     o.rpy = e.requireVector("rpy", 3);
     c.calibration.push_back(o);
   }
-  if (r.has("camera_info")) c.camera_info_path = r.resolvePath(r.require<std::string>("camera_info"));
+  c.camera_info_path = r.getPath("camera_info", c.camera_info_path);
   const ConfigNode col = r.childOrEmpty("collision");
   c.checked_links = col.getStrings("checked_links", {});
   c.floor_links = col.getStrings("floor_links", {});
@@ -191,6 +192,13 @@ std::string robotsDirectory() {
   return configDirectory() + "/robots";
 }
 
+std::vector<std::string> robotSearchPath() {
+  std::vector<std::string> dirs{robotsDirectory()};
+  const std::string shipped = configDirectory() + "/robots";
+  if (dirs.front() != shipped) dirs.push_back(shipped);
+  return dirs;
+}
+
 namespace {
 bool isRobotName(const std::string& s) {
   return !s.empty() && s.find('/') == std::string::npos && !(s.size() >= 5 && s.compare(s.size() - 5, 5, ".yaml") == 0);
@@ -199,7 +207,7 @@ bool isRobotName(const std::string& s) {
 
 std::string robotFileField(const ConfigNode& node, const std::string& key) {
   const std::string value = node.require<std::string>(key);
-  if (!isRobotName(value)) return node.resolvePath(value);
+  if (!isRobotName(value)) return node.requirePath(key);
   try {
     return resolveRobotFile(value);
   } catch (const std::invalid_argument& e) {
@@ -212,15 +220,20 @@ std::string resolveRobotFile(const std::string& name_or_path) {
   const std::string& s = name_or_path;
   if (!s.empty() && !isRobotName(s)) return s;
   if (s.empty()) fail("no robot given (a robot name such as realman_rm65_water2, or a robot.yaml path)");
-  const fs::path dir = robotsDirectory();
-  const fs::path file = dir / s / "robot.yaml";
-  if (fs::is_regular_file(file)) return file.string();
-  std::string known;
-  std::error_code ec;
-  for (const auto& e : fs::directory_iterator(dir, ec))
-    if (fs::is_regular_file(e.path() / "robot.yaml")) known += (known.empty() ? "" : ", ") + e.path().filename().string();
-  fail("unknown robot '" + s + "': no " + file.string() + " (robots in " + dir.string() + ": " +
-       (known.empty() ? "none" : known) + "); give a robot name or a path to a robot.yaml");
+  const std::vector<std::string> dirs = robotSearchPath();
+  for (const std::string& dir : dirs) {
+    const fs::path file = fs::path(dir) / s / "robot.yaml";
+    if (fs::is_regular_file(file)) return file.string();
+  }
+  std::string where;
+  for (const std::string& dir : dirs) {
+    std::string known;
+    std::error_code ec;
+    for (const auto& e : fs::directory_iterator(dir, ec))
+      if (fs::is_regular_file(e.path() / "robot.yaml")) known += (known.empty() ? "" : ", ") + e.path().filename().string();
+    where += (where.empty() ? "" : "; ") + std::string("robots in ") + dir + ": " + (known.empty() ? "none" : known);
+  }
+  fail("unknown robot '" + s + "': no " + s + "/robot.yaml (" + where + "); give a robot name or a path to a robot.yaml");
 }
 
 }  // namespace ehc_control

@@ -21,7 +21,7 @@ std::string TargetTrackerParams::summary() const {
 TargetTrackerParams loadTargetTrackerParams(const ehc_common::ConfigNode& n) {
   TargetTrackerParams p;
   const std::string camera = n.get<std::string>("camera", "");
-  if (!camera.empty()) p.camera_file = n.resolvePath(camera);
+  if (!camera.empty()) p.camera_file = n.requirePath("camera");
   p.new_target_distance = n.get("new_target_distance", p.new_target_distance);
   n.validate(p);  // errors name the file and the section
   return p;

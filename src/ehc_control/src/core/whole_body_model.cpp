@@ -30,9 +30,15 @@ namespace {
   throw std::invalid_argument("[WholeBodyModel] " + what);
 }
 
-std::string readFile(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) fail("cannot read URDF file '" + path + "'");
+/// robot.yaml's field `field` does not match the URDF: names the file and the field.
+[[noreturn]] void failField(const RobotConfig& cfg, const std::string& field, const std::string& what) {
+  fail((cfg.source_file.empty() ? std::string("robot config") : cfg.source_file) + ": field '" + field + "' " + what +
+       " (URDF " + cfg.urdf_path + ")");
+}
+
+std::string readUrdf(const RobotConfig& cfg) {
+  std::ifstream in(cfg.urdf_path);
+  if (!in) failField(cfg, "robot.urdf", "names a file that cannot be read");
   std::stringstream ss;
   ss << in.rdbuf();
   return ss.str();
@@ -134,7 +140,7 @@ struct WholeBodyModel::Impl {
   }
 };
 
-WholeBodyModel::WholeBodyModel(const RobotConfig& cfg) : WholeBodyModel(cfg, readFile(cfg.urdf_path)) {}
+WholeBodyModel::WholeBodyModel(const RobotConfig& cfg) : WholeBodyModel(cfg, readUrdf(cfg)) {}
 
 WholeBodyModel::WholeBodyModel(const RobotConfig& cfg, const std::string& urdf_xml)
     : cfg_(cfg), urdf_xml_(urdf_xml), impl_(std::make_unique<Impl>()) {
@@ -154,12 +160,12 @@ namespace {
 /// The URDF with the calibration of `cfg` applied to its fixed joints (the one place it is done).
 urdf::ModelInterfaceSharedPtr parseCalibrated(const RobotConfig& cfg, const std::string& xml) {
   const urdf::ModelInterfaceSharedPtr model = urdf::parseURDF(xml);
-  if (!model) fail("URDF of '" + cfg.urdf_path + "' could not be parsed (see the message above)");
+  if (!model) failField(cfg, "robot.urdf", "names a URDF that could not be parsed (see the message above)");
   for (const FrameOverride& o : cfg.calibration) {
     const auto it = model->joints_.find(o.joint);
-    if (it == model->joints_.end()) fail("calibration joint '" + o.joint + "' is not in the URDF");
-    if (it->second->type != urdf::Joint::FIXED)
-      fail("calibration joint '" + o.joint + "' must be a fixed joint");
+    const std::string field = "robot.calibration." + o.key + ".joint";
+    if (it == model->joints_.end()) failField(cfg, field, "names joint '" + o.joint + "' which is not in the URDF");
+    if (it->second->type != urdf::Joint::FIXED) failField(cfg, field, "names joint '" + o.joint + "', which must be a fixed joint");
     urdf::Pose& p = it->second->parent_to_joint_origin_transform;
     p.position = urdf::Vector3(o.xyz.x(), o.xyz.y(), o.xyz.z());
     p.rotation.setFromRPY(o.rpy.x(), o.rpy.y(), o.rpy.z());
@@ -185,7 +191,7 @@ std::string WholeBodyModel::calibratedUrdfXml() const {
     TiXmlElement* joint = robot ? robot->FirstChildElement("joint") : nullptr;
     while (joint && (!joint->Attribute("name") || o.joint != joint->Attribute("name")))
       joint = joint->NextSiblingElement("joint");
-    if (!joint) fail("calibration joint '" + o.joint + "' is not in the URDF");
+    if (!joint) failField(cfg_, "robot.calibration." + o.key + ".joint", "names joint '" + o.joint + "' which is not in the URDF");
     TiXmlElement* origin = joint->FirstChildElement("origin");
     if (!origin) origin = joint->InsertEndChild(TiXmlElement("origin"))->ToElement();
     origin->SetAttribute("xyz", triple(o.xyz));
@@ -202,7 +208,7 @@ void WholeBodyModel::build() {
 
   const std::string root = model->getRoot() ? model->getRoot()->name : "";
   if (root != cfg_.base_frame)
-    fail("URDF root link is '" + root + "' but robot.frames.base is '" + cfg_.base_frame + "'");
+    failField(cfg_, "robot.frames.base", "is '" + cfg_.base_frame + "' but the URDF's root link is '" + root + "'");
 
   KDL::Tree tree;
   if (!kdl_parser::treeFromUrdfModel(*model, tree)) fail("kdl_parser could not build a KDL tree");
@@ -213,18 +219,18 @@ void WholeBodyModel::build() {
   for (int i = 0; i < nArm(); ++i) {
     const std::string& name = cfg_.arm_joints[static_cast<std::size_t>(i)];
     const auto it = model->joints_.find(name);
-    if (it == model->joints_.end()) fail("arm joint '" + name + "' is not in the URDF");
+    if (it == model->joints_.end()) failField(cfg_, "robot.arm.joints", "names joint '" + name + "' which is not in the URDF");
     const urdf::Joint& j = *it->second;
     if (j.type == urdf::Joint::PRISMATIC)
       impl_->arm_revolute[static_cast<std::size_t>(i)] = false;
     else if (j.type != urdf::Joint::REVOLUTE && j.type != urdf::Joint::CONTINUOUS)
-      fail("arm joint '" + name + "' must be revolute, continuous or prismatic");
+      failField(cfg_, "robot.arm.joints", "names joint '" + name + "', which must be revolute, continuous or prismatic");
     if (j.type != urdf::Joint::CONTINUOUS && j.limits) {
       const double eps = 1e-9;
       if (cfg_.arm_lower[i] < j.limits->lower - eps || cfg_.arm_upper[i] > j.limits->upper + eps)
-        fail("limits of joint '" + name + "' in robot.yaml are wider than the URDF's");
+        failField(cfg_, "robot.arm.lower/upper", "of joint '" + name + "' are wider than the URDF's limits");
       if (j.limits->velocity > 0 && cfg_.arm_velocity[i] > j.limits->velocity + eps)
-        fail("velocity limit of joint '" + name + "' in robot.yaml exceeds the URDF's");
+        failField(cfg_, "robot.arm.velocity", "of joint '" + name + "' exceeds the URDF's limit");
     }
     arm_idx[name] = i;
   }
@@ -245,13 +251,13 @@ void WholeBodyModel::build() {
     impl_->links[link] = std::move(lc);
   }
 
-  for (const std::string& f : {cfg_.arm_base_frame, cfg_.tcp_frame, cfg_.camera_frame})
-    if (!impl_->links.count(f)) fail("frame '" + f + "' from robot.yaml is not a link of the URDF");
+  for (const auto& [f, field] : {std::make_pair(cfg_.arm_base_frame, "robot.frames.arm_base"),
+                                 std::make_pair(cfg_.tcp_frame, "robot.frames.tcp"),
+                                 std::make_pair(cfg_.camera_frame, "robot.frames.camera_optical")})
+    if (!impl_->links.count(f)) failField(cfg_, field, "names link '" + f + "' which is not in the URDF");
   // Every link robot.yaml names must be a link of the URDF (never silently ignored).
-  const std::string in_file = cfg_.source_file.empty() ? std::string("robot config") : cfg_.source_file;
   auto requireLink = [&](const std::string& link, const std::string& field) {
-    if (!impl_->links.count(link))
-      fail(in_file + ": field '" + field + "' names link '" + link + "' which is not in the URDF " + cfg_.urdf_path);
+    if (!impl_->links.count(link)) failField(cfg_, field, "names link '" + link + "' which is not in the URDF");
   };
   for (const std::string& l : cfg_.checked_links) requireLink(l, "robot.collision.checked_links");
   for (const std::string& l : cfg_.floor_links) requireLink(l, "robot.collision.floor_links");
@@ -269,8 +275,8 @@ void WholeBodyModel::build() {
     std::string chain_joints;
     for (const auto& s : tcp.chain.segments)
       if (s.getJoint().getType() != KDL::Joint::None) chain_joints += s.getJoint().getName() + " ";
-    fail("robot.arm.joints must be the movable joints from '" + cfg_.base_frame + "' to '" +
-         cfg_.tcp_frame + "' in order; the URDF chain has: " + chain_joints);
+    failField(cfg_, "robot.arm.joints", "must be the movable joints from '" + cfg_.base_frame + "' to '" + cfg_.tcp_frame +
+                                            "' in order; the URDF chain has: " + chain_joints);
   }
   impl_->tcp = &tcp;
   impl_->buildTree(tree, arm_idx);

@@ -2,6 +2,7 @@
 // sig(omega), proportional or PBVS/MPBS servo, EHC QP).
 //   rosrun ehc_control ehc_controller_node _config:=config/control/controller.yaml [_robot:=robot.yaml]
 //       [_mode:=ehc|neo_e|neo_c|tsmm] [_servo:=pbvs|proportional] [_mpbs:=true|false] [_target_timeout:=<s>]
+//       [_require_obstacles:=false] [_trigger:=state|timer]   (private parameters: ehc_common::initNode, docs/NODES.md)
 // Subscribes /joint_states, /odom, /ehc/target_pose (PoseStamped, world frame: the TCP goal),
 // /ehc/obstacles, /ehc/target_centre (PointStamped, world frame: the point the camera watches when
 // it is not the goal's, e.g. the object behind a pre-grasp goal). Publishes /cmd_vel,
@@ -25,6 +26,7 @@
 #include "ehc_msgs/ObstacleArray.h"
 #include "ehc_common/logging.h"
 #include "ehc_common/lockstep_ack.h"
+#include "ehc_common/node_init.h"
 #include "ehc_common/config_node.h"
 #include "ehc_control/control_cycle.h"
 #include "ehc_control/controller_node_config.h"
@@ -49,16 +51,23 @@ using namespace ehc_control;
 using ehc_common::kLogThrottle;
 
 /// controller.yaml with the node's private overrides applied.
-ControlCycleParams loadParams(const ConfigNode& cfg, ros::NodeHandle& pnh) {
+ControlCycleParams loadParams(const ConfigNode& cfg, const ehc_common::NodeParams& params) {
   ControlCycleParams p = loadControlCycleParams(cfg);
-  std::string s;
-  if (pnh.getParam("robot", s) && !s.empty()) p.robot_file = ehc_control::resolveRobotFile(s);  // name or path
-  if (pnh.getParam("mode", s) && !s.empty()) p.controller.mode = controlModeFromString(s);
-  if (pnh.getParam("servo", s)) p.servo_type = servoTypeFromString(s);
-  if (pnh.hasParam("mpbs")) pnh.getParam("mpbs", p.mpbs.enabled);
-  if (pnh.hasParam("target_timeout")) pnh.getParam("target_timeout", p.watchdog.target_timeout);
-  if (pnh.hasParam("require_obstacles")) pnh.getParam("require_obstacles", p.watchdog.require_obstacles);
-  p.validate();
+  p.robot_file = params.getParsed<std::string>("robot", resolveRobotFile).value_or(p.robot_file);  // name or path
+  p.controller.mode = params.getParsed<ControlMode>("mode", controlModeFromString).value_or(p.controller.mode);
+  p.servo_type = params.getParsed<ServoType>("servo", servoTypeFromString).value_or(p.servo_type);
+  p.mpbs.enabled = params.get("mpbs", p.mpbs.enabled);
+  p.watchdog.target_timeout = params.get("target_timeout", p.watchdog.target_timeout);
+  p.watchdog.require_obstacles = params.get("require_obstacles", p.watchdog.require_obstacles);
+  params.validate([&] { p.validate(); });
+  return p;
+}
+
+/// controller.yaml's node: section with the _trigger override (run_realman.sh: timer, the real
+/// robot has no lock-step simulator).
+ControllerNodeParams loadNodeParams(const ConfigNode& cfg, const ehc_common::NodeParams& params) {
+  ControllerNodeParams p = loadControllerNodeParams(cfg);
+  p.trigger = params.getParsed<CycleTrigger>("trigger", cycleTriggerFromString).value_or(p.trigger);
   return p;
 }
 
@@ -68,11 +77,15 @@ Eigen::Quaterniond toEigen(const geometry_msgs::Quaternion& q) { return Eigen::Q
 
 class ControllerNode {
  public:
-  ControllerNode(ros::NodeHandle& nh, ros::NodeHandle& pnh, const ConfigNode& cfg)
-      : cycle_(loadParams(cfg, pnh)), node_(loadControllerNodeParams(cfg)),
+  ControllerNode(ros::NodeHandle& nh, const ehc_common::NodeParams& params, const ConfigNode& cfg)
+      : cycle_(loadParams(cfg, params)), node_(loadNodeParams(cfg, params)),
         watchdog_(cycle_.params().watchdog.state_timeout, node_.wall_timeout),
         world_frame_(cycle_.model().config().world_frame) {
     ROS_INFO_STREAM("ehc_controller_node\n" << cycle_.summary() << "\n  " << node_.summary());
+    if (!cycle_.params().watchdog.require_obstacles)
+      ROS_WARN_STREAM("[ehc_controller_node] obstacle sensing is OFF (watchdog.require_obstacles false): the robot "
+                      "moves without obstacle dampers whenever no fresh /ehc/obstacles list is in; every /ehc/status "
+                      "says obstacles_required: false");
     // After the solve the watchdog is checked again on the ROS clock (ControlCycle::update).
     cycle_.setClock([] { return ros::Time::now().toSec(); });
     cmd_vel_ = nh.advertise<geometry_msgs::Twist>("cmd_vel", 1);
@@ -230,6 +243,7 @@ class ControllerNode {
     st.target_age = s.target_age;
     st.state_age = s.state_age;
     st.obstacles_age = s.obstacles_age;
+    st.obstacles_required = s.obstacles_required;
 
     const Eigen::VectorXd& v = out.velocity;
     const int nb = cycle_.model().nBase();
@@ -272,18 +286,12 @@ class ControllerNode {
 }  // namespace
 
 int main(int argc, char** argv) {
-  ros::init(argc, argv, "ehc_controller_node");
-  ros::NodeHandle nh, pnh("~");
-  try {
-    std::string config;
-    if (!pnh.getParam("config", config)) throw std::invalid_argument("missing parameter _config:=<controller.yaml>");
-    const ConfigNode cfg = ConfigNode::loadFile(config, "ControllerNode");
-    ControllerNode node(nh, pnh, cfg);
+  return ehc_common::runNode(argc, argv, "ehc_controller_node", 1, [](const ehc_common::NodeParams& params, ros::NodeHandle& nh) {
+    const ConfigNode cfg = ConfigNode::loadFile(params.requireText("config", "<controller.yaml>"), "ControllerNode");
+    ControllerNode node(nh, params, cfg);
     cfg.rejectUnknownKeys();  // every loader has run: a key none of them read is a misspelling
+    ehc_common::checkNodeParams(params);
     ros::spin();
-  } catch (const std::exception& e) {
-    ROS_FATAL_STREAM("[ehc_controller_node] " << e.what());
-    return 1;
-  }
-  return 0;
+    return 0;
+  });
 }

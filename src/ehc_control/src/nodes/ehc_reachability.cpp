@@ -4,6 +4,7 @@
 // Progress and ETA on stderr; a summary line on stdout. Errors: stderr, exit code 2.
 
 #include "ehc_common/command_line.h"
+#include "ehc_common/output_dir.h"
 #include "ehc_control/reachability_map.h"
 
 #include <chrono>
@@ -24,6 +25,7 @@ int main(int argc, char** argv) {
     }
     const std::string robot = ehc_control::resolveRobotFile(cli.text("robot"));  // a robot name or a robot.yaml
     const std::string out = cli.text("out");
+    ehc_common::prepareOutputFile(out);  // before the (long) generation
     const long samples = cli.integer("samples", 0, 1, 1000000000L);
     if (!cli.has("samples")) cli.text("samples");  // "--samples is required"
     const auto seed = static_cast<unsigned>(cli.integer("seed", 1, 0, 4294967295L));

@@ -48,7 +48,7 @@ TagNodeConfig loadTagNodeConfig(const std::string& path) {
   c.world_frame = n.get("world_frame", c.world_frame);
   c.camera_frame = n.get("camera_frame", c.camera_frame);
   c.camera_file = n.get("camera_file", c.camera_file);
-  if (!c.camera_file.empty()) c.camera_file = root.resolvePath(c.camera_file);
+  if (!c.camera_file.empty()) c.camera_file = n.requirePath("camera_file");
   c.tf_timeout = n.get("tf_timeout", c.tf_timeout);
   c.stale_after = n.get("stale_after", c.stale_after);
   c.max_image_pixels = n.get("max_image_pixels", c.max_image_pixels);

@@ -118,21 +118,19 @@ TagDetectorConfig loadTagDetectorConfig(const ConfigNode& n) {
   c.family = n.get<std::string>("family", c.family);
   c.default_tag_size = n.get<double>("default_tag_size", c.default_tag_size);
   if (n.has("tag_sizes")) {
-    const YAML::Node m = n.yaml()["tag_sizes"];
-    if (!m.IsMap()) n.fail("tag_sizes", "must be a mapping {tag id: size in m}");
-    for (const auto& kv : m) {
+    if (!n.yaml()["tag_sizes"].IsMap()) n.fail("tag_sizes", "must be a mapping {tag id: size in m}");
+    const ConfigNode sizes = n.child("tag_sizes");
+    for (const std::string& key : sizes.keys()) {
+      std::size_t used = 0;
       int id = -1;
-      double size = 0.0;
       try {
-        id = kv.first.as<int>();
-        size = kv.second.as<double>();
-      } catch (const YAML::Exception&) {
-        n.fail("tag_sizes", "entries must be <integer id>: <size in m>");
+        id = std::stoi(key, &used);
+      } catch (const std::exception&) {
+        used = 0;
       }
-      if (!std::isfinite(size)) n.fail("tag_sizes", "sizes must be finite");
-      c.tag_sizes[id] = size;
+      if (used == 0 || used != key.size()) sizes.fail(key, "must be an integer tag id (entries <tag id>: <size in m>)");
+      c.tag_sizes[id] = sizes.require<double>(key);  // errors name the entry
     }
-    n.ignore("tag_sizes");  // parsed whole above
   }
   c.quad_decimate = n.get<double>("quad_decimate", c.quad_decimate);
   c.threads = n.get<int>("threads", c.threads);

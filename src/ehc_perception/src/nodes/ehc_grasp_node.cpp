@@ -31,6 +31,7 @@
 #include "ehc_msgs/GraspCandidates.h"
 #include "ehc_common/logging.h"
 #include "ehc_common/lockstep_ack.h"
+#include "ehc_common/node_init.h"
 #include "ehc_perception/frame_counts.h"
 #include "ehc_perception/grasp_generator.h"
 #include "ehc_perception/grasp_target_history.h"
@@ -53,13 +54,13 @@ using ehc_common::kLogThrottle;
 
 class GraspNode {
  public:
-  GraspNode(ros::NodeHandle& nh, const ros::NodeHandle& pnh, const GraspNodeConfig& cfg)
+  GraspNode(ros::NodeHandle& nh, const ehc_common::NodeParams& params, const GraspNodeConfig& cfg)
       : cfg_(cfg),
         gen_(cfg.generator),
         listener_(tf_),
         limiter_(cfg.targeting.max_rate_hz),
         targets_(cfg.targeting.target_timeout, kMaxTargets),
-        ack_(pnh, cfg.lockstepInputs()) {
+        ack_(params, cfg.lockstepInputs()) {
     pub_ = nh.advertise<ehc_msgs::GraspCandidates>(cfg_.output_topic, 2);
     lockstep_ = !ack_.topic().empty();
     const ros::TransportHints fast = ros::TransportHints().tcpNoDelay();  // no Nagle delay (lock-step order)
@@ -173,21 +174,12 @@ class GraspNode {
 }  // namespace
 
 int main(int argc, char** argv) {
-  ros::init(argc, argv, "ehc_grasp_node");
-  ros::NodeHandle nh, pnh("~");
-  std::string config;
-  if (!pnh.getParam("config", config)) {
-    ROS_FATAL("ehc_grasp_node: missing _config:=<file.yaml> (see config/perception/grasp_node.yaml)");
-    return 2;
-  }
-  try {
-    const GraspNodeConfig cfg = loadGraspNodeConfig(config);
+  return ehc_common::runNode(argc, argv, "ehc_grasp_node", 2, [](const ehc_common::NodeParams& params, ros::NodeHandle& nh) {
+    const auto cfg = loadGraspNodeConfig(params.requireText("config", "<grasp_node.yaml>"));
     ROS_INFO_STREAM(cfg.summary());
-    GraspNode node(nh, pnh, cfg);
+    GraspNode node(nh, params, cfg);
+    ehc_common::checkNodeParams(params);
     ros::spin();
-  } catch (const std::exception& e) {
-    ROS_FATAL_STREAM("ehc_grasp_node: " << e.what());
-    return 2;
-  }
-  return 0;
+    return 0;
+  });
 }

@@ -32,6 +32,7 @@
 #include "ehc_msgs/ObstacleExclusion.h"
 #include "ehc_common/logging.h"
 #include "ehc_common/lockstep_ack.h"
+#include "ehc_common/node_init.h"
 #include "ehc_control/robot_config.h"
 #include "ehc_control/pose_math.h"
 #include "ehc_perception/frame_counts.h"
@@ -57,11 +58,11 @@ using ehc_common::kLogThrottle;
 
 class ObstacleNode {
  public:
-  ObstacleNode(ros::NodeHandle& nh, const ros::NodeHandle& pnh, const ObstacleNodeConfig& cfg)
+  ObstacleNode(ros::NodeHandle& nh, const ehc_common::NodeParams& params, const ObstacleNodeConfig& cfg)
       : cfg_(cfg),
         monitor_(ehc_control::loadRobotConfig(cfg.robot_config), cfg.map, cfg.monitor),
         listener_(tf_),
-        ack_(pnh, cfg.lockstepInputs()),
+        ack_(params, cfg.lockstepInputs()),
         cycle_(cfg.publish_rate_hz) {
     ROS_INFO_STREAM("  " << monitor_.field().summary());
     pub_ = nh.advertise<ehc_msgs::ObstacleArray>(cfg_.output_topic, 5);
@@ -258,23 +259,14 @@ class ObstacleNode {
 }  // namespace
 
 int main(int argc, char** argv) {
-  ros::init(argc, argv, "ehc_obstacle_node");
-  ros::NodeHandle nh, pnh("~");
-  std::string config;
-  if (!pnh.getParam("config", config)) {
-    ROS_FATAL("ehc_obstacle_node: missing _config:=<file.yaml> (see config/perception/obstacle_node.yaml)");
-    return 2;
-  }
-  try {
-    ObstacleNodeConfig cfg = loadObstacleNodeConfig(config);
-    std::string robot;  // _robot:=<name | robot.yaml> overrides node.robot_config
-    if (pnh.getParam("robot", robot) && !robot.empty()) cfg.robot_config = ehc_control::resolveRobotFile(robot);
+  return ehc_common::runNode(argc, argv, "ehc_obstacle_node", 2, [](const ehc_common::NodeParams& params, ros::NodeHandle& nh) {
+    ObstacleNodeConfig cfg = loadObstacleNodeConfig(params.requireText("config", "<obstacle_node.yaml>"));
+    // _robot:=<name | robot.yaml> overrides node.robot_config
+    cfg.robot_config = params.getParsed<std::string>("robot", ehc_control::resolveRobotFile).value_or(cfg.robot_config);
     ROS_INFO_STREAM(cfg.summary());
-    ObstacleNode node(nh, pnh, cfg);
+    ObstacleNode node(nh, params, cfg);
+    ehc_common::checkNodeParams(params);
     ros::spin();
-  } catch (const std::exception& e) {
-    ROS_FATAL_STREAM("ehc_obstacle_node: " << e.what());
-    return 2;
-  }
-  return 0;
+    return 0;
+  });
 }

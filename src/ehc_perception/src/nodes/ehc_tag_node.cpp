@@ -21,6 +21,7 @@
 #include "ehc_common/logging.h"
 #include "ehc_control/camera_info_msg.h"
 #include "ehc_common/lockstep_ack.h"
+#include "ehc_common/node_init.h"
 #include "ehc_perception/frame_counts.h"
 #include "ehc_perception/node_config.h"
 #include "ehc_perception/tag_detector.h"
@@ -41,10 +42,10 @@ using ehc_common::kLogThrottle;
 
 class TagNode {
  public:
-  TagNode(ros::NodeHandle& nh, const ros::NodeHandle& pnh, const TagNodeConfig& cfg)
+  TagNode(ros::NodeHandle& nh, const ehc_common::NodeParams& params, const TagNodeConfig& cfg)
       : cfg_(cfg),
         listener_(tf_),
-        ack_(pnh, cfg.lockstepInputs()) {
+        ack_(params, cfg.lockstepInputs()) {
     if (!cfg_.camera_file.empty()) build(ehc_control::loadPinholeCamera(cfg_.camera_file));
     pub_ = nh.advertise<geometry_msgs::PoseStamped>(cfg_.target_topic, 10);
     lockstep_ = !ack_.topic().empty();
@@ -189,21 +190,12 @@ class TagNode {
 }  // namespace
 
 int main(int argc, char** argv) {
-  ros::init(argc, argv, "ehc_tag_node");
-  ros::NodeHandle nh, pnh("~");
-  std::string config;
-  if (!pnh.getParam("config", config)) {
-    ROS_FATAL("ehc_tag_node: missing _config:=<file.yaml> (see config/perception/tag_node.yaml)");
-    return 2;
-  }
-  try {
-    const TagNodeConfig cfg = loadTagNodeConfig(config);
+  return ehc_common::runNode(argc, argv, "ehc_tag_node", 2, [](const ehc_common::NodeParams& params, ros::NodeHandle& nh) {
+    const auto cfg = loadTagNodeConfig(params.requireText("config", "<tag_node.yaml>"));
     ROS_INFO_STREAM(cfg.summary());
-    TagNode node(nh, pnh, cfg);
+    TagNode node(nh, params, cfg);
+    ehc_common::checkNodeParams(params);
     ros::spin();
-  } catch (const std::exception& e) {
-    ROS_FATAL_STREAM("ehc_tag_node: " << e.what());
-    return 2;
-  }
-  return 0;
+    return 0;
+  });
 }

@@ -41,7 +41,7 @@ RmArmAdapterConfig loadRmArmAdapterConfig(const std::string& path) {
   const auto a = root.child("rm_arm_adapter");
   RmArmAdapterConfig c;
   c.source_file = path;
-  c.robot_file = a.resolvePath(a.require<std::string>("robot"));
+  c.robot_file = a.requirePath("robot");
   const ehc_control::RobotConfig robot = ehc_control::loadRobotConfig(c.robot_file);
   c.limits.names = robot.arm_joints;
   c.limits.lower = robot.arm_lower;

@@ -108,7 +108,7 @@ Water2BridgeConfig loadWater2BridgeConfig(const std::string& path) {
   c.odom_frame = b.get<std::string>("odom_frame", c.odom_frame);
   c.base_frame = b.get<std::string>("base_frame", c.base_frame);
   if (b.has("robot")) {
-    c.robot_file = b.resolvePath(b.require<std::string>("robot"));
+    c.robot_file = b.requirePath("robot");
     const auto robot = ehc_control::loadRobotConfig(c.robot_file);
     c.max_linear_velocity = std::min(c.max_linear_velocity, robot.max_linear_velocity);
     c.max_angular_velocity = std::min(c.max_angular_velocity, robot.max_angular_velocity);

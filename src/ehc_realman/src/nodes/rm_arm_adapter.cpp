@@ -20,6 +20,7 @@
 // step published, "commands" + "rejected_commands" that a command was taken).
 
 #include "ehc_common/logging.h"
+#include "ehc_common/node_init.h"
 #include "ehc_realman/realman_adapter_config.h"
 #include "ehc_realman/realman_joint_streamer.h"
 #include "diagnostics.h"
@@ -279,27 +280,16 @@ class RmArmAdapterNode {
 }  // namespace
 
 int main(int argc, char** argv) {
-  ros::init(argc, argv, "rm_arm_adapter");
-  ros::NodeHandle nh;
-  ros::NodeHandle pnh("~");
-  std::string config_path;
-  if (!pnh.getParam("config", config_path)) {
-    ROS_FATAL("rm_arm_adapter: missing parameter _config:=<rm_arm_adapter.yaml>");
-    return 2;
-  }
-  const bool status_every_step = pnh.param("status_every_step", false);
-  std::unique_ptr<RmArmAdapterNode> node;
-  try {
-    const auto config = ehc_realman::loadRmArmAdapterConfig(config_path);
+  return ehc_common::runNode(argc, argv, "rm_arm_adapter", 2, [](const ehc_common::NodeParams& params, ros::NodeHandle& nh) {
+    const auto config = ehc_realman::loadRmArmAdapterConfig(params.requireText("config", "<rm_arm_adapter.yaml>"));
+    const bool status_every_step = params.get("status_every_step", false);
+    ehc_common::checkNodeParams(params);
     ROS_INFO_STREAM("rm_arm_adapter configuration:\n" << config.summary() << "\nclock: "
                     << (ros::Time::isSimTime() ? "ROS time (/use_sim_time)" : "steady")
                     << (status_every_step ? ", status after every stream step" : ""));
-    node = std::make_unique<RmArmAdapterNode>(nh, config, status_every_step);
-  } catch (const std::exception& e) {
-    ROS_FATAL("rm_arm_adapter: %s", e.what());
-    return 2;
-  }
-  ros::spin();
-  node.reset();
-  return 0;
+    auto node = std::make_unique<RmArmAdapterNode>(nh, config, status_every_step);
+    ros::spin();
+    node.reset();
+    return 0;
+  });
 }

@@ -17,6 +17,7 @@
 // "commands" + "rejected_commands" that a command was taken).
 
 #include "ehc_common/logging.h"
+#include "ehc_common/node_init.h"
 #include "ehc_realman/water2_base_bridge.h"
 #include "diagnostics.h"
 #include "node_clock.h"
@@ -177,32 +178,23 @@ class Water2BaseBridgeNode {
 }  // namespace
 
 int main(int argc, char** argv) {
-  ros::init(argc, argv, "water2_base_bridge");
-  ros::NodeHandle nh;
-  ros::NodeHandle pnh("~");
-  std::unique_ptr<Water2BaseBridgeNode> node;
-  try {
+  return ehc_common::runNode(argc, argv, "water2_base_bridge", 2, [](const ehc_common::NodeParams& params, ros::NodeHandle& nh) {
     ehc_realman::Water2BridgeConfig config;
-    std::string config_path;
-    if (pnh.getParam("config", config_path))
-      config = ehc_realman::loadWater2BridgeConfig(config_path);
+    if (const auto path = params.getOptional<std::string>("config"))
+      config = ehc_realman::loadWater2BridgeConfig(*path);
     else
       ROS_WARN("water2_base_bridge: no _config:=<file.yaml>; using built-in defaults");
-    std::string host;
-    if (pnh.getParam("host", host)) config.host = host;
-    int port = 0;
-    if (pnh.getParam("port", port)) config.port = port;
-    config.validate();
-    const bool status_every_step = pnh.param("status_every_step", false);
+    config.host = params.get("host", config.host);
+    config.port = params.getInRange("port", config.port, 1, 65535);
+    params.validate([&] { config.validate(); });
+    const bool status_every_step = params.get("status_every_step", false);
+    ehc_common::checkNodeParams(params);
     ROS_INFO_STREAM("water2_base_bridge configuration:\n" << config.summary() << "\nclock: "
                     << (ros::Time::isSimTime() ? "ROS time (/use_sim_time), network cycle every 10 ms" : "steady")
                     << (status_every_step ? ", status after every network cycle" : ""));
-    node = std::make_unique<Water2BaseBridgeNode>(nh, config, status_every_step);
-  } catch (const std::exception& e) {
-    ROS_FATAL("water2_base_bridge: %s", e.what());
-    return 2;
-  }
-  ros::spin();
-  node.reset();
-  return 0;
+    auto node = std::make_unique<Water2BaseBridgeNode>(nh, config, status_every_step);
+    ros::spin();
+    node.reset();
+    return 0;
+  });
 }

@@ -73,10 +73,6 @@ struct AckGateConfig {
   /// " name (stream)" for every node, e.g. " ehc_tag_node (image) ehc_grasp_node (cloud)".
   std::string summary() const;
 };
-/// Splits one string of specs separated by commas, blanks or brackets, as rosrun passes a list
-/// (`_lockstep_acks:=[a,b:cloud]` stays a string): {"a", "b:cloud"}. Empty pieces are skipped:
-/// "" and "[]" give no specs.
-std::vector<std::string> splitAckSpecs(const std::string& text);
 /// AckNode::parse of every spec and the lag. Throws std::invalid_argument "[StepScheduler] ..."
 /// naming the bad spec (an empty name, an unknown stream) or a lag outside [0, 10] s.
 AckGateConfig parseAckGate(const std::vector<std::string>& specs, double max_lag_s);
@@ -120,7 +116,9 @@ class StepScheduler {
   /// An image or a cloud stamped `stamp_ns` was published (states are recorded by statePublished).
   void framePublished(AckStream stream, std::int64_t stamp_ns);
   /// `node` is done with the frames of its stream up to `stamp_ns` (whatever came of them): ""
-  /// if counted, else why not (a node the gate does not list).
+  /// if counted, else why not: a node the gate does not list, or a stamp more than one step
+  /// ahead of the newest frame published (no such frame exists: a wrong clock or a stray
+  /// publisher; counting it would let sim time run past frames nobody processed).
   std::string onAck(const std::string& node, std::int64_t stamp_ns);
   /// "" when no step is held back by the gate; else which node and frame it waits for.
   std::string ackWait() const;
@@ -140,6 +138,8 @@ class StepScheduler {
   double last_fresh_publish_ = 0.0;
   std::optional<double> last_base_cmd_, last_arm_cmd_, next_step_;
   std::int64_t state_ns_ = 0;  ///< stamp of the last fresh state
+  std::int64_t newest_ns_ = 0;  ///< stamp of the newest frame (state, image, cloud) published
+  long future_acks_ = 0;        ///< acknowledgements ignored for a stamp ahead of newest_ns_
   // Acknowledgement gate: listed nodes, their last acknowledged stamp (-1: not joined), the
   // frames per stream (increasing) not yet acknowledged by every joined node of the stream.
   std::vector<AckNode> ack_nodes_;

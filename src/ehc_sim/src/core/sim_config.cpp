@@ -147,8 +147,8 @@ SimConfig loadSim(const ConfigNode& root) {
   if (s.has("robot_start"))
     s.fail("robot_start", "is not used by the Bullet simulator: the robot starts at the scene's "
                           "robot_start");
-  if (s.has("camera_info")) c.camera_file = s.resolvePath(s.require<std::string>("camera_info"));
-  if (s.has("scene")) c.scene_file = s.resolvePath(s.require<std::string>("scene"));
+  c.camera_file = s.getPath("camera_info", c.camera_file);
+  c.scene_file = s.getPath("scene", c.scene_file);
   c.max_physics_substep = s.get<double>("max_physics_substep", c.max_physics_substep);
   if (!(c.max_physics_substep >= 1e-4 && c.max_physics_substep <= 0.02))
     s.fail("max_physics_substep", "must be in [0.0001, 0.02] s");

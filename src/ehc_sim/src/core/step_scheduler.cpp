@@ -50,20 +50,6 @@ std::string AckGateConfig::summary() const {
   return s;
 }
 
-std::vector<std::string> splitAckSpecs(const std::string& text) {
-  std::vector<std::string> specs;
-  std::string spec;
-  for (const char ch : text + ",") {
-    if (ch == ',' || ch == ' ' || ch == '[' || ch == ']') {
-      if (!spec.empty()) specs.push_back(spec);
-      spec.clear();
-    } else {
-      spec += ch;
-    }
-  }
-  return specs;
-}
-
 AckGateConfig parseAckGate(const std::vector<std::string>& specs, double max_lag_s) {
   if (!(max_lag_s >= 0.0 && max_lag_s <= 10.0)) {
     std::ostringstream os;
@@ -84,6 +70,7 @@ StepScheduler::StepScheduler(const ehc_control::RobotConfig& robot, const FakeRo
 void StepScheduler::statePublished(double wall_s, std::int64_t stamp_ns, bool fresh) {
   if (fresh) {
     state_ns_ = stamp_ns;
+    newest_ns_ = stamp_ns;
     gate_.newState(stamp_ns);
     last_fresh_publish_ = wall_s;
     recordFrame(AckStream::State, stamp_ns);
@@ -133,6 +120,7 @@ double StepScheduler::callbackWait() const {
 }
 
 void StepScheduler::reset() {
+  newest_ns_ = 0;  // time restarts: an acknowledgement of a frame before the reset is from the future
   gate_.zero();
   gate_.resetCounters();
   for (auto& f : frames_ns_) f.clear();
@@ -160,6 +148,7 @@ void StepScheduler::recordFrame(AckStream stream, std::int64_t stamp_ns) {
   auto& f = frames_ns_[static_cast<std::size_t>(stream)];
   if (!f.empty() && stamp_ns <= f.back()) f.clear();  // time restarted (reset)
   f.push_back(stamp_ns);
+  newest_ns_ = stamp_ns;
 }
 
 std::string StepScheduler::onAck(const std::string& node, std::int64_t stamp_ns) {
@@ -168,6 +157,15 @@ std::string StepScheduler::onAck(const std::string& node, std::int64_t stamp_ns)
   const auto it = std::find_if(ack_nodes_.begin(), ack_nodes_.end(), [&](const AckNode& n) { return n.name == name; });
   if (it == ack_nodes_.end()) return "'" + name + "' is not a node of the lock-step acknowledgement gate";
   const auto k = static_cast<std::size_t>(it - ack_nodes_.begin());
+  if (stamp_ns > newest_ns_ + config_.dtNs()) {
+    // No frame of that stamp was published: counting it would open the gate for every frame up
+    // to it (for the rest of the run, for a far-future stamp).
+    std::ostringstream why;
+    why << "'" << name << "' acknowledged " << 1e-9 * static_cast<double>(stamp_ns) << " s, ahead of the newest frame ("
+        << 1e-9 * static_cast<double>(newest_ns_) << " s) by more than one step: ignored (" << ++future_acks_
+        << " so far)";
+    return why.str();
+  }
   acked_ns_[k] = std::max(acked_ns_[k], stamp_ns);
   // Frames every joined node of the stream has acknowledged no longer hold anything back.
   std::int64_t all = acked_ns_[k];

@@ -26,6 +26,8 @@
 #include "ehc_sim/hardware_stand_in.h"
 #include "ehc_sim/water2_api_server.h"
 
+#include "ehc_common/node_init.h"
+
 #include <geometry_msgs/PoseStamped.h>
 #include <rm_msgs/Gripper_Pick.h>
 #include <rm_msgs/Gripper_Set.h>
@@ -43,16 +45,17 @@ constexpr double kMaxServeWait = 0.002;  ///< s the loop blocks on the Water2 so
 
 class HardwareStandInNode {
  public:
-  HardwareStandInNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : setup_(pnh, "ehc_hardware_standin_node") {
-    int port = 0;
-    pnh.param("port", port, port);
+  HardwareStandInNode(ros::NodeHandle& nh, const ehc_common::NodeParams& params)
+      : setup_(params, "ehc_hardware_standin_node") {
+    const int port = params.getInRange("port", 0, 0, 65535);  // 0: a free port
+    ros::param::del("~water2_port");  // an earlier run's: never read as this run's port
     const ehc_control::RobotConfig& robot = setup_.robot;
     world_ = std::make_unique<ehc_sim::SimWorld>(setup_.cfg, robot, setup_.scene);
     stand_in_ = std::make_unique<ehc_sim::HardwareStandIn>(*world_);
     camera_ = std::make_unique<ehc_sim::SimCameraStreams>(nh, setup_, *world_);
     gate_ = std::make_unique<ehc_sim::CommandGate>(robot);  // /sim/status command fields: none here
     server_ = std::make_unique<ehc_sim::Water2ApiServer>(port);
-    pnh.setParam("water2_port", server_->port());
+    ros::param::set("~water2_port", server_->port());  // an output: the port it got
     ROS_INFO("[ehc_hardware_standin_node] Water2 API on 127.0.0.1:%d; rm_driver topics /rm_driver/*",
              server_->port());
 
@@ -145,14 +148,11 @@ class HardwareStandInNode {
 }  // namespace
 
 int main(int argc, char** argv) {
-  ros::init(argc, argv, "ehc_hardware_standin_node");
-  ros::NodeHandle nh, pnh("~");
-  try {
-    HardwareStandInNode node(nh, pnh);
+  return ehc_common::runNode(argc, argv, "ehc_hardware_standin_node", 1, [](const ehc_common::NodeParams& params, ros::NodeHandle& nh) {
+    HardwareStandInNode node(nh, params);
+    params.has("water2_port");  // its own output, left by an earlier run: not an input
+    ehc_common::checkNodeParams(params);
     node.run();
-  } catch (const std::exception& e) {
-    ROS_FATAL_STREAM(e.what());
-    return 1;
-  }
-  return 0;
+    return 0;
+  });
 }

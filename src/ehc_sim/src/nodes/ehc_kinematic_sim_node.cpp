@@ -26,6 +26,8 @@
 
 #include "ehc_sim/fake_robot_config.h"
 #include "ehc_sim/kinematic_fake_robot.h"
+#include "ehc_common/node_init.h"
+#include "ehc_control/whole_body_model.h"
 
 #include <ros/ros.h>
 #include <tf2_msgs/TFMessage.h>
@@ -36,13 +38,12 @@ namespace {
 
 class KinematicSimNode {
  public:
-  KinematicSimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh) {
-    std::string config_file;
-    if (!pnh.getParam("config", config_file))
-      throw std::invalid_argument("[ehc_kinematic_sim_node] parameter _config:=<sim.yaml> is required");
+  KinematicSimNode(ros::NodeHandle& nh, const ehc_common::NodeParams& params) : nh_(nh) {
+    const std::string config_file = params.requireText("config", "<sim.yaml>");
     cfg_ = ehc_sim::loadFakeRobotConfigFile(config_file);
-    ehc_sim::applyNodeOverrides(pnh, "ehc_kinematic_sim_node", &cfg_);
+    ehc_sim::applyNodeOverrides(params, &cfg_);
     const ehc_control::RobotConfig robot = ehc_control::loadRobotConfig(cfg_.robot_file);
+    ehc_control::WholeBodyModel check(robot);  // robot.yaml against its URDF: arm joints, calibration joints, frames
     ROS_INFO_STREAM("[ehc_kinematic_sim_node] start-up configuration (" << config_file << ")\n"
                     << cfg_.summary() << robot.summary());
 
@@ -102,14 +103,10 @@ class KinematicSimNode {
 }  // namespace
 
 int main(int argc, char** argv) {
-  ros::init(argc, argv, "ehc_kinematic_sim_node");
-  ros::NodeHandle nh, pnh("~");
-  try {
-    KinematicSimNode node(nh, pnh);
+  return ehc_common::runNode(argc, argv, "ehc_kinematic_sim_node", 1, [](const ehc_common::NodeParams& params, ros::NodeHandle& nh) {
+    KinematicSimNode node(nh, params);
+    ehc_common::checkNodeParams(params);
     node.run();
-  } catch (const std::exception& e) {
-    ROS_FATAL_STREAM(e.what());
-    return 1;
-  }
-  return 0;
+    return 0;
+  });
 }

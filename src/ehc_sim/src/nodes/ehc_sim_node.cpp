@@ -26,6 +26,7 @@
 #include "sim_camera_streams.h"
 #include "sim_ros_conversions.h"
 
+#include "ehc_common/node_init.h"
 #include "ehc_msgs/ResetScene.h"
 
 #include <ros/ros.h>
@@ -41,7 +42,7 @@ using ehc_common::kLogThrottle;
 
 class SimNode {
  public:
-  SimNode(ros::NodeHandle& nh, ros::NodeHandle& pnh) : nh_(nh), setup_(pnh, "ehc_sim_node") {
+  SimNode(ros::NodeHandle& nh, const ehc_common::NodeParams& params) : nh_(nh), setup_(params, "ehc_sim_node") {
     const ehc_control::RobotConfig& robot = setup_.robot;
     world_ = std::make_unique<ehc_sim::SimWorld>(setup_.cfg, robot, setup_.scene);
     camera_ = std::make_unique<ehc_sim::SimCameraStreams>(nh_, setup_, *world_);
@@ -54,15 +55,8 @@ class SimNode {
     objects_pub_ = nh_.advertise<ehc_msgs::SimObjectPoses>("/sim/object_poses", 10);
     status_pub_ = nh_.advertise<ehc_msgs::SimStatus>("/sim/status", 10);
     // A YAML list, or one string of specs (rosrun _lockstep_acks:=[a,b:cloud]: roscpp keeps it a string).
-    std::vector<std::string> specs;
-    if (!pnh.getParam("lockstep_acks", specs)) {
-      std::string text;
-      pnh.param<std::string>("lockstep_acks", text, "");
-      specs = ehc_sim::splitAckSpecs(text);
-    }
-    double max_lag = 0.0;
-    pnh.param("lockstep_max_lag", max_lag, max_lag);
-    const ehc_sim::AckGateConfig gate = ehc_sim::parseAckGate(specs, max_lag);
+    const ehc_sim::AckGateConfig gate =
+        ehc_sim::parseAckGate(params.getList("lockstep_acks"), params.get("lockstep_max_lag", 0.0));
     if (!gate.nodes.empty()) {
       lock_step_->scheduler().setAckGate(gate.nodes, gate.maxLagNs());
       ROS_INFO_STREAM("[ehc_sim_node] lock-step acknowledgement gate on /sim/lockstep_ack:"
@@ -170,14 +164,10 @@ class SimNode {
 }  // namespace
 
 int main(int argc, char** argv) {
-  ros::init(argc, argv, "ehc_sim_node");
-  ros::NodeHandle nh, pnh("~");
-  try {
-    SimNode node(nh, pnh);
+  return ehc_common::runNode(argc, argv, "ehc_sim_node", 1, [](const ehc_common::NodeParams& params, ros::NodeHandle& nh) {
+    SimNode node(nh, params);
+    ehc_common::checkNodeParams(params);
     node.run();
-  } catch (const std::exception& e) {
-    ROS_FATAL_STREAM(e.what());
-    return 1;
-  }
-  return 0;
+    return 0;
+  });
 }

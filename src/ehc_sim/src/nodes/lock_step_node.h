@@ -6,6 +6,7 @@
 
 #include "ehc_msgs/JointVelocityCommand.h"
 #include "ehc_common/logging.h"
+#include "ehc_common/node_params.h"
 #include "ehc_sim/step_scheduler.h"
 
 #include <geometry_msgs/Twist.h>
@@ -22,14 +23,10 @@ using ehc_common::kLogThrottle;
 
 /// Private parameters _robot (a robot name or a robot.yaml), _free_run and _seed override the
 /// configuration file.
-inline void applyNodeOverrides(const ros::NodeHandle& pnh, const std::string& node, FakeRobotConfig* cfg) {
-  std::string robot;
-  if (pnh.getParam("robot", robot) && !robot.empty()) cfg->robot_file = ehc_control::resolveRobotFile(robot);
-  pnh.param("free_run", cfg->free_run, cfg->free_run);
-  int seed = static_cast<int>(cfg->seed);
-  pnh.param("seed", seed, seed);
-  if (seed < 0) throw std::invalid_argument("[" + node + "] _seed must be >= 0");
-  cfg->seed = static_cast<unsigned>(seed);
+inline void applyNodeOverrides(const ehc_common::NodeParams& params, FakeRobotConfig* cfg) {
+  cfg->robot_file = params.getParsed<std::string>("robot", ehc_control::resolveRobotFile).value_or(cfg->robot_file);
+  cfg->free_run = params.get("free_run", cfg->free_run);
+  cfg->seed = params.get<unsigned>("seed", cfg->seed);
 }
 
 class LockStepNode {

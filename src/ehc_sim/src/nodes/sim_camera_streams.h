@@ -22,15 +22,11 @@ struct BulletNodeSetup {
   SceneConfig scene;
   ehc_control::PinholeCamera intrinsics;
 
-  BulletNodeSetup(const ros::NodeHandle& pnh, const std::string& node) {
-    std::string config_file;
-    if (!pnh.getParam("config", config_file))
-      throw std::invalid_argument("[" + node + "] parameter _config:=<sim.yaml> is required");
-    cfg = loadSimConfig(config_file);
-    std::string scene_file = cfg.scene_file;
-    pnh.param("scene", scene_file, scene_file);
+  BulletNodeSetup(const ehc_common::NodeParams& params, const std::string& node) {
+    cfg = loadSimConfig(params.requireText("config", "<sim.yaml>"));
+    const std::string scene_file = params.get<std::string>("scene", cfg.scene_file);
     if (scene_file.empty()) throw std::invalid_argument("[" + node + "] no scene: set sim.scene or _scene:=");
-    applyNodeOverrides(pnh, node, &cfg.fake_robot);
+    applyNodeOverrides(params, &cfg.fake_robot);
     robot = ehc_control::loadRobotConfig(cfg.fake_robot.robot_file);
     scene = loadSceneConfig(scene_file);
     intrinsics = ehc_control::loadPinholeCamera(simCameraFile(cfg, robot));

@@ -12,6 +12,7 @@
 // Without _ack_topic it does nothing. Header-only (roscpp, std_msgs).
 
 #include "ehc_common/logging.h"
+#include "ehc_common/node_params.h"
 
 #include <ros/names.h>
 #include <ros/poll_manager.h>
@@ -38,8 +39,8 @@ class LockstepAck {
  public:
   /// `inputs`: the topics the node must be connected to before it is ready (as the node
   /// subscribes them: relative names and remappings are resolved), e.g. its sensor topic and /tf.
-  LockstepAck(const ros::NodeHandle& pnh, const std::vector<std::string>& inputs) {
-    pnh.param<std::string>("ack_topic", topic_, "");
+  LockstepAck(const NodeParams& params, const std::vector<std::string>& inputs) {
+    topic_ = params.get<std::string>("ack_topic", "");
     if (topic_.empty()) return;
     ros::NodeHandle nh;
     pub_ = nh.advertise<std_msgs::Header>(topic_, 50);
