@@ -96,6 +96,9 @@ std::string configDirectory();
 /// Folder of the robots shipped with the stack (<configDirectory()>/robots); the environment
 /// variable EHC_ROBOTS_DIR overrides it.
 std::string robotsDirectory();
+/// The robots in `dir` (default robotsDirectory()): the names of its folders that hold a
+/// robot.yaml, sorted. Tests run over every shipped robot with it.
+std::vector<std::string> robotNames(const std::string& dir = robotsDirectory());
 /// The one robot switch (--robot, _robot:=, ROBOT=): a robot name (no '/', not ending in
 /// .yaml, e.g. "kuka_iiwa14_kmr") -> <robotsDirectory()>/<name>/robot.yaml; anything else is a
 /// path to a robot.yaml, returned unchanged. Throws std::invalid_argument "[RobotConfig] ..."

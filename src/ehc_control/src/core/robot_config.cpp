@@ -3,6 +3,7 @@
 #include "ehc_common/config_node.h"
 #include "ehc_common/enum_names.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -207,6 +208,16 @@ std::string robotFileField(const ConfigNode& node, const std::string& key) {
   }
 }
 
+std::vector<std::string> robotNames(const std::string& dir) {
+  namespace fs = std::filesystem;
+  std::vector<std::string> names;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir, ec))
+    if (fs::is_regular_file(e.path() / "robot.yaml")) names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
 std::string resolveRobotFile(const std::string& name_or_path) {
   namespace fs = std::filesystem;
   const std::string& s = name_or_path;
@@ -216,9 +227,7 @@ std::string resolveRobotFile(const std::string& name_or_path) {
   const fs::path file = dir / s / "robot.yaml";
   if (fs::is_regular_file(file)) return file.string();
   std::string known;
-  std::error_code ec;
-  for (const auto& e : fs::directory_iterator(dir, ec))
-    if (fs::is_regular_file(e.path() / "robot.yaml")) known += (known.empty() ? "" : ", ") + e.path().filename().string();
+  for (const std::string& n : robotNames(dir.string())) known += (known.empty() ? "" : ", ") + n;
   fail("unknown robot '" + s + "': no " + file.string() + " (robots in " + dir.string() + ": " +
        (known.empty() ? "none" : known) + "); give a robot name or a path to a robot.yaml");
 }
