@@ -244,7 +244,7 @@ void checkCameraView(const RobotConfig& rc, const WholeBodyModel& model, const R
                                  (c & 4) ? p.view_max.z() : p.view_min.z());
     const std::string why = cornerProblem(cam, T.inverse() * corner, p);
     if (why.empty()) continue;
-    if (unseen++ == 0) first = "corner " + vec(corner) + " is " + why;
+    if (unseen++ == 0) first = "corner " + vec(corner, 3) + " is " + why;
   }
   const std::string region = "the region ahead (x " + num(p.view_min.x()) + " .. " + num(p.view_max.x()) + ", y " +
                              num(p.view_min.y()) + " .. " + num(p.view_max.y()) + ", z " + num(p.view_min.z()) + " .. " +
