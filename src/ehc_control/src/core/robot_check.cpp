@@ -14,7 +14,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <iomanip>
 #include <memory>
 #include <sstream>
@@ -285,14 +284,6 @@ void checkMap(const RobotConfig& rc, const WholeBodyModel& model, Report& r) {
   }
 }
 
-std::string readText(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) return "";
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 }  // namespace
 
 RobotCheckParams::RobotCheckParams() : ready_margin(QpControllerParams{}.joint_stop) {}
@@ -320,11 +311,16 @@ std::vector<RobotCheckLine> checkRobot(const std::string& robot_file, const Robo
   }
   r.ok("robot.yaml", "robot '" + rc.name + "': " + std::to_string(rc.nArm()) + " arm joints, " + toString(rc.base_type) +
                          " base (" + robot_file + ")");
-  const std::string xml = readText(rc.urdf_path);
-  const urdf::ModelInterfaceSharedPtr urdf = xml.empty() ? nullptr : urdf::parseURDF(xml);
+  std::string xml;
+  try {
+    xml = readUrdfFile(rc.urdf_path);
+  } catch (const std::exception& e) {
+    r.problem("urdf", std::string(e.what()) + " (robot.urdf)");
+    return r.take();
+  }
+  const urdf::ModelInterfaceSharedPtr urdf = urdf::parseURDF(xml);
   if (!urdf) {
-    r.problem("urdf", "'" + rc.urdf_path + "' " + (xml.empty() ? "cannot be read" : "does not parse as a URDF") +
-                          " (robot.urdf)");
+    r.problem("urdf", "'" + rc.urdf_path + "' does not parse as a URDF (robot.urdf)");
     return r.take();
   }
   checkFrames(rc, *urdf, r);

@@ -29,13 +29,6 @@ namespace {
   throw std::invalid_argument("[WholeBodyModel] " + what);
 }
 
-std::string readFile(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) fail("cannot read URDF file '" + path + "'");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 Eigen::Isometry3d toEigen(const KDL::Frame& f) {
   Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
@@ -133,7 +126,15 @@ struct WholeBodyModel::Impl {
   }
 };
 
-WholeBodyModel::WholeBodyModel(const RobotConfig& cfg) : WholeBodyModel(cfg, readFile(cfg.urdf_path)) {}
+std::string readUrdfFile(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) fail("cannot read URDF file '" + path + "'");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+WholeBodyModel::WholeBodyModel(const RobotConfig& cfg) : WholeBodyModel(cfg, readUrdfFile(cfg.urdf_path)) {}
 
 WholeBodyModel::WholeBodyModel(const RobotConfig& cfg, const std::string& urdf_xml)
     : cfg_(cfg), urdf_xml_(urdf_xml), impl_(std::make_unique<Impl>()) {
