@@ -13,7 +13,8 @@
 # Environment (defaults in brackets):
 #   EHC_DEVEL          devel space to source                          [devel]
 #   OUT                output folder; relative paths are relative to the workspace root
-#                      (absolute paths are used as given)             [results/demo]
+#                      (absolute paths are used as given)             [results/demo; with ROBOT:
+#                                                                      results/demo_<robot>]
 #   EHC_DEMO_PORT      ROS master port                                [a free port from 11411 up]
 #   CONTROLLER_CONFIG  controller YAML                                [config/demo/controller.yaml]
 #   MODE               controller mode ehc | neo_e | neo_c | tsmm     [ehc]
@@ -40,6 +41,13 @@ export PATH="/usr/bin:/bin:$PATH"  # the catkin-aware python3 first
 cd "$(dirname "$0")/../../.." || exit 2
 WS="$(pwd)"
 # Every path below is absolute from here on (an absolute OUT used to become "$WS//abs/path").
+# Another robot's run goes to its own folder (results/demo_<robot>), beside the default's.
+if [ -z "${OUT:-}" ] && [ -n "${ROBOT:-}" ]; then
+  case "$ROBOT" in
+    */*|*.yaml) OUT="results/demo_$(basename "$(dirname "$ROBOT")")" ;;
+    *) OUT="results/demo_$ROBOT" ;;
+  esac
+fi
 OUT="${OUT:-results/demo}"
 case "$OUT" in /*) ;; *) OUT="$WS/$OUT" ;; esac
 EHC_DEVEL="${EHC_DEVEL:-devel}"

@@ -4,7 +4,9 @@
   make_results.py [--results DIR] [--experiments DIR] [--bench DIR] [--demo DIR] [--out FILE]
       Reads DIR/experiments/{exp1,exp2,exp3} (ehc_experiment reach / grasp / poses, written by
       experiments.sh), DIR/bench (bench.sh) and DIR/demo (demo.sh), DIR = results/ by default,
-      and writes FILE (docs/RESULTS.md). A folder that is not there is listed as "not run".
+      and writes FILE (docs/RESULTS.md). A folder that is not there is listed as "not run". The
+      demo folder and every DIR/demo_<robot> (demo.sh with ROBOT=<name>) make one row each of
+      the per-robot demo table.
       Every table comes with the command that made it, the code version, the machine, the date
       and the seeds (from the folder's meta.json) and the paper's figure beside ours. Means of
       per-set data come with a 95 % bootstrap interval over the sets (fixed bootstrap seed:
@@ -444,6 +446,36 @@ def demo_section(folder, meta):
     return out
 
 
+def demo_folders(args):
+    """Every demo run: the demo folder and the results' demo_<robot> folders (`make demo
+    ROBOT=<name>` writes there), each with a summary.json."""
+    folders = [args.demo or os.path.join(args.results, "demo")]
+    if os.path.isdir(args.results):
+        folders += [os.path.join(args.results, n) for n in sorted(os.listdir(args.results)) if n.startswith("demo_")]
+    return [f for f in folders if os.path.isfile(os.path.join(f, "summary.json"))]
+
+
+def robots_section(folders):
+    """One row per demo run, i.e. per robot: what `make demo ROBOT=<name>` grasped."""
+    out = ["## Demo on every robot (`make demo ROBOT=<name>`, one run each)", "",
+           "| Robot | Grasped | Time per object (s) | TfM (%) | Mode | Seed | Code version | Folder |",
+           "|---|---|---|---|---|---|---|---|"]
+    for folder in folders:
+        path = os.path.join(folder, "summary.json")
+        s = read_json(path)
+        objects = field(s, ["objects"], path)
+        if not isinstance(objects, list):
+            raise ResultsError("%s: field 'objects' is not a list" % rel(path))
+        meta = read_meta(folder) or {}
+        times = ", ".join("%.2f" % float(field(o, ["time_s"], path)) for o in objects)
+        tfm = ", ".join("%.1f" % (100.0 * float(field(o, ["tfm"], path))) for o in objects)
+        out.append("| %s | %s/%s | %s | %s | %s | %s | `%s` | `%s` |" % (
+            meta.get("robot") or "the configs' default", sum(1 for o in objects if field(o, ["success"], path)),
+            len(objects), times, tfm, s.get("mode", "?"), meta.get("seed", "not recorded"),
+            meta.get("code_version", "not recorded"), rel(folder)))
+    return out
+
+
 # ------------------------------------------------------------------------------ report
 def sources(args):
     exp = args.experiments or os.path.join(args.results, "experiments")
@@ -471,6 +503,10 @@ def build_report(args):
         meta = read_meta(meta_folder or folder)
         header.append("| %s | `%s` | below |" % (name, rel(folder)))
         body += [""] + section(folder, meta)
+    demos = demo_folders(args)
+    if demos:
+        header.append("| Demo on every robot | %s | below |" % ", ".join("`%s`" % rel(f) for f in demos))
+        body += [""] + robots_section(demos)
     return "\n".join(header + body) + "\n"
 
 

@@ -1,12 +1,15 @@
 // What the grasp sequencer node records (grasp_trace.h): trace.csv and the summary file in a
-// temporary folder, and the trace's arm speed over the robot's arm joints: on the KUKA, whose
-// joints are not named "joint...", it is the norm over its seven arm joints, not 0.
+// temporary folder, and the trace's arm speed over the robot's arm joints: on every shipped
+// robot (the KUKA's, the Kinova's and the UR5e's joints are not named "joint...") it is the norm
+// over robot.yaml's arm joints, not 0.
 
 #include "ehc_bringup/grasp_trace.h"
 #include "ehc_control/robot_config.h"
+#include "ehc_test/temp_dir.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -19,24 +22,11 @@ namespace {
 using ehc_bringup::GraspTraceRow;
 using ehc_bringup::GraspTraceWriter;
 
-struct TempDir {
-  TempDir() {
-    char tmpl[] = "/tmp/test_grasp_trace_XXXXXX";
-    path = ::mkdtemp(tmpl);
-  }
-  ~TempDir() { std::system(("rm -rf '" + path + "'").c_str()); }
-  std::string path;
-};
-
-std::string readFile(const std::string& path) {
-  std::ifstream f(path);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
+using ehc_test::readText;
+using ehc_test::TempDir;
 
 TEST(GraspTraceWriter, WritesTheHeaderAndOneLinePerCycle) {
-  TempDir dir;
+  TempDir dir("test_grasp_trace");
   const std::string file = dir.path + "/trace.csv";
   {
     GraspTraceWriter w(file);
@@ -62,7 +52,7 @@ TEST(GraspTraceWriter, WritesTheHeaderAndOneLinePerCycle) {
     w.write(r);
     w.flush();
   }
-  EXPECT_EQ(readFile(file),
+  EXPECT_EQ(readText(file),
             "t,object,phase,controller_phase,error_norm,position_error,sig_omega,base_speed,base_turn_rate,arm_speed,"
             "target_in_fov,obstacle_rows,qp_status\n"
             "1.235,front,APPROACH,TRACKING,0.50000,0.25000,0.12500,0.20000,0.10000,0.30000,1,4,OK\n"
@@ -79,33 +69,47 @@ TEST(GraspTraceWriter, AFileThatCannotBeWrittenIsAnError) {
 }
 
 TEST(GraspSummaryFile, WritesTheJsonAndANewline) {
-  TempDir dir;
+  TempDir dir("test_grasp_trace");
   ehc_bringup::GraspResult r;
   r.name = "front";
   r.success = true;
   const std::string json = ehc_bringup::graspResultsToJson({r}, "ehc", 12.5);
   ASSERT_TRUE(ehc_bringup::writeGraspSummaryFile(dir.path + "/summary.json", json));
-  EXPECT_EQ(readFile(dir.path + "/summary.json"), json + "\n");
+  EXPECT_EQ(readText(dir.path + "/summary.json"), json + "\n");
   EXPECT_FALSE(ehc_bringup::writeGraspSummaryFile("/nonexistent_folder/summary.json", json));
 }
 
-TEST(JointStateArmSpeed, IsTheNormOverTheKukaArmJoints) {
-  const ehc_control::RobotConfig kuka = ehc_control::loadRobotConfig(ehc_control::resolveRobotFile("kuka_iiwa14_kmr"));
-  ASSERT_EQ(kuka.arm_joints.size(), 7u);
-  for (const auto& j : kuka.arm_joints) EXPECT_NE(j.rfind("joint", 0), 0u) << j;  // what the prefix rule missed
+class JointStateArmSpeedOfEveryRobot : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(JointStateArmSpeedOfEveryRobot, IsTheNormOverItsArmJointsInAnyOrder) {
+  const ehc_control::RobotConfig rc = ehc_control::loadRobotConfig(ehc_control::resolveRobotFile(GetParam()));
   // A joint state in another order, with a finger joint the speed must leave out.
   std::vector<std::string> names{"finger_joint"};
   std::vector<double> rates{5.0};
   double squares = 0.0;
-  for (std::size_t i = 0; i < kuka.arm_joints.size(); ++i) {
+  for (std::size_t i = 0; i < rc.arm_joints.size(); ++i) {
     const double v = 0.1 * static_cast<double>(i + 1) * (i % 2 ? -1.0 : 1.0);
-    names.insert(names.begin(), kuka.arm_joints[i]);
+    names.insert(names.begin(), rc.arm_joints[i]);
     rates.insert(rates.begin(), v);
     squares += v * v;
   }
-  const double speed = ehc_bringup::jointStateArmSpeed(kuka.arm_joints, names, rates);
+  const double speed = ehc_bringup::jointStateArmSpeed(rc.arm_joints, names, rates);
   EXPECT_GT(speed, 0.0);
   EXPECT_NEAR(speed, std::sqrt(squares), 1e-12);
+}
+
+INSTANTIATE_TEST_SUITE_P(Robots, JointStateArmSpeedOfEveryRobot, ::testing::ValuesIn(ehc_control::robotNames()),
+                         [](const auto& info) { return info.param; });
+
+// What the joint-name prefix rule missed: the arm joints of the KUKA, the Kinova and the UR5e
+// are not named "joint...".
+TEST(JointStateArmSpeed, ShippedRobotsWhoseJointsAreNotNamedJoint) {
+  int others = 0;
+  for (const std::string& robot : ehc_control::robotNames()) {
+    const auto rc = ehc_control::loadRobotConfig(ehc_control::resolveRobotFile(robot));
+    others += std::none_of(rc.arm_joints.begin(), rc.arm_joints.end(), [](const std::string& j) { return j.rfind("joint", 0) == 0; });
+  }
+  EXPECT_GE(others, 3);
 }
 
 TEST(JointStateArmSpeed, IsTheNormOverTheRealmanArmJointsAsBefore) {

@@ -127,6 +127,31 @@ def test_a_demo_run_gets_its_table(tmp_path):
     assert "2/3 grasped, mode ehc, MPBS on." in demo
 
 
+def test_every_robots_demo_gets_a_row(tmp_path):
+    results = tmp_path / "results"
+    shutil.copytree(FIXTURE, results)
+    runs = {"demo": (None, [True, True, True]), "demo_ur5e_ridgeback": ("ur5e_ridgeback", [True, False, True]),
+            "demo_kinova_gen3_husky": ("kinova_gen3_husky", [True, True, True])}
+    for folder, (robot, success) in runs.items():
+        (results / folder).mkdir()
+        (results / folder / "summary.json").write_text(json.dumps({"mode": "ehc", "objects": [
+            {"name": n, "success": ok, "time_s": 5.0 + i, "tfm": 1.0} for i, (n, ok) in
+            enumerate(zip(["front", "middle", "back"], success))]}))
+        meta = json.loads((results / "bench" / "meta.json").read_text())
+        meta.update({"seed": "2", "robot": robot})
+        (results / folder / "meta.json").write_text(json.dumps(meta))
+    text = generate(tmp_path, results)
+    secs = sections(text)
+    rows = table_rows(secs[next(s for s in secs if s.startswith("Demo on every robot"))])
+    assert rows[0][:3] == ["Robot", "Grasped", "Time per object (s)"]
+    assert [r[:3] for r in rows[1:]] == [["the configs' default", "3/3", "5.00, 6.00, 7.00"],
+                                        ["kinova_gen3_husky", "3/3", "5.00, 6.00, 7.00"],
+                                        ["ur5e_ridgeback", "2/3", "5.00, 6.00, 7.00"]]
+    assert all(r[5] == "2" and r[6] == "`ef2b0fb`" for r in rows[1:])
+    assert "| Demo on every robot |" in text
+    assert "Demo on every robot" not in generate(tmp_path)  # no demo run: no table
+
+
 @pytest.mark.parametrize("name, damage, says", [
     ("experiments/exp2/summary.json", lambda t: t[: len(t) // 2], "not valid JSON"),
     ("experiments/exp1/trials.csv", lambda t: t.replace(",1,", ",yes,", 1), "is not a number"),

@@ -1,6 +1,6 @@
-// The closed loop on every shipped robot (parameterised over the RealMan on its
-// differential base and the KUKA iiwa 14 on a holonomic base), as ocs2 runs its closed-loop
-// tests over robots. Everything is selected by the robot switch alone (a robot name):
+// The closed loop on every shipped robot (every folder under config/robots: the RealMan RM65
+// and the Kinova Gen3 7-DOF on differential bases, the KUKA iiwa 14 and the UR5e on holonomic
+// bases), as ocs2 runs its closed-loop tests over robots. Everything is selected by the robot switch alone (a robot name):
 //  - reduced Exp-1: the controller converges from several start states (each target of the
 //    sequence protocol starts where the previous one ended; the reset protocol from the ready
 //    pose) with Table I noise, and no arm joint ever leaves its limits;
@@ -87,4 +87,5 @@ TEST_P(RobotClosedLoop, Exp2OneSetGraspsAllThreeObjectsKeepingTheStopDistance) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Robots, RobotClosedLoop, ::testing::Values("realman_rm65_water2", "kuka_iiwa14_kmr"));
+INSTANTIATE_TEST_SUITE_P(Robots, RobotClosedLoop, ::testing::ValuesIn(ehc_control::robotNames()),
+                         [](const auto& info) { return info.param; });

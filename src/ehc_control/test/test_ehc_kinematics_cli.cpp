@@ -1,7 +1,9 @@
-// ehc_kinematics CLI: JSON output for a valid call, exit code 2 + stderr for bad calls.
+// ehc_kinematics CLI: JSON output for a valid call, exit code 2 + stderr for bad calls; --check
+// prints one line per check and exits 0 on a shipped robot, 1 with a PROBLEM line on a broken copy.
 // ehc_reachability CLI: unparsable values are start-up errors naming the flag.
 
 #include "ehc_common/json.h"
+#include "ehc_test/temp_dir.h"
 
 #include <gtest/gtest.h>
 
@@ -9,6 +11,7 @@
 #include <cstdio>
 #include <fstream>
 #include <iterator>
+#include <sstream>
 #include <string>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -86,6 +89,31 @@ TEST(EhcKinematicsCli, UnparsableValuesNameTheFlag) {
   EXPECT_NE(lastStderr().find("--base: '0x' is not a number"), std::string::npos) << lastStderr();
   EXPECT_EQ(run(kRobot + " --q ready --q ready").code, 2);
   EXPECT_NE(lastStderr().find("--q: given twice"), std::string::npos) << lastStderr();
+}
+
+TEST(EhcKinematicsCli, CheckPrintsOneOkLinePerCheckAndExits0) {
+  const Result r = run("--robot realman_rm65_water2 --check");
+  EXPECT_EQ(r.code, 0) << r.out;
+  std::istringstream lines(r.out);
+  int n = 0;
+  for (std::string line; std::getline(lines, line); ++n) EXPECT_EQ(line.rfind("ok ", 0), 0u) << line;
+  EXPECT_EQ(n, 8) << r.out;
+  EXPECT_NE(r.out.find("ok camera view:"), std::string::npos) << r.out;
+}
+
+TEST(EhcKinematicsCli, CheckExits1WithOneLinePerProblem) {
+  ehc_test::TempDir dir("ehc_kin_check");
+  ehc_test::copyFolder(std::string(EHC_CONFIG_DIR) + "/robots/kuka_iiwa14_kmr", dir.path + "/kuka");
+  // The ready pose turned to the right: the hand camera looks away from the table.
+  ehc_test::replaceInFile(dir.path + "/kuka/robot.yaml", "ready:    [0.0,", "ready:    [-1.5,");
+  const Result r = run("--robot " + dir.path + "/kuka/robot.yaml --check");
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_NE(r.out.find("\nPROBLEM camera view: in the ready pose the camera"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("ok reachability map:"), std::string::npos) << r.out;
+  // Another view region, where the camera looks now: nothing wrong.
+  EXPECT_EQ(run("--robot " + dir.path + "/kuka/robot.yaml --check --view-region 0.2,0.6,-1.8,-1.5,0.75,0.85").code, 0);
+  EXPECT_EQ(run(kRobot + " --check --view-region 1,2").code, 2);  // six values
+  EXPECT_NE(lastStderr().find("--view-region needs 6 values"), std::string::npos) << lastStderr();
 }
 
 // A loose parser read `--samples 1e6` as one sample, wrote a one-voxel map and exited 0.

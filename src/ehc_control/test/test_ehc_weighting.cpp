@@ -56,6 +56,40 @@ TEST(ReachabilityMap, GenerationIsDeterministicPerSeedAndRoundTrips) {
   EXPECT_EQ(r.seed(), 5u);
 }
 
+// The map records the joint limits it sampled and the TCP at reference configurations; a model
+// whose TCP or limits differ is found out, by start-up (checkCompatible) and by
+// `ehc_kinematics --check` (kinematicMismatch).
+TEST(ReachabilityMap, RecordsItsArmsKinematicsAndFindsAnotherArm) {
+  const RobotConfig rc = test::realmanConfig();
+  const WholeBodyModel model(rc);
+  ReachabilityMapParams p;
+  p.resolution = 0.1;
+  ReachabilityMap::generate(model, 2000, 5, p).save("/tmp/ehc_test_kin_map.bin");
+  const auto map = ReachabilityMap::load("/tmp/ehc_test_kin_map.bin");
+  ASSERT_TRUE(map.hasKinematics());
+  EXPECT_EQ(map.referencePoses().size(), static_cast<std::size_t>(ReachabilityMap::kReferencePoses));
+  EXPECT_EQ(map.sampledLower(), rc.arm_lower);
+  EXPECT_EQ(map.sampledUpper(), rc.arm_upper);
+  EXPECT_EQ(map.kinematicMismatch(model), "");
+  EXPECT_NO_THROW(map.checkCompatible(model));
+  for (const auto& r : map.referencePoses()) {  // spread inside the limits, stored exactly
+    EXPECT_TRUE((r.q.array() >= rc.arm_lower.array()).all() && (r.q.array() <= rc.arm_upper.array()).all());
+    const Eigen::Isometry3d T = model.linkPoseInBase(r.q, rc.arm_base_frame).inverse() * model.linkPoseInBase(r.q, rc.tcp_frame);
+    EXPECT_LT((T.translation() - r.tcp.translation()).norm(), 1e-12);
+  }
+  RobotConfig longer_tcp = rc;  // a TCP 3 cm further out: 0.3 voxel
+  for (auto& c : longer_tcp.calibration)
+    if (c.joint == "tcp_joint") c.xyz.z() += 0.03;
+  const WholeBodyModel other(longer_tcp);
+  EXPECT_NE(map.kinematicMismatch(other).find("the TCP at reference configuration"), std::string::npos)
+      << map.kinematicMismatch(other);
+  const std::string e = test::errorOf([&] { map.checkCompatible(other); });
+  EXPECT_NE(e.find("built for another arm"), std::string::npos) << e;
+  RobotConfig narrower = rc;
+  narrower.arm_upper[4] -= 0.1;
+  EXPECT_NE(map.kinematicMismatch(WholeBodyModel(narrower)).find("joint joint5 has limits"), std::string::npos);
+}
+
 TEST(ReachabilityMap, BadFilesFailClearly) {
   EXPECT_THROW(ReachabilityMap::load("/nonexistent.bin"), std::invalid_argument);
   std::ofstream("/tmp/ehc_bad_map.bin") << "not a map\n";

@@ -1,5 +1,6 @@
-// Any mobile manipulator from a URDF + robot.yaml. Over every shipped robot (the
-// RealMan on a differential base, the KUKA iiwa 14 on a holonomic base): the robot switch
+// Any mobile manipulator from a URDF + robot.yaml. Over every shipped robot (every folder under
+// config/robots: the RealMan RM65 and the Kinova Gen3 on differential bases, the KUKA iiwa 14 and
+// the UR5e on holonomic bases): the robot switch
 // resolves the name, the description loads, its map fits and matches, the self-collision pairs
 // are computed; a minimal robot.yaml is enough; a link robot.yaml names that the URDF lacks, an
 // unknown robot and an arm of other than 6 or 7 joints are start-up errors naming the field.
@@ -61,7 +62,7 @@ TEST_P(ShippedRobot, LoadsByNameWithItsMapAndSelfCollisionPairs) {
   // The map (<= 5 MB) belongs to this arm, TCP and limits.
   ASSERT_FALSE(rc.reachability_map_path.empty());
   EXPECT_LE(std::filesystem::file_size(rc.reachability_map_path), 5u * 1024u * 1024u);
-  EXPECT_NO_THROW(ReachabilityMap::load(rc.reachability_map_path).checkCompatible(rc));
+  EXPECT_NO_THROW(ReachabilityMap::load(rc.reachability_map_path).checkCompatible(model));
   EXPECT_FALSE(rc.camera_info_path.empty());
   // Checked links: robot.yaml's, or every link with collision geometry.
   const RobotCollisionModel collision(model.urdfXml(), rc.arm_joints, rc.checked_links);
@@ -87,15 +88,18 @@ TEST_P(ShippedRobot, LoadsByNameWithItsMapAndSelfCollisionPairs) {
   for (const auto& [link, d] : rc.obstacle_stop_distances) EXPECT_EQ(cycle.controller().params().obstacleStop(link), d);
 }
 
-INSTANTIATE_TEST_SUITE_P(Robots, ShippedRobot, ::testing::Values("realman_rm65_water2", "kuka_iiwa14_kmr"));
+INSTANTIATE_TEST_SUITE_P(Robots, ShippedRobot, ::testing::ValuesIn(robotNames()), [](const auto& info) { return info.param; });
 
 TEST(RobotSwitch, ResolvesNamesAndPathsAndNamesTheKnownRobots) {
   EXPECT_EQ(resolveRobotFile("some/dir/robot.yaml"), "some/dir/robot.yaml");
   EXPECT_EQ(resolveRobotFile("robot.yaml"), "robot.yaml");
   const std::string e = errorOf([] { resolveRobotFile("no_such_robot"); });
   EXPECT_NE(e.find("unknown robot 'no_such_robot'"), std::string::npos) << e;
-  EXPECT_NE(e.find("kuka_iiwa14_kmr"), std::string::npos) << e;
-  EXPECT_NE(e.find("realman_rm65_water2"), std::string::npos) << e;
+  for (const std::string& robot : robotNames()) EXPECT_NE(e.find(robot), std::string::npos) << e;
+  const std::vector<std::string> names = robotNames();  // sorted
+  EXPECT_TRUE(std::is_sorted(names.begin(), names.end()));
+  for (const char* shipped : {"kinova_gen3_husky", "kuka_iiwa14_kmr", "realman_rm65_water2", "ur5e_ridgeback"})
+    EXPECT_TRUE(std::count(names.begin(), names.end(), shipped)) << shipped;
 }
 
 TEST(RobotSwitch, AUsersRobotsFolderStillFindsTheShippedRobots) {
@@ -152,6 +156,19 @@ TEST(MinimalRobotYaml, NamesTheRobotDoesNotHaveAreStartUpErrors) {
                                   : "robot.collision." + extra.substr(extra.find('{') + 1, extra.find(':', extra.find('{')) - extra.find('{') - 1);
     EXPECT_NE(e.find(field), std::string::npos) << field << " not in " << e;
   }
+}
+
+// The KUKA's map names the KUKA but sampled the KUKA's joint limits, not the minimal file's:
+// the controller does not start on it.
+TEST(MinimalRobotYaml, AMapOfAnotherArmIsAStartUpError) {
+  const std::string file = writeTemp(minimalYaml(kIiwaJoints, "  name: kuka_iiwa14_kmr\n  reachability_map: " + kConfigDir +
+                                                                  "/robots/kuka_iiwa14_kmr/reachability_map.bin\n"));
+  ControlCycleParams params = loadControlCycleParams(ehc_common::ConfigNode::loadFile(kConfigDir + "/control/controller.yaml", "test"));
+  params.robot_file = file;
+  const std::string e = errorOf([&] { ControlCycle cycle(params); });
+  EXPECT_NE(e.find("built for another arm"), std::string::npos) << e;
+  EXPECT_NE(e.find("joint iiwa_joint_1 has limits [-2.9, 2.9]"), std::string::npos) << e;
+  EXPECT_NE(e.find("regenerate it with ehc_reachability"), std::string::npos) << e;
 }
 
 TEST(MinimalRobotYaml, ArmsOfSixOrSevenJointsOnly) {

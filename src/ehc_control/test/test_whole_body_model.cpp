@@ -330,17 +330,17 @@ TEST(WholeBodyModel, CameraLooksAlongTheApproachAxis) {
   EXPECT_NEAR(std::hypot(d.x(), d.y()), 0.07, 1e-9);
 }
 
-// The hand camera's image is upright in the ready pose, on both robots, with
+// The hand camera's image is upright in the ready pose, on every shipped robot, with
 // robot.yaml's calibration and with the URDF's own mount. Optical frame: z forward, x right,
 // y down. Upright: in the ready pose (base at the origin, facing +x) the image's down (y) points
 // to the floor and its right (x) to the robot's right (-y).
 TEST(WholeBodyModel, CameraImageIsUprightInTheReadyPose) {
-  for (const char* robot : {"realman_rm65_water2", "kuka_iiwa14_kmr"}) {
+  for (const std::string& robot : robotNames()) {
     const RobotConfig calibrated = loadRobotConfig(resolveRobotFile(robot));
     RobotConfig uncalibrated = calibrated;
     uncalibrated.calibration.clear();
     for (const RobotConfig& rc : {calibrated, uncalibrated}) {
-      SCOPED_TRACE(std::string(robot) + (rc.calibration.empty() ? " (URDF mount)" : " (robot.yaml mount)"));
+      SCOPED_TRACE(robot + (rc.calibration.empty() ? " (URDF mount)" : " (robot.yaml mount)"));
       const WholeBodyModel model(rc);
       const Eigen::Isometry3d Tc =
           model.fk(Eigen::Vector3d::Zero(), rc.arm_ready, "camera_color_optical_frame");

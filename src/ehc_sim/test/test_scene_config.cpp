@@ -4,6 +4,7 @@
 // frame convention.
 
 #include "ehc_control/pinhole_camera.h"
+#include "ehc_control/robot_check.h"
 #include "ehc_common/config_node.h"
 #include "ehc_sim/scene_config.h"
 #include "ehc_sim/sim_config.h"
@@ -66,6 +67,25 @@ TEST(SceneConfig, TableThreeObjectsMatchesExperiment2) {
   ASSERT_EQ(parts.size(), 5u);
   EXPECT_NEAR(parts[0].position.z() + parts[0].halfExtents().z(), 0.75, 1e-12);
   for (int i = 1; i < 5; ++i) EXPECT_NEAR(parts[i].position.z() - parts[i].halfExtents().z(), 0.0, 1e-12);
+}
+
+// `ehc_kinematics --check` asks that the ready pose's camera sees a region ahead
+// (ehc_control::RobotCheckParams): by default, every tag of the Exp-2 table seen from the scene's
+// start, the four corners of each black square included.
+TEST(SceneConfig, TheRobotChecksViewRegionHoldsEveryTagOfTheExp2Table) {
+  const SceneConfig s = loadSceneConfig(kScenes + "table_three_objects.yaml");
+  const ehc_control::RobotCheckParams p;
+  const Eigen::Isometry3d start = Eigen::Translation3d(s.robot_start.x(), s.robot_start.y(), 0.0) *
+                                  Eigen::AngleAxisd(s.robot_start.z(), Eigen::Vector3d::UnitZ());
+  for (const BodyConfig& o : s.objects) {
+    const Eigen::Isometry3d tag = start.inverse() * o.pose() * tagPoseInBody(o);
+    for (const double u : {-0.5, 0.5})
+      for (const double v : {-0.5, 0.5}) {
+        const Eigen::Vector3d c = tag * Eigen::Vector3d(u * o.tag.size, v * o.tag.size, 0.0);
+        EXPECT_TRUE((c.array() >= p.view_min.array()).all() && (c.array() <= p.view_max.array()).all())
+            << o.name << " tag corner " << c.transpose() << " outside the view region";
+      }
+  }
 }
 
 TEST(SceneConfig, SingleObjectIsOneTaggedObjectAtOnePointFiveMetres) {

@@ -3,7 +3,9 @@
 // Voxel grid in the arm base frame x discretised approach directions (Fibonacci sphere).
 // R(voxel) = fraction of direction bins in which some sampled joint configuration put the TCP
 // in that voxel with that approach axis. Built by sampling the joint space (FK via
-// WholeBodyModel); deterministic for a given seed. ROS-free.
+// WholeBodyModel); deterministic for a given seed. The map records the joint limits it sampled
+// and the TCP pose at a few reference configurations, so that a map built for another arm, TCP
+// or joint limits is found out (kinematicMismatch). ROS-free.
 
 #include "ehc_control/whole_body_model.h"
 
@@ -26,6 +28,14 @@ struct ReachabilityMapParams {
 class ReachabilityMap {
  public:
   using Progress = std::function<void(long done, long total)>;
+
+  /// The TCP pose in the arm base frame at one arm configuration, as the map's robot had it.
+  struct ReferencePose {
+    Eigen::VectorXd q;
+    Eigen::Isometry3d tcp = Eigen::Isometry3d::Identity();
+  };
+  /// Reference configurations recorded per map.
+  static constexpr int kReferencePoses = 8;
 
   /// Samples `samples` uniform random arm configurations within the joint limits.
   static ReachabilityMap generate(const WholeBodyModel& model, long samples, unsigned seed,
@@ -50,6 +60,19 @@ class ReachabilityMap {
   long countAbove(double threshold) const;
   /// Throws unless the map was built for this robot (name, frames, joint count).
   void checkCompatible(const RobotConfig& robot) const;
+  /// Same, and throws when kinematicMismatch(model) finds a difference.
+  void checkCompatible(const WholeBodyModel& model) const;
+  /// True for maps that record their joint limits and reference poses (every map built by this
+  /// version; maps of the first format do not).
+  bool hasKinematics() const { return !references_.empty(); }
+  const Eigen::VectorXd& sampledLower() const { return lower_; }
+  const Eigen::VectorXd& sampledUpper() const { return upper_; }
+  const std::vector<ReferencePose>& referencePoses() const { return references_; }
+  /// "" when the model's arm matches the map (same joint limits to 1e-6 rad, and at every
+  /// reference configuration the TCP within 0.2 voxel and 0.02 rad of the recorded pose) or the
+  /// map records no kinematics; otherwise what differs, e.g. "the TCP at reference
+  /// configuration 3 is 0.042 m from where the map's arm had it".
+  std::string kinematicMismatch(const WholeBodyModel& model) const;
   std::string summary() const;
 
   /// Unit directions of the bins (Fibonacci sphere), index = bin.
@@ -57,6 +80,9 @@ class ReachabilityMap {
 
  private:
   long index(const Eigen::Vector3d& p) const;  ///< -1 outside
+  /// Reads the `limits`, `references` and `reference` header lines (format 2); `expect(key)`
+  /// returns the rest of the next line, which must start with key.
+  void readKinematics(const std::string& path, const std::function<std::string(const std::string&)>& expect);
 
   std::string robot_name_, arm_base_frame_, tcp_frame_;
   int n_arm_ = 0;
@@ -66,6 +92,8 @@ class ReachabilityMap {
   int direction_bins_ = 0;
   long samples_ = 0;
   unsigned seed_ = 0;
+  Eigen::VectorXd lower_, upper_;         ///< joint limits sampled (empty: first format)
+  std::vector<ReferencePose> references_;  ///< empty: first format
   std::vector<std::uint8_t> reached_;  ///< per voxel: number of direction bins reached
 };
 

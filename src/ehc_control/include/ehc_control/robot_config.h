@@ -100,6 +100,9 @@ std::string robotsDirectory();
 /// Where a robot name is looked up, in order: robotsDirectory(), then the stack's robots (so a
 /// folder with only the user's robot still finds the shipped robots the configs name).
 std::vector<std::string> robotSearchPath();
+/// The robots in `dir` (default robotsDirectory()): the names of its folders that hold a
+/// robot.yaml, sorted. Tests run over every shipped robot with it.
+std::vector<std::string> robotNames(const std::string& dir = robotsDirectory());
 /// The one robot switch (--robot, _robot:=, ROBOT=): a robot name (no '/', not ending in
 /// .yaml, e.g. "kuka_iiwa14_kmr") -> <dir>/<name>/robot.yaml, the first of robotSearchPath()
 /// that has it; anything else is a path to a robot.yaml, returned unchanged. Throws

@@ -24,6 +24,10 @@ using Matrix6Xd = Eigen::Matrix<double, 6, Eigen::Dynamic>;
 
 class WholeBodyModel;
 
+/// The text of a URDF file. Throws std::invalid_argument "[WholeBodyModel] cannot read URDF
+/// file '<path>'".
+std::string readUrdfFile(const std::string& path);
+
 /// Every link pose and every arm joint axis of one robot state, from one forward pass over the
 /// kinematic tree (WholeBodyModel::updateKinematics). The Jacobian of any link, or of a point
 /// fixed to a link, is then read from it without another FK pass (the KinematicState overloads

@@ -59,11 +59,13 @@ std::shared_ptr<const WholeBodyModel> loadModel(const ControlCycleParams& params
   return std::make_shared<const WholeBodyModel>(loadRobotConfig(params.robot_file));
 }
 
-/// The EHC weighting of the robot's reachability map, nullptr if robot.yaml names none.
-std::shared_ptr<const EhcWeighting> loadWeighting(const RobotConfig& rc, const EhcWeightingParams& params) {
+/// The EHC weighting of the robot's reachability map, nullptr if robot.yaml names none. The map
+/// must be this robot's (name, frames, joints; the arm's kinematics when the map records them).
+std::shared_ptr<const EhcWeighting> loadWeighting(const WholeBodyModel& model, const EhcWeightingParams& params) {
+  const RobotConfig& rc = model.config();
   if (rc.reachability_map_path.empty()) return nullptr;
   auto map = std::make_shared<const ReachabilityMap>(ReachabilityMap::load(rc.reachability_map_path));
-  map->checkCompatible(rc);
+  map->checkCompatible(model);
   return std::make_shared<const EhcWeighting>(map, params);
 }
 
@@ -72,7 +74,7 @@ std::shared_ptr<const EhcWeighting> loadWeighting(const RobotConfig& rc, const E
 ControlCycle::ControlCycle(const ControlCycleParams& params) : ControlCycle(loadModel(params), params) {}
 
 ControlCycle::ControlCycle(const std::shared_ptr<const WholeBodyModel>& model, const ControlCycleParams& params)
-    : ControlCycle(model, loadWeighting(model->config(), params.weighting), params) {}
+    : ControlCycle(model, loadWeighting(*model, params.weighting), params) {}
 
 ControlCycle::ControlCycle(std::shared_ptr<const WholeBodyModel> model, std::shared_ptr<const EhcWeighting> weighting,
                            const ControlCycleParams& params)

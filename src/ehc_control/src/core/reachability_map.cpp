@@ -13,7 +13,27 @@ namespace {
 [[noreturn]] void fail(const std::string& what) {
   throw std::invalid_argument("[ReachabilityMap] " + what);
 }
-const char* kMagic = "EHC_REACHABILITY_MAP 1";
+// Format 2 adds the sampled joint limits and the reference poses; format 1 maps still load.
+const char* kMagic = "EHC_REACHABILITY_MAP 2";
+const char* kMagicV1 = "EHC_REACHABILITY_MAP 1";
+
+/// Reference configuration k: spread over the joint ranges (fractional parts of multiples of
+/// square roots of primes, one prime per joint), the same for every map of the same limits.
+Eigen::VectorXd referenceConfiguration(int k, const Eigen::VectorXd& lower, const Eigen::VectorXd& upper) {
+  static const double kPrimes[] = {2, 3, 5, 7, 11, 13, 17, 19};
+  Eigen::VectorXd q(lower.size());
+  for (int i = 0; i < q.size(); ++i) {
+    const double f = (k + 1) * std::sqrt(kPrimes[i % 8]);
+    q[i] = lower[i] + (upper[i] - lower[i]) * (f - std::floor(f));
+  }
+  return q;
+}
+
+/// TCP pose in the arm base frame (the map's frame) at q.
+Eigen::Isometry3d tcpInArmBase(const WholeBodyModel& model, const Eigen::VectorXd& q) {
+  const RobotConfig& rc = model.config();
+  return model.linkPoseInBase(q, rc.arm_base_frame).inverse() * model.linkPoseInBase(q, rc.tcp_frame);
+}
 }  // namespace
 
 void ReachabilityMapParams::validate() const {
@@ -47,6 +67,14 @@ ReachabilityMap ReachabilityMap::generate(const WholeBodyModel& model, long samp
   m.direction_bins_ = params.direction_bins;
   m.samples_ = samples;
   m.seed_ = seed;
+  m.lower_ = rc.arm_lower;
+  m.upper_ = rc.arm_upper;
+  for (int k = 0; k < kReferencePoses; ++k) {
+    ReferencePose r;
+    r.q = referenceConfiguration(k, rc.arm_lower, rc.arm_upper);
+    r.tcp = tcpInArmBase(model, r.q);
+    m.references_.push_back(r);
+  }
 
   // Grid bounds: a cube around the arm base large enough for the longest possible reach
   // (sum of distances between consecutive chain frames bounds the TCP distance).
@@ -130,6 +158,39 @@ void ReachabilityMap::checkCompatible(const RobotConfig& robot) const {
          " joints); regenerate it with ehc_reachability");
 }
 
+void ReachabilityMap::checkCompatible(const WholeBodyModel& model) const {
+  checkCompatible(model.config());
+  const std::string mismatch = kinematicMismatch(model);
+  if (!mismatch.empty())
+    fail("map was built for another arm of robot '" + robot_name_ + "': " + mismatch +
+         "; regenerate it with ehc_reachability");
+}
+
+std::string ReachabilityMap::kinematicMismatch(const WholeBodyModel& model) const {
+  if (!hasKinematics()) return "";
+  const RobotConfig& rc = model.config();
+  if (rc.nArm() != n_arm_) return "the map has " + std::to_string(n_arm_) + " arm joints, the robot " + std::to_string(rc.nArm());
+  std::ostringstream os;
+  os << std::setprecision(6);
+  for (int i = 0; i < n_arm_; ++i)
+    if (std::abs(rc.arm_lower[i] - lower_[i]) > 1e-6 || std::abs(rc.arm_upper[i] - upper_[i]) > 1e-6) {
+      os << "joint " << rc.arm_joints[static_cast<std::size_t>(i)] << " has limits [" << rc.arm_lower[i] << ", "
+         << rc.arm_upper[i] << "] rad, the map sampled [" << lower_[i] << ", " << upper_[i] << "]";
+      return os.str();
+    }
+  for (std::size_t k = 0; k < references_.size(); ++k) {
+    const Eigen::Isometry3d T = tcpInArmBase(model, references_[k].q);
+    const double dp = (T.translation() - references_[k].tcp.translation()).norm();
+    const double da = Eigen::AngleAxisd(T.linear().transpose() * references_[k].tcp.linear()).angle();
+    if (dp > 0.2 * resolution_ || da > 0.02) {
+      os << "the TCP at reference configuration " << k << " is " << dp << " m and " << da
+         << " rad from where the map's arm had it";
+      return os.str();
+    }
+  }
+  return "";
+}
+
 std::string ReachabilityMap::summary() const {
   std::ostringstream os;
   os << "reachability map of '" << robot_name_ << "' (" << arm_base_frame_ << " -> " << tcp_frame_
@@ -151,10 +212,51 @@ void ReachabilityMap::save(const std::string& path) const {
       << "dims " << dims_.x() << " " << dims_.y() << " " << dims_.z() << "\n"
       << "direction_bins " << direction_bins_ << "\n"
       << "samples " << samples_ << "\n"
-      << "seed " << seed_ << "\n"
-      << "data\n";
+      << "seed " << seed_ << "\n";
+  out << "limits";
+  for (int i = 0; i < n_arm_; ++i) out << " " << lower_[i];
+  for (int i = 0; i < n_arm_; ++i) out << " " << upper_[i];
+  out << "\nreferences " << references_.size() << "\n";
+  for (const ReferencePose& r : references_) {
+    const Eigen::Quaterniond qt(r.tcp.linear());
+    out << "reference";
+    for (int i = 0; i < r.q.size(); ++i) out << " " << r.q[i];
+    const Eigen::Vector3d& t = r.tcp.translation();
+    out << " " << t.x() << " " << t.y() << " " << t.z() << " " << qt.x() << " " << qt.y() << " " << qt.z() << " "
+        << qt.w() << "\n";
+  }
+  out << "data\n";
   out.write(reinterpret_cast<const char*>(reached_.data()), static_cast<std::streamsize>(reached_.size()));
   if (!out) fail("error while writing '" + path + "'");
+}
+
+void ReachabilityMap::readKinematics(const std::string& path,
+                                     const std::function<std::string(const std::string&)>& expect) {
+  if (n_arm_ < 1 || n_arm_ > 7) fail("'" + path + "': invalid header values (arm_joints)");
+  auto numbers = [&](const std::string& key, int n) {
+    std::istringstream ss(expect(key));
+    std::vector<double> v(static_cast<std::size_t>(n));
+    for (double& x : v)
+      if (!(ss >> x) || !std::isfinite(x)) fail("'" + path + "': line '" + key + "' needs " + std::to_string(n) + " finite numbers");
+    std::string rest;
+    if (ss >> rest) fail("'" + path + "': line '" + key + "' has more than " + std::to_string(n) + " numbers");
+    return v;
+  };
+  const std::vector<double> limits = numbers("limits", 2 * n_arm_);
+  lower_ = Eigen::Map<const Eigen::VectorXd>(limits.data(), n_arm_);
+  upper_ = Eigen::Map<const Eigen::VectorXd>(limits.data() + n_arm_, n_arm_);
+  const std::vector<double> count = numbers("references", 1);
+  if (count[0] < 1 || count[0] > 100 || count[0] != std::floor(count[0]))
+    fail("'" + path + "': invalid header values (references)");
+  for (int k = 0; k < static_cast<int>(count[0]); ++k) {
+    const std::vector<double> v = numbers("reference", n_arm_ + 7);
+    ReferencePose r;
+    r.q = Eigen::Map<const Eigen::VectorXd>(v.data(), n_arm_);
+    const double* t = v.data() + n_arm_;
+    r.tcp.translation() << t[0], t[1], t[2];
+    r.tcp.linear() = Eigen::Quaterniond(t[6], t[3], t[4], t[5]).normalized().toRotationMatrix();
+    references_.push_back(r);
+  }
 }
 
 ReachabilityMap ReachabilityMap::load(const std::string& path) {
@@ -162,7 +264,8 @@ ReachabilityMap ReachabilityMap::load(const std::string& path) {
   if (!in) fail("cannot read map file '" + path + "'");
   std::string line;
   std::getline(in, line);
-  if (line != kMagic) fail("'" + path + "' is not a reachability map (bad header)");
+  if (line != kMagic && line != kMagicV1) fail("'" + path + "' is not a reachability map (bad header)");
+  const bool v1 = line == kMagicV1;
   ReachabilityMap m;
   auto expect = [&](const std::string& key) {
     if (!std::getline(in, line)) fail("'" + path + "' is truncated before '" + key + "'");
@@ -181,6 +284,7 @@ ReachabilityMap ReachabilityMap::load(const std::string& path) {
   std::istringstream(expect("direction_bins")) >> m.direction_bins_;
   std::istringstream(expect("samples")) >> m.samples_;
   std::istringstream(expect("seed")) >> m.seed_;
+  if (!v1) m.readKinematics(path, expect);
   expect("data");
   if (!(m.resolution_ > 0) || (m.dims_.array() <= 0).any() || (m.dims_.array() > 2000).any() ||
       m.direction_bins_ < 1 || m.direction_bins_ > 255 || !m.origin_.allFinite())

@@ -3,6 +3,7 @@
 #include "ehc_common/config_node.h"
 #include "ehc_common/enum_names.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -215,6 +216,16 @@ std::string robotFileField(const ConfigNode& node, const std::string& key) {
   }
 }
 
+std::vector<std::string> robotNames(const std::string& dir) {
+  namespace fs = std::filesystem;
+  std::vector<std::string> names;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir, ec))
+    if (fs::is_regular_file(e.path() / "robot.yaml")) names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
 std::string resolveRobotFile(const std::string& name_or_path) {
   namespace fs = std::filesystem;
   const std::string& s = name_or_path;
@@ -228,9 +239,7 @@ std::string resolveRobotFile(const std::string& name_or_path) {
   std::string where;
   for (const std::string& dir : dirs) {
     std::string known;
-    std::error_code ec;
-    for (const auto& e : fs::directory_iterator(dir, ec))
-      if (fs::is_regular_file(e.path() / "robot.yaml")) known += (known.empty() ? "" : ", ") + e.path().filename().string();
+    for (const std::string& n : robotNames(dir)) known += (known.empty() ? "" : ", ") + n;
     where += (where.empty() ? "" : "; ") + std::string("robots in ") + dir + ": " + (known.empty() ? "none" : known);
   }
   fail("unknown robot '" + s + "': no " + s + "/robot.yaml (" + where + "); give a robot name or a path to a robot.yaml");

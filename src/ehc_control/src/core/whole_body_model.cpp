@@ -36,12 +36,10 @@ namespace {
        " (URDF " + cfg.urdf_path + ")");
 }
 
-std::string readUrdf(const RobotConfig& cfg) {
-  std::ifstream in(cfg.urdf_path);
-  if (!in) failField(cfg, "robot.urdf", "names a file that cannot be read");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
+/// The URDF robot.yaml names; an unreadable file names the field.
+std::string urdfOf(const RobotConfig& cfg) {
+  if (!std::ifstream(cfg.urdf_path)) failField(cfg, "robot.urdf", "names a file that cannot be read");
+  return readUrdfFile(cfg.urdf_path);
 }
 
 Eigen::Isometry3d toEigen(const KDL::Frame& f) {
@@ -140,7 +138,15 @@ struct WholeBodyModel::Impl {
   }
 };
 
-WholeBodyModel::WholeBodyModel(const RobotConfig& cfg) : WholeBodyModel(cfg, readUrdf(cfg)) {}
+std::string readUrdfFile(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) fail("cannot read URDF file '" + path + "'");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+WholeBodyModel::WholeBodyModel(const RobotConfig& cfg) : WholeBodyModel(cfg, urdfOf(cfg)) {}
 
 WholeBodyModel::WholeBodyModel(const RobotConfig& cfg, const std::string& urdf_xml)
     : cfg_(cfg), urdf_xml_(urdf_xml), impl_(std::make_unique<Impl>()) {

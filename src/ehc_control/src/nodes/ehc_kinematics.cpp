@@ -2,14 +2,18 @@
 //   rosrun ehc_control ehc_kinematics --robot robot.yaml --q j1,...,jn [--base x,y,yaw]
 //                                     [--link NAME] [--summary]
 //   rosrun ehc_control ehc_kinematics --robot robot.yaml --urdf
+//   rosrun ehc_control ehc_kinematics --robot robot.yaml --check [--view-region x0,x1,y0,y1,z0,z1]
 // Prints one JSON object {"joint_names", "base_type", "T", "J", "manipulability"} (T and J of
 // --link, default the TCP, world frame). --q ready uses the ready pose of robot.yaml.
 // --summary prints a human-readable kinematic summary instead. --urdf prints the URDF with
 // robot.yaml's calibration applied (robot_description for robot_state_publisher, run_realman.sh).
+// --check runs ehc_control::checkRobot: one "ok <check>: ..." line per check that passes and one
+// "PROBLEM <check>: ..." line per problem; exit code 0 when there is none, 1 otherwise.
 // Errors: stderr, exit code 2.
 
 #include "ehc_common/command_line.h"
 #include "ehc_common/json.h"
+#include "ehc_control/robot_check.h"
 #include "ehc_control/whole_body_model.h"
 
 #include <cstdio>
@@ -24,7 +28,9 @@ namespace {
 const char* kUsage =
     "usage: ehc_kinematics --robot <robot.yaml> --q <j1,...,jn | ready> [--base x,y,yaw]\n"
     "                      [--link NAME] [--summary]\n"
-    "       ehc_kinematics --robot <robot.yaml> --urdf   (the calibrated URDF)\n";
+    "       ehc_kinematics --robot <robot.yaml> --urdf   (the calibrated URDF)\n"
+    "       ehc_kinematics --robot <robot.yaml> --check [--view-region x0,x1,y0,y1,z0,z1]\n"
+    "                      (what will go wrong: exit 0 when nothing, 1 with one line per problem)\n";
 
 struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
@@ -62,17 +68,34 @@ void printSummary(const ehc_control::WholeBodyModel& model, const Eigen::Vector3
   std::cout << "  manipulability at q: " << model.manipulability(q) << "\n";
 }
 
+/// --check: every check of the robot folder, one line each; exit code 1 on any problem.
+int runCheck(const ehc_common::CommandLine& cli, const std::string& robot) {
+  ehc_control::RobotCheckParams params;
+  if (cli.has("view-region")) {
+    const std::vector<double> v = cli.reals("view-region", {});
+    if (v.size() != 6) throw UsageError("--view-region needs 6 values x0,x1,y0,y1,z0,z1 (m), got " + std::to_string(v.size()));
+    params.view_min = Eigen::Vector3d(v[0], v[2], v[4]);
+    params.view_max = Eigen::Vector3d(v[1], v[3], v[5]);
+    if ((params.view_min.array() > params.view_max.array()).any()) throw UsageError("--view-region: each min must be <= its max");
+  }
+  const std::vector<ehc_control::RobotCheckLine> lines = ehc_control::checkRobot(robot, params);
+  for (const auto& l : lines) std::cout << ehc_control::toString(l) << "\n";
+  std::cout << std::flush;
+  return ehc_control::allOk(lines) ? 0 : 1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   try {
-    const ehc_common::CommandLine cli(argc, argv, {"robot", "q", "base", "link"},
-                                       {"summary", "urdf", "help"});
+    const ehc_common::CommandLine cli(argc, argv, {"robot", "q", "base", "link", "view-region"},
+                                       {"summary", "urdf", "check", "help"});
     if (cli.has("help")) {
       std::cout << kUsage;
       return 0;
     }
     const std::string robot = ehc_control::resolveRobotFile(cli.text("robot"));  // a robot name or a robot.yaml
+    if (cli.has("check")) return runCheck(cli, robot);
     if (cli.has("urdf")) {
       std::cout << ehc_control::WholeBodyModel(ehc_control::loadRobotConfig(robot)).calibratedUrdfXml();
       return 0;
