@@ -146,6 +146,9 @@ class ReachExperiment {
   /// Optional per-cycle trace (CSV rows: method,set,index,t,x,y,yaw,q...,pos_err,ori_err,omega,
   /// sig,base_weight,qp_status,v...). Not owned; nullptr disables it.
   void setTrace(std::ostream* trace) { trace_ = trace; }
+  /// Optional log of the controller's events (a stall recovery planned, moved, given up; a
+  /// wrist flip), one line each: "<method> set S target I t T s: <event>". Not owned.
+  void setEvents(std::ostream* events) { events_ = events; }
 
   /// Drives `robot` to one target (at most the time limit) through `cycle` (built by run() from
   /// the constructor's arguments), accumulating speeds and the update() timings.
@@ -166,6 +169,7 @@ class ReachExperiment {
   ReachExperimentParams params_;
   ehc_control::ControlCycleParams cycle_params_;
   std::ostream* trace_ = nullptr;
+  std::ostream* events_ = nullptr;
   double sim_time_ = 0.0;  ///< s, advanced by one control period per cycle
   int trace_set_ = 0, trace_index_ = 0;
   int roll_joint_ = -1;             ///< findRollJoint

@@ -185,6 +185,9 @@ ReachTrial ReachExperiment::reach(ehc_sim::KinematicFakeRobot& robot, ControlCyc
     step_us.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
     sim_time_ += dt;
     const ehc_control::ControlCycleStatus& st = out.status;
+    if (events_ && !out.event.empty())
+      *events_ << ehc_control::toString(controller_.mode) << " set " << trace_set_ << " target " << trace_index_
+               << " t " << k * dt << " s: " << out.event << "\n";
     if (st.recovering && !recovering) ++t.recoveries;  // a stall recovery (ReachRecovery) started
     recovering = st.recovering;
     if (st.qp_status != ehc_control::QpStatus::Ok) ++t.qp_failures;  // any cycle without a good QP solve

@@ -270,6 +270,7 @@ int main(int argc, char** argv) {
 
     std::vector<ehc_bringup::ReachSummary> summaries;
     std::vector<ehc_bringup::ReachTrial> trials;
+    std::ofstream events(a.out + "/events.log");
     for (const std::string& m : methods) {
       ctrl.mode = ehc_control::controlModeFromString(m);
       ehc_bringup::ReachExperiment exp(model, ctrl, weighting, ep);
@@ -279,6 +280,7 @@ int main(int argc, char** argv) {
         if (!trace_file) throw std::invalid_argument("cannot write trace file '" + a.trace + "'");
         exp.setTrace(&trace_file);
       }
+      exp.setEvents(&events);
       const auto t0 = std::chrono::steady_clock::now();
       double last = -1.0;
       auto progress = [&](int done, int total, const ehc_bringup::ReachSummary& s) {
@@ -308,7 +310,7 @@ int main(int argc, char** argv) {
     std::vector<Eigen::Isometry3d> flat;
     for (const auto& s : run_sets) flat.insert(flat.end(), s.begin(), s.end());
     ehc_bringup::writeReachTargetsCsv(a.out + "/targets.csv", flat);
-    std::cerr << "[ehc_experiment] results in " << a.out << "/ (summary.json, table.md, trials.csv, targets.csv)\n";
+    std::cerr << "[ehc_experiment] results in " << a.out << "/ (summary.json, table.md, trials.csv, targets.csv, events.log)\n";
     return interrupted(static_cast<int>(trials.size()), summaries[0].targets_planned * static_cast<int>(methods.size()),
                        "targets (over the methods)");
   } catch (const std::exception& e) {

@@ -19,8 +19,10 @@
 //            ready posture where the base stands; near it, whole-body IK (WholeBodyModel::inverseKinematicsFrom) from `starts` starts, a few
 //            per cycle: the current configuration, the current base with the ready posture,
 //            then base placements around the target, the ready TCP over it; the solution with
-//            the best min(margin, joint_influence) - travel_weight x travel is taken if its
-//            smallest joint margin beats the current one by min_improvement;
+//            the best min(margin, joint_influence) - travel_weight x travel is taken (a joint
+//            whose range spans more than a turn at its widest equivalent, widestTurn). Any
+//            solution will do, even one near a stop: it is a configuration of the target
+//            itself inside the stops, which the stalled pose task was not finding;
 //   move     a whole-body reference velocity towards that configuration (b*, q*), tracked
 //            through the QP (EhcQpController::step's `reference`: joint dampers, obstacle
 //            dampers and velocity limits still apply): arm joint_gain (q* - q); base a
@@ -53,7 +55,6 @@ struct ReachRecoveryParams {
   double pinned_margin = 0.05;                       ///< rad beyond the joint stop: a joint this close is pinned
   int starts = 24;                                   ///< IK starts per plan
   int starts_per_cycle = 2;                          ///< IK solves per control cycle while planning
-  double min_improvement = 0.05;                     ///< rad: required gain of the smallest joint margin
   double travel_weight = 0.2;                        ///< rad of margin per m of base travel when choosing
   double joint_gain = 1.0;                           ///< 1/s
   double base_gain = 1.0;                            ///< 1/s: k_rho (differential), position gain (holonomic)
@@ -96,6 +97,10 @@ class ReachRecovery {
   const Eigen::VectorXd& goalArm() const { return goal_q_; }
   /// Smallest distance of an arm joint to its limit (rad).
   double margin(const Eigen::VectorXd& q) const;
+  /// q with every joint whose range spans more than a turn (a continuous joint given limits
+  /// of +-2 pi, a UR joint) moved by whole turns to the equivalent, inside the stops, with the
+  /// widest limit margin: the same pose of every link, the most room to move.
+  Eigen::VectorXd widestTurn(const Eigen::VectorXd& q) const;
 
  private:
   void startWatching(double now, double position_error, double orientation_error);

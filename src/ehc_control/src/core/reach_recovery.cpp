@@ -30,7 +30,6 @@ void ReachRecoveryParams::validate() const {
   requireRange(kOwner, "pinned_margin", pinned_margin, 0.0, 1.0);
   requireRange(kOwner, "starts", starts, 1, 1000);
   requireRange(kOwner, "starts_per_cycle", starts_per_cycle, 1, 1000);
-  requireRange(kOwner, "min_improvement", min_improvement, 0.0, M_PI);
   requireRange(kOwner, "travel_weight", travel_weight, 0.0, 100.0);
   requireRange(kOwner, "joint_gain", joint_gain, 1e-3, 100.0);
   requireRange(kOwner, "base_gain", base_gain, 1e-3, 100.0);
@@ -49,7 +48,7 @@ std::string ReachRecoveryParams::summary() const {
   if (!enabled) return "reach recovery off";
   std::ostringstream os;
   os << "reach recovery after " << stall_window << " s without progress with a joint within " << pinned_margin
-     << " rad of its stop: IK from " << starts << " starts, margin gain >= " << min_improvement << " rad, at most "
+     << " rad of its stop: IK from " << starts << " starts, at most "
      << max_attempts << " per target, " << move_timeout << " s each";
   return os.str();
 }
@@ -63,7 +62,6 @@ ReachRecoveryParams loadReachRecoveryParams(const ehc_common::ConfigNode& n) {
   p.pinned_margin = n.get("pinned_margin", p.pinned_margin);
   p.starts = n.get("starts", p.starts);
   p.starts_per_cycle = n.get("starts_per_cycle", p.starts_per_cycle);
-  p.min_improvement = n.get("min_improvement", p.min_improvement);
   p.travel_weight = n.get("travel_weight", p.travel_weight);
   p.joint_gain = n.get("joint_gain", p.joint_gain);
   p.base_gain = n.get("base_gain", p.base_gain);
@@ -101,6 +99,18 @@ double ReachRecovery::margin(const Eigen::VectorXd& q) const {
   return std::min((q - rc.arm_lower).minCoeff(), (rc.arm_upper - q).minCoeff());
 }
 
+Eigen::VectorXd ReachRecovery::widestTurn(const Eigen::VectorXd& q) const {
+  const RobotConfig& rc = model_.config();
+  Eigen::VectorXd out = q;
+  const auto margin_of = [&](int i, double v) { return std::min(v - rc.arm_lower[i], rc.arm_upper[i] - v); };
+  for (int i = 0; i < q.size(); ++i)
+    for (int turns = -2; turns <= 2; ++turns) {
+      const double v = q[i] + 2.0 * M_PI * turns;
+      if (margin_of(i, v) >= joint_stop_ && margin_of(i, v) > margin_of(i, out[i])) out[i] = v;
+    }
+  return out;
+}
+
 void ReachRecovery::startWatching(double now, double position_error, double orientation_error) {
   state_ = State::Watching;
   best_position_ = position_error;
@@ -136,7 +146,7 @@ void ReachRecovery::startPlanning(const Eigen::Vector3d& base_pose, const Eigen:
 void ReachRecovery::start(int k, const Eigen::Isometry3d& target, Eigen::Vector3d* base, Eigen::VectorXd* q) const {
   const RobotConfig& rc = model_.config();
   *base = plan_base_;
-  *q = k == 0 ? plan_q_ : rc.arm_ready;
+  *q = widestTurn(k == 0 ? plan_q_ : rc.arm_ready);
   if (k < kFixedStarts) return;
   // Around the target: the base on a circle of the ready reach (second round: 0.7 of it,
   // between the first round's bearings), facing so that the ready TCP is over the target.
@@ -215,6 +225,7 @@ void ReachRecovery::plan(const Eigen::Isometry3d& target) {
     q = q0;
     if (!solve(target, &b, &q)) continue;
     ++solutions_;
+    q = widestTurn(q);
     const double m = margin(q);
     const double travel = (b.head<2>() - plan_base_.head<2>()).norm() + kTurnTravel * std::abs(wrap(b.z() - plan_base_.z()));
     const double score = std::min(m, joint_influence_) - params_.travel_weight * travel;
@@ -293,11 +304,10 @@ const Eigen::VectorXd* ReachRecovery::update(double now, const Eigen::Vector3d& 
       }
       plan(target_);
       if (next_start_ < params_.starts) return nullptr;
-      if (!have_goal_ || goal_margin_ < plan_margin_ + params_.min_improvement) {
+      if (!have_goal_) {
         os << "stall " << position_error * 100.0 << " cm short, smallest joint margin " << plan_margin_
-           << " rad: no whole-body configuration with a wider margin found (" << solutions_ << " IK solutions of "
+           << " rad: no whole-body configuration inside the joint stops found (" << solutions_ << " IK solutions of "
            << params_.starts << " starts";
-        if (have_goal_) os << ", widest margin " << goal_margin_ << " rad";
         os << ")";
         event_ = os.str();
         startWatching(now, position_error, orientation_error);
