@@ -55,6 +55,24 @@ using ehc_bringup::GraspSequencer;
 
 using ehc_common::kLogThrottle;
 
+/// The status's motion limit (none, logged, for a string the core does not know).
+ehc_control::MotionLimitReport motionLimit(const ehc_msgs::ControllerStatus& m) {
+  ehc_control::MotionLimitReport r;
+  if (m.motion_limit.empty()) return r;  // a controller that does not report one
+  try {
+    r.limit = ehc_control::motionLimitFromString(m.motion_limit);
+  } catch (const std::invalid_argument& e) {
+    ROS_WARN_STREAM_THROTTLE(kLogThrottle, "[ehc_grasp_sequencer_node] " << e.what());
+    return r;
+  }
+  r.joint = m.motion_limit_joint;
+  r.link = m.motion_limit_link;
+  r.obstacle_point = Eigen::Vector3d(m.motion_limit_obstacle_point.x, m.motion_limit_obstacle_point.y,
+                                     m.motion_limit_obstacle_point.z);
+  r.value = m.motion_limit_value;
+  return r;
+}
+
 Eigen::Isometry3d toEigen(const geometry_msgs::Pose& p) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.translation() << p.position.x, p.position.y, p.position.z;
@@ -255,6 +273,7 @@ class SequencerNode {
     if (std::isfinite(m.sig_omega)) in.sig = m.sig_omega;
     in.gripper_state = gripper_state_;
     in.grasp_succeeded = grasp_succeeded_;
+    in.motion_limit = motionLimit(m);
     if (const auto tcp = lookup(node_.tcp_frame, m.header.stamp)) in.tcp = *tcp;
     if (const auto camera = lookup(node_.camera_frame, m.header.stamp)) in.camera = *camera;
     inbox_.takeBefore(m.header.stamp);
