@@ -55,6 +55,8 @@ struct GraspExperimentParams {
   /// water2 = the RealMan Water2 chain, whose /odom estimate is what the stack sees
   /// (GraspPipeline::stackView).
   std::optional<ehc_sim::BaseModelType> base_model;
+  /// s, WAIT_TARGET..LIFT per object (--object-time-limit): unset = the sequencer file's (30 s).
+  std::optional<double> object_time_limit;
   void validate() const;       ///< throws "[GraspExperiment] ..."
 };
 

@@ -86,6 +86,8 @@ void GraspExperimentParams::validate() const {
   if (!(jitter_yaw_deg >= 0.0 && jitter_yaw_deg <= 15.0)) bad("jitter_yaw_deg must be in [0, 15] deg");
   if (!(distant_threshold > 0.0)) bad("distant_threshold must be > 0");
   if (!(trace_period > 0.0)) bad("trace_period must be > 0");
+  if (object_time_limit && !(*object_time_limit > 0.0 && *object_time_limit <= 3600.0))
+    bad("object_time_limit must be in (0, 3600] s");
 }
 
 struct GraspExperiment::RunOutput {
@@ -127,6 +129,7 @@ GraspPipelineConfig GraspExperiment::runConfig(const std::string& method, const 
   c.cycle.controller.mode = m.mode;
   c.cycle.mpbs.enabled = m.mpbs;
   if (params_.base_model) c.sim.fake_robot.base_model.type = *params_.base_model;
+  if (params_.object_time_limit) c.sequencer.object_time_limit = *params_.object_time_limit;
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   for (auto& o : c.scene.objects) {
