@@ -63,6 +63,7 @@ struct ReachExperimentParams {
   double progress_orientation = 1.0 * M_PI / 180.0;  ///< rad: idem
   // Pinned joints and singularity: the controller's motion-limit tests (MotionLimitMonitor:
   // joint_stop + recovery.pinned_margin, motion_limit.singular_manipulability).
+  ehc_control::MotionLimitParams motion_limit;  ///< controller.yaml's motion_limit section
   double base_reach = 0.8;             ///< m: position error beyond which only the base can help
   double base_stuck_distance = 0.02;   ///< m: base travel over the window below which it is stuck
   void validate() const;            ///< throws "[ReachExperiment] ..."

@@ -55,6 +55,7 @@ void ReachExperimentParams::validate() const {
     bad("progress_window, progress_position and progress_orientation must be > 0");
   if (!(base_reach > 0.0 && base_stuck_distance > 0.0)) bad("base_reach and base_stuck_distance must be > 0");
   noise.validate();
+  motion_limit.validate();
   base_model.validate();
   servo.validate();
 }
@@ -70,6 +71,7 @@ ReachExperiment::ReachExperiment(std::shared_ptr<const ehc_control::WholeBodyMod
   cycle_params_.controller = controller_;
   cycle_params_.servo_type = ehc_control::ServoType::Proportional;
   cycle_params_.servo = params_.servo;
+  cycle_params_.motion_limit = params_.motion_limit;
   roll_joint_ = ehc_control::findRollJoint(*model_);
   limits_ = std::make_unique<ehc_control::MotionLimitMonitor>(*model_, controller_, cycle_params_.motion_limit);
 }

@@ -199,11 +199,13 @@ int main(int argc, char** argv) {
     ehc_control::QpControllerParams ctrl = ehc_control::loadQpControllerParams(cfg.childOrEmpty("controller"));
     const auto wparams = ehc_control::loadEhcWeightingParams(cfg.childOrEmpty("weighting"));
     // The whole controller file is validated as the controller node reads it (the experiment
-    // uses the controller, weighting and proportional-servo sections); a misspelled key is an error.
-    ehc_control::loadControlCycleParams(cfg);
+    // uses the controller, weighting, proportional-servo and motion_limit sections); a misspelled
+    // key is an error.
+    const ehc_control::ControlCycleParams cycle_cfg = ehc_control::loadControlCycleParams(cfg);
     cfg.ignore("node");
     cfg.rejectUnknownKeys();
     ehc_bringup::ReachExperimentParams ep;
+    ep.motion_limit = cycle_cfg.motion_limit;
     ep.servo = ehc_control::loadPoseServoParams(cfg.childOrEmpty("servo"));
     ep.noise.enabled = a.noise;
     ep.base_model.type = a.base_model;
