@@ -85,9 +85,9 @@ struct GraspPipelineConfig {
 /// std::invalid_argument naming the file and field.
 GraspPipelineConfig loadGraspPipelineConfig(const GraspPipelineFiles& files);
 
-/// Name of the scene body (table part, object, obstacle) or "floor" nearest to `p` (world), by
-/// the distance to its bounding box at its current pose (ground truth: names a perceived
-/// obstacle point for the safety table and a stall held by an obstacle).
+/// Name of the scene body (table part, object, obstacle) or "floor" nearest to `p` (world), at
+/// the bodies' current poses (ehc_sim::nearestBody; ground truth: names a perceived obstacle
+/// point for the safety table and a stall held by an obstacle).
 std::string nearestSceneBody(const ehc_sim::SimWorld& world, const Eigen::Vector3d& p);
 
 /// One perceived link-obstacle pair as the controller received it (safety metrics).

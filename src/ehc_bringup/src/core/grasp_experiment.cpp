@@ -48,6 +48,25 @@ std::string paperCell(const PaperTable& paper, const std::string& method, const 
   return cell == row->second.end() ? "" : cell->second;
 }
 
+/// The sequencer's result of one object into its trial.
+void takeResult(const GraspResult& r, GraspTrial* t) {
+  t->success = r.success;
+  t->time_s = r.time_s;
+  t->tfm = r.tfm;
+  t->tfm_until_switch = r.tfm_until_switch;
+  t->controller_tfm = r.controller_tfm;
+  t->failed_phase = r.failed_phase;
+  t->reason = r.reason;
+  t->stall_cause = r.stallCause();
+  if (r.timed_out) {
+    t->stall_joint = r.stall.joint;
+    t->stall_link = r.stall.link;
+    t->stall_body = r.stall_body;
+    t->stall_detail = r.stallDetail();
+  }
+  t->close_offset = r.close_offset;
+}
+
 [[noreturn]] void bad(const std::string& what) { throw std::invalid_argument("[GraspExperiment] " + what); }
 
 const char* kApproaches[] = {"forward", "downward", "sideways"};
@@ -232,22 +251,7 @@ GraspExperiment::RunOutput GraspExperiment::runOne(const RunSpec& spec) const {
     t.object = cfg.sequencer.objects[i].name;
     t.approach = toString(cfg.sequencer.objects[i].approach);
     if (i < results.size()) {
-      const GraspResult& r = results[i];
-      t.success = r.success;
-      t.time_s = r.time_s;
-      t.tfm = r.tfm;
-      t.tfm_until_switch = r.tfm_until_switch;
-      t.controller_tfm = r.controller_tfm;
-      t.failed_phase = r.failed_phase;
-      t.reason = r.reason;
-      t.stall_cause = r.stallCause();
-      if (r.timed_out) {
-        t.stall_joint = r.stall.joint;
-        t.stall_link = r.stall.link;
-        t.stall_body = r.stall_body;
-        t.stall_detail = r.stallDetail();
-      }
-      t.close_offset = r.close_offset;
+      takeResult(results[i], &t);
     } else {
       t.failed_phase = toString(pipe.sequencer().phase());
       t.reason = "run ended (sim time limit " + std::to_string(limit) + " s) before this object was handled";

@@ -37,17 +37,7 @@ constexpr double kSimClockOffset = 1.0;  ///< s: ehc_sim_node's clock starts at 
 }  // namespace
 
 std::string nearestSceneBody(const ehc_sim::SimWorld& world, const Eigen::Vector3d& p) {
-  std::string best = "floor";
-  double best_d = std::abs(p.z());
-  for (std::size_t i = 0; i < world.bodies().size(); ++i) {
-    const Eigen::Vector3d local = world.bodyPose(static_cast<int>(i)).inverse() * p;
-    const double d = (local.cwiseAbs() - world.bodies()[i].halfExtents()).cwiseMax(0.0).norm();
-    if (d < best_d) {
-      best_d = d;
-      best = world.bodies()[i].name;
-    }
-  }
-  return best;
+  return ehc_sim::nearestBody(world.bodies(), [&world](int i) { return world.bodyPose(i); }, p);
 }
 
 GraspPipelineFiles GraspPipelineFiles::demo(const std::string& config_dir, const std::string& scene,

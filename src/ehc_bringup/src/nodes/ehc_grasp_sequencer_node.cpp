@@ -28,6 +28,7 @@
 #include "ehc_control/pose_math.h"
 #include "ehc_control/robot_config.h"
 #include "ehc_msgs/SimStatus.h"
+#include "ehc_sim/scene_config.h"
 #include "ehc_common/lockstep_ack.h"
 
 #include <geometry_msgs/PointStamped.h>
@@ -109,6 +110,13 @@ class SequencerNode {
     const ehc_bringup::GraspSequencerParams sp = ehc_bringup::loadGraspSequencerParams(root);
     root.rejectUnknownKeys();  // both loaders have run: a key neither read is a misspelling
     seq_ = std::make_unique<GraspSequencer>(sp);
+    std::string scene;  // names the body of an obstacle that held the robot when a time limit fires
+    if (pnh.getParam("scene", scene) && !scene.empty()) {
+      const std::vector<ehc_sim::BodyConfig> bodies = ehc_sim::loadSceneConfig(scene).bodies();
+      seq_->setObstacleNamer([bodies](const Eigen::Vector3d& p) {
+        return ehc_sim::nearestBody(bodies, [&bodies](int i) { return bodies[static_cast<std::size_t>(i)].pose(); }, p);
+      });
+    }
     std::vector<std::string> inputs = node_.pose_topics;
     for (const auto& t : {node_.status_topic, node_.candidates_topic, node_.sim_status_topic, node_.camera_info_topic,
                           std::string("/tf")})
