@@ -166,7 +166,7 @@ OBSTACLE_ARG=()
 sup_start controller rosrun ehc_control ehc_controller_node _config:="$CONTROLLER_CONFIG" _mode:="$MODE" "${MPBS_ARG[@]}" \
   "${OBSTACLE_ARG[@]}" "${ROBOT_ARG[@]}"
 sup_start sequencer rosrun ehc_bringup ehc_grasp_sequencer_node _config:="$SEQUENCER_CONFIG" "${ROBOT_ARG[@]}" "${ACK_ARG[@]}" \
-  _summary:="$OUT/summary.json" _trace:="$OUT/trace.csv"
+  _summary:="$OUT/summary.json" _trace:="$OUT/trace.csv" _scene:="$SCENE"
 SEQ_PID=$SUP_LAST_PID
 
 # Progress: the sequencer's "[grasp]" lines, without the ROS log prefix.

@@ -223,3 +223,51 @@ TEST(GraspExperiment, Exp3OneSetOfEveryMethodReportsTfmPerApproach) {
     }
   }
 }
+
+TEST(GraspExperiment, AnObjectsTimeLimitNamesTheStallsCauseInTheResultLineTrialsAndSummary) {
+  // A bench across the way (test/fixtures/scenes/blocked_single_object.yaml): the camera sees the
+  // object over it, the obstacle dampers stop the base at it. A grasp that runs out of time says
+  // why: the link and the scene body held at the stop distance (or another MotionLimit), never
+  // only "time limit".
+  GraspExperimentParams p = params(GraspProtocol::Poses);
+  p.scene = std::string(EHC_TEST_FIXTURES_DIR) + "/scenes/blocked_single_object.yaml";
+  p.object_time_limit = 8.0;
+  const GraspExperimentResult r = GraspExperiment(p, {"ehc"}).run();
+  ASSERT_EQ(r.trials.size(), 3u);
+  int timed_out = 0, bench = 0;
+  for (const auto& t : r.trials) {
+    SCOPED_TRACE(t.approach + ": " + t.reason);
+    RecordProperty(t.approach, t.success ? std::string("grasped") : t.reason);
+    if (t.success || t.reason.rfind("time limit", 0) != 0) {
+      EXPECT_EQ(t.stall_cause, "");
+      continue;
+    }
+    ++timed_out;
+    EXPECT_NO_THROW(ehc_control::motionLimitFromString(t.stall_cause));
+    EXPECT_NE(t.reason.find("stall: " + t.stall_cause), std::string::npos);
+    EXPECT_FALSE(t.stall_detail.empty());
+    if (t.stall_cause == "joint_limit") {
+      EXPECT_FALSE(t.stall_joint.empty());
+    }
+    if (t.stall_cause == "obstacle") {
+      EXPECT_FALSE(t.stall_link.empty());
+      EXPECT_FALSE(t.stall_body.empty());
+      if (t.stall_body == "bench") ++bench;
+    }
+  }
+  EXPECT_GE(timed_out, 1);
+  EXPECT_GE(bench, 1) << "no stall named the bench that blocks the way";
+  ASSERT_EQ(r.summaries.size(), 1u);
+  int counted = 0;
+  for (const auto& [cause, n] : r.summaries[0].stall_causes) counted += n;
+  EXPECT_EQ(counted, timed_out);
+
+  const std::string dir = ::testing::TempDir() + "/ehc_stall_test";
+  writeGraspResults(dir, p, r, "test");
+  const std::string trials = readFile(dir + "/trials.csv");
+  EXPECT_NE(trials.find(",stall_cause,stall_joint,stall_link,stall_body,stall_detail,"), std::string::npos);
+  EXPECT_NE(trials.find(",obstacle,,base_link,bench,"), std::string::npos) << trials;
+  const std::string summary = readFile(dir + "/summary.json");
+  EXPECT_NE(summary.find("\"stall_causes\":{"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("\"obstacle\":"), std::string::npos) << summary;
+}

@@ -14,6 +14,7 @@
 
 #include <cmath>
 #include <limits>
+#include <random>
 
 using ehc_common::ConfigNode;
 
@@ -43,15 +44,16 @@ struct Loop {
     ASSERT_EQ(cycle.setJointState(t, rc.arm_joints, std::vector<double>(sim.q.data(), sim.q.data() + sim.q.size())), "");
     ASSERT_EQ(cycle.setBasePose(t, sim.base), "");
   }
-  /// One cycle at t = k dt: state (and the target, if given) stamped t, update, integrate.
-  ControlCycleOutput step(const Eigen::Isometry3d* target = nullptr) {
+  /// One cycle at t = k dt: state (and the target, if given) stamped t, update, integrate
+  /// (`move` false: the robot ignores the command, e.g. a blocked base).
+  ControlCycleOutput step(const Eigen::Isometry3d* target = nullptr, bool move = true) {
     const double t = k * dt;
     feedState(t);
     if (target) {
       EXPECT_EQ(cycle.setTarget(t, *target), "");
     }
     ControlCycleOutput out = cycle.update(t);
-    sim.step(cycle.model(), out.velocity, dt);
+    if (move) sim.step(cycle.model(), out.velocity, dt);
     ++k;
     return out;
   }
@@ -416,6 +418,150 @@ TEST(ControlCycle, ANewTargetRestartsTheQp) {
   EXPECT_EQ(out.status.phase, ControlPhase::TsmmArm);
 }
 
+// ------------------------------------------------------------------ motion limits (a stall's cause)
+
+/// The TCP's own pose: a target that asks for no motion.
+Eigen::Isometry3d tcpPose(const Loop& loop) {
+  return loop.cycle.model().fk(loop.sim.base, loop.sim.q, loop.cycle.model().config().tcp_frame);
+}
+
+TEST(ControlCycle, MotionLimitNamesTheJointPinnedAtItsStop) {
+  const unsigned seed = std::random_device{}();
+  RecordProperty("seed", std::to_string(seed));
+  SCOPED_TRACE("seed " + std::to_string(seed));
+  std::mt19937 rng(seed);
+  Loop loop(cycleParams());
+  const RobotConfig& rc = loop.cycle.model().config();
+  const QpControllerParams& qp = loop.cycle.controller().params();
+  const double pinned = qp.joint_stop + qp.recovery.pinned_margin;  // one definition: ReachRecovery's
+  ASSERT_LT(pinnedJoint(rc, rc.arm_ready, pinned), 0) << "the ready pose has a pinned joint";
+  std::uniform_int_distribution<int> joint(0, rc.nArm() - 1);
+  std::uniform_real_distribution<double> inside(0.0, 0.99 * pinned);
+  for (int trial = 0; trial < 20; ++trial) {
+    const int j = joint(rng);
+    const bool upper = rng() % 2 == 0;
+    const double margin = inside(rng);
+    SCOPED_TRACE(rc.arm_joints[static_cast<std::size_t>(j)] + (upper ? " upper " : " lower ") + std::to_string(margin));
+    auto at = [&](double m) {
+      loop.sim.q = rc.arm_ready;
+      loop.sim.q[j] = upper ? rc.arm_upper[j] - m : rc.arm_lower[j] + m;
+      const Eigen::Isometry3d target = tcpPose(loop);
+      return loop.step(&target, false).status.motion_limit;
+    };
+    const MotionLimitReport held = at(margin);
+    EXPECT_EQ(held.limit, MotionLimit::JointLimit);
+    EXPECT_EQ(held.joint, rc.arm_joints[static_cast<std::size_t>(j)]);
+    EXPECT_NEAR(held.value, margin, 1e-9);
+    EXPECT_NE(held.detail().find(held.joint), std::string::npos) << held.detail();
+    // Beyond the pinned margin the joint is free.
+    EXPECT_NE(at(pinned + 0.02).limit, MotionLimit::JointLimit);
+  }
+}
+
+TEST(ControlCycle, MotionLimitNamesTheLinkObstaclePairHeldAtItsStopDistance) {
+  Loop loop(cycleParams());
+  const Eigen::Isometry3d target = tcpPose(loop);
+  std::vector<ObstaclePair> pairs = manyPairs(loop.cycle, 10);  // 0.10-0.25 m: all beyond d_s + margin
+  ASSERT_EQ(loop.cycle.setObstacles(loop.now(), pairs), "");
+  EXPECT_EQ(loop.step(&target).status.motion_limit.limit, MotionLimit::None);
+  // One pair at its link's stop distance (+ 4 mm, within motion_limit.obstacle_margin): named.
+  const QpControllerParams& qp = loop.cycle.controller().params();
+  ObstaclePair& held = pairs[3];
+  held.distance = qp.obstacleStop(held.link) + 0.004;
+  held.obstacle_point = held.link_point - held.distance * held.normal;
+  ASSERT_EQ(loop.cycle.setObstacles(loop.now(), pairs), "");
+  MotionLimitReport r = loop.step(&target).status.motion_limit;
+  EXPECT_EQ(r.limit, MotionLimit::Obstacle);
+  EXPECT_EQ(r.link, held.link);
+  EXPECT_TRUE(r.obstacle_point.isApprox(held.obstacle_point)) << r.obstacle_point.transpose();
+  EXPECT_NEAR(r.value, 0.004, 1e-9);
+  // A finger closer to its own (smaller) stop distance is the tighter pair: d_s per link.
+  ObstaclePair finger = held;
+  finger.link = "left_finger_link";
+  finger.distance = qp.obstacleStop(finger.link) + 0.001;
+  ASSERT_LT(finger.distance, held.distance);
+  pairs.push_back(finger);
+  ASSERT_EQ(loop.cycle.setObstacles(loop.now(), pairs), "");
+  r = loop.step(&target).status.motion_limit;
+  EXPECT_EQ(r.link, "left_finger_link");
+  EXPECT_NE(r.detail().find("left_finger_link"), std::string::npos) << r.detail();
+}
+
+TEST(ControlCycle, MotionLimitNamesATargetOutOfViewForTargetUnseenTime) {
+  Loop loop(cycleParams());
+  const Eigen::Isometry3d target = tcpPose(loop);
+  const double unseen = loop.cycle.params().motion_limit.target_unseen_time;
+  const double t0 = loop.now();
+  ControlCycleOutput out;
+  while (loop.now() - t0 < unseen + 0.5) {
+    ASSERT_EQ(loop.cycle.setWatchedCentre(loop.now(), Eigen::Vector3d(-2.0, 0.0, 0.6)), "");  // behind the robot
+    const double t = loop.now();
+    out = loop.step(&target);
+    ASSERT_FALSE(out.status.target_in_fov);
+    if (t - t0 < unseen - 1e-9) {
+      EXPECT_NE(out.status.motion_limit.limit, MotionLimit::TargetNotSeen) << "t " << t;
+    }
+  }
+  EXPECT_EQ(out.status.motion_limit.limit, MotionLimit::TargetNotSeen);
+  EXPECT_GE(out.status.motion_limit.value, unseen);
+  // In view again: no longer.
+  ASSERT_EQ(loop.cycle.setWatchedCentre(loop.now(), Eigen::Vector3d(1.5, 0.0, 0.6)), "");
+  out = loop.step(&target);
+  ASSERT_TRUE(out.status.target_in_fov);
+  EXPECT_NE(out.status.motion_limit.limit, MotionLimit::TargetNotSeen);
+}
+
+TEST(ControlCycle, MotionLimitNamesABaseThatIsCommandedButDoesNotMove) {
+  Loop loop(cycleParams());
+  const Eigen::Isometry3d far = approachPose(2.5, 0.0, 0.8, Eigen::Vector3d(1, 0, -1));  // the base must drive
+  const double window = loop.cycle.params().motion_limit.base_window;
+  ControlCycleOutput out;
+  // The base does not follow its command (blocked, a stalled drive).
+  while (loop.now() < window + 0.2) {
+    const double t = loop.now();
+    out = loop.step(&far, false);
+    EXPECT_GT(std::abs(out.velocity[0]), loop.cycle.params().motion_limit.base_command) << "t " << t;
+    if (t < window - 1e-9) {
+      EXPECT_NE(out.status.motion_limit.limit, MotionLimit::BaseNotMoving) << "t " << t;
+    }
+  }
+  EXPECT_EQ(out.status.motion_limit.limit, MotionLimit::BaseNotMoving);
+  EXPECT_LT(out.status.motion_limit.value, 1e-12);
+  // It drives: within a few cycles no longer.
+  for (int i = 0; i < 5; ++i) out = loop.step(&far);
+  EXPECT_EQ(out.status.motion_limit.limit, MotionLimit::None);
+}
+
+TEST(ControlCycle, MotionLimitNamesASingularArmAndASaturatedSlackInTheirOrder) {
+  const ControlCycle cycle(cycleParams());
+  const WholeBodyModel& model = cycle.model();
+  const QpControllerParams& qp = cycle.controller().params();
+  MotionLimitMonitor m(model, qp, MotionLimitParams{});
+  MotionLimitMonitor::Cycle c;
+  c.q = model.config().arm_ready;
+  c.has_target = true;
+  c.target_in_fov = true;
+  EXPECT_EQ(m.update(c).limit, MotionLimit::None);
+  // The arm stretched straight (every joint at 0): singular.
+  c.q = Eigen::VectorXd::Zero(model.nArm());
+  ASSERT_LT(m.manipulabilityRatio(c.q), MotionLimitParams{}.singular_manipulability);
+  MotionLimitReport r = m.update(c);
+  EXPECT_EQ(r.limit, MotionLimit::Singular);
+  EXPECT_LT(r.value, MotionLimitParams{}.singular_manipulability);
+  // A task slack at its bound.
+  c.q = model.config().arm_ready;
+  Vector6d slack = Vector6d::Zero();
+  slack[4] = -0.97 * qp.slack_bound;
+  c.slack = &slack;
+  r = m.update(c);
+  EXPECT_EQ(r.limit, MotionLimit::SlackSaturated);
+  EXPECT_NEAR(r.value, 0.97, 1e-12);
+  // A pinned joint comes first (the order of MotionLimit).
+  c.q[0] = model.config().arm_upper[0] - qp.joint_stop;
+  EXPECT_EQ(m.update(c).limit, MotionLimit::JointLimit);
+  for (MotionLimit l : motionLimits()) EXPECT_EQ(motionLimitFromString(toString(l)), l);
+}
+
 // ------------------------------------------------------------------ parameters
 
 TEST(ControlCycle, LoadsTheShippedControllerYamlAndChecksTheConfiguration) {
@@ -474,6 +620,23 @@ TEST(ControlCycle, LoadsTheShippedControllerYamlAndChecksTheConfiguration) {
   }
   EXPECT_THROW(load("tracking: {centre_timeout: 0}\n"), std::invalid_argument);
   EXPECT_THROW(load("watchdog: {target_timeout: -1}\n"), std::invalid_argument);
+  EXPECT_EQ(load("motion_limit: {base_window: 2.5}\n").motion_limit.base_window, 2.5);
+  try {
+    load("motion_limit: {base_window: 0}\n");
+    ADD_FAILURE() << "base_window 0 accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("base_window"), std::string::npos) << e.what();
+  }
+  {  // an unknown key of the section: the node's check (rejectUnknownKeys) names it
+    const ConfigNode root = ConfigNode::loadString("motion_limit: {stall_time: 1}\n", "/cfg/controller.yaml", "ControllerNode");
+    loadControlCycleParams(root);
+    try {
+      root.rejectUnknownKeys();
+      ADD_FAILURE() << "motion_limit.stall_time accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("stall_time"), std::string::npos) << e.what();
+    }
+  }
   EXPECT_THROW(servoTypeFromString("PBVS"), std::invalid_argument);
   EXPECT_EQ(servoTypeFromString(toString(ServoType::Pbvs)), ServoType::Pbvs);
 

@@ -1,8 +1,9 @@
-// ControlPhase / QpStatus: one string map each, and exactly the values /ehc/status declares
-// (ehc_msgs/ControllerStatus PHASE_* and QP_*): every enum value's string is a message constant
+// ControlPhase / QpStatus / MotionLimit: one string map each, and exactly the values /ehc/status declares
+// (ehc_msgs/ControllerStatus PHASE_*, QP_* and LIMIT_*): every enum value's string is a message constant
 // and every message constant is an enum value's string. Round trip; unknown strings throw.
 
 #include "ehc_control/control_status.h"
+#include "ehc_control/motion_limit.h"
 #include "ehc_msgs/ControllerStatus.h"
 
 #include <gtest/gtest.h>
@@ -53,6 +54,15 @@ TEST(ControlStatus, PhaseStringsAreTheMessageConstants) {
   EXPECT_EQ(toString(ControlPhase::TargetLost), Msg::PHASE_TARGET_LOST);
   EXPECT_EQ(toString(ControlPhase::QpFailed), Msg::PHASE_QP_FAILED);
   EXPECT_EQ(toString(ControlPhase::ObstaclesStale), Msg::PHASE_OBSTACLES_STALE);
+}
+
+TEST(ControlStatus, MotionLimitStringsAreTheMessageConstants) {
+  expectSameStrings(motionLimits(),
+                    {Msg::LIMIT_NONE, Msg::LIMIT_JOINT_LIMIT, Msg::LIMIT_OBSTACLE, Msg::LIMIT_SINGULAR,
+                     Msg::LIMIT_SLACK_SATURATED, Msg::LIMIT_BASE_NOT_MOVING, Msg::LIMIT_TARGET_NOT_SEEN},
+                    motionLimitFromString);
+  EXPECT_EQ(motionLimits().size(), 7u);
+  EXPECT_THROW(motionLimitFromString("stalled"), std::invalid_argument);
 }
 
 TEST(ControlStatus, QpStatusStringsAreTheMessageConstants) {

@@ -55,6 +55,8 @@ struct GraspExperimentParams {
   /// water2 = the RealMan Water2 chain, whose /odom estimate is what the stack sees
   /// (GraspPipeline::stackView).
   std::optional<ehc_sim::BaseModelType> base_model;
+  /// s, WAIT_TARGET..LIFT per object (--object-time-limit): unset = the sequencer file's (30 s).
+  std::optional<double> object_time_limit;
   void validate() const;       ///< throws "[GraspExperiment] ..."
 };
 
@@ -84,6 +86,10 @@ struct GraspTrial {
   double time_s = 0.0;
   double tfm = 0.0, tfm_until_switch = 0.0, controller_tfm = 0.0;
   std::string failed_phase, reason;
+  /// The object's time limit fired: its cause (GraspResult::stallCause: a MotionLimit name) and
+  /// what it names (the pinned joint; the link held at its stop distance and the scene body of
+  /// the obstacle point; the detail line). All "" otherwise.
+  std::string stall_cause, stall_joint, stall_link, stall_body, stall_detail;
   double close_offset = -1.0;        ///< m, GraspResult::close_offset
   long contact_steps = 0;            ///< sim steps with a robot-scene or self collision
   long joint_limit_violations = 0;   ///< arm joint samples outside the limits
@@ -126,6 +132,7 @@ struct GraspMethodSummary {
   SpeedMeans distant, close;          ///< mean |commanded speed| (Exp-1's definition)
   std::map<std::string, std::pair<double, int>> tfm;  ///< approach -> (mean TfM, grasps)
   long contact_steps = 0, joint_limit_violations = 0;
+  std::map<std::string, int> stall_causes;  ///< grasps whose time limit fired, per cause (GraspTrial::stall_cause)
   ObstacleExtreme nearest, tightest, grasped;  ///< over every grasp of the method (see GraspTrial)
   double sim_time_s = 0.0, wall_time_s = 0.0;
 };

@@ -85,6 +85,11 @@ struct GraspPipelineConfig {
 /// std::invalid_argument naming the file and field.
 GraspPipelineConfig loadGraspPipelineConfig(const GraspPipelineFiles& files);
 
+/// Name of the scene body (table part, object, obstacle) or "floor" nearest to `p` (world), at
+/// the bodies' current poses (ehc_sim::nearestBody; ground truth: names a perceived obstacle
+/// point for the safety table and a stall held by an obstacle).
+std::string nearestSceneBody(const ehc_sim::SimWorld& world, const Eigen::Vector3d& p);
+
 /// One perceived link-obstacle pair as the controller received it (safety metrics).
 struct ObstaclePairRecord {
   double distance = -1.0;  ///< m; -1: no pair this cycle

@@ -41,7 +41,10 @@
 //                until within retreat_tolerance or retreat_timeout; then the next object
 //   DONE         all objects handled: no goal any more (the controller stops on TARGET_LOST)
 // WAIT_TARGET..LIFT of one object must finish within object_time_limit (30 s), else the object
-// is failed with the phase it was in. Time = sim time (s). NaN/Inf inputs are rejected
+// is failed with the phase it was in and the stall's cause (GraspResult::stall): in WAIT_TARGET
+// target_not_seen (no perceived pose), else the controller's motion limit of the last cycle
+// (/ehc/status motion_limit: a pinned joint, a link held at its stop distance from an obstacle,
+// singular, slack saturated, base not moving, target out of view; none if nothing held it). Time = sim time (s). NaN/Inf inputs are rejected
 // (counted); a non-finite or decreasing time throws "[GraspSequencer] ...".
 //
 // TfM of an object = fraction of cycles of the approach at a distance in which the object centre
@@ -64,12 +67,14 @@
 #include "ehc_bringup/grasp_selection.h"
 #include "ehc_bringup/target_pose_filter.h"
 #include "ehc_control/gripper_state.h"
+#include "ehc_control/motion_limit.h"
 #include "ehc_control/pinhole_camera.h"
 #include "ehc_control/target_tracker.h"
 
 #include <Eigen/Geometry>
 
 #include <array>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -153,6 +158,7 @@ struct SequencerInput {
   std::optional<double> sig;                       ///< /ehc/status sig_omega, if any
   ehc_control::GripperState gripper_state = ehc_control::GripperState::Open;  ///< /sim/status gripper_state
   bool grasp_succeeded = false;                    ///< /sim/status grasp_succeeded
+  ehc_control::MotionLimitReport motion_limit;     ///< /ehc/status motion_limit*
 };
 
 /// A sphere of the obstacle map to ignore (world).
@@ -189,6 +195,15 @@ struct GraspResult {
   std::string approach;           ///< wanted approach direction
   std::vector<std::pair<std::string, double>> phase_times;  ///< phase -> s spent
   std::vector<std::pair<std::string, long>> controller_phases;  ///< controller phase -> cycles
+  /// The object's time limit fired (WAIT_TARGET..LIFT): `stall` names the cause (see above).
+  bool timed_out = false;
+  ehc_control::MotionLimitReport stall;
+  /// obstacle: the body the obstacle point belongs to (GraspSequencer::setObstacleNamer), else "".
+  std::string stall_body;
+  /// "" unless timed out; else the cause's name, e.g. "joint_limit".
+  std::string stallCause() const { return timed_out ? ehc_control::toString(stall.limit) : ""; }
+  /// "" unless timed out; else what the cause names (MotionLimitReport::detail, the body if known).
+  std::string stallDetail() const;
 };
 
 class GraspSequencer {
@@ -206,6 +221,10 @@ class GraspSequencer {
   /// Camera intrinsics for TfM (e.g. from camera_info); false (ignored, counted) if invalid
   /// (PinholeCamera::validate). No TfM cycle is counted before the first valid camera.
   bool setCamera(const ehc_control::PinholeCamera& camera);
+  /// Names the body an obstacle point (world) belongs to, for a stall held by an obstacle
+  /// (GraspResult::stall_body); e.g. the simulator's scene. None: the point is reported.
+  using ObstacleNamer = std::function<std::string(const Eigen::Vector3d&)>;
+  void setObstacleNamer(ObstacleNamer namer) { namer_ = std::move(namer); }
 
   /// One cycle. Throws "[GraspSequencer] ..." for a non-finite or decreasing time.
   SequencerOutput update(const SequencerInput& in);
@@ -311,6 +330,9 @@ class GraspSequencer {
   std::string last_controller_phase_;
   std::vector<GraspResult> results_;
   long rejected_ = 0;
+  ObstacleNamer namer_;
+  /// The stall's cause when the object's time limit fires in the current phase (see above).
+  void recordStall(const SequencerInput& in);
 };
 
 /// JSON summary: {"mode": ..., "objects": [{"name", "success", "time_s", "tfm", ...}], "successes": n,

@@ -34,7 +34,7 @@ enum class ReachFailure {
   Converging,          ///< the error still fell over the last progress window: out of time
   RollWinding,         ///< the TCP roll joint is pinned at a limit (wound up)
   JointLimit,          ///< another arm joint is pinned at a limit (ReachTrial::failure_joint)
-  Singular,            ///< arm manipulability below singular_manipulability
+  Singular,            ///< arm manipulability below motion_limit.singular_manipulability
   BaseStuck,           ///< TCP beyond the arm's reach and the base does not move
   Stalled,             ///< none of the above: a local minimum away from limits and singularities
 };
@@ -61,8 +61,9 @@ struct ReachExperimentParams {
   double progress_window = 3.0;        ///< s: the error is compared with its value this long before
   double progress_position = 0.005;    ///< m: a smaller drop over the window is no progress
   double progress_orientation = 1.0 * M_PI / 180.0;  ///< rad: idem
-  double pinned_margin = 0.15;         ///< rad: a joint this close to a limit is pinned
-  double singular_manipulability = 0.01;  ///< fraction of the ready pose's manipulability
+  // Pinned joints and singularity: the controller's motion-limit tests (MotionLimitMonitor:
+  // joint_stop + recovery.pinned_margin, motion_limit.singular_manipulability).
+  ehc_control::MotionLimitParams motion_limit;  ///< controller.yaml's motion_limit section
   double base_reach = 0.8;             ///< m: position error beyond which only the base can help
   double base_stuck_distance = 0.02;   ///< m: base travel over the window below which it is stuck
   void validate() const;            ///< throws "[ReachExperiment] ..."
@@ -173,7 +174,8 @@ class ReachExperiment {
   double sim_time_ = 0.0;  ///< s, advanced by one control period per cycle
   int trace_set_ = 0, trace_index_ = 0;
   int roll_joint_ = -1;             ///< findRollJoint
-  double ready_manipulability_ = 0.0;
+  /// The controller's pinned-joint and singularity tests (the cause of a stall, MotionLimit).
+  std::unique_ptr<ehc_control::MotionLimitMonitor> limits_;
 };
 
 /// Writes summary.json, table.md (paper Table II layout) and trials.csv into `dir`.

@@ -48,21 +48,23 @@ std::string paperCell(const PaperTable& paper, const std::string& method, const 
   return cell == row->second.end() ? "" : cell->second;
 }
 
-/// Name of the scene body (table part, object, obstacle) or "floor" nearest to `p`, by the
-/// distance to its bounding box at its current pose (ground truth; names a perceived obstacle
-/// point for the safety table).
-std::string nearestSceneBody(const ehc_sim::SimWorld& world, const Eigen::Vector3d& p) {
-  std::string best = "floor";
-  double best_d = std::abs(p.z());
-  for (std::size_t i = 0; i < world.bodies().size(); ++i) {
-    const Eigen::Vector3d local = world.bodyPose(static_cast<int>(i)).inverse() * p;
-    const double d = (local.cwiseAbs() - world.bodies()[i].halfExtents()).cwiseMax(0.0).norm();
-    if (d < best_d) {
-      best_d = d;
-      best = world.bodies()[i].name;
-    }
+/// The sequencer's result of one object into its trial.
+void takeResult(const GraspResult& r, GraspTrial* t) {
+  t->success = r.success;
+  t->time_s = r.time_s;
+  t->tfm = r.tfm;
+  t->tfm_until_switch = r.tfm_until_switch;
+  t->controller_tfm = r.controller_tfm;
+  t->failed_phase = r.failed_phase;
+  t->reason = r.reason;
+  t->stall_cause = r.stallCause();
+  if (r.timed_out) {
+    t->stall_joint = r.stall.joint;
+    t->stall_link = r.stall.link;
+    t->stall_body = r.stall_body;
+    t->stall_detail = r.stallDetail();
   }
-  return best;
+  t->close_offset = r.close_offset;
 }
 
 [[noreturn]] void bad(const std::string& what) { throw std::invalid_argument("[GraspExperiment] " + what); }
@@ -103,6 +105,8 @@ void GraspExperimentParams::validate() const {
   if (!(jitter_yaw_deg >= 0.0 && jitter_yaw_deg <= 15.0)) bad("jitter_yaw_deg must be in [0, 15] deg");
   if (!(distant_threshold > 0.0)) bad("distant_threshold must be > 0");
   if (!(trace_period > 0.0)) bad("trace_period must be > 0");
+  if (object_time_limit && !(*object_time_limit > 0.0 && *object_time_limit <= 3600.0))
+    bad("object_time_limit must be in (0, 3600] s");
 }
 
 struct GraspExperiment::RunOutput {
@@ -145,6 +149,7 @@ GraspPipelineConfig GraspExperiment::runConfig(const std::string& method, const 
   c.cycle.controller.mode = m.mode;
   c.cycle.mpbs.enabled = m.mpbs;
   if (params_.base_model) c.sim.fake_robot.base_model.type = *params_.base_model;
+  if (params_.object_time_limit) c.sequencer.object_time_limit = *params_.object_time_limit;
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   for (auto& o : c.scene.objects) {
@@ -248,15 +253,7 @@ GraspExperiment::RunOutput GraspExperiment::runOne(const RunSpec& spec) const {
     t.object = cfg.sequencer.objects[i].name;
     t.approach = toString(cfg.sequencer.objects[i].approach);
     if (i < results.size()) {
-      const GraspResult& r = results[i];
-      t.success = r.success;
-      t.time_s = r.time_s;
-      t.tfm = r.tfm;
-      t.tfm_until_switch = r.tfm_until_switch;
-      t.controller_tfm = r.controller_tfm;
-      t.failed_phase = r.failed_phase;
-      t.reason = r.reason;
-      t.close_offset = r.close_offset;
+      takeResult(results[i], &t);
     } else {
       t.failed_phase = toString(pipe.sequencer().phase());
       t.reason = "run ended (sim time limit " + std::to_string(limit) + " s) before this object was handled";
@@ -355,6 +352,7 @@ GraspExperimentResult GraspExperiment::run(const Progress& progress) const {
         ++e.second;
         s.contact_steps += t.contact_steps;
         s.joint_limit_violations += t.joint_limit_violations;
+        if (!t.stall_cause.empty()) ++s.stall_causes[t.stall_cause];
         s.nearest.take(t.nearest, false);
         s.tightest.take(t.tightest, true);
         s.grasped.take(t.grasped, false);
@@ -437,6 +435,8 @@ ehc_common::Json graspSummaryJsonValue(const GraspMethodSummary& s) {
   for (const auto& e : s.tfm) tfm[e.first] = jsonNumber(100.0 * e.second.first);
   j["contact_steps"] = s.contact_steps;
   j["joint_limit_violations"] = s.joint_limit_violations;
+  ehc_common::Json& stalls = j["stall_causes"] = ehc_common::Json::object();
+  for (const auto& [cause, n] : s.stall_causes) stalls[cause] = n;
   j["min_obstacle"] = obstacleJson(s.nearest);
   j["min_obstacle_margin"] = obstacleJson(s.tightest);
   j["min_grasped_object"] = obstacleJson(s.grasped);
@@ -560,17 +560,20 @@ std::string obstacleCsvValue(const ObstacleExtreme& e, double v) {
 void writeTrialsCsv(const std::string& dir, const GraspExperimentResult& result) {
   std::ofstream f = openResultFile(dir, "trials.csv");
   f << "method,set,index,seed,object,approach,success,time_s,tfm,tfm_until_switch,controller_tfm,failed_phase,"
-       "reason,close_offset_m,contact_steps,joint_limit_violations,min_obstacle_distance_m,min_obstacle_link,min_obstacle_body,"
+       "reason,stall_cause,stall_joint,stall_link,stall_body,stall_detail,close_offset_m,contact_steps,joint_limit_violations,min_obstacle_distance_m,min_obstacle_link,min_obstacle_body,"
        "min_obstacle_phase,min_margin_m,min_margin_link,min_margin_body,min_margin_phase,min_grasped_object_m,"
        "min_grasped_object_link,min_grasped_object_phase,lock_centre_in_grasp_x_m,lock_centre_in_grasp_y_m,"
        "lock_centre_in_grasp_z_m,close_centre_in_tcp_x_m,close_centre_in_tcp_y_m,close_centre_in_tcp_z_m,"
        "lock_closing_axis_error_deg\n";
   for (const auto& t : result.trials) {
-    std::string reason = t.reason;
-    std::replace(reason.begin(), reason.end(), '"', '\'');
+    auto quoted = [](std::string text) {
+      std::replace(text.begin(), text.end(), '"', '\'');
+      return "\"" + text + "\"";
+    };
     f << t.method << "," << t.set << "," << t.index << "," << t.seed << "," << t.object << "," << t.approach << ","
       << (t.success ? 1 : 0) << "," << t.time_s << "," << t.tfm << "," << t.tfm_until_switch << ","
-      << t.controller_tfm << "," << t.failed_phase << ",\"" << reason << "\"," << t.close_offset << "," << t.contact_steps << ","
+      << t.controller_tfm << "," << t.failed_phase << "," << quoted(t.reason) << "," << t.stall_cause << ","
+      << t.stall_joint << "," << t.stall_link << "," << t.stall_body << "," << quoted(t.stall_detail) << "," << t.close_offset << "," << t.contact_steps << ","
       << t.joint_limit_violations << "," << obstacleCsvValue(t.nearest, t.nearest.distance) << "," << t.nearest.link << ","
       << t.nearest.body << "," << t.nearest.phase << "," << obstacleCsvValue(t.tightest, t.tightest.margin()) << ","
       << t.tightest.link << "," << t.tightest.body << "," << t.tightest.phase << ","

@@ -8,6 +8,7 @@
 #include "ehc_sim/simulated_camera.h"
 
 #include <chrono>
+#include <cmath>
 #include <sstream>
 #include <stdexcept>
 
@@ -35,6 +36,10 @@ class StageTimer {
 constexpr double kSimClockOffset = 1.0;  ///< s: ehc_sim_node's clock starts at 1 s
 
 }  // namespace
+
+std::string nearestSceneBody(const ehc_sim::SimWorld& world, const Eigen::Vector3d& p) {
+  return ehc_sim::nearestBody(world.bodies(), [&world](int i) { return world.bodyPose(i); }, p);
+}
 
 GraspPipelineFiles GraspPipelineFiles::demo(const std::string& config_dir, const std::string& scene,
                                             const std::string& sequencer, const std::vector<std::string>& tag_objects) {
@@ -149,6 +154,7 @@ GraspPipeline::GraspPipeline(const GraspPipelineConfig& cfg, unsigned seed) : cf
   cycle_ = std::make_unique<ehc_control::ControlCycle>(cfg_.cycle);
   sequencer_ = std::make_unique<GraspSequencer>(cfg_.sequencer);
   if (!sequencer_->setCamera(intrinsics)) throw std::invalid_argument("[GraspPipeline] invalid camera intrinsics");
+  sequencer_->setObstacleNamer([this](const Eigen::Vector3d& p) { return nearestSceneBody(*world_, p); });
   detector_ = std::make_unique<ehc_perception::TagDetector>(cfg_.detector, intrinsics);
   generator_ = std::make_unique<ehc_perception::GraspGenerator>(cfg_.generator);
   if (cfg_.obstacles) monitor_ = std::make_unique<ehc_perception::ObstacleMonitor>(robot, cfg_.map, cfg_.monitor);
@@ -281,6 +287,7 @@ const PipelineCycle& GraspPipeline::step() {
     in.sig = out.status.sig;
     in.gripper_state = world_->gripper().state();
     in.grasp_succeeded = world_->gripper().graspSucceeded();
+    in.motion_limit = out.status.motion_limit;
     in.tcp = stackView(world_->linkPose(cycle_->model().config().tcp_frame));
     in.camera = stackView(world_->cameraPose());
     const SequencerOutput s = sequencer_->update(in);

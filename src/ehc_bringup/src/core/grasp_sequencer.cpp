@@ -462,6 +462,10 @@ SequencerOutput GraspSequencer::update(const SequencerInput& in) {
         << (phase_ == GraspPhase::Grasp ? "grasp" : "pre-grasp") << ", " << num(t - best_distance_t_, 1)
         << " s since it last came closer)";
     }
+    recordStall(in);
+    s << "; stall: " << cur_.stallCause();
+    const std::string detail = cur_.stallDetail();
+    if (!detail.empty()) s << " (" << detail << ")";
     finishObject(t, false, s.str(), in, &out);
   } else {
     advance(in, &out);
@@ -471,6 +475,30 @@ SequencerOutput GraspSequencer::update(const SequencerInput& in) {
   // under the fingers, inside their stop distance).
   out.exclusions = obstacleExclusions(in);
   return out;
+}
+
+void GraspSequencer::recordStall(const SequencerInput& in) {
+  cur_.timed_out = true;
+  cur_.stall = in.motion_limit;
+  cur_.stall_body.clear();
+  if (phase_ == GraspPhase::WaitTarget) {  // perception has no pose of the object: that is the cause
+    cur_.stall = ehc_control::MotionLimitReport{};
+    cur_.stall.limit = ehc_control::MotionLimit::TargetNotSeen;
+    cur_.stall.value = in.t - std::max(object_t0_, object_pose_t_);
+  } else if (cur_.stall.limit == ehc_control::MotionLimit::Obstacle && namer_) {
+    cur_.stall_body = namer_(cur_.stall.obstacle_point);
+  }
+}
+
+std::string GraspResult::stallDetail() const {
+  if (!timed_out) return "";
+  if (stall.limit == ehc_control::MotionLimit::Obstacle && !stall_body.empty()) {
+    std::ostringstream s;
+    s << stall.link << " held at its stop distance from " << stall_body << " (d_s " << (stall.value < 0.0 ? "- " : "+ ")
+      << num(std::abs(stall.value), 3) << " m)";
+    return s.str();
+  }
+  return stall.detail();
 }
 
 void GraspSequencer::advance(const SequencerInput& in, SequencerOutput* out) {
@@ -700,6 +728,11 @@ std::string graspResultsToJson(const std::vector<GraspResult>& results, const st
     o["grasp_from_candidate"] = r.used_candidate;
     o["failed_phase"] = r.failed_phase;
     o["reason"] = r.reason;
+    o["stall_cause"] = r.stallCause();
+    o["stall_joint"] = r.timed_out ? r.stall.joint : "";
+    o["stall_link"] = r.timed_out ? r.stall.link : "";
+    o["stall_body"] = r.stall_body;
+    o["stall_detail"] = r.stallDetail();
     o["close_offset_m"] = jsonNumber(r.close_offset);
     ehc_common::Json& phases = o["phase_times"] = ehc_common::Json::object();
     for (const auto& [phase, time] : r.phase_times) phases[phase] = jsonNumber(time);

@@ -55,9 +55,9 @@ void ReachExperimentParams::validate() const {
   if (!(arrival_position > 0.0 && arrival_orientation > 0.0)) bad("arrival tolerances must be > 0");
   if (!(progress_window > 0.0 && progress_position > 0.0 && progress_orientation > 0.0))
     bad("progress_window, progress_position and progress_orientation must be > 0");
-  if (!(pinned_margin > 0.0 && singular_manipulability >= 0.0 && base_reach > 0.0 && base_stuck_distance > 0.0))
-    bad("pinned_margin, base_reach and base_stuck_distance must be > 0, singular_manipulability >= 0");
+  if (!(base_reach > 0.0 && base_stuck_distance > 0.0)) bad("base_reach and base_stuck_distance must be > 0");
   noise.validate();
+  motion_limit.validate();
   base_model.validate();
   servo.validate();
 }
@@ -74,8 +74,9 @@ ReachExperiment::ReachExperiment(std::shared_ptr<const ehc_control::WholeBodyMod
   cycle_params_.servo_type = ehc_control::ServoType::Proportional;
   cycle_params_.servo = params_.servo;
   cycle_params_.watchdog.require_obstacles = false;  // Exp-1 reaches in free space: no obstacle sensing
+  cycle_params_.motion_limit = params_.motion_limit;
   roll_joint_ = ehc_control::findRollJoint(*model_);
-  ready_manipulability_ = model_->manipulability(model_->config().arm_ready);
+  limits_ = std::make_unique<ehc_control::MotionLimitMonitor>(*model_, controller_, cycle_params_.motion_limit);
 }
 
 CommandSpeeds commandSpeeds(const Eigen::VectorXd& v, int nb) {
@@ -113,22 +114,13 @@ void ReachExperiment::classifyFailure(ReachTrial& t, const Eigen::Vector3d& base
                                       double orientation_error_before, const Eigen::Vector3d& base_before) const {
   const auto& rc = model_->config();
   t.failure_joint.clear();
-  // The joint closest to a limit, if pinned.
-  int pinned = -1;
-  double pinned_margin = params_.pinned_margin;
-  for (int i = 0; i < q.size(); ++i) {
-    const double m = std::min(q[i] - rc.arm_lower[i], rc.arm_upper[i] - q[i]);
-    if (m < pinned_margin) {
-      pinned_margin = m;
-      pinned = i;
-    }
-  }
+  const int pinned = limits_->pinned(q);  // the joint closest to a limit, if pinned
   if (!kinematicallyReachable(*model_, target, controller_.joint_stop)) t.failure = ReachFailure::Unreachable;
   else if (position_error_before - t.final_position_error > params_.progress_position ||
            orientation_error_before - t.final_orientation_error > params_.progress_orientation)
     t.failure = ReachFailure::Converging;
   else if (pinned >= 0) t.failure = pinned == roll_joint_ ? ReachFailure::RollWinding : ReachFailure::JointLimit;
-  else if (model_->manipulability(q) < params_.singular_manipulability * ready_manipulability_)
+  else if (limits_->singular(q))
     t.failure = ReachFailure::Singular;
   else if (t.final_position_error > params_.base_reach &&
            (base - base_before).head<2>().norm() < params_.base_stuck_distance)

@@ -50,9 +50,10 @@ const char* kUsage =
     "       ehc_experiment grasp --method tsmm|neo_c|neo_e|ehc|all --out DIR [--robot <name|robot.yaml>] [--sets 15] [--seed 1]\n"
     "           [--scene scene.yaml] [--jobs 1] [--config-dir config] [--jitter-xy 0.01] [--jitter-yaw 3]\n"
     "           [--base-model ideal|water2]   (default: the sim file's, ideal; water2: the stack sees the bridge's /odom)\n"
+    "           [--object-time-limit s]   (per object, WAIT_TARGET..LIFT; default: the sequencer file's, 30 s)\n"
     "       ehc_experiment poses --method neo_nompbs|ehc_nompbs|ehc|all --out DIR [--robot <name|robot.yaml>] [--sets 15] [--per-set 5]\n"
     "           [--seed 1] [--scene scene.yaml] [--jobs 1] [--config-dir config] [--jitter-xy 0.01] [--jitter-yaw 3]\n"
-    "           [--base-model ideal|water2]\n";
+    "           [--base-model ideal|water2] [--object-time-limit s]\n";
 
 struct Args {
   std::string command, robot, method = "ehc", out, targets_csv, config, map, trace;
@@ -127,7 +128,7 @@ int runGrasp(int argc, char** argv) {
   ehc_bringup::GraspExperimentParams p;
   p.protocol = command == "grasp" ? ehc_bringup::GraspProtocol::Table : ehc_bringup::GraspProtocol::Poses;
   std::vector<std::string> options = {"robot", "method", "out", "sets", "seed", "scene", "jobs", "config-dir",
-                                      "jitter-xy", "jitter-yaw", "base-model"};
+                                      "jitter-xy", "jitter-yaw", "base-model", "object-time-limit"};
   if (p.protocol == ehc_bringup::GraspProtocol::Poses) options.push_back("per-set");
   const ehc_common::CommandLine cli(argc, argv, options, {}, /*first=*/2);
   const std::string method = cli.text("method", "all");
@@ -144,6 +145,7 @@ int runGrasp(int argc, char** argv) {
   p.jitter_xy = cli.real("jitter-xy", p.jitter_xy);
   p.jitter_yaw_deg = cli.real("jitter-yaw", p.jitter_yaw_deg);
   if (p.protocol == ehc_bringup::GraspProtocol::Table) p.per_set = 1;
+  if (cli.has("object-time-limit")) p.object_time_limit = cli.real("object-time-limit", 30.0);
   if (cli.has("base-model"))
     p.base_model = ehc_sim::baseModelTypeFromString(cli.choice("base-model", {"ideal", "water2"}, "ideal"));
   const std::vector<std::string> methods = ehc_bringup::graspMethodNames(p.protocol, method);
@@ -214,11 +216,13 @@ int main(int argc, char** argv) {
     ehc_control::QpControllerParams ctrl = ehc_control::loadQpControllerParams(cfg.childOrEmpty("controller"));
     const auto wparams = ehc_control::loadEhcWeightingParams(cfg.childOrEmpty("weighting"));
     // The whole controller file is validated as the controller node reads it (the experiment
-    // uses the controller, weighting and proportional-servo sections); a misspelled key is an error.
-    ehc_control::loadControlCycleParams(cfg);
+    // uses the controller, weighting, proportional-servo and motion_limit sections); a misspelled
+    // key is an error.
+    const ehc_control::ControlCycleParams cycle_cfg = ehc_control::loadControlCycleParams(cfg);
     ehc_control::loadControllerNodeParams(cfg);  // the node's section: checked as the node reads it
     cfg.rejectUnknownKeys();
     ehc_bringup::ReachExperimentParams ep;
+    ep.motion_limit = cycle_cfg.motion_limit;
     ep.servo = ehc_control::loadPoseServoParams(cfg.childOrEmpty("servo"));
     ep.noise.enabled = a.noise;
     ep.base_model.type = a.base_model;

@@ -29,6 +29,7 @@
 #include "ehc_control/robot_config.h"
 #include "ehc_control/whole_body_model.h"
 #include "ehc_msgs/SimStatus.h"
+#include "ehc_sim/scene_config.h"
 #include "ehc_common/lockstep_ack.h"
 #include "ehc_common/node_init.h"
 
@@ -56,6 +57,24 @@ namespace {
 using ehc_bringup::GraspSequencer;
 
 using ehc_common::kLogThrottle;
+
+/// The status's motion limit (none, logged, for a string the core does not know).
+ehc_control::MotionLimitReport motionLimit(const ehc_msgs::ControllerStatus& m) {
+  ehc_control::MotionLimitReport r;
+  if (m.motion_limit.empty()) return r;  // a controller that does not report one
+  try {
+    r.limit = ehc_control::motionLimitFromString(m.motion_limit);
+  } catch (const std::invalid_argument& e) {
+    ROS_WARN_STREAM_THROTTLE(kLogThrottle, "[ehc_grasp_sequencer_node] " << e.what());
+    return r;
+  }
+  r.joint = m.motion_limit_joint;
+  r.link = m.motion_limit_link;
+  r.obstacle_point = Eigen::Vector3d(m.motion_limit_obstacle_point.x, m.motion_limit_obstacle_point.y,
+                                     m.motion_limit_obstacle_point.z);
+  r.value = m.motion_limit_value;
+  return r;
+}
 
 Eigen::Isometry3d toEigen(const geometry_msgs::Pose& p) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
@@ -91,6 +110,14 @@ class SequencerNode {
     const ehc_bringup::GraspSequencerParams sp = ehc_bringup::loadGraspSequencerParams(root);
     root.rejectUnknownKeys();  // both loaders have run: a key neither read is a misspelling
     seq_ = std::make_unique<GraspSequencer>(sp);
+    // The scene names the body of an obstacle that held the robot when a time limit fires.
+    const std::string scene = params.get<std::string>("scene", "");
+    if (!scene.empty()) {
+      const std::vector<ehc_sim::BodyConfig> bodies = ehc_sim::loadSceneConfig(scene).bodies();
+      seq_->setObstacleNamer([bodies](const Eigen::Vector3d& p) {
+        return ehc_sim::nearestBody(bodies, [&bodies](int i) { return bodies[static_cast<std::size_t>(i)].pose(); }, p);
+      });
+    }
     std::vector<std::string> inputs = node_.pose_topics;
     for (const auto& t : {node_.status_topic, node_.candidates_topic, node_.sim_status_topic, node_.camera_info_topic,
                           std::string("/tf")})
@@ -255,6 +282,7 @@ class SequencerNode {
     if (std::isfinite(m.sig_omega)) in.sig = m.sig_omega;
     in.gripper_state = gripper_state_;
     in.grasp_succeeded = grasp_succeeded_;
+    in.motion_limit = motionLimit(m);
     if (const auto tcp = lookup(node_.tcp_frame, m.header.stamp)) in.tcp = *tcp;
     if (const auto camera = lookup(node_.camera_frame, m.header.stamp)) in.camera = *camera;
     inbox_.takeBefore(m.header.stamp);

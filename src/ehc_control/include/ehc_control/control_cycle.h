@@ -6,7 +6,8 @@
 // (ehc_controller_node, the Exp-1 runner, tests, benches) feed it inputs stamped with their
 // time (sim or ROS seconds) and call update(now) once per cycle:
 //
-//   watchdog decision -> TfM bookkeeping -> sig(omega) -> servo -> QP step -> status
+//   watchdog decision -> TfM bookkeeping -> sig(omega) -> servo -> QP step -> status (with the
+//   cycle's motion limit, MotionLimitMonitor)
 //
 // The command is never NaN/Inf and all zeros unless the QP ran and succeeded. Core errors
 // inside the cycle stop the robot (STOPPED, reason "controller error: ...") instead of throwing.
@@ -14,6 +15,7 @@
 #include "ehc_control/control_status.h"
 #include "ehc_control/controller_supervisor.h"
 #include "ehc_control/ehc_weighting.h"
+#include "ehc_control/motion_limit.h"
 #include "ehc_control/mpbs.h"
 #include "ehc_control/pose_servo.h"
 #include "ehc_control/qp_controller.h"
@@ -51,6 +53,7 @@ struct ControlCycleParams {
   TargetTrackerParams tracking;             ///< section `tracking`
   double centre_timeout = 1.0;              ///< s, `tracking.centre_timeout`: older watched centres are ignored
   SupervisorParams watchdog;                ///< section `watchdog`
+  MotionLimitParams motion_limit;           ///< section `motion_limit`
   void validate() const;                    ///< throws "[ControlCycleParams] ..." (and the sections' own)
 };
 /// Reads the whole controller.yaml (`root`); `robot` defaults to the RealMan robot.yaml next to
@@ -75,6 +78,8 @@ struct ControlCycleStatus : QpStepFigures {
   bool controller_error = false;          ///< a core error (exception) stopped this cycle
   bool wrist_flip = false;                ///< the QP step prescribed a wrist flip (WristFlip)
   bool recovering = false;                ///< the QP tracked a stall recovery's reference (ReachRecovery)
+  /// What holds the robot back this cycle (MotionLimitMonitor; none without joint state and odometry).
+  MotionLimitReport motion_limit;
 };
 
 struct ControlCycleOutput {
@@ -134,6 +139,7 @@ class ControlCycle {
   MpbsServo& mpbsServo() { return *mpbs_; }
   const TargetTracker& tracker() const { return *tracker_; }
   const ControllerSupervisor& supervisor() const { return *supervisor_; }
+  const MotionLimitMonitor& motionLimits() const { return *limits_; }
   /// Index of the arm joint that rolls the TCP (findRollJoint), -1 if none.
   int rollJointIndex() const { return roll_index_; }
   /// That joint at arm configuration q, for the servo's roll unwinding (none without one).
@@ -150,6 +156,8 @@ class ControlCycle {
   ControlCycleOutput zeroOutput(double now) const;
   /// Servo + QP for the supervisor's current state and target.
   ControllerCommand step(double now);
+  /// The cycle's motion limit into out->status (after the command is final).
+  void reportMotionLimit(double now, const Vector6d* slack, ControlCycleOutput* out);
 
   ControlCycleParams params_;
   std::shared_ptr<const WholeBodyModel> model_;
@@ -157,6 +165,7 @@ class ControlCycle {
   std::unique_ptr<EhcQpController> controller_;
   std::unique_ptr<ReachRecovery> recovery_;
   std::unique_ptr<ControllerSupervisor> supervisor_;
+  std::unique_ptr<MotionLimitMonitor> limits_;
   std::unique_ptr<MpbsServo> mpbs_;
   std::unique_ptr<TargetTracker> tracker_;
   Eigen::Isometry3d tcp_T_camera_ = Eigen::Isometry3d::Identity();

@@ -25,6 +25,7 @@ void ControlCycleParams::validate() const {
   mpbs.validate();
   tracking.validate();
   watchdog.validate();
+  motion_limit.validate();
   ehc_common::requireRange("ControlCycleParams", "tracking.centre_timeout", centre_timeout, 1e-3, 3600.0);
 }
 
@@ -47,6 +48,7 @@ ControlCycleParams loadControlCycleParams(const ConfigNode& root) {
   p.tracking = loadTargetTrackerParams(tracking);
   p.centre_timeout = tracking.get("centre_timeout", p.centre_timeout);
   p.watchdog = loadSupervisorParams(root.childOrEmpty("watchdog"));
+  p.motion_limit = loadMotionLimitParams(root.childOrEmpty("motion_limit"));
   root.validate(p);
   return p;
 }
@@ -86,6 +88,7 @@ ControlCycle::ControlCycle(std::shared_ptr<const WholeBodyModel> model, std::sha
   recovery_ = std::make_unique<ReachRecovery>(*model_, params_.controller.recovery, params_.controller.joint_stop,
                                               params_.controller.joint_influence);
   supervisor_ = std::make_unique<ControllerSupervisor>(rc, params_.watchdog);
+  limits_ = std::make_unique<MotionLimitMonitor>(*model_, controller_->params(), params_.motion_limit);
   // Camera: mount on the hand (URDF) for MPBS and TfM, intrinsics from robot.yaml's
   // robot.camera_info (tracking.camera, if set, overrides it).
   if (!model_->hasLink(rc.camera_frame) || !model_->hasLink(rc.tcp_frame))
@@ -161,6 +164,8 @@ ControlCycleOutput ControlCycle::update(double now) {
   ControlCycleOutput out = zeroOutput(now);
   ControlCycleStatus& st = out.status;
   const SupervisorDecision d = supervisor_->check(now);
+  Vector6d slack = Vector6d::Zero();
+  bool have_slack = false;
   try {
     // TfM: every cycle with a target (served or lost), camera pose from the kinematics.
     if (supervisor_->hasTarget() && (d.run || d.phase == ControlPhase::TargetLost)) {
@@ -186,6 +191,8 @@ ControlCycleOutput ControlCycle::update(double now) {
       st.recovering = c.recovering;
       static_cast<QpStepFigures&>(st) = c;
       if (c.ok) out.velocity = c.velocity;
+      slack = c.slack;
+      have_slack = c.ok;
       if (!c.event.empty()) out.event += (out.event.empty() ? "" : "; ") + c.event;
       // The solve took time: a cycle over its budget, or a command computed from a state (or
       // target, or obstacles) that went stale meanwhile, is not sent.
@@ -220,7 +227,28 @@ ControlCycleOutput ControlCycle::update(double now) {
     st.controller_error = true;
   }
   if (!out.velocity.allFinite()) out.velocity.setZero();  // never command NaN
+  reportMotionLimit(now, have_slack ? &slack : nullptr, &out);
   return out;
+}
+
+void ControlCycle::reportMotionLimit(double now, const Vector6d* slack, ControlCycleOutput* out) {
+  if (supervisor_->stateAge(now) < 0.0) return;  // no joint state or odometry yet
+  MotionLimitMonitor::Cycle c;
+  c.t = now;
+  c.base_pose = supervisor_->basePose();
+  c.q = supervisor_->q();
+  c.command = out->velocity;
+  c.slack = slack;
+  const std::vector<ObstaclePair> obstacles = supervisor_->obstacles(now);
+  c.obstacles = &obstacles;
+  c.has_target = supervisor_->hasTarget();
+  c.target_in_fov = out->status.target_in_fov;
+  try {
+    out->status.motion_limit = limits_->update(c);
+  } catch (const std::exception& e) {  // core errors: reported, never thrown out of a cycle
+    out->status.motion_limit = MotionLimitReport{};
+    if (out->status.reason.empty()) out->status.reason = std::string("motion limit: ") + e.what();
+  }
 }
 
 std::optional<RollJoint> ControlCycle::rollJointAt(const Eigen::VectorXd& q) const {
@@ -274,7 +302,7 @@ std::string ControlCycle::summary() const {
   os << "\n  roll joint "
      << (roll_index_ >= 0 ? rc.arm_joints[static_cast<std::size_t>(roll_index_)] : std::string("none")) << "\n  "
      << params_.tracking.summary() << ", " << tracker_->camera().summary() << ", centre timeout "
-     << params_.centre_timeout << " s\n  " << params_.watchdog.summary();
+     << params_.centre_timeout << " s\n  " << params_.watchdog.summary() << "\n  " << params_.motion_limit.summary();
   return os.str();
 }
 

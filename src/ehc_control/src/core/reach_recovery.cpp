@@ -1,6 +1,7 @@
 #include "ehc_control/reach_recovery.h"
 
 #include "ehc_common/config_node.h"
+#include "ehc_control/motion_limit.h"
 #include "ehc_control/qp_controller.h"
 
 #include <Eigen/SVD>
@@ -129,7 +130,7 @@ bool ReachRecovery::stalled(double now, double position_error, double orientatio
   // Near the target a stall with every joint free is the task's own equilibrium (obstacles,
   // singularity: not this mechanism's business); far from it the arm unwinds either way.
   return now - progress_t_ >= params_.stall_window && attempts_ < params_.max_attempts &&
-         (margin(q) < joint_stop_ + params_.pinned_margin || position_error > 2.0 * reach_);
+         (pinnedJoint(model_.config(), q, joint_stop_ + params_.pinned_margin) >= 0 || position_error > 2.0 * reach_);
 }
 
 void ReachRecovery::startPlanning(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q) {

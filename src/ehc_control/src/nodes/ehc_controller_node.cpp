@@ -244,6 +244,14 @@ class ControllerNode {
     st.state_age = s.state_age;
     st.obstacles_age = s.obstacles_age;
     st.obstacles_required = s.obstacles_required;
+    st.motion_limit = toString(s.motion_limit.limit);
+    st.motion_limit_joint = s.motion_limit.joint;
+    st.motion_limit_link = s.motion_limit.link;
+    st.motion_limit_obstacle_point.x = s.motion_limit.obstacle_point.x();
+    st.motion_limit_obstacle_point.y = s.motion_limit.obstacle_point.y();
+    st.motion_limit_obstacle_point.z = s.motion_limit.obstacle_point.z();
+    st.motion_limit_value = s.motion_limit.value;
+    st.motion_limit_detail = s.motion_limit.detail();
 
     const Eigen::VectorXd& v = out.velocity;
     const int nb = cycle_.model().nBase();

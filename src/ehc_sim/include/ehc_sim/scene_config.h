@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -81,7 +82,14 @@ struct SceneConfig {
   std::string summary() const;
   /// Index of the object called `name`, -1 if none.
   int objectIndex(const std::string& name) const;
+  /// Every body, in SimWorld's order: the tables' parts, the objects, the obstacles.
+  std::vector<BodyConfig> bodies() const;
 };
+
+/// Name of the body (table part, object, obstacle) or "floor" nearest to `p` (world), by the
+/// distance to its bounding box at pose(i) of body i: names a perceived obstacle point.
+std::string nearestBody(const std::vector<BodyConfig>& bodies, const std::function<Eigen::Isometry3d(int)>& pose,
+                        const Eigen::Vector3d& p);
 
 /// Loads and validates a scene YAML file (top-level key `scene`).
 SceneConfig loadSceneConfig(const std::string& path);

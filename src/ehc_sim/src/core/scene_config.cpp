@@ -174,6 +174,30 @@ Eigen::Vector3d BodyConfig::halfExtents() const {
   return Eigen::Vector3d(0.5 * size.x(), 0.5 * size.x(), 0.5 * size.y());
 }
 
+std::vector<BodyConfig> SceneConfig::bodies() const {
+  std::vector<BodyConfig> out;
+  for (const auto& t : tables)
+    for (const auto& b : t.bodies()) out.push_back(b);
+  out.insert(out.end(), objects.begin(), objects.end());
+  out.insert(out.end(), obstacles.begin(), obstacles.end());
+  return out;
+}
+
+std::string nearestBody(const std::vector<BodyConfig>& bodies, const std::function<Eigen::Isometry3d(int)>& pose,
+                        const Eigen::Vector3d& p) {
+  std::string best = "floor";
+  double best_d = std::abs(p.z());
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    const Eigen::Vector3d local = pose(static_cast<int>(i)).inverse() * p;
+    const double d = (local.cwiseAbs() - bodies[i].halfExtents()).cwiseMax(0.0).norm();
+    if (d < best_d) {
+      best_d = d;
+      best = bodies[i].name;
+    }
+  }
+  return best;
+}
+
 std::vector<BodyConfig> TableConfig::bodies() const {
   std::vector<BodyConfig> out;
   const Eigen::Isometry3d T = poseFromXyzRpy(Eigen::Vector3d(center.x(), center.y(), 0.0),

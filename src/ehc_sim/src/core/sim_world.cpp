@@ -203,12 +203,8 @@ void SimWorld::build() {
   m.add(m.floor, kFloor, kObject | kRobot | kRay);
 
   // Scene bodies: table parts, objects, obstacles.
-  bodies_.clear();
-  for (const auto& t : scene_.tables)
-    for (const auto& b : t.bodies()) bodies_.push_back(b);
-  first_object_ = static_cast<int>(bodies_.size());
-  for (const auto& o : scene_.objects) bodies_.push_back(o);
-  for (const auto& o : scene_.obstacles) bodies_.push_back(o);
+  bodies_ = scene_.bodies();
+  first_object_ = static_cast<int>(bodies_.size() - scene_.objects.size() - scene_.obstacles.size());
   m.scene.resize(bodies_.size());
   for (std::size_t i = 0; i < bodies_.size(); ++i) {
     const BodyConfig& c = bodies_[i];
