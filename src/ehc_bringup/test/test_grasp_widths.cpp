@@ -205,8 +205,8 @@ bool graspAndLift(Shape shape, double width, unsigned seed, std::string* what) {
 // on this branch (deterministic: fixed views and noise seeds). Before the footprint hypotheses
 // the lying cylinder had 0/6 at every width (its sides are seen only at grazing angles: no
 // antipodal pair, the seeds' normals tilted up), and the simulator's cylinders were 4-5 mm
-// short in the depth cloud (Bullet's GJK ray cast; SimWorld::castRay intersects them exactly
-// now).
+// short in the depth cloud (Bullet's GJK ray cast; the depth is rasterised from the bodies'
+// triangles now).
 struct WidthCase {
   Shape shape;
   double width;

@@ -2,6 +2,7 @@
 // Synthetic data for the perception tests and benchmarks: object surface clouds (box,
 // cylinder, lying bottle), a table plane, image pixel noise, and the shipped camera / robot files.
 
+#include "ehc_control/pose_math.h"
 #include "ehc_perception/grasp_generator.h"
 
 #include <Eigen/Geometry>
@@ -26,17 +27,8 @@ inline void addPixelNoise(vpImage<unsigned char>* image, std::mt19937* rng, doub
     image->bitmap[k] = static_cast<unsigned char>(std::clamp(std::lround(image->bitmap[k] + n(*rng)), 0L, 255L));
 }
 
-/// Optical frame at `eye` looking at `target` (z forward, x right, y down; world z up).
-inline Eigen::Isometry3d lookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target) {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  const Eigen::Vector3d z = (target - eye).normalized();
-  const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
-  T.linear().col(0) = x;
-  T.linear().col(1) = z.cross(x);
-  T.linear().col(2) = z;
-  T.translation() = eye;
-  return T;
-}
+/// Optical frame at `eye` looking at `target` (ehc_control/pose_math.h).
+using ehc_control::lookAt;
 
 struct Surface {
   PointList points;
