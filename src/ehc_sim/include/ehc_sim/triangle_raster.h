@@ -62,16 +62,23 @@ void rasterTriangle(const RasterGrid& g, const Eigen::Vector3d& a, const Eigen::
   }
   if (area == 0.0) return;  // seen edge-on
   const double s = area > 0.0 ? 1.0 : -1.0;
+  // Edge i is inside where ea[i] col + eb[i] row + ec[i] >= 0; the ray's dot product with the
+  // plane normal is dc col + dr row + d0.
+  std::array<double, 4> ea{}, eb{}, ec{};
+  for (int i = 0; i < np; ++i) {
+    const Eigen::Vector2d& p = uv[static_cast<std::size_t>(i)];
+    const Eigen::Vector2d& q = uv[static_cast<std::size_t>((i + 1) % np)];
+    ea[static_cast<std::size_t>(i)] = -s * (q.y() - p.y());
+    eb[static_cast<std::size_t>(i)] = s * (q.x() - p.x());
+    ec[static_cast<std::size_t>(i)] = s * ((q.y() - p.y()) * p.x() - (q.x() - p.x()) * p.y());
+  }
+  const double dc = n.x() / g.fx, dr = n.y() / g.fy, d0 = n.z() - n.x() * g.cx / g.fx - n.y() * g.cy / g.fy;
   for (int r = r0; r <= r1; ++r)
     for (int col = c0; col <= c1; ++col) {
       bool inside = true;
-      for (int i = 0; i < np && inside; ++i) {
-        const Eigen::Vector2d& p = uv[static_cast<std::size_t>(i)];
-        const Eigen::Vector2d& q = uv[static_cast<std::size_t>((i + 1) % np)];
-        inside = s * ((q.x() - p.x()) * (r - p.y()) - (q.y() - p.y()) * (col - p.x())) >= 0.0;
-      }
+      for (std::size_t i = 0; i < static_cast<std::size_t>(np) && inside; ++i) inside = ea[i] * col + eb[i] * r + ec[i] >= 0.0;
       if (!inside) continue;
-      const double denom = n.dot(g.ray(col, r));
+      const double denom = dc * col + dr * r + d0;
       if (denom == 0.0) continue;
       const double z = k / denom;
       if (z > near) write(col, r, z);

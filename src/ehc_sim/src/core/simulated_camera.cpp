@@ -45,29 +45,27 @@ vpColVector col(const Eigen::Vector3d& p) {
   return v;
 }
 
-/// A planar convex quad in the body frame, corners ordered so that vpImageSimulator sees it
-/// from the side of `outward` (its corners must turn clockwise when viewed from there).
-std::vector<Eigen::Vector3d> orient(std::vector<Eigen::Vector3d> c, const Eigen::Vector3d& outward) {
-  const Eigen::Vector3d n_in = (c[1] - c[0]).cross(c[2] - c[1]);
-  if (n_in.dot(outward) > 0) std::swap(c[1], c[3]);
-  return c;
-}
-
-/// Orthonormal frame of a box face: z into the body, y = -up, x = y x z (the tag convention).
-Eigen::Matrix3d faceFrame(const Eigen::Vector3d& n, const Eigen::Vector3d& up) {
-  Eigen::Matrix3d R;
-  const Eigen::Vector3d z = -n, y = -up, x = y.cross(z);
-  R.col(0) = x;
-  R.col(1) = y;
-  R.col(2) = z;
-  return R;
-}
-
 constexpr int kNoiseTable = 1 << 18;
 constexpr double kNearPlane = 0.01;  ///< m: faces with a corner closer than this are not drawn
 constexpr int kCylinderSides = 16;
 constexpr double kDepthNear = 1e-4;  ///< m: surfaces nearer than this are clipped from the depth
 constexpr double kTagBorderMargin = 2.0;  ///< px, tagInView: beyond two cells of the tag
+
+/// The faces the image shows: a box's six, a mesh's triangles, a cylinder as a 16-sided prism
+/// whose sides' middles touch the cylinder and face +-x and +-y (vertices half a side off the
+/// axes), so that a tag on a +-x / +-y face lies flat 0.5 mm in front of a side (with a vertex
+/// on the axis, the edge there poked through the tag and drew a seam across it; close up the
+/// detector lost the tag).
+std::shared_ptr<const TriangleMesh> imageSurface(const BodyConfig& b) {
+  switch (b.shape) {
+    case ShapeType::Box: return std::make_shared<const TriangleMesh>(boxSurface(b.size));
+    case ShapeType::Cylinder:
+      return std::make_shared<const TriangleMesh>(
+          cylinderSurface(b.size.x() / std::cos(M_PI / kCylinderSides), b.size.y(), kCylinderSides));
+    case ShapeType::Mesh: return b.mesh;
+  }
+  return nullptr;
+}
 }  // namespace
 
 vpImage<unsigned char> makeTagTexture(int id, int pixels_per_cell) {
@@ -104,13 +102,14 @@ struct SimulatedCamera::Impl {
     Eigen::Vector3d outward = Eigen::Vector3d::Zero();  ///< its printed side's normal (body frame)
   };
   std::vector<Tag> tags;
-  /// A mesh body's triangles and their grey levels (shade and light, as the quads).
-  struct MeshBody {
+  /// A body's faces as triangles and their grey levels (its shade, lit).
+  struct FlatBody {
     int body = 0;
     std::shared_ptr<const TriangleMesh> mesh;
     std::vector<unsigned char> shade;
+    bool cull = false;  ///< closed and wound outwards (boxes, cylinders): faces turned away are hidden
   };
-  std::vector<MeshBody> meshes;
+  std::vector<FlatBody> bodies;
   int background = 110;
   vpMatrix zbuffer;
   std::vector<signed char> noise;
@@ -144,7 +143,11 @@ SimulatedCamera::SimulatedCamera(const ehc_control::PinholeCamera& intrinsics,
 SimulatedCamera::~SimulatedCamera() = default;
 SimulatedCamera::SimulatedCamera(SimulatedCamera&&) noexcept = default;
 
-int SimulatedCamera::faceCount() const { return static_cast<int>(impl_->quads.size()); }
+int SimulatedCamera::faceCount() const {
+  std::size_t n = impl_->quads.size();
+  for (const auto& b : impl_->bodies) n += b.mesh->triangles.size();
+  return static_cast<int>(n);
+}
 
 void SimulatedCamera::reseed(unsigned seed) {
   rng_.seed(seed);
@@ -161,7 +164,7 @@ void SimulatedCamera::setScene(const std::vector<BodyConfig>& bodies, int floor_
   Impl& m = *impl_;
   m.quads.clear();
   m.tags.clear();
-  m.meshes.clear();
+  m.bodies.clear();
   m.background = cfg_.background >= 0 ? cfg_.background : floor_shade;
   const Eigen::Vector3d light = Eigen::Vector3d(0.3, -0.2, 1.0).normalized();
   // A textured quad; corners clockwise seen from outside, as vpImageSimulator expects.
@@ -179,70 +182,17 @@ void SimulatedCamera::setScene(const std::vector<BodyConfig>& bodies, int floor_
                                          : vpImageSimulator::SIMPLE);
     m.quads.push_back(std::move(q));
   };
-  auto addQuad = [&](int body, const vpImage<unsigned char>& tex, std::vector<Eigen::Vector3d> c,
-                     const Eigen::Vector3d& outward, bool bilinear) {
-    pushQuad(body, tex, orient(std::move(c), outward), bilinear);
-  };
-  auto flat = [&](int shade, const Eigen::Vector3d& n) {
-    const double k = 0.6 + 0.4 * std::max(0.0, n.dot(light));
-    vpImage<unsigned char> t(4, 4, static_cast<unsigned char>(std::clamp(shade * k, 0.0, 255.0)));
-    return t;
-  };
 
   for (std::size_t bi = 0; bi < bodies.size(); ++bi) {
     const BodyConfig& b = bodies[bi];
     const int body = static_cast<int>(bi);
-    const Eigen::Vector3d he = b.halfExtents();
-    if (b.shape == ShapeType::Box) {
-      for (int axis = 0; axis < 3; ++axis)
-        for (int sign : {1, -1}) {
-          Eigen::Vector3d n = Eigen::Vector3d::Zero();
-          n[axis] = sign;
-          const Eigen::Vector3d up = axis == 2 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitZ();
-          const Eigen::Matrix3d R = faceFrame(n, up);
-          const double a = R.col(0).cwiseAbs().dot(he), h = R.col(1).cwiseAbs().dot(he);
-          const Eigen::Vector3d c0 = n.cwiseProduct(he);
-          addQuad(body, flat(b.shade, n),
-                  {c0 - a * R.col(0) - h * R.col(1), c0 + a * R.col(0) - h * R.col(1),
-                   c0 + a * R.col(0) + h * R.col(1), c0 - a * R.col(0) + h * R.col(1)},
-                  n, false);
-        }
-    } else if (b.shape == ShapeType::Mesh) {
-      // Drawn by rasterTriangle in render(), flat-shaded like the quads.
-      Impl::MeshBody mb{body, b.mesh, {}};
-      for (std::size_t t = 0; t < b.mesh->triangles.size(); ++t) {
-        const Eigen::Vector3d n = b.mesh->normal(t);
-        mb.shade.push_back(static_cast<unsigned char>(std::clamp(b.shade * (0.6 + 0.4 * std::max(0.0, n.dot(light))), 0.0, 255.0)));
-      }
-      m.meshes.push_back(std::move(mb));
-    } else {
-      const double r = he.x() / std::cos(M_PI / kCylinderSides), hz = he.z();
-      std::vector<Eigen::Vector3d> ring;
-      // Vertices half a side off the axes, so that a side's middle faces +-x and +-y: a tag on
-      // a +-x / +-y face then lies flat 0.5 mm in front of a side. (With a vertex on the axis,
-      // the edge there poked 0.1 mm through the tag and drew a seam across it; close up the
-      // detector lost the tag.)
-      for (int k = 0; k < kCylinderSides; ++k) {
-        const double t = 2.0 * M_PI * (k + 0.5) / kCylinderSides;
-        ring.emplace_back(r * std::cos(t), r * std::sin(t), 0.0);
-      }
-      for (int k = 0; k < kCylinderSides; ++k) {
-        const Eigen::Vector3d p0 = ring[static_cast<std::size_t>(k)];
-        const Eigen::Vector3d p1 = ring[static_cast<std::size_t>((k + 1) % kCylinderSides)];
-        const Eigen::Vector3d n = (p0 + p1).normalized();
-        const Eigen::Vector3d zt(0, 0, hz);
-        addQuad(body, flat(b.shade, n), {p0 + zt, p1 + zt, p1 - zt, p0 - zt}, n, false);
-      }
-      for (int sign : {1, -1}) {
-        const Eigen::Vector3d n(0, 0, sign), zt(0, 0, sign * hz);
-        for (int k = 1; k + 2 <= kCylinderSides; k += 2)
-          addQuad(body, flat(b.shade, n),
-                  {ring[0] + zt, ring[static_cast<std::size_t>(k)] + zt,
-                   ring[static_cast<std::size_t>(k + 1)] + zt,
-                   ring[static_cast<std::size_t>((k + 2) % kCylinderSides)] + zt},
-                  n, false);
-      }
+    // The faces: flat-shaded triangles (light from above), drawn by rasterTriangle in render().
+    Impl::FlatBody fb{body, imageSurface(b), {}, b.shape != ShapeType::Mesh};
+    for (std::size_t t = 0; t < fb.mesh->triangles.size(); ++t) {
+      const Eigen::Vector3d n = fb.mesh->normal(t);
+      fb.shade.push_back(static_cast<unsigned char>(std::clamp(b.shade * (0.6 + 0.4 * std::max(0.0, n.dot(light))), 0.0, 255.0)));
     }
+    m.bodies.push_back(std::move(fb));
     if (b.tag.enabled) {
       const Eigen::Isometry3d T = tagPoseInBody(b);  // x right, y up, z out of the face
       const vpImage<unsigned char> tex = makeTagTexture(b.tag.id, cfg_.tag_pixels_per_cell);
@@ -290,7 +240,7 @@ void SimulatedCamera::render(const Eigen::Isometry3d& T_world_cam,
     q->sim.setCameraPosition(toVisp(T_cam_body));
     q->sim.getImage(*image, m.cam, m.zbuffer);
   }
-  drawMeshes(T_cam_world, poses, image);
+  drawFaces(T_cam_world, poses, image);
   if (cfg_.image_noise > 0.0) {
     int k = noiseOffset();
     unsigned char* px = image->bitmap;
@@ -303,13 +253,13 @@ void SimulatedCamera::render(const Eigen::Isometry3d& T_world_cam,
   }
 }
 
-void SimulatedCamera::drawMeshes(const Eigen::Isometry3d& T_cam_world, const std::vector<Eigen::Isometry3d>& poses,
+void SimulatedCamera::drawFaces(const Eigen::Isometry3d& T_cam_world, const std::vector<Eigen::Isometry3d>& poses,
                                   vpImage<unsigned char>* image) {
   Impl& m = *impl_;
   const RasterGrid g{intrinsics_.width, intrinsics_.height, intrinsics_.fx, intrinsics_.fy, intrinsics_.cx, intrinsics_.cy};
   double* zb = m.zbuffer.data;  // camera z as vpImageSimulator writes it; < 0: empty
   std::vector<Eigen::Vector3d> v;
-  for (const Impl::MeshBody& mb : m.meshes) {
+  for (const Impl::FlatBody& mb : m.bodies) {
     if (mb.body >= static_cast<int>(poses.size())) fail("render: fewer poses than bodies");
     const Eigen::Isometry3d T = T_cam_world * poses[static_cast<std::size_t>(mb.body)];
     v.resize(mb.mesh->vertices.size());
@@ -317,8 +267,11 @@ void SimulatedCamera::drawMeshes(const Eigen::Isometry3d& T_cam_world, const std
     for (std::size_t t = 0; t < mb.mesh->triangles.size(); ++t) {
       const Eigen::Vector3i& tri = mb.mesh->triangles[t];
       const unsigned char shade = mb.shade[t];
-      rasterTriangle(g, v[static_cast<std::size_t>(tri[0])], v[static_cast<std::size_t>(tri[1])],
-                     v[static_cast<std::size_t>(tri[2])], kNearPlane, [&](int c, int r, double z) {
+      const Eigen::Vector3d& a = v[static_cast<std::size_t>(tri[0])];
+      const Eigen::Vector3d& b = v[static_cast<std::size_t>(tri[1])];
+      const Eigen::Vector3d& c3 = v[static_cast<std::size_t>(tri[2])];
+      if (mb.cull && (b - a).cross(c3 - a).dot(a) >= 0.0) continue;
+      rasterTriangle(g, a, b, c3, kNearPlane, [&](int c, int r, double z) {
                        const std::size_t i = static_cast<std::size_t>(r) * static_cast<std::size_t>(g.width) +
                                              static_cast<std::size_t>(c);
                        if (zb[i] >= 0.0 && z >= zb[i]) return;
