@@ -3,6 +3,7 @@
 #   make test   - every gtest + rostest, closing line "N passed, N failed"
 #   make bench  - benchmarks, one JSON object per line
 #   make experiments - paper Exp-1..3 in-process -> results/experiments/REPORT.md
+#   make validate - Exp-1 reaching on a fresh random seed, every robot x generator x method -> results/validate
 #   make results - docs/RESULTS.md from the result folders under results/ (missing ones: "not run")
 SHELL := /bin/bash
 .SHELLFLAGS := -eo pipefail -c
@@ -12,7 +13,7 @@ JOBS ?= 2
 CATKIN := catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCMAKE_BUILD_TYPE=Release -j$(JOBS)
 
 .PHONY: all deps build demo test bench experiments clean
-.PHONY: results
+.PHONY: results validate
 
 all: build
 
@@ -34,6 +35,11 @@ bench: build
 
 experiments: build
 	ROBOT="$(ROBOT)" src/ehc_bringup/scripts/experiments.sh
+
+# SEED=123: rerun a validation; default a fresh random seed (printed first).
+validate: build
+	/usr/bin/python3 src/ehc_bringup/scripts/validate.py --out "$(or $(OUT),results/validate)" --jobs $(JOBS) \
+	  --sets $(or $(VALIDATE_SETS),4) --points $(or $(VALIDATE_POINTS),50) $(if $(SEED),--seed $(SEED))
 
 clean:
 	rm -rf build devel install

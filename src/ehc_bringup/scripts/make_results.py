@@ -55,6 +55,11 @@ BENCH_BARS = {
     "perception.obstacle_distances_2cm": ("median_us", "<=", 1000.0, "<= 1 ms per cycle"),
     "perception.tag_detect_pose_640x480": ("mean_us", "<=", 1e6 / 30.0, ">= 30 Hz"),
     "perception.grasps_object_20k": ("median_us", "<=", 100000.0, "<= 100 ms"),
+    "perception.obstacle_node_rate_640x480": ("max_gap_ms", "<=", 100.0, "gaps <= 0.1 s"),
+    "perception.obstacle_node_rate_1920x1080": ("max_gap_ms", "<=", 100.0, "gaps <= 0.1 s"),
+    "perception.obstacle_cloud_2M": ("median_us", "<=", 20000.0, "<= 20 ms (one 50 Hz cycle)"),
+    "perception.grasp_cloud_2M": ("median_us", "<=", 500000.0, "<= 0.5 s (one 2 Hz cycle)"),
+    "perception.grasp_cloud_2M_blob": ("median_us", "<=", 500000.0, "<= 0.5 s (one 2 Hz cycle)"),
 }
 
 

@@ -20,6 +20,16 @@ Result run(const std::string& args) {
   while (fgets(buf.data(), buf.size(), p)) out += buf.data();
   return {WEXITSTATUS(pclose(p)), out};
 }
+/// The whole text of a file ("" if it cannot be read).
+std::string readText(const std::string& path) {
+  FILE* f = std::fopen(path.c_str(), "r");
+  if (!f) return "";
+  std::string text;
+  std::array<char, 4096> buf{};
+  while (std::fgets(buf.data(), buf.size(), f)) text += buf.data();
+  std::fclose(f);
+  return text;
+}
 }  // namespace
 
 TEST(ExperimentCli, UnparsableValuesAreStartUpErrorsNamingTheFlag) {
@@ -45,14 +55,29 @@ TEST(ExperimentCli, ReachTakesTheProtocolAndTheBaseModel) {
                            "/robots/realman_rm65_water2/robot.yaml --method neo_e --sets 1 --points 1 --out " + out + " ";
   const Result reset = run(base + "--protocol reset --base-model water2");
   ASSERT_EQ(reset.code, 0) << reset.out;
-  FILE* f = std::fopen((out + "/table.md").c_str(), "r");
-  ASSERT_NE(f, nullptr);
-  std::string table;
-  std::array<char, 4096> buf{};
-  while (std::fgets(buf.data(), buf.size(), f)) table += buf.data();
-  std::fclose(f);
+  const std::string table = readText(out + "/table.md");
+  ASSERT_FALSE(table.empty());
   EXPECT_NE(table.find("protocol reset"), std::string::npos) << table;
   const Result bad = run(base + "--protocol random");
   EXPECT_EQ(bad.code, 2);
   EXPECT_NE(bad.out.find("--protocol:"), std::string::npos) << bad.out;
+}
+
+TEST(ExperimentCli, ReachTakesTheTargetGeneratorAndItsFields) {
+  const std::string out = "/tmp/ehc_cli_exp_generator";
+  const std::string base = std::string("reach --robot ") + EHC_CONFIG_DIR +
+                           "/robots/realman_rm65_water2/robot.yaml --method neo_e --sets 1 --points 1 --out " + out + " ";
+  const Result any = run(base + "--generator any --max-distance 2.5");
+  ASSERT_EQ(any.code, 0) << any.out;
+  const std::string table = readText(out + "/table.md");
+  ASSERT_FALSE(table.empty());
+  // The table names the distribution it was measured on, with the overridden field.
+  EXPECT_NE(table.find("targets 0-2.5 m apart"), std::string::npos) << table;
+  EXPECT_NE(table.find("tilt sphere up to 180 deg"), std::string::npos) << table;
+  const Result unknown = run(base + "--generator everywhere");
+  EXPECT_EQ(unknown.code, 2);
+  EXPECT_NE(unknown.out.find("--generator"), std::string::npos) << unknown.out;
+  const Result bad = run(base + "--min-distance 3 --max-distance 2");
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.out.find("min_distance"), std::string::npos) << bad.out;
 }

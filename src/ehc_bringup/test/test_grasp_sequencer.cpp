@@ -6,7 +6,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <random>
 #include <fstream>
 
 using ehc_common::ConfigNode;
@@ -274,7 +277,7 @@ TEST(GraspSequencer, ThePreGraspSwitchWaitsForTheTcpOnTheApproachAxis) {
 
 TEST(GraspSequencer, PerceptionMovesTheGoalUntilTheLock) {
   GraspSequencerParams p = twoObjects();
-  p.pose_filter_gain = 1.0;  // no filter: the goal follows each pose
+  p.pose_filter.gain = 1.0;  // no filter: the goal follows each pose
   Harness h(p);
   h.follow = false;
   h.seq.setObjectPose(0, h.t, forwardTarget());
@@ -296,7 +299,7 @@ TEST(GraspSequencer, PerceptionMovesTheGoalUntilTheLock) {
 
 TEST(GraspSequencer, PoseFilterSmoothsPerception) {
   GraspSequencerParams p = twoObjects();
-  p.pose_filter_gain = 0.5;
+  p.pose_filter.gain = 0.5;
   GraspSequencer s(p);
   s.setObjectPose(0, 1.0, forwardTarget(1.5, 0.0));
   s.setObjectPose(0, 1.1, forwardTarget(1.5, 0.1));
@@ -305,6 +308,64 @@ TEST(GraspSequencer, PoseFilterSmoothsPerception) {
   const SequencerOutput out = s.update(in);
   ASSERT_TRUE(out.object_pose);
   EXPECT_NEAR(out.object_pose->translation().y(), 0.05, 1e-9);
+}
+
+TEST(GraspSequencer, ASingleFarPerceptionGlitchDoesNotMoveTheGoal) {
+  // The tag node sees the object every cycle; one observation 5 m off (a perception glitch):
+  // the goal stays (within 1 mm), the glitch is counted and reported.
+  Harness h(twoObjects());
+  h.follow = false;
+  h.perceive = forwardTarget();
+  h.run(0.5);
+  ASSERT_EQ(h.seq.phase(), GraspPhase::Approach);
+  const Eigen::Isometry3d before = *h.last_goal;
+  h.seq.setObjectPose(0, h.t, forwardTarget(6.5, 0.0));
+  h.step();
+  EXPECT_LT((h.last_goal->translation() - before.translation()).norm(), 1e-3);
+  h.run(0.2);
+  EXPECT_LT((h.last_goal->translation() - before.translation()).norm(), 1e-3);
+  EXPECT_EQ(h.seq.poseOutliers(), 1);
+  EXPECT_TRUE(hasEvent(h.events, "a: 1 perceived pose(s) far from the object ignored")) << "reported";
+  EXPECT_EQ(h.seq.phase(), GraspPhase::Approach);
+  // Two glitches in a row (fewer than jump_confirmations), far from each other too: still ignored.
+  h.seq.setObjectPose(0, h.t, forwardTarget(6.5, 0.0));
+  h.step();
+  h.seq.setObjectPose(0, h.t, forwardTarget(1.5, -4.0));
+  h.step();
+  h.run(0.1);
+  EXPECT_LT((h.last_goal->translation() - before.translation()).norm(), 1e-3);
+  EXPECT_EQ(h.seq.poseOutliers(), 3);
+}
+
+TEST(GraspSequencer, AnObjectThatReallyMovedIsFollowedAfterConfirmations) {
+  // The object is moved 0.5 m to the side and seen there from then on: the goal stays for the
+  // first jump_confirmations - 1 observations, then follows the object.
+  GraspSequencerParams p = twoObjects();
+  Harness h(p);
+  h.follow = false;
+  h.perceive = forwardTarget();
+  h.run(0.5);
+  ASSERT_EQ(h.seq.phase(), GraspPhase::Approach);
+  const Eigen::Isometry3d before = *h.last_goal;
+  h.perceive = forwardTarget(1.5, 0.5);
+  for (int k = 1; k < p.pose_filter.jump_confirmations; ++k) {
+    h.step();
+    EXPECT_LT((h.last_goal->translation() - before.translation()).norm(), 1e-3) << "observation " << k;
+  }
+  h.step();
+  EXPECT_NEAR(h.last_goal->translation().y(), before.translation().y() + 0.5, 1e-6) << "followed";
+  EXPECT_TRUE(hasEvent(h.events, "a: perceived pose moved 0.500 m, confirmed by 3 observations in a row"));
+  EXPECT_EQ(h.seq.poseOutliers(), 0);
+  EXPECT_EQ(h.seq.phase(), GraspPhase::Approach) << "perception stayed fresh";
+  // One confirmation: every jump at once (no rejection).
+  p.pose_filter.jump_confirmations = 1;
+  Harness once(p);
+  once.follow = false;
+  once.perceive = forwardTarget();
+  once.run(0.5);
+  once.perceive = forwardTarget(1.5, 0.5);
+  once.step();
+  EXPECT_NEAR(once.last_goal->translation().y(), before.translation().y() + 0.5, 1e-6);
 }
 
 TEST(GraspSequencer, AStallNearTheGraspClosesThereAndAFarStallWaits) {
@@ -893,8 +954,17 @@ TEST(GraspSequencerParams, ValidationNamesTheField) {
   p.object_time_limit = -1.0;
   expectInvalid([&] { p.validate(); }, "object_time_limit");
   p = twoObjects();
-  p.pose_filter_gain = 0.0;
+  p.pose_filter.gain = 0.0;
   EXPECT_THROW(GraspSequencer{p}, std::invalid_argument);
+  p = twoObjects();
+  p.pose_filter.jump_distance = std::nan("");
+  expectInvalid([&] { p.validate(); }, "pose_jump_distance");
+  p = twoObjects();
+  p.pose_filter.jump_angle_deg = 0.0;
+  expectInvalid([&] { p.validate(); }, "pose_jump_angle_deg");
+  p = twoObjects();
+  p.pose_filter.jump_confirmations = 0;
+  expectInvalid([&] { p.validate(); }, "pose_jump_confirmations");
   p = twoObjects();
   p.selection.max_angle_deg = std::nan("");
   EXPECT_THROW(p.validate(), std::invalid_argument);
@@ -937,6 +1007,16 @@ TEST(GraspSequencerParams, LoadsYamlAndNamesFileAndField) {
   expectError("sequencer: {lift_height: .nan}\nobjects: [{name: a}]\n", "lift_height");
   expectError("sequencer: {lift_height: -0.1}\nobjects: [{name: a}]\n", "lift_height");
   expectError("sequencer: {}\n", "objects");
+  expectError("sequencer: {pose_jump_distance: 0}\nobjects: [{name: a}]\n", "pose_jump_distance");
+  expectError("sequencer: {pose_jump_confirmations: 1.5}\nobjects: [{name: a}]\n", "pose_jump_confirmations");
+  expectError("sequencer: {pose_filter_gain: 2}\nobjects: [{name: a}]\n", "pose_filter_gain");
+  const auto jumps = loadGraspSequencerParams(ConfigNode::loadString(
+      "sequencer: {pose_filter_gain: 0.5, pose_jump_distance: 0.2, pose_jump_angle_deg: 30, "
+      "pose_jump_confirmations: 4}\nobjects: [{name: a}]\n", "seq.yaml", "GraspSequencerNode"));
+  EXPECT_EQ(jumps.pose_filter.gain, 0.5);
+  EXPECT_EQ(jumps.pose_filter.jump_distance, 0.2);
+  EXPECT_EQ(jumps.pose_filter.jump_angle_deg, 30.0);
+  EXPECT_EQ(jumps.pose_filter.jump_confirmations, 4);
   // Misspelled keys: the node calls rejectUnknownKeys() after its own and this loader.
   const auto typo = ConfigNode::loadString(
       "sequencer: {lift_hieght: 0.1, selection: {max_angel_deg: 20}}\nobjects: [{name: a, aproach: downward}]\n",
@@ -1269,4 +1349,82 @@ TEST(GraspSelection, SideGraspsKeepTheWristCameraAboveTheTcp) {
   const Eigen::Isometry3d g = ehc_bringup::turnedTagGrasp(tag, Eigen::Vector3d(1, 0, 0), 0.0);
   EXPECT_GT(g.linear().col(0).z(), 0.99);
   EXPECT_NEAR(g.linear().determinant(), 1.0, 1e-9);
+}
+
+// ---------------------------------------------------------------- target pose filter
+
+TEST(TargetPoseFilter, RandomGlitchesNeverMoveThePoseAndRealMovesAreFollowed) {
+  // A random track of a perceived object (seed printed): noisy observations (3 mm, 1 deg) of a
+  // pose that now and then really moves (0.15-2 m and/or 50-180 deg), with single glitches
+  // (1-10 m off, or turned 90-180 deg) at random. The filtered pose is always near a pose the
+  // object really had since it was last seen jump_confirmations times in a row (never near a
+  // glitch), and after jump_confirmations observations in a row of the object where it is, it
+  // is near that pose. Random parameters too.
+  const unsigned seed = 424242;
+  std::printf("seed %u\n", seed);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::normal_distribution<double> n(0.0, 1.0);
+  auto randomRotation = [&] {
+    return Eigen::Quaterniond(n(rng), n(rng), n(rng), n(rng)).normalized().toRotationMatrix();
+  };
+  auto turned = [&](const Eigen::Matrix3d& R, double lo_deg, double hi_deg) {
+    const Eigen::Vector3d axis = Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized();
+    return Eigen::Matrix3d(Eigen::AngleAxisd((lo_deg + (hi_deg - lo_deg) * u(rng)) * M_PI / 180.0, axis) * R);
+  };
+  auto offset = [&](double lo, double hi) {
+    return Eigen::Vector3d(Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized() * (lo + (hi - lo) * u(rng)));
+  };
+  long glitches = 0, moves = 0;
+  for (int run = 0; run < 20; ++run) {
+    TargetPoseFilterParams p;
+    p.gain = 0.2 + 0.8 * u(rng);
+    p.jump_confirmations = 2 + static_cast<int>(4 * u(rng));
+    TargetPoseFilter f(p);
+    const double tol = 0.02, tol_deg = 5.0;  // noise 3 mm / 1 deg; moves and glitches far beyond the gates
+    Eigen::Isometry3d truth = Eigen::Isometry3d::Identity();
+    truth.linear() = randomRotation();
+    truth.translation() = offset(0.5, 2.0);
+    std::vector<Eigen::Isometry3d> recent{truth};  // where it was since last seen enough in a row
+    int in_a_row = 0;  // observations of the true pose since the last move, without a glitch between
+    for (int k = 0; k < 300; ++k) {
+      SCOPED_TRACE("run " + std::to_string(run) + " observation " + std::to_string(k));
+      Eigen::Isometry3d obs;
+      const double r = u(rng);
+      if (k > 0 && r < 0.05) {  // a real move
+        if (u(rng) < 0.7) truth.translation() += offset(0.15, 2.0);
+        if (u(rng) < 0.5) truth.linear() = turned(truth.linear(), 50.0, 180.0);
+        in_a_row = 0;
+        recent.push_back(truth);
+        ++moves;
+      }
+      const bool glitch = k > 0 && r >= 0.05 && r < 0.15;
+      if (glitch) {
+        obs = truth;
+        if (u(rng) < 0.6) obs.translation() += offset(1.0, 10.0);
+        else obs.linear() = turned(truth.linear(), 90.0, 180.0);
+        in_a_row = 0;
+        ++glitches;
+      } else {
+        obs = truth;
+        obs.translation() += 0.003 * Eigen::Vector3d(n(rng), n(rng), n(rng));
+        obs.linear() = turned(truth.linear(), 0.0, 1.0);
+        ++in_a_row;
+      }
+      f.add(obs);
+      ASSERT_TRUE(f.pose());
+      auto near = [&](const Eigen::Isometry3d& a) {
+        return (f.pose()->translation() - a.translation()).norm() < tol &&
+               ehc_control::rotationAngle(f.pose()->linear(), a.linear()) < tol_deg * M_PI / 180.0;
+      };
+      ASSERT_TRUE(std::any_of(recent.begin(), recent.end(), near)) << "the pose is not one the object had";
+      if (in_a_row >= p.jump_confirmations) {
+        ASSERT_TRUE(near(truth)) << in_a_row << " in a row of the object where it is";
+        recent = {truth};
+      }
+    }
+  }
+  std::printf("%ld glitches, %ld moves\n", glitches, moves);
+  EXPECT_GT(glitches, 300);
+  EXPECT_GT(moves, 200);
 }

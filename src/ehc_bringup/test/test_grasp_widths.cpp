@@ -11,6 +11,7 @@
 #include "ehc_bringup/grasp_experiment.h"
 #include "ehc_control/pinhole_camera.h"
 #include "ehc_control/robot_config.h"
+#include "ehc_perception/point_cloud_layout.h"
 #include "ehc_perception/tag_detector.h"
 #include "ehc_sim/sim_world.h"
 #include "ehc_sim/simulated_camera.h"
@@ -151,10 +152,9 @@ PerceptionOutcome perceive(Shape shape, double width) {
       ehc_sim::SimulatedCamera camera(intrinsics, cfg.sim.camera, seed);
       std::vector<Eigen::Vector3f> cam_points;
       camera.cloud(world, T_world_cam, &cam_points);
-      ehc_perception::PointList points;
-      for (const auto& p : cam_points) points.push_back(T_world_cam.cast<float>() * p);
+      const ehc_perception::PointList points = ehc_perception::transformPoints(cam_points, T_world_cam);
       const ehc_perception::GraspResult res = ehc_perception::generateForTarget(
-          generator, points, eye, &centre, cfg.targeting.target_gate);
+          generator, points, eye, &centre, cfg.targeting);
       ++out.clouds;
       bool spans = false;
       double best_w = 0.0;

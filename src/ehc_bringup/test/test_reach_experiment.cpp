@@ -134,6 +134,7 @@ TEST(ReachExperiment, NoJointLimitTrapsBackToBackEveryMethod) {
   ehc_control::QpControllerParams before = s.ctrl;
   before.base_turn_unwinding = false;
   before.limit_centring_gain = 0.0;
+  before.recovery.enabled = false;  // the stall recovery would rescue these targets too
   std::vector<ReachTrial> trials_before;
   const ReachSummary b = runSet0(s, before, ehc_control::ControlMode::NeoC, sets, &trials_before);
   EXPECT_GE(b.failed, 2);
@@ -160,6 +161,7 @@ TEST(ReachExperiment, WristFlipRemovesTheForearmRollTrapBackToBack) {
   const auto sets = experimentSet0(s, 47);
   ehc_control::QpControllerParams no_flip = s.ctrl;
   no_flip.wrist_flip.margin = 0.0;
+  no_flip.recovery.enabled = false;  // the stall recovery would rescue this target too
   std::vector<ReachTrial> trials_before;
   const ReachSummary b = runSet0(s, no_flip, ehc_control::ControlMode::Ehc, sets, &trials_before);
   ASSERT_EQ(trials_before.size(), 47u);
@@ -216,4 +218,38 @@ TEST(ReachExperiment, RunsOnTheSevenDofTestArm) {
   EXPECT_GT(r.min_joint_limit_margin, 0.0);
   EXPECT_LE(r.failed, 2);
   expectCausesAccountedFor(r, trials);
+}
+
+// Joint-limit stalls and their recovery (ReachRecovery). Two targets approached from the side
+// (the `any` generator): from the ready pose without recovery, the QP pins the wrist bend
+// (joint5) or the forearm roll (joint4) and settles a few cm short for good; with the recovery,
+// whole-body IK finds a configuration with wide joint margins and the robot reaches the target.
+TEST(ReachExperiment, AJointLimitStallIsRecoveredThroughWholeBodyIk) {
+  ExpSetup s = makeSetup(1);
+  auto pose = [](double x, double y, double z, double qx, double qy, double qz, double qw) {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = Eigen::Quaterniond(qw, qx, qy, qz).normalized().toRotationMatrix();
+    T.translation() << x, y, z;
+    return T;
+  };
+  s.sets = {{pose(-0.01073739308, -0.2371418818, 0.698047065, -0.2357319204, -0.4545359977, 0.8384985393, 0.1864073179)},
+            {pose(-1.71836345, 0.28998997, 0.5336868357, -0.7470270042, -0.04410559814, -0.3843337259, 0.5406412289)}};
+  s.params.noise.enabled = false;
+  for (const bool recovery : {false, true}) {
+    s.ctrl.recovery.enabled = recovery;
+    std::vector<ReachTrial> trials;
+    const ReachSummary sum = run(s, ehc_control::ControlMode::Ehc, &trials);
+    ASSERT_EQ(trials.size(), 2u);
+    for (const ReachTrial& t : trials) {
+      if (recovery) {
+        EXPECT_TRUE(t.reached) << "set " << t.set << ": " << toString(t.failure) << " " << t.failure_joint << ", "
+                               << t.final_position_error << " m short";
+        EXPECT_GT(t.min_joint_limit_margin, 0.0);
+      } else {
+        EXPECT_FALSE(t.reached) << "set " << t.set << " (the stall this test is about no longer occurs)";
+        EXPECT_EQ(t.failure, ReachFailure::JointLimit) << "set " << t.set;
+      }
+    }
+    EXPECT_EQ(sum.qp_failures, 0);
+  }
 }

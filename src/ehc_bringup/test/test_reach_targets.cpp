@@ -37,6 +37,51 @@ TEST(ReachTargets, GeneratorFollowsTheProtocolAndIsSeeded) {
   EXPECT_FALSE(a[0].isApprox(c[0]));
 }
 
+TEST(ReachTargets, AnyPresetApproachesFromEverySideAndDistance) {
+  const ReachTargetGenerator g = ReachTargetGenerator::preset("any");
+  const auto a = g.generate(4000, 21);
+  Eigen::Vector2d prev = Eigen::Vector2d::Zero();
+  int below_horizontal = 0, against_travel = 0, near = 0, far = 0;
+  Eigen::Vector3d mean_axis = Eigen::Vector3d::Zero();
+  for (const Eigen::Isometry3d& t : a) {
+    const Eigen::Vector2d xy = t.translation().head<2>();
+    const double d = (xy - prev).norm();
+    EXPECT_LE(d, 7.0 + 1e-9);
+    near += d < 1.0;
+    far += d > 6.0;
+    const Eigen::Vector3d axis = t.linear().col(2);
+    mean_axis += axis;
+    below_horizontal += axis.z() > 0.1;  // approached from below
+    if (axis.head<2>().norm() > 0.3 && d > 1e-3) against_travel += axis.head<2>().normalized().dot((xy - prev) / d) < -0.7;
+    prev = xy;
+  }
+  // Uniform over the sphere: as many approach axes point up as down, every azimuth relative to
+  // the travel direction occurs, and the distances cover [0, 7] m.
+  EXPECT_LT((mean_axis / a.size()).norm(), 0.05);
+  EXPECT_GT(below_horizontal, 1600);
+  EXPECT_GT(against_travel, 300);
+  EXPECT_GT(near, 300);
+  EXPECT_GT(far, 300);
+}
+
+TEST(ReachTargets, PaperPresetIsTheDefaultAndUnknownPresetsAreErrors) {
+  const auto p = ReachTargetGenerator::preset("paper");
+  const ReachTargetGenerator d;
+  EXPECT_EQ(p.summary(), d.summary());
+  const auto a = p.generate(20, 5), b = d.generate(20, 5);
+  for (std::size_t i = 0; i < a.size(); ++i) EXPECT_TRUE(a[i].isApprox(b[i]));
+  try {
+    ReachTargetGenerator::preset("everywhere");
+    FAIL() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("[ReachTargetGenerator] unknown generator 'everywhere'"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(tiltSamplingFromString("cone"), std::invalid_argument);
+  ReachTargetGenerator bad = d;
+  bad.max_tilt_deg = 190.0;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+}
+
 TEST(ReachTargets, CsvRoundTrip) {
   const auto t = ReachTargetGenerator{}.generate(20, 3);
   writeReachTargetsCsv("/tmp/ehc_targets.csv", t);

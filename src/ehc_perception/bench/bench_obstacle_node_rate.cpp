@@ -1,11 +1,15 @@
-// bench_obstacle_node_rate: the rate of /ehc/obstacles under a full D435 depth stream
-// (docs/DESIGN.md, performance bars). A ROS node that plays the camera and the robot for a running ehc_obstacle_node
-// (bench/obstacle_node_rate.sh starts master, node and this): organised 640x480 XYZ+RGB clouds
-// (4.9 MB each: a wall 2 m ahead, a table edge 1.2 m ahead in the lower part, 10 % invalid
+// bench_obstacle_node_rate: the rate of /ehc/obstacles under a depth stream (docs/DESIGN.md,
+// performance bars). A ROS node that plays the camera and the robot for a running
+// ehc_obstacle_node (bench/obstacle_node_rate.sh starts master, node and this): organised
+// `width` x `height` XYZ+RGB clouds (640x480: 4.9 MB each, a full D435 frame; 1920x1080: 2 M
+// points, 33 MB; a wall 2 m ahead, a table edge 1.2 m ahead in the lower part, 10 % invalid
 // pixels as NaN) at `cloud_hz`, /joint_states and /odom at 100 Hz, a static tf odom -> camera.
-// After `warmup` s it counts /ehc/obstacles for `seconds` s and prints both rates and the
-// largest gap. Wall-clock figures: noisy on a shared machine.
+// After `warmup` s it counts /ehc/obstacles for `seconds` s and prints one JSON line
+// (perception.obstacle_node_rate_<width>x<height>): both rates and the largest gap. Wall-clock
+// figures: noisy on a shared machine.
 //   rosrun ehc_perception bench_obstacle_node_rate [_cloud_hz:=30] [_seconds:=20] [_warmup:=5]
+//       [_width:=640] [_height:=480]
+#include "ehc_common/bench_util.h"
 #include "ehc_msgs/ObstacleArray.h"
 
 #include <geometry_msgs/TransformStamped.h>
@@ -17,16 +21,14 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <cstring>
 #include <random>
 #include <vector>
 
 namespace {
 
-sensor_msgs::PointCloud2 d435Cloud(const std::string& frame) {
-  const int w = 640, h = 480;
-  const float f = 615.0f;
+sensor_msgs::PointCloud2 depthCloud(const std::string& frame, int w, int h) {
+  const float f = 615.0f * static_cast<float>(w) / 640.0f;  // the D435's field of view at any size
   sensor_msgs::PointCloud2 m;
   m.header.frame_id = frame;
   m.height = h;
@@ -51,10 +53,10 @@ sensor_msgs::PointCloud2 d435Cloud(const std::string& frame) {
   std::memcpy(&rgb, &grey, 4);
   for (int v = 0; v < h; ++v)
     for (int u = 0; u < w; ++u) {
-      float depth = (v >= 300 && u >= 100 && u < 540) ? 1.2f : 2.0f;
+      float depth = (v >= h * 5 / 8 && u >= w * 5 / 32 && u < w * 27 / 32) ? 1.2f : 2.0f;
       if (uni(rng) < 0.1f) depth = std::nanf("");
       // Optical frame: x right, y down, z ahead.
-      const float p[4] = {(u - 320.0f) / f * depth, (v - 240.0f) / f * depth, depth, rgb};
+      const float p[4] = {(u - 0.5f * w) / f * depth, (v - 0.5f * h) / f * depth, depth, rgb};
       std::memcpy(&m.data[static_cast<std::size_t>(v) * m.row_step + 16 * u], p, 16);
     }
   return m;
@@ -67,6 +69,7 @@ int main(int argc, char** argv) {
   ros::NodeHandle nh, pnh("~");
   const double cloud_hz = pnh.param("cloud_hz", 30.0), seconds = pnh.param("seconds", 20.0),
                warmup = pnh.param("warmup", 5.0);
+  const int width = pnh.param("width", 640), height = pnh.param("height", 480);
   ros::Publisher cloud_pub = nh.advertise<sensor_msgs::PointCloud2>("/camera/depth/points", 1);
   ros::Publisher js_pub = nh.advertise<sensor_msgs::JointState>("/joint_states", 5);
   ros::Publisher odom_pub = nh.advertise<nav_msgs::Odometry>("/odom", 5);
@@ -86,7 +89,7 @@ int main(int argc, char** argv) {
   t.transform.rotation.z = -0.5;
   t.transform.rotation.w = 0.5;
   static_tf.sendTransform(t);
-  sensor_msgs::PointCloud2 cloud = d435Cloud("bench_camera_optical");
+  sensor_msgs::PointCloud2 cloud = depthCloud("bench_camera_optical", width, height);
   sensor_msgs::JointState js;
   js.name = {"joint1", "joint2", "joint3", "joint4", "joint5", "joint6"};
   js.position = {0.0, 0.5, -1.9, 0.0, -0.5, 0.0};
@@ -121,7 +124,12 @@ int main(int argc, char** argv) {
     if (s >= t0) kept.push_back(s);
   double gap = 0.0;
   for (std::size_t i = 1; i < kept.size(); ++i) gap = std::max(gap, kept[i] - kept[i - 1]);
-  std::printf("640x480 clouds published at %.1f Hz; /ehc/obstacles %.1f Hz over %.0f s (largest gap %.0f ms)\n",
-              clouds_measured / seconds, kept.size() / seconds, seconds, 1e3 * gap);
+  ehc_common::benchPrintValues(
+      "perception.obstacle_node_rate_" + std::to_string(width) + "x" + std::to_string(height),
+      {{"points", width * height},
+       {"clouds_hz", ehc_common::jsonNumber(clouds_measured / seconds)},
+       {"obstacles_hz", ehc_common::jsonNumber(kept.size() / seconds)},
+       {"seconds", seconds},
+       {"max_gap_ms", ehc_common::jsonNumber(1e3 * gap)}});
   return 0;
 }

@@ -7,12 +7,21 @@
 //  - perception.octomap_insert_cloud: ray insertion of a 20 000-point depth cloud
 //  - perception.obstacle_monitor_bound_d435 / _insert_d435: ObstacleMonitor bounding (voxel +
 //    budget) and inserting a full 640x480 D435 frame (307 200 points, wall 1.5 m ahead)
+//  - perception.obstacle_cloud_300k / _2M and perception.grasp_cloud_300k / _2M: the work of
+//    ehc_obstacle_node and ehc_grasp_node per cloud, from the message's bytes (an organised
+//    640x480 or 1920x1080 depth frame of a table with a box, 0.6 m away): the point budget read
+//    (PointBudget), the transform, then ObstacleMonitor::queueCloud (the node's callback; the
+//    ray casting follows, points_per_update per publish cycle) or generateForTarget;
+//    perception.grasp_cloud_2M_blob: 2 M points in a 0.2 m cube (one object of every point, the
+//    worst case of the generator). ROS's own deserialisation is not included
+//    (bench_obstacle_node_rate measures the node).
 #include "ehc_common/bench_util.h"
 #include "ehc_control/whole_body_model.h"
 #include "ehc_control/pinhole_camera.h"
 #include "ehc_perception/grasp_generator.h"
 #include "ehc_perception/obstacle_distance_field.h"
 #include "ehc_perception/obstacle_monitor.h"
+#include "ehc_perception/point_cloud_layout.h"
 #include "ehc_perception/tag_detector.h"
 #include "ehc_perception/tag_image_renderer.h"
 #include "ehc_test/perception_fixtures.h"
@@ -166,6 +175,55 @@ void benchObstacles() {
   }, {{"points", 307200}, {"inserted", kept}});
 }
 
+/// The nodes' work per cloud, from the message's bytes, at 300 k and 2 M points (see the top).
+void benchCloudPaths(double* sink) {
+  const ehc_control::RobotConfig robot = ehc_control::loadRobotConfig(robotYaml());
+  const Box table{pose(1.0, 0.0, 0.685, 0.0), Eigen::Vector3d(0.8, 1.2, 0.03)};
+  const Box box{pose(0.95, 0.05, 0.75, 0.4), Eigen::Vector3d(0.05, 0.06, 0.10)};
+  const Eigen::Vector3d centre = box.pose.translation();
+  const Eigen::Isometry3d cam = lookAt(centre + Eigen::Vector3d(-0.42, 0.0, 0.42), centre);
+  const GraspGenerator gen{GraspGeneratorConfig()};
+  const GraspTargetingParams targeting;
+  const ObstacleMonitorParams obstacle;
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<float> blob(0.0f, 0.2f);
+  PointList cube;
+  for (int i = 0; i < 2000000; ++i) cube.emplace_back(0.85f + blob(rng), blob(rng), 0.7f + blob(rng));
+  struct Case {
+    std::string name;
+    PackedCloud msg;
+  };
+  std::vector<Case> cases;
+  cases.push_back({"300k", packCloud(depthCameraCloud(640, 480, cam, {table, box}, 0.001), xyzFloat32(), 480)});
+  cases.push_back({"2M", packCloud(depthCameraCloud(1920, 1080, cam, {table, box}, 0.001), xyzFloat32(), 1080)});
+  cases.push_back({"2M_blob", packCloud(cube)});
+  for (const Case& c : cases) {
+    const std::size_t total = std::size_t{c.msg.layout.width} * c.msg.layout.height;
+    if (c.name != "2M_blob") {
+      ObstacleMonitor monitor(robot, ObstacleMapConfig(), obstacle);
+      monitor.setJointState(0.0, robot.arm_joints,
+                            std::vector<double>(robot.arm_ready.data(), robot.arm_ready.data() + robot.nArm()));
+      monitor.setBasePose(0.0, Eigen::Vector3d::Zero());
+      int queued = 0;
+      ehc_common::benchReport("perception.obstacle_cloud_" + c.name, 20, [&](int) {
+        const CloudPoints read = c.msg.extract(static_cast<std::size_t>(obstacle.max_input_points));
+        queued = monitor.queueCloud(0.0, transformPoints(read.points, Eigen::Isometry3d::Identity()), cam.translation()).queued;
+      }, {{"points", total}, {"read", PointBudget(c.msg.layout.width, c.msg.layout.height, obstacle.max_input_points).selected()}});
+      ehc_common::benchPrintValues("perception.obstacle_cloud_" + c.name + ".result", {{"queued", queued}});
+    }
+    GraspResult last;
+    ehc_common::benchReport("perception.grasp_cloud_" + c.name, 5, [&](int) {
+      const CloudPoints read = c.msg.extract(static_cast<std::size_t>(targeting.max_input_points));
+      last = generateForTarget(gen, transformPoints(read.points, Eigen::Isometry3d::Identity()), cam.translation(),
+                               &centre, targeting);
+      *sink += static_cast<double>(last.grasps.size());
+    }, {{"points", total}, {"read", PointBudget(c.msg.layout.width, c.msg.layout.height, targeting.max_input_points).selected()}});
+    ehc_common::benchPrintValues("perception.grasp_cloud_" + c.name + ".result",
+                                 {{"grasps", last.grasps.size()}, {"object_points", last.filtered_points},
+                                  {"voxel_m", ehc_common::jsonNumber(last.voxel_size)}});
+  }
+}
+
 }  // namespace
 
 int main() {
@@ -173,5 +231,6 @@ int main() {
   benchTags();
   benchGrasps(&sink);
   benchObstacles();
+  benchCloudPaths(&sink);
   return sink == 12345.678 ? 1 : 0;
 }

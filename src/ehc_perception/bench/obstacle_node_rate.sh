@@ -1,6 +1,7 @@
 #!/bin/bash
-# Rate of /ehc/obstacles under a full 640x480 D435 stream: starts a private ROS master (free
-# port), ehc_obstacle_node with CONFIG and bench_obstacle_node_rate (the camera + robot).
+# Rate of /ehc/obstacles under a full 640x480 D435 stream at cloud_hz, then under 2 M-point
+# clouds (1920x1080) at 5 Hz: starts a private ROS master (free port), ehc_obstacle_node with
+# CONFIG and bench_obstacle_node_rate (the camera + robot).
 #   source devel/setup.bash
 #   src/ehc_perception/bench/obstacle_node_rate.sh [CONFIG=config/perception/obstacle_node.yaml] \
 #       [cloud_hz=30] [seconds=20]
@@ -17,3 +18,4 @@ rosmaster --core -p "$PORT" >/dev/null 2>&1 & PIDS+=($!)
 for _ in $(seq 100); do rosparam set /use_sim_time false >/dev/null 2>&1 && break; sleep 0.1; done
 rosrun ehc_perception ehc_obstacle_node _config:="$CONFIG" >/dev/null 2>&1 & PIDS+=($!)
 rosrun ehc_perception bench_obstacle_node_rate _cloud_hz:="$HZ" _seconds:="$SECONDS_"
+rosrun ehc_perception bench_obstacle_node_rate _cloud_hz:=5 _seconds:="$SECONDS_" _width:=1920 _height:=1080

@@ -53,7 +53,8 @@ TEST(NodeConfig, AnEmptyTagNodeFileGivesTheDefaults) {
   EXPECT_EQ(c.camera_frame, "");
   EXPECT_EQ(c.camera_file, "");
   EXPECT_EQ(c.tf_timeout, 0.05);
-  EXPECT_EQ(c.image_queue, 5);
+  EXPECT_EQ(c.stale_after, 0.5);
+  EXPECT_EQ(c.max_image_pixels, 1920 * 1080);
   EXPECT_EQ(c.summary(), d.summary());  // the detector and the target too
   EXPECT_NO_THROW(d.validate());
 }
@@ -67,8 +68,10 @@ TEST(NodeConfig, AnEmptyGraspNodeFileGivesTheDefaults) {
   EXPECT_EQ(c.targeting.max_rate_hz, 2.0);
   EXPECT_EQ(c.targeting.target_timeout, 2.0);
   EXPECT_EQ(c.targeting.target_gate, 0.15);
+  EXPECT_EQ(c.targeting.max_input_points, 20000);
   EXPECT_EQ(c.tf_timeout, 0.1);
-  EXPECT_EQ(c.cloud_queue, 3);
+  EXPECT_EQ(c.stale_after, 0.5);
+  EXPECT_EQ(c.generator.max_object_points, 5000);
   EXPECT_EQ(c.summary(), GraspNodeConfig().summary());  // the generator too
   EXPECT_NO_THROW(GraspNodeConfig().validate());
 }
@@ -84,6 +87,8 @@ TEST(NodeConfig, AnObstacleNodeFileWithOnlyTheRobotGivesTheDefaults) {
   EXPECT_EQ(c.world_frame, "odom");
   EXPECT_EQ(c.publish_rate_hz, 50.0);
   EXPECT_EQ(c.tf_timeout, 0.05);
+  EXPECT_EQ(c.stale_after, 0.2);
+  EXPECT_EQ(c.monitor.max_input_points, 80000);
   ObstacleNodeConfig d;
   d.robot_config = c.robot_config;
   EXPECT_EQ(c.summary(), d.summary());  // the monitor and the map too
@@ -96,7 +101,7 @@ TEST(NodeConfig, FieldsAreReadAndTheCameraFileIsRelativeToTheConfig) {
   const std::string tag = writeTemp("tag_fields.yaml",
                                     "node: {image_topic: /img, camera_info_topic: '', camera_file: cam.yaml,\n"
                                     "       target_topic: /t, world_frame: map, camera_frame: cam, tf_timeout: 0.5,\n"
-                                    "       image_queue: 2}\n"
+                                    "       stale_after: 0.3, max_image_pixels: 307200}\n"
                                     "tag_detector: {family: 25h9}\n"
                                     "target: {tag_id: 3}\n");
   const TagNodeConfig c = loadTagNodeConfig(tag);
@@ -106,26 +111,33 @@ TEST(NodeConfig, FieldsAreReadAndTheCameraFileIsRelativeToTheConfig) {
   EXPECT_EQ(c.world_frame, "map");
   EXPECT_EQ(c.camera_frame, "cam");
   EXPECT_EQ(c.tf_timeout, 0.5);
-  EXPECT_EQ(c.image_queue, 2);
+  EXPECT_EQ(c.stale_after, 0.3);
+  EXPECT_EQ(c.max_image_pixels, 307200);
   EXPECT_EQ(c.detector.family, "25h9");
   EXPECT_EQ(c.target.tag_id, 3);
 
   const GraspNodeConfig g = loadGraspNodeConfig(writeTemp(
-      "grasp_fields.yaml", "node: {target_topic: '', max_rate_hz: 5, target_timeout: 0.5, cloud_queue: 7}\n"
-                           "grasp_generator: {top_k: 4}\n"));
+      "grasp_fields.yaml", "node: {target_topic: '', max_rate_hz: 5, target_timeout: 0.5, stale_after: 0.7,\n"
+                           "       max_input_points: 5000}\n"
+                           "grasp_generator: {top_k: 4, max_object_points: 900}\n"));
   EXPECT_EQ(g.target_topic, "");
   EXPECT_EQ(g.targeting.max_rate_hz, 5.0);
   EXPECT_EQ(g.targeting.target_timeout, 0.5);
-  EXPECT_EQ(g.cloud_queue, 7);
+  EXPECT_EQ(g.stale_after, 0.7);
+  EXPECT_EQ(g.targeting.max_input_points, 5000);
   EXPECT_EQ(g.generator.top_k, 4);
+  EXPECT_EQ(g.generator.max_object_points, 900);
 
   const ObstacleNodeConfig o = loadObstacleNodeConfig(writeTemp(
       "obstacle_fields.yaml", "node: {robot_config: kuka_iiwa14_kmr, exclusion_topic: '', publish_rate_hz: 20,\n"
-                              "       state_timeout: 0.3}\nobstacle_map: {resolution: 0.05}\n"));
+                              "       state_timeout: 0.3, stale_after: 0.4, max_input_points: 1000}\n"
+                              "obstacle_map: {resolution: 0.05}\n"));
   EXPECT_NE(o.robot_config.find("kuka_iiwa14_kmr"), std::string::npos) << o.robot_config;
   EXPECT_EQ(o.exclusion_topic, "");
   EXPECT_EQ(o.publish_rate_hz, 20.0);
   EXPECT_EQ(o.monitor.state_timeout, 0.3);
+  EXPECT_EQ(o.stale_after, 0.4);
+  EXPECT_EQ(o.monitor.max_input_points, 1000);
   EXPECT_EQ(o.map.resolution, 0.05);
 }
 
@@ -156,7 +168,9 @@ TEST(NodeConfig, ABadValueNamesTheFileAndTheField) {
     expectError([&] { loadTagNodeConfig(path); }, path, words);
   };
   tag("tag_tf.yaml", "node: {tf_timeout: 9}\n", {"TagNodeConfig", "node.tf_timeout"});
-  tag("tag_queue.yaml", "node: {image_queue: 0}\n", {"TagNodeConfig", "node.image_queue"});
+  tag("tag_stale.yaml", "node: {stale_after: 0}\n", {"TagNodeConfig", "node.stale_after"});
+  tag("tag_pixels.yaml", "node: {max_image_pixels: 0}\n", {"TagNodeConfig", "node.max_image_pixels"});
+  tag("tag_queue.yaml", "node: {image_queue: 5}\n", {"unknown field 'node.image_queue'"});  // the newest image only
   tag("tag_frame.yaml", "node: {world_frame: ''}\n", {"TagNodeConfig", "node.world_frame"});
   tag("tag_type.yaml", "node: {tf_timeout: soon}\n", {"node.tf_timeout", "wrong type"});
   tag("tag_nan.yaml", "node: {tf_timeout: .nan}\n", {"node.tf_timeout"});
@@ -167,7 +181,11 @@ TEST(NodeConfig, ABadValueNamesTheFileAndTheField) {
     expectError([&] { loadGraspNodeConfig(path); }, path, words);
   };
   grasp("grasp_tf.yaml", "node: {tf_timeout: -1}\n", {"GraspNodeConfig", "node.tf_timeout"});
-  grasp("grasp_queue.yaml", "node: {cloud_queue: 101}\n", {"GraspNodeConfig", "node.cloud_queue"});
+  grasp("grasp_stale.yaml", "node: {stale_after: 11}\n", {"GraspNodeConfig", "node.stale_after"});
+  grasp("grasp_budget.yaml", "node: {max_input_points: 10}\n", {"max_input_points"});
+  grasp("grasp_budget_nan.yaml", "node: {max_input_points: .nan}\n", {"node.max_input_points"});
+  grasp("grasp_object_points.yaml", "grasp_generator: {max_object_points: 10}\n", {"max_object_points"});
+  grasp("grasp_queue.yaml", "node: {cloud_queue: 3}\n", {"unknown field 'node.cloud_queue'"});  // the newest cloud only
   grasp("grasp_rate.yaml", "node: {max_rate_hz: 0}\n", {"max_rate_hz"});
   grasp("grasp_gen.yaml", "grasp_generator: {top_k: 0}\n", {"grasp_generator"});
 
@@ -181,6 +199,10 @@ TEST(NodeConfig, ABadValueNamesTheFileAndTheField) {
            {"ObstacleNodeConfig", "node.tf_timeout"});
   obstacle("obst_state.yaml", "node: {robot_config: realman_rm65_water2, state_timeout: 0}\n",
            {"node.state_timeout"});
+  obstacle("obst_stale.yaml", "node: {robot_config: realman_rm65_water2, stale_after: -1}\n",
+           {"ObstacleNodeConfig", "node.stale_after"});
+  obstacle("obst_budget.yaml", "node: {robot_config: realman_rm65_water2, max_input_points: 0}\n",
+           {"node.max_input_points"});
   obstacle("obst_map.yaml", kObstacleNode + "obstacle_map: {resolution: -1}\n", {"obstacle_map"});
   obstacle("obst_no_node.yaml", "obstacle_map: {}\n", {"node"});
   obstacle("obst_no_robot.yaml", "node: {publish_rate_hz: 20}\n", {"node.robot_config"});

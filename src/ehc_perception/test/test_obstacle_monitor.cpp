@@ -12,7 +12,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <limits>
+#include <random>
 
 using ehc_common::ConfigNode;
 
@@ -180,6 +182,89 @@ TEST(ObstacleMonitor, AFullD435FrameIsBoundedByVoxelDecimationAndThePointBudget)
       "node: {cloud_voxel: 0.05, max_cloud_points: 500}\n", "obst.yaml", "ObstacleNode").child("node"));
   EXPECT_EQ(q.cloud_voxel, 0.05);
   EXPECT_EQ(q.max_cloud_points, 500);
+}
+
+TEST(ObstacleMonitor, TheWorkPerCloudIsBoundedByThePointBudgetWhateverItsSize) {
+  Rig r;
+  r.state(1.0);
+  const ObstacleMonitorParams& p = r.monitor.params();
+  // A 1920x1080 depth frame (2 073 600 points) of a block in front of the base: the point budget
+  // first, then the voxel grid and the insertion budget.
+  const test::Box block{test::pose(0.43, 0.0, 0.23, 0.3), Eigen::Vector3d(0.06, 0.06, 0.06)};
+  const Eigen::Isometry3d cam = test::lookAt(Eigen::Vector3d(0.1, 0.0, 1.0), Eigen::Vector3d(0.5, 0.0, 0.2));
+  const PointList frame = test::depthCameraCloud(1920, 1080, cam, {block});
+  const ObstacleMonitor::CloudInsertion big = r.monitor.queueCloud(1.0, frame, cam.translation());
+  EXPECT_EQ(big.received, 2073600);
+  EXPECT_EQ(big.after_budget, p.max_input_points);
+  EXPECT_LE(big.after_voxel, big.after_budget);
+  EXPECT_LE(big.queued, p.max_cloud_points);
+  // Random cloud sizes up to 3 M points: the points past the voxel step never exceed the budget.
+  const unsigned seed = 3;
+  std::printf("seed %u\n", seed);
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> size(1, 3000000);
+  std::uniform_real_distribution<float> u(-3.0f, 3.0f);
+  for (int k = 0; k < 4; ++k) {
+    PointList cloud(static_cast<std::size_t>(size(rng)));
+    for (auto& q : cloud) q = Eigen::Vector3f(u(rng), u(rng), 0.5f * (u(rng) + 3.0f));
+    const ObstacleMonitor::CloudInsertion c = r.monitor.queueCloud(1.0, cloud, cam.translation());
+    EXPECT_EQ(c.after_budget, std::min(c.received, p.max_input_points)) << c.received << " points";
+    EXPECT_LE(c.queued, p.max_cloud_points);
+  }
+}
+
+TEST(ObstacleMonitor, AFrameReadWithinThePointBudgetGivesTheSameDistances) {
+  // A 1280x720 frame (921 600 points) of blocks around the robot, read as the node reads it
+  // (PointBudget: every 4th row and column, 57 600 points) and whole: each link within the
+  // influence distance in either map is within one map voxel (2 cm) of the same distance in the
+  // other (or, missing there, within 2 cm of the influence distance). Every voxel point is
+  // inserted (max_cloud_points, the insertion budget, off): the read budget's effect alone.
+  // Random blocks and views (seed printed).
+  const unsigned seed = 5;
+  std::printf("seed %u\n", seed);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  ObstacleMonitorParams budgeted_params;
+  budgeted_params.max_cloud_points = 1000000;
+  const ObstacleMonitorParams& budgeted = budgeted_params;
+  const double influence = ObstacleMapConfig().influence_distance;
+  ObstacleMonitorParams whole_params = budgeted;
+  whole_params.max_input_points = 10000000;
+  const ObstacleMonitorParams& whole = whole_params;
+  for (int k = 0; k < 4; ++k) {
+    std::vector<test::Box> blocks;
+    for (int b = 0; b < 3; ++b) {
+      const double a = -0.8 + 1.6 * u(rng), d = 0.4 + 0.15 * u(rng);
+      blocks.push_back({test::pose(d * std::cos(a), d * std::sin(a), 0.1 + 0.4 * u(rng), M_PI * u(rng)),
+                        Eigen::Vector3d(0.05 + 0.1 * u(rng), 0.05 + 0.1 * u(rng), 0.05 + 0.1 * u(rng))});
+    }
+    const Eigen::Isometry3d cam = test::lookAt(Eigen::Vector3d(0.2 * u(rng), 0.0, 1.1 + 0.3 * u(rng)),
+                                               Eigen::Vector3d(0.6, -0.3 + 0.6 * u(rng), 0.2));
+    const PointList frame = test::depthCameraCloud(1280, 720, cam, blocks, 0.002, seed + k);
+    const CloudPoints read = test::packCloud(frame, test::xyzFloat32(), 720).extract(
+        static_cast<std::size_t>(budgeted.max_input_points));
+    ASSERT_EQ(read.read, 57600u);
+    std::vector<std::vector<LinkObstacleDistance>> out;
+    for (const auto& [params, cloud] : {std::make_pair(&whole, &frame), std::make_pair(&budgeted, &read.points)}) {
+      Rig r;
+      ObstacleMonitor m(r.robot, ObstacleMapConfig(), *params);
+      ASSERT_EQ(m.setJointState(1.0, r.robot.arm_joints, r.ready()), "");
+      ASSERT_EQ(m.setBasePose(1.0, Eigen::Vector3d::Zero()), "");
+      m.insertCloud(1.0, *cloud, cam.translation());
+      const ObstacleReport rep = m.update(1.0);
+      ASSERT_EQ(rep.status, ObstacleReport::Status::Publish);
+      out.push_back(rep.distances);
+    }
+    SCOPED_TRACE("scene " + std::to_string(k));
+    for (int a = 0; a < 2; ++a)
+      for (const LinkObstacleDistance& d : out[static_cast<std::size_t>(a)]) {
+        double other = influence;  // not reported: beyond the influence distance
+        for (const LinkObstacleDistance& e : out[static_cast<std::size_t>(1 - a)])
+          if (e.link == d.link) other = e.distance;
+        EXPECT_NEAR(d.distance, other, 0.02) << d.link << (a == 0 ? " (whole frame)" : " (budget)");
+        std::printf("scene %d %s %s: %.4f / %.4f m\n", k, a == 0 ? "whole" : "budget", d.link.c_str(), d.distance, other);
+      }
+  }
 }
 
 TEST(ObstacleMonitor, AQueuedCloudIsRayCastInBoundedChunksPerUpdate) {

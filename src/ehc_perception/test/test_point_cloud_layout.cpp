@@ -1,81 +1,32 @@
 // PointCloudLayout: every malformed PointCloud2 layout is rejected with a reason before a byte
 // is read; FLOAT32 / FLOAT64 x, y, z in any field order are extracted, NaN points dropped.
+// PointBudget: at most the budget is read of any cloud (randomized sizes and budgets, seed
+// printed), on an even grid of an organised cloud, and a cloud within the budget is read whole.
 #include "ehc_perception/point_cloud_layout.h"
+#include "ehc_test/perception_fixtures.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <random>
+#include <set>
 #include <stdexcept>
 
 using namespace ehc_perception;
 
 namespace {
 
-struct FieldSpec {
-  std::string name;
-  PointFieldType type;
-};
+using test::FieldSpec;
+using TestCloud = test::PackedCloud;
 
-/// A cloud's layout and bytes, as a PointCloud2 would carry them.
-struct TestCloud {
-  PointCloudLayout layout;
-  std::vector<std::uint8_t> data;
-
-  std::string problem() const { return layout.problem(data.size()); }
-  CloudPoints extract() const { return extractCloudPoints(layout, data.data(), data.size()); }
-};
-
-template <class T>
-void putAs(std::uint8_t* at, double v) {
-  const T x = static_cast<T>(v);
-  std::memcpy(at, &x, sizeof x);
-}
-
-void put(std::uint8_t* at, PointFieldType t, double v) {
-  switch (t) {
-    case PointFieldType::Int8: return putAs<std::int8_t>(at, v);
-    case PointFieldType::Uint8: return putAs<std::uint8_t>(at, v);
-    case PointFieldType::Int16: return putAs<std::int16_t>(at, v);
-    case PointFieldType::Uint16: return putAs<std::uint16_t>(at, v);
-    case PointFieldType::Int32: return putAs<std::int32_t>(at, v);
-    case PointFieldType::Uint32: return putAs<std::uint32_t>(at, v);
-    case PointFieldType::Float32: return putAs<float>(at, v);
-    case PointFieldType::Float64: return putAs<double>(at, v);
-  }
-}
-
-/// Points packed row-major in `height` rows, the fields in the given order (x, y, z from the
-/// point, any other field 7), then `padding` bytes per point and `row_padding` bytes per row.
 TestCloud makeCloud(const std::vector<Eigen::Vector3d>& pts, const std::vector<FieldSpec>& fields,
-                    std::uint32_t height = 1, std::uint32_t padding = 0,
-                    std::uint32_t row_padding = 0) {
-  TestCloud c;
-  std::uint32_t offset = 0;
-  for (const FieldSpec& f : fields) {
-    c.layout.fields.push_back({f.name, offset, static_cast<std::uint8_t>(f.type), 1});
-    offset += static_cast<std::uint32_t>(pointFieldTypeSize(static_cast<std::uint8_t>(f.type)));
-  }
-  c.layout.height = height;
-  c.layout.width = static_cast<std::uint32_t>(pts.size()) / height;
-  c.layout.point_step = offset + padding;
-  c.layout.row_step = c.layout.width * c.layout.point_step + row_padding;
-  c.data.assign(std::size_t{c.layout.row_step} * height, 0xAB);
-  for (std::size_t i = 0; i < pts.size(); ++i) {
-    std::uint8_t* point = c.data.data() + (i / c.layout.width) * c.layout.row_step +
-                          (i % c.layout.width) * c.layout.point_step;
-    for (std::size_t k = 0; k < fields.size(); ++k) {
-      const std::string& n = fields[k].name;
-      const double v = n == "x" ? pts[i].x() : n == "y" ? pts[i].y() : n == "z" ? pts[i].z() : 7.0;
-      put(point + c.layout.fields[k].offset, fields[k].type, v);
-    }
-  }
-  return c;
+                    std::uint32_t height = 1, std::uint32_t padding = 0, std::uint32_t row_padding = 0) {
+  return test::packCloud(pts, fields, height, padding, row_padding);
 }
 
-const std::vector<FieldSpec> kXyz32 = {
-    {"x", PointFieldType::Float32}, {"y", PointFieldType::Float32}, {"z", PointFieldType::Float32}};
+const std::vector<FieldSpec>& kXyz32 = test::xyzFloat32();
 
 std::vector<Eigen::Vector3d> somePoints(int n) {
   std::vector<Eigen::Vector3d> pts;
@@ -279,4 +230,94 @@ TEST(PointCloudLayout, DatatypeNamesAndSizes) {
   EXPECT_EQ(pointFieldTypeSize(static_cast<std::uint8_t>(PointFieldType::Uint16)), 2u);
   EXPECT_EQ(pointFieldTypeSize(static_cast<std::uint8_t>(PointFieldType::Float64)), 8u);
   EXPECT_EQ(pointFieldTypeSize(42), 0u);
+}
+
+// ---------------------------------------------------------------- point budget
+
+TEST(PointBudget, AtMostTheBudgetIsReadWhateverTheCloudsSize) {
+  const unsigned seed = 20240611;
+  std::printf("seed %u\n", seed);
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<std::uint64_t> side(1, 5000), budget(1, 200000);
+  for (int k = 0; k < 2000; ++k) {
+    const std::uint64_t w = side(rng), h = k % 4 == 0 ? 1 : side(rng) % 3000 + 1, b = budget(rng);
+    const PointBudget pb(w, h, b);
+    SCOPED_TRACE(std::to_string(w) + "x" + std::to_string(h) + " budget " + std::to_string(b));
+    ASSERT_EQ(pb.total(), w * h);
+    ASSERT_EQ(pb.subsampled(), w * h > b);
+    if (h == 1) {
+      ASSERT_EQ(pb.selected(), std::min(w, b)) << "unorganised: exactly the budget";
+      continue;
+    }
+    ASSERT_LE(pb.selected(), std::min(w * h, b));
+    // The smallest grid step that fits: one step less would not.
+    const std::uint64_t k1 = pb.step() - 1;
+    if (k1 >= 1) ASSERT_GT(((w + k1 - 1) / k1) * ((h + k1 - 1) / k1), b);
+  }
+  // An unorganised 2 M-point cloud, the visits counted: the budget, evenly spread, in order.
+  const PointBudget flat(2000000, 1, 20000);
+  std::uint64_t visits = 0, last = 0, max_gap = 0;
+  flat.forEach([&](std::uint64_t r, std::uint64_t c) {
+    EXPECT_EQ(r, 0u);
+    if (visits++ > 0) max_gap = std::max(max_gap, c - last);
+    last = c;
+  });
+  EXPECT_EQ(visits, 20000u);
+  EXPECT_EQ(max_gap, 100u);
+  // An organised 1920x1080 frame (2 073 600 points): every step-th row and column.
+  const PointBudget grid(1920, 1080, 20000);
+  EXPECT_EQ(grid.step(), 11u);  // 175 x 99 = 17 325 points; step 10: 192 x 108 = 20 736
+  std::set<std::uint64_t> rows, cols;
+  visits = 0;
+  grid.forEach([&](std::uint64_t r, std::uint64_t c) {
+    ++visits;
+    rows.insert(r);
+    cols.insert(c);
+    EXPECT_EQ(r % 11, 0u);
+    EXPECT_EQ(c % 11, 0u);
+  });
+  EXPECT_EQ(visits, grid.selected());
+  EXPECT_EQ(rows.size(), 99u);
+  EXPECT_EQ(cols.size(), 175u);
+  EXPECT_EQ(*rows.rbegin(), 1078u) << "the grid spans the whole frame";
+  EXPECT_EQ(*cols.rbegin(), 1914u);
+  // No budget, or one the cloud is within: every point.
+  EXPECT_EQ(PointBudget(640, 480, 0).selected(), 307200u);
+  EXPECT_EQ(PointBudget(640, 480, 307200).step(), 1u);
+  EXPECT_FALSE(PointBudget(0, 0, 10).subsampled());
+}
+
+TEST(PointBudget, A2MPointMessageIsReadWithinTheBudgetAndASmallOneWhole) {
+  // A 1920x1080 depth frame (2 073 600 points, 25 MB): only the budget's points are read.
+  const Eigen::Isometry3d cam = test::lookAt(Eigen::Vector3d(0, 0, 1.2), Eigen::Vector3d(1, 0, 0.6));
+  const PointList frame = test::depthCameraCloud(1920, 1080, cam, {});
+  const TestCloud big = test::packCloud(frame, kXyz32, 1080);
+  const CloudPoints got = big.extract(20000);
+  EXPECT_EQ(got.total, 2073600u);
+  EXPECT_EQ(got.read, 17325u);
+  EXPECT_EQ(got.points.size() + got.non_finite, got.read);
+  // The points read are the frame's on the grid, in row-major order (NaN: no return, dropped).
+  std::size_t i = 0;
+  for (std::size_t r = 0; r < 1080; r += 11)
+    for (std::size_t c = 0; c < 1920; c += 11) {
+      const Eigen::Vector3f& p = frame[r * 1920 + c];
+      if (!p.allFinite()) continue;
+      ASSERT_LT(i, got.points.size());
+      EXPECT_EQ(got.points[i++], p);
+    }
+  EXPECT_EQ(i, got.points.size());
+  // Within the budget: the same points as without one.
+  const auto pts = somePoints(50);
+  const TestCloud small = makeCloud(pts, kXyz32, 5);
+  const CloudPoints whole = small.extract(), budgeted = small.extract(50);
+  EXPECT_EQ(budgeted.points, whole.points);
+  EXPECT_EQ(budgeted.read, 50u);
+  // A malformed layout is rejected before the budget matters.
+  TestCloud bad = small;
+  bad.layout.point_step = 0;
+  EXPECT_THROW(bad.extract(10), std::invalid_argument);
+  // budgetPoints: the unorganised stride of a point list.
+  EXPECT_EQ(budgetPoints(frame, 1000).size(), 1000u);
+  EXPECT_EQ(budgetPoints(frame, 1000)[1], frame[2073]);
+  EXPECT_EQ(budgetPoints(frame, 0).size(), frame.size());
 }

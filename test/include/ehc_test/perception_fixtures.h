@@ -1,17 +1,23 @@
 #pragma once
 // Synthetic data for the perception tests and benchmarks: object surface clouds (box,
-// cylinder, lying bottle), a table plane, image pixel noise, and the shipped camera / robot files.
+// cylinder, lying bottle), a table plane, a depth camera's organised cloud of boxes on a table,
+// PointCloud2 bytes without ROS, image pixel noise, and the shipped camera / robot files.
 
 #include "ehc_control/pose_math.h"
 #include "ehc_perception/grasp_generator.h"
+#include "ehc_perception/point_cloud_layout.h"
 
 #include <Eigen/Geometry>
 #include <visp3/core/vpImage.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
 #include <random>
 #include <string>
+#include <vector>
 
 namespace ehc_perception::test {
 
@@ -185,6 +191,125 @@ inline PointList fullD435Wall() {
       pts.emplace_back(depth, -right, 1.0f - down);
     }
   return pts;
+}
+
+/// An oriented box: its centre's pose and its edge lengths.
+struct Box {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  Eigen::Vector3d size = Eigen::Vector3d::Constant(0.05);
+};
+
+/// Distance along the ray o + t d (|d| = 1) to `box`, +inf if it misses (slab test).
+inline double rayBox(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const Box& box) {
+  const Eigen::Vector3d lo = box.pose.inverse() * o, ld = box.pose.linear().transpose() * d;
+  double t0 = 0.0, t1 = std::numeric_limits<double>::infinity();
+  for (int a = 0; a < 3; ++a) {
+    const double h = 0.5 * box.size[a];
+    if (std::abs(ld[a]) < 1e-12) {
+      if (std::abs(lo[a]) > h) return std::numeric_limits<double>::infinity();
+      continue;
+    }
+    double ta = (-h - lo[a]) / ld[a], tb = (h - lo[a]) / ld[a];
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta);
+    t1 = std::min(t1, tb);
+    if (t0 > t1) return std::numeric_limits<double>::infinity();
+  }
+  return t0 > 0.0 ? t0 : std::numeric_limits<double>::infinity();
+}
+
+/// A depth camera's organised cloud, width x height points row-major in the world frame: a
+/// pinhole camera at `T_world_cam` (optical frame: z ahead, x right, y down; fx = fy = 615 per
+/// 640 columns, the field of view of fullD435Wall at any resolution, principal point at the
+/// centre) sees `boxes` (a table top is a flat box) and the floor z = 0; a pixel whose ray meets
+/// nothing within 6 m is NaN (no return). Depth noise: Gaussian, `sigma` m along the ray (seeded).
+inline PointList depthCameraCloud(int width, int height, const Eigen::Isometry3d& T_world_cam,
+                                  const std::vector<Box>& boxes, double sigma = 0.0, unsigned seed = 1) {
+  const double f = 615.0 * width / 640.0;
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0.0, sigma > 0.0 ? sigma : 1.0);
+  PointList pts;
+  pts.reserve(static_cast<std::size_t>(width) * height);
+  const Eigen::Vector3d o = T_world_cam.translation();
+  for (int v = 0; v < height; ++v)
+    for (int u = 0; u < width; ++u) {
+      const Eigen::Vector3d d =
+          (T_world_cam.linear() * Eigen::Vector3d((u - 0.5 * width) / f, (v - 0.5 * height) / f, 1.0)).normalized();
+      double t = d.z() < -1e-9 ? -o.z() / d.z() : std::numeric_limits<double>::infinity();
+      for (const Box& b : boxes) t = std::min(t, rayBox(o, d, b));
+      if (t > 6.0) {
+        pts.emplace_back(Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN()));
+        continue;
+      }
+      if (sigma > 0.0) t += sigma * noise(rng);
+      pts.push_back((o + t * d).cast<float>());
+    }
+  return pts;
+}
+
+/// A PointCloud2's layout and bytes without ROS (what the nodes copy into a PointCloudLayout).
+struct PackedCloud {
+  PointCloudLayout layout;
+  std::vector<std::uint8_t> data;
+  std::string problem() const { return layout.problem(data.size()); }
+  CloudPoints extract(std::size_t max_points = 0) const {
+    return extractCloudPoints(layout, data.data(), data.size(), max_points);
+  }
+};
+
+/// One field of packCloud's points: its name and datatype.
+struct FieldSpec {
+  std::string name;
+  PointFieldType type;
+};
+inline const std::vector<FieldSpec>& xyzFloat32() {
+  static const std::vector<FieldSpec> f = {
+      {"x", PointFieldType::Float32}, {"y", PointFieldType::Float32}, {"z", PointFieldType::Float32}};
+  return f;
+}
+
+/// Writes `v` at `at` as datatype `t`.
+inline void putField(std::uint8_t* at, PointFieldType t, double v) {
+  auto put = [&](auto x) { std::memcpy(at, &x, sizeof x); };
+  switch (t) {
+    case PointFieldType::Int8: return put(static_cast<std::int8_t>(v));
+    case PointFieldType::Uint8: return put(static_cast<std::uint8_t>(v));
+    case PointFieldType::Int16: return put(static_cast<std::int16_t>(v));
+    case PointFieldType::Uint16: return put(static_cast<std::uint16_t>(v));
+    case PointFieldType::Int32: return put(static_cast<std::int32_t>(v));
+    case PointFieldType::Uint32: return put(static_cast<std::uint32_t>(v));
+    case PointFieldType::Float32: return put(static_cast<float>(v));
+    case PointFieldType::Float64: return put(v);
+  }
+}
+
+/// `pts` packed row-major in `height` rows, the fields in the given order (x, y, z from the
+/// point, any other field 7), then `padding` bytes per point and `row_padding` bytes per row
+/// (filled with 0xAB).
+template <class Point>
+PackedCloud packCloud(const std::vector<Point>& pts, const std::vector<FieldSpec>& fields = xyzFloat32(),
+                      std::uint32_t height = 1, std::uint32_t padding = 0, std::uint32_t row_padding = 0) {
+  PackedCloud c;
+  std::uint32_t offset = 0;
+  for (const FieldSpec& f : fields) {
+    c.layout.fields.push_back({f.name, offset, static_cast<std::uint8_t>(f.type), 1});
+    offset += static_cast<std::uint32_t>(pointFieldTypeSize(static_cast<std::uint8_t>(f.type)));
+  }
+  c.layout.height = height;
+  c.layout.width = static_cast<std::uint32_t>(pts.size()) / height;
+  c.layout.point_step = offset + padding;
+  c.layout.row_step = c.layout.width * c.layout.point_step + row_padding;
+  c.data.assign(std::size_t{c.layout.row_step} * height, 0xAB);
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    std::uint8_t* point = c.data.data() + (i / c.layout.width) * c.layout.row_step +
+                          (i % c.layout.width) * c.layout.point_step;
+    for (std::size_t k = 0; k < fields.size(); ++k) {
+      const std::string& n = fields[k].name;
+      const double v = n == "x" ? pts[i].x() : n == "y" ? pts[i].y() : n == "z" ? pts[i].z() : 7.0;
+      putField(point + c.layout.fields[k].offset, fields[k].type, v);
+    }
+  }
+  return c;
 }
 
 }  // namespace ehc_perception::test

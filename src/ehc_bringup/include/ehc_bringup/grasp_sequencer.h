@@ -62,6 +62,7 @@
 // is reported as controller_tfm (from the first pose until the gripper closes).
 
 #include "ehc_bringup/grasp_selection.h"
+#include "ehc_bringup/target_pose_filter.h"
 #include "ehc_control/gripper_state.h"
 #include "ehc_control/pinhole_camera.h"
 #include "ehc_control/target_tracker.h"
@@ -96,7 +97,8 @@ struct GraspSequencerParams {
   /// from the pre-grasp) until the retreat ends: the object and the support right under it,
   /// which the fingers must touch. Until then the object is an obstacle like any other.
   double obstacle_exclusion_radius = 0.10;
-  double pose_filter_gain = 0.3;          ///< (0, 1]: weight of a new perceived pose (1 = no filter)
+  /// Perceived poses: smoothing, and jumps held until confirmed (TargetPoseFilter, one per object).
+  TargetPoseFilterParams pose_filter;
   double pregrasp_distance = 0.10;        ///< m, pre-grasp = grasp backed off along the approach
   double pregrasp_switch_distance = 0.25;  ///< m: APPROACH -> PRE_GRASP (TCP to grasp position)
   double pregrasp_position_tolerance = 0.015;     ///< m
@@ -193,8 +195,11 @@ class GraspSequencer {
  public:
   explicit GraspSequencer(const GraspSequencerParams& params);  ///< validates
 
-  /// Perceived pose of object `index` at time t (world). Returns false (and counts it) if the
-  /// index is unknown or the pose is not finite / not a rotation.
+  /// Perceived pose of object `index` at time t (world), into the object's TargetPoseFilter
+  /// (the current object's only until its grasp is locked): a far jump moves the object only
+  /// once confirmed (an event says so, and one says when a jump was dropped as an outlier).
+  /// Returns false (and counts it) if the index is unknown or the pose is not finite / not a
+  /// rotation.
   bool setObjectPose(std::size_t index, double t, const Eigen::Isometry3d& pose);
   /// Latest grasp candidates (world). Non-finite candidates are dropped (counted).
   void setGraspCandidates(double t, const std::vector<GraspCandidate>& candidates);
@@ -210,6 +215,8 @@ class GraspSequencer {
   std::size_t currentObject() const { return current_; }
   const std::vector<GraspResult>& results() const { return results_; }
   long rejectedInputs() const { return rejected_; }
+  /// Perceived poses dropped as outliers (far jumps not confirmed), every object.
+  long poseOutliers() const;
   const GraspSequencerParams& params() const { return params_; }
   /// Locked grasp of the current object (PRE_GRASP onwards).
   const std::optional<GraspChoice>& lockedGrasp() const { return locked_; }
@@ -274,9 +281,13 @@ class GraspSequencer {
   double object_t0_ = 0.0, phase_t0_ = 0.0;
   double best_distance_ = 1e9, best_distance_t_ = 0.0;  ///< stall detection, per phase
   // perception of the current object
-  std::optional<Eigen::Isometry3d> object_pose_;
-  std::vector<std::optional<Eigen::Isometry3d>> remembered_;  ///< last pose of every object
+  /// Every object's perceived pose (the last one seen: the search pose of WAIT_TARGET).
+  std::vector<TargetPoseFilter> filters_;
+  /// Time of the current object's last perceived pose that the filter took in since the object
+  /// started (-1: none yet); until then the object has no current pose (currentPose()).
   double object_pose_t_ = -1.0;
+  std::optional<Eigen::Isometry3d> currentPose() const;
+  std::vector<std::string> pose_events_;  ///< from setObjectPose, out with the next update
   std::vector<GraspCandidate> candidates_;
   std::optional<GraspChoice> locked_;
   Eigen::Vector3d locked_object_centre_ = Eigen::Vector3d::Zero();

@@ -54,6 +54,9 @@ struct ReachExperimentParams {
   ehc_sim::BaseModelConfig base_model;
   ehc_control::PoseServoParams servo;
   ReachProtocol protocol = ReachProtocol::Sequence;
+  /// Number of the first set: set k (k = first_set, first_set + 1, ...) has noise seed
+  /// `seed + k`, so that one set of a larger run can be rerun alone (--first-set K --sets 1).
+  int first_set = 0;
   // Failure classification (ReachFailure) of a target not reached in time:
   double progress_window = 3.0;        ///< s: the error is compared with its value this long before
   double progress_position = 0.005;    ///< m: a smaller drop over the window is no progress
@@ -103,6 +106,7 @@ struct ReachTrial {
   double min_joint_limit_margin = 0.0;  ///< rad, smallest distance to a joint limit seen
   ReachFailure failure = ReachFailure::None;
   std::string failure_joint;            ///< the pinned joint (RollWinding, JointLimit), else ""
+  int recoveries = 0;                   ///< joint-limit stall recoveries started (ReachRecovery)
 };
 
 struct ReachSummary {
@@ -111,6 +115,7 @@ struct ReachSummary {
   double mean_time_s = 0.0;  ///< over reached targets
   SpeedMeans distant, close;
   long qp_failures = 0;
+  long recoveries = 0;                           ///< stall recoveries started, all targets
   long cycles = 0;
   double controller_median_us = 0.0, controller_p99_us = 0.0;
   double min_joint_limit_margin = 0.0;
@@ -128,7 +133,8 @@ class ReachExperiment {
                   std::shared_ptr<const ehc_control::EhcWeighting> weighting,
                   const ReachExperimentParams& params);
 
-  /// Runs every set from the ready pose at the origin; set s uses noise seed `seed + s`. With
+  /// Runs every set from the ready pose at the origin; set s (numbered from params.first_set)
+  /// uses noise seed `seed + s`. With
   /// ReachProtocol::Reset every target starts from the ready pose at the origin, and targets
   /// are taken relative to the previous one (relativeToPrevious, reach_targets.h) by the caller.
   ReachSummary run(const std::vector<std::vector<Eigen::Isometry3d>>& sets, unsigned seed,

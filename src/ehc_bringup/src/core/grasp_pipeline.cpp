@@ -1,6 +1,7 @@
 #include "ehc_bringup/grasp_pipeline.h"
 
 #include "ehc_common/config_node.h"
+#include "ehc_perception/point_cloud_layout.h"
 #include "ehc_perception/rate_limiter.h"
 #include "ehc_sim/sim_world.h"
 #include "ehc_sim/simulated_camera.h"
@@ -211,15 +212,12 @@ void GraspPipeline::perceive(double t) {
   }
   ++counters_.clouds;
   const Eigen::Isometry3d T_world_cam = stackView(world_->cameraPose());
-  const Eigen::Isometry3f T = T_world_cam.cast<float>();
-  ehc_perception::PointList points;
-  points.reserve(cam_points.size());
-  for (const auto& p : cam_points) points.push_back(T * p);
+  const ehc_perception::PointList points = ehc_perception::transformPoints(cam_points, T_world_cam);
   if (want_grasps) {
     StageTimer timer(timing_, &counters_.wall_grasps);
     const bool fresh = grasp_target_ && t - grasp_target_t_ <= cfg_.targeting.target_timeout;
     const ehc_perception::GraspResult res = ehc_perception::generateForTarget(
-        *generator_, points, T_world_cam.translation(), fresh ? &*grasp_target_ : nullptr, cfg_.targeting.target_gate);
+        *generator_, points, T_world_cam.translation(), fresh ? &*grasp_target_ : nullptr, cfg_.targeting);
     std::vector<GraspCandidate> candidates;
     for (const auto& g : res.grasps) candidates.push_back({g.pose, g.width, g.score});
     sequencer_->setGraspCandidates(t, candidates);

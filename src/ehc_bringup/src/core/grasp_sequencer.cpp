@@ -65,8 +65,7 @@ void GraspSequencerParams::validate() const {
         "obstacle_exclusion_radius must be in [0, 0.5] m");
   check(std::isfinite(search_distance) && search_distance >= 0.0 && search_distance <= 2.0,
         "search_distance must be in [0, 2] m");
-  check(std::isfinite(pose_filter_gain) && pose_filter_gain > 0.0 && pose_filter_gain <= 1.0,
-        "pose_filter_gain must be in (0, 1]");
+  pose_filter.validate();
   check(std::isfinite(pregrasp_distance) && pregrasp_distance >= 0.0 && pregrasp_distance <= 0.5,
         "pregrasp_distance must be in [0, 0.5] m");
   positive(pregrasp_switch_distance, "pregrasp_switch_distance");
@@ -110,7 +109,7 @@ std::string GraspSequencerParams::summary() const {
   for (const auto& o : objects) s << " " << o.name << " (" << toString(o.approach) << ")";
   s << "\n  limit " << object_time_limit << " s/object, perception hold " << perception_hold
     << " s, search " << search_distance << " m, obstacle exclusion " << obstacle_exclusion_radius
-    << " m, pose filter gain " << pose_filter_gain << ", pre-grasp " << pregrasp_distance << " m"
+    << " m, " << pose_filter.summary() << ", pre-grasp " << pregrasp_distance << " m"
     << "\n  pre-grasp from " << pregrasp_switch_distance << " m; tolerances: pre-grasp " << pregrasp_position_tolerance << " m/" << pregrasp_orientation_tolerance_deg
     << " deg (" << pregrasp_lateral_tolerance << " m across the approach), grasp " << grasp_position_tolerance << " m/" << grasp_orientation_tolerance_deg << " deg"
     << " (stalled for " << stall_time << " s: x" << stall_tolerance_factor << "; the gripper closes within "
@@ -143,7 +142,7 @@ GraspSequencerParams loadGraspSequencerParams(const ConfigNode& root) {
   p.perception_hold = s.get("perception_hold", p.perception_hold);
   p.search_distance = s.get("search_distance", p.search_distance);
   p.obstacle_exclusion_radius = s.get("obstacle_exclusion_radius", p.obstacle_exclusion_radius);
-  p.pose_filter_gain = s.get("pose_filter_gain", p.pose_filter_gain);
+  p.pose_filter = loadTargetPoseFilterParams(s);
   p.pregrasp_distance = s.get("pregrasp_distance", p.pregrasp_distance);
   p.pregrasp_switch_distance = s.get("pregrasp_switch_distance", p.pregrasp_switch_distance);
   p.stall_time = s.get("stall_time", p.stall_time);
@@ -200,7 +199,7 @@ GraspSequencerParams loadGraspSequencerParams(const ConfigNode& root) {
 
 GraspSequencer::GraspSequencer(const GraspSequencerParams& params) : params_(params) {
   params_.validate();
-  remembered_.resize(params_.objects.size());
+  filters_.assign(params_.objects.size(), TargetPoseFilter(params_.pose_filter));
 }
 
 bool GraspSequencer::setObjectPose(std::size_t index, double t, const Eigen::Isometry3d& pose) {
@@ -208,27 +207,40 @@ bool GraspSequencer::setObjectPose(std::size_t index, double t, const Eigen::Iso
     ++rejected_;
     return false;
   }
-  remembered_[index] = pose;
-  if (index != current_ || done()) return true;  // another object's pose: remembered only
-  if (locked_) return true;                      // grasp locked: perception no longer moves it
-  if (!object_pose_) {
-    object_pose_ = pose;
-  } else {
-    const double a = params_.pose_filter_gain;
-    Eigen::Isometry3d f = Eigen::Isometry3d::Identity();
-    f.translation() = (1.0 - a) * object_pose_->translation() + a * pose.translation();
-    const Eigen::Quaterniond q0(object_pose_->linear()), q1(pose.linear());
-    f.linear() = q0.slerp(a, q1).normalized().toRotationMatrix();
-    object_pose_ = f;
-  }
-  object_pose_t_ = t;
+  const bool current = index == current_ && !done();
+  if (current && locked_) return true;  // grasp locked: perception no longer moves it
+  TargetPoseFilter& f = filters_[index];
+  const std::optional<Eigen::Isometry3d> before = f.pose();
+  const long outliers = f.outliers();
+  const TargetPoseFilter::Update u = f.add(pose);
+  const std::string name = params_.objects[index].name;
+  if (f.outliers() > outliers)
+    pose_events_.push_back(name + ": " + std::to_string(f.outliers() - outliers) +
+                           " perceived pose(s) far from the object ignored (not confirmed by " +
+                           std::to_string(params_.pose_filter.jump_confirmations) + " in a row)");
+  if (u == TargetPoseFilter::Update::JumpConfirmed)
+    pose_events_.push_back(name + ": perceived pose moved " +
+                           num((f.pose()->translation() - before->translation()).norm(), 3) + " m, confirmed by " +
+                           std::to_string(params_.pose_filter.jump_confirmations) + " observations in a row");
+  if (current && u != TargetPoseFilter::Update::JumpHeld) object_pose_t_ = t;
   return true;
+}
+
+long GraspSequencer::poseOutliers() const {
+  long n = 0;
+  for (const TargetPoseFilter& f : filters_) n += f.outliers();
+  return n;
+}
+
+std::optional<Eigen::Isometry3d> GraspSequencer::currentPose() const {
+  if (object_pose_t_ < 0.0 || done()) return std::nullopt;
+  return filters_[current_].pose();
 }
 
 std::optional<Eigen::Vector3d> GraspSequencer::objectCentre() const {
   if (done() || phase_ > GraspPhase::Lift) return std::nullopt;
   if (locked_) return locked_object_centre_;
-  if (object_pose_) return object_pose_->translation();
+  if (const auto pose = currentPose()) return pose->translation();
   return std::nullopt;
 }
 
@@ -343,10 +355,11 @@ bool GraspSequencer::within(const SequencerInput& in, const Eigen::Isometry3d& g
 }
 
 std::optional<GraspChoice> GraspSequencer::currentChoice(const SequencerInput& in) const {
-  if (!object_pose_) return std::nullopt;
+  const std::optional<Eigen::Isometry3d> object_pose = currentPose();
+  if (!object_pose) return std::nullopt;
   const Eigen::Matrix3d ref = (in.tcp && isValidPose(*in.tcp)) ? Eigen::Matrix3d(in.tcp->linear())
-                                                              : Eigen::Matrix3d(object_pose_->linear());
-  return chooseGrasp(candidates_, params_.objects[current_].approach, *object_pose_, ref, params_.selection);
+                                                              : Eigen::Matrix3d(object_pose->linear());
+  return chooseGrasp(candidates_, params_.objects[current_].approach, *object_pose, ref, params_.selection);
 }
 
 void GraspSequencer::finishObject(double t, bool success, const std::string& reason,
@@ -395,6 +408,7 @@ SequencerOutput GraspSequencer::update(const SequencerInput& in) {
   }
   last_t_ = in.t;
   SequencerOutput out;
+  out.events.swap(pose_events_);  // what setObjectPose saw since the last cycle
   if (!started_) {
     started_ = true;
     startObject(in.t, &out);
@@ -413,7 +427,7 @@ SequencerOutput GraspSequencer::update(const SequencerInput& in) {
     if (cp != last_controller_phase_ && !last_controller_phase_.empty())
       out.events.push_back(label() + ": controller " + last_controller_phase_ + " -> " + cp);
     last_controller_phase_ = cp;
-    if (counting_tfm_ && object_pose_) {
+    if (counting_tfm_ && object_pose_t_ >= 0.0) {
       if (!in.controller_phase.empty()) {
         ++ctrl_cycles_;
         if (in.target_in_fov) ++ctrl_fov_cycles_;
@@ -464,8 +478,9 @@ void GraspSequencer::advance(const SequencerInput& in, SequencerOutput* out) {
   const double in_phase = t - phase_t0_;
   const bool centre_was_sent = centre_sent_;  // the goal of the last cycle (tsmm, see Approach)
   centre_sent_ = false;
-  const bool fresh = object_pose_ && (t - object_pose_t_) <= params_.perception_hold;
-  if (object_pose_ && !locked_) out->object_pose = *object_pose_;
+  const std::optional<Eigen::Isometry3d> object_pose = currentPose();
+  const bool fresh = object_pose && (t - object_pose_t_) <= params_.perception_hold;
+  if (object_pose && !locked_) out->object_pose = *object_pose;
 
   switch (phase_) {
     case GraspPhase::WaitTarget: advanceWaitTarget(in, fresh, out); break;
@@ -484,7 +499,7 @@ void GraspSequencer::advance(const SequencerInput& in, SequencerOutput* out) {
 void GraspSequencer::advanceWaitTarget(const SequencerInput& in, bool fresh, SequencerOutput* out) {
   const double t = in.t;
   if (!fresh) {
-    const auto& seen = object_pose_ ? object_pose_ : remembered_[current_];
+    const std::optional<Eigen::Isometry3d>& seen = filters_[current_].pose();  // now or before this object
     if (seen && params_.search_distance > 0.0) {
       Eigen::Isometry3d look = *seen;
       look.translation() -= params_.search_distance * seen->linear().col(2);
@@ -633,7 +648,6 @@ void GraspSequencer::advanceRetreat(const SequencerInput& in, double in_phase, S
     if (current_ + 1 < params_.objects.size()) {
       enter(GraspPhase::WaitTarget, t, out);
       ++current_;
-      object_pose_.reset();
       object_pose_t_ = -1.0;
       candidates_.clear();
       startObject(t, out);

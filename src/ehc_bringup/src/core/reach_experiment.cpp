@@ -48,6 +48,7 @@ void ReachExperimentParams::validate() const {
   auto bad = [](const std::string& w) { throw std::invalid_argument("[ReachExperiment] " + w); };
   if (!(control_rate >= 1.0 && control_rate <= 10000.0)) bad("control_rate must be in [1, 10000] Hz");
   if (!(time_limit > 0.0)) bad("time_limit must be > 0");
+  if (first_set < 0) bad("first_set must be >= 0");
   if (!(distant_threshold > 0.0)) bad("distant_threshold must be > 0");
   if (!(arrival_position > 0.0 && arrival_orientation > 0.0)) bad("arrival tolerances must be > 0");
   if (!(progress_window > 0.0 && progress_position > 0.0 && progress_orientation > 0.0))
@@ -146,6 +147,7 @@ ReachTrial ReachExperiment::reach(ehc_sim::KinematicFakeRobot& robot, ControlCyc
   const int window = std::max(1, static_cast<int>(std::lround(params_.progress_window * params_.control_rate)));
   std::vector<Eigen::Vector3d> history(static_cast<std::size_t>(window), Eigen::Vector3d::Zero());
   std::vector<Eigen::Vector2d> base_history(static_cast<std::size_t>(window), Eigen::Vector2d::Zero());
+  bool recovering = false;
   for (int k = 0; k <= max_steps; ++k) {
     const Eigen::Isometry3d tcp = model_->fk(robot.basePose(), robot.armPositions(), rc.tcp_frame);
     const Vector6d e = ehc_control::poseError(tcp, target);
@@ -180,6 +182,8 @@ ReachTrial ReachExperiment::reach(ehc_sim::KinematicFakeRobot& robot, ControlCyc
     step_us.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
     sim_time_ += dt;
     const ehc_control::ControlCycleStatus& st = out.status;
+    if (st.recovering && !recovering) ++t.recoveries;  // a stall recovery (ReachRecovery) started
+    recovering = st.recovering;
     if (st.qp_status != ehc_control::QpStatus::Ok) ++t.qp_failures;  // any cycle without a good QP solve
     if (trace_) {
       std::ostream& o = *trace_;
@@ -217,19 +221,23 @@ ReachSummary ReachExperiment::run(const std::vector<std::vector<Eigen::Isometry3
   std::vector<double> step_us;
   double time_sum = 0.0;
   s.min_joint_limit_margin = 1e9;
-  ControlCycle cycle(model_, weighting_, cycle_params_);
   for (std::size_t si = 0; si < sets.size(); ++si) {
-    const unsigned set_seed = seed + static_cast<unsigned>(si);
+    const int set_number = params_.first_set + static_cast<int>(si);
+    // Each set starts from nothing (controller state, clock), so a set rerun alone with
+    // --first-set repeats it exactly.
+    ControlCycle cycle(model_, weighting_, cycle_params_);
+    sim_time_ = 0.0;
+    const unsigned set_seed = seed + static_cast<unsigned>(set_number);
     ehc_sim::KinematicFakeRobot robot(model_->config(), params_.noise, set_seed, params_.base_model);
     robot.reset(Eigen::Vector3d::Zero(), model_->config().arm_ready, set_seed);
     for (std::size_t ti = 0; ti < sets[si].size(); ++ti) {
       if (params_.protocol == ReachProtocol::Reset && ti > 0)  // a fresh noise stream per target
         robot.reset(Eigen::Vector3d::Zero(), model_->config().arm_ready, set_seed * 1000u + static_cast<unsigned>(ti));
-      trace_set_ = static_cast<int>(si);
+      trace_set_ = set_number;
       trace_index_ = static_cast<int>(ti);
       ReachTrial t = reach(robot, cycle, sets[si][ti], distant, close, step_us);
       t.method = s.method;
-      t.set = static_cast<int>(si);
+      t.set = set_number;
       t.index = static_cast<int>(ti);
       ++s.targets;
       if (t.reached) {
@@ -240,6 +248,7 @@ ReachSummary ReachExperiment::run(const std::vector<std::vector<Eigen::Isometry3
         if (!t.failure_joint.empty()) ++s.pinned_joints[t.failure_joint];
       }
       s.qp_failures += t.qp_failures;
+      s.recoveries += t.recoveries;
       s.min_joint_limit_margin = std::min(s.min_joint_limit_margin, t.min_joint_limit_margin);
       if (trials) trials->push_back(t);
       if (progress) {
@@ -277,6 +286,7 @@ ehc_common::Json summaryJsonValue(const ReachSummary& s) {
   j["distant"] = speedJson(s.distant);
   j["close"] = speedJson(s.close);
   j["qp_failures"] = s.qp_failures;
+  j["recoveries"] = s.recoveries;
   j["min_joint_limit_margin_rad"] = jsonNumber(s.min_joint_limit_margin);
   j["controller_step_median_us"] = jsonNumber(s.controller_median_us);
   j["controller_step_p99_us"] = jsonNumber(s.controller_p99_us);
@@ -346,11 +356,11 @@ void writeReachResults(const std::string& dir, const std::vector<ReachSummary>& 
   {
     std::ofstream f = open("trials.csv");
     f << "method,set,index,reached,time_s,final_position_error_m,final_orientation_error_rad,qp_failures,"
-         "min_joint_limit_margin_rad,failure,failure_joint\n";
+         "min_joint_limit_margin_rad,failure,failure_joint,recoveries\n";
     for (const auto& t : trials)
       f << t.method << "," << t.set << "," << t.index << "," << (t.reached ? 1 : 0) << "," << t.time_s << ","
         << t.final_position_error << "," << t.final_orientation_error << "," << t.qp_failures << ","
-        << t.min_joint_limit_margin << "," << toString(t.failure) << "," << t.failure_joint << "\n";
+        << t.min_joint_limit_margin << "," << toString(t.failure) << "," << t.failure_joint << "," << t.recoveries << "\n";
   }
 }
 

@@ -1,7 +1,9 @@
 #include "ehc_bringup/reach_targets.h"
 
+#include "ehc_common/enum_names.h"
 #include "ehc_control/pose_math.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <iomanip>
@@ -10,6 +12,42 @@
 #include <stdexcept>
 
 namespace ehc_bringup {
+
+namespace {
+constexpr ehc_common::EnumNames<TiltSampling, 2> kTiltNames = {{
+    {TiltSampling::Uniform, "uniform"},
+    {TiltSampling::Sphere, "sphere"},
+}};
+}  // namespace
+
+std::string toString(TiltSampling s) { return ehc_common::enumName(kTiltNames, s, "ReachTargetGenerator"); }
+TiltSampling tiltSamplingFromString(const std::string& s) {
+  return ehc_common::enumValue(kTiltNames, s, "ReachTargetGenerator", "tilt sampling");
+}
+
+std::vector<std::string> ReachTargetGenerator::presetNames() { return {"paper", "any"}; }
+
+ReachTargetGenerator ReachTargetGenerator::preset(const std::string& name) {
+  ReachTargetGenerator g;
+  if (name == "paper") return g;
+  if (name == "any") {
+    g.min_distance = 0.0;
+    g.max_distance = 7.0;
+    g.max_tilt_deg = 180.0;
+    g.tilt_sampling = TiltSampling::Sphere;
+    g.tilt_azimuth_spread_deg = 180.0;
+    return g;
+  }
+  throw std::invalid_argument("[ReachTargetGenerator] unknown generator '" + name + "' (paper, any)");
+}
+
+std::string ReachTargetGenerator::summary() const {
+  std::ostringstream s;
+  s << "targets " << min_distance << "-" << max_distance << " m apart, height " << min_height << "-" << max_height
+    << " m, tilt " << toString(tilt_sampling) << " up to " << max_tilt_deg << " deg, azimuth within +-"
+    << tilt_azimuth_spread_deg << " deg of the travel direction";
+  return s.str();
+}
 
 void ReachTargetGenerator::validate() const {
   auto bad = [](const std::string& w) { throw std::invalid_argument("[ReachTargetGenerator] " + w); };
@@ -28,7 +66,10 @@ std::vector<Eigen::Isometry3d> ReachTargetGenerator::generate(
   std::uniform_real_distribution<double> dist(min_distance, max_distance);
   std::uniform_real_distribution<double> angle(-M_PI, M_PI);
   std::uniform_real_distribution<double> height(min_height, max_height);
-  std::uniform_real_distribution<double> tilt(0.0, max_tilt_deg * M_PI / 180.0);
+  const double max_tilt = max_tilt_deg * M_PI / 180.0;
+  std::uniform_real_distribution<double> tilt(0.0, max_tilt);
+  // Sphere: cos(tilt) uniform in [cos(max), 1] gives directions uniform over the cap.
+  std::uniform_real_distribution<double> cos_tilt(std::cos(max_tilt), 1.0);
   const double spread = tilt_azimuth_spread_deg * M_PI / 180.0;
   std::uniform_real_distribution<double> azimuth_offset(-spread, spread);
   std::vector<Eigen::Isometry3d> out;
@@ -37,7 +78,8 @@ std::vector<Eigen::Isometry3d> ReachTargetGenerator::generate(
   int redraws = 0;
   for (int i = 0; i < count; ++i) {
     const double d = dist(rng), bearing = angle(rng), z = height(rng);
-    const double t = tilt(rng), azimuth = bearing + azimuth_offset(rng), roll = angle(rng);
+    const double t = tilt_sampling == TiltSampling::Sphere ? std::acos(std::clamp(cos_tilt(rng), -1.0, 1.0)) : tilt(rng);
+    const double azimuth = bearing + azimuth_offset(rng), roll = angle(rng);
     const Eigen::Vector2d xy = prev + d * Eigen::Vector2d(std::cos(bearing), std::sin(bearing));
     // Straight down = rotation of pi about x (z -> -z); then tilt about the horizontal axis
     // perpendicular to the azimuth, so the approach axis leans towards the azimuth; roll about

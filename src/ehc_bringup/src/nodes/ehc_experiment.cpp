@@ -37,7 +37,13 @@ const char* kUsage =
     "                                          its default parameters; the controller sees its odometry)\n"
     "           [--config controller.yaml] [--map reachability_map.bin] [--trace cycles.csv]\n"
     "           [--protocol sequence|reset]   (reset: every target from the ready pose at the origin)\n"
+    "           [--first-set K]   (number of the first set: runs sets K..K+sets-1; set k's targets and noise\n"
+    "                              depend only on the seed and k, so one set of a run reruns alone)\n"
     "           [--all-targets]   (keep generated targets no whole-body IK solution reaches)\n"
+    "           [--generator paper|any]   (target distribution: paper = 1.5-4 m apart, approach within +-45 deg\n"
+    "                                      of the travel direction; any = 0-7 m apart, approach from any direction)\n"
+    "           [--min-distance m] [--max-distance m] [--min-height m] [--max-height m] [--max-tilt deg]\n"
+    "           [--azimuth-spread deg] [--tilt-sampling uniform|sphere]   (override the generator's fields)\n"
     "       ehc_experiment grasp --method tsmm|neo_c|neo_e|ehc|all --out DIR [--robot <name|robot.yaml>] [--sets 15] [--seed 1]\n"
     "           [--scene scene.yaml] [--jobs 1] [--config-dir config] [--jitter-xy 0.01] [--jitter-yaw 3]\n"
     "           [--base-model ideal|water2]   (default: the sim file's, ideal; water2: the stack sees the bridge's /odom)\n"
@@ -47,13 +53,29 @@ const char* kUsage =
 
 struct Args {
   std::string command, robot, method = "ehc", out, targets_csv, config, map, trace;
-  int sets = 10, points = 50;
+  int sets = 10, points = 50, first_set = 0;
   unsigned seed = 1;
   bool noise = true;
   ehc_sim::BaseModelType base_model = ehc_sim::BaseModelType::Ideal;
   bool all_targets = false;  ///< keep kinematically unreachable targets
   ehc_bringup::ReachProtocol protocol = ehc_bringup::ReachProtocol::Sequence;
+  ehc_bringup::ReachTargetGenerator generator;
 };
+
+/// --generator preset, then the field overrides.
+ehc_bringup::ReachTargetGenerator generatorFromCli(const ehc_common::CommandLine& cli) {
+  auto g = ehc_bringup::ReachTargetGenerator::preset(cli.choice("generator", ehc_bringup::ReachTargetGenerator::presetNames(), "paper"));
+  g.min_distance = cli.real("min-distance", g.min_distance);
+  g.max_distance = cli.real("max-distance", g.max_distance);
+  g.min_height = cli.real("min-height", g.min_height);
+  g.max_height = cli.real("max-height", g.max_height);
+  g.max_tilt_deg = cli.real("max-tilt", g.max_tilt_deg);
+  g.tilt_azimuth_spread_deg = cli.real("azimuth-spread", g.tilt_azimuth_spread_deg);
+  if (cli.has("tilt-sampling"))
+    g.tilt_sampling = ehc_bringup::tiltSamplingFromString(cli.choice("tilt-sampling", {"uniform", "sphere"}, "uniform"));
+  g.validate();
+  return g;
+}
 
 Args parse(int argc, char** argv) {
   Args a;
@@ -62,13 +84,16 @@ Args parse(int argc, char** argv) {
   if (a.command != "reach") throw std::invalid_argument("unknown command '" + a.command + "' (reach, grasp, poses)");
   const ehc_common::CommandLine cli(argc, argv,
                                      {"robot", "method", "out", "sets", "points", "seed", "targets",
-                                      "config", "map", "trace", "noise", "base-model", "protocol"},
+                                      "config", "map", "trace", "noise", "base-model", "protocol", "generator",
+                                      "min-distance", "max-distance", "min-height", "max-height", "max-tilt",
+                                      "azimuth-spread", "tilt-sampling", "first-set"},
                                      {"all-targets"}, /*first=*/2);
   a.robot = ehc_control::resolveRobotFile(cli.text("robot"));  // a robot name or a robot.yaml
   a.out = cli.text("out");
   a.method = cli.text("method", a.method);
   a.sets = static_cast<int>(cli.integer("sets", a.sets, 1, 1000000));
   a.points = static_cast<int>(cli.integer("points", a.points, 1, 1000000));
+  a.first_set = static_cast<int>(cli.integer("first-set", a.first_set, 0, 1000000));
   a.seed = static_cast<unsigned>(cli.integer("seed", a.seed, 0, 4294967295L));
   a.targets_csv = cli.text("targets", "");
   a.config = cli.text("config", "");
@@ -78,6 +103,7 @@ Args parse(int argc, char** argv) {
   a.noise = cli.choice("noise", {"on", "off"}, "on") == "on";
   a.base_model = ehc_sim::baseModelTypeFromString(cli.choice("base-model", {"ideal", "water2"}, "ideal"));
   a.protocol = ehc_bringup::reachProtocolFromString(cli.choice("protocol", {"sequence", "reset"}, "sequence"));
+  a.generator = generatorFromCli(cli);
   return a;
 }
 
@@ -180,6 +206,7 @@ int main(int argc, char** argv) {
     ep.noise.enabled = a.noise;
     ep.base_model.type = a.base_model;
     ep.protocol = a.protocol;
+    ep.first_set = a.first_set;
     ep.arrival_position = ctrl.arrival_position;
     ep.arrival_orientation = ctrl.arrival_orientation;
 
@@ -197,12 +224,12 @@ int main(int argc, char** argv) {
         sets.emplace_back(all.begin() + static_cast<long>(i),
                           all.begin() + static_cast<long>(std::min(all.size(), i + static_cast<std::size_t>(a.points))));
     } else {
-      const ehc_bringup::ReachTargetGenerator gen;
+      const ehc_bringup::ReachTargetGenerator& gen = a.generator;
       // Targets no whole-body IK solution reaches (e.g. a horizontal approach 0.3 m above the
       // floor for a 0.61 m arm on a 0.6 m base), or only with a joint inside the controller's
       // joint stop, are redrawn unless --all-targets.
       auto reachable = [&](const Eigen::Isometry3d& T) { return ehc_bringup::kinematicallyReachable(*model, T, ctrl.joint_stop); };
-      for (int s = 0; s < a.sets; ++s) {
+      for (int s = a.first_set; s < a.first_set + a.sets; ++s) {
         int rejected = 0;
         sets.push_back(gen.generate(a.points, a.seed * 1000u + static_cast<unsigned>(s), Eigen::Vector2d::Zero(),
                                     a.all_targets ? std::function<bool(const Eigen::Isometry3d&)>() : reachable, &rejected));
@@ -219,7 +246,7 @@ int main(int argc, char** argv) {
 
     std::cerr << robot_cfg.summary() << map->summary() << "\n" << ctrl.summary() << "\n"
               << "[ehc_experiment] " << sets.size() << " sets, noise " << (a.noise ? "on" : "off")
-              << ", seed " << a.seed << ", base model " << ep.base_model.summary() << ", protocol "
+              << ", seed " << a.seed << ", " << (a.targets_csv.empty() ? a.generator.summary() : "targets from " + a.targets_csv) << ", base model " << ep.base_model.summary() << ", protocol "
               << ehc_bringup::toString(a.protocol) << ", methods:";
     for (const auto& m : methods) std::cerr << " " << m;
     std::cerr << std::endl;
@@ -251,6 +278,7 @@ int main(int argc, char** argv) {
     std::string notes = "Exp-1 (random reaching), " + std::to_string(summaries[0].targets) +
                         " targets, protocol " + ehc_bringup::toString(a.protocol) + ", noise " + (a.noise ? "on (Table I)" : "off") + ", seed " +
                         std::to_string(a.seed) + ", " +
+                        (a.targets_csv.empty() ? a.generator.summary() + ", " : std::string()) +
                         (a.targets_csv.empty() ? (a.all_targets ? std::string("unreachable targets kept")
                                                                 : std::to_string(unreachable_redrawn) + " unreachable draws redrawn (whole-body IK with every joint " + std::to_string(ctrl.joint_stop).substr(0, 4) + " rad inside its limits)")
                                                : "targets from " + a.targets_csv) +

@@ -17,6 +17,7 @@
 #include "ehc_control/mpbs.h"
 #include "ehc_control/pose_servo.h"
 #include "ehc_control/qp_controller.h"
+#include "ehc_control/reach_recovery.h"
 #include "ehc_control/target_tracker.h"
 #include "ehc_control/whole_body_model.h"
 
@@ -70,6 +71,7 @@ struct ControlCycleStatus : QpStepFigures {
   double obstacles_age = -1.0;            ///< s since the last good obstacle list; -1: none
   bool controller_error = false;          ///< a core error (exception) stopped this cycle
   bool wrist_flip = false;                ///< the QP step prescribed a wrist flip (WristFlip)
+  bool recovering = false;                ///< the QP tracked a stall recovery's reference (ReachRecovery)
 };
 
 struct ControlCycleOutput {
@@ -150,6 +152,7 @@ class ControlCycle {
   std::shared_ptr<const WholeBodyModel> model_;
   std::shared_ptr<const EhcWeighting> weighting_;  ///< nullptr: no reachability map
   std::unique_ptr<EhcQpController> controller_;
+  std::unique_ptr<ReachRecovery> recovery_;
   std::unique_ptr<ControllerSupervisor> supervisor_;
   std::unique_ptr<MpbsServo> mpbs_;
   std::unique_ptr<TargetTracker> tracker_;

@@ -33,6 +33,7 @@
 #include "ehc_control/control_status.h"
 #include "ehc_control/ehc_weighting.h"
 #include "ehc_control/qp_solver.h"
+#include "ehc_control/reach_recovery.h"
 #include "ehc_control/whole_body_model.h"
 #include "ehc_control/wrist_flip.h"
 
@@ -88,6 +89,10 @@ struct QpControllerParams {
   /// spherical-wrist roll joint nearing its limit moves to the other wrist branch (same TCP
   /// pose) while the base and the other joints keep the TCP position task.
   WristFlipParams wrist_flip;
+  /// Section `recovery`: the joint-limit stall recovery of the control cycle (ReachRecovery,
+  /// reach_recovery.h): after a stall with a joint pinned, a whole-body configuration with wide
+  /// joint margins from IK, tracked through this QP as a reference velocity (step()'s `reference`).
+  ReachRecoveryParams recovery;
   double joint_influence = 0.9;        ///< rad: joint damper becomes active
   double joint_stop = 0.1;             ///< rad: closest allowed approach to a joint limit
   double joint_damper_gain = 1.0;      ///< xi of the joint dampers, 1/s
@@ -153,6 +158,7 @@ struct ControllerCommand : QpStepFigures {
   std::string failure;                          ///< reason when qp_status == QpStatus::Failed
   int joint_damper_rows = 0;
   bool wrist_flip = false;                      ///< the arm's wrist rates were prescribed (WristFlip)
+  bool recovering = false;                      ///< a stall recovery's reference was tracked (ControlCycle)
   std::string event;                            ///< log-worthy, e.g. a wrist flip started; else ""
 };
 
@@ -178,10 +184,14 @@ class EhcQpController {
   /// returns a zero command with qp_status QP_FAILED and the reason.
   /// `weight`: sig(omega) of this cycle if the caller already evaluated it (weight(), e.g. for
   /// MPBS), else it is evaluated here.
+  /// `reference` (size nDof, [base twist; arm rates]): a whole-body velocity to track instead
+  /// of the servo (ReachRecovery): the task becomes nu_e = J reference and the linear cost
+  /// -h o reference (h: the cost diagonal), so the optimum is the reference itself wherever the
+  /// bounds, joint dampers and obstacle dampers allow it; no wrist flip starts meanwhile.
   ControllerCommand step(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q,
                          const Eigen::Isometry3d& target, const Vector6d& nu_e,
                          const std::vector<ObstaclePair>& obstacles = {},
-                         const EhcWeight* weight = nullptr);
+                         const EhcWeight* weight = nullptr, const Eigen::VectorXd* reference = nullptr);
 
   /// The EHC weighting of a TCP position towards a target position (both world frame) for the
   /// base pose, exactly as step() evaluates it. Throws "[EhcQpController] ..." without a
@@ -232,13 +242,14 @@ class EhcQpController {
   /// The turn term's TCP bearing in the base frame (unwound, see base_turn_unwinding).
   double turnBearing(const Eigen::VectorXd& q);
   /// Cost diagonal h and linear term c of [qd; delta].
-  void buildCost(const Eigen::VectorXd& q, double e_floor, const ControllerCommand& out);
+  void buildCost(const Eigen::VectorXd& q, double e_floor, const ControllerCommand& out,
+                 const Eigen::VectorXd* reference);
   /// Velocity and slack bounds, the held variables, the joint dampers as tightened bounds.
   std::string buildBounds(const Eigen::VectorXd& q, const HeldGroups& held, ControllerCommand* out);
   /// Obstacle damper rows (nearest pairs first, parallel rows merged).
   std::string buildObstacleRows(const std::vector<ObstaclePair>& obstacles, ControllerCommand* out);
   /// WristFlip: prescribes the wrist triple's rates (held) when a flip runs; true then.
-  bool applyWristFlip(const Eigen::VectorXd& q, const HeldGroups& held, ControllerCommand* out);
+  bool applyWristFlip(const Eigen::VectorXd& q, const HeldGroups& held, bool may_run, ControllerCommand* out);
   /// The free DOFs, the task rows over them and the QP's cost G, g (slack eliminated).
   void buildTaskAndCost(const Vector6d& nu_e, bool release_orientation);
   /// The QP's inequality rows C, d (bounds, slack bounds, obstacle dampers); returns their count.

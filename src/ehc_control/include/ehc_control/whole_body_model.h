@@ -128,6 +128,11 @@ class WholeBodyModel {
   bool inverseKinematics(const Eigen::Isometry3d& target, unsigned seed, int attempts,
                          Eigen::Vector3d* base_pose = nullptr, Eigen::VectorXd* q = nullptr,
                          double limit_margin = 0.0) const;
+  /// One solve of the same problem from a given start (base pose x, y, yaw and arm q, clamped
+  /// into the shrunk ranges): the solution near that configuration, if the solver converges.
+  bool inverseKinematicsFrom(const Eigen::Isometry3d& target, const Eigen::Vector3d& base_start,
+                             const Eigen::VectorXd& q_start, Eigen::Vector3d* base_out,
+                             Eigen::VectorXd* q_out, double limit_margin = 0.0) const;
 
   /// Throws unless q has nArm finite entries / base pose is finite.
   void checkArm(const Eigen::VectorXd& q) const;
@@ -137,6 +142,7 @@ class WholeBodyModel {
 
  private:
   struct Impl;
+  struct IkProblem;
   void build();
   /// Whole-body Jacobian of a point fixed to `link`, p_base in base coordinates.
   void pointJacobianInBase(const KinematicState& state, int link, const Eigen::Vector3d& p_base,

@@ -81,6 +81,8 @@ ControlCycle::ControlCycle(std::shared_ptr<const WholeBodyModel> model, std::sha
   params_.validate();
   const RobotConfig& rc = model_->config();
   controller_ = std::make_unique<EhcQpController>(model_, params_.controller, weighting_);
+  recovery_ = std::make_unique<ReachRecovery>(*model_, params_.controller.recovery, params_.controller.joint_stop,
+                                              params_.controller.joint_influence);
   supervisor_ = std::make_unique<ControllerSupervisor>(rc, params_.watchdog);
   // Camera: mount on the hand (URDF) for MPBS and TfM, intrinsics from robot.yaml's
   // robot.camera_info (tracking.camera, if set, overrides it).
@@ -178,6 +180,7 @@ ControlCycleOutput ControlCycle::update(double now) {
       st.reason = c.failure;
       st.qp_status = c.qp_status;
       st.wrist_flip = c.wrist_flip;
+      st.recovering = c.recovering;
       static_cast<QpStepFigures&>(st) = c;
       if (c.ok) out.velocity = c.velocity;
       if (!c.event.empty()) out.event += (out.event.empty() ? "" : "; ") + c.event;
@@ -236,14 +239,22 @@ ControllerCommand ControlCycle::step(double now) {
   const std::optional<RollJoint> roll = rollJointAt(q);
   const RollJoint* roll_ptr = roll ? &*roll : nullptr;
   const std::vector<ObstaclePair> obstacles = supervisor_->obstacles(now);
+  // A joint-limit stall: the recovery's whole-body reference replaces the servo (ReachRecovery).
+  const Eigen::VectorXd* reference = recovery_->update(now, base, q, tcp, target);
+  auto withEvent = [this](ControllerCommand c) {
+    if (!recovery_->event().empty()) c.event += (c.event.empty() ? "" : "; ") + recovery_->event();
+    c.recovering = recovery_->state() == ReachRecovery::State::Moving;
+    return c;
+  };
   if (params_.servo_type == ServoType::Proportional)
-    return controller_->step(base, q, target, proportionalPoseServo(tcp, target, params_.servo, roll_ptr), obstacles);
+    return withEvent(controller_->step(base, q, target, proportionalPoseServo(tcp, target, params_.servo, roll_ptr),
+                                       obstacles, nullptr, reference));
   // sig(omega) once per cycle, shared by MPBS (eq. 14) and the QP weighting.
   std::optional<EhcWeight> w;
   if (controller_->hasWeighting()) w = controller_->weight(base, tcp.translation(), target.translation());
   const Eigen::Vector3d centre = watchedCentre(now);
   const MpbsOutput servo = mpbs_->compute(tcp, target, w ? w->sig : 1.0, roll_ptr, &centre);
-  return controller_->step(base, q, target, servo.twist, obstacles, w ? &*w : nullptr);
+  return withEvent(controller_->step(base, q, target, servo.twist, obstacles, w ? &*w : nullptr, reference));
 }
 
 std::string ControlCycle::summary() const {

@@ -55,6 +55,7 @@ void QpControllerParams::validate() const {
   requireRange(kOwner, "posture_gain", posture_gain, 0.0, 100.0);
   requireRange(kOwner, "limit_centring_gain", limit_centring_gain, 0.0, 100.0);
   wrist_flip.validate();
+  recovery.validate();
   requireRange(kOwner, "joint_stop", joint_stop, 0.0, 1.0);
   requireRange(kOwner, "joint_influence", joint_influence, 0.0, 3.0);
   if (joint_influence <= joint_stop)
@@ -89,7 +90,7 @@ std::string QpControllerParams::summary() const {
      << ", k_eps " << base_turn_gain << (base_turn_unwinding ? " (unwound)" : "") << ", k_m " << manipulability_gain
      << (manipulability_fade_distance > 0.0 ? " (fading within " + std::to_string(manipulability_fade_distance) + " m)" : std::string())
      << ", k_p "
-     << posture_gain << ", limit centring " << limit_centring_gain << "; " << wrist_flip.summary() << "\n"
+     << posture_gain << ", limit centring " << limit_centring_gain << "; " << wrist_flip.summary() << "; " << recovery.summary() << "\n"
      << "  joint dampers: influence " << joint_influence << " rad, stop " << joint_stop
      << " rad, gain " << joint_damper_gain << "; obstacle dampers: d_i " << obstacle_influence
      << " m, d_s " << obstacle_stop << " m";
@@ -130,6 +131,7 @@ QpControllerParams loadQpControllerParams(const ehc_common::ConfigNode& n) {
     p.wrist_flip.gain = flip.get("gain", p.wrist_flip.gain);
     p.wrist_flip.tolerance = flip.get("tolerance", p.wrist_flip.tolerance);
   }
+  p.recovery = loadReachRecoveryParams(n.childOrEmpty("recovery"));
   p.joint_influence = n.get("joint_influence", p.joint_influence);
   p.joint_stop = n.get("joint_stop", p.joint_stop);
   p.joint_damper_gain = n.get("joint_damper_gain", p.joint_damper_gain);
@@ -323,7 +325,7 @@ std::vector<const ObstaclePair*> EhcQpController::nearestObstaclePairs(const std
 ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q,
                                         const Eigen::Isometry3d& target, const Vector6d& nu_e,
                                         const std::vector<ObstaclePair>& obstacles,
-                                        const EhcWeight* weight) {
+                                        const EhcWeight* weight, const Eigen::VectorXd* reference) {
   const auto t0 = std::chrono::steady_clock::now();
   const int na = model_->nArm(), nd = model_->nDof();
   ControllerCommand out;
@@ -333,6 +335,8 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
   if (!q.allFinite() || !base_pose.allFinite()) return fail(out, "non-finite robot state");
   if (!target.matrix().allFinite()) return fail(out, "non-finite target pose");
   if (!nu_e.allFinite()) return fail(out, "non-finite desired twist");
+  if (reference && (reference->size() != nd || !reference->allFinite()))
+    return fail(out, "reference velocity must have " + std::to_string(nd) + " finite entries");
 
   // --- model: one FK pass; TCP pose, whole-body Jacobian, manipulability gradient
   const Eigen::Isometry3d T_tcp = updateKinematics(base_pose, q);
@@ -347,15 +351,16 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
   const HeldGroups held = applyMode(e, target, e_floor, &out);
 
   // --- cost, bounds and joint dampers, obstacle dampers, wrist flip
-  buildCost(q, e_floor, out);
+  buildCost(q, e_floor, out, reference);
   std::string failure = buildBounds(q, held, &out);
   if (!failure.empty()) return fail(out, failure);
   failure = buildObstacleRows(obstacles, &out);
   if (!failure.empty()) return fail(out, failure);
-  const bool flip = applyWristFlip(q, held, &out);
+  const bool flip = applyWristFlip(q, held, reference == nullptr, &out);
 
   // --- the QP in the rates alone (see buildTaskAndCost), solved through the QpSolver interface
-  buildTaskAndCost(nu_e, held.arm || flip);
+  if (reference) buildTaskAndCost(ws_->J * *reference, held.arm);
+  else buildTaskAndCost(nu_e, held.arm || flip);
   const int rows = buildInequalities();
   Workspace& s = *ws_;
   const int nf = static_cast<int>(s.free.size());
@@ -461,7 +466,8 @@ double EhcQpController::turnBearing(const Eigen::VectorXd& q) {
   return bearing;
 }
 
-void EhcQpController::buildCost(const Eigen::VectorXd& q, double e_floor, const ControllerCommand& out) {
+void EhcQpController::buildCost(const Eigen::VectorXd& q, double e_floor, const ControllerCommand& out,
+                                const Eigen::VectorXd* reference) {
   const RobotConfig& rc = model_->config();
   const int nb = model_->nBase(), na = model_->nArm(), nx = model_->nDof() + 6;
   Workspace& s = *ws_;
@@ -472,6 +478,10 @@ void EhcQpController::buildCost(const Eigen::VectorXd& q, double e_floor, const 
   h.head(nb).setConstant(out.base_weight);
   h.segment(nb, na).setConstant(params_.arm_weight);
   h.tail(6).setConstant(1.0 / e_floor);
+  if (reference) {  // track the reference: minimum of 1/2 qd^T H qd + c^T qd at qd = reference
+    c.head(nb + na) = -h.head(nb + na).cwiseProduct(*reference);
+    return;
+  }
   const double bearing = turnBearing(q);
   c[nb - 1] = -params_.base_turn_gain * bearing;
   const double fade = params_.manipulability_fade_distance > 0.0
@@ -578,14 +588,15 @@ std::string EhcQpController::buildObstacleRows(const std::vector<ObstaclePair>& 
   return std::string();
 }
 
-bool EhcQpController::applyWristFlip(const Eigen::VectorXd& q, const HeldGroups& groups, ControllerCommand* out) {
+bool EhcQpController::applyWristFlip(const Eigen::VectorXd& q, const HeldGroups& groups, bool may_run,
+                                     ControllerCommand* out) {
   const int nb = model_->nBase(), nx = model_->nDof() + 6;
   Workspace& s = *ws_;
   // --- wrist flip (WristFlip): the triple's rates are prescribed (held at the flip rate, within
   // the bounds and dampers), the orientation rows go to the slack; not when arrived, with the
   // arm held, or with an obstacle within influence (the flip sweeps the hand).
   const bool flip =
-      flip_->update(q, s.prev_arm_rates, !groups.arm && out->phase != ControlPhase::Arrived && s.nearest.empty());
+      flip_->update(q, s.prev_arm_rates, may_run && !groups.arm && out->phase != ControlPhase::Arrived && s.nearest.empty());
   s.fixed.setZero(nx);
   if (flip) {
     for (int k = 0; k < 3; ++k) {

@@ -13,6 +13,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <iomanip>
@@ -537,42 +538,81 @@ void WholeBodyModel::manipulabilityGradientFromJacobian(const Matrix6Xd& J, Eige
   g *= m;
 }
 
+/// The whole-body IK problem of one target: a virtual planar base (prismatic x, prismatic y,
+/// revolute yaw) followed by the TCP chain, the arm joints within their limits shrunk by the
+/// margin, the base within 3 m of the target, KDL's Newton-Raphson solver with joint limits.
+struct WholeBodyModel::IkProblem {
+  KDL::Chain chain;
+  unsigned n = 0;
+  KDL::JntArray lo, hi;
+  KDL::Frame goal;
+  Eigen::Isometry3d target;
+  std::unique_ptr<KDL::ChainFkSolverPos_recursive> fk;
+  std::unique_ptr<KDL::ChainIkSolverVel_pinv> ikv;
+  std::unique_ptr<KDL::ChainIkSolverPos_NR_JL> ik;
+
+  IkProblem(const WholeBodyModel& m, const Eigen::Isometry3d& T, double limit_margin) : target(T) {
+    const RobotConfig& cfg = m.cfg_;
+    if (!T.matrix().allFinite()) fail("inverseKinematics: target is not finite");
+    if (!(limit_margin >= 0.0) || ((cfg.arm_upper - cfg.arm_lower).array() <= 2.0 * limit_margin).any())
+      fail("inverseKinematics: limit margin must be >= 0 and leave every joint a range");
+    chain.addSegment(KDL::Segment(KDL::Joint("virtual_x", KDL::Joint::TransX)));
+    chain.addSegment(KDL::Segment(KDL::Joint("virtual_y", KDL::Joint::TransY)));
+    chain.addSegment(KDL::Segment(KDL::Joint("virtual_yaw", KDL::Joint::RotZ)));
+    chain.addChain(m.impl_->tcp->chain);
+    n = chain.getNrOfJoints();
+    lo.resize(n);
+    hi.resize(n);
+    const Eigen::Vector3d t = T.translation();
+    for (unsigned i = 0; i < 2; ++i) {
+      lo(i) = t[static_cast<int>(i)] - 3.0;
+      hi(i) = t[static_cast<int>(i)] + 3.0;
+    }
+    lo(2) = -4.0 * M_PI;
+    hi(2) = 4.0 * M_PI;
+    for (int i = 0; i < m.nArm(); ++i) {
+      lo(3 + static_cast<unsigned>(i)) = cfg.arm_lower[i] + limit_margin;
+      hi(3 + static_cast<unsigned>(i)) = cfg.arm_upper[i] - limit_margin;
+    }
+    fk = std::make_unique<KDL::ChainFkSolverPos_recursive>(chain);
+    ikv = std::make_unique<KDL::ChainIkSolverVel_pinv>(chain);
+    ik = std::make_unique<KDL::ChainIkSolverPos_NR_JL>(chain, lo, hi, *fk, *ikv, 500, 1e-6);
+    for (int r = 0; r < 3; ++r) {
+      goal.p[r] = t[r];
+      for (int c = 0; c < 3; ++c) goal.M(r, c) = T.linear()(r, c);
+    }
+  }
+
+  /// One Newton-Raphson solve from q0 = [x, y, yaw, q_arm]; true when the TCP reaches the
+  /// target within 1 mm / 0.5 deg with every arm joint inside its (shrunk) range.
+  bool solve(const KDL::JntArray& q0, Eigen::Vector3d* base_out, Eigen::VectorXd* q_out) const {
+    KDL::JntArray qs(n);
+    if (ik->CartToJnt(q0, goal, qs) < 0) return false;
+    KDL::Frame f;
+    fk->JntToCart(qs, f);
+    const Eigen::Isometry3d T = toEigen(f);
+    const Eigen::AngleAxisd d(Eigen::Matrix3d(T.linear().transpose() * target.linear()));
+    if ((T.translation() - target.translation()).norm() > 1e-3 || std::abs(d.angle()) > 0.5 * M_PI / 180.0) return false;
+    for (unsigned i = 3; i < n; ++i)
+      if (qs(i) < lo(i) - 1e-9 || qs(i) > hi(i) + 1e-9) return false;
+    if (base_out) *base_out = Eigen::Vector3d(qs(0), qs(1), std::remainder(qs(2), 2.0 * M_PI));
+    if (q_out) {
+      q_out->resize(static_cast<Eigen::Index>(n - 3));
+      for (unsigned i = 3; i < n; ++i) (*q_out)[static_cast<Eigen::Index>(i - 3)] = qs(i);
+    }
+    return true;
+  }
+};
+
 bool WholeBodyModel::inverseKinematics(const Eigen::Isometry3d& target, unsigned seed, int attempts,
                                        Eigen::Vector3d* base_out, Eigen::VectorXd* q_out, double limit_margin) const {
-  if (!target.matrix().allFinite()) fail("inverseKinematics: target is not finite");
-  if (!(limit_margin >= 0.0) || ((cfg_.arm_upper - cfg_.arm_lower).array() <= 2.0 * limit_margin).any())
-    fail("inverseKinematics: limit margin must be >= 0 and leave every joint a range");
-  // Virtual planar base (prismatic x, prismatic y, revolute yaw) followed by the TCP chain.
-  KDL::Chain chain;
-  chain.addSegment(KDL::Segment(KDL::Joint("virtual_x", KDL::Joint::TransX)));
-  chain.addSegment(KDL::Segment(KDL::Joint("virtual_y", KDL::Joint::TransY)));
-  chain.addSegment(KDL::Segment(KDL::Joint("virtual_yaw", KDL::Joint::RotZ)));
-  chain.addChain(impl_->tcp->chain);
-  const unsigned n = chain.getNrOfJoints();
-  KDL::JntArray lo(n), hi(n), q0(n), qs(n);
+  const IkProblem p(*this, target, limit_margin);
+  KDL::JntArray q0(p.n);
   const Eigen::Vector3d t = target.translation();
-  for (unsigned i = 0; i < 2; ++i) {
-    lo(i) = t[static_cast<int>(i)] - 3.0;
-    hi(i) = t[static_cast<int>(i)] + 3.0;
-  }
-  lo(2) = -4.0 * M_PI;
-  hi(2) = 4.0 * M_PI;
-  for (int i = 0; i < nArm(); ++i) {
-    lo(3 + static_cast<unsigned>(i)) = cfg_.arm_lower[i] + limit_margin;
-    hi(3 + static_cast<unsigned>(i)) = cfg_.arm_upper[i] - limit_margin;
-  }
-  KDL::ChainFkSolverPos_recursive fk(chain);
-  KDL::ChainIkSolverVel_pinv ikv(chain);
-  KDL::ChainIkSolverPos_NR_JL ik(chain, lo, hi, fk, ikv, 500, 1e-6);
-  KDL::Frame goal;
-  for (int r = 0; r < 3; ++r) {
-    goal.p[r] = t[r];
-    for (int c = 0; c < 3; ++c) goal.M(r, c) = target.linear()(r, c);
-  }
   std::mt19937_64 rng(seed);
   for (int a = 0; a < attempts; ++a) {
-    for (unsigned i = 0; i < n; ++i) {
-      std::uniform_real_distribution<double> u(lo(i), hi(i));
+    for (unsigned i = 0; i < p.n; ++i) {
+      std::uniform_real_distribution<double> u(p.lo(i), p.hi(i));
       q0(i) = u(rng);
     }
     // Start the base within arm's reach of the target, facing it.
@@ -580,23 +620,22 @@ bool WholeBodyModel::inverseKinematics(const Eigen::Isometry3d& target, unsigned
     q0(0) = t.x() - 0.4 * std::cos(yaw);
     q0(1) = t.y() - 0.4 * std::sin(yaw);
     q0(2) = yaw;
-    if (ik.CartToJnt(q0, goal, qs) < 0) continue;
-    KDL::Frame f;
-    fk.JntToCart(qs, f);
-    const Eigen::Isometry3d T = toEigen(f);
-    const Eigen::AngleAxisd d(Eigen::Matrix3d(T.linear().transpose() * target.linear()));
-    if ((T.translation() - t).norm() > 1e-3 || std::abs(d.angle()) > 0.5 * M_PI / 180.0) continue;
-    bool inside = true;
-    for (unsigned i = 3; i < n; ++i) inside &= qs(i) >= lo(i) - 1e-9 && qs(i) <= hi(i) + 1e-9;
-    if (!inside) continue;
-    if (base_out) *base_out = Eigen::Vector3d(qs(0), qs(1), std::remainder(qs(2), 2.0 * M_PI));
-    if (q_out) {
-      q_out->resize(nArm());
-      for (int i = 0; i < nArm(); ++i) (*q_out)[i] = qs(3 + static_cast<unsigned>(i));
-    }
-    return true;
+    if (p.solve(q0, base_out, q_out)) return true;
   }
   return false;
+}
+
+bool WholeBodyModel::inverseKinematicsFrom(const Eigen::Isometry3d& target, const Eigen::Vector3d& base_start,
+                                           const Eigen::VectorXd& q_start, Eigen::Vector3d* base_out,
+                                           Eigen::VectorXd* q_out, double limit_margin) const {
+  checkBase(base_start);
+  checkArm(q_start);
+  const IkProblem p(*this, target, limit_margin);
+  KDL::JntArray q0(p.n);
+  for (unsigned i = 0; i < 3; ++i) q0(i) = base_start[static_cast<int>(i)];
+  for (unsigned i = 3; i < p.n; ++i)
+    q0(i) = std::clamp(q_start[static_cast<Eigen::Index>(i - 3)], p.lo(i), p.hi(i));
+  return p.solve(q0, base_out, q_out);
 }
 
 }  // namespace ehc_control

@@ -89,6 +89,11 @@ struct GraspGeneratorConfig {
   double voxel_size = 0.004;          ///< m, voxel filter leaf
   double normal_radius = 0.012;       ///< m, normal estimation radius
   int min_object_points = 30;         ///< after filtering; fewer => no grasp
+  /// After filtering, at most this many points per object: beyond it the voxel edge grows until
+  /// they fit (every part of the object keeps points, coarser), which bounds the work per object
+  /// whatever the cloud. 5000 points at 4 mm are 0.08 m^2 of surface, far more than any object
+  /// the gripper can close around shows; only larger clusters are coarsened.
+  int max_object_points = 5000;
   int max_seeds = 200;                ///< contact points sampled
   int pairs_per_seed = 2;             ///< antipodal partners kept per seed
   int approach_steps = 16;            ///< approach directions around each closing axis
@@ -162,6 +167,11 @@ struct GraspResult {
   bool support_plane_found = false;
   Eigen::Vector4d support_plane = Eigen::Vector4d::Zero();  ///< n.p + d = 0, n = up side
   int input_points = 0, finite_points = 0;
+  /// generateForTarget: points left by the point budget (GraspTargetingParams::max_input_points).
+  int budget_points = 0;
+  /// Points of the object(s) after the voxel filter (each object at most max_object_points).
+  int filtered_points = 0;
+  double voxel_size = 0.0;  ///< m, the largest voxel edge used (voxel_size, grown for a large object)
 };
 
 struct SceneSegmentation {
@@ -200,24 +210,34 @@ class GraspGenerator {
   GraspGeneratorConfig config_;
 };
 
-/// How grasps are aimed at the perceived target object (ehc_grasp_node's `node` section; the
-/// in-process experiment pipeline reads the same fields of the same file).
+/// How ehc_grasp_node works through its clouds and aims the grasps at the perceived target
+/// object (its `node` section; the in-process experiment pipeline reads the same fields of the
+/// same file).
 struct GraspTargetingParams {
   double max_rate_hz = 2.0;     ///< clouds processed per second at most
+  /// At most this many points of a cloud are read (point_cloud_layout.h PointBudget), before
+  /// anything else: an organised cloud on an even grid of its rows and columns. A 640x480 D435
+  /// frame is read every 4th row and column (19 200 points, 6 mm apart at 0.5 m, under the
+  /// simulator's 12 mm on its 80x60 ray grid, on which the grasps are tested); the work per cloud
+  /// does not grow with its size.
+  int max_input_points = 20000;
   double target_timeout = 2.0;  ///< s; an older target is ignored (grasps for every object)
   double target_gate = 0.15;    ///< m; no grasps if the nearest object is farther from the target
   void validate() const;        ///< throws std::invalid_argument "[GraspTargeting] ..."
   std::string summary() const;
 };
-/// Reads max_rate_hz, target_timeout and target_gate of a `node` mapping (all optional).
+/// Reads max_rate_hz, max_input_points, target_timeout and target_gate of a `node` mapping (all
+/// optional).
 GraspTargetingParams loadGraspTargetingParams(const ehc_common::ConfigNode& node);
 
-/// generateFromScene near `target` (every object without one), then the gate: if the nearest
-/// object's centroid is farther than `target_gate` from the target there are no grasps (the
-/// reason says how far). What ehc_grasp_node and the in-process pipeline do with each cloud.
+/// At most targeting.max_input_points of `scene` (budgetPoints; the node reads a message within
+/// the same budget), generateFromScene near `target` (every object without one), then the gate:
+/// if the nearest object's centroid is farther than target_gate from the target there are no
+/// grasps (the reason says how far). What ehc_grasp_node and the in-process pipeline do with
+/// each cloud.
 GraspResult generateForTarget(const GraspGenerator& generator, const PointList& scene,
                               const Eigen::Vector3d& viewpoint, const Eigen::Vector3d* target,
-                              double target_gate);
+                              const GraspTargetingParams& targeting);
 
 /// PCD files (PCL). loadPcd reads x, y, z of any point type; throws std::invalid_argument
 /// "[PointCloudIO] cannot read '<path>' ..." on a missing or malformed file.

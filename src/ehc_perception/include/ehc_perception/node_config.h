@@ -24,13 +24,19 @@ struct TagNodeConfig {
   std::string camera_frame;  ///< "" = the image's header.frame_id
   std::string camera_file;   ///< optional camera_info YAML; "" = use the camera_info topic
   double tf_timeout = 0.05;  ///< wall s an image waits for its camera pose (lock-step: the node's own wait)
-  int image_queue = 5;       ///< images queued for processing (the oldest is dropped)
+  /// s: an image that waited longer in the node (receipt to processing, the node's clock) is
+  /// dropped as stale (timer mode; in lock-step the simulator waits for the node). The
+  /// subscription keeps the newest image only.
+  double stale_after = 0.5;
+  /// Pixels of an image at most (1920x1080, the D435's largest colour mode): a larger one is
+  /// dropped before any per-pixel work; so is one of another size than the camera's.
+  int max_image_pixels = 1920 * 1080;
   TagDetectorConfig detector;
   TagTargetConfig target;
 
   /// Throws std::invalid_argument "[TagNodeConfig] parameter 'node.<field>' ..." (tf_timeout in
-  /// [0, 5] s, image_queue in [1, 100], world_frame not empty), then the detector's and the
-  /// target's own validation.
+  /// [0, 5] s, stale_after in [0.01, 10] s, max_image_pixels in [1, 10^8], world_frame not
+  /// empty), then the detector's and the target's own validation.
   void validate() const;
   std::string summary() const;
   /// The topics the node needs a publisher on before it takes part in a lock-step
@@ -49,13 +55,17 @@ struct GraspNodeConfig {
   std::string target_topic = "/ehc/target_pose";  ///< "" = no target: every object
   std::string output_topic = "/ehc/grasp_candidates";
   std::string world_frame = "odom";
-  GraspTargetingParams targeting;  ///< max rate, target timeout and gate
+  GraspTargetingParams targeting;  ///< max rate, point budget, target timeout and gate
   double tf_timeout = 0.1;  ///< wall s a cloud waits for its camera pose (lock-step: the node's own wait)
-  int cloud_queue = 3;      ///< clouds waiting to be processed (the oldest is dropped)
+  /// s: a cloud that waited longer in the node (receipt to processing, the node's clock) is
+  /// dropped as stale (timer mode; in lock-step the simulator waits for the node). The
+  /// subscription keeps the newest cloud only.
+  double stale_after = 0.5;
   GraspGeneratorConfig generator;
 
   /// Throws std::invalid_argument "[GraspNodeConfig] parameter 'node.<field>' ..." (tf_timeout in
-  /// [0, 5] s, cloud_queue in [1, 100]), then the targeting's and the generator's own validation.
+  /// [0, 5] s, stale_after in [0.01, 10] s), then the targeting's and the generator's own
+  /// validation.
   void validate() const;
   std::string summary() const;
   /// The topics the node needs a publisher on before it takes part in a lock-step: the clouds,
@@ -79,11 +89,17 @@ struct ObstacleNodeConfig {
   std::string world_frame = "odom";
   double publish_rate_hz = 50.0;
   double tf_timeout = 0.05;       ///< s
-  ObstacleMonitorParams monitor;  ///< state / exclusion timeouts, insert rate
+  /// s: a cloud that waited longer in the node (receipt to processing, the node's clock) is
+  /// dropped as stale (timer mode; in lock-step the simulator waits for the node). The robot's
+  /// own points are removed with its pose at processing: a cloud older than the state timeout
+  /// would be filtered with the wrong pose.
+  double stale_after = 0.2;
+  ObstacleMonitorParams monitor;  ///< state / exclusion timeouts, insert rate, point budgets
   ObstacleMapConfig map;
 
   /// Throws std::invalid_argument "[ObstacleNodeConfig] parameter 'node.<field>' ..."
-  /// (publish_rate_hz in [0.1, 1000] Hz, tf_timeout in [0, 5] s), then the monitor's and the
+  /// (publish_rate_hz in [0.1, 1000] Hz, tf_timeout in [0, 5] s, stale_after in [0.01, 10] s),
+  /// then the monitor's and the
   /// map's own validation. robot_config is checked by the loader (robotFileField).
   void validate() const;
   std::string summary() const;

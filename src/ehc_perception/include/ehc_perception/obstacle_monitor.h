@@ -33,8 +33,14 @@ struct ObstacleMonitorParams {
   double exclusion_timeout = 0.5;   ///< s: an older exclusion list is dropped
   double max_insert_rate_hz = 5.0;  ///< clouds inserted at most this often
   /// Work per cloud is bounded, whatever the camera sends (a full 640x480 D435 frame is 307 200
-  /// points; the rays of each inserted point cost up to max_range / resolution voxel updates):
-  /// m, one point per voxel of this edge is kept (the first, in cloud order); 0 = off.
+  /// points, a 1280x720 one 921 600; the rays of each inserted point cost up to max_range /
+  /// resolution voxel updates). First a point budget: at most this many points of a cloud are
+  /// read (point_cloud_layout.h PointBudget: an organised cloud on an even grid of its rows and
+  /// columns, 640x480 every second row and column; nothing is done with the others, not even
+  /// their conversion). At the map's 3 m range, 640x480 read every second pixel leaves 1.8 cm
+  /// between points, under one 2 cm voxel.
+  int max_input_points = 80000;
+  /// Then m, one point per voxel of this edge is kept (the first, in cloud order); 0 = off.
   double cloud_voxel = 0.02;
   /// then at most this many points are inserted (an even stride over the decimated points).
   int max_cloud_points = 3000;
@@ -46,8 +52,8 @@ struct ObstacleMonitorParams {
   std::string summary() const;
 };
 
-/// Reads state_timeout, exclusion_timeout, max_insert_rate_hz, cloud_voxel and
-/// max_cloud_points of the obstacle node's `node` mapping (all optional).
+/// Reads state_timeout, exclusion_timeout, max_insert_rate_hz, max_input_points, cloud_voxel,
+/// max_cloud_points and points_per_update of the obstacle node's `node` mapping (all optional).
 ObstacleMonitorParams loadObstacleMonitorParams(const ehc_common::ConfigNode& node);
 
 /// What ObstacleMonitor::update decided.
@@ -86,6 +92,7 @@ class ObstacleMonitor {
   struct CloudInsertion {
     ObstacleDistanceField::InsertStats stats;  ///< insertCloud: of the bounded cloud (stats.input = kept)
     int received = 0;            ///< points in the cloud given
+    int after_budget = 0;        ///< points left by the point budget (max_input_points)
     int after_voxel = 0;         ///< finite points left by the voxel decimation (cloud_voxel)
     int queued = 0;              ///< points of the bounded cloud (<= max_cloud_points)
     int replaced = 0;            ///< points of an unfinished queued cloud this one replaced
@@ -101,10 +108,12 @@ class ObstacleMonitor {
   ObstacleDistanceField::InsertStats insertQueued(std::size_t max_points);
   /// Points of the queued cloud not inserted yet.
   std::size_t queuedPoints() const { return queue_.points.size() - queue_.next; }
-  /// The bounded cloud insertCloud inserts: non-finite points dropped, one point per
-  /// cloud_voxel voxel (the first), then at most max_cloud_points (even stride, order kept).
-  /// `after_voxel` (optional) receives the count after the voxel step.
-  PointList boundCloud(const PointList& points, int* after_voxel = nullptr) const;
+  /// The bounded cloud insertCloud inserts: at most max_input_points of `points` (budgetPoints:
+  /// even stride; the node reads a message within the same budget, PointBudget), non-finite
+  /// points dropped, one point per cloud_voxel voxel (the first), then at most
+  /// max_cloud_points (even stride, order kept). `after_voxel` and `after_budget` (optional)
+  /// receive the counts after the voxel step and after the budget.
+  PointList boundCloud(const PointList& points, int* after_voxel = nullptr, int* after_budget = nullptr) const;
 
   /// The cycle at `now`: ray-casts points_per_update queued points, drops an expired exclusion
   /// list, computes the distances. Throws what ObstacleDistanceField::distances throws.

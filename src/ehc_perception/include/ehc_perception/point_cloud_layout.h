@@ -14,8 +14,14 @@
 //     rejected. Other fields (rgb, intensity, ...) are checked but not read.
 // Points with a non-finite coordinate (an organised cloud's "no return") are dropped and
 // counted; the others keep their row-major order.
+//
+// Point budget (PointBudget): a node reads at most max_points of a cloud, chosen from the
+// layout's width and height alone, before any per-point work (no conversion, transform or voxel
+// grid of the points it skips): the work per message does not grow with the cloud.
 
 #include "ehc_perception/grasp_generator.h"  // PointList
+
+#include <Eigen/Geometry>
 
 #include <cstddef>
 #include <cstdint>
@@ -63,15 +69,54 @@ struct PointCloudLayout {
   std::string problem(std::size_t data_size) const;
 };
 
-struct CloudPoints {
-  PointList points;            ///< finite points, row-major
-  std::size_t non_finite = 0;  ///< points dropped for a NaN / Inf coordinate
+/// Which points of a width x height cloud are read when at most `max_points` may be (0: every
+/// point). An organised cloud (height > 1) is read on an even grid: every step-th row and
+/// column from the first, with the smallest step whose grid fits the budget. That is the
+/// sampling of a lower-resolution image of the same camera, even across the view (a stride
+/// through the row-major order would keep whole rows and skip columns). An unorganised cloud
+/// (height 1) is read at an even stride: point floor(i x total / max_points), in order.
+class PointBudget {
+ public:
+  PointBudget(std::uint64_t width, std::uint64_t height, std::uint64_t max_points);
+  std::uint64_t total() const { return width_ * height_; }
+  /// Points read: total() within the budget, else at most max_points.
+  std::uint64_t selected() const { return selected_; }
+  bool subsampled() const { return selected_ < total(); }
+  /// Organised: the row and column step (1: every point); unorganised: 1.
+  std::uint64_t step() const { return step_; }
+  /// Calls fn(row, column) for every point read, row-major.
+  template <class Fn>
+  void forEach(Fn&& fn) const {
+    if (height_ > 1 || !subsampled()) {
+      for (std::uint64_t r = 0; r < height_; r += step_)
+        for (std::uint64_t c = 0; c < width_; c += step_) fn(r, c);
+    } else {
+      for (std::uint64_t i = 0; i < selected_; ++i) fn(std::uint64_t{0}, i * width_ / selected_);
+    }
+  }
+
+ private:
+  std::uint64_t width_, height_, selected_, step_ = 1;
 };
 
-/// The finite x, y, z points of a cloud (`data`: its `data_size` bytes). Validates the layout
-/// first (PointCloudLayout::problem); throws std::invalid_argument("[PointCloudLayout] ...")
-/// before reading any byte if it is not valid.
+/// At most `max_points` of `points` (0: all), as PointBudget reads an unorganised cloud.
+PointList budgetPoints(const PointList& points, std::size_t max_points);
+
+/// `points` moved by `T` (e.g. from the camera frame into the world), in float.
+PointList transformPoints(const PointList& points, const Eigen::Isometry3d& T);
+
+struct CloudPoints {
+  PointList points;            ///< finite points, row-major
+  std::size_t non_finite = 0;  ///< points read and dropped for a NaN / Inf coordinate
+  std::size_t total = 0;       ///< points in the cloud (width x height)
+  std::size_t read = 0;        ///< points read (PointBudget::selected; total without a budget)
+};
+
+/// The finite x, y, z points of a cloud (`data`: its `data_size` bytes), at most `max_points`
+/// of them read (PointBudget; 0 = every point). Validates the layout first
+/// (PointCloudLayout::problem); throws std::invalid_argument("[PointCloudLayout] ...") before
+/// reading any byte if it is not valid.
 CloudPoints extractCloudPoints(const PointCloudLayout& layout, const std::uint8_t* data,
-                               std::size_t data_size);
+                               std::size_t data_size, std::size_t max_points = 0);
 
 }  // namespace ehc_perception

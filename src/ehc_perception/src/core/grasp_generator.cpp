@@ -3,6 +3,7 @@
 
 #include "ehc_common/config_node.h"
 #include "ehc_control/pose_math.h"
+#include "ehc_perception/point_cloud_layout.h"
 
 #include <Eigen/Eigenvalues>
 #include <pcl/common/centroid.h>
@@ -62,6 +63,27 @@ Cloud::Ptr voxelFilter(const Cloud::ConstPtr& in, double leaf) {
   vg.setLeafSize(l, l, l);
   vg.filter(*out);
   return out;
+}
+
+/// The voxel filter at `leaf`, with the leaf grown until at most `max_points` remain: every
+/// occupied region keeps a point, only coarser, so the collision checks still see the whole
+/// object. If the voxel grid cannot bring it down (PCL's VoxelGrid returns its input unfiltered
+/// when the grid's indices would overflow, e.g. points kilometres apart), an even stride
+/// (budgetPoints) does. `used` receives the leaf of the result.
+Cloud::Ptr boundedVoxelFilter(const Cloud::ConstPtr& in, double leaf, std::size_t max_points, double* used) {
+  Cloud::Ptr out = voxelFilter(in, leaf);
+  // A surface's voxel count falls with the square of the leaf, a volume's with the cube: the
+  // square root of the excess reaches the bound in one step on a surface, in a few on a volume.
+  for (int k = 0; k < 8 && out->size() > max_points; ++k) {
+    leaf *= 1.01 * std::sqrt(static_cast<double>(out->size()) / static_cast<double>(max_points));
+    out = voxelFilter(in, leaf);
+  }
+  *used = leaf;
+  if (out->size() <= max_points) return out;
+  PointList pts;
+  pts.reserve(out->size());
+  for (const auto& p : *out) pts.push_back(p.getVector3fMap());
+  return toCloud(budgetPoints(pts, max_points));
 }
 
 Eigen::Vector3d pt(const Cloud& c, int i) {
@@ -459,6 +481,7 @@ void GraspGeneratorConfig::validate() const {
   range("voxel_size", voxel_size, 0.0005, 0.05);
   range("normal_radius", normal_radius, voxel_size, 0.2);
   range("min_object_points", min_object_points, 3, 1e7);
+  range("max_object_points", max_object_points, min_object_points, 1e7);
   range("max_seeds", max_seeds, 1, 1e6);
   range("pairs_per_seed", pairs_per_seed, 1, 100);
   range("approach_steps", approach_steps, 1, 360);
@@ -509,7 +532,8 @@ std::string GraspGeneratorConfig::summary() const {
   os << "grasp generator: gripper max width " << gripper.max_width << " m, fingers "
      << gripper.finger_length << " x " << gripper.finger_breadth << " x "
      << gripper.finger_thickness << " m, palm " << gripper.palm_height << " m; voxel "
-     << voxel_size << " m, normals r " << normal_radius << " m, " << max_seeds << " seeds x "
+     << voxel_size << " m (coarser above " << max_object_points << " points per object), normals r "
+     << normal_radius << " m, " << max_seeds << " seeds x "
      << pairs_per_seed << " pairs x " << approach_steps << " approaches, friction cone "
      << friction_cone_deg << " deg, centroid sigma " << centroid_sigma_deg << " deg, pca power "
      << pca_power << "/" << pca_approach_power << ", refine shift <= " << max_refine_shift
@@ -536,6 +560,7 @@ GraspGeneratorConfig loadGraspGeneratorConfig(const ConfigNode& n) {
   c.voxel_size = n.get("voxel_size", c.voxel_size);
   c.normal_radius = n.get("normal_radius", c.normal_radius);
   c.min_object_points = n.get("min_object_points", c.min_object_points);
+  c.max_object_points = n.get("max_object_points", c.max_object_points);
   c.max_seeds = n.get("max_seeds", c.max_seeds);
   c.pairs_per_seed = n.get("pairs_per_seed", c.pairs_per_seed);
   c.approach_steps = n.get("approach_steps", c.approach_steps);
@@ -588,6 +613,7 @@ namespace {
 /// the collision environment, the centre of gravity, the principal subspaces and the support.
 struct PreparedObject {
   Cloud::Ptr raw, cloud;
+  double leaf = 0.0;  ///< voxel edge of `cloud`: voxel_size, grown for objects over max_object_points
   Normals::Ptr normals;
   pcl::search::KdTree<pcl::PointXYZ>::Ptr tree;
   Cloud::Ptr env;  ///< collision environment (the object, plus other geometry if given)
@@ -617,7 +643,9 @@ bool filterObject(const GraspGeneratorConfig& cfg, const PointList& object, cons
     r.reason = "viewpoint is not finite";
     return false;
   }
-  po->cloud = voxelFilter(po->raw, cfg.voxel_size);
+  po->cloud = boundedVoxelFilter(po->raw, cfg.voxel_size, static_cast<std::size_t>(cfg.max_object_points), &po->leaf);
+  r.filtered_points = static_cast<int>(po->cloud->size());
+  r.voxel_size = po->leaf;
   if (static_cast<int>(po->cloud->size()) < cfg.min_object_points) {
     r.reason = "only " + std::to_string(po->cloud->size()) + " points after the " +
                std::to_string(cfg.voxel_size) + " m voxel filter (min_object_points " +
@@ -676,7 +704,7 @@ void estimateNormalsAndEnvironment(const GraspGeneratorConfig& cfg, const PointL
   pcl::NormalEstimation<pcl::PointXYZ, pcl::Normal> ne;
   ne.setInputCloud(po->cloud);
   ne.setSearchMethod(po->tree);
-  ne.setRadiusSearch(cfg.normal_radius);
+  ne.setRadiusSearch(cfg.normal_radius * po->leaf / cfg.voxel_size);  // as many neighbours on a coarser grid
   ne.compute(*po->normals);
 
   // Collision environment (the object, plus other geometry if given).
@@ -685,7 +713,7 @@ void estimateNormalsAndEnvironment(const GraspGeneratorConfig& cfg, const PointL
   if (collision_cloud && !collision_cloud->empty()) {
     Cloud::Ptr both = toCloud(*collision_cloud);
     *both += *po->raw;
-    po->env = voxelFilter(both, cfg.voxel_size);
+    po->env = voxelFilter(both, po->leaf);
     po->env_tree.reset(new pcl::search::KdTree<pcl::PointXYZ>(false));
     po->env_tree->setInputCloud(po->env);
   }
@@ -1213,6 +1241,8 @@ GraspResult GraspGenerator::generateFromScene(const PointList& scene,
                                    seg.plane_found ? &seg.plane : nullptr, &seg.obstacles);
     ++res.objects;
     res.finite_points += r.finite_points;
+    res.filtered_points += r.filtered_points;
+    res.voxel_size = std::max(res.voxel_size, r.voxel_size);
     res.centroids.insert(res.centroids.end(), r.centroids.begin(), r.centroids.end());
     for (Grasp gr : r.grasps) {
       gr.object = o;
@@ -1231,13 +1261,15 @@ GraspResult GraspGenerator::generateFromScene(const PointList& scene,
 
 void GraspTargetingParams::validate() const {
   requireRange("GraspTargeting", "max_rate_hz", max_rate_hz, 0.01, 100.0);
+  requireRange("GraspTargeting", "max_input_points", max_input_points, 100, 10000000);
   requireRange("GraspTargeting", "target_timeout", target_timeout, 0.0, 1e6);
   ehc_common::requirePositive("GraspTargeting", "target_gate", target_gate);
 }
 
 std::string GraspTargetingParams::summary() const {
   std::ostringstream os;
-  os << "grasp targeting: max " << max_rate_hz << " Hz, target timeout " << target_timeout << " s, gate "
+  os << "grasp targeting: max " << max_rate_hz << " Hz, at most " << max_input_points
+     << " points read per cloud, target timeout " << target_timeout << " s, gate "
      << target_gate << " m";
   return os.str();
 }
@@ -1245,6 +1277,7 @@ std::string GraspTargetingParams::summary() const {
 GraspTargetingParams loadGraspTargetingParams(const ConfigNode& n) {
   GraspTargetingParams p;
   p.max_rate_hz = n.get("max_rate_hz", p.max_rate_hz);
+  p.max_input_points = n.get("max_input_points", p.max_input_points);
   p.target_timeout = n.get("target_timeout", p.target_timeout);
   p.target_gate = n.get("target_gate", p.target_gate);
   n.validate(p);
@@ -1253,11 +1286,17 @@ GraspTargetingParams loadGraspTargetingParams(const ConfigNode& n) {
 
 GraspResult generateForTarget(const GraspGenerator& generator, const PointList& scene,
                               const Eigen::Vector3d& viewpoint, const Eigen::Vector3d* target,
-                              double target_gate) {
-  GraspResult res = generator.generateFromScene(scene, viewpoint, target);
-  if (target && !res.centroids.empty() && (res.centroids.front() - *target).norm() > target_gate) {
+                              const GraspTargetingParams& targeting) {
+  // The point budget first (a no-op on a cloud the node read within it).
+  const auto budget = static_cast<std::size_t>(targeting.max_input_points);
+  const PointList budgeted = scene.size() > budget ? budgetPoints(scene, budget) : PointList();
+  GraspResult res = generator.generateFromScene(scene.size() > budget ? budgeted : scene, viewpoint, target);
+  res.input_points = static_cast<int>(scene.size());
+  res.budget_points = static_cast<int>(std::min(scene.size(), budget));
+  const double gate = targeting.target_gate;
+  if (target && !res.centroids.empty() && (res.centroids.front() - *target).norm() > gate) {
     res.reason = "nearest object is " + std::to_string((res.centroids.front() - *target).norm()) +
-                 " m from the target (gate " + std::to_string(target_gate) + " m)";
+                 " m from the target (gate " + std::to_string(gate) + " m)";
     res.grasps.clear();
   }
   return res;

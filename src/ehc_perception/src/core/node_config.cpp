@@ -15,7 +15,8 @@ namespace ehc_perception {
 void TagNodeConfig::validate() const {
   const char* o = "TagNodeConfig";
   requireRange(o, "node.tf_timeout", tf_timeout, 0.0, 5.0);
-  requireRange(o, "node.image_queue", image_queue, 1, 100);
+  requireRange(o, "node.stale_after", stale_after, 0.01, 10.0);
+  requireRange(o, "node.max_image_pixels", max_image_pixels, 1, 100000000);
   if (world_frame.empty())
     throw std::invalid_argument(std::string("[") + o + "] parameter 'node.world_frame' must not be empty");
   detector.validate();
@@ -26,8 +27,9 @@ std::string TagNodeConfig::summary() const {
   return "ehc_tag_node: image " + image_topic + ", camera_info " +
          (camera_file.empty() ? camera_info_topic : camera_file) + " -> " + target_topic + " in '" +
          world_frame + "' (camera frame '" + (camera_frame.empty() ? "<image header>" : camera_frame) +
-         "', tf timeout " + std::to_string(tf_timeout) + " wall s, " + std::to_string(image_queue) +
-         " images queued" + ")\n  " + detector.summary() + "\n  " + target.summary();
+         "', tf timeout " + std::to_string(tf_timeout) + " wall s, the newest image only, stale after " +
+         std::to_string(stale_after) + " s, at most " + std::to_string(max_image_pixels) + " pixels)\n  " +
+         detector.summary() + "\n  " + target.summary();
 }
 
 std::vector<std::string> TagNodeConfig::lockstepInputs() const {
@@ -48,7 +50,8 @@ TagNodeConfig loadTagNodeConfig(const std::string& path) {
   c.camera_file = n.get("camera_file", c.camera_file);
   if (!c.camera_file.empty()) c.camera_file = root.resolvePath(c.camera_file);
   c.tf_timeout = n.get("tf_timeout", c.tf_timeout);
-  c.image_queue = n.get("image_queue", c.image_queue);
+  c.stale_after = n.get("stale_after", c.stale_after);
+  c.max_image_pixels = n.get("max_image_pixels", c.max_image_pixels);
   n.validate(c);  // the node fields (the sections below validate themselves as they load)
   c.detector = loadTagDetectorConfig(root.childOrEmpty("tag_detector"));
   c.target = loadTagTargetConfig(root.childOrEmpty("target"));
@@ -61,7 +64,7 @@ TagNodeConfig loadTagNodeConfig(const std::string& path) {
 void GraspNodeConfig::validate() const {
   const char* o = "GraspNodeConfig";
   requireRange(o, "node.tf_timeout", tf_timeout, 0.0, 5.0);
-  requireRange(o, "node.cloud_queue", cloud_queue, 1, 100);
+  requireRange(o, "node.stale_after", stale_after, 0.01, 10.0);
   targeting.validate();
   generator.validate();
 }
@@ -69,7 +72,8 @@ void GraspNodeConfig::validate() const {
 std::string GraspNodeConfig::summary() const {
   return "ehc_grasp_node: " + cloud_topic + " -> " + output_topic + " in '" + world_frame + "', target " +
          (target_topic.empty() ? std::string("<none>") : target_topic) + ", " + targeting.summary() + ", " +
-         std::to_string(cloud_queue) + " clouds queued, camera pose waited for " + std::to_string(tf_timeout) +
+         "the newest cloud only, stale after " + std::to_string(stale_after) + " s, camera pose waited for " +
+         std::to_string(tf_timeout) +
          " wall s\n  " + generator.summary();
 }
 
@@ -88,7 +92,7 @@ GraspNodeConfig loadGraspNodeConfig(const std::string& path) {
   c.world_frame = n.get("world_frame", c.world_frame);
   c.targeting = loadGraspTargetingParams(n);
   c.tf_timeout = n.get("tf_timeout", c.tf_timeout);
-  c.cloud_queue = n.get("cloud_queue", c.cloud_queue);
+  c.stale_after = n.get("stale_after", c.stale_after);
   n.validate(c);
   c.generator = loadGraspGeneratorConfig(root.childOrEmpty("grasp_generator"));
   root.rejectUnknownKeys();  // a key no loader read is a misspelling
@@ -101,6 +105,7 @@ void ObstacleNodeConfig::validate() const {
   const char* o = "ObstacleNodeConfig";
   requireRange(o, "node.publish_rate_hz", publish_rate_hz, 0.1, 1000.0);
   requireRange(o, "node.tf_timeout", tf_timeout, 0.0, 5.0);
+  requireRange(o, "node.stale_after", stale_after, 0.01, 10.0);
   monitor.validate();
   map.validate();
 }
@@ -108,7 +113,8 @@ void ObstacleNodeConfig::validate() const {
 std::string ObstacleNodeConfig::summary() const {
   return "ehc_obstacle_node: robot " + robot_config + ", " + cloud_topic + " + " + joint_states_topic + " + " +
          odom_topic + " -> " + output_topic + " at " + std::to_string(publish_rate_hz) + " Hz in '" + world_frame +
-         "', exclusions " + (exclusion_topic.empty() ? std::string("off") : exclusion_topic) + "\n  " +
+         "', exclusions " + (exclusion_topic.empty() ? std::string("off") : exclusion_topic) +
+         ", clouds stale after " + std::to_string(stale_after) + " s\n  " +
          monitor.summary() + "\n  " + map.summary();
 }
 
@@ -131,6 +137,7 @@ ObstacleNodeConfig loadObstacleNodeConfig(const std::string& path) {
   c.world_frame = n.get("world_frame", c.world_frame);
   c.publish_rate_hz = n.get("publish_rate_hz", c.publish_rate_hz);
   c.tf_timeout = n.get("tf_timeout", c.tf_timeout);
+  c.stale_after = n.get("stale_after", c.stale_after);
   n.validate(c);
   c.monitor = loadObstacleMonitorParams(n);
   c.map = loadObstacleMapConfig(root.childOrEmpty("obstacle_map"));

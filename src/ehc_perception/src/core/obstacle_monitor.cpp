@@ -2,6 +2,7 @@
 
 #include "ehc_common/config_node.h"
 #include "ehc_control/joint_state.h"
+#include "ehc_perception/point_cloud_layout.h"
 
 #include <algorithm>
 #include <cmath>
@@ -19,6 +20,7 @@ void ObstacleMonitorParams::validate() const {
   ehc_common::requirePositive(o, "node.state_timeout", state_timeout);
   requireRange(o, "node.exclusion_timeout", exclusion_timeout, 0.01, 10.0);
   requireRange(o, "node.max_insert_rate_hz", max_insert_rate_hz, 0.01, 100.0);
+  requireRange(o, "node.max_input_points", max_input_points, 1, 10000000);
   requireRange(o, "node.cloud_voxel", cloud_voxel, 0.0, 1.0);
   requireRange(o, "node.max_cloud_points", max_cloud_points, 1, 1000000);
   requireRange(o, "node.points_per_update", points_per_update, 1, 1000000);
@@ -27,7 +29,8 @@ void ObstacleMonitorParams::validate() const {
 std::string ObstacleMonitorParams::summary() const {
   std::ostringstream os;
   os << "state timeout " << state_timeout << " s, exclusion timeout " << exclusion_timeout
-     << " s, clouds inserted at <= " << max_insert_rate_hz << " Hz, decimated to one point per "
+     << " s, clouds inserted at <= " << max_insert_rate_hz << " Hz, at most " << max_input_points
+     << " points read per cloud, decimated to one point per "
      << cloud_voxel << " m voxel" << (cloud_voxel > 0.0 ? "" : " (off)") << ", at most " << max_cloud_points
      << " points per cloud, ray-cast " << points_per_update << " per update";
   return os.str();
@@ -38,6 +41,7 @@ ObstacleMonitorParams loadObstacleMonitorParams(const ehc_common::ConfigNode& n)
   p.state_timeout = n.get("state_timeout", p.state_timeout);
   p.exclusion_timeout = n.get("exclusion_timeout", p.exclusion_timeout);
   p.max_insert_rate_hz = n.get("max_insert_rate_hz", p.max_insert_rate_hz);
+  p.max_input_points = n.get("max_input_points", p.max_input_points);
   p.cloud_voxel = n.get("cloud_voxel", p.cloud_voxel);
   p.max_cloud_points = n.get("max_cloud_points", p.max_cloud_points);
   p.points_per_update = n.get("points_per_update", p.points_per_update);
@@ -95,7 +99,13 @@ bool ObstacleMonitor::acceptCloud(double now) {
   return insert_limiter_.accept(now);  // a clock that jumped back (simulator reset) accepts the cloud
 }
 
-PointList ObstacleMonitor::boundCloud(const PointList& points, int* after_voxel) const {
+PointList ObstacleMonitor::boundCloud(const PointList& input, int* after_voxel, int* after_budget) const {
+  // The budget first: no per-point work on the points beyond it (a no-op on a cloud the node
+  // read within the same budget).
+  const auto read_budget = static_cast<std::size_t>(params_.max_input_points);
+  const PointList budgeted = input.size() > read_budget ? budgetPoints(input, read_budget) : PointList();
+  const PointList& points = input.size() > read_budget ? budgeted : input;
+  if (after_budget) *after_budget = static_cast<int>(points.size());
   PointList kept;
   kept.reserve(std::min(points.size(), static_cast<std::size_t>(1) << 16));
   if (params_.cloud_voxel > 0.0) {
@@ -119,12 +129,8 @@ PointList ObstacleMonitor::boundCloud(const PointList& points, int* after_voxel)
       if (p.allFinite()) kept.push_back(p);
   }
   if (after_voxel) *after_voxel = static_cast<int>(kept.size());
-  const std::size_t budget = static_cast<std::size_t>(params_.max_cloud_points);
-  if (kept.size() <= budget) return kept;
-  PointList strided;
-  strided.reserve(budget);
-  for (std::size_t i = 0; i < budget; ++i) strided.push_back(kept[i * kept.size() / budget]);
-  return strided;
+  const auto insert_budget = static_cast<std::size_t>(params_.max_cloud_points);
+  return kept.size() <= insert_budget ? kept : budgetPoints(kept, insert_budget);
 }
 
 ObstacleMonitor::CloudInsertion ObstacleMonitor::queueCloud(double now, const PointList& points,
@@ -133,7 +139,7 @@ ObstacleMonitor::CloudInsertion ObstacleMonitor::queueCloud(double now, const Po
   CloudInsertion r;
   r.received = static_cast<int>(points.size());
   r.replaced = static_cast<int>(queuedPoints());
-  queue_.points = boundCloud(points, &r.after_voxel);
+  queue_.points = boundCloud(points, &r.after_voxel, &r.after_budget);
   queue_.next = 0;
   queue_.origin = sensor_origin;
   r.queued = static_cast<int>(queue_.points.size());

@@ -1,5 +1,6 @@
 #include "ehc_perception/point_cloud_layout.h"
 
+#include <algorithm>
 #include <array>
 #include <cstring>
 #include <stdexcept>
@@ -113,27 +114,64 @@ std::string PointCloudLayout::problem(std::size_t data_size) const {
   return "";
 }
 
+PointBudget::PointBudget(std::uint64_t width, std::uint64_t height, std::uint64_t max_points)
+    : width_(width), height_(height), selected_(width * height) {
+  if (max_points == 0 || selected_ <= max_points) return;
+  if (height_ <= 1) {
+    selected_ = max_points;
+    return;
+  }
+  // The smallest step whose grid fits: the grid's size does not grow with the step, and the
+  // largest step (one point) always fits.
+  auto grid = [&](std::uint64_t k) { return ((width_ + k - 1) / k) * ((height_ + k - 1) / k); };
+  std::uint64_t lo = 1, hi = std::max(width_, height_);
+  while (lo < hi) {
+    const std::uint64_t mid = lo + (hi - lo) / 2;
+    if (grid(mid) <= max_points) hi = mid;
+    else lo = mid + 1;
+  }
+  step_ = lo;
+  selected_ = grid(lo);
+}
+
+PointList budgetPoints(const PointList& points, std::size_t max_points) {
+  const PointBudget budget(points.size(), 1, max_points);
+  if (!budget.subsampled()) return points;
+  PointList out;
+  out.reserve(budget.selected());
+  budget.forEach([&](std::uint64_t, std::uint64_t i) { out.push_back(points[i]); });
+  return out;
+}
+
+PointList transformPoints(const PointList& points, const Eigen::Isometry3d& T) {
+  const Eigen::Isometry3f Tf = T.cast<float>();
+  PointList out;
+  out.reserve(points.size());
+  for (const auto& p : points) out.push_back(Tf * p);
+  return out;
+}
+
 CloudPoints extractCloudPoints(const PointCloudLayout& layout, const std::uint8_t* data,
-                               std::size_t data_size) {
+                               std::size_t data_size, std::size_t max_points) {
   const std::string problem = layout.problem(data_size);
   if (!problem.empty()) throw std::invalid_argument("[PointCloudLayout] " + problem);
   CloudPoints out;
-  if (std::uint64_t{layout.width} * layout.height == 0) return out;
+  const PointBudget budget(layout.width, layout.height, max_points);
+  out.total = budget.total();
+  if (out.total == 0) return out;
   const auto axes = axisFields(layout);
   // Validated: width x height x point_step <= data_size, so the reservation is bounded.
-  out.points.reserve(std::size_t{layout.width} * layout.height);
-  for (std::size_t r = 0; r < layout.height; ++r) {
-    const std::uint8_t* row = data + r * layout.row_step;
-    for (std::size_t c = 0; c < layout.width; ++c) {
-      const std::uint8_t* point = row + c * layout.point_step;
-      Eigen::Vector3f p;
-      for (int a = 0; a < 3; ++a) p[a] = readCoordinate(point + axes[a]->offset, axes[a]->datatype);
-      if (p.allFinite())
-        out.points.push_back(p);
-      else
-        ++out.non_finite;
-    }
-  }
+  out.points.reserve(budget.selected());
+  budget.forEach([&](std::uint64_t r, std::uint64_t c) {
+    const std::uint8_t* point = data + r * layout.row_step + c * layout.point_step;
+    Eigen::Vector3f p;
+    for (int a = 0; a < 3; ++a) p[a] = readCoordinate(point + axes[a]->offset, axes[a]->datatype);
+    ++out.read;
+    if (p.allFinite())
+      out.points.push_back(p);
+    else
+      ++out.non_finite;
+  });
   return out;
 }
 

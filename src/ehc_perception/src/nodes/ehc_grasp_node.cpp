@@ -1,8 +1,12 @@
 // ehc_grasp_node: depth cloud -> grasp candidates on /ehc/grasp_candidates.
 //   rosrun ehc_perception ehc_grasp_node _config:=config/perception/grasp_node.yaml
 // Its parameters: ehc_perception::GraspNodeConfig (node_config.h).
-// Each processed cloud (at most max_rate_hz) is transformed into the world frame (tf2 at the
-// cloud stamp), the support plane removed and the objects clustered; grasps are generated
+// The subscription keeps the newest cloud only (one that arrives while the node is busy replaces
+// the one waiting); a cloud that waited longer than stale_after in the node is dropped (timer
+// mode; in lock-step the simulator waits for the node). Each processed cloud (at most
+// max_rate_hz) is read within the point budget (max_input_points, PointBudget: the points
+// beyond it are never converted), transformed into the world frame (tf2 at the cloud stamp),
+// the support plane removed and the objects clustered; grasps are generated
 // for the object nearest the latest /ehc/target_pose (or every object without a fresh
 // target) and published best first (ehc_msgs/GraspCandidates, world frame). A cloud
 // without a usable grasp publishes an empty candidate list (reason in the log). A cloud waits
@@ -21,9 +25,13 @@
 // _ack_topic:=<topic> every cloud received is acknowledged there exactly once, whatever came
 // of it (processed and its candidates published, skipped by the rate limit, or dropped with a
 // logged reason): a lock-step simulator's acknowledgement gate (ehc_common::LockstepAck, demo.sh).
+// What became of the clouds (processed, over the budget, rate-limited, stale, no camera pose,
+// malformed, failed: ehc_perception::FrameCounts) is logged at most every 10 s while clouds are
+// dropped (and at the first cloud over the point budget).
 #include "ehc_msgs/GraspCandidates.h"
 #include "ehc_common/logging.h"
 #include "ehc_common/lockstep_ack.h"
+#include "ehc_perception/frame_counts.h"
 #include "ehc_perception/grasp_generator.h"
 #include "ehc_perception/grasp_target_history.h"
 #include "ehc_perception/node_config.h"
@@ -55,7 +63,7 @@ class GraspNode {
     pub_ = nh.advertise<ehc_msgs::GraspCandidates>(cfg_.output_topic, 2);
     lockstep_ = !ack_.topic().empty();
     const ros::TransportHints fast = ros::TransportHints().tcpNoDelay();  // no Nagle delay (lock-step order)
-    cloud_sub_ = nh.subscribe(cfg_.cloud_topic, static_cast<std::uint32_t>(cfg_.cloud_queue), &GraspNode::onCloud, this, fast);
+    cloud_sub_ = nh.subscribe(cfg_.cloud_topic, 1, &GraspNode::onCloud, this, fast);  // the newest cloud wins
     if (lockstep_) ROS_INFO_STREAM("ehc_grasp_node: each cloud acknowledged on " << ack_.topic() << " when done");
     if (!cfg_.target_topic.empty()) {  // taken when a cloud comes (onCloud), on their own queue
       ros::SubscribeOptions opts = ros::SubscribeOptions::create<geometry_msgs::PoseStamped>(
@@ -86,31 +94,48 @@ class GraspNode {
   /// Every cloud: processed, skipped or dropped (reason logged), then acknowledged once.
   /// In lock-step the targets published before the cloud (by the sequencer, before its
   /// acknowledgement let the simulator go on) are all taken first, whenever they arrived.
-  void onCloud(const sensor_msgs::PointCloud2ConstPtr& cloud) {
+  void onCloud(const ros::MessageEvent<const sensor_msgs::PointCloud2>& event) {
+    const sensor_msgs::PointCloud2ConstPtr cloud = event.getConstMessage();
     if (lockstep_ && !cfg_.target_topic.empty() && !poll_pass_.wait(ehc_common::kLockstepWallWait))
       ROS_WARN_STREAM_THROTTLE(kLogThrottle, "ehc_grasp_node: roscpp's poll thread did not pass within " << ehc_common::kLockstepWallWait << " wall s");
     target_queue_.callAvailable();
-    process(*cloud);
+    const double waited = (ros::Time::now() - event.getReceiptTime()).toSec();
+    if (!lockstep_ && waited > cfg_.stale_after) {
+      ROS_WARN_STREAM_THROTTLE(kLogThrottle, "ehc_grasp_node: cloud at " << cloud->header.stamp << " dropped: it waited "
+                                                << waited << " s in the node (stale_after " << cfg_.stale_after << " s)");
+      count(FrameOutcome::Stale);
+    } else {
+      count(process(*cloud));
+    }
     ack_.done(cloud->header.stamp);  // after the candidates: the simulator steps on
   }
 
-  void process(const sensor_msgs::PointCloud2& msg) {
-    if (!limiter_.accept(msg.header.stamp.toSec())) return;  // skipped: inside the rate limit
+  void count(FrameOutcome o) { ros_conv::countFrame(&counts_, o, "ehc_grasp_node"); }
+
+  FrameOutcome process(const sensor_msgs::PointCloud2& msg) {
+    if (!limiter_.accept(msg.header.stamp.toSec())) return FrameOutcome::RateLimited;
     if (!ehc_common::waitForTransformWall(tf_, cfg_.world_frame, msg.header.frame_id, msg.header.stamp,
                                         lockstep_ ? ehc_common::kLockstepWallWait : cfg_.tf_timeout)) {
       ROS_WARN_STREAM_THROTTLE(kLogThrottle, "ehc_grasp_node: cloud at " << msg.header.stamp << " dropped: no camera pose ('"
                                                 << msg.header.frame_id << "' in '" << cfg_.world_frame << "') at its stamp after "
                                                 << (lockstep_ ? ehc_common::kLockstepWallWait : cfg_.tf_timeout) << " wall s");
-      return;
+      return FrameOutcome::NoCameraPose;
     }
+    CloudPoints read;
+    try {  // the point budget first: the points beyond it are never converted
+      read = ros_conv::cloudToPoints(msg, static_cast<std::size_t>(cfg_.targeting.max_input_points));
+    } catch (const std::invalid_argument& e) {
+      ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "ehc_grasp_node: cloud dropped: " << e.what());
+      return FrameOutcome::Malformed;
+    }
+    if (read.read < read.total) counts_.countSubsampled();
     try {
       const geometry_msgs::TransformStamped tf =
           tf_.lookupTransform(cfg_.world_frame, msg.header.frame_id, msg.header.stamp);  // there: waited for above
       const Eigen::Isometry3d T = tf2::transformToEigen(tf);
-      const PointList pts = ros_conv::transformPoints(ros_conv::cloudToPoints(msg), T);
+      const PointList pts = transformPoints(read.points, T);
       const std::optional<Eigen::Vector3d> target = targets_.targetFor(stampNs(msg.header.stamp));
-      const GraspResult res = generateForTarget(gen_, pts, T.translation(), target ? &*target : nullptr,
-                                                cfg_.targeting.target_gate);
+      const GraspResult res = generateForTarget(gen_, pts, T.translation(), target ? &*target : nullptr, cfg_.targeting);
       ehc_msgs::GraspCandidates out;
       out.header.stamp = msg.header.stamp;
       out.header.frame_id = cfg_.world_frame;
@@ -122,8 +147,10 @@ class GraspNode {
       if (res.grasps.empty())
         ROS_WARN_STREAM_THROTTLE(kLogThrottle, "ehc_grasp_node: no grasp: " << res.reason);
       pub_.publish(out);
+      return FrameOutcome::Processed;
     } catch (const std::exception& e) {
       ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "ehc_grasp_node: cloud dropped: " << e.what());
+      return FrameOutcome::Failed;
     }
   }
 
@@ -140,6 +167,7 @@ class GraspNode {
   ehc_common::PollPassBarrier poll_pass_;
   ehc_common::LockstepAck ack_;
   bool lockstep_ = false;  ///< _ack_topic set: the simulator waits for this node
+  FrameCounts counts_{"clouds"};  ///< what became of the clouds (logged)
 };
 
 }  // namespace

@@ -5,9 +5,12 @@
 // runs the timer and publishes.
 //   rosrun ehc_perception ehc_obstacle_node _config:=config/perception/obstacle_node.yaml
 // Its parameters: ehc_perception::ObstacleNodeConfig (node_config.h).
-// Clouds (at most max_insert_rate_hz) are transformed into the world frame with tf2 at their
-// stamp, bounded (one point per cloud_voxel voxel, then at most max_cloud_points: the work per
-// cloud does not grow with the camera's resolution) and queued with the robot's pose; each
+// Clouds (at most max_insert_rate_hz; the subscription keeps only the newest in timer mode, and
+// a cloud that waited longer than stale_after in the node is dropped) are read within the point
+// budget (max_input_points, PointBudget: the points beyond it are never converted), transformed
+// into the world frame with tf2 at their stamp, bounded (one point per cloud_voxel voxel, then
+// at most max_cloud_points: the work per cloud does not grow with the camera's resolution) and
+// queued with the robot's pose, replacing an unfinished one; each
 // timer cycle ray-casts points_per_update of them from the sensor origin (no cycle stalls on a
 // whole cloud, so the distances keep publish_rate_hz), the robot's own points removed. A timer publishes the distances of every link closer than the
 // influence distance while the state (/joint_states + /odom) is fresh (judged by receipt time on
@@ -22,12 +25,16 @@
 // (publish_rate_hz on the stamps; ehc_perception::ObstacleLockstepCycle), then acknowledges t;
 // times are the stamps. So the distances do not depend on when messages arrive, and the
 // simulator steps on only once they are out.
+// What became of the clouds (processed, over the budget, rate-limited, stale, superseded, no
+// camera pose, malformed, failed: ehc_perception::FrameCounts) is logged at most every 10 s
+// while clouds are dropped (and at the first cloud over the point budget).
 #include "ehc_msgs/ObstacleArray.h"
 #include "ehc_msgs/ObstacleExclusion.h"
 #include "ehc_common/logging.h"
 #include "ehc_common/lockstep_ack.h"
 #include "ehc_control/robot_config.h"
 #include "ehc_control/pose_math.h"
+#include "ehc_perception/frame_counts.h"
 #include "ehc_perception/node_config.h"
 #include "ehc_perception/obstacle_monitor.h"
 #include "ros_conversions.h"
@@ -135,7 +142,8 @@ class ObstacleNode {
     else apply(receiptTime(msg.header.stamp));
   }
 
-  void onCloud(const sensor_msgs::PointCloud2ConstPtr& msg) {
+  void onCloud(const ros::MessageEvent<const sensor_msgs::PointCloud2>& event) {
+    const sensor_msgs::PointCloud2ConstPtr msg = event.getConstMessage();
     if (lockstep_) {
       inbox_.add(msg->header.stamp, kCloudSource, [this, msg] {
         if (!ehc_common::waitForTransformWall(tf_, cfg_.world_frame, msg->header.frame_id, msg->header.stamp, ehc_common::kLockstepWallWait)) {
@@ -146,23 +154,49 @@ class ObstacleNode {
         return true;
       });
     } else {
-      insertCloud(*msg);
+      const double waited = (ros::Time::now() - event.getReceiptTime()).toSec();
+      if (waited > cfg_.stale_after) {
+        ROS_WARN_STREAM_THROTTLE(kLogThrottle, "ehc_obstacle_node: cloud at " << msg->header.stamp << " dropped: it waited "
+                                                  << waited << " s in the node (stale_after " << cfg_.stale_after << " s)");
+        count(FrameOutcome::Stale);
+      } else {
+        insertCloud(*msg);
+      }
     }
   }
 
+  void count(FrameOutcome o) { ros_conv::countFrame(&counts_, o, "ehc_obstacle_node"); }
+
   void insertCloud(const sensor_msgs::PointCloud2& msg) {
     const double now = receiptTime(msg.header.stamp);
-    if (!monitor_.acceptCloud(now)) return;
+    if (!monitor_.acceptCloud(now)) return count(FrameOutcome::RateLimited);
+    Eigen::Isometry3d T;
     try {
-      const geometry_msgs::TransformStamped tf = tf_.lookupTransform(
-          cfg_.world_frame, msg.header.frame_id, msg.header.stamp, ros::Duration(cfg_.tf_timeout));
-      const Eigen::Isometry3d T = tf2::transformToEigen(tf);
-      const PointList pts = ros_conv::transformPoints(ros_conv::cloudToPoints(msg), T);
-      if (!monitor_.queueCloud(now, pts, T.translation()).self_filtered)
+      T = tf2::transformToEigen(tf_.lookupTransform(cfg_.world_frame, msg.header.frame_id, msg.header.stamp,
+                                                    ros::Duration(cfg_.tf_timeout)));
+    } catch (const tf2::TransformException& e) {
+      ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "ehc_obstacle_node: cloud dropped: " << e.what());
+      return count(FrameOutcome::NoCameraPose);
+    }
+    CloudPoints read;
+    try {  // the point budget first: the points beyond it are never converted
+      read = ros_conv::cloudToPoints(msg, static_cast<std::size_t>(cfg_.monitor.max_input_points));
+    } catch (const std::invalid_argument& e) {
+      ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "ehc_obstacle_node: cloud dropped: " << e.what());
+      return count(FrameOutcome::Malformed);
+    }
+    try {
+      const ObstacleMonitor::CloudInsertion r =
+          monitor_.queueCloud(now, transformPoints(read.points, T), T.translation());
+      if (!r.self_filtered)
         ROS_WARN_THROTTLE(kLogThrottle, "ehc_obstacle_node: no fresh robot state; cloud inserted without "
                                         "removing the robot's own points");
+      if (r.replaced > 0) count(FrameOutcome::Superseded);  // the previous cloud, not all ray-cast
+      if (read.read < read.total) counts_.countSubsampled();
+      count(FrameOutcome::Processed);
     } catch (const std::exception& e) {
       ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "ehc_obstacle_node: cloud dropped: " << e.what());
+      count(FrameOutcome::Failed);
     }
   }
 
@@ -216,6 +250,7 @@ class ObstacleNode {
   ObstacleLockstepCycle cycle_;  ///< lock-step: when a state is complete and its distances due
   /// Lock-step: clouds and exclusion lists, taken at the first state after their stamp.
   ehc_common::StampedInbox inbox_;
+  FrameCounts counts_{"clouds"};  ///< what became of the clouds (logged)
   static constexpr int kExclusionSource = 0, kCloudSource = 1;
   static constexpr double kMaxCloudWait = 1.0;  ///< s of stamps; then the cloud is dropped
 };

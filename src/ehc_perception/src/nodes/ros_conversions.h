@@ -1,11 +1,15 @@
 #pragma once
-// Message <-> core conversions shared by the perception nodes (node side only: roscpp types).
+// Message <-> core conversions shared by the perception nodes (node side only: roscpp types),
+// and their log line of what became of their frames (countFrame).
 // CameraInfo <-> PinholeCamera: ehc_control/camera_info_msg.h (every package's nodes).
 
+#include "ehc_perception/frame_counts.h"
 #include "ehc_perception/grasp_generator.h"
 #include "ehc_perception/point_cloud_layout.h"
 
 #include <geometry_msgs/Pose.h>
+#include <ros/console.h>
+#include <ros/time.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/PointCloud2.h>
@@ -51,10 +55,11 @@ inline void imageToGray(const sensor_msgs::Image& msg, vpImage<unsigned char>* o
   }
 }
 
-/// The finite x, y, z points of a PointCloud2: the message's layout is copied into a
-/// PointCloudLayout and validated before any byte is read (FLOAT64 converted, NaN / Inf points
-/// dropped). Throws std::invalid_argument("[PointCloudLayout] ...") on a malformed cloud.
-inline PointList cloudToPoints(const sensor_msgs::PointCloud2& msg) {
+/// The finite x, y, z points of a PointCloud2, at most `max_points` of them read (PointBudget;
+/// 0 = every point): the message's layout is copied into a PointCloudLayout and validated before
+/// any byte is read (FLOAT64 converted, NaN / Inf points dropped). Throws
+/// std::invalid_argument("[PointCloudLayout] ...") on a malformed cloud.
+inline CloudPoints cloudToPoints(const sensor_msgs::PointCloud2& msg, std::size_t max_points) {
   PointCloudLayout layout;
   layout.width = msg.width;
   layout.height = msg.height;
@@ -63,15 +68,17 @@ inline PointList cloudToPoints(const sensor_msgs::PointCloud2& msg) {
   layout.is_bigendian = msg.is_bigendian;
   layout.point_step = msg.point_step;
   layout.row_step = msg.row_step;
-  return extractCloudPoints(layout, msg.data.data(), msg.data.size()).points;
+  return extractCloudPoints(layout, msg.data.data(), msg.data.size(), max_points);
 }
 
-inline PointList transformPoints(const PointList& in, const Eigen::Isometry3d& T) {
-  const Eigen::Isometry3f Tf = T.cast<float>();
-  PointList out;
-  out.reserve(in.size());
-  for (const auto& p : in) out.push_back(Tf * p);
-  return out;
+/// Counts a frame's outcome and logs the counts when FrameCounts::reportDue says so (on the wall
+/// clock): WARN once frames were dropped, else INFO (the first frame over the point budget).
+inline void countFrame(FrameCounts* counts, FrameOutcome o, const char* node) {
+  counts->add(o);
+  const std::string report = counts->reportDue(ros::WallTime::now().toSec());
+  if (report.empty()) return;
+  if (counts->dropped() > 0) ROS_WARN_STREAM(node << ": " << report);
+  else ROS_INFO_STREAM(node << ": " << report);
 }
 
 inline geometry_msgs::Pose toPose(const Eigen::Isometry3d& T) { return tf2::toMsg(T); }

@@ -1,0 +1,139 @@
+#pragma once
+// ReachRecovery: the way out of a joint-limit stall, from whole-body inverse kinematics. ROS-free.
+//
+// The trap (Exp-1 traces, targets approached from any side, every method): the QP follows the
+// local gradient of the pose task; the arm takes the orientation the short way and a joint
+// (the RM65's wrist bend most often) ends at its stop. What is left of the error then needs a
+// motion the remaining joints cannot make without moving the pinned one, e.g. a sideways shift
+// of a differential base, which it can only make by driving forwards and backwards while
+// turning. No single reactive step does that: the command settles at a few mm/s, the TCP 1-30
+// cm short, with or without actuation noise. Linear secondary terms towards an IK posture
+// (tried) only add equilibria. Yet with a mobile base, every target that whole-body IK reaches
+// inside the joint stops can be reached with wide joint margins: the base can stand elsewhere.
+//
+// ReachRecovery watches the approach and, when it stalls with a joint pinned, looks further:
+//   detect   no progress (position_progress, orientation_progress) for stall_window s, not
+//            arrived, and an arm joint within pinned_margin of its joint stop or the target
+//            farther than twice the ready pose's reach (the base is not bringing the arm there);
+//   plan     far from the target (beyond twice the ready pose's reach) the arm unwinds to its
+//            ready posture where the base stands; near it, whole-body IK (WholeBodyModel::inverseKinematicsFrom) from `starts` starts, a few
+//            per cycle: the current configuration, the current base with the ready posture,
+//            then base placements around the target, the ready TCP over it; the solution with
+//            the best min(margin, joint_influence) - travel_weight x travel is taken if its
+//            smallest joint margin beats the current one by min_improvement;
+//   move     a whole-body reference velocity towards that configuration (b*, q*), tracked
+//            through the QP (EhcQpController::step's `reference`: joint dampers, obstacle
+//            dampers and velocity limits still apply): arm joint_gain (q* - q); base a
+//            pose-stabilising law (differential: the polar law of Astolfi, forwards or
+//            backwards; holonomic: proportional);
+//   resume   within the tolerances of (b*, q*), where the TCP is on the target, or after
+//            move_timeout; the pose task takes over again. At most max_attempts per target.
+// Every method gets it (it acts only after a stall, when the method has failed to make
+// progress), so comparisons between methods stay fair and nothing costs time when no stall occurs.
+
+#include "ehc_control/whole_body_model.h"
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <optional>
+#include <string>
+
+namespace ehc_common {
+class ConfigNode;
+}  // namespace ehc_common
+
+namespace ehc_control {
+
+struct ReachRecoveryParams {
+  bool enabled = true;
+  double stall_window = 2.0;                         ///< s without progress
+  double position_progress = 0.005;                  ///< m: a smaller drop of the error is no progress
+  double orientation_progress = 1.0 * M_PI / 180.0;  ///< rad
+  double pinned_margin = 0.05;                       ///< rad beyond the joint stop: a joint this close is pinned
+  int starts = 24;                                   ///< IK starts per plan
+  int starts_per_cycle = 2;                          ///< IK solves per control cycle while planning
+  double min_improvement = 0.05;                     ///< rad: required gain of the smallest joint margin
+  double travel_weight = 0.2;                        ///< rad of margin per m of base travel when choosing
+  double joint_gain = 1.0;                           ///< 1/s
+  double base_gain = 1.0;                            ///< 1/s: k_rho (differential), position gain (holonomic)
+  double heading_gain = 3.0;                         ///< 1/s: k_alpha (differential), yaw gain (holonomic)
+  double final_heading_gain = -1.5;                  ///< 1/s: k_beta (differential), < 0
+  /// The move ends this close to (b*, q*): the pose task, whose target (b*, q*) reaches, finishes.
+  double position_tolerance = 0.05;                  ///< m
+  double yaw_tolerance = 8.0 * M_PI / 180.0;         ///< rad
+  double joint_tolerance = 0.1;                      ///< rad
+  double move_timeout = 10.0;                        ///< s
+  int max_attempts = 2;                              ///< per target
+  void validate() const;                             ///< throws "[ReachRecoveryParams] ..."
+  std::string summary() const;
+};
+/// Section `recovery` of the controller section (defaults for absent keys).
+ReachRecoveryParams loadReachRecoveryParams(const ehc_common::ConfigNode& node);
+
+class ReachRecovery {
+ public:
+  enum class State { Watching, Planning, Moving };
+
+  /// `joint_stop`: the controller's joint stop (IK solutions keep it, pins are measured from it);
+  /// `joint_influence`: margins beyond it count no more when choosing.
+  ReachRecovery(const WholeBodyModel& model, const ReachRecoveryParams& params, double joint_stop,
+                double joint_influence);
+
+  /// Per control cycle at time `now` (s), before the QP: the state, the TCP pose and the target.
+  /// Returns the whole-body reference velocity while moving (size nDof), else nullptr.
+  const Eigen::VectorXd* update(double now, const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q,
+                                const Eigen::Isometry3d& tcp, const Eigen::Isometry3d& target);
+  /// A new approach: forgets the progress history and the attempts.
+  void reset();
+
+  State state() const { return state_; }
+  int attempts() const { return attempts_; }
+  /// "" or what the last update() started or ended (log-worthy).
+  const std::string& event() const { return event_; }
+  /// The configuration the last plan chose.
+  const Eigen::Vector3d& goalBase() const { return goal_base_; }
+  const Eigen::VectorXd& goalArm() const { return goal_q_; }
+  /// Smallest distance of an arm joint to its limit (rad).
+  double margin(const Eigen::VectorXd& q) const;
+
+ private:
+  void startWatching(double now, double position_error, double orientation_error);
+  bool stalled(double now, double position_error, double orientation_error, const Eigen::VectorXd& q);
+  void startPlanning(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q);
+  void plan(const Eigen::Isometry3d& target);
+  /// Whole-body IK of `target` from (base, q) with joint-limit avoidance (see the .cpp); true
+  /// and the solution in (base, q) when it converges.
+  bool solve(const Eigen::Isometry3d& target, Eigen::Vector3d* base, Eigen::VectorXd* q) const;
+  void start(int k, const Eigen::Isometry3d& target, Eigen::Vector3d* base, Eigen::VectorXd* q) const;
+  void reference(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q);
+  bool atGoal(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q) const;
+
+  const WholeBodyModel& model_;
+  ReachRecoveryParams params_;
+  double joint_stop_ = 0.0, joint_influence_ = 0.0;
+  double reach_ = 0.5, ready_bearing_ = 0.0;  ///< the ready pose's TCP in the base frame (horizontal)
+  Eigen::VectorXd vmax_;
+  State state_ = State::Watching;
+  Eigen::Isometry3d target_ = Eigen::Isometry3d::Identity();
+  bool have_target_ = false;
+  double best_position_ = 0.0, best_orientation_ = 0.0, progress_t_ = 0.0;
+  int attempts_ = 0;
+  // Planning
+  Eigen::Vector3d plan_base_ = Eigen::Vector3d::Zero();
+  Eigen::VectorXd plan_q_;
+  double plan_margin_ = 0.0;
+  int next_start_ = 0;
+  int solutions_ = 0;  ///< IK solutions found by the current plan
+  bool have_goal_ = false;
+  double goal_score_ = 0.0;
+  Eigen::Vector3d goal_base_ = Eigen::Vector3d::Zero();
+  Eigen::VectorXd goal_q_;
+  double goal_margin_ = 0.0;
+  // Moving
+  double move_t_ = 0.0;
+  Eigen::VectorXd reference_;
+  std::string event_;
+};
+
+}  // namespace ehc_control

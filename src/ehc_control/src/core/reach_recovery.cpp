@@ -1,0 +1,325 @@
+#include "ehc_control/reach_recovery.h"
+
+#include "ehc_common/config_node.h"
+#include "ehc_control/qp_controller.h"
+
+#include <Eigen/SVD>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace ehc_control {
+
+namespace {
+const char* kOwner = "ReachRecoveryParams";
+/// Bearing offsets (x pi) of the base placements around the target, the robot's side first.
+constexpr double kPlacementOffsets[] = {0.0, 0.25, -0.25, 0.5, -0.5, 0.75, -0.75, 1.0};
+constexpr int kOffsets = static_cast<int>(sizeof(kPlacementOffsets) / sizeof(kPlacementOffsets[0]));
+constexpr int kFixedStarts = 2;  ///< the current configuration; the current base with the ready posture
+constexpr double kTurnTravel = 0.3;  ///< m of travel counted per rad of base turn when choosing
+double wrap(double a) { return std::remainder(a, 2.0 * M_PI); }
+}  // namespace
+
+void ReachRecoveryParams::validate() const {
+  using ehc_common::requireRange;
+  requireRange(kOwner, "stall_window", stall_window, 0.01, 1000.0);
+  requireRange(kOwner, "position_progress", position_progress, 1e-5, 1.0);
+  requireRange(kOwner, "orientation_progress", orientation_progress, 1e-5, 1.0);
+  requireRange(kOwner, "pinned_margin", pinned_margin, 0.0, 1.0);
+  requireRange(kOwner, "starts", starts, 1, 1000);
+  requireRange(kOwner, "starts_per_cycle", starts_per_cycle, 1, 1000);
+  requireRange(kOwner, "min_improvement", min_improvement, 0.0, M_PI);
+  requireRange(kOwner, "travel_weight", travel_weight, 0.0, 100.0);
+  requireRange(kOwner, "joint_gain", joint_gain, 1e-3, 100.0);
+  requireRange(kOwner, "base_gain", base_gain, 1e-3, 100.0);
+  requireRange(kOwner, "heading_gain", heading_gain, 1e-3, 100.0);
+  requireRange(kOwner, "final_heading_gain", final_heading_gain, -100.0, -1e-3);
+  if (!(heading_gain > base_gain))
+    throw std::invalid_argument("[ReachRecoveryParams] heading_gain must exceed base_gain (stability of the polar law)");
+  requireRange(kOwner, "position_tolerance", position_tolerance, 1e-4, 1.0);
+  requireRange(kOwner, "yaw_tolerance", yaw_tolerance, 1e-4, 1.0);
+  requireRange(kOwner, "joint_tolerance", joint_tolerance, 1e-4, 1.0);
+  requireRange(kOwner, "move_timeout", move_timeout, 0.1, 1000.0);
+  requireRange(kOwner, "max_attempts", max_attempts, 0, 100);
+}
+
+std::string ReachRecoveryParams::summary() const {
+  if (!enabled) return "reach recovery off";
+  std::ostringstream os;
+  os << "reach recovery after " << stall_window << " s without progress with a joint within " << pinned_margin
+     << " rad of its stop: IK from " << starts << " starts, margin gain >= " << min_improvement << " rad, at most "
+     << max_attempts << " per target, " << move_timeout << " s each";
+  return os.str();
+}
+
+ReachRecoveryParams loadReachRecoveryParams(const ehc_common::ConfigNode& n) {
+  ReachRecoveryParams p;
+  p.enabled = n.get("enabled", p.enabled);
+  p.stall_window = n.get("stall_window", p.stall_window);
+  p.position_progress = n.get("position_progress", p.position_progress);
+  p.orientation_progress = n.get("orientation_progress_deg", p.orientation_progress * 180.0 / M_PI) * M_PI / 180.0;
+  p.pinned_margin = n.get("pinned_margin", p.pinned_margin);
+  p.starts = n.get("starts", p.starts);
+  p.starts_per_cycle = n.get("starts_per_cycle", p.starts_per_cycle);
+  p.min_improvement = n.get("min_improvement", p.min_improvement);
+  p.travel_weight = n.get("travel_weight", p.travel_weight);
+  p.joint_gain = n.get("joint_gain", p.joint_gain);
+  p.base_gain = n.get("base_gain", p.base_gain);
+  p.heading_gain = n.get("heading_gain", p.heading_gain);
+  p.final_heading_gain = n.get("final_heading_gain", p.final_heading_gain);
+  p.position_tolerance = n.get("position_tolerance", p.position_tolerance);
+  p.yaw_tolerance = n.get("yaw_tolerance_deg", p.yaw_tolerance * 180.0 / M_PI) * M_PI / 180.0;
+  p.joint_tolerance = n.get("joint_tolerance", p.joint_tolerance);
+  p.move_timeout = n.get("move_timeout", p.move_timeout);
+  p.max_attempts = n.get("max_attempts", p.max_attempts);
+  n.validate(p);  // errors name the file and the section
+  return p;
+}
+
+ReachRecovery::ReachRecovery(const WholeBodyModel& model, const ReachRecoveryParams& params, double joint_stop,
+                             double joint_influence)
+    : model_(model), params_(params), joint_stop_(joint_stop), joint_influence_(joint_influence) {
+  params_.validate();
+  const RobotConfig& rc = model_.config();
+  const Eigen::Vector3d tcp = model_.linkPoseInBase(rc.arm_ready, rc.tcp_frame).translation();
+  reach_ = std::max(0.2, tcp.head<2>().norm());
+  ready_bearing_ = std::atan2(tcp.y(), tcp.x());
+  vmax_ = rc.velocityLimits();
+  reference_ = Eigen::VectorXd::Zero(model_.nDof());
+}
+
+void ReachRecovery::reset() {
+  state_ = State::Watching;
+  have_target_ = false;
+  attempts_ = 0;
+}
+
+double ReachRecovery::margin(const Eigen::VectorXd& q) const {
+  const RobotConfig& rc = model_.config();
+  return std::min((q - rc.arm_lower).minCoeff(), (rc.arm_upper - q).minCoeff());
+}
+
+void ReachRecovery::startWatching(double now, double position_error, double orientation_error) {
+  state_ = State::Watching;
+  best_position_ = position_error;
+  best_orientation_ = orientation_error;
+  progress_t_ = now;
+}
+
+bool ReachRecovery::stalled(double now, double position_error, double orientation_error, const Eigen::VectorXd& q) {
+  if (position_error < best_position_ - params_.position_progress ||
+      orientation_error < best_orientation_ - params_.orientation_progress) {
+    best_position_ = std::min(best_position_, position_error);
+    best_orientation_ = std::min(best_orientation_, orientation_error);
+    progress_t_ = now;
+    return false;
+  }
+  // Near the target a stall with every joint free is the task's own equilibrium (obstacles,
+  // singularity: not this mechanism's business); far from it the arm unwinds either way.
+  return now - progress_t_ >= params_.stall_window && attempts_ < params_.max_attempts &&
+         (margin(q) < joint_stop_ + params_.pinned_margin || position_error > 2.0 * reach_);
+}
+
+void ReachRecovery::startPlanning(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q) {
+  state_ = State::Planning;
+  plan_base_ = base_pose;
+  plan_q_ = q;
+  plan_margin_ = margin(q);
+  next_start_ = 0;
+  solutions_ = 0;
+  have_goal_ = false;
+  ++attempts_;
+}
+
+void ReachRecovery::start(int k, const Eigen::Isometry3d& target, Eigen::Vector3d* base, Eigen::VectorXd* q) const {
+  const RobotConfig& rc = model_.config();
+  *base = plan_base_;
+  *q = k == 0 ? plan_q_ : rc.arm_ready;
+  if (k < kFixedStarts) return;
+  // Around the target: the base on a circle of the ready reach (second round: 0.7 of it,
+  // between the first round's bearings), facing so that the ready TCP is over the target.
+  const int i = k - kFixedStarts;
+  const bool second = (i / kOffsets) % 2 == 1;
+  const Eigen::Vector2d t = target.translation().head<2>();
+  const Eigen::Vector2d to_robot = plan_base_.head<2>() - t;
+  const double robot_side = to_robot.norm() > 1e-6 ? std::atan2(to_robot.y(), to_robot.x()) : plan_base_.z() + M_PI;
+  const double a = robot_side + M_PI * (kPlacementOffsets[i % kOffsets] + (second ? 0.125 : 0.0));
+  base->head<2>() = t + (second ? 0.7 : 1.0) * reach_ * Eigen::Vector2d(std::cos(a), std::sin(a));
+  (*base)[2] = wrap(a + M_PI - ready_bearing_);
+}
+
+bool ReachRecovery::solve(const Eigen::Isometry3d& target, Eigen::Vector3d* base, Eigen::VectorXd* q) const {
+  // Whole-body IK over (x, y, yaw, q) with joint-limit avoidance by gradient projection: each
+  // step is a damped least-squares step onto the target plus, in the task's null space, a step
+  // of every joint within joint_influence of its nearer limit away from it, so that the base
+  // moves to let the arm centre its joints. Joints stay within joint_stop of their limits.
+  // (KDL's solver with limits clamps a joint at its bound and stalls there, which is where a
+  // stalled approach starts from.) Success: the TCP on the target within 1 mm / 0.5 deg.
+  const RobotConfig& rc = model_.config();
+  const int na = model_.nArm(), n = 3 + na;
+  const Eigen::VectorXd lo = rc.arm_lower + Eigen::VectorXd::Constant(na, joint_stop_);
+  const Eigen::VectorXd hi = rc.arm_upper - Eigen::VectorXd::Constant(na, joint_stop_);
+  Eigen::Vector3d b = *base;
+  Eigen::VectorXd qa = q->cwiseMax(lo).cwiseMin(hi);
+  Eigen::MatrixXd J(6, n);
+  Eigen::VectorXd g(n);
+  for (int it = 0; it < 150; ++it) {
+    const Eigen::Isometry3d world_T_base = WholeBodyModel::baseTransform(b);
+    const Eigen::Isometry3d tcp = world_T_base * model_.linkPoseInBase(qa, rc.tcp_frame);
+    const Vector6d e = poseError(tcp, target);
+    g.setZero();
+    for (int i = 0; i < na; ++i) {
+      const double to_lower = qa[i] - rc.arm_lower[i], to_upper = rc.arm_upper[i] - qa[i];
+      if (to_lower < joint_influence_ && to_lower <= to_upper) g[3 + i] = joint_influence_ - to_lower;
+      else if (to_upper < joint_influence_) g[3 + i] = -(joint_influence_ - to_upper);
+    }
+    if (e.head<3>().norm() < 1e-4 && e.tail<3>().norm() < 1e-4 && g.isZero()) break;
+    const Matrix6Xd Ja = model_.armJacobian(qa, rc.tcp_frame);
+    J.setZero();
+    J(0, 0) = 1.0;
+    J(1, 1) = 1.0;
+    const Eigen::Vector3d r = tcp.translation() - world_T_base.translation();
+    J(0, 2) = -r.y();
+    J(1, 2) = r.x();
+    J(5, 2) = 1.0;
+    J.block(0, 3, 3, na) = world_T_base.linear() * Ja.topRows<3>();
+    J.block(3, 3, 3, na) = world_T_base.linear() * Ja.bottomRows<3>();
+    const Eigen::MatrixXd Jp = J.completeOrthogonalDecomposition().pseudoInverse();
+    Eigen::VectorXd centre = (Eigen::MatrixXd::Identity(n, n) - Jp * J) * g;
+    const double largest = centre.cwiseAbs().maxCoeff();
+    if (largest > 0.05) centre *= 0.05 / largest;
+    // Damped least squares onto the target (the step bounded, for far starts).
+    Eigen::VectorXd task = J.transpose() * (J * J.transpose() + 1e-4 * Eigen::Matrix<double, 6, 6>::Identity()).ldlt().solve(e);
+    const double task_largest = task.cwiseAbs().maxCoeff();
+    if (task_largest > 0.2) task *= 0.2 / task_largest;
+    const Eigen::VectorXd step = task + centre;
+    b += step.head<3>();
+    qa = (qa + step.tail(na)).cwiseMax(lo).cwiseMin(hi);
+  }
+  const Eigen::Isometry3d tcp = WholeBodyModel::baseTransform(b) * model_.linkPoseInBase(qa, rc.tcp_frame);
+  const Vector6d e = poseError(tcp, target);
+  if (e.head<3>().norm() > 1e-3 || e.tail<3>().norm() > 0.5 * M_PI / 180.0) return false;
+  *base = Eigen::Vector3d(b.x(), b.y(), wrap(b.z()));
+  *q = qa;
+  return true;
+}
+
+void ReachRecovery::plan(const Eigen::Isometry3d& target) {
+  for (int n = 0; n < params_.starts_per_cycle && next_start_ < params_.starts; ++n, ++next_start_) {
+    Eigen::Vector3d b0, b;
+    Eigen::VectorXd q0, q;
+    start(next_start_, target, &b0, &q0);
+    b = b0;
+    q = q0;
+    if (!solve(target, &b, &q)) continue;
+    ++solutions_;
+    const double m = margin(q);
+    const double travel = (b.head<2>() - plan_base_.head<2>()).norm() + kTurnTravel * std::abs(wrap(b.z() - plan_base_.z()));
+    const double score = std::min(m, joint_influence_) - params_.travel_weight * travel;
+    if (!have_goal_ || score > goal_score_) {
+      have_goal_ = true;
+      goal_score_ = score;
+      goal_base_ = b;
+      goal_q_ = q;
+      goal_margin_ = m;
+    }
+  }
+}
+
+void ReachRecovery::reference(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q) {
+  const int nb = model_.nBase();
+  reference_.setZero(model_.nDof());
+  reference_.tail(model_.nArm()) = params_.joint_gain * (goal_q_ - q);
+  const Eigen::Vector2d d = goal_base_.head<2>() - base_pose.head<2>();
+  const double rho = d.norm(), yaw = base_pose.z();
+  if (nb == 3) {  // holonomic: proportional in the base frame
+    reference_[0] = params_.base_gain * (std::cos(yaw) * d.x() + std::sin(yaw) * d.y());
+    reference_[1] = params_.base_gain * (-std::sin(yaw) * d.x() + std::cos(yaw) * d.y());
+    reference_[2] = params_.heading_gain * wrap(goal_base_.z() - yaw);
+  } else if (rho < params_.position_tolerance) {  // on the spot: turn to the goal heading
+    reference_[1] = params_.heading_gain * wrap(goal_base_.z() - yaw);
+  } else {
+    // Polar law (Astolfi): alpha = bearing of the goal, beta = goal heading beyond it; a goal
+    // behind the base is approached backwards (the same law with the base's rear as its front).
+    double alpha = wrap(std::atan2(d.y(), d.x()) - yaw);
+    const bool backwards = std::abs(alpha) > 0.5 * M_PI;
+    if (backwards) alpha = wrap(alpha - M_PI);
+    const double beta = wrap(goal_base_.z() - yaw - alpha);
+    reference_[0] = (backwards ? -1.0 : 1.0) * params_.base_gain * rho;
+    reference_[1] = params_.heading_gain * alpha + params_.final_heading_gain * beta;
+  }
+  // One scale for the whole reference: its direction survives the velocity limits.
+  double scale = 1.0;
+  for (int i = 0; i < reference_.size(); ++i)
+    if (std::abs(reference_[i]) > vmax_[i]) scale = std::min(scale, vmax_[i] / std::abs(reference_[i]));
+  reference_ *= scale;
+}
+
+bool ReachRecovery::atGoal(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q) const {
+  return (goal_base_.head<2>() - base_pose.head<2>()).norm() < params_.position_tolerance &&
+         std::abs(wrap(goal_base_.z() - base_pose.z())) < params_.yaw_tolerance &&
+         (goal_q_ - q).cwiseAbs().maxCoeff() < params_.joint_tolerance;
+}
+
+const Eigen::VectorXd* ReachRecovery::update(double now, const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q,
+                                             const Eigen::Isometry3d& tcp, const Eigen::Isometry3d& target) {
+  event_.clear();
+  if (!params_.enabled) return nullptr;
+  const double position_error = (target.translation() - tcp.translation()).norm();
+  const double orientation_error = Eigen::AngleAxisd(Eigen::Matrix3d(target.linear() * tcp.linear().transpose())).angle();
+  // A target that moved (not a perception update of the same one) is a new approach.
+  if (!have_target_ || (target.translation() - target_.translation()).norm() > 0.01 ||
+      Eigen::AngleAxisd(Eigen::Matrix3d(target.linear() * target_.linear().transpose())).angle() > 2.0 * M_PI / 180.0) {
+    reset();
+    target_ = target;
+    have_target_ = true;
+    startWatching(now, position_error, orientation_error);
+  }
+  std::ostringstream os;
+  switch (state_) {
+    case State::Watching:
+      if (!stalled(now, position_error, orientation_error, q)) return nullptr;
+      startPlanning(base_pose, q);
+      [[fallthrough]];
+    case State::Planning:
+      if (position_error > 2.0 * reach_) {  // far: unwind the arm where the base stands
+        have_goal_ = true;
+        goal_base_ = plan_base_;
+        goal_q_ = model_.config().arm_ready;
+        goal_margin_ = margin(goal_q_);
+        next_start_ = params_.starts;
+      }
+      plan(target_);
+      if (next_start_ < params_.starts) return nullptr;
+      if (!have_goal_ || goal_margin_ < plan_margin_ + params_.min_improvement) {
+        os << "stall " << position_error * 100.0 << " cm short, smallest joint margin " << plan_margin_
+           << " rad: no whole-body configuration with a wider margin found (" << solutions_ << " IK solutions of "
+           << params_.starts << " starts";
+        if (have_goal_) os << ", widest margin " << goal_margin_ << " rad";
+        os << ")";
+        event_ = os.str();
+        startWatching(now, position_error, orientation_error);
+        return nullptr;
+      }
+      state_ = State::Moving;
+      move_t_ = now;
+      os << "stall " << position_error * 100.0 << " cm short, smallest joint margin " << plan_margin_
+         << " rad: moving to base (" << goal_base_.x() << ", " << goal_base_.y() << ", " << goal_base_.z()
+         << ") with margin " << goal_margin_ << " rad (attempt " << attempts_ << ")";
+      event_ = os.str();
+      [[fallthrough]];
+    case State::Moving:
+      if (atGoal(base_pose, q) || now - move_t_ > params_.move_timeout) {
+        if (event_.empty()) event_ = atGoal(base_pose, q) ? "recovery configuration reached" : "recovery move timed out";
+        startWatching(now, position_error, orientation_error);
+        return nullptr;
+      }
+      reference(base_pose, q);
+      return &reference_;
+  }
+  return nullptr;
+}
+
+}  // namespace ehc_control
