@@ -124,6 +124,22 @@ inline Surface cylinderSurface(double r, double z0, double z1, double step, bool
   return s;
 }
 
+/// Sphere of radius r centred at the origin (latitude rings `step` apart).
+inline Surface sphereSurface(double r, double step) {
+  Surface s;
+  const int nl = std::max(4, static_cast<int>(std::round(M_PI * r / step)));
+  for (int i = 0; i <= nl; ++i) {
+    const double lat = -0.5 * M_PI + M_PI * i / nl;
+    const int na = std::max(1, static_cast<int>(std::round(2 * M_PI * r * std::cos(lat) / step)));
+    for (int k = 0; k < na; ++k) {
+      const double lon = 2 * M_PI * k / na;
+      const Eigen::Vector3d n(std::cos(lat) * std::cos(lon), std::cos(lat) * std::sin(lon), std::sin(lat));
+      s.add(r * n, n);
+    }
+  }
+  return s;
+}
+
 /// A bottle along its local z: body (r_body, length body_len), conical shoulder, neck.
 inline Surface bottleSurface(double r_body, double body_len, double shoulder_len, double r_neck,
                              double neck_len, double step) {
