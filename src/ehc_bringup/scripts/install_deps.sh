@@ -19,6 +19,7 @@ PACKAGES=(
   libvisp-dev libopencv-dev libapriltag-dev
   # perception, collision, physics
   libpcl-dev libfcl-dev liboctomap-dev libbullet-dev
+  libassimp-dev  # mesh objects of the simulator (OBJ, STL, PLY)
   # tests and result plots
   googletest libgtest-dev python3-yaml python3-numpy python3-matplotlib python3-pytest
   # rostopic pub / echo of the messages the nodes use (README "Running a node")

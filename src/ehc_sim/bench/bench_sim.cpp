@@ -80,7 +80,7 @@ int main() {
       setting);
   printRate("sim_step_and_state_publication_rate", s.mean_us, 1000);
 
-  // Camera: ready pose in front of the table (three tags in view), 640x480, 80x60 rays.
+  // Camera: ready pose in front of the table (three tags in view), 640x480, 80x60 depth samples.
   world.reset(1);
   SimulatedCamera camera(ehc_control::loadPinholeCamera(simCameraFile(cfg, robot)), cfg.camera, 1);
   camera.setScene(world.bodies(), world.scene().floor_shade);
@@ -96,7 +96,7 @@ int main() {
   ehc_common::benchReport("sim_image_render", m, [&](int) { camera.render(world, &image); }, cam_setting);
   camera.cloud(world, &points);
   cloud_setting["points"] = points.size();
-  ehc_common::benchReport("sim_cloud_raycast", m, [&](int) { camera.cloud(world, &points); }, cloud_setting);
+  ehc_common::benchReport("sim_cloud_raster", m, [&](int) { camera.cloud(world, &points); }, cloud_setting);
   sensor_msgs::Image img;
   sensor_msgs::PointCloud2 cloud;
   const auto c = ehc_common::benchReport(

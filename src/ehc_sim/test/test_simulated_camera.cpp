@@ -10,6 +10,8 @@
 #include <gtest/gtest.h>
 
 #include "ehc_common/config_node.h"
+#include "ehc_control/pose_math.h"
+#include "ehc_test/errors.h"
 #include "ehc_perception/tag_detector.h"
 
 // The perception tests' helpers (lookAt).
@@ -33,7 +35,8 @@ struct Rig {
     cfg = loadSimConfig(EHC_SIM_CONFIG);
     if (!noise) {
       cfg.camera.image_noise = 0.0;
-      cfg.camera.depth_noise_base = cfg.camera.depth_noise_quadratic = 0.0;
+      cfg.camera.depth_noise.model = DepthNoiseModel::Gaussian;
+      cfg.camera.depth_noise.base = cfg.camera.depth_noise.quadratic = 0.0;
     }
     const ehc_control::RobotConfig robot = ehc_control::loadRobotConfig(cfg.fake_robot.robot_file);
     world = std::make_unique<SimWorld>(cfg, robot, loadSceneConfig(kConfig + "/scenes/" + scene));
@@ -202,7 +205,7 @@ TEST(SimulatedCamera, TableTopCloudLiesAtTheTableHeight) {
       near_object |= (p.head<2>() - o.position.head<2>()).norm() < 0.08;
     if (near_object || p.x() < 1.6 || p.x() > 2.25 || std::abs(p.y()) > 0.5 || p.z() < 0.5) continue;
     const double z = (T_cam.inverse() * p).z();  // depth along the optical axis
-    const double sigma = rig.cfg.camera.depth_noise_base + rig.cfg.camera.depth_noise_quadratic * z * z;
+    const double sigma = rig.cfg.camera.depth_noise.sigma(z);
     // Noise is along the ray: the height error is at most the depth error.
     if (std::abs(p.z() - height) / sigma > worst) {
       worst = std::abs(p.z() - height) / sigma;
@@ -214,7 +217,7 @@ TEST(SimulatedCamera, TableTopCloudLiesAtTheTableHeight) {
   ASSERT_GT(on_top, 300);
   EXPECT_LT(worst, 5.0) << "every table point within 5 sigma of the depth noise";
   EXPECT_NEAR(sum / on_top, 0.0, 0.002) << "mean height error";
-  // Without noise: exact (float precision of Bullet).
+  // Without noise: exact (the rasterised depth is the ray's intersection with the plane).
   Rig exact("table_three_objects.yaml", false);
   exact.camera->cloud(*exact.world, &pts);
   const Eigen::Isometry3d T = exact.world->cameraPose();
@@ -376,4 +379,164 @@ TEST(SimulatedCamera, SkippingAnImageKeepsTheNoiseStream) {
   other.render(*rig.world, &b);
   EXPECT_TRUE(std::equal(a.bitmap, a.bitmap + a.getSize(), b.bitmap));
   EXPECT_TRUE(rig.camera->tagInView(*rig.world));  // the ready pose sees the tag (test above)
+}
+
+namespace {
+/// A camera of `rig` with the depth model `noise` (seeded).
+SimulatedCamera depthCamera(const Rig& rig, const DepthNoiseConfig& noise, unsigned seed, double max_range = 6.0) {
+  SimulatedCameraConfig c = rig.camera->config();
+  c.depth_noise = noise;
+  c.max_range = max_range;
+  return SimulatedCamera(rig.camera->intrinsics(), c, seed);
+}
+
+/// Looking straight down from `height` over the empty floor behind the robot.
+Eigen::Isometry3d downwards(double height) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() << 1, 0, 0, 0, -1, 0, 0, 0, -1;
+  T.translation() = Eigen::Vector3d(-3.0, -3.0, height);
+  return T;
+}
+
+DepthNoiseConfig stereo() {
+  DepthNoiseConfig d;
+  d.model = DepthNoiseModel::Stereo;
+  return d;
+}
+}  // namespace
+
+// Intel's D400 RMS error, z^2 * subpixel / (focal_px * baseline): a flat floor seen straight down
+// (every sample at the same depth, no edge, no grazing angle) from 0.5, 1 and 2 m.
+TEST(DepthNoise, StereoModelGrowsWithTheSquareOfTheDistance) {
+  Rig rig("single_object.yaml", false);
+  const DepthNoiseConfig model = stereo();
+  for (double h : {0.5, 1.0, 2.0}) {
+    SimulatedCamera cam = depthCamera(rig, model, 4);
+    std::vector<Eigen::Vector3f> pts;
+    cam.cloud(*rig.world, downwards(h), &pts);
+    ASSERT_EQ(pts.size(), 80u * 60u) << "every sample sees the floor, none is dropped";
+    double sum = 0.0, sum2 = 0.0;
+    for (const auto& p : pts) {
+      sum += p.z() - h;
+      sum2 += (p.z() - h) * (p.z() - h);
+    }
+    const double mean = sum / pts.size(), rms = std::sqrt(sum2 / pts.size());
+    const double expected = h * h * 0.08 / (447.0 * 0.050);
+    std::printf("stereo depth noise at %.1f m: RMS %.2f mm (model %.2f mm), mean %.3f mm\n", h, 1e3 * rms, 1e3 * expected, 1e3 * mean);
+    EXPECT_NEAR(model.sigma(h), expected, 1e-12);
+    EXPECT_NEAR(rms, expected, 0.05 * expected);
+    EXPECT_LT(std::abs(mean), 0.1 * expected);
+  }
+  // The former model stays available: sigma = base + quadratic z^2.
+  DepthNoiseConfig gaussian;
+  SimulatedCamera cam = depthCamera(rig, gaussian, 4);
+  std::vector<Eigen::Vector3f> pts;
+  cam.cloud(*rig.world, downwards(1.0), &pts);
+  double sum2 = 0.0;
+  for (const auto& p : pts) sum2 += (p.z() - 1.0) * (p.z() - 1.0);
+  EXPECT_NEAR(std::sqrt(sum2 / pts.size()), 0.003, 0.00015);
+}
+
+// Flying pixels: with no Gaussian part and no holes, the only differences from the exact depth
+// are samples next to a depth edge, each between its own surface and a neighbour's.
+TEST(DepthNoise, FlyingPixelsLieBetweenTheSurfacesOfADepthEdge) {
+  Rig rig("table_three_objects.yaml", false);
+  rig.world->setRobotState(Eigen::Vector3d(0.9, 0.0, 0.0), rig.world->model().config().arm_ready);
+  DepthNoiseConfig flying = stereo();
+  flying.subpixel = 0.0;
+  flying.grazing_angle = 90.0;
+  flying.flying_pixels = 1.0;
+  // Every surface in range, so that each sample's neighbours are in the exact cloud.
+  SimulatedCamera exact_cam = depthCamera(rig, DepthNoiseConfig{DepthNoiseModel::Gaussian, 0.0, 0.0}, 1, 100.0);
+  SimulatedCamera flying_cam = depthCamera(rig, flying, 1, 100.0);
+  std::vector<Eigen::Vector3f> exact, noisy;
+  exact_cam.cloud(*rig.world, &exact);
+  flying_cam.cloud(*rig.world, &noisy);
+  ASSERT_EQ(exact.size(), noisy.size());
+  // The exact depth per grid cell, to look at a sample's neighbours.
+  const ehc_control::PinholeCamera& K = rig.camera->intrinsics();
+  const int cols = rig.camera->config().ray_cols, rows = rig.camera->config().ray_rows;
+  std::vector<double> grid(static_cast<std::size_t>(cols * rows), -1.0);
+  auto cell = [&](const Eigen::Vector3f& p) {
+    const double u = K.fx * p.x() / p.z() + K.cx, v = K.fy * p.y() / p.z() + K.cy;
+    return std::make_pair(static_cast<int>(std::lround((u + 0.5) * cols / K.width - 0.5)),
+                          static_cast<int>(std::lround((v + 0.5) * rows / K.height - 0.5)));
+  };
+  for (const auto& p : exact) {
+    const auto [c, r] = cell(p);
+    grid[static_cast<std::size_t>(r * cols + c)] = p.z();
+  }
+  int moved = 0, checked = 0;
+  for (std::size_t i = 0; i < exact.size(); ++i) {
+    if (std::abs(noisy[i].z() - exact[i].z()) < 1e-6) continue;
+    ++moved;
+    const auto [c, r] = cell(exact[i]);
+    double lo = exact[i].z(), hi = exact[i].z(), jump = 0.0;
+    bool known = true;  // a neighbour beyond max_range (the floor near the horizon) is not in the cloud
+    const int dc[4] = {1, -1, 0, 0}, dr[4] = {0, 0, 1, -1};
+    for (int k = 0; k < 4; ++k) {
+      const int cc = c + dc[k], rr = r + dr[k];
+      if (cc < 0 || rr < 0 || cc >= cols || rr >= rows) continue;
+      const double zn = grid[static_cast<std::size_t>(rr * cols + cc)];
+      known = known && zn >= 0;
+      if (zn < 0) continue;
+      lo = std::min(lo, zn);
+      hi = std::max(hi, zn);
+      jump = std::max(jump, std::abs(zn - exact[i].z()));
+    }
+    if (!known) continue;
+    ++checked;
+    EXPECT_GT(jump, 0.5 * flying.edge_jump) << "sample " << i << " moved without a depth edge";
+    EXPECT_GE(noisy[i].z(), lo - 1e-6);
+    EXPECT_LE(noisy[i].z(), hi + 1e-6);
+  }
+  std::printf("%d of %zu samples are flying pixels (%d checked against their neighbours)\n", moved, exact.size(), checked);
+  EXPECT_GT(checked, 30) << "the table edge and the objects' silhouettes give edges";
+  EXPECT_LT(moved, static_cast<int>(exact.size()) / 5) << "only edges: slanted planes (the floor, the table) have none";
+}
+
+// Holes: the floor seen at a low angle loses samples with a probability rising from 0 at
+// grazing_angle to 1 at 90 deg; nearer to the normal nothing is lost.
+TEST(DepthNoise, HolesAtGrazingAngles) {
+  Rig rig("single_object.yaml", false);
+  DepthNoiseConfig holes = stereo();
+  holes.subpixel = 0.0;
+  holes.flying_pixels = 0.0;
+  Eigen::Isometry3d T = ehc_control::lookAt(Eigen::Vector3d(-3.0, -3.0, 0.4), Eigen::Vector3d(-1.0, -3.0, 0.0));
+  SimulatedCamera exact_cam = depthCamera(rig, DepthNoiseConfig{DepthNoiseModel::Gaussian, 0.0, 0.0}, 2);
+  std::vector<Eigen::Vector3f> exact;
+  exact_cam.cloud(*rig.world, T, &exact);
+  double expected_lost = 0.0, var = 0.0;
+  for (const auto& p : exact) {
+    const Eigen::Vector3d ray = T.linear() * p.cast<double>().normalized();
+    const double angle = std::acos(std::abs(ray.z())) * 180.0 / M_PI;  // floor normal: world z
+    const double q = std::clamp((angle - holes.grazing_angle) / (90.0 - holes.grazing_angle), 0.0, 1.0);
+    expected_lost += q;
+    var += q * (1 - q);
+  }
+  std::vector<Eigen::Vector3f> a, b, c;
+  depthCamera(rig, holes, 2).cloud(*rig.world, T, &a);
+  depthCamera(rig, holes, 2).cloud(*rig.world, T, &b);
+  depthCamera(rig, holes, 3).cloud(*rig.world, T, &c);
+  const double lost = static_cast<double>(exact.size() - a.size());
+  std::printf("grazing floor: %zu samples, %.0f lost (expected %.1f)\n", exact.size(), lost, expected_lost);
+  ASSERT_GT(expected_lost, 100.0) << "the view must graze the floor";
+  EXPECT_NEAR(lost, expected_lost, 4.0 * std::sqrt(var) + 1.0);
+  EXPECT_TRUE(a == b) << "same seed, same cloud";
+  EXPECT_FALSE(a == c) << "another seed, other holes";
+}
+
+TEST(DepthNoise, BadSettingsAreRejectedNamingTheField) {
+  const auto err = [](const std::string& yaml) {
+    return ehc_test::errorOf([&] {
+      const auto n = ehc_common::ConfigNode::loadString(yaml, "cam.yaml", "T");
+      loadSimulatedCameraConfig(n);
+      n.rejectUnknownKeys();
+    });
+  };
+  EXPECT_NE(err("depth_noise: {model: tof}\n").find("depth_noise.model"), std::string::npos);
+  EXPECT_NE(err("depth_noise: {model: stereo, subpixel: -1}\n").find("sim.camera.depth_noise.subpixel"), std::string::npos);
+  EXPECT_NE(err("depth_noise: {flying_pixels: 1.5}\n").find("flying_pixels"), std::string::npos);
+  EXPECT_NE(err("depth_noise: {grazing_angle: .nan}\n").find("grazing_angle"), std::string::npos);
+  EXPECT_NE(err("depth_noise: {basline: 0.05}\n").find("basline"), std::string::npos) << "unknown key";
 }

@@ -3,6 +3,7 @@
 // cylinder, lying bottle), a table plane, a depth camera's organised cloud of boxes on a table,
 // PointCloud2 bytes without ROS, image pixel noise, and the shipped camera / robot files.
 
+#include "ehc_control/pose_math.h"
 #include "ehc_perception/grasp_generator.h"
 #include "ehc_perception/point_cloud_layout.h"
 
@@ -32,17 +33,8 @@ inline void addPixelNoise(vpImage<unsigned char>* image, std::mt19937* rng, doub
     image->bitmap[k] = static_cast<unsigned char>(std::clamp(std::lround(image->bitmap[k] + n(*rng)), 0L, 255L));
 }
 
-/// Optical frame at `eye` looking at `target` (z forward, x right, y down; world z up).
-inline Eigen::Isometry3d lookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target) {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  const Eigen::Vector3d z = (target - eye).normalized();
-  const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
-  T.linear().col(0) = x;
-  T.linear().col(1) = z.cross(x);
-  T.linear().col(2) = z;
-  T.translation() = eye;
-  return T;
-}
+/// Optical frame at `eye` looking at `target` (ehc_control/pose_math.h).
+using ehc_control::lookAt;
 
 struct Surface {
   PointList points;
@@ -127,6 +119,22 @@ inline Surface cylinderSurface(double r, double z0, double z1, double step, bool
         const double a = 2 * M_PI * i / m;
         s.add(Eigen::Vector3d(rr * std::cos(a), rr * std::sin(a), z), n);
       }
+    }
+  }
+  return s;
+}
+
+/// Sphere of radius r centred at the origin (latitude rings `step` apart).
+inline Surface sphereSurface(double r, double step) {
+  Surface s;
+  const int nl = std::max(4, static_cast<int>(std::round(M_PI * r / step)));
+  for (int i = 0; i <= nl; ++i) {
+    const double lat = -0.5 * M_PI + M_PI * i / nl;
+    const int na = std::max(1, static_cast<int>(std::round(2 * M_PI * r * std::cos(lat) / step)));
+    for (int k = 0; k < na; ++k) {
+      const double lon = 2 * M_PI * k / na;
+      const Eigen::Vector3d n(std::cos(lat) * std::cos(lon), std::cos(lat) * std::sin(lon), std::sin(lat));
+      s.add(r * n, n);
     }
   }
   return s;

@@ -29,6 +29,19 @@ double yawFromQuaternion(const Eigen::Quaterniond& q);
 /// The rotation matrix of `q` (normalised first). All NaN unless isRotationQuaternion(q).
 Eigen::Matrix3d rotationFromQuaternion(const Eigen::Quaterniond& q);
 
+/// Pose of a camera optical frame (z forward, x right, y down) at `eye` looking at `target`, its
+/// x axis horizontal (not defined when looking straight up or down).
+inline Eigen::Isometry3d lookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  const Eigen::Vector3d z = (target - eye).normalized();
+  const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
+  T.linear().col(0) = x;
+  T.linear().col(1) = z.cross(x);
+  T.linear().col(2) = z;
+  T.translation() = eye;
+  return T;
+}
+
 /// Angle (rad, in [0, pi]) of the rotation between two rotation matrices: acos of
 /// (trace(a^T b) - 1) / 2, the cosine clamped to [-1, 1] against rounding. A NaN entry gives NaN.
 inline double rotationAngle(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {

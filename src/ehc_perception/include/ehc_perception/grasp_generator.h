@@ -12,7 +12,7 @@
 // approach line should pass through the object's centroid: weight from the angle between the
 // approach direction and the direction from the gripper's approach origin to the centroid)
 // x PCA weight (finger closing axis, and approach axis, aligned with the object's principal
-// axes). Refinement: the grasp is centred between the object's extreme points along the
+// axes). Refinement: the grasp is centred between the object's measured sides along the
 // closing axis and moved along the finger breadth axis onto the centroid's projection.
 // Depth refinement: the contact pairs give a grasp centre near the contacts, often close to
 // an edge (e.g. just below the top face of a standing box, fingers overlapping the object by
@@ -38,17 +38,29 @@
 // axis (circle resting on the support) or standing (circular footprint of its mantle); an
 // upright round object's circle bounds every hypothesis closing parallel to the support.
 //
-// Margin rule (gripper.clearance): a grasp needs  measured width + 2 x clearance <= max_width,
-// the measured width being the object's extent across the closing axis as above (trimmed: the
-// max_collision_points most extreme points per side are noise; completed by the circle where
-// round) or, for the points between the fingers, their trimmed extent. With the 70 mm gripper
-// and clearance 0.5 mm, objects measured up to 69 mm are grasped. Measured on the simulator's
-// single views (test_grasp_widths, 3 views x 2 noise seeds): 68 mm objects measure 68.0-68.9 mm,
-// 72 mm ones 70.4-72.9 mm (boxes: sampling shortens the extent by up to one ray spacing), so
-// objects up to 68 mm pass and 72 mm fail with 1.4 mm to spare. When no grasp is found and the
-// footprint's narrowest completed width breaks the rule, the reason is "too wide: the object
-// measures W m across its narrowest axis parallel to the support; the gripper opens 0.07 m and
-// needs C m clearance each side (objects up to X m)".
+// Measured width (robust estimates, not extreme points): each side of the object between the
+// fingers is its contact surface fitted by least squares: the object's points in the fingers'
+// slab whose estimated normal (oriented outwards from the object's centre) lies within the
+// friction cone (atan(friction_coefficient)) of the closing axis, near that side's trimmed
+// extreme (4 x the cloud's noise + 2 voxels), at least min_contact_points of them, fitted with
+// y = a + b x + c x^2 + d z + e z^2 over the finger's breadth (x) and length (z) and refitted
+// without the points beyond 3 RMS; the side is where that surface reaches farthest, counting
+// only significant terms (a crest, the outer end of a slope, else the patch's mean). A side
+// without such a patch is not seen by the view: it is bounded by a fitted completion (the
+// circle of a round section, standing or lying, or the sphere of a ball, whose RMS is within
+// round_fit_tolerance beyond the cloud's noise and whose points cover an arc of 60 deg), else
+// by the trimmed extreme of the points between the fingers and, for single-contact and
+// footprint hypotheses, of the object's extent (its points and their projections onto the
+// support). Grasps with an unseen side rank below seen ones (antipodal quality at most
+// single_contact_weight). The cloud's noise is estimated from the normals' plane fits.
+//
+// Margin rule (gripper.clearance): a grasp needs  measured width + 2 x clearance <= max_width.
+// With the 70 mm gripper and clearance 0.5 mm, objects measured up to 69 mm are grasped.
+// test_grasp_widths prints the widths measured on the simulator's single views (3 views x 2
+// noise seeds); when no grasp is found and the footprint's narrowest completed width breaks
+// the rule, the reason is "too wide: the object measures W m across its narrowest axis
+// parallel to the support; the gripper opens 0.07 m and needs C m clearance each side
+// (objects up to X m)" and the failure GraspFailure::TooWide.
 //
 // Grasp frame: origin between the fingertips at the grasp centre, z = approach direction
 // (into the object), y = finger closing direction, x = y cross z.
@@ -97,7 +109,11 @@ struct GraspGeneratorConfig {
   int max_seeds = 200;                ///< contact points sampled
   int pairs_per_seed = 2;             ///< antipodal partners kept per seed
   int approach_steps = 16;            ///< approach directions around each closing axis
-  double friction_cone_deg = 20.0;    ///< max angle between contact normal and closing axis
+  /// Coulomb friction coefficient mu of the finger pads on objects: a contact holds if its
+  /// surface normal is within the friction cone, atan(mu) of the closing axis (0.36: 19.8 deg).
+  /// Contact pairs, the fitted contact surfaces' normals and the measured contacts are checked
+  /// against it.
+  double friction_coefficient = 0.36;
   double max_approach_tilt_deg = 95.0;  ///< max angle between approach and straight down
   int max_collision_points = 2;       ///< cloud points tolerated inside fingers/palm (noise)
   double outlier_fraction = 0.03;     ///< ... or this fraction of the points there, if more
@@ -130,6 +146,10 @@ struct GraspGeneratorConfig {
   /// tangent to the support, e.g. a lying cylinder): its circle then gives the width across
   /// that axis where the single view sees the sides only at grazing angles.
   double round_fit_tolerance = 0.002;
+  /// Points a contact surface's fit needs on one side of the closing axis (the points between
+  /// the fingers whose estimated normal is within the friction cone of the closing axis, near
+  /// that side's outermost points); with fewer the side counts as unseen.
+  int min_contact_points = 6;
   double nms_distance = 0.01;         ///< m, grasps closer than this and ...
   double nms_angle_deg = 20.0;        ///< ... this rotation are duplicates
   int top_k = 10;                     ///< grasps returned per object
@@ -149,9 +169,33 @@ struct GraspGeneratorConfig {
 /// Reads a `grasp_generator` mapping (all fields optional; gripper: sub-mapping).
 GraspGeneratorConfig loadGraspGeneratorConfig(const ehc_common::ConfigNode& node);
 
+/// Why a generator call gave no grasp (one string map: toString / graspFailureFromString).
+enum class GraspFailure {
+  None,              ///< there are grasps
+  EmptyCloud,        ///< no points
+  NoFinitePoints,    ///< every point NaN / Inf
+  BadViewpoint,      ///< the viewpoint is not finite
+  TooFewPoints,      ///< fewer than min_object_points after the voxel filter
+  BadSupportPlane,   ///< the given support plane is not finite
+  NoObject,          ///< scenes: nothing above the support plane, or no cluster
+  TooWide,           ///< the object is wider than the opening across every closing axis tried
+  NoAntipodalPair,   ///< no contact pair within the friction cone and the opening
+  Collides,          ///< every candidate collides with the cloud or the support, or does not fit
+  TargetTooFar,      ///< generateForTarget: the nearest object is outside the target gate
+};
+std::string toString(GraspFailure f);
+GraspFailure graspFailureFromString(const std::string& s);  ///< throws "[GraspGenerator] unknown ..."
+
 struct Grasp {
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();  ///< grasp frame in the cloud frame
-  double width = 0.0;            ///< m, opening needed (object extent + 2 x clearance)
+  double width = 0.0;            ///< m, opening needed (measured width + 2 x clearance)
+  /// m, the object's width between the fingers: the distance between the two contact surfaces
+  /// fitted along the closing axis (see the header comment); width - 2 x clearance.
+  double measured_width = 0.0;
+  /// Contacts the view supports (0, 1 or 2): sides whose contact surface was fitted from the
+  /// points between the fingers. An unseen side is bounded by the object's extent or its fitted
+  /// circle / sphere; such grasps rank below fully supported ones (single_contact_weight).
+  int seen_contacts = 0;
   double score = 0.0;            ///< antipodal x centroid x pca, in [0, 1]
   double antipodal = 0.0;        ///< min |cos| between contact normals and closing axis
   double centroid_weight = 0.0;
@@ -162,6 +206,7 @@ struct Grasp {
 struct GraspResult {
   std::vector<Grasp> grasps;     ///< best first
   std::string reason;            ///< why there is no grasp ("" when there are grasps)
+  GraspFailure failure = GraspFailure::None;  ///< the reason's kind
   int objects = 0;               ///< objects considered
   std::vector<Eigen::Vector3d> centroids;  ///< per object
   bool support_plane_found = false;
@@ -180,6 +225,7 @@ struct SceneSegmentation {
   std::vector<PointList> objects;                   ///< largest first
   PointList obstacles;                              ///< every point above the plane
   std::string reason;
+  GraspFailure failure = GraspFailure::None;
 };
 
 class GraspGenerator {

@@ -2,6 +2,7 @@
 #include "ehc_perception/grasp_generator.h"
 
 #include "ehc_common/config_node.h"
+#include "ehc_common/enum_names.h"
 #include "ehc_control/pose_math.h"
 #include "ehc_perception/point_cloud_layout.h"
 
@@ -33,6 +34,20 @@ namespace ehc_perception {
 namespace {
 
 const char* kOwner = "GraspGenerator";
+
+constexpr ehc_common::EnumNames<GraspFailure, 11> kFailureNames = {{
+    {GraspFailure::None, "none"},
+    {GraspFailure::EmptyCloud, "empty_cloud"},
+    {GraspFailure::NoFinitePoints, "no_finite_points"},
+    {GraspFailure::BadViewpoint, "bad_viewpoint"},
+    {GraspFailure::TooFewPoints, "too_few_points"},
+    {GraspFailure::BadSupportPlane, "bad_support_plane"},
+    {GraspFailure::NoObject, "no_object"},
+    {GraspFailure::TooWide, "too_wide"},
+    {GraspFailure::NoAntipodalPair, "no_antipodal_pair"},
+    {GraspFailure::Collides, "collides"},
+    {GraspFailure::TargetTooFar, "target_too_far"},
+}};
 constexpr double kDeg = M_PI / 180.0;
 
 using Cloud = pcl::PointCloud<pcl::PointXYZ>;
@@ -129,52 +144,199 @@ struct ExtentHint {
   Eigen::Vector3d a = Eigen::Vector3d::Zero(), b = Eigen::Vector3d::Zero();
 };
 
+/// An object point near a grasp with its estimated surface normal (sign-free).
+struct SurfacePoint {
+  Eigen::Vector3d p, n;
+};
+
+/// One side of the object along a grasp's closing axis, as measured between the fingers.
+struct ContactSide {
+  bool seen = false;     ///< fitted from the points whose normals face along the closing axis
+  double y = 0.0;        ///< position along the closing axis (grasp-local, from c0)
+  double cos_n = 0.0;    ///< |cos| of the fitted surface's normal at the contact and the axis
+};
+
+/// The two contact surfaces of a grasp (see ContactSurfaceFit).
+struct Measurement {
+  ContactSide side[2];   ///< [0]: towards -y, [1]: towards +y
+  double width = 0.0;    ///< m, side[1].y - side[0].y
+  int seen() const { return side[0].seen + side[1].seen; }
+};
+
+/// The contact surfaces' fit: the object's points between the fingers whose estimated normal
+/// lies within the friction cone of the closing axis y and that are near one side's outermost
+/// points are that side's contact patch; the patch is fitted by least squares with a surface
+/// y = a + b x + c x^2 + d z + e z^2 over the finger's breadth (x) and length (z) (a flat face
+/// or a curved one: a cylinder's mantle, a ball), refitted without the points beyond 3 RMS,
+/// and the side's position is the fitted surface's outermost value over the patch (where the
+/// fingers first touch it). Noise averages out in the fit instead of pushing the extreme points
+/// outwards: a 66 mm cylinder under 2 mm noise measures 66 mm, not 75. Every point of a patch
+/// has its estimated normal within the friction cone (the antipodal check of the contacts);
+/// the contact's quality is their mean cosine with the axis.
+class ContactSurfaceFit {
+ public:
+  ContactSurfaceFit(double cos_cone, int min_points, double noise, double leaf)
+      : cos_cone_(cos_cone), min_points_(min_points), band_(4.0 * noise + 2.0 * leaf) {}
+
+  /// `pts`: (y, x, z) grasp-local coordinates of the object's points between the fingers and
+  /// `ny` the cos of their outward normals with y; `lo`, `hi`: the trimmed extremes along y.
+  /// Side `s` (+1: +y, -1: -y): the points whose outward normal is within the cone of s y.
+  ContactSide fit(const std::vector<Eigen::Vector3d>& pts, const std::vector<double>& ny, double lo,
+                  double hi, int s) const {
+    ContactSide out;
+    const double mid = 0.5 * (lo + hi), outer = s > 0 ? hi : lo;
+    std::vector<const Eigen::Vector3d*> patch;
+    double cos_sum = 0.0;
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      const double y = pts[i].x();
+      if (s * ny[i] < cos_cone_ || s * (y - mid) <= 0.0 || s * (outer - y) > band_) continue;
+      patch.push_back(&pts[i]);
+      cos_sum += s * ny[i];
+    }
+    Eigen::Matrix<double, 5, 1> c;
+    if (static_cast<int>(patch.size()) < min_points_ || !solve(patch, &c)) return out;
+    // Refit without the points farther than 3 RMS from the first fit (flying pixels, strays).
+    double ss = 0.0;
+    for (const auto* q : patch) ss += std::pow(q->x() - value(c, q->y(), q->z()), 2);
+    const double cut = 3.0 * std::sqrt(ss / static_cast<double>(patch.size())) + 1e-6;
+    std::vector<const Eigen::Vector3d*> kept;
+    for (const auto* q : patch)
+      if (std::abs(q->x() - value(c, q->y(), q->z())) <= cut) kept.push_back(q);
+    if (static_cast<int>(kept.size()) < min_points_ || !solve(kept, &c)) return out;
+    // Where the fingers touch: along x and along z (separable terms) the fitted surface's
+    // vertex where it bends away from the finger significantly (more than twice its standard
+    // error) inside the patch, a cylinder's or a ball's crest; the outer end of a significant
+    // slope (a face tilted from the closing axis); else the patch's mean (a flat face: its
+    // mean position; the maximum of a noisy fit over the patch would be biased out).
+    Eigen::Matrix<double, 5, 5> A = Eigen::Matrix<double, 5, 5>::Zero();
+    double x0 = kept[0]->y(), x1 = x0, z0 = kept[0]->z(), z1 = z0, xm = 0.0, zm = 0.0, res = 0.0;
+    for (const auto* q : kept) {
+      Eigen::Matrix<double, 5, 1> r;
+      r << 1.0, q->y(), q->y() * q->y(), q->z(), q->z() * q->z();
+      A += r * r.transpose();
+      x0 = std::min(x0, q->y());
+      x1 = std::max(x1, q->y());
+      z0 = std::min(z0, q->z());
+      z1 = std::max(z1, q->z());
+      xm += q->y();
+      zm += q->z();
+      res += std::pow(q->x() - value(c, q->y(), q->z()), 2);
+    }
+    const double n = static_cast<double>(kept.size());
+    const double var = res / std::max(1.0, n - 5.0);
+    const Eigen::Matrix<double, 5, 5> cov = A.inverse() * var;
+    auto se = [&](int i) { return std::sqrt(std::max(0.0, cov(i, i))); };
+    const double x = crest(c[1], c[2], se(1), se(2), x0, x1, xm / n, s);
+    const double z = crest(c[3], c[4], se(3), se(4), z0, z1, zm / n, s);
+    out.seen = true;
+    out.y = value(c, x, z);
+    out.cos_n = cos_sum / static_cast<double>(patch.size());
+    return out;
+  }
+
+ private:
+  static double value(const Eigen::Matrix<double, 5, 1>& c, double x, double z) {
+    return c[0] + c[1] * x + c[2] * x * x + c[3] * z + c[4] * z * z;
+  }
+  /// Where b t + a t^2 reaches farthest towards side s on [t0, t1], counting only terms that
+  /// are significant (more than twice their standard errors se_b, se_a): a crest (s a < 0)
+  /// inside the range; else the outer end of a significant slope (a tilted face); else `mean`.
+  static double crest(double b, double a, double se_b, double se_a, double t0, double t1, double mean, int s) {
+    if (s * a < 0.0 && std::abs(a) > 2.0 * se_a) {
+      const double tv = -b / (2.0 * a);
+      if (tv >= t0 && tv <= t1) return tv;
+    }
+    if (std::abs(b) > 2.0 * se_b) return s * b > 0.0 ? t1 : t0;
+    return mean;
+  }
+  /// Least squares with a small ridge on the slope and curvature terms (a patch along one
+  /// direction only leaves the other's terms at 0 instead of undetermined).
+  static bool solve(const std::vector<const Eigen::Vector3d*>& pts, Eigen::Matrix<double, 5, 1>* c) {
+    Eigen::Matrix<double, 5, 5> A = Eigen::Matrix<double, 5, 5>::Zero();
+    Eigen::Matrix<double, 5, 1> b = Eigen::Matrix<double, 5, 1>::Zero();
+    for (const auto* q : pts) {
+      Eigen::Matrix<double, 5, 1> r;
+      r << 1.0, q->y(), q->y() * q->y(), q->z(), q->z() * q->z();
+      A += r * r.transpose();
+      b += r * q->x();
+    }
+    const double n = static_cast<double>(pts.size());
+    A(1, 1) += 1e-6 * n;  // (1 mm)^2 per point
+    A(3, 3) += 1e-6 * n;
+    A(2, 2) += 1e-10 * n;
+    A(4, 4) += 1e-10 * n;
+    *c = A.ldlt().solve(b);
+    return c->allFinite();
+  }
+
+  double cos_cone_;
+  int min_points_;
+  double band_;
+};
+
 struct Candidate {
   Eigen::Matrix3d R;
   Eigen::Vector3d c;
   double width = 0, antipodal = 0, wc = 0, wp = 0, score = 0;
+  double q = 0;         ///< the hypothesis's antipodal quality
+  Measurement m;        ///< the contact surfaces between the fingers
   bool single = false;  ///< single-contact hypothesis (width from the object's extent)
   ExtentHint hint;      ///< completes the object's extent (footprint hypotheses)
 };
 
-/// Evaluates the gripper at (R, c0): centres it along the closing axis on the points between
-/// the fingers, checks width, finger / palm collisions and the support plane.
+/// Antipodal quality of a measured grasp: the fitted contacts' normals (min |cos| with the
+/// closing axis) where both sides were fitted; otherwise the hypothesis's quality, at most
+/// single_contact_weight (a contact the view does not show ranks below seen ones).
+double supportedQuality(double q, const Measurement& m, double single_weight) {
+  if (m.seen() == 2) return std::min(m.side[0].cos_n, m.side[1].cos_n);
+  const double seen_cos = m.side[0].seen ? m.side[0].cos_n : m.side[1].seen ? m.side[1].cos_n : 1.0;
+  return std::min(q, single_weight) * seen_cos;
+}
+
+/// Evaluates the gripper at (R, c0): centres it along the closing axis on the object between
+/// the fingers, measures it there (ContactSurfaceFit), checks width, finger / palm collisions
+/// and the support plane.
 class GripperCheck {
  public:
-  GripperCheck(const GraspGeneratorConfig& cfg, const Eigen::Vector4d& plane, bool has_plane)
-      : cfg_(cfg), g_(cfg.gripper), plane_(plane), has_plane_(has_plane) {}
+  /// `noise`: the object cloud's estimated noise (m, see estimateNoise), `leaf` its voxel edge.
+  GripperCheck(const GraspGeneratorConfig& cfg, const Eigen::Vector4d& plane, bool has_plane, double noise,
+               double leaf)
+      : cfg_(cfg), g_(cfg.gripper), plane_(plane), has_plane_(has_plane), noise_(noise),
+        fit_(std::cos(std::atan(cfg.friction_coefficient)), cfg.min_contact_points, noise, leaf) {}
 
-  /// Expresses the neighbourhood in the (y, u, v) frame of a closing axis y (u, v span the
-  /// approach plane, v = y x u), dropping points no gripper pose around y can touch.
   /// A closing axis y at c0 with the neighbourhood expressed in its (y, u, v) frame (u, v
   /// span the approach plane, v = y x u).
   struct Prepared {
     Eigen::Vector3d c0 = Eigen::Vector3d::Zero(), y = Eigen::Vector3d::Zero(), u = Eigen::Vector3d::Zero(),
                     v = Eigen::Vector3d::Zero();
     std::vector<Eigen::Vector3d> local;  ///< (y, u, v) coordinates of reachable points
+    std::vector<Eigen::Vector3d> surface;    ///< (y, u, v) of the object's reachable points
+    std::vector<Eigen::Vector3d> surface_n;  ///< their normals in (y, u, v)
     bool use_extent = false;             ///< bound the object by its extent along y
     bool too_wide = false;               ///< object extent along y exceeds the opening
     double ext_min = 0, ext_max = 0;
+    bool hint = false;                   ///< ext_min / ext_max are a fitted circle's or sphere's
   };
 
   /// Drops points no gripper pose around y can touch. `object` (optional): the object's
   /// points; its extent along y then bounds the part of the object between the fingers
-  /// (used when the far contact is not seen).
+  /// where a side is not seen. `surface`: the object's points near c0 with their normals.
   void prepare(const Eigen::Vector3d& c0, const Eigen::Vector3d& y, const Eigen::Vector3d& u,
-               const std::vector<Eigen::Vector3d>& nbrs, const Cloud* object, const ExtentHint& hint,
-               Prepared* pr) {
+               const std::vector<Eigen::Vector3d>& nbrs, const std::vector<SurfacePoint>& surface,
+               const Cloud* object, const ExtentHint& hint, Prepared* pr) {
     pr->c0 = c0;
     pr->y = y;
     pr->u = u;
     pr->v = y.cross(u);
     pr->use_extent = false;
     pr->too_wide = false;
+    pr->hint = false;
     // The object rests on the support: the unseen volume below each seen point, down to the
     // support, may be object too (single views miss the lower far side). Its extent along y
     // is that of the points and of their projections onto the support (k most extreme per
-    // side dropped as noise), widened to the hint's completion of a round section.
+    // side dropped as noise); a round section's or a ball's fitted extremes replace it.
     ext_.clear();
-    if (object) {
+    if (object && !hint.valid) {
       const double yn = has_plane_ ? y.dot(plane_.head<3>()) : 0.0;
       for (const auto& pf : *object) {
         const Eigen::Vector3d p = pf.getVector3fMap().cast<double>();
@@ -184,22 +346,21 @@ class GripperCheck {
       }
     }
     const std::size_t k = static_cast<std::size_t>(cfg_.max_collision_points);
-    bool bounded = false;
-    if (ext_.size() > 2 * k + 1) {
+    if (hint.valid) {
+      const double ha = y.dot(hint.a - c0), hb = y.dot(hint.b - c0);
+      pr->ext_min = std::min(ha, hb);
+      pr->ext_max = std::max(ha, hb);
+      pr->use_extent = pr->hint = true;
+    } else if (ext_.size() > 2 * k + 1) {
       const auto range = trimmedRange(ext_, k);
       pr->ext_min = range.first;
       pr->ext_max = range.second;
-      bounded = true;
-    }
-    if (hint.valid) {
-      const double ha = y.dot(hint.a - c0), hb = y.dot(hint.b - c0);
-      pr->ext_min = bounded ? std::min(pr->ext_min, std::min(ha, hb)) : std::min(ha, hb);
-      pr->ext_max = bounded ? std::max(pr->ext_max, std::max(ha, hb)) : std::max(ha, hb);
-      bounded = true;
-    }
-    if (bounded) {
       pr->use_extent = true;
-      pr->too_wide = pr->ext_max - pr->ext_min + 2.0 * g_.clearance > g_.max_width;
+    }
+    if (pr->use_extent) {
+      // Only a fitted completion is a measurement of the width; the raw extent bounds unseen
+      // sides only (the seen ones are fitted between the fingers, see evaluate).
+      pr->too_wide = pr->hint && pr->ext_max - pr->ext_min + 2.0 * g_.clearance > g_.max_width;
       if (pr->too_wide) return;
     }
     const double W = g_.max_width, t = g_.finger_thickness;
@@ -208,110 +369,171 @@ class GripperCheck {
                                                           g_.finger_tip_depth);
     const double xmax = 0.5 * std::max(g_.finger_breadth, g_.palm_breadth);
     const double r2 = zmax * zmax + xmax * xmax;
-    pr->local.clear();
-    for (const Eigen::Vector3d& p : nbrs) {
+    auto toLocal = [&](const Eigen::Vector3d& p, Eigen::Vector3d* l) {
       const Eigen::Vector3d d = p - c0;
       const double py = y.dot(d);
-      if (std::abs(py) > ymax) continue;
+      if (std::abs(py) > ymax) return false;
       const double pu = u.dot(d), pv = pr->v.dot(d);
-      if (pu * pu + pv * pv > r2) continue;
-      pr->local.emplace_back(py, pu, pv);
-    }
+      if (pu * pu + pv * pv > r2) return false;
+      *l = Eigen::Vector3d(py, pu, pv);
+      return true;
+    };
+    pr->local.clear();
+    Eigen::Vector3d l;
+    for (const Eigen::Vector3d& p : nbrs)
+      if (toLocal(p, &l)) pr->local.push_back(l);
+    pr->surface.clear();
+    pr->surface_n.clear();
+    for (const SurfacePoint& sp : surface)
+      if (toLocal(sp.p, &l)) {
+        pr->surface.push_back(l);
+        pr->surface_n.emplace_back(y.dot(sp.n), u.dot(sp.n), pr->v.dot(sp.n));
+      }
   }
 
-  /// Gripper with approach a = cos(phi) u + sin(phi) v: centres it along y on the points
-  /// between the fingers, checks the opening, finger / palm collisions and the support plane.
+  /// Gripper with approach a = cos(phi) u + sin(phi) v: centres it along y on the object
+  /// between the fingers (measured by its contact surfaces), checks the opening, finger / palm
+  /// collisions and the support plane.
   bool evaluate(const Prepared& pr, double cphi, double sphi, Eigen::Matrix3d* Rout,
-                Eigen::Vector3d* c, double* width) {
-    const double z1 = g_.finger_tip_depth, z0 = z1 - g_.finger_length;
-    const double zp = z0 - g_.palm_height;
-    const double W = g_.max_width, t = g_.finger_thickness;
-    ys_.clear();
-    inner_.clear();
-    palm_.clear();
-    for (const Eigen::Vector3d& l : pr.local) {
-      const double qz = cphi * l.y() + sphi * l.z();
-      if (qz > z1 || qz < zp) continue;
-      const double qx = cphi * l.z() - sphi * l.y();
-      const double qy = l.x();
-      if (qz >= z0) {
-        if (std::abs(qx) <= 0.5 * g_.finger_breadth && std::abs(qy) <= W + 2 * t) {
-          ys_.push_back(qy);
-          if (std::abs(qy) <= 0.5 * W) inner_.push_back(qy);
-        }
-      } else if (std::abs(qx) <= 0.5 * g_.palm_breadth &&
-                 std::abs(qy) <= 0.5 * g_.palm_width + 0.5 * W) {
-        palm_.push_back(qy);
-      }
-    }
-    Eigen::Matrix3d R;
-    R.col(1) = pr.y;
-    R.col(2) = cphi * pr.u + sphi * pr.v;
-    R.col(0) = cphi * pr.v - sphi * pr.u;
-    const Eigen::Vector3d& c0 = pr.c0;
-    // Object between the fingers: trimmed extent of the points in the opening (the k most
-    // extreme points on each side are treated as noise).
-    if (pr.too_wide) return false;
-    // Outliers tolerated per side: max_collision_points, or outlier_fraction of the points.
-    const int k = std::max(cfg_.max_collision_points,
-                           static_cast<int>(cfg_.outlier_fraction * inner_.size()));
-    if (static_cast<int>(inner_.size()) < cfg_.min_points_between_fingers + 2 * k) return false;
-    const auto kk = static_cast<long>(k);
-    std::nth_element(inner_.begin(), inner_.begin() + kk, inner_.end());
-    double ymin = inner_[static_cast<std::size_t>(k)];
-    std::nth_element(inner_.begin(), inner_.end() - 1 - kk, inner_.end());
-    double ymax = inner_[inner_.size() - 1 - static_cast<std::size_t>(k)];
-    if (pr.use_extent) {
-      ymin = std::min(ymin, pr.ext_min);
-      ymax = std::max(ymax, pr.ext_max);
-    }
-    const double w = ymax - ymin + 2.0 * g_.clearance;
-    if (w > W) return false;
-    const double yc = 0.5 * (ymin + ymax);
-    // Points under the fingers or in the clearance gap (outside the trimmed extent).
-    const double half = 0.5 * (ymax - ymin);
-    int finger_hits = 0;
-    for (double y : ys_) {
-      const double d = std::abs(y - yc);
-      if (d > half + 1e-9 && d <= 0.5 * w + t) ++finger_hits;
-    }
-    if (finger_hits > 2 * k) return false;
-    int palm_hits = 0;
-    for (double y : palm_)
-      if (std::abs(y - yc) <= 0.5 * g_.palm_width) ++palm_hits;
-    if (palm_hits > std::max(cfg_.max_collision_points,
-                             static_cast<int>(cfg_.outlier_fraction * palm_.size())))
-      return false;
-    const Eigen::Vector3d centre = c0 + R.col(1) * yc;
-    if (has_plane_) {
-      const double fy = 0.5 * w + g_.finger_thickness;
-      const double xs[2] = {0.5 * g_.finger_breadth, 0.5 * g_.palm_breadth};
-      const double yss[2] = {fy, 0.5 * g_.palm_width};
-      const double zs[2][2] = {{z0, z1}, {zp, z0}};
-      for (int b = 0; b < 2; ++b)
-        for (double sx : {-1.0, 1.0})
-          for (double sy : {-1.0, 1.0})
-            for (int iz = 0; iz < 2; ++iz) {
-              const Eigen::Vector3d corner =
-                  centre + R * Eigen::Vector3d(sx * xs[b], sy * yss[b], zs[b][iz]);
-              if (plane_.head<3>().dot(corner) + plane_[3] < cfg_.support_clearance) return false;
-            }
-    }
-    *Rout = R;
-    *c = centre;
-    *width = w;
-    return true;
-  }
+                Eigen::Vector3d* c, double* width, Measurement* m);
 
  private:
+  /// The object's points in the fingers' slab in grasp coordinates (y, x, z) with the cos of
+  /// their outward normals with y, into slab_ / slab_ny_.
+  void surfaceInSlab(const Prepared& pr, double cphi, double sphi);
+  /// The two sides: fitted where the view shows them (ContactSurfaceFit), else bounded by
+  /// the fitted completion, or by the trimmed extremes of the points between the fingers and
+  /// the object's extent. False if a fitted contact's normal is outside the friction cone.
+  bool measure(const Prepared& pr, double lo, double hi, Measurement* m) const;
+
   const GraspGeneratorConfig& cfg_;
   const GripperGeometry& g_;
   Eigen::Vector4d plane_;
   bool has_plane_;
+  double noise_;
+  ContactSurfaceFit fit_;
   std::vector<double> ys_, inner_, palm_;
   std::vector<double> ext_;
-
+  std::vector<Eigen::Vector3d> slab_;
+  std::vector<double> slab_ny_;
 };
+
+void GripperCheck::surfaceInSlab(const Prepared& pr, double cphi, double sphi) {
+  const double z1 = g_.finger_tip_depth, z0 = z1 - g_.finger_length;
+  slab_.clear();
+  slab_ny_.clear();
+  for (std::size_t i = 0; i < pr.surface.size(); ++i) {
+    const Eigen::Vector3d& l = pr.surface[i];
+    const double qz = cphi * l.y() + sphi * l.z();
+    const double qx = cphi * l.z() - sphi * l.y();
+    if (qz > z1 || qz < z0 || std::abs(qx) > 0.5 * g_.finger_breadth || std::abs(l.x()) > 0.5 * g_.max_width)
+      continue;
+    slab_.emplace_back(l.x(), qx, qz);
+    slab_ny_.push_back(pr.surface_n[i].x());
+  }
+}
+
+bool GripperCheck::measure(const Prepared& pr, double lo, double hi, Measurement* m) const {
+  for (int i = 0; i < 2; ++i) {
+    const int s = i == 0 ? -1 : 1;
+    ContactSide& side = m->side[i];
+    side = fit_.fit(slab_, slab_ny_, lo, hi, s);
+    if (side.seen) continue;
+    if (pr.hint) {
+      side.y = s > 0 ? pr.ext_max : pr.ext_min;
+      continue;
+    }
+    // Bounded by the last samples of the surfaces running up to it (a top face's far edge):
+    // their trimmed extreme, short of the true side by up to one sample spacing.
+    side.y = s > 0 ? hi : lo;
+    if (pr.use_extent) side.y = s > 0 ? std::max(hi, pr.ext_max) : std::min(lo, pr.ext_min);
+  }
+  m->width = m->side[1].y - m->side[0].y;
+  // Two sides closer than the noise can tell apart are one surface's noise.
+  return m->width > 4.0 * noise_;
+}
+
+bool GripperCheck::evaluate(const Prepared& pr, double cphi, double sphi, Eigen::Matrix3d* Rout,
+                            Eigen::Vector3d* c, double* width, Measurement* m) {
+  const double z1 = g_.finger_tip_depth, z0 = z1 - g_.finger_length;
+  const double zp = z0 - g_.palm_height;
+  const double W = g_.max_width, t = g_.finger_thickness;
+  ys_.clear();
+  inner_.clear();
+  palm_.clear();
+  for (const Eigen::Vector3d& l : pr.local) {
+    const double qz = cphi * l.y() + sphi * l.z();
+    if (qz > z1 || qz < zp) continue;
+    const double qx = cphi * l.z() - sphi * l.y();
+    const double qy = l.x();
+    if (qz >= z0) {
+      if (std::abs(qx) <= 0.5 * g_.finger_breadth && std::abs(qy) <= W + 2 * t) {
+        ys_.push_back(qy);
+        if (std::abs(qy) <= 0.5 * W) inner_.push_back(qy);
+      }
+    } else if (std::abs(qx) <= 0.5 * g_.palm_breadth &&
+               std::abs(qy) <= 0.5 * g_.palm_width + 0.5 * W) {
+      palm_.push_back(qy);
+    }
+  }
+  Eigen::Matrix3d R;
+  R.col(1) = pr.y;
+  R.col(2) = cphi * pr.u + sphi * pr.v;
+  R.col(0) = cphi * pr.v - sphi * pr.u;
+  const Eigen::Vector3d& c0 = pr.c0;
+  if (pr.too_wide) return false;
+  // Outliers tolerated per side: max_collision_points, or outlier_fraction of the points.
+  const int k = std::max(cfg_.max_collision_points,
+                         static_cast<int>(cfg_.outlier_fraction * inner_.size()));
+  if (static_cast<int>(inner_.size()) < cfg_.min_points_between_fingers + 2 * k) return false;
+  // What is between the fingers: its trimmed extremes (the k most extreme points per side are
+  // noise) locate the two sides; their contact surfaces measure them.
+  const auto kk = static_cast<long>(k);
+  std::nth_element(inner_.begin(), inner_.begin() + kk, inner_.end());
+  const double lo = inner_[static_cast<std::size_t>(k)];
+  std::nth_element(inner_.begin(), inner_.end() - 1 - kk, inner_.end());
+  const double hi = inner_[inner_.size() - 1 - static_cast<std::size_t>(k)];
+  surfaceInSlab(pr, cphi, sphi);
+  if (!measure(pr, lo, hi, m)) return false;
+  const double ymin = m->side[0].y, ymax = m->side[1].y;
+  const double w = ymax - ymin + 2.0 * g_.clearance;
+  if (w > W) return false;
+  const double yc = 0.5 * (ymin + ymax);
+  // Points under the fingers or in the clearance gap, beyond the measured sides by more than
+  // the noise (3 x the cloud's estimated noise: points of the contact surfaces themselves).
+  const double half = 0.5 * (ymax - ymin) + 3.0 * noise_;
+  int finger_hits = 0;
+  for (double y : ys_) {
+    const double d = std::abs(y - yc);
+    if (d > half + 1e-9 && d <= 0.5 * w + t) ++finger_hits;
+  }
+  if (finger_hits > 2 * k) return false;
+  int palm_hits = 0;
+  for (double y : palm_)
+    if (std::abs(y - yc) <= 0.5 * g_.palm_width) ++palm_hits;
+  if (palm_hits > std::max(cfg_.max_collision_points,
+                           static_cast<int>(cfg_.outlier_fraction * palm_.size())))
+    return false;
+  const Eigen::Vector3d centre = c0 + R.col(1) * yc;
+  if (has_plane_) {
+    const double fy = 0.5 * w + g_.finger_thickness;
+    const double xs[2] = {0.5 * g_.finger_breadth, 0.5 * g_.palm_breadth};
+    const double yss[2] = {fy, 0.5 * g_.palm_width};
+    const double zs[2][2] = {{z0, z1}, {zp, z0}};
+    for (int b = 0; b < 2; ++b)
+      for (double sx : {-1.0, 1.0})
+        for (double sy : {-1.0, 1.0})
+          for (int iz = 0; iz < 2; ++iz) {
+            const Eigen::Vector3d corner =
+                centre + R * Eigen::Vector3d(sx * xs[b], sy * yss[b], zs[b][iz]);
+            if (plane_.head<3>().dot(corner) + plane_[3] < cfg_.support_clearance) return false;
+          }
+  }
+  *Rout = R;
+  *c = centre;
+  *width = w;
+  return true;
+}
 
 /// Footprint of an object resting on a support plane: its points projected onto the plane, and
 /// the rectangle of least area around them (trimmed extents, orientations in 0.5 deg steps).
@@ -398,13 +620,27 @@ bool fitCircle(const std::vector<Eigen::Vector2d>& q, bool resting, double toler
   return used >= static_cast<int>(q.size() * 2 / 3) && rms <= tolerance;
 }
 
+/// The angle (rad) the points within 3 x tolerance of the circle (c, r) cover: 2 pi minus the
+/// largest gap between their directions from c.
+double arcSpan(const std::vector<Eigen::Vector2d>& q, const Eigen::Vector2d& c, double r, double tolerance) {
+  std::vector<double> a;
+  for (const auto& v : q)
+    if (std::abs((v - c).norm() - r) <= 3.0 * tolerance) a.push_back(std::atan2(v.y() - c.y(), v.x() - c.x()));
+  if (a.size() < 2) return 0.0;
+  std::sort(a.begin(), a.end());
+  double gap = a.front() + 2.0 * M_PI - a.back();
+  for (std::size_t i = 1; i < a.size(); ++i) gap = std::max(gap, a[i] - a[i - 1]);
+  return 2.0 * M_PI - gap;
+}
+
 /// Round cross-sections, completed by their circle where the single view shows them only in
 /// part (the far side and grazing sides unseen). Lying: the section across closing axis `y`
 /// (points projected along `along`, only those whose normal is across `along`, so end caps do
 /// not fill it) is a circle resting on the support. Upright (`along` = the support normal):
 /// the footprint of the points whose normal is parallel to the support (the mantle) is a
-/// circle. Valid if the circle fits (fitCircle), the seen extent along y is at least its radius
-/// and at most its diameter (a box's section or footprint is a rectangle: no fit); then the
+/// circle. Valid if the circle fits (fitCircle), the points on it cover an arc of at least 60
+/// deg (arcSpan: a chord of one radius; a few points on a short arc fit any circle), the seen
+/// extent along y is at most its diameter (a box's section or footprint is a rectangle: no fit); then the
 /// circle's extremes along y, at the height of its centre (lying) or of `ref` (upright).
 ExtentHint roundCrossSection(const Cloud& cloud, const Normals& normals, const Eigen::Vector4d& plane,
                              const Eigen::Vector3d& y, const Eigen::Vector3d& along,
@@ -444,13 +680,75 @@ ExtentHint roundCrossSection(const Cloud& cloud, const Normals& normals, const E
     c.y() = r = 0.5 * hs[hs.size() - 1 - k2];
   }
   if (!fitCircle(q, !upright, tolerance, &c, &r)) return hint;
-  if (hi - lo < r || 2.0 * r < hi - lo - 2.0 * tolerance) return hint;
+  if (2.0 * r < hi - lo - 2.0 * tolerance || arcSpan(q, c, r, tolerance) < M_PI / 3.0) return hint;
   const Eigen::Vector3d base = upright ? Eigen::Vector3d(v2 * c.y() + n * n.dot(ref))
                                        : Eigen::Vector3d(n * (c.y() - plane[3]));
   hint.valid = true;
   hint.a = y * (c.x() - r) + base;
   hint.b = y * (c.x() + r) + base;
   return hint;
+}
+
+/// A ball: the sphere through the object's points (algebraic least squares, then Gauss-Newton
+/// on the geometric distances, points farther than 3 x tolerance dropped after the first
+/// iterations). Valid if at least 2/3 of the points are kept, their RMS distance is within
+/// `tolerance` and the seen part is a cap at least a radius across in two directions (a flat
+/// face fits a huge sphere, a small patch any); then its extremes along every closing axis.
+bool fitSphere(const Cloud& cloud, double tolerance, Eigen::Vector3d* centre, double* radius) {
+  if (cloud.size() < 20) return false;
+  Eigen::Matrix4d A = Eigen::Matrix4d::Zero();
+  Eigen::Vector4d b = Eigen::Vector4d::Zero();
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const auto& pf : cloud) mean += pf.getVector3fMap().cast<double>();
+  mean /= static_cast<double>(cloud.size());
+  for (const auto& pf : cloud) {  // |p|^2 = 2 c.p + k, k = r^2 - |c|^2 (centred for conditioning)
+    const Eigen::Vector3d p = pf.getVector3fMap().cast<double>() - mean;
+    const Eigen::Vector4d row(2.0 * p.x(), 2.0 * p.y(), 2.0 * p.z(), 1.0);
+    A += row * row.transpose();
+    b += row * p.squaredNorm();
+  }
+  const Eigen::Vector4d x = A.ldlt().solve(b);
+  Eigen::Vector3d c = x.head<3>();
+  double r2 = x[3] + c.squaredNorm();
+  if (!x.allFinite() || r2 <= 0.0) return false;
+  double r = std::sqrt(r2), rms = 0.0;
+  std::size_t used = 0;
+  for (int it = 0; it < 8; ++it) {
+    Eigen::Matrix4d JtJ = Eigen::Matrix4d::Zero();
+    Eigen::Vector4d Jtd = Eigen::Vector4d::Zero();
+    double ss = 0.0;
+    used = 0;
+    for (const auto& pf : cloud) {
+      const Eigen::Vector3d w = pf.getVector3fMap().cast<double>() - mean - c;
+      const double rho = w.norm();
+      if (rho < 1e-9) continue;
+      const double d = rho - r;
+      if (it >= 3 && std::abs(d) > 3.0 * tolerance) continue;
+      const Eigen::Vector4d J(-w.x() / rho, -w.y() / rho, -w.z() / rho, -1.0);
+      JtJ += J * J.transpose();
+      Jtd += J * d;
+      ss += d * d;
+      ++used;
+    }
+    if (used < 20) return false;
+    rms = std::sqrt(ss / static_cast<double>(used));
+    const Eigen::Vector4d step = JtJ.ldlt().solve(-Jtd);
+    if (!step.allFinite()) return false;
+    c += step.head<3>();
+    r += step[3];
+    if (r <= 0.0) return false;
+  }
+  if (used < cloud.size() * 2 / 3 || rms > tolerance) return false;
+  Eigen::Matrix3f covf;
+  Eigen::Vector4f cenf;
+  pcl::computeMeanAndCovarianceMatrix(cloud, covf, cenf);
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(covf.cast<double>());
+  // Spread along the two largest principal axes: a cap of angular radius t has std-dev about
+  // r sin(t) / 2 across; at least a radius across (t >= 30 deg) in both.
+  if (std::sqrt(std::max(0.0, es.eigenvalues()[1])) < 0.25 * r) return false;
+  *centre = c + mean;
+  *radius = r;
+  return true;
 }
 
 std::string num(double v) {
@@ -462,6 +760,12 @@ std::string num(double v) {
 }  // namespace
 
 // ------------------------------------------------------------------------------ config
+
+std::string toString(GraspFailure f) { return ehc_common::enumName(kFailureNames, f, kOwner); }
+
+GraspFailure graspFailureFromString(const std::string& s) {
+  return ehc_common::enumValue(kFailureNames, s, kOwner, "grasp failure");
+}
 
 void GraspGeneratorConfig::validate() const {
   auto range = [](const std::string& f, double v, double lo, double hi) {
@@ -485,7 +789,7 @@ void GraspGeneratorConfig::validate() const {
   range("max_seeds", max_seeds, 1, 1e6);
   range("pairs_per_seed", pairs_per_seed, 1, 100);
   range("approach_steps", approach_steps, 1, 360);
-  range("friction_cone_deg", friction_cone_deg, 1.0, 60.0);
+  range("friction_coefficient", friction_coefficient, 0.02, 2.0);
   range("max_approach_tilt_deg", max_approach_tilt_deg, 0.0, 180.0);
   range("max_collision_points", max_collision_points, 0, 1000);
   range("outlier_fraction", outlier_fraction, 0.0, 0.2);
@@ -516,6 +820,7 @@ void GraspGeneratorConfig::validate() const {
   range("single_contact_weight", single_contact_weight, 0.0, 1.0);
   range("footprint_weight", footprint_weight, 0.0, 1.0);
   range("round_fit_tolerance", round_fit_tolerance, 0.0, 0.05);
+  range("min_contact_points", min_contact_points, 5, 1e6);
   range("nms_distance", nms_distance, 0.0, 1.0);
   range("nms_angle_deg", nms_angle_deg, 0.0, 180.0);
   range("top_k", top_k, 1, 10000);
@@ -534,8 +839,9 @@ std::string GraspGeneratorConfig::summary() const {
      << gripper.finger_thickness << " m, palm " << gripper.palm_height << " m; voxel "
      << voxel_size << " m (coarser above " << max_object_points << " points per object), normals r "
      << normal_radius << " m, " << max_seeds << " seeds x "
-     << pairs_per_seed << " pairs x " << approach_steps << " approaches, friction cone "
-     << friction_cone_deg << " deg, centroid sigma " << centroid_sigma_deg << " deg, pca power "
+     << pairs_per_seed << " pairs x " << approach_steps << " approaches, friction mu "
+     << friction_coefficient << " (cone " << std::atan(friction_coefficient) / kDeg << " deg), contact fits >= "
+     << min_contact_points << " points, centroid sigma " << centroid_sigma_deg << " deg, pca power "
      << pca_power << "/" << pca_approach_power << ", refine shift <= " << max_refine_shift
      << " m, depth shift <= " << max_depth_shift << " m (step " << depth_step << " m, margin "
      << depth_margin << " m), top " << top_k << ", up ["
@@ -564,7 +870,7 @@ GraspGeneratorConfig loadGraspGeneratorConfig(const ConfigNode& n) {
   c.max_seeds = n.get("max_seeds", c.max_seeds);
   c.pairs_per_seed = n.get("pairs_per_seed", c.pairs_per_seed);
   c.approach_steps = n.get("approach_steps", c.approach_steps);
-  c.friction_cone_deg = n.get("friction_cone_deg", c.friction_cone_deg);
+  c.friction_coefficient = n.get("friction_coefficient", c.friction_coefficient);
   c.max_approach_tilt_deg = n.get("max_approach_tilt_deg", c.max_approach_tilt_deg);
   c.max_collision_points = n.get("max_collision_points", c.max_collision_points);
   c.outlier_fraction = n.get("outlier_fraction", c.outlier_fraction);
@@ -584,6 +890,7 @@ GraspGeneratorConfig loadGraspGeneratorConfig(const ConfigNode& n) {
   c.single_contact_weight = n.get("single_contact_weight", c.single_contact_weight);
   c.footprint_weight = n.get("footprint_weight", c.footprint_weight);
   c.round_fit_tolerance = n.get("round_fit_tolerance", c.round_fit_tolerance);
+  c.min_contact_points = n.get("min_contact_points", c.min_contact_points);
   c.nms_distance = n.get("nms_distance", c.nms_distance);
   c.nms_angle_deg = n.get("nms_angle_deg", c.nms_angle_deg);
   c.top_k = n.get("top_k", c.top_k);
@@ -622,7 +929,25 @@ struct PreparedObject {
   std::vector<Eigen::MatrixXd> subspaces;
   Eigen::Vector4d plane = Eigen::Vector4d::Zero();
   bool has_plane = false;
+  double noise = 0.0;  ///< m, the filtered cloud's estimated noise (estimateNoise)
 };
+
+/// The noise of a cloud from its normals' plane fits: a flat patch of radius r with points
+/// scattered sigma about it has the covariance eigenvalues r^2/4, r^2/4 and sigma^2, so PCL's
+/// curvature c = l0 / (l0 + l1 + l2) gives sigma^2 = c / (1 - c) r^2 / 2. The median over the
+/// points (edges and corners are a minority); a curved surface adds r^2 / (8 R) in quadrature
+/// (0.5 mm for r = 12 mm on a 66 mm cylinder).
+double estimateNoise(const Normals& normals, double radius) {
+  std::vector<double> s;
+  s.reserve(normals.size());
+  for (const auto& n : normals) {
+    const double c = n.curvature;
+    if (std::isfinite(c) && c >= 0.0 && c < 1.0 / 3.0) s.push_back(std::sqrt(c / (1.0 - c) * 0.5) * radius);
+  }
+  if (s.empty()) return 0.0;
+  std::nth_element(s.begin(), s.begin() + static_cast<long>(s.size() / 2), s.end());
+  return s[s.size() / 2];
+}
 
 /// Input checks and the voxel filter: false (and res->reason) if there is nothing to grasp.
 bool filterObject(const GraspGeneratorConfig& cfg, const PointList& object, const Eigen::Vector3d& viewpoint,
@@ -632,21 +957,25 @@ bool filterObject(const GraspGeneratorConfig& cfg, const PointList& object, cons
   r.input_points = static_cast<int>(object.size());
   if (object.empty()) {
     r.reason = "empty cloud";
+    r.failure = GraspFailure::EmptyCloud;
     return false;
   }
   po->raw = toCloud(object, &r.finite_points);
   if (r.finite_points == 0) {
     r.reason = "no finite points (" + std::to_string(object.size()) + " points, all NaN/Inf)";
+    r.failure = GraspFailure::NoFinitePoints;
     return false;
   }
   if (!viewpoint.allFinite()) {
     r.reason = "viewpoint is not finite";
+    r.failure = GraspFailure::BadViewpoint;
     return false;
   }
   po->cloud = boundedVoxelFilter(po->raw, cfg.voxel_size, static_cast<std::size_t>(cfg.max_object_points), &po->leaf);
   r.filtered_points = static_cast<int>(po->cloud->size());
   r.voxel_size = po->leaf;
   if (static_cast<int>(po->cloud->size()) < cfg.min_object_points) {
+    r.failure = GraspFailure::TooFewPoints;
     r.reason = "only " + std::to_string(po->cloud->size()) + " points after the " +
                std::to_string(cfg.voxel_size) + " m voxel filter (min_object_points " +
                std::to_string(cfg.min_object_points) + ")";
@@ -675,6 +1004,7 @@ bool describeObject(const GraspGeneratorConfig& cfg, const Eigen::Vector4d* supp
   if (support_plane) {
     if (!support_plane->allFinite() || support_plane->head<3>().norm() < 1e-9) {
       res->reason = "support plane is not finite";
+      res->failure = GraspFailure::BadSupportPlane;
       return false;
     }
     plane = *support_plane / support_plane->head<3>().norm();
@@ -704,8 +1034,10 @@ void estimateNormalsAndEnvironment(const GraspGeneratorConfig& cfg, const PointL
   pcl::NormalEstimation<pcl::PointXYZ, pcl::Normal> ne;
   ne.setInputCloud(po->cloud);
   ne.setSearchMethod(po->tree);
-  ne.setRadiusSearch(cfg.normal_radius * po->leaf / cfg.voxel_size);  // as many neighbours on a coarser grid
+  const double radius = cfg.normal_radius * po->leaf / cfg.voxel_size;  // as many neighbours on a coarser grid
+  ne.setRadiusSearch(radius);
   ne.compute(*po->normals);
+  po->noise = estimateNoise(*po->normals, radius);
 
   // Collision environment (the object, plus other geometry if given).
   po->env = po->cloud;
@@ -753,8 +1085,8 @@ struct Pending {
 class GraspSearch {
  public:
   GraspSearch(const GraspGeneratorConfig& cfg, const PreparedObject& po)
-      : cfg_(cfg), g_(cfg.gripper), po_(po), check_(cfg, po.plane, po.has_plane),
-        cos_fc_(std::cos(cfg.friction_cone_deg * kDeg)),
+      : cfg_(cfg), g_(cfg.gripper), po_(po), check_(cfg, po.plane, po.has_plane, po.noise, po.leaf),
+        cos_fc_(std::cos(std::atan(cfg.friction_coefficient))),
         cos_tilt_(std::cos(cfg.max_approach_tilt_deg * kDeg)),
         check_radius_(std::sqrt(
             std::pow(0.5 * std::max(g_.palm_width, g_.max_width + 2 * g_.finger_thickness), 2) +
@@ -783,7 +1115,7 @@ class GraspSearch {
   void refineDepth(std::vector<Candidate>* kept);
 
  private:
-  /// Environment points within `radius` of `centre` into nbrs_.
+  /// Environment points within `radius` of `centre` into nbrs_, the object's into surf_.
   void gather(const Eigen::Vector3d& centre, double radius);
   /// The gripper with cd's rotation, centred near c0 (re-centred along the closing axis by
   /// evaluate), approach unchanged ((cphi, sphi) = (1, 0)). nbrs_ must hold the environment
@@ -803,6 +1135,7 @@ class GraspSearch {
   std::vector<int> idx_;
   std::vector<float> d2_;
   std::vector<Eigen::Vector3d> nbrs_;
+  std::vector<SurfacePoint> surf_;  ///< the object's points (with normals) gathered with nbrs_
 };
 
 void GraspSearch::score(Candidate& cd) const {
@@ -861,32 +1194,53 @@ void GraspSearch::addFootprintHypotheses(std::vector<Hyp>* hyps) {
   // least-area rectangle, parallel to the support, width = the object's extent (see
   // supportFootprint). They find the grasp across a lying cylinder, whose single-view cloud
   // shows its sides only at grazing angles (no antipodal pair there, normals tilted up).
-  use_footprint_ = po_.has_plane && cfg_.footprint_weight > 0.0;
-  if (!use_footprint_) return;
   const Cloud& cloud = *po_.cloud;
   const Normals& normals = *po_.normals;
+  // The round fits' tolerance on top of the cloud's noise: their RMS is the noise where the
+  // shape fits.
+  const double tol = std::hypot(cfg_.round_fit_tolerance, po_.noise);
+  // A ball: its sphere gives its width across every closing axis (one view shows less than
+  // half of it; the seen cap's extent is short of the diameter along most axes).
+  Eigen::Vector3d ball_c = Eigen::Vector3d::Zero();
+  double ball_r = 0.0;
+  const bool ball = fitSphere(cloud, tol, &ball_c, &ball_r);
+  if (ball)
+    for (Hyp& h : *hyps) h.hint = {true, ball_c - ball_r * h.y, ball_c + ball_r * h.y};
+  use_footprint_ = po_.has_plane && cfg_.footprint_weight > 0.0;
+  if (!use_footprint_) return;
   const Eigen::Vector4d& plane = po_.plane;
   Footprint& footprint = footprint_;
   footprint = supportFootprint(cloud, plane, static_cast<std::size_t>(cfg_.max_collision_points), po_.centroid);
+  if (ball) {
+    for (int a = 0; a < 2; ++a) {
+      footprint.width[a] = 2.0 * ball_r;
+      footprint.centre += footprint.axis[a] * footprint.axis[a].dot(ball_c - footprint.centre);
+      hyps->push_back({footprint.axis[a], footprint.centre, {}, {}, cfg_.footprint_weight, true,
+                       {true, ball_c - ball_r * footprint.axis[a], ball_c + ball_r * footprint.axis[a]}});
+    }
+    return;
+  }
   // An upright round object (its footprint a circle, the far side unseen): the circle gives
   // its width across every axis parallel to the support, for every hypothesis (a closing on
   // a chord short of the diameter would push it until the diameter is between the fingers).
   const ExtentHint upright = roundCrossSection(cloud, normals, plane, footprint.axis[0], plane.head<3>(),
-                                               po_.centroid, cfg_.round_fit_tolerance);
+                                               po_.centroid, tol);
   if (upright.valid) {
     const Eigen::Vector3d c = 0.5 * (upright.a + upright.b);
     const double r = 0.5 * (upright.b - upright.a).norm();
     for (Hyp& h : *hyps) {
       const Eigen::Vector3d yh = h.y - h.y.dot(plane.head<3>()) * plane.head<3>();
       if (yh.norm() < 0.5) continue;  // closing across the support: not this section
-      h.hint = {true, c - r * yh.normalized(), c + r * yh.normalized()};
+      // A closing axis tilted from the support crosses the mantle's section obliquely: the
+      // object is 2 r / |yh| long along it (its height not counted).
+      h.hint = {true, c - r / yh.norm() * h.y, c + r / yh.norm() * h.y};
     }
   }
   for (int a = 0; a < 2; ++a) {
     // A round cross-section across this axis (a cylinder lying along the other axis, seen
     // from one side down to grazing angles) is completed by its circle likewise.
     ExtentHint hint = roundCrossSection(cloud, normals, plane, footprint.axis[a], footprint.axis[1 - a],
-                                        po_.centroid, cfg_.round_fit_tolerance);
+                                        po_.centroid, tol);
     if (!hint.valid && upright.valid) {
       const Eigen::Vector3d c = 0.5 * (upright.a + upright.b);
       const double r = 0.5 * (upright.b - upright.a).norm();
@@ -959,19 +1313,16 @@ std::vector<Candidate> GraspSearch::checkCandidates(const std::vector<Hyp>& hyps
     auto it = prepared.find(pd.hyp);
     if (it == prepared.end()) {
       // Neighbourhood of the grasp for the collision checks (shared by all approaches).
-      pcl::PointXYZ pc(static_cast<float>(hp.c0.x()), static_cast<float>(hp.c0.y()),
-                       static_cast<float>(hp.c0.z()));
-      po_.env_tree->radiusSearch(pc, check_radius_, idx_, d2_);
-      nbrs_.clear();
-      for (int e : idx_) nbrs_.push_back(pt(*po_.env, e));
+      gather(hp.c0, check_radius_);
       it = prepared.emplace(pd.hyp, GripperCheck::Prepared()).first;
-      check_.prepare(hp.c0, hp.y, hp.u, nbrs_, hp.single ? po_.cloud.get() : nullptr, hp.hint, &it->second);
+      check_.prepare(hp.c0, hp.y, hp.u, nbrs_, surf_, hp.single ? po_.cloud.get() : nullptr, hp.hint, &it->second);
     }
     const double phi = 2.0 * M_PI * pd.step / cfg_.approach_steps;
     Candidate cd;
-    if (!check_.evaluate(it->second, std::cos(phi), std::sin(phi), &cd.R, &cd.c, &cd.width))
+    if (!check_.evaluate(it->second, std::cos(phi), std::sin(phi), &cd.R, &cd.c, &cd.width, &cd.m))
       continue;
-    cd.antipodal = hp.q;
+    cd.q = hp.q;
+    cd.antipodal = supportedQuality(hp.q, cd.m, cfg_.single_contact_weight);
     cd.single = hp.single;
     cd.hint = hp.hint;
     cands.push_back(cd);
@@ -1005,13 +1356,24 @@ void GraspSearch::gather(const Eigen::Vector3d& centre, double radius) {
   po_.env_tree->radiusSearch(pc, radius, idx_, d2_);
   nbrs_.clear();
   for (int e : idx_) nbrs_.push_back(pt(*po_.env, e));
+  po_.tree->radiusSearch(pc, radius, idx_, d2_);
+  surf_.clear();
+  for (int e : idx_) {
+    // Normals oriented outwards from the object's centre (convex objects; a cloud of one view
+    // or of several).
+    const Eigen::Vector3d p = pt(*po_.cloud, e);
+    const Eigen::Vector3d n = (*po_.normals)[static_cast<std::size_t>(e)].getNormalVector3fMap().cast<double>();
+    if (n.allFinite() && n.norm() > 0.5) surf_.push_back({p, n.dot(p - po_.centroid) >= 0.0 ? n : Eigen::Vector3d(-n)});
+  }
 }
 
 bool GraspSearch::checkAt(const Candidate& cd, const Eigen::Vector3d& c0, Candidate* out) {
   GripperCheck::Prepared pr;
-  check_.prepare(c0, cd.R.col(1), cd.R.col(2), nbrs_, cd.single ? po_.cloud.get() : nullptr, cd.hint, &pr);
+  check_.prepare(c0, cd.R.col(1), cd.R.col(2), nbrs_, surf_, cd.single ? po_.cloud.get() : nullptr, cd.hint, &pr);
   *out = cd;
-  return check_.evaluate(pr, 1.0, 0.0, &out->R, &out->c, &out->width);
+  if (!check_.evaluate(pr, 1.0, 0.0, &out->R, &out->c, &out->width, &out->m)) return false;
+  out->antipodal = supportedQuality(cd.q, out->m, cfg_.single_contact_weight);
+  return true;
 }
 
 void GraspSearch::refineOntoCentroid(std::vector<Candidate>* kept) {
@@ -1078,6 +1440,8 @@ Grasp toGrasp(const Candidate& cd) {
   gr.pose.linear() = cd.R;
   gr.pose.translation() = cd.c;
   gr.width = cd.width;
+  gr.measured_width = cd.m.width;
+  gr.seen_contacts = cd.m.seen();
   gr.score = cd.score;
   gr.antipodal = cd.antipodal;
   gr.centroid_weight = cd.wc;
@@ -1109,10 +1473,11 @@ GraspResult GraspGenerator::generate(const PointList& object, const Eigen::Vecto
   std::vector<Candidate> cands = search.checkCandidates(hyps, pending);
   if (!any_pair && cands.empty()) {
     res.reason = search.tooWide();
+    res.failure = GraspFailure::TooWide;
     if (!res.reason.empty()) return res;
-    res.reason = "no antipodal contact pair within the gripper opening (" +
-                 std::to_string(g.max_width) + " m, friction cone " +
-                 std::to_string(cfg.friction_cone_deg) + " deg)";
+    res.failure = GraspFailure::NoAntipodalPair;
+    res.reason = "no antipodal contact pair within the gripper opening (" + num(g.max_width) +
+                 " m) and the friction cone (mu " + num(cfg.friction_coefficient) + ")";
     return res;
   }
 
@@ -1132,9 +1497,12 @@ GraspResult GraspGenerator::generate(const PointList& object, const Eigen::Vecto
 
   for (const Candidate& cd : kept) res.grasps.push_back(toGrasp(cd));
   if (res.grasps.empty()) res.reason = search.tooWide();
-  if (res.grasps.empty() && res.reason.empty())
+  if (!res.reason.empty()) res.failure = GraspFailure::TooWide;
+  if (res.grasps.empty() && res.reason.empty()) {
+    res.failure = GraspFailure::Collides;
     res.reason = "every grasp candidate collides with the cloud or the support, or needs more "
                  "than the " + std::to_string(g.max_width) + " m opening";
+  }
   return res;
 }
 
@@ -1147,6 +1515,7 @@ SceneSegmentation GraspGenerator::segmentScene(const PointList& scene) const {
   Cloud::Ptr raw = toCloud(scene, &finite);
   if (finite == 0) {
     seg.reason = scene.empty() ? "empty cloud" : "no finite points (all NaN/Inf)";
+    seg.failure = scene.empty() ? GraspFailure::EmptyCloud : GraspFailure::NoFinitePoints;
     return seg;
   }
   Cloud::Ptr cloud = voxelFilter(raw, cfg.voxel_size);
@@ -1182,6 +1551,7 @@ SceneSegmentation GraspGenerator::segmentScene(const PointList& scene) const {
   for (const auto& p : *above) seg.obstacles.push_back(p.getVector3fMap());
   if (above->empty()) {
     seg.reason = "no points above the support plane";
+    seg.failure = GraspFailure::NoObject;
     return seg;
   }
   pcl::search::KdTree<pcl::PointXYZ>::Ptr tree(new pcl::search::KdTree<pcl::PointXYZ>);
@@ -1203,6 +1573,7 @@ SceneSegmentation GraspGenerator::segmentScene(const PointList& scene) const {
   }
   if (seg.objects.empty())
     seg.reason = "no cluster of at least " + std::to_string(cfg.min_cluster_points) + " points";
+  if (seg.objects.empty()) seg.failure = GraspFailure::NoObject;
   return seg;
 }
 
@@ -1216,6 +1587,7 @@ GraspResult GraspGenerator::generateFromScene(const PointList& scene,
   res.support_plane = seg.plane;
   if (seg.objects.empty()) {
     res.reason = seg.reason;
+    res.failure = seg.failure;
     return res;
   }
   std::vector<int> which;
@@ -1249,12 +1621,15 @@ GraspResult GraspGenerator::generateFromScene(const PointList& scene,
       res.grasps.push_back(gr);
     }
     if (!r.reason.empty()) reasons.push_back("object " + std::to_string(o) + ": " + r.reason);
+    if (res.failure == GraspFailure::None) res.failure = r.failure;  // the first (or the target) object's
   }
   std::stable_sort(res.grasps.begin(), res.grasps.end(),
                    [](const Grasp& a, const Grasp& b) { return a.score > b.score; });
+  if (!res.grasps.empty()) res.failure = GraspFailure::None;
   if (res.grasps.empty()) {
     for (const std::string& r : reasons) res.reason += (res.reason.empty() ? "" : "; ") + r;
     if (res.reason.empty()) res.reason = "no grasp";
+    if (res.failure == GraspFailure::None) res.failure = GraspFailure::Collides;
   }
   return res;
 }
@@ -1295,6 +1670,7 @@ GraspResult generateForTarget(const GraspGenerator& generator, const PointList& 
   res.budget_points = static_cast<int>(std::min(scene.size(), budget));
   const double gate = targeting.target_gate;
   if (target && !res.centroids.empty() && (res.centroids.front() - *target).norm() > gate) {
+    res.failure = GraspFailure::TargetTooFar;
     res.reason = "nearest object is " + std::to_string((res.centroids.front() - *target).norm()) +
                  " m from the target (gate " + std::to_string(gate) + " m)";
     res.grasps.clear();

@@ -1,26 +1,31 @@
 #pragma once
 // SceneConfig: the content of a simulated world, loaded from a scene YAML under config/scenes/.
-// Floor (always present, z = 0), tables (top box + four legs), graspable objects (box or
-// cylinder with a mass, optional AprilTag 36h11 on one face) and static obstacles, plus the
+// Floor (always present, z = 0), tables (top box + four legs), graspable objects (box, cylinder
+// or triangle mesh from an OBJ, STL or PLY file, with a mass, optional AprilTag 36h11 on one
+// face) and static obstacles, plus the
 // robot's start pose. ROS-free (yaml-cpp via ehc_common::ConfigNode); every error names the
 // file and the field.
+
+#include "ehc_sim/triangle_mesh.h"
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
 namespace ehc_sim {
 
-enum class ShapeType { Box, Cylinder };
+enum class ShapeType { Box, Cylinder, Mesh };
 
 std::string toString(ShapeType s);
 
 /// Face of a box / cylinder in its own frame: "+x", "-x", "+y", "-y", "+z", "-z".
 /// Cylinders (axis z) accept "+z"/"-z" (caps) and "+x", "-x", "+y", "-y" (the side, at the
-/// point where the outward normal is that axis).
+/// point where the outward normal is that axis). On a mesh the tag lies on the face of the
+/// bounding box, moved in to where the axis from the centre leaves the mesh.
 enum class Face { PosX, NegX, PosY, NegY, PosZ, NegZ };
 
 std::string toString(Face f);
@@ -32,13 +37,21 @@ struct TagConfig {
   int id = 0;              ///< 0..586 (tag36h11)
   double size = 0.04;      ///< m, black-square edge
   Face face = Face::NegX;  ///< face the tag is printed on
+  /// Mesh bodies: distance from the body origin along the face's normal to the surface the tag
+  /// lies on (where that axis leaves the mesh); < 0: the bounding box's face.
+  double surface = -1.0;
 };
 
-/// A box (size = [x, y, z] edges) or an upright cylinder (size = [diameter, height]).
+/// A box (size = [x, y, z] edges), an upright cylinder (size = [diameter, height]) or a mesh
+/// (`mesh: <file>`, `scale`; its body frame is the centre of its bounding box, with the file's
+/// axes, and `size` is the bounding box, read from the file).
 struct BodyConfig {
   std::string name;
   ShapeType shape = ShapeType::Box;
-  Eigen::Vector3d size = Eigen::Vector3d(0.05, 0.05, 0.1);  ///< box: edges; cylinder: [d, h, unused]
+  Eigen::Vector3d size = Eigen::Vector3d(0.05, 0.05, 0.1);  ///< box, mesh: edges; cylinder: [d, h, unused]
+  std::string mesh_file;  ///< mesh: the file (resolved against the scene file's folder)
+  double mesh_scale = 1.0;  ///< mesh: file units to metres
+  std::shared_ptr<const TriangleMesh> mesh;  ///< mesh: the loaded, centred triangles
   Eigen::Vector3d position = Eigen::Vector3d::Zero();       ///< m, centre, world (odom) frame
   Eigen::Vector3d rpy = Eigen::Vector3d::Zero();            ///< rad, fixed-axis roll/pitch/yaw
   double mass = 0.0;       ///< kg; > 0 for objects, 0 (static) for obstacles and tables
@@ -90,6 +103,9 @@ struct SceneConfig {
 /// distance to its bounding box at pose(i) of body i: names a perceived obstacle point.
 std::string nearestBody(const std::vector<BodyConfig>& bodies, const std::function<Eigen::Isometry3d(int)>& pose,
                         const Eigen::Vector3d& p);
+/// A mesh body (`shape: mesh`) from `file` (loadObjectMesh: a missing, empty, degenerate or huge
+/// mesh throws naming the file), with its bounding box as `size`.
+BodyConfig meshBody(const std::string& name, const std::string& file, double scale);
 
 /// Loads and validates a scene YAML file (top-level key `scene`).
 SceneConfig loadSceneConfig(const std::string& path);

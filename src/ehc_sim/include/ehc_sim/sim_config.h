@@ -41,6 +41,38 @@ struct GripperConfig {
   void validate() const;
 };
 
+/// How the simulated depth is disturbed. `gaussian`: Gaussian noise along the ray with sigma =
+/// base + quadratic z^2, every sample kept. `stereo`: the D400 family's active-stereo error model
+/// (Intel, "Tuning depth cameras for best performance" / "Depth camera performance", RealSense
+/// D400 white papers: depth RMS error = z^2 * subpixel / (focal_px * baseline)), with D435
+/// figures: subpixel 0.08 (the white papers' typical value on a well-textured scene), baseline
+/// 50 mm, focal length 0.5 * 848 px / tan(87 deg / 2) = 447 px (depth stream at 848 x 480, 87 deg
+/// horizontal field of view: D400 data sheet); plus flying pixels at depth edges and holes at
+/// grazing angles, whose figures are ASSUMPTIONS (no measured source): a sample next to a depth
+/// edge (a grid neighbour whose depth is off this sample's
+/// surface plane by more than edge_jump) takes, with probability flying_pixels, a depth drawn
+/// uniformly between its own and that neighbour's; a surface seen at more than grazing_angle from its normal
+/// gives no depth with a probability rising linearly from 0 there to 1 at 90 deg.
+enum class DepthNoiseModel { Gaussian, Stereo };
+std::string toString(DepthNoiseModel m);
+DepthNoiseModel depthNoiseModelFromString(const std::string& name);
+
+struct DepthNoiseConfig {
+  DepthNoiseModel model = DepthNoiseModel::Gaussian;
+  double base = 0.001;        ///< gaussian: m, sigma at any range
+  double quadratic = 0.002;   ///< gaussian: m / m^2, sigma += quadratic z^2
+  double subpixel = 0.08;     ///< stereo: disparity RMS error, pixels
+  double baseline = 0.050;    ///< stereo: m
+  double focal_px = 447.0;    ///< stereo: focal length of the depth stream, pixels
+  double flying_pixels = 0.3; ///< stereo: probability of a flying pixel at a depth edge (ASSUMPTION)
+  double edge_jump = 0.02;    ///< stereo: m, a neighbour this far off the sample's plane is across an edge (ASSUMPTION)
+  double grazing_angle = 75.0;  ///< stereo: deg from the normal where holes start (ASSUMPTION)
+  /// Depth noise sigma (m) at depth z (m).
+  double sigma(double z) const;
+  void validate() const;
+  std::string summary() const;
+};
+
 struct SimulatedCameraConfig {
   double image_rate = 15.0;   ///< Hz (sim time); 0 = never
   double cloud_rate = 15.0;   ///< Hz (sim time); 0 = never
@@ -48,8 +80,7 @@ struct SimulatedCameraConfig {
   int ray_rows = 60;
   double min_range = 0.10;    ///< m (D435 minimum depth)
   double max_range = 6.0;     ///< m
-  double depth_noise_base = 0.001;       ///< m, sigma at any range
-  double depth_noise_quadratic = 0.002;  ///< m / m^2: sigma += k z^2 (stereo error grows as z^2)
+  DepthNoiseConfig depth_noise;
   double image_noise = 2.0;   ///< grey levels, Gaussian pixel noise sigma (0 = none)
   int background = 110;       ///< grey level where no surface is hit (floor colour if < 0: scene's)
   int tag_pixels_per_cell = 12;  ///< texture resolution of the AprilTag patterns
@@ -82,5 +113,6 @@ SimConfig loadSimConfigString(const std::string& text, const std::string& origin
 CollisionConfig loadCollisionConfig(const ehc_common::ConfigNode& n);
 GripperConfig loadGripperConfig(const ehc_common::ConfigNode& n);
 SimulatedCameraConfig loadSimulatedCameraConfig(const ehc_common::ConfigNode& n);
+DepthNoiseConfig loadDepthNoiseConfig(const ehc_common::ConfigNode& n);
 
 }  // namespace ehc_sim

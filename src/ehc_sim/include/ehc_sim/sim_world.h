@@ -104,13 +104,11 @@ class SimWorld {
   int objectBodyIndex(int object) const { return first_object_ + object; }
   /// Current pose of object `i` (scene.objects order).
   Eigen::Isometry3d objectPose(int i) const { return bodyPose(objectBodyIndex(i)); }
+  /// The triangles of body `i` in its frame (what the depth camera rasterises): boxes and
+  /// meshes exactly, cylinders as 96-sided prisms.
+  const TriangleMesh& bodySurface(int i) const { return *surfaces_.at(static_cast<std::size_t>(i)); }
   /// Pose of the tag printed on body `i` (only if bodies()[i].tag.enabled).
   Eigen::Isometry3d tagPose(int i) const;
-
-  /// Closest hit of the segment from -> to with the floor and the scene bodies (the robot is
-  /// transparent to the camera). Returns false if nothing is hit. Cylinders are intersected
-  /// exactly (Bullet's GJK ray cast stops up to ~5 mm inside them); boxes and the floor by Bullet.
-  bool castRay(const Eigen::Vector3d& from, const Eigen::Vector3d& to, Eigen::Vector3d* hit) const;
 
   /// Finds collisions of the current configuration without advancing time (tests, tools).
   StepReport checkCollisions();
@@ -132,6 +130,7 @@ class SimWorld {
   KinematicFakeRobot robot_;
   ParallelGripper gripper_;
   std::vector<BodyConfig> bodies_;
+  std::vector<std::shared_ptr<const TriangleMesh>> surfaces_;  ///< per body
   int first_object_ = 0;
   std::int64_t dt_ns_ = 0;
   long step_count_ = 0;

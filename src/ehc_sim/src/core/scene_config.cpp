@@ -39,7 +39,8 @@ Face faceFromString(const ConfigNode& n, const std::string& key, const std::stri
 ShapeType shapeFromString(const ConfigNode& n, const std::string& key, const std::string& s) {
   if (s == "box") return ShapeType::Box;
   if (s == "cylinder") return ShapeType::Cylinder;
-  n.fail(key, "must be 'box' or 'cylinder' (got '" + s + "')");
+  if (s == "mesh") return ShapeType::Mesh;
+  n.fail(key, "must be 'box', 'cylinder' or 'mesh' (got '" + s + "')");
 }
 
 void checkRange(const ConfigNode& n, const std::string& key, double v, double lo, double hi) {
@@ -54,13 +55,21 @@ BodyConfig loadBody(const ConfigNode& n, bool dynamic, int default_shade) {
   BodyConfig b;
   b.name = n.require<std::string>("name");
   b.shape = shapeFromString(n, "shape", n.get<std::string>("shape", "box"));
-  if (b.shape == ShapeType::Box) {
+  if (b.shape == ShapeType::Mesh) {
+    if (n.has("size")) n.fail("size", "is read from the mesh file (its bounding box); set scale instead");
+    const std::string file = n.resolvePath(n.require<std::string>("mesh"));
+    try {
+      b = meshBody(b.name, file, n.get<double>("scale", 1.0));
+    } catch (const std::invalid_argument& e) {
+      n.fail("mesh", e.what());
+    }
+  } else if (b.shape == ShapeType::Box) {
     b.size = n.requireVector("size", 3);
   } else {
     const Eigen::VectorXd s = n.requireVector("size", 2);
     b.size = Eigen::Vector3d(s[0], s[1], 0.0);
   }
-  const int nsize = b.shape == ShapeType::Box ? 3 : 2;
+  const int nsize = b.shape == ShapeType::Cylinder ? 2 : 3;
   for (int i = 0; i < nsize; ++i) checkRange(n, "size", b.size[i], 0.005, 20.0);
   b.position = n.requireVector("position", 3);
   b.rpy = n.getVector("rpy", Eigen::Vector3d::Zero(), 3);
@@ -97,6 +106,7 @@ BodyConfig loadBody(const ConfigNode& n, bool dynamic, int default_shade) {
       w = b.size.x() * 0.7;  // keep a printed tag on the flat-ish part of the curved side
     if (b.shape == ShapeType::Cylinder && (b.tag.face == Face::PosZ || b.tag.face == Face::NegZ))
       w = h = b.size.x() / std::sqrt(2.0);
+    if (b.shape == ShapeType::Mesh) b.tag.surface = b.mesh->exitDistance(tagPoseInBody(b).translation().normalized());
     if (printed > w + 1e-9 || printed > h + 1e-9) {
       std::ostringstream os;
       os << "size " << b.tag.size << " m (printed " << printed << " m with its white border) "
@@ -153,7 +163,25 @@ SceneConfig loadScene(const ConfigNode& root) {
 }
 }  // namespace
 
-std::string toString(ShapeType s) { return s == ShapeType::Box ? "box" : "cylinder"; }
+std::string toString(ShapeType s) {
+  switch (s) {
+    case ShapeType::Box: return "box";
+    case ShapeType::Cylinder: return "cylinder";
+    case ShapeType::Mesh: return "mesh";
+  }
+  return "?";
+}
+
+BodyConfig meshBody(const std::string& name, const std::string& file, double scale) {
+  BodyConfig b;
+  b.name = name;
+  b.shape = ShapeType::Mesh;
+  b.mesh_file = file;
+  b.mesh_scale = scale;
+  b.mesh = std::make_shared<const TriangleMesh>(loadObjectMesh(file, scale));
+  b.size = b.mesh->boundsMax() - b.mesh->boundsMin();
+  return b;
+}
 
 std::string toString(Face f) {
   switch (f) {
@@ -170,7 +198,7 @@ std::string toString(Face f) {
 Eigen::Isometry3d BodyConfig::pose() const { return poseFromXyzRpy(position, rpy); }
 
 Eigen::Vector3d BodyConfig::halfExtents() const {
-  if (shape == ShapeType::Box) return 0.5 * size;
+  if (shape != ShapeType::Cylinder) return 0.5 * size;
   return Eigen::Vector3d(0.5 * size.x(), 0.5 * size.x(), 0.5 * size.y());
 }
 
@@ -263,7 +291,7 @@ std::string SceneConfig::summary() const {
     os << "  table " << t.name << ": " << t.size.x() << " x " << t.size.y() << " m, top at "
        << t.height << " m, centre (" << t.center.x() << ", " << t.center.y() << ")\n";
   for (const auto& o : objects) {
-    os << "  object " << o.name << ": " << toString(o.shape) << " at (" << o.position.transpose()
+    os << "  object " << o.name << ": " << toString(o.shape) << (o.mesh ? " " + o.mesh_file : std::string()) << " at (" << o.position.transpose()
        << "), " << o.mass << " kg";
     if (o.tag.enabled) os << ", tag36h11 id " << o.tag.id << " (" << o.tag.size << " m) on " << toString(o.tag.face);
     os << "\n";
@@ -306,7 +334,7 @@ Eigen::Isometry3d tagPoseInBody(const BodyConfig& body) {
   T.linear().col(0) = x;
   T.linear().col(1) = y;
   T.linear().col(2) = z;
-  T.translation() = n.cwiseProduct(he);
+  T.translation() = body.tag.surface >= 0.0 ? Eigen::Vector3d(body.tag.surface * n) : Eigen::Vector3d(n.cwiseProduct(he));
   return T;
 }
 

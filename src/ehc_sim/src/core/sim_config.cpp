@@ -1,6 +1,7 @@
 #include "ehc_sim/sim_config.h"
 
 #include "ehc_common/config_node.h"
+#include "ehc_common/enum_names.h"
 
 #include <cmath>
 #include <sstream>
@@ -33,11 +34,71 @@ void SimulatedCameraConfig::validate() const {
   requireRange(o, "sim.camera.max_range", max_range, 0.1, 100.0);
   if (!(min_range < max_range))
     throw std::invalid_argument("[SimulatedCameraConfig] sim.camera.min_range must be < max_range");
-  requireRange(o, "sim.camera.depth_noise_base", depth_noise_base, 0.0, 0.1);
-  requireRange(o, "sim.camera.depth_noise_quadratic", depth_noise_quadratic, 0.0, 0.1);
+  depth_noise.validate();
   requireRange(o, "sim.camera.image_noise", image_noise, 0.0, 50.0);
   requireRange(o, "sim.camera.background", background, -1, 255);
   requireRange(o, "sim.camera.tag_pixels_per_cell", tag_pixels_per_cell, 1, 64);
+}
+
+namespace {
+constexpr ehc_common::EnumNames<DepthNoiseModel, 2> kDepthNoiseModelNames = {
+    {{DepthNoiseModel::Gaussian, "gaussian"}, {DepthNoiseModel::Stereo, "stereo"}}};
+}  // namespace
+
+std::string toString(DepthNoiseModel m) { return ehc_common::enumName(kDepthNoiseModelNames, m, "DepthNoiseConfig"); }
+
+DepthNoiseModel depthNoiseModelFromString(const std::string& name) {
+  return ehc_common::enumValue(kDepthNoiseModelNames, name, "DepthNoiseConfig", "depth noise model");
+}
+
+double DepthNoiseConfig::sigma(double z) const {
+  if (model == DepthNoiseModel::Gaussian) return base + quadratic * z * z;
+  return z * z * subpixel / (focal_px * baseline);
+}
+
+void DepthNoiseConfig::validate() const {
+  const char* o = "DepthNoiseConfig";
+  requireRange(o, "sim.camera.depth_noise.base", base, 0.0, 0.1);
+  requireRange(o, "sim.camera.depth_noise.quadratic", quadratic, 0.0, 0.1);
+  requireRange(o, "sim.camera.depth_noise.subpixel", subpixel, 0.0, 2.0);
+  requireRange(o, "sim.camera.depth_noise.baseline", baseline, 0.005, 1.0);
+  requireRange(o, "sim.camera.depth_noise.focal_px", focal_px, 10.0, 1e5);
+  requireRange(o, "sim.camera.depth_noise.flying_pixels", flying_pixels, 0.0, 1.0);
+  requireRange(o, "sim.camera.depth_noise.edge_jump", edge_jump, 0.001, 1.0);
+  requireRange(o, "sim.camera.depth_noise.grazing_angle", grazing_angle, 0.0, 90.0);
+}
+
+std::string DepthNoiseConfig::summary() const {
+  std::ostringstream os;
+  if (model == DepthNoiseModel::Gaussian) {
+    os << "gaussian, sigma " << base << " + " << quadratic << " z^2 m";
+  } else {
+    os << "stereo, sigma z^2 * " << subpixel << " / (" << focal_px << " px * " << baseline << " m) = "
+       << sigma(1.0) * 1000.0 << " mm at 1 m, flying pixels " << flying_pixels << " at jumps > " << edge_jump
+       << " m, holes beyond " << grazing_angle << " deg";
+  }
+  return os.str();
+}
+
+DepthNoiseConfig loadDepthNoiseConfig(const ConfigNode& n) {
+  DepthNoiseConfig d;
+  if (n.has("model")) {
+    try {
+      d.model = depthNoiseModelFromString(n.require<std::string>("model"));
+    } catch (const std::invalid_argument& e) {
+      n.fail("model", e.what());
+    }
+  }
+  d.base = n.get<double>("base", d.base);
+  d.quadratic = n.get<double>("quadratic", d.quadratic);
+  d.subpixel = n.get<double>("subpixel", d.subpixel);
+  d.baseline = n.get<double>("baseline", d.baseline);
+  d.focal_px = n.get<double>("focal_px", d.focal_px);
+  d.flying_pixels = n.get<double>("flying_pixels", d.flying_pixels);
+  d.edge_jump = n.get<double>("edge_jump", d.edge_jump);
+  d.grazing_angle = n.get<double>("grazing_angle", d.grazing_angle);
+  n.validate(d);
+  return d;
 }
 
 void SimConfig::validate() const {
@@ -64,8 +125,7 @@ std::string SimConfig::summary() const {
      << "  gripper speed " << gripper.speed << " m/s, lift " << gripper.lift_height << " m\n"
      << "  camera image " << camera.image_rate << " Hz, cloud " << camera.cloud_rate << " Hz ("
      << camera.ray_cols << "x" << camera.ray_rows << " rays, " << camera.min_range << ".."
-     << camera.max_range << " m, depth noise " << camera.depth_noise_base << " + "
-     << camera.depth_noise_quadratic << " z^2)\n";
+     << camera.max_range << " m, depth noise " << camera.depth_noise.summary() << ")\n";
   return os.str();
 }
 
@@ -115,14 +175,7 @@ SimulatedCameraConfig loadSimulatedCameraConfig(const ConfigNode& n) {
   }
   c.min_range = n.get<double>("min_range", c.min_range);
   c.max_range = n.get<double>("max_range", c.max_range);
-  if (n.has("depth_noise")) {
-    const ConfigNode d = n.child("depth_noise");
-    c.depth_noise_base = d.get<double>("base", c.depth_noise_base);
-    c.depth_noise_quadratic = d.get<double>("quadratic", c.depth_noise_quadratic);
-    if (c.depth_noise_base < 0 || c.depth_noise_base > 0.1) d.fail("base", "must be in [0, 0.1] m");
-    if (c.depth_noise_quadratic < 0 || c.depth_noise_quadratic > 0.1)
-      d.fail("quadratic", "must be in [0, 0.1] m/m^2");
-  }
+  c.depth_noise = loadDepthNoiseConfig(n.childOrEmpty("depth_noise"));
   c.image_noise = n.get<double>("image_noise", c.image_noise);
   c.background = n.get<int>("background", c.background);
   c.tag_pixels_per_cell = n.get<int>("tag_pixels_per_cell", c.tag_pixels_per_cell);

@@ -1,6 +1,6 @@
 #include "ehc_sim/sim_world.h"
 
-#include <BulletCollision/NarrowPhaseCollision/btRaycastCallback.h>
+#include <BulletCollision/CollisionShapes/btShapeHull.h>
 #include <btBulletDynamicsCommon.h>
 
 #include <algorithm>
@@ -20,7 +20,6 @@ constexpr int kFloor = 1 << 6;
 constexpr int kStatic = 1 << 7;
 constexpr int kObject = 1 << 8;
 constexpr int kRobot = 1 << 9;
-constexpr int kRay = 1 << 10;
 
 // btCollisionObject user index = kind, user index 2 = index within the kind.
 enum Kind { KindFloor = 1, KindScene = 2, KindRobot = 3 };
@@ -42,14 +41,65 @@ Eigen::Isometry3d toEigen(const btTransform& t) {
 }
 
 
-std::unique_ptr<btCollisionShape> makeShape(ShapeType type, const Eigen::Vector3d& he) {
+constexpr int kMaxHullVertices = 256;  ///< a part's hull with more vertices is resampled (btShapeHull)
+
+/// The convex hull of one part of a mesh (its vertices, interior ones dropped).
+std::unique_ptr<btConvexHullShape> hullShape(const TriangleMesh& part) {
+  auto hull = std::make_unique<btConvexHullShape>();
+  for (const auto& v : part.vertices) hull->addPoint(btVector3(v.x(), v.y(), v.z()), false);
+  hull->recalcLocalAabb();
+  hull->optimizeConvexHull();
+  hull->setMargin(kMargin);
+  if (hull->getNumPoints() <= kMaxHullVertices) return hull;
+  btShapeHull reduced(hull.get());
+  reduced.buildHull(kMargin);
+  auto out = std::make_unique<btConvexHullShape>(&reduced.getVertexPointer()->getX(), reduced.numVertices());
+  out->setMargin(kMargin);
+  return out;
+}
+
+/// A body's collision shape, in shapes[0] (a compound's children after it). A mesh is a compound
+/// of the convex hulls of its connected parts, computed at load. Why hulls of parts: a rigid body
+/// rests on a plane on its convex hull, so resting poses on the table are exact; a part that is
+/// convex (a box, a bar, a cylinder, a handle segment, a blob) collides exactly, and the library's
+/// objects are unions of such parts (a mug's handle is a chain of short cylinders, so the hole
+/// stays open). Only the concavity of a single part is filled (a mug's inside, a banana's inner
+/// curve). Bullet's convex decomposition (HACD, libbullet-extras) was not used: it needs tuning
+/// per mesh and seconds per object at load. The hulls' 1 mm collision margin lies outside the
+/// triangles (a mesh object rests 1 mm above the table; its depth comes from the triangles).
+void makeShapes(const BodyConfig& body, std::vector<std::unique_ptr<btCollisionShape>>* shapes) {
+  const Eigen::Vector3d he = body.halfExtents();
+  if (body.shape == ShapeType::Mesh) {
+    auto compound = std::make_unique<btCompoundShape>();
+    std::vector<std::unique_ptr<btCollisionShape>> children;
+    for (const TriangleMesh& part : body.mesh->components()) {
+      children.push_back(hullShape(part));
+      compound->addChildShape(btTransform::getIdentity(), children.back().get());
+    }
+    shapes->push_back(std::move(compound));
+    for (auto& c : children) shapes->push_back(std::move(c));
+    return;
+  }
   std::unique_ptr<btCollisionShape> s;
-  if (type == ShapeType::Box)
+  if (body.shape == ShapeType::Box)
     s = std::make_unique<btBoxShape>(btVector3(he.x(), he.y(), he.z()));
   else
     s = std::make_unique<btCylinderShapeZ>(btVector3(he.x(), he.y(), he.z()));
   s->setMargin(kMargin);
-  return s;
+  shapes->push_back(std::move(s));
+}
+
+/// The surface the depth camera sees: boxes and meshes exactly, cylinders with 96 sides (chord
+/// error r (1 - cos(pi / 96)): 0.02 mm on a 70 mm cylinder).
+constexpr int kDepthCylinderSides = 96;
+std::shared_ptr<const TriangleMesh> depthSurface(const BodyConfig& body) {
+  switch (body.shape) {
+    case ShapeType::Box: return std::make_shared<const TriangleMesh>(boxSurface(body.size));
+    case ShapeType::Cylinder:
+      return std::make_shared<const TriangleMesh>(cylinderSurface(body.size.x(), body.size.y(), kDepthCylinderSides));
+    case ShapeType::Mesh: return body.mesh;
+  }
+  return nullptr;
 }
 }  // namespace
 
@@ -200,16 +250,18 @@ void SimWorld::build() {
   m.floor.body->setFriction(scene_.floor_friction);
   m.floor.body->setUserIndex(KindFloor);
   m.floor.body->setUserIndex2(0);
-  m.add(m.floor, kFloor, kObject | kRobot | kRay);
+  m.add(m.floor, kFloor, kObject | kRobot);
 
   // Scene bodies: table parts, objects, obstacles.
   bodies_ = scene_.bodies();
   first_object_ = static_cast<int>(bodies_.size() - scene_.objects.size() - scene_.obstacles.size());
   m.scene.resize(bodies_.size());
+  surfaces_.assign(bodies_.size(), nullptr);
   for (std::size_t i = 0; i < bodies_.size(); ++i) {
     const BodyConfig& c = bodies_[i];
     Impl::Body& b = m.scene[i];
-    b.shapes.push_back(makeShape(c.shape, c.halfExtents()));
+    makeShapes(c, &b.shapes);
+    surfaces_[i] = depthSurface(c);
     btVector3 inertia(0, 0, 0);
     if (c.mass > 0.0) b.shapes[0]->calculateLocalInertia(c.mass, inertia);
     b.motion = std::make_unique<btDefaultMotionState>(toBt(c.pose()));
@@ -222,9 +274,9 @@ void SimWorld::build() {
     b.body->setUserIndex(KindScene);
     b.body->setUserIndex2(static_cast<int>(i));
     if (c.mass > 0.0)
-      m.add(b, kObject, kFloor | kStatic | kObject | kRobot | kRay);
+      m.add(b, kObject, kFloor | kStatic | kObject | kRobot);
     else
-      m.add(b, kStatic, kObject | kRobot | kRay);
+      m.add(b, kStatic, kObject | kRobot);
   }
 
   // Robot links: kinematic compound bodies.
@@ -502,67 +554,6 @@ const StepReport& SimWorld::step(const Eigen::VectorXd& command) {
   if (report_.robot_world_collision) ++counters_.collision_steps;
   if (report_.self_collision) ++counters_.self_collision_steps;
   return report_;
-}
-
-namespace {
-/// Bullet's ray test with cylinder bodies left out: its GJK ray cast stops up to ~5 mm short of
-/// a cylinder's surface (measured: the ray through a 68 mm cylinder's axis hit it 4.5 mm
-/// inside, its lateral extent 65.5 mm), so castRay intersects cylinders exactly instead.
-struct ClosestNonCylinderRay : btCollisionWorld::ClosestRayResultCallback {
-  using btCollisionWorld::ClosestRayResultCallback::ClosestRayResultCallback;
-  bool needsCollision(btBroadphaseProxy* proxy) const override {
-    if (!btCollisionWorld::ClosestRayResultCallback::needsCollision(proxy)) return false;
-    const auto* obj = static_cast<const btCollisionObject*>(proxy->m_clientObject);
-    return obj->getCollisionShape()->getShapeType() != CYLINDER_SHAPE_PROXYTYPE;
-  }
-};
-
-/// Smallest t in [0, t_max] where o + t d (cylinder frame: axis z, radius r, half height hz)
-/// enters the solid cylinder; t_max + 1 if it does not.
-double rayCylinder(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double r, double hz, double t_max) {
-  double best = t_max + 1.0;
-  // Side: (ox + t dx)^2 + (oy + t dy)^2 = r^2 with |z| <= hz.
-  const double a = d.x() * d.x() + d.y() * d.y();
-  if (a > 1e-18) {
-    const double b = 2.0 * (o.x() * d.x() + o.y() * d.y());
-    const double c = o.x() * o.x() + o.y() * o.y() - r * r;
-    const double disc = b * b - 4.0 * a * c;
-    if (disc >= 0.0) {
-      const double t = (-b - std::sqrt(disc)) / (2.0 * a);
-      if (t >= 0.0 && t <= t_max && std::abs(o.z() + t * d.z()) <= hz) best = std::min(best, t);
-    }
-  }
-  // Caps: z = +-hz with x^2 + y^2 <= r^2.
-  if (std::abs(d.z()) > 1e-18)
-    for (double z : {-hz, hz}) {
-      const double t = (z - o.z()) / d.z();
-      if (t < 0.0 || t > t_max) continue;
-      const Eigen::Vector3d p = o + t * d;
-      if (p.x() * p.x() + p.y() * p.y() <= r * r) best = std::min(best, t);
-    }
-  return best;
-}
-}  // namespace
-
-bool SimWorld::castRay(const Eigen::Vector3d& from, const Eigen::Vector3d& to,
-                       Eigen::Vector3d* hit) const {
-  const btVector3 f(from.x(), from.y(), from.z()), t(to.x(), to.y(), to.z());
-  ClosestNonCylinderRay cb(f, t);
-  cb.m_collisionFilterGroup = kRay;
-  cb.m_collisionFilterMask = kFloor | kStatic | kObject;
-  cb.m_flags |= btTriangleRaycastCallback::kF_UseGjkConvexCastRaytest;  // exact on boxes
-  impl_->world->rayTest(f, t, cb);
-  double fraction = cb.hasHit() ? static_cast<double>(cb.m_closestHitFraction) : 2.0;
-  for (std::size_t i = 0; i < bodies_.size(); ++i) {
-    if (bodies_[i].shape != ShapeType::Cylinder) continue;
-    const Eigen::Isometry3d T_body_world = bodyPose(static_cast<int>(i)).inverse();
-    const Eigen::Vector3d he = bodies_[i].halfExtents();
-    fraction = std::min(fraction, rayCylinder(T_body_world * from, T_body_world.linear() * (to - from),
-                                              he.x(), he.z(), 1.0));
-  }
-  if (fraction > 1.0) return false;
-  if (hit) *hit = from + fraction * (to - from);
-  return true;
 }
 
 }  // namespace ehc_sim

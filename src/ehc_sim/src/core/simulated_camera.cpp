@@ -2,6 +2,7 @@
 
 #include "ehc_common/config_node.h"
 #include "ehc_sim/sim_world.h"
+#include "ehc_sim/triangle_raster.h"
 
 #include <apriltag/apriltag.h>
 #include <apriltag/common/image_u8.h>
@@ -44,28 +45,27 @@ vpColVector col(const Eigen::Vector3d& p) {
   return v;
 }
 
-/// A planar convex quad in the body frame, corners ordered so that vpImageSimulator sees it
-/// from the side of `outward` (its corners must turn clockwise when viewed from there).
-std::vector<Eigen::Vector3d> orient(std::vector<Eigen::Vector3d> c, const Eigen::Vector3d& outward) {
-  const Eigen::Vector3d n_in = (c[1] - c[0]).cross(c[2] - c[1]);
-  if (n_in.dot(outward) > 0) std::swap(c[1], c[3]);
-  return c;
-}
-
-/// Orthonormal frame of a box face: z into the body, y = -up, x = y x z (the tag convention).
-Eigen::Matrix3d faceFrame(const Eigen::Vector3d& n, const Eigen::Vector3d& up) {
-  Eigen::Matrix3d R;
-  const Eigen::Vector3d z = -n, y = -up, x = y.cross(z);
-  R.col(0) = x;
-  R.col(1) = y;
-  R.col(2) = z;
-  return R;
-}
-
 constexpr int kNoiseTable = 1 << 18;
 constexpr double kNearPlane = 0.01;  ///< m: faces with a corner closer than this are not drawn
 constexpr int kCylinderSides = 16;
+constexpr double kDepthNear = 1e-4;  ///< m: surfaces nearer than this are clipped from the depth
 constexpr double kTagBorderMargin = 2.0;  ///< px, tagInView: beyond two cells of the tag
+
+/// The faces the image shows: a box's six, a mesh's triangles, a cylinder as a 16-sided prism
+/// whose sides' middles touch the cylinder and face +-x and +-y (vertices half a side off the
+/// axes), so that a tag on a +-x / +-y face lies flat 0.5 mm in front of a side (with a vertex
+/// on the axis, the edge there poked through the tag and drew a seam across it; close up the
+/// detector lost the tag).
+std::shared_ptr<const TriangleMesh> imageSurface(const BodyConfig& b) {
+  switch (b.shape) {
+    case ShapeType::Box: return std::make_shared<const TriangleMesh>(boxSurface(b.size));
+    case ShapeType::Cylinder:
+      return std::make_shared<const TriangleMesh>(
+          cylinderSurface(b.size.x() / std::cos(M_PI / kCylinderSides), b.size.y(), kCylinderSides));
+    case ShapeType::Mesh: return b.mesh;
+  }
+  return nullptr;
+}
 }  // namespace
 
 vpImage<unsigned char> makeTagTexture(int id, int pixels_per_cell) {
@@ -102,10 +102,21 @@ struct SimulatedCamera::Impl {
     Eigen::Vector3d outward = Eigen::Vector3d::Zero();  ///< its printed side's normal (body frame)
   };
   std::vector<Tag> tags;
+  /// A body's faces as triangles and their grey levels (its shade, lit).
+  struct FlatBody {
+    int body = 0;
+    std::shared_ptr<const TriangleMesh> mesh;
+    std::vector<unsigned char> shade;
+    bool cull = false;  ///< closed and wound outwards (boxes, cylinders): faces turned away are hidden
+  };
+  std::vector<FlatBody> bodies;
   int background = 110;
   vpMatrix zbuffer;
   std::vector<signed char> noise;
   vpCameraParameters cam;
+  RasterGrid grid;                       ///< the depth samples (the image's pinhole, scaled)
+  std::vector<double> depth;             ///< per sample, noiseless, camera z (inf: no surface)
+  std::vector<Eigen::Vector3d> normal;   ///< per sample, the surface's normal (camera frame)
 };
 
 SimulatedCamera::SimulatedCamera(const ehc_control::PinholeCamera& intrinsics,
@@ -121,17 +132,27 @@ SimulatedCamera::SimulatedCamera(const ehc_control::PinholeCamera& intrinsics,
   impl_->cam.initPersProjWithoutDistortion(intrinsics_.fx, intrinsics_.fy, intrinsics_.cx,
                                            intrinsics_.cy);
   impl_->zbuffer.resize(static_cast<unsigned>(intrinsics_.height), static_cast<unsigned>(intrinsics_.width));
+  // Sample (c, r) of the depth grid sits at pixel ((c + 0.5) su - 0.5, (r + 0.5) sv - 0.5).
+  const double su = static_cast<double>(intrinsics_.width) / cfg_.ray_cols;
+  const double sv = static_cast<double>(intrinsics_.height) / cfg_.ray_rows;
+  impl_->grid = RasterGrid{cfg_.ray_cols, cfg_.ray_rows, intrinsics_.fx / su, intrinsics_.fy / sv,
+                           (intrinsics_.cx + 0.5) / su - 0.5, (intrinsics_.cy + 0.5) / sv - 0.5};
   reseed(seed);
 }
 
 SimulatedCamera::~SimulatedCamera() = default;
 SimulatedCamera::SimulatedCamera(SimulatedCamera&&) noexcept = default;
 
-int SimulatedCamera::faceCount() const { return static_cast<int>(impl_->quads.size()); }
+int SimulatedCamera::faceCount() const {
+  std::size_t n = impl_->quads.size();
+  for (const auto& b : impl_->bodies) n += b.mesh->triangles.size();
+  return static_cast<int>(n);
+}
 
 void SimulatedCamera::reseed(unsigned seed) {
   rng_.seed(seed);
   gauss_.reset();
+  uniform_.reset();
   impl_->noise.resize(kNoiseTable);
   for (auto& v : impl_->noise) {
     const double n = std::round(cfg_.image_noise * gauss_(rng_));
@@ -143,6 +164,7 @@ void SimulatedCamera::setScene(const std::vector<BodyConfig>& bodies, int floor_
   Impl& m = *impl_;
   m.quads.clear();
   m.tags.clear();
+  m.bodies.clear();
   m.background = cfg_.background >= 0 ? cfg_.background : floor_shade;
   const Eigen::Vector3d light = Eigen::Vector3d(0.3, -0.2, 1.0).normalized();
   // A textured quad; corners clockwise seen from outside, as vpImageSimulator expects.
@@ -160,62 +182,17 @@ void SimulatedCamera::setScene(const std::vector<BodyConfig>& bodies, int floor_
                                          : vpImageSimulator::SIMPLE);
     m.quads.push_back(std::move(q));
   };
-  auto addQuad = [&](int body, const vpImage<unsigned char>& tex, std::vector<Eigen::Vector3d> c,
-                     const Eigen::Vector3d& outward, bool bilinear) {
-    pushQuad(body, tex, orient(std::move(c), outward), bilinear);
-  };
-  auto flat = [&](int shade, const Eigen::Vector3d& n) {
-    const double k = 0.6 + 0.4 * std::max(0.0, n.dot(light));
-    vpImage<unsigned char> t(4, 4, static_cast<unsigned char>(std::clamp(shade * k, 0.0, 255.0)));
-    return t;
-  };
 
   for (std::size_t bi = 0; bi < bodies.size(); ++bi) {
     const BodyConfig& b = bodies[bi];
     const int body = static_cast<int>(bi);
-    const Eigen::Vector3d he = b.halfExtents();
-    if (b.shape == ShapeType::Box) {
-      for (int axis = 0; axis < 3; ++axis)
-        for (int sign : {1, -1}) {
-          Eigen::Vector3d n = Eigen::Vector3d::Zero();
-          n[axis] = sign;
-          const Eigen::Vector3d up = axis == 2 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitZ();
-          const Eigen::Matrix3d R = faceFrame(n, up);
-          const double a = R.col(0).cwiseAbs().dot(he), h = R.col(1).cwiseAbs().dot(he);
-          const Eigen::Vector3d c0 = n.cwiseProduct(he);
-          addQuad(body, flat(b.shade, n),
-                  {c0 - a * R.col(0) - h * R.col(1), c0 + a * R.col(0) - h * R.col(1),
-                   c0 + a * R.col(0) + h * R.col(1), c0 - a * R.col(0) + h * R.col(1)},
-                  n, false);
-        }
-    } else {
-      const double r = he.x() / std::cos(M_PI / kCylinderSides), hz = he.z();
-      std::vector<Eigen::Vector3d> ring;
-      // Vertices half a side off the axes, so that a side's middle faces +-x and +-y: a tag on
-      // a +-x / +-y face then lies flat 0.5 mm in front of a side. (With a vertex on the axis,
-      // the edge there poked 0.1 mm through the tag and drew a seam across it; close up the
-      // detector lost the tag.)
-      for (int k = 0; k < kCylinderSides; ++k) {
-        const double t = 2.0 * M_PI * (k + 0.5) / kCylinderSides;
-        ring.emplace_back(r * std::cos(t), r * std::sin(t), 0.0);
-      }
-      for (int k = 0; k < kCylinderSides; ++k) {
-        const Eigen::Vector3d p0 = ring[static_cast<std::size_t>(k)];
-        const Eigen::Vector3d p1 = ring[static_cast<std::size_t>((k + 1) % kCylinderSides)];
-        const Eigen::Vector3d n = (p0 + p1).normalized();
-        const Eigen::Vector3d zt(0, 0, hz);
-        addQuad(body, flat(b.shade, n), {p0 + zt, p1 + zt, p1 - zt, p0 - zt}, n, false);
-      }
-      for (int sign : {1, -1}) {
-        const Eigen::Vector3d n(0, 0, sign), zt(0, 0, sign * hz);
-        for (int k = 1; k + 2 <= kCylinderSides; k += 2)
-          addQuad(body, flat(b.shade, n),
-                  {ring[0] + zt, ring[static_cast<std::size_t>(k)] + zt,
-                   ring[static_cast<std::size_t>(k + 1)] + zt,
-                   ring[static_cast<std::size_t>((k + 2) % kCylinderSides)] + zt},
-                  n, false);
-      }
+    // The faces: flat-shaded triangles (light from above), drawn by rasterTriangle in render().
+    Impl::FlatBody fb{body, imageSurface(b), {}, b.shape != ShapeType::Mesh};
+    for (std::size_t t = 0; t < fb.mesh->triangles.size(); ++t) {
+      const Eigen::Vector3d n = fb.mesh->normal(t);
+      fb.shade.push_back(static_cast<unsigned char>(std::clamp(b.shade * (0.6 + 0.4 * std::max(0.0, n.dot(light))), 0.0, 255.0)));
     }
+    m.bodies.push_back(std::move(fb));
     if (b.tag.enabled) {
       const Eigen::Isometry3d T = tagPoseInBody(b);  // x right, y up, z out of the face
       const vpImage<unsigned char> tex = makeTagTexture(b.tag.id, cfg_.tag_pixels_per_cell);
@@ -263,6 +240,7 @@ void SimulatedCamera::render(const Eigen::Isometry3d& T_world_cam,
     q->sim.setCameraPosition(toVisp(T_cam_body));
     q->sim.getImage(*image, m.cam, m.zbuffer);
   }
+  drawFaces(T_cam_world, poses, image);
   if (cfg_.image_noise > 0.0) {
     int k = noiseOffset();
     unsigned char* px = image->bitmap;
@@ -271,6 +249,35 @@ void SimulatedCamera::render(const Eigen::Isometry3d& T_world_cam,
       const int v = px[i] + m.noise[static_cast<std::size_t>(k)];
       px[i] = static_cast<unsigned char>(v < 0 ? 0 : (v > 255 ? 255 : v));
       k = (k + 1) & (kNoiseTable - 1);
+    }
+  }
+}
+
+void SimulatedCamera::drawFaces(const Eigen::Isometry3d& T_cam_world, const std::vector<Eigen::Isometry3d>& poses,
+                                  vpImage<unsigned char>* image) {
+  Impl& m = *impl_;
+  const RasterGrid g{intrinsics_.width, intrinsics_.height, intrinsics_.fx, intrinsics_.fy, intrinsics_.cx, intrinsics_.cy};
+  double* zb = m.zbuffer.data;  // camera z as vpImageSimulator writes it; < 0: empty
+  std::vector<Eigen::Vector3d> v;
+  for (const Impl::FlatBody& mb : m.bodies) {
+    if (mb.body >= static_cast<int>(poses.size())) fail("render: fewer poses than bodies");
+    const Eigen::Isometry3d T = T_cam_world * poses[static_cast<std::size_t>(mb.body)];
+    v.resize(mb.mesh->vertices.size());
+    for (std::size_t k = 0; k < v.size(); ++k) v[k] = T * mb.mesh->vertices[k];
+    for (std::size_t t = 0; t < mb.mesh->triangles.size(); ++t) {
+      const Eigen::Vector3i& tri = mb.mesh->triangles[t];
+      const unsigned char shade = mb.shade[t];
+      const Eigen::Vector3d& a = v[static_cast<std::size_t>(tri[0])];
+      const Eigen::Vector3d& b = v[static_cast<std::size_t>(tri[1])];
+      const Eigen::Vector3d& c3 = v[static_cast<std::size_t>(tri[2])];
+      if (mb.cull && (b - a).cross(c3 - a).dot(a) >= 0.0) continue;
+      rasterTriangle(g, a, b, c3, kNearPlane, [&](int c, int r, double z) {
+                       const std::size_t i = static_cast<std::size_t>(r) * static_cast<std::size_t>(g.width) +
+                                             static_cast<std::size_t>(c);
+                       if (zb[i] >= 0.0 && z >= zb[i]) return;
+                       zb[i] = z;
+                       image->bitmap[i] = shade;
+                     });
     }
   }
 }
@@ -330,30 +337,97 @@ void SimulatedCamera::skipImage() {
   if (cfg_.image_noise > 0.0) noiseOffset();
 }
 
-void SimulatedCamera::cloud(const SimWorld& world, const Eigen::Isometry3d& T_world_cam,
-                            std::vector<Eigen::Vector3f>* points) {
-  points->clear();
-  points->reserve(static_cast<std::size_t>(cfg_.ray_cols * cfg_.ray_rows));
-  const Eigen::Vector3d origin = T_world_cam.translation();
-  const Eigen::Matrix3d R = T_world_cam.linear();
+void SimulatedCamera::rasteriseDepth(const SimWorld& world, const Eigen::Isometry3d& T_world_cam) {
+  Impl& m = *impl_;
+  const RasterGrid& g = m.grid;
+  const std::size_t n = static_cast<std::size_t>(g.width) * static_cast<std::size_t>(g.height);
+  m.depth.assign(n, std::numeric_limits<double>::infinity());
+  m.normal.resize(n);
   const Eigen::Isometry3d T_cam_world = T_world_cam.inverse();
-  const double su = static_cast<double>(intrinsics_.width) / cfg_.ray_cols;
-  const double sv = static_cast<double>(intrinsics_.height) / cfg_.ray_rows;
-  for (int r = 0; r < cfg_.ray_rows; ++r) {
-    const double v = (r + 0.5) * sv - 0.5;
-    for (int c = 0; c < cfg_.ray_cols; ++c) {
-      const double u = (c + 0.5) * su - 0.5;
-      const Eigen::Vector3d d((u - intrinsics_.cx) / intrinsics_.fx, (v - intrinsics_.cy) / intrinsics_.fy, 1.0);
-      Eigen::Vector3d hit;
-      if (!world.castRay(origin, origin + R * (d * cfg_.max_range), &hit)) continue;
-      Eigen::Vector3d p = T_cam_world * hit;
-      const double z = p.z();
-      if (z < cfg_.min_range || z > cfg_.max_range) continue;
-      const double sigma = cfg_.depth_noise_base + cfg_.depth_noise_quadratic * z * z;
-      if (sigma > 0.0) p *= (z + sigma * gauss_(rng_)) / z;
-      points->emplace_back(p.cast<float>());
+  // The floor, the plane z = 0 of the world: one ray-plane intersection per sample.
+  const Eigen::Vector3d floor_n = T_cam_world.linear().col(2);
+  const double floor_k = floor_n.dot(T_cam_world.translation());
+  for (int r = 0; r < g.height; ++r)
+    for (int c = 0; c < g.width; ++c) {
+      const double denom = floor_n.dot(g.ray(c, r));
+      if (denom == 0.0) continue;
+      const double z = floor_k / denom;
+      if (z <= kDepthNear) continue;
+      const std::size_t i = static_cast<std::size_t>(r) * static_cast<std::size_t>(g.width) + static_cast<std::size_t>(c);
+      m.depth[i] = z;
+      m.normal[i] = floor_n;
+    }
+  // Every scene body's triangles, nearest surface kept (z-buffer).
+  std::vector<Eigen::Vector3d> v;
+  for (std::size_t b = 0; b < world.bodies().size(); ++b) {
+    const TriangleMesh& surface = world.bodySurface(static_cast<int>(b));
+    const Eigen::Isometry3d T = T_cam_world * world.bodyPose(static_cast<int>(b));
+    v.resize(surface.vertices.size());
+    for (std::size_t k = 0; k < v.size(); ++k) v[k] = T * surface.vertices[k];
+    for (const Eigen::Vector3i& t : surface.triangles) {
+      const Eigen::Vector3d& a = v[static_cast<std::size_t>(t[0])];
+      const Eigen::Vector3d& bb = v[static_cast<std::size_t>(t[1])];
+      const Eigen::Vector3d& cc = v[static_cast<std::size_t>(t[2])];
+      const Eigen::Vector3d normal = (bb - a).cross(cc - a).normalized();
+      rasterTriangle(g, a, bb, cc, kDepthNear, [&](int col, int row, double z) {
+        const std::size_t i = static_cast<std::size_t>(row) * static_cast<std::size_t>(g.width) + static_cast<std::size_t>(col);
+        if (z >= m.depth[i]) return;
+        m.depth[i] = z;
+        m.normal[i] = normal;
+      });
     }
   }
+}
+
+double SimulatedCamera::disturbedDepth(int c, int r, double z) {
+  const Impl& m = *impl_;
+  const DepthNoiseConfig& noise = cfg_.depth_noise;
+  if (noise.model == DepthNoiseModel::Stereo) {
+    const RasterGrid& g = m.grid;
+    const Eigen::Vector3d ray = g.ray(c, r);
+    // Holes at grazing angles: the angle between the ray and the surface normal.
+    const double cos_incidence = std::abs(m.normal[static_cast<std::size_t>(r * g.width + c)].dot(ray)) / ray.norm();
+    const double angle = std::acos(std::min(1.0, cos_incidence)) * 180.0 / M_PI;
+    if (angle > noise.grazing_angle &&
+        uniform_(rng_) < (angle - noise.grazing_angle) / std::max(1e-9, 90.0 - noise.grazing_angle))
+      return -1.0;
+    // Flying pixels: next to a depth edge, a depth between this surface and the neighbour's. An
+    // edge is where the neighbour's depth is off this sample's plane by more than edge_jump (a
+    // plane seen at a slant, however steep its depth gradient, has none).
+    const Eigen::Vector3d& n = m.normal[static_cast<std::size_t>(r * g.width + c)];
+    const double k = n.dot(ray * z);
+    double jump = 0.0;
+    const int dc[4] = {1, -1, 0, 0}, dr[4] = {0, 0, 1, -1};
+    for (int i = 0; i < 4; ++i) {
+      const int cc = c + dc[i], rr = r + dr[i];
+      if (cc < 0 || rr < 0 || cc >= g.width || rr >= g.height) continue;
+      const double zn = m.depth[static_cast<std::size_t>(rr * g.width + cc)];
+      if (!std::isfinite(zn)) continue;
+      const double denom = n.dot(g.ray(cc, rr));
+      const bool off_plane = denom == 0.0 || std::abs(zn - k / denom) > noise.edge_jump;
+      if (off_plane && std::abs(zn - z) > std::abs(jump)) jump = zn - z;
+    }
+    if (jump != 0.0 && uniform_(rng_) < noise.flying_pixels) z += uniform_(rng_) * jump;
+  }
+  const double sigma = noise.sigma(z);
+  return sigma > 0.0 ? z + sigma * gauss_(rng_) : z;
+}
+
+void SimulatedCamera::cloud(const SimWorld& world, const Eigen::Isometry3d& T_world_cam,
+                            std::vector<Eigen::Vector3f>* points) {
+  rasteriseDepth(world, T_world_cam);
+  const Impl& m = *impl_;
+  const RasterGrid& g = m.grid;
+  points->clear();
+  points->reserve(m.depth.size());
+  for (int r = 0; r < g.height; ++r)
+    for (int c = 0; c < g.width; ++c) {
+      const double z = m.depth[static_cast<std::size_t>(r * g.width + c)];
+      if (!(z >= cfg_.min_range && z <= cfg_.max_range)) continue;
+      const double zd = disturbedDepth(c, r, z);
+      if (zd <= 0.0) continue;  // a hole
+      points->emplace_back((g.ray(c, r) * zd).cast<float>());
+    }
 }
 
 void SimulatedCamera::cloud(const SimWorld& world, std::vector<Eigen::Vector3f>* points) {

@@ -1,0 +1,100 @@
+// ehc_object_library: the simulator's generated everyday objects (ehc_sim/object_library.h).
+//   ehc_object_library manifest --seed S --per-kind N --out <library.yaml>
+//       draws N objects of every kind with seed S and writes the manifest (parameters, bounding
+//       box, mass, friction, split); config/objects/library.yaml is made this way.
+//   ehc_object_library meshes [--manifest <library.yaml>] [--out <dir>]
+//       writes every object's mesh (its manifest's mesh_dir by default; the build runs this).
+//   ehc_object_library cloud --object <name> --out <cloud.pcd> [--manifest <library.yaml>]
+//       [--distance m] [--elevation deg] [--azimuth deg] [--seed S] [--sim <bullet_sim.yaml>]
+//       the object on a table, one depth cloud of the simulated camera (world frame, binary PCD);
+//       the camera position, the object's pose and the point count go to stdout as JSON.
+// Exit 0: done. Exit 2: bad arguments or files.
+#include "ehc_bringup/object_view.h"
+#include "ehc_common/command_line.h"
+#include "ehc_common/json.h"
+#include "ehc_control/robot_config.h"
+
+#include <sys/stat.h>
+
+#include <fstream>
+#include <iostream>
+
+namespace {
+const char* kUsage =
+    "usage: ehc_object_library manifest --seed S --per-kind N --out <library.yaml>\n"
+    "       ehc_object_library meshes [--manifest <library.yaml>] [--out <dir>]\n"
+    "       ehc_object_library cloud --object <name> --out <cloud.pcd> [--manifest <library.yaml>]\n"
+    "                          [--distance 0.6] [--elevation 45] [--azimuth 0] [--seed 1] [--sim <bullet_sim.yaml>]\n"
+    "The default manifest is config/objects/library.yaml.\n";
+
+std::string defaultManifest() { return ehc_control::configDirectory() + "/objects/library.yaml"; }
+
+int manifest(int argc, char** argv) {
+  const ehc_common::CommandLine cli(argc, argv, {"seed", "per-kind", "out"}, {}, 2);
+  const auto seed = static_cast<unsigned>(cli.integer("seed", 1, 0, 1000000));
+  const int per_kind = static_cast<int>(cli.integer("per-kind", 4, 1, 100));
+  const std::string out = cli.text("out");
+  const ehc_sim::ObjectLibrary lib = ehc_sim::drawObjectLibrary(seed, per_kind);
+  std::ofstream f(out);
+  if (!f) throw std::invalid_argument("cannot write '" + out + "'");
+  f << ehc_sim::objectLibraryYaml(lib, "rosrun ehc_bringup ehc_object_library manifest --seed " + std::to_string(seed) +
+                                           " --per-kind " + std::to_string(per_kind) + " --out <this file>");
+  std::cerr << "ehc_object_library: " << lib.objects.size() << " objects -> " << out << "\n";
+  return 0;
+}
+
+int meshes(int argc, char** argv) {
+  const ehc_common::CommandLine cli(argc, argv, {"manifest", "out"}, {}, 2);
+  const ehc_sim::ObjectLibrary lib = ehc_sim::loadObjectLibrary(cli.text("manifest", defaultManifest()));
+  const std::string dir = cli.text("out", lib.mesh_dir);
+  mkdir(dir.c_str(), 0755);
+  for (const ehc_sim::LibraryObject& o : lib.objects)
+    ehc_sim::writeMeshFile(ehc_sim::generateObjectMesh(o.kind, o.params, o.seed), dir + "/" + o.file);
+  std::cerr << "ehc_object_library: " << lib.objects.size() << " meshes -> " << dir << "\n";
+  return 0;
+}
+
+int cloud(int argc, char** argv) {
+  const ehc_common::CommandLine cli(
+      argc, argv, {"manifest", "object", "out", "distance", "elevation", "azimuth", "seed", "sim"}, {}, 2);
+  const ehc_sim::ObjectLibrary lib = ehc_sim::loadObjectLibrary(cli.text("manifest", defaultManifest()));
+  ehc_bringup::ObjectView view;
+  view.distance = cli.real("distance", view.distance);
+  view.elevation_deg = cli.real("elevation", view.elevation_deg);
+  view.azimuth_deg = cli.real("azimuth", view.azimuth_deg);
+  if (!(view.distance > 0.1 && view.distance < 5.0)) throw std::invalid_argument("--distance must be in (0.1, 5) m");
+  if (!(view.elevation_deg > 0.0 && view.elevation_deg < 89.0)) throw std::invalid_argument("--elevation must be in (0, 89) deg");
+  const auto seed = static_cast<unsigned>(cli.integer("seed", 1, 0, 1000000000));
+  const ehc_sim::SimConfig sim = ehc_sim::loadSimConfig(cli.text("sim", ehc_control::configDirectory() + "/sim/bullet_sim.yaml"));
+  const ehc_bringup::ObjectViewCloud c = ehc_bringup::objectViewCloud(lib, cli.text("object"), view, sim, seed);
+  const std::string out = cli.text("out");
+  ehc_perception::savePcd(out, c.points);
+  ehc_common::Json j;
+  j["object"] = cli.text("object");
+  j["points"] = c.points.size();
+  const Eigen::Vector3d eye = c.T_world_cam.translation(), p = c.T_world_object.translation();
+  const Eigen::Quaterniond q(c.T_world_object.linear());
+  j["camera_position"] = {ehc_common::jsonNumber(eye.x()), ehc_common::jsonNumber(eye.y()), ehc_common::jsonNumber(eye.z())};
+  j["object_position"] = {ehc_common::jsonNumber(p.x()), ehc_common::jsonNumber(p.y()), ehc_common::jsonNumber(p.z())};
+  j["object_orientation"] = {ehc_common::jsonNumber(q.x()), ehc_common::jsonNumber(q.y()), ehc_common::jsonNumber(q.z()),
+                             ehc_common::jsonNumber(q.w())};
+  j["mesh"] = c.body.mesh_file;
+  j["cloud"] = out;
+  std::cout << ehc_common::jsonLine(j) << "\n";
+  return 0;
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::string command = argc > 1 ? argv[1] : "";
+  try {
+    if (command == "manifest") return manifest(argc, argv);
+    if (command == "meshes") return meshes(argc, argv);
+    if (command == "cloud") return cloud(argc, argv);
+    std::cerr << kUsage;
+    return command == "--help" || command == "-h" ? 0 : 2;
+  } catch (const std::exception& e) {
+    std::cerr << "ehc_object_library: " << e.what() << "\n" << kUsage;
+    return 2;
+  }
+}
