@@ -23,6 +23,8 @@
 //            whose range spans more than a turn at its widest equivalent, widestTurn). Any
 //            solution will do, even one near a stop: it is a configuration of the target
 //            itself inside the stops, which the stalled pose task was not finding;
+//            when no start converges, WholeBodyModel::inverseKinematics from 30 random seeds
+//            (the check that admits Exp-1's targets; one longer cycle, once per stall);
 //   move     a whole-body reference velocity towards that configuration (b*, q*), tracked
 //            through the QP (EhcQpController::step's `reference`: joint dampers, obstacle
 //            dampers and velocity limits still apply): arm joint_gain (q* - q); base a

@@ -18,6 +18,7 @@ const char* kOwner = "ReachRecoveryParams";
 /// Bearing offsets (x pi) of the base placements around the target, the robot's side first.
 constexpr double kPlacementOffsets[] = {0.0, 0.25, -0.25, 0.5, -0.5, 0.75, -0.75, 1.0};
 constexpr int kOffsets = static_cast<int>(sizeof(kPlacementOffsets) / sizeof(kPlacementOffsets[0]));
+constexpr int kFallbackSeeds = 30;  ///< random seeds of the fallback solve (as Exp-1's reachability check)
 constexpr int kFixedStarts = 2;  ///< the current configuration; the current base with the ready posture
 constexpr double kTurnTravel = 0.3;  ///< m of travel counted per rad of base turn when choosing
 double wrap(double a) { return std::remainder(a, 2.0 * M_PI); }
@@ -238,6 +239,20 @@ void ReachRecovery::plan(const Eigen::Isometry3d& target) {
       goal_margin_ = m;
     }
   }
+  if (have_goal_ || next_start_ < params_.starts) return;
+  // No start converged (the damped least-squares steps from these starts miss some targets
+  // that need the arm far from every start): the random-restart solver
+  // that admits Exp-1's targets (WholeBodyModel::inverseKinematics, KDL with the joint limits
+  // shrunk by the stop), once; it finds a configuration of every target it admitted.
+  Eigen::Vector3d b;
+  Eigen::VectorXd q;
+  if (!model_.inverseKinematics(target, 1, kFallbackSeeds, &b, &q, joint_stop_)) return;
+  ++solutions_;
+  have_goal_ = true;
+  goal_base_ = b;
+  goal_q_ = widestTurn(q);
+  goal_margin_ = margin(goal_q_);
+  goal_score_ = std::min(goal_margin_, joint_influence_);
 }
 
 void ReachRecovery::reference(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q) {
@@ -297,6 +312,11 @@ const Eigen::VectorXd* ReachRecovery::update(double now, const Eigen::Vector3d& 
       [[fallthrough]];
     case State::Planning:
       if (position_error > 2.0 * reach_) {  // far: unwind the arm where the base stands
+        if ((model_.config().arm_ready - q).cwiseAbs().maxCoeff() < params_.joint_tolerance) {
+          // Nothing to unwind: the arm is at its ready posture, the stall is not the arm's.
+          startWatching(now, position_error, orientation_error);
+          return nullptr;
+        }
         have_goal_ = true;
         goal_base_ = plan_base_;
         goal_q_ = model_.config().arm_ready;

@@ -400,7 +400,7 @@ ObjectLibrary loadObjectLibrary(const std::string& path) {
   ObjectLibrary lib;
   lib.source_file = path;
   lib.seed = static_cast<unsigned>(n.require<int>("seed"));
-  lib.mesh_dir = n.resolvePath(n.require<std::string>("mesh_dir"));
+  lib.mesh_dir = n.requirePath("mesh_dir");
   std::set<std::string> names;
   for (std::size_t i = 0; i < n.listSize("objects"); ++i) {
     const ConfigNode e = n.element("objects", i);

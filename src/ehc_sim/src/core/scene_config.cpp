@@ -57,7 +57,7 @@ BodyConfig loadBody(const ConfigNode& n, bool dynamic, int default_shade) {
   b.shape = shapeFromString(n, "shape", n.get<std::string>("shape", "box"));
   if (b.shape == ShapeType::Mesh) {
     if (n.has("size")) n.fail("size", "is read from the mesh file (its bounding box); set scale instead");
-    const std::string file = n.resolvePath(n.require<std::string>("mesh"));
+    const std::string file = n.requirePath("mesh");
     try {
       b = meshBody(b.name, file, n.get<double>("scale", 1.0));
     } catch (const std::invalid_argument& e) {
