@@ -77,18 +77,21 @@ std::vector<Eigen::VectorXd> randomCommands(int n_dof, int steps, unsigned seed)
   }
   return out;
 }
-/// |true - odometry| in the plane after driving `distance` m along x at 0.25 m/s, then 1 s
-/// standing (noise off: the wheels turn exactly as commanded).
+/// |true - odometry| in the plane after driving `distance` m straight at 0.25 m/s (along x; a
+/// holonomic base at 60 deg to it), then 1 s standing (noise off: the wheels turn exactly as
+/// commanded).
 double straightDriveError(const ehc_control::RobotConfig& rc, const BaseModelConfig& m, unsigned seed,
                           double distance = 1.0) {
   KinematicFakeRobot r(rc, noise(false), seed, m);
-  const Eigen::VectorXd go = baseCommand(r, 0.25, 0.0, 0.0), stop = baseCommand(r, 0.0, 0.0, 0.0);
+  const double a = rc.nBase() == 3 ? M_PI / 3.0 : 0.0;
+  const Eigen::VectorXd go = baseCommand(r, 0.25 * std::cos(a), 0.25 * std::sin(a), 0.0);
+  const Eigen::VectorXd stop = baseCommand(r, 0.0, 0.0, 0.0);
   const int n = static_cast<int>(std::lround(distance / 0.25 / kDt));
   for (int k = 0; k < n; ++k) r.step(go, kDt);
   for (int k = 0; k < 100; ++k) r.step(stop, kDt);
   if (m.imprecision.localisation_period == 0.0 || m.imprecision.level == 0.0) {
-    EXPECT_NEAR(r.odometryPose().x(), distance, 1e-9) << "the odometry counts the wheels' distance";
-    EXPECT_NEAR(r.odometryPose().y(), 0.0, 1e-12);
+    EXPECT_NEAR(r.odometryPose().x(), distance * std::cos(a), 1e-9) << "the odometry counts the wheels' distance";
+    EXPECT_NEAR(r.odometryPose().y(), distance * std::sin(a), 1e-9);
   }
   return (r.basePose().head<2>() - r.odometryPose().head<2>()).norm();
 }
@@ -125,7 +128,7 @@ TEST(BaseImprecision, LevelZeroIsTodaysBaseBitForBit) {
 TEST(BaseImprecision, OdometryDriftGrowsWithTheLevelOnEveryBaseType) {
   // Commanded straight 1 m without localisation fixes: the odometry says 1 m along x, the true
   // pose is off by the run's scale and curvature errors and the slip. Differential and
-  // holonomic bases, 12 seeds per level.
+  // holonomic (driving sideways too) bases, 12 seeds per level.
   BaseImprecisionParams p;
   p.localisation_period = 0.0;
   for (const std::string name : {"realman_rm65_water2", "kuka_iiwa14_kmr"}) {
@@ -308,6 +311,7 @@ TEST(BaseImprecision, ConfigurationIsReadValidatedAndPrinted) {
     const std::string e = ehc_test::errorOf([&] { load("  base_imprecision: " + yaml + "\n"); });
     EXPECT_NE(e.find(field), std::string::npos) << yaml << ": " << e;
     EXPECT_NE(e.find("test.yaml"), std::string::npos) << yaml << ": " << e;
+    std::printf("%s -> %s\n", yaml.c_str(), e.c_str());
   }
   // Both simulators' files document the defaults (off).
   const BaseImprecisionParams d;
