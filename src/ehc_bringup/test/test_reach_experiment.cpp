@@ -78,7 +78,9 @@ TEST(ReachExperiment, ReachesMostTargetsWithTheBaseImprecisionAtLevelOne) {
   EXPECT_LE(r.failed, 3);
   EXPECT_EQ(r.qp_failures, 0);
   for (const auto& t : trials)
-    if (t.reached) EXPECT_LT(t.final_position_error, 0.01);  // the true TCP
+    if (t.reached) {
+      EXPECT_LT(t.final_position_error, 0.01);  // the true TCP
+    }
 }
 
 TEST(ReachExperiment, DmcgEhcBaseMovesLessThanNeoEOnceTheArmCanReach) {
