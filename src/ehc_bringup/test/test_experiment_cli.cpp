@@ -63,6 +63,25 @@ TEST(ExperimentCli, ReachTakesTheProtocolAndTheBaseModel) {
   EXPECT_NE(bad.out.find("--protocol:"), std::string::npos) << bad.out;
 }
 
+TEST(ExperimentCli, ReachAndGraspTakeTheBaseImprecisionLevelAndRecordIt) {
+  const std::string out = "/tmp/ehc_cli_exp_imprecision";
+  const std::string base = std::string("reach --robot ") + EHC_CONFIG_DIR +
+                           "/robots/realman_rm65_water2/robot.yaml --method neo_e --sets 1 --points 1 --out " + out + " ";
+  const Result ok = run(base + "--base-imprecision 0.5");
+  ASSERT_EQ(ok.code, 0) << ok.out;
+  const std::string summary = readText(out + "/summary.json");
+  EXPECT_NE(summary.find("\"base_imprecision\":0.5"), std::string::npos) << summary;
+  EXPECT_NE(ok.out.find("\"base_imprecision\":0.5"), std::string::npos) << "the summary line";
+  EXPECT_NE(readText(out + "/table.md").find("base imprecision level 0.5"), std::string::npos);
+  for (const std::string& bad : {std::string("--base-imprecision -1"), std::string("--base-imprecision nan")}) {
+    for (const std::string& command : {base, "grasp --method ehc --sets 1 --out " + out + "_grasp "}) {
+      const Result r = run(command + bad);
+      EXPECT_EQ(r.code, 2) << command << bad << ": " << r.out;
+      EXPECT_NE(r.out.find("--base-imprecision:"), std::string::npos) << command << bad << ": " << r.out;
+    }
+  }
+}
+
 TEST(ExperimentCli, ReachTakesTheTargetGeneratorAndItsFields) {
   const std::string out = "/tmp/ehc_cli_exp_generator";
   const std::string base = std::string("reach --robot ") + EHC_CONFIG_DIR +

@@ -160,6 +160,19 @@ TEST(GraspExperiment, TheWater2BaseGraspsThroughItsOdometryEstimate) {
   EXPECT_EQ(pipe.counters().collision_steps, 0);
 }
 
+TEST(GraspExperiment, TheBaseImprecisionLevelReachesTheSimulatorAndTheStackSeesItsOdometry) {
+  GraspExperimentParams p = params(GraspProtocol::Table);
+  p.base_imprecision = 1.0;
+  const GraspExperiment exp(p, {"ehc"});
+  const GraspPipelineConfig cfg = exp.runConfig("ehc", "", 7000);
+  ASSERT_EQ(cfg.sim.fake_robot.base_model.imprecision.level, 1.0);
+  GraspPipeline pipe(cfg, 7000);
+  ASSERT_NE(pipe.world().robot().imprecision(), nullptr);
+  EXPECT_FALSE(pipe.world().robot().odometryIsTruth());
+  p.base_imprecision = -0.5;
+  EXPECT_THROW(GraspExperiment(p, {"ehc"}), std::invalid_argument);
+}
+
 TEST(GraspExperiment, Exp2OneSetOfEveryMethodAndTheSameSeedGivesTheSameResult) {
   const GraspExperimentParams p = params(GraspProtocol::Table);
   const GraspExperiment exp(p, graspMethodNames(GraspProtocol::Table, "all"));

@@ -63,6 +63,26 @@ TEST(ReachExperiment, DeterministicPerSeedAndSafe) {
     }
 }
 
+TEST(ReachExperiment, ReachesMostTargetsWithTheBaseImprecisionAtLevelOne) {
+  // The controller runs on the imprecise odometry (latency, minimum speed, drift, localisation
+  // jumps); arrival is judged on the true pose. Same targets as above.
+  ExpSetup s = makeSetup(8);
+  s.params.base_model.imprecision.level = 1.0;
+  std::vector<ReachTrial> trials;
+  const ReachSummary r = run(s, ehc_control::ControlMode::Ehc, &trials);
+  std::printf("base imprecision level 1: %d of %d failed, mean %.2f s (targets seed 3000, noise seed 3)\n", r.failed,
+              r.targets, r.mean_time_s);
+  EXPECT_EQ(r.base_imprecision, 1.0);
+  EXPECT_NE(summaryJson(r).find("\"base_imprecision\":1"), std::string::npos) << summaryJson(r);
+  EXPECT_EQ(r.targets, 8);
+  EXPECT_LE(r.failed, 3);
+  EXPECT_EQ(r.qp_failures, 0);
+  for (const auto& t : trials)
+    if (t.reached) {
+      EXPECT_LT(t.final_position_error, 0.01);  // the true TCP
+    }
+}
+
 TEST(ReachExperiment, DmcgEhcBaseMovesLessThanNeoEOnceTheArmCanReach) {
   // Close = position error below 0.5 m (DESIGN section 10), where EHC's sig(omega) rises to 1.
   // 100 targets: fewer make the close-phase means too noisy to compare.

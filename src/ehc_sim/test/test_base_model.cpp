@@ -180,7 +180,7 @@ TEST(Water2Base, OdometryRateAndBoundedDrift) {
     EXPECT_NEAR(twist[2], p.response.angular_gain * 0.2, 1e-6);
   }
   // Long drive, default model (noise, localisation error on): bounded error.
-  KinematicFakeRobot r(robot(), ActuationNoise{}, 3, BaseModelConfig{BaseModelType::Water2, p});
+  KinematicFakeRobot r(robot(), ActuationNoise{}, 3, BaseModelConfig{BaseModelType::Water2, p, {}});
   const ActuationNoise noise;
   const double v = 0.4, w = 0.3;
   // Bound: the bridge predicts the wheels exactly but for what it cannot know: Table I noise

@@ -55,6 +55,9 @@ struct GraspExperimentParams {
   /// water2 = the RealMan Water2 chain, whose /odom estimate is what the stack sees
   /// (GraspPipeline::stackView).
   std::optional<ehc_sim::BaseModelType> base_model;
+  /// Base imprecision level of the simulator (--base-imprecision; ehc_sim::BaseImprecisionParams,
+  /// on top of the base model): unset = the sim file's (bullet_sim.yaml: 0, off).
+  std::optional<double> base_imprecision;
   /// s, WAIT_TARGET..LIFT per object (--object-time-limit): unset = the sequencer file's (30 s).
   std::optional<double> object_time_limit;
   void validate() const;       ///< throws "[GraspExperiment] ..."
@@ -127,6 +130,8 @@ struct GraspTraceSample {
 
 struct GraspMethodSummary {
   std::string method;
+  std::string base_model;          ///< the simulator's base model (ideal | water2)
+  double base_imprecision = 0.0;   ///< its base imprecision level (0 = off)
   int grasps = 0, successes = 0;
   double mean_time_s = 0.0;           ///< over successful grasps
   SpeedMeans distant, close;          ///< mean |commanded speed| (Exp-1's definition)

@@ -152,8 +152,9 @@ class GraspPipeline {
  private:
   void perceive(double t);
   void updateObstacles(double t);
-  /// The stack's view of a world pose of a robot frame: what tf gives the nodes. Ideal base: the
-  /// true pose (unchanged, bit for bit). Water2 base: /odom is the bridge's estimate, so every
+  /// The stack's view of a world pose of a robot frame: what tf gives the nodes. Ideal base
+  /// without imprecision: the true pose (unchanged, bit for bit). Otherwise (water2: the
+  /// bridge's estimate; base imprecision: the drifting odometry) /odom is not the truth, so every
   /// robot frame the nodes look up (camera, TCP) is the true one moved by the odometry error:
   /// odom_T_base(estimate) * base_T_frame(true). Perception then puts a tag or a cloud where the
   /// odometry says the camera was, as on the robot.

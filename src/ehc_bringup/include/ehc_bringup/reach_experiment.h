@@ -49,7 +49,8 @@ struct ReachExperimentParams {
   double arrival_position = 0.01;   ///< m
   double arrival_orientation = 2.0 * M_PI / 180.0;  ///< rad
   ehc_sim::ActuationNoise noise;    ///< Table I; noise.enabled = false for --noise off
-  /// ideal (--base-model ideal) | water2: the controller is fed the base model's odometry
+  /// ideal (--base-model ideal) | water2, and the base imprecision on top (--base-imprecision:
+  /// imprecision.level): the controller is fed the base model's odometry
   /// (KinematicFakeRobot::odometryPose); arrival is judged on the true pose.
   ehc_sim::BaseModelConfig base_model;
   ehc_control::PoseServoParams servo;
@@ -112,6 +113,8 @@ struct ReachTrial {
 
 struct ReachSummary {
   std::string method;
+  std::string base_model;          ///< ideal | water2 (ReachExperimentParams::base_model)
+  double base_imprecision = 0.0;   ///< its base imprecision level (0 = off)
   int targets = 0, failed = 0;
   double mean_time_s = 0.0;  ///< over reached targets
   SpeedMeans distant, close;

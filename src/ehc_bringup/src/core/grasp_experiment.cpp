@@ -107,6 +107,8 @@ void GraspExperimentParams::validate() const {
   if (!(trace_period > 0.0)) bad("trace_period must be > 0");
   if (object_time_limit && !(*object_time_limit > 0.0 && *object_time_limit <= 3600.0))
     bad("object_time_limit must be in (0, 3600] s");
+  if (base_imprecision && !(*base_imprecision >= 0.0 && *base_imprecision <= 100.0))
+    bad("base_imprecision must be in [0, 100]");
 }
 
 struct GraspExperiment::RunOutput {
@@ -149,6 +151,7 @@ GraspPipelineConfig GraspExperiment::runConfig(const std::string& method, const 
   c.cycle.controller.mode = m.mode;
   c.cycle.mpbs.enabled = m.mpbs;
   if (params_.base_model) c.sim.fake_robot.base_model.type = *params_.base_model;
+  if (params_.base_imprecision) c.sim.fake_robot.base_model.imprecision.level = *params_.base_imprecision;
   if (params_.object_time_limit) c.sequencer.object_time_limit = *params_.object_time_limit;
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
@@ -335,6 +338,9 @@ GraspExperimentResult GraspExperiment::run(const Progress& progress) const {
   for (const auto& m : methods_) {
     GraspMethodSummary s;
     s.method = m;
+    const ehc_sim::BaseModelConfig& base = runConfig(m, base_.begin()->first, 0).sim.fake_robot.base_model;
+    s.base_model = ehc_sim::toString(base.type);
+    s.base_imprecision = base.imprecision.level;
     SpeedMeans distant, close;
     double time_sum = 0.0;
     std::map<std::string, std::pair<double, int>> tfm;
@@ -425,6 +431,8 @@ ehc_common::Json graspSummaryJsonValue(const GraspMethodSummary& s) {
   j["method"] = s.method;
   j["mode"] = ehc_control::toString(m.mode);
   j["mpbs"] = m.mpbs;
+  j["base_model"] = s.base_model;
+  j["base_imprecision"] = jsonNumber(s.base_imprecision);
   j["grasps"] = s.grasps;
   j["successes"] = s.successes;
   j["success_rate"] = jsonNumber(s.grasps ? 100.0 * s.successes / s.grasps : 0.0);
@@ -463,6 +471,10 @@ void writeSummaryJson(const std::string& dir, const GraspExperimentParams& param
   j["seed"] = params.seed;
   j["jitter_xy"] = jsonNumber(params.jitter_xy);
   j["jitter_yaw_deg"] = jsonNumber(params.jitter_yaw_deg);
+  if (!result.summaries.empty()) {  // every method runs on the same base
+    j["base_model"] = result.summaries.front().base_model;
+    j["base_imprecision"] = jsonNumber(result.summaries.front().base_imprecision);
+  }
   j["sim_time_s"] = jsonNumber(result.sim_time_s);
   // Interrupted (SIGINT / SIGTERM): the completed runs only.
   j["partial"] = result.partial();

@@ -334,7 +334,7 @@ Eigen::Vector3d GraspPipeline::odometryPose() const { return world_->robot().odo
 
 Eigen::Isometry3d GraspPipeline::stackView(const Eigen::Isometry3d& T_world_frame) const {
   const ehc_sim::KinematicFakeRobot& robot = world_->robot();
-  if (!robot.water2()) return T_world_frame;  // ideal base: /odom is the true pose
+  if (robot.odometryIsTruth()) return T_world_frame;  // ideal base without imprecision
   using ehc_control::WholeBodyModel;
   return WholeBodyModel::baseTransform(robot.odometryPose()) * WholeBodyModel::baseTransform(robot.basePose()).inverse() *
          T_world_frame;

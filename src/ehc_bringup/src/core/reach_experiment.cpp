@@ -213,6 +213,8 @@ ReachSummary ReachExperiment::run(const std::vector<std::vector<Eigen::Isometry3
   const auto wall0 = std::chrono::steady_clock::now();
   ReachSummary s;
   s.method = ehc_control::toString(controller_.mode);
+  s.base_model = ehc_sim::toString(params_.base_model.type);
+  s.base_imprecision = params_.base_model.imprecision.level;
   int total = 0;
   for (const auto& set : sets) total += static_cast<int>(set.size());
   SpeedMeans distant, close;
@@ -283,6 +285,8 @@ ehc_common::Json summaryJsonValue(const ReachSummary& s) {
   using ehc_common::jsonNumber;
   ehc_common::Json j;
   j["method"] = s.method;
+  j["base_model"] = s.base_model;
+  j["base_imprecision"] = jsonNumber(s.base_imprecision);
   j["targets"] = s.targets;
   j["failed"] = s.failed;
   j["mean_time_s"] = jsonNumber(s.mean_time_s);

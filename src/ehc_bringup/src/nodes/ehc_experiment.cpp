@@ -1,12 +1,12 @@
 // ehc_experiment: the paper's experiments, in-process (no ROS master needed).
 //   rosrun ehc_bringup ehc_experiment reach --robot robot.yaml --method ehc|neo_e|neo_c|all
 //       [--sets 10] [--points 50] [--seed S] [--targets targets.csv] [--noise on|off]
-//       [--base-model ideal|water2] [--protocol sequence|reset]
+//       [--base-model ideal|water2] [--base-imprecision LEVEL] [--protocol sequence|reset]
 //       [--config controller.yaml] [--map reachability_map.bin] --out DIR
 // Writes DIR/summary.json, DIR/table.md (paper Table II layout), DIR/trials.csv and
 // DIR/targets.csv; progress and ETA on stderr. Errors: stderr, exit code 2.
 //   rosrun ehc_bringup ehc_experiment grasp --method tsmm|neo_c|neo_e|ehc|all [--sets 15] [--seed S]
-//       [--scene scene.yaml] [--jobs N] [--config-dir config] --out DIR          (paper Exp-2)
+//       [--scene scene.yaml] [--jobs N] [--config-dir config] [--base-imprecision LEVEL] --out DIR  (paper Exp-2)
 //   rosrun ehc_bringup ehc_experiment poses --method neo_nompbs|ehc_nompbs|ehc|all [--sets 15]
 //       [--per-set 5] [--seed S] [--scene ...] [--jobs N] --out DIR             (paper Exp-3)
 // The grasping pipeline in-process (ehc_bringup::GraspPipeline, GraspExperiment): DIR/table.md
@@ -38,6 +38,9 @@ const char* kUsage =
     "           [--sets 10] [--points 50] [--seed 1] [--targets targets.csv] [--noise on|off]\n"
     "           [--base-model ideal|water2]   (water2: the Water2 chain of ehc_sim/base_model.h with\n"
     "                                          its default parameters; the controller sees its odometry)\n"
+    "           [--base-imprecision LEVEL]   (>= 0, default 0 = off: wheel slip and scale error, minimum speed,\n"
+    "                                         command latency, odometry drift, localisation jumps on top of the\n"
+    "                                         base model, every magnitude x LEVEL; ehc_sim::BaseImprecisionParams)\n"
     "           [--config controller.yaml] [--map reachability_map.bin] [--trace cycles.csv]\n"
     "           [--protocol sequence|reset]   (reset: every target from the ready pose at the origin)\n"
     "           [--first-set K]   (number of the first set: runs sets K..K+sets-1; set k's targets and noise\n"
@@ -50,10 +53,11 @@ const char* kUsage =
     "       ehc_experiment grasp --method tsmm|neo_c|neo_e|ehc|all --out DIR [--robot <name|robot.yaml>] [--sets 15] [--seed 1]\n"
     "           [--scene scene.yaml] [--jobs 1] [--config-dir config] [--jitter-xy 0.01] [--jitter-yaw 3]\n"
     "           [--base-model ideal|water2]   (default: the sim file's, ideal; water2: the stack sees the bridge's /odom)\n"
+    "           [--base-imprecision LEVEL]   (default: the sim file's, 0 = off)\n"
     "           [--object-time-limit s]   (per object, WAIT_TARGET..LIFT; default: the sequencer file's, 30 s)\n"
     "       ehc_experiment poses --method neo_nompbs|ehc_nompbs|ehc|all --out DIR [--robot <name|robot.yaml>] [--sets 15] [--per-set 5]\n"
     "           [--seed 1] [--scene scene.yaml] [--jobs 1] [--config-dir config] [--jitter-xy 0.01] [--jitter-yaw 3]\n"
-    "           [--base-model ideal|water2] [--object-time-limit s]\n";
+    "           [--base-model ideal|water2] [--base-imprecision LEVEL] [--object-time-limit s]\n";
 
 struct Args {
   std::string command, robot, method = "ehc", out, targets_csv, config, map, trace;
@@ -61,10 +65,20 @@ struct Args {
   unsigned seed = 1;
   bool noise = true;
   ehc_sim::BaseModelType base_model = ehc_sim::BaseModelType::Ideal;
+  double base_imprecision = 0.0;  ///< level, 0 = off
   bool all_targets = false;  ///< keep kinematically unreachable targets
   ehc_bringup::ReachProtocol protocol = ehc_bringup::ReachProtocol::Sequence;
   ehc_bringup::ReachTargetGenerator generator;
 };
+
+/// --base-imprecision: a level in [0, 100] (BaseImprecisionParams::level); `fallback` if not given.
+double baseImprecisionLevel(const ehc_common::CommandLine& cli, double fallback) {
+  const double level = cli.real("base-imprecision", fallback);
+  if (!(level >= 0.0 && level <= 100.0))
+    throw std::invalid_argument("[CommandLine] --base-imprecision: must be in [0, 100] (0 = off), got " +
+                                std::to_string(level));
+  return level;
+}
 
 /// --generator preset, then the field overrides.
 ehc_bringup::ReachTargetGenerator generatorFromCli(const ehc_common::CommandLine& cli) {
@@ -88,7 +102,7 @@ Args parse(int argc, char** argv) {
   if (a.command != "reach") throw std::invalid_argument("unknown command '" + a.command + "' (reach, grasp, poses)");
   const ehc_common::CommandLine cli(argc, argv,
                                      {"robot", "method", "out", "sets", "points", "seed", "targets",
-                                      "config", "map", "trace", "noise", "base-model", "protocol", "generator",
+                                      "config", "map", "trace", "noise", "base-model", "base-imprecision", "protocol", "generator",
                                       "min-distance", "max-distance", "min-height", "max-height", "max-tilt",
                                       "azimuth-spread", "tilt-sampling", "first-set"},
                                      {"all-targets"}, /*first=*/2);
@@ -106,6 +120,7 @@ Args parse(int argc, char** argv) {
   a.all_targets = cli.has("all-targets");
   a.noise = cli.choice("noise", {"on", "off"}, "on") == "on";
   a.base_model = ehc_sim::baseModelTypeFromString(cli.choice("base-model", {"ideal", "water2"}, "ideal"));
+  a.base_imprecision = baseImprecisionLevel(cli, a.base_imprecision);
   a.protocol = ehc_bringup::reachProtocolFromString(cli.choice("protocol", {"sequence", "reset"}, "sequence"));
   a.generator = generatorFromCli(cli);
   return a;
@@ -128,7 +143,7 @@ int runGrasp(int argc, char** argv) {
   ehc_bringup::GraspExperimentParams p;
   p.protocol = command == "grasp" ? ehc_bringup::GraspProtocol::Table : ehc_bringup::GraspProtocol::Poses;
   std::vector<std::string> options = {"robot", "method", "out", "sets", "seed", "scene", "jobs", "config-dir",
-                                      "jitter-xy", "jitter-yaw", "base-model", "object-time-limit"};
+                                      "jitter-xy", "jitter-yaw", "base-model", "base-imprecision", "object-time-limit"};
   if (p.protocol == ehc_bringup::GraspProtocol::Poses) options.push_back("per-set");
   const ehc_common::CommandLine cli(argc, argv, options, {}, /*first=*/2);
   const std::string method = cli.text("method", "all");
@@ -148,13 +163,17 @@ int runGrasp(int argc, char** argv) {
   if (cli.has("object-time-limit")) p.object_time_limit = cli.real("object-time-limit", 30.0);
   if (cli.has("base-model"))
     p.base_model = ehc_sim::baseModelTypeFromString(cli.choice("base-model", {"ideal", "water2"}, "ideal"));
+  if (cli.has("base-imprecision")) p.base_imprecision = baseImprecisionLevel(cli, 0.0);
   const std::vector<std::string> methods = ehc_bringup::graspMethodNames(p.protocol, method);
   const ehc_bringup::GraspExperiment exp(p, methods);
   std::cerr << "[ehc_experiment] " << command << ": " << p.sets << " set(s)"
             << (p.protocol == ehc_bringup::GraspProtocol::Poses ? " x " + std::to_string(p.per_set) + " per approach" : "")
             << ", seed " << p.seed << ", jobs " << p.jobs << ", methods:";
   for (const auto& m : methods) std::cerr << " " << m;
-  std::cerr << "\n  " << exp.runConfig(methods.front(), p.protocol == ehc_bringup::GraspProtocol::Table ? "" : "forward", 0).summary()
+  const ehc_bringup::GraspPipelineConfig first =
+      exp.runConfig(methods.front(), p.protocol == ehc_bringup::GraspProtocol::Table ? "" : "forward", 0);
+  const ehc_sim::BaseModelConfig& base = first.sim.fake_robot.base_model;
+  std::cerr << "\n  " << first.summary()
             << std::endl;
   const auto t0 = std::chrono::steady_clock::now();
   auto progress = [&](int done, int total, const std::string& text) {
@@ -184,9 +203,10 @@ int runGrasp(int argc, char** argv) {
         << "object time (object start -> lift success). Speeds: mean |v| (m/s) / |w| (rad/s) / sum |qd_arm| (rad/s) of "
         << "the commanded velocity while an object is worked on (QP solved); distant = controller position error > "
         << p.distant_threshold << " m. Base model: "
-        << exp.runConfig(methods.front(), p.protocol == ehc_bringup::GraspProtocol::Table ? "" : "forward", 0).sim.fake_robot.base_model.summary()
-        << (p.base_model && *p.base_model == ehc_sim::BaseModelType::Water2
+        << base.summary()
+        << (base.type == ehc_sim::BaseModelType::Water2
                 ? " (the stack sees the bridge's /odom estimate: controller, perception, sequencer)" : "")
+        << (base.imprecision.enabled() ? " (the stack sees the imprecise odometry)" : ", base imprecision off (level 0)")
         << ". In-process pipeline (no ROS transport latency), "
         << res.sim_time_s << " s of sim time in " << wall << " s wall with " << p.jobs << " job(s) (real-time factor "
         << res.sim_time_s / std::max(1e-9, wall) << "; wall figures depend on the machine's load).";
@@ -226,6 +246,7 @@ int main(int argc, char** argv) {
     ep.servo = ehc_control::loadPoseServoParams(cfg.childOrEmpty("servo"));
     ep.noise.enabled = a.noise;
     ep.base_model.type = a.base_model;
+    ep.base_model.imprecision.level = a.base_imprecision;
     ep.protocol = a.protocol;
     ep.first_set = a.first_set;
     ep.arrival_position = ctrl.arrival_position;
@@ -305,7 +326,7 @@ int main(int argc, char** argv) {
                         (a.targets_csv.empty() ? (a.all_targets ? std::string("unreachable targets kept")
                                                                 : std::to_string(unreachable_redrawn) + " unreachable draws redrawn (whole-body IK with every joint " + std::to_string(ctrl.joint_stop).substr(0, 4) + " rad inside its limits)")
                                                : "targets from " + a.targets_csv) +
-                        (a.base_model == ehc_sim::BaseModelType::Ideal
+                        (a.base_model == ehc_sim::BaseModelType::Ideal && a.base_imprecision == 0.0
                              ? std::string()
                              : ", base model " + ep.base_model.summary() + " (the controller sees its odometry)") +
                         ". Speeds: mean |v| (m/s) / |w| (rad/s) / sum |qd_arm| (rad/s) of the commanded velocity; distant = position error > 0.5 m." +

@@ -2,7 +2,7 @@
 // FakeRobotConfig: the settings both fake robots share — the Bullet simulator (ehc_sim_node,
 // part of SimConfig) and the kinematic one (ehc_kinematic_sim_node): robot file, control step,
 // noise seed, stepping policy (lock-step or free-run, see StepScheduler), Table I actuation
-// noise, the base model (ideal | water2, base_model.h) and the robot's start pose. One loader reads them from the `sim` mapping of either
+// noise, the base model (ideal | water2, base_model.h) with its base imprecision and the robot's start pose. One loader reads them from the `sim` mapping of either
 // simulator's YAML file, so both files use the same keys:
 //
 //   sim:
@@ -16,6 +16,7 @@
 //     noise: {enabled: true, base_translation: 0.05, base_rotation: 0.05, arm: 0.002}
 //     base_model: ideal            # ideal | water2 (the Water2 chain, base_model.h)
 //     water2: {command_latency: 0.05, ...}  # Water2BaseParams (optional; any subset)
+//     base_imprecision: {level: 0, ...}     # BaseImprecisionParams on top of either model (0 = off)
 //     robot_start: {x: 0, y: 0, yaw: 0}  # kinematic simulator only (Bullet: the scene's)
 //
 // Keys of the kinematic simulator's former schema (lockstep, lockstep_timeout_wall, noise as a
@@ -53,7 +54,7 @@ struct FakeRobotConfig {
   /// dt in nanoseconds (exact: validate() requires whole nanoseconds).
   std::int64_t dtNs() const;
   void validate() const;  ///< throws "[FakeRobotConfig] ..."
-  /// Three lines: robot, dt, seed, mode, noise, base model (and the start pose).
+  /// Three lines: robot and start pose; dt, seed, mode, noise; base model and base imprecision.
   std::string summary() const;
 };
 

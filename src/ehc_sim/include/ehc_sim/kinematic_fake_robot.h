@@ -4,7 +4,7 @@
 // differential base moves as a unicycle. The base model (base_model.h) decides how the base
 // executes its command and what the odometry reports: `ideal` (at once; odometry = true pose)
 // or `water2` (latency, 0.5 s hold, acceleration limits, lag, gain error, ~2 Hz odometry with
-// error). ROS-free; the Bullet simulator builds on it.
+// error); the base imprecision (BaseImprecisionParams, level > 0) acts on top of either. ROS-free; the Bullet simulator builds on it.
 
 #include "ehc_control/robot_config.h"
 #include "ehc_sim/base_model.h"
@@ -56,17 +56,24 @@ class KinematicFakeRobot {
 
   /// The true base pose (x, y, yaw) in the world (= odom at time 0).
   const Eigen::Vector3d& basePose() const { return base_; }
-  /// What /odom reports (the controller's base pose): ideal = basePose(); water2 = the bridge's
-  /// estimate from the ~2 Hz status.
+  /// What /odom reports (the controller's base pose): ideal = basePose(), or with the base
+  /// imprecision the odometry (wheel twist, localisation fixes); water2 = the bridge's estimate
+  /// from the ~2 Hz status (which reports the imprecise odometry when the imprecision is on).
   Eigen::Vector3d odometryPose() const;
-  /// The /odom twist (v_x, v_y, w_z), base frame: ideal = the executed base velocity; water2 =
-  /// the base velocity the bridge predicts from the twists it sent.
+  /// The /odom twist (v_x, v_y, w_z), base frame: ideal = the executed base velocity (with the
+  /// imprecision: the wheel twist, without slip and systematic errors); water2 = the base
+  /// velocity the bridge predicts from the twists it sent.
   Eigen::Vector3d odometryTwist() const;
+  /// True when /odom is the true pose (the ideal base without imprecision).
+  bool odometryIsTruth() const { return !water2_ && !imprecision_; }
   const BaseModelConfig& baseModel() const { return base_model_; }
   /// The Water2 chain (nullptr for the ideal base).
   const Water2BaseModel* water2() const { return water2_ ? &*water2_ : nullptr; }
+  /// The base imprecision (nullptr at level 0).
+  const BaseImprecision* imprecision() const { return imprecision_ ? &*imprecision_ : nullptr; }
   const Eigen::VectorXd& armPositions() const { return q_; }
-  /// Velocity actually executed in the last step (after saturation, noise, joint limits).
+  /// Velocity actually executed in the last step (after saturation, noise, joint limits; the
+  /// base's true twist).
   const Eigen::VectorXd& executedVelocity() const { return executed_; }
   double time() const { return time_; }
   int nDof() const { return robot_.nBase() + robot_.nArm(); }
@@ -80,6 +87,7 @@ class KinematicFakeRobot {
   ActuationNoise noise_;
   BaseModelConfig base_model_;
   std::optional<Water2BaseModel> water2_;
+  std::optional<BaseImprecision> imprecision_;
   Eigen::VectorXd vmax_;
   std::mt19937_64 rng_;
   std::normal_distribution<double> gauss_{0.0, 1.0};

@@ -66,7 +66,8 @@ std::string Water2BaseParams::summary() const {
 }
 
 std::string BaseModelConfig::summary() const {
-  return type == BaseModelType::Ideal ? std::string("ideal") : water2.summary();
+  return (type == BaseModelType::Ideal ? std::string("ideal") : water2.summary()) +
+         (imprecision.enabled() ? ", base imprecision " + imprecision.summary() : std::string());
 }
 
 Water2BaseParams loadWater2BaseParams(const ehc_common::ConfigNode& n) {
@@ -90,6 +91,160 @@ Water2BaseParams loadWater2BaseParams(const ehc_common::ConfigNode& n) {
   n.rejectUnknownKeys();
   n.validate(p);
   return p;
+}
+
+// ------------------------------------------------------------------ base imprecision
+BaseImprecisionParams BaseImprecisionParams::levelled() const {
+  BaseImprecisionParams e = *this;
+  for (double* f : {&e.scale_error, &e.track_error, &e.curvature_error, &e.slip_linear, &e.slip_angular,
+                    &e.min_linear_speed, &e.min_angular_speed, &e.command_latency, &e.localisation_period,
+                    &e.localisation_position_sigma, &e.localisation_heading_sigma})
+    *f *= level;
+  return e;
+}
+
+void BaseImprecisionParams::validate() const {
+  const char* o = "BaseImprecisionParams";
+  requireRange(o, "level", level, 0.0, 100.0);
+  requireRange(o, "scale_error", scale_error, 0.0, 0.5);
+  requireRange(o, "track_error", track_error, 0.0, 0.5);
+  requireRange(o, "curvature_error", curvature_error, 0.0, 1.0);
+  requireRange(o, "slip_linear", slip_linear, 0.0, 1.0);
+  requireRange(o, "slip_angular", slip_angular, 0.0, 1.0);
+  requireRange(o, "slip_correlation_time", slip_correlation_time, 1e-3, 1e3);
+  requireRange(o, "min_linear_speed", min_linear_speed, 0.0, 0.5);
+  requireRange(o, "min_angular_speed", min_angular_speed, 0.0, 0.5);
+  requireRange(o, "command_latency", command_latency, 0.0, 1.0);
+  requireRange(o, "localisation_period", localisation_period, 0.0, 100.0);
+  requireRange(o, "localisation_position_sigma", localisation_position_sigma, 0.0, 1.0);
+  requireRange(o, "localisation_heading_sigma", localisation_heading_sigma, 0.0, 1.0);
+}
+
+std::string BaseImprecisionParams::summary() const {
+  if (!enabled()) return "off (level 0)";
+  const BaseImprecisionParams e = levelled();
+  std::ostringstream os;
+  os << "level " << level << " (per-run sigma: scale " << e.scale_error << ", track " << e.track_error
+     << ", curvature " << e.curvature_error << " rad/m; slip sigma " << e.slip_linear << " / " << e.slip_angular
+     << " over " << e.slip_correlation_time << " s; min speed " << e.min_linear_speed << " m/s / "
+     << e.min_angular_speed << " rad/s; latency " << e.command_latency << " s; localisation ";
+  if (e.localisation_period > 0.0)
+    os << "every " << e.localisation_period << " s, sigma " << e.localisation_position_sigma << " m / "
+       << e.localisation_heading_sigma << " rad)";
+  else
+    os << "none)";
+  return os.str();
+}
+
+BaseImprecisionParams loadBaseImprecisionParams(const ConfigNode& n) {
+  BaseImprecisionParams p;
+  auto get = [&](const char* key, double& field) { field = n.get<double>(key, field); };
+  get("level", p.level);
+  get("scale_error", p.scale_error);
+  get("track_error", p.track_error);
+  get("curvature_error", p.curvature_error);
+  get("slip_linear", p.slip_linear);
+  get("slip_angular", p.slip_angular);
+  get("slip_correlation_time", p.slip_correlation_time);
+  get("min_linear_speed", p.min_linear_speed);
+  get("min_angular_speed", p.min_angular_speed);
+  get("command_latency", p.command_latency);
+  get("localisation_period", p.localisation_period);
+  get("localisation_position_sigma", p.localisation_position_sigma);
+  get("localisation_heading_sigma", p.localisation_heading_sigma);
+  n.rejectUnknownKeys();
+  n.validate(p);
+  return p;
+}
+
+Eigen::Vector3d integrateBaseTwist(const Eigen::Vector3d& pose, double vx, double vy, double wz, double dt) {
+  const double th = wz * dt;
+  double dx, dy;
+  if (std::abs(th) < 1e-9) {
+    dx = vx * dt - 0.5 * vy * th * dt;
+    dy = vy * dt + 0.5 * vx * th * dt;
+  } else {
+    const double s = std::sin(th) / wz, c = (1.0 - std::cos(th)) / wz;
+    dx = s * vx - c * vy;
+    dy = c * vx + s * vy;
+  }
+  Eigen::Vector3d p = pose;
+  const double cy = std::cos(pose.z()), sy = std::sin(pose.z());
+  p.x() += cy * dx - sy * dy;
+  p.y() += sy * dx + cy * dy;
+  p.z() = std::remainder(pose.z() + th, 2.0 * M_PI);
+  return p;
+}
+
+BaseImprecision::BaseImprecision(const BaseImprecisionParams& params)
+    : params_((params.validate(), params)), eff_(params.levelled()) {
+  if (!params_.enabled()) throw std::invalid_argument("[BaseImprecision] level must be > 0 (0 = off: no model)");
+  reset(Eigen::Vector3d::Zero(), 0);
+}
+
+void BaseImprecision::reset(const Eigen::Vector3d& pose, unsigned seed) {
+  // A stream of its own, from the run's seed: the actuation noise's stream is the same at every level.
+  std::seed_seq seq{seed, 0x62617365u /* "base" */};
+  rng_.seed(seq);
+  gauss_.reset();
+  scale_ = eff_.scale_error * gauss_(rng_);
+  track_ = eff_.track_error * gauss_(rng_);
+  curvature_ = eff_.curvature_error * gauss_(rng_);
+  commands_.clear();
+  in_force_.resize(0);
+  slip_.setZero();
+  odometry_ = pose;
+  odometry_twist_.setZero();
+  next_fix_ = eff_.localisation_period;
+  fixes_ = 0;
+}
+
+Eigen::VectorXd BaseImprecision::delayCommand(const Eigen::VectorXd& base_command, double now) {
+  if (in_force_.size() != base_command.size()) in_force_ = Eigen::VectorXd::Zero(base_command.size());
+  commands_.emplace_back(now + eff_.command_latency, base_command);
+  while (!commands_.empty() && commands_.front().first <= now + kEps) {
+    in_force_ = commands_.front().second;
+    commands_.pop_front();
+  }
+  return in_force_;
+}
+
+double BaseImprecision::deadbandLinear(double actuation_deadband) const {
+  return std::max(actuation_deadband, eff_.min_linear_speed);
+}
+
+double BaseImprecision::deadbandAngular(double actuation_deadband) const {
+  return std::max(actuation_deadband, eff_.min_angular_speed);
+}
+
+Eigen::Vector3d BaseImprecision::trueTwist(const Eigen::Vector3d& wheel_twist, double dt) {
+  // Slip: first-order Gauss-Markov per component, stationary sigma, one update per step.
+  const double a = std::exp(-dt / eff_.slip_correlation_time);
+  const double b = std::sqrt(1.0 - a * a);
+  slip_[0] = a * slip_[0] + b * eff_.slip_linear * gauss_(rng_);
+  slip_[1] = a * slip_[1] + b * eff_.slip_angular * gauss_(rng_);
+  odometry_ = integrateBaseTwist(odometry_, wheel_twist[0], wheel_twist[1], wheel_twist[2], dt);
+  odometry_twist_ = wheel_twist;
+  // UMBmark's systematic errors (bounded so that a factor never reverses), then the slip.
+  const double es = std::max(0.1, 1.0 + scale_), eb = std::max(0.1, 1.0 + track_);
+  const double sv = std::max(0.0, 1.0 + slip_[0]), sw = std::max(0.0, 1.0 + slip_[1]);
+  Eigen::Vector3d t;
+  t[0] = es * sv * wheel_twist[0];
+  t[1] = es * sv * wheel_twist[1];
+  t[2] = sw * es * wheel_twist[2] / eb + curvature_ * t[0];
+  return t;
+}
+
+void BaseImprecision::observe(const Eigen::Vector3d& true_pose, double now) {
+  if (eff_.localisation_period <= 0.0) return;
+  while (now >= next_fix_ - kEps) {
+    odometry_ = true_pose + Eigen::Vector3d(eff_.localisation_position_sigma * gauss_(rng_),
+                                            eff_.localisation_position_sigma * gauss_(rng_),
+                                            eff_.localisation_heading_sigma * gauss_(rng_));
+    odometry_.z() = std::remainder(odometry_.z(), 2.0 * M_PI);
+    next_fix_ += eff_.localisation_period;
+    ++fixes_;
+  }
 }
 
 // ------------------------------------------------------------------ the chain

@@ -42,7 +42,9 @@ std::string FakeRobotConfig::summary() const {
        << (max_real_time_factor > 0 ? ", at most " + std::to_string(max_real_time_factor) + " x real time" : "")
        << ")";
   os << ", noise " << (noise.enabled ? "on" : "off") << " (base-T " << noise.base_translation
-     << ", base-R " << noise.base_rotation << ", arm " << noise.arm << ")\n";
+     << ", base-R " << noise.base_rotation << ", arm " << noise.arm << ")\n"
+     << "  base model " << toString(base_model.type) << ", base imprecision " << base_model.imprecision.summary()
+     << "\n";
   return os.str();
 }
 
@@ -103,6 +105,8 @@ FakeRobotConfig loadFakeRobotConfig(const ConfigNode& s) {
   // The Water2 parameters are read (and checked) whichever model is selected, so that a file
   // can keep them next to base_model: ideal.
   if (s.has("water2")) c.base_model.water2 = loadWater2BaseParams(s.child("water2"));
+  // On top of either model; level 0 (the default) = off.
+  if (s.has("base_imprecision")) c.base_model.imprecision = loadBaseImprecisionParams(s.child("base_imprecision"));
   s.validate(c);
   return c;
 }
