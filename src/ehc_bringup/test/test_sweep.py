@@ -1,0 +1,132 @@
+#!/usr/bin/python3
+"""sweep.py (`make sweep`) in a reduced form: one robot, Exp-1 (both protocols) and Exp-2, NEO(e)
+and EHC, level 0, two fresh seeds (printed: a failure reproduces with them), one set per seed.
+The same plan runs once unsharded and once as two shards into one folder, merged: the reports
+agree field by field (every cell, paired difference, CSV row and job's trials). Also: the bad
+cases are errors that say why (a shard missing from a merge, sharding without --seeds, levels
+above 0 without ehc_experiment's --base-imprecision).
+
+  /usr/bin/python3 -m pytest src/ehc_bringup/test/test_sweep.py
+"""
+import csv
+import importlib.util
+import json
+import os
+import shutil
+import subprocess
+import sys
+
+import pytest
+
+ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", ".."))
+SCRIPT = os.path.join(ROOT, "src", "ehc_bringup", "scripts", "sweep.py")
+EXE = os.path.join(ROOT, "devel", "lib", "ehc_bringup", "ehc_experiment")
+sys.path.insert(0, os.path.dirname(SCRIPT))
+_spec = importlib.util.spec_from_file_location("sweep", SCRIPT)
+sweep = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(sweep)
+
+SMALL = ["--levels", "0", "--experiments", "exp1_sequence,exp1_reset,exp2", "--methods", "neo_e,ehc",
+         "--exp1-sets", "1", "--exp1-points", "2", "--exp2-sets", "1", "--object-time-limit", "8"]
+
+
+def run(*args):
+    r = subprocess.run([sys.executable, SCRIPT] + list(args), capture_output=True, text=True, check=False)
+    return r.returncode, r.stdout + r.stderr
+
+
+@pytest.fixture(scope="module")
+def sweeps(tmp_path_factory):
+    """(one run's folder, the merged shards' folder, the seeds)."""
+    seeds = sweep.draw_seeds(2)
+    print("sweep seeds %s" % ",".join(map(str, seeds)))
+    base = tmp_path_factory.mktemp("sweep")
+    one, shards = base / "one", base / "shards"
+    plan = ["--seeds", ",".join(map(str, seeds))] + SMALL
+    code, log = run("run", "--out", str(one), "--jobs", "2", *plan)
+    assert code == 0, log
+    assert "seeds %s" % ",".join(map(str, seeds)) in log and "bootstrap seed 1" in log and "ETA" in log
+    for k in (1, 2):
+        code, log = run("run", "--out", str(shards), "--jobs", "1", "--shard", "%d/2" % k, *plan)
+        assert code == 0, log
+    code, log = run("merge", "--out", str(shards), str(shards))
+    assert code == 0, log
+    return one, shards, seeds
+
+
+def test_merged_shards_give_the_same_report_as_one_run(sweeps):
+    one, shards, seeds = sweeps
+    a, b = (json.load(open(d / "sweep.json")) for d in (one, shards))
+    for key in ("plan", "rerun", "seeds", "bootstrap_seed", "bootstrap_resamples", "code_version"):
+        assert a[key] == b[key], key
+    assert len(a["cells"]) == len(b["cells"]) == 2 * (2 * 2 + 2)  # methods x (Exp-1 2 protocols x 2 metrics + Exp-2 2)
+    for ca, cb in zip(a["cells"], b["cells"]):
+        assert ca == cb
+    assert len(a["paired"]) == 2 * 2 + 2
+    for pa, pb in zip(a["paired"], b["paired"]):
+        assert pa == pb
+    for name in ("sweep.csv", "paired.csv"):
+        assert (one / name).read_text() == (shards / name).read_text(), name
+    # every job's trials, and the shards split the jobs between them
+    jobs = sweep.plan_jobs(a["plan"])
+    assert len(jobs) == 3 * 2 * 2
+    m1, m2 = (json.load(open(shards / ("shard-%d-of-2.json" % k))) for k in (1, 2))
+    assert sorted(j["id"] for j in m1["jobs"] + m2["jobs"]) == sorted(j["id"] for j in jobs)
+    assert abs(len(m1["jobs"]) - len(m2["jobs"])) <= 1
+    for j in jobs:
+        assert (one / j["id"] / "trials.csv").read_text() == (shards / j["id"] / "trials.csv").read_text(), j["id"]
+    assert [s["seed"] for s in a["seeds"]] == seeds and all(s["role"] == "reporting" for s in a["seeds"])
+    for exp in a["plan"]["experiments"]:
+        assert (one / (exp + ".png")).stat().st_size > 0
+
+
+def test_the_statistics_are_those_of_the_trials(sweeps):
+    one, _, seeds = sweeps
+    report = json.load(open(one / "sweep.json"))
+    cells = {(c["experiment"], c["method"], c["metric"]): c for c in report["cells"]}
+    for exp in ("exp1_sequence", "exp1_reset"):
+        for m in ("neo_e", "ehc"):
+            rows = []
+            for s in seeds:
+                with open(one / sweep.job_id(exp, 0.0, s, m) / "trials.csv") as f:
+                    rows += [r for r in csv.DictReader(f) if r["method"] == m]
+            failed = sum(1 - int(r["reached"]) for r in rows)
+            c = cells[(exp, m, "failures_per_500")]
+            assert c["sets"] == 2 and c["trials"] == len(rows) == 4
+            assert c["mean"] == pytest.approx(500.0 * failed / len(rows))
+            assert c["ci95"] is not None and c["ci95"][0] <= c["mean"] + 1e-9 and c["mean"] <= c["ci95"][1] + 1e-9
+    for p in report["paired"]:
+        a, b = cells[(p["experiment"], "ehc", p["metric"])], cells[(p["experiment"], "neo_e", p["metric"])]
+        if a["mean"] == a["mean"] and b["mean"] == b["mean"]:  # both defined (not NaN)
+            assert p["diff"] == pytest.approx(a["mean"] - b["mean"])
+
+
+def test_a_merge_with_a_missing_shard_is_an_error(sweeps, tmp_path):
+    _, shards, _ = sweeps
+    shutil.copy(shards / "shard-1-of-2.json", tmp_path / "shard-1-of-2.json")
+    code, log = run("merge", "--out", str(tmp_path / "out"), str(tmp_path))
+    assert code == 2 and "in no shard" in log, log
+    code, log = run("merge", "--out", str(tmp_path / "out"), str(tmp_path / "nothing"))
+    assert code == 2 and "not a sweep shard folder" in log, log
+
+
+def test_bad_plans_are_errors_that_say_why(tmp_path):
+    code, log = run("run", "--out", str(tmp_path), "--shard", "1/2", *SMALL)
+    assert code == 2 and "needs --seeds" in log, log
+    for args, word in ((["--shard", "3/2"], "--shard"), (["--levels", "-1"], "--levels"),
+                       (["--experiments", "exp9"], "--experiments"), (["--methods", "rrt"], "--methods"),
+                       (["--seeds", "1,1"], "--seeds")):
+        code, log = run("run", "--out", str(tmp_path), "--seeds", "1001,1002", *(SMALL + args))
+        assert code == 2 and word in log, log
+    if not sweep.has_imprecision_flag(EXE):
+        code, log = run("run", "--out", str(tmp_path), "--seeds", "1001", *(SMALL + ["--levels", "0,1"]))
+        assert code == 2 and "--base-imprecision" in log and "only level 0" in log, log
+
+
+def test_the_job_command_passes_the_level_when_ehc_experiment_takes_it():
+    plan = {"robot": "r", "exp1_sets": 1, "exp1_points": 2, "exp2_sets": 1, "exp3_sets": 1, "exp3_per_set": 1,
+            "object_time_limit": None, "imprecision_flag": True}
+    job = {"experiment": "exp1_reset", "level": 2.5, "seed": 1234, "method": "ehc"}
+    cmd = sweep.job_command(plan, "x", job, "o")
+    assert cmd[cmd.index("--base-imprecision") + 1] == "2.5" and cmd[cmd.index("--protocol") + 1] == "reset"
+    assert "--base-imprecision" not in sweep.job_command(dict(plan, imprecision_flag=False), "x", job, "o")
