@@ -433,7 +433,7 @@ def main_run(argv):
         j["cmd"] = job_command(plan, a.exe, j, j["out"])
     t0 = time.time()
     run_all(mine, a.jobs, "sweep", lambda j: j["id"][len("runs/"):])
-    manifest = {"plan": plan, "shard": [k, n], "command": " ".join([os.path.relpath(sys.argv[0], mr.ROOT)] + argv),
+    manifest = {"plan": plan, "shard": [k, n], "command": " ".join([mr.rel(sys.argv[0])] + sys.argv[1:]),
                 "code_version": mr.code_version(), "machine": mr.machine(), "finished": mr.now(),
                 "wall_s": round(time.time() - t0, 1),
                 "jobs": [{"id": j["id"], "cpu_s": round(j["cpu_s"], 2), "cmd": " ".join(j["cmd"])} for j in mine]}

@@ -242,9 +242,12 @@ def test_the_verdict_rule():
     assert v(95.6, 80.0, (70.0, 90.0), "higher") == "worse"
     assert v(95.6, 95.6, None, "higher") == "inside"  # no interval: the mean alone
     c = make_results.combined_verdict
-    assert c([("0", "inside"), ("1", "better")]) == "reproduced"
-    assert c([("0", "worse"), ("1", "worse")]) == "not reproduced"
-    assert c([("0", "worse"), ("2", "better"), ("4", "inside")]) == "reproduced at imprecision level 2, 4 only"
+    # EHC's figures and the comparisons are one-sided (better reproduces), a baseline's figure two-sided.
+    assert c([("0", "inside"), ("1", "better")], True) == "reproduced"
+    assert c([("0", "inside"), ("1", "better")], False) == "reproduced at imprecision level 0 only"
+    assert c([("0", "worse"), ("1", "worse")], True) == "not reproduced"
+    assert c([("0", "better")], False) == "not reproduced"
+    assert c([("0", "worse"), ("2", "better"), ("4", "inside")], True) == "reproduced at imprecision level 2, 4 only"
 
 
 def write_sweep(folder, seeds, cells, paired):
@@ -263,6 +266,7 @@ def test_the_verdicts_section_judges_every_measured_claim(tmp_path):
     cells = [cell("exp1_sequence", "ehc", "time_s", "lower", 0.0, 9.0, 8.5, 9.5),        # paper 9.98: better
              cell("exp1_sequence", "ehc", "time_s", "lower", 1.0, 11.0, 10.5, 11.5),      # worse
              cell("exp2", "neo_e", "success_pct", "higher", 0.0, 20.0, 10.0, 30.0),       # paper 51.1: worse
+             cell("exp2", "neo_c", "success_pct", "higher", 0.0, 90.0, 80.0, 100.0),      # paper 11.1: better
              cell("exp3", "ehc", "tfm_downward_pct", "higher", 0.0, 99.0, 97.0, 100.0)]   # paper 100: inside
     paired = [{"experiment": "exp1_sequence", "level": 0.0, "metric": "time_s", "better": "lower", "a": "ehc",
                "b": "neo_e", "diff": -1.0, "diff_ci95": [-2.0, 0.0], "ratio": 0.9, "ratio_ci95": [0.8, 1.0], "sets": 20}]
@@ -271,11 +275,12 @@ def test_the_verdicts_section_judges_every_measured_claim(tmp_path):
     secs = sections(generate(tmp_path, results))
     body = secs["Verdicts: the paper's claims against the sweep"]
     rows = {r[0]: r for r in table_rows(body)[1:]}
-    assert set(rows) == {"Table II EHC time (s), back to back", "Table III NEO(e) success (%)",
+    assert set(rows) == {"Table II EHC time (s), back to back", "Table III NEO(e) success (%)", "Table III NEO(c) success (%)",
                          "Table IV EHC (MPBS) TfM downward (%)", "Table II EHC / NEO(e) time, back to back"}
     assert rows["Table II EHC time (s), back to back"][1:] == [
         "9.98", "L0: 9.00 [8.50, 9.50] (better); L1: 11.00 [10.50, 11.50] (worse)", "reproduced at imprecision level 0 only"]
     assert rows["Table III NEO(e) success (%)"][3] == "not reproduced"
+    assert rows["Table III NEO(c) success (%)"][3] == "not reproduced"  # a baseline better than the paper's
     assert rows["Table IV EHC (MPBS) TfM downward (%)"][3] == "reproduced"
     assert rows["Table II EHC / NEO(e) time, back to back"][1:] == ["0.845", "L0: 0.90 [0.80, 1.00] (inside)", "reproduced"]
     assert "sweep.py run --out DIR --seeds 12345,67890" in body and "make results" in body
