@@ -534,7 +534,10 @@ def seed_role(seed):
 
 
 def verdict(paper, point, ci, better):
-    """'inside', 'better' or 'worse': where our interval (or the mean alone) lies from the paper's figure."""
+    """'inside', 'better' or 'worse': where our interval (or the mean alone) lies from the paper's figure;
+    'no data' without a mean (e.g. a time when nothing was reached)."""
+    if ci is None and (point is None or not math.isfinite(point)):
+        return "no data"
     lo, hi = ci if ci else (point, point)
     if lo <= paper <= hi:
         return "inside"
@@ -546,6 +549,8 @@ def verdict(paper, point, ci, better):
 def combined_verdict(per_level, one_sided):
     """[(level text, verdict)] -> the claim's verdict over the levels; one_sided: 'better' reproduces too."""
     ok = [lv for lv, v in per_level if v == "inside" or (one_sided and v == "better")]
+    if all(v == "no data" for _, v in per_level):
+        return "not measured"
     if len(ok) == len(per_level):
         return "reproduced"
     if not ok:

@@ -241,12 +241,15 @@ def test_the_verdict_rule():
     assert v(95.6, 97.0, (96.0, 98.0), "higher") == "better"
     assert v(95.6, 80.0, (70.0, 90.0), "higher") == "worse"
     assert v(95.6, 95.6, None, "higher") == "inside"  # no interval: the mean alone
+    assert v(9.98, float("nan"), None, "lower") == "no data"  # nothing reached: no time
     c = make_results.combined_verdict
     # EHC's figures and the comparisons are one-sided (better reproduces), a baseline's figure two-sided.
     assert c([("0", "inside"), ("1", "better")], True) == "reproduced"
     assert c([("0", "inside"), ("1", "better")], False) == "reproduced at imprecision level 0 only"
     assert c([("0", "worse"), ("1", "worse")], True) == "not reproduced"
     assert c([("0", "better")], False) == "not reproduced"
+    assert c([("0", "no data")], True) == "not measured"
+    assert c([("0", "no data"), ("1", "inside")], True) == "reproduced at imprecision level 1 only"
     assert c([("0", "worse"), ("2", "better"), ("4", "inside")], True) == "reproduced at imprecision level 2, 4 only"
 
 
