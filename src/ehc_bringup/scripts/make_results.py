@@ -642,12 +642,12 @@ def verdict_section(folder, meta):
 def sources(args):
     exp = args.experiments or os.path.join(args.results, "experiments")
     return [
+        ("Verdicts", args.sweep or os.path.join(args.results, "sweep"), None, verdict_section, "make sweep"),
         ("Exp-1", os.path.join(exp, "exp1"), exp, exp1_section, "make experiments"),
         ("Exp-2", os.path.join(exp, "exp2"), exp, exp2_section, "make experiments"),
         ("Exp-3", os.path.join(exp, "exp3"), exp, exp3_section, "make experiments"),
         ("Benchmarks", args.bench or os.path.join(args.results, "bench"), None, bench_section, "make bench"),
         ("Demo", args.demo or os.path.join(args.results, "demo"), None, demo_section, "make demo"),
-        ("Verdicts", args.sweep or os.path.join(args.results, "sweep"), None, verdict_section, "make sweep"),
     ]
 
 

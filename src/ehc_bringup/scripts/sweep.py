@@ -29,8 +29,9 @@ is the pooled ratio over all sets with its 95 % percentile bootstrap interval fr
 the sets (make_results.bootstrap; --bootstrap-seed, recorded); paired: the difference and ratio
 EHC - baseline (Exp-1/2: NEO(e), Exp-3: NEO without MPBS) with the sets resampled together.
 
-Sharding: --shard K/N runs jobs K-1, K-1+N, K-1+2N, ... of the plan's fixed order (each shard a
-mix of every experiment) and writes DIR/shard-K-of-N.json; `merge` checks that the shard folders'
+Sharding: --shard K/N runs the K-th of N parts of the plan's jobs, balanced by their estimated
+CPU time (each part a mix of experiments and methods; the same split on every machine), and
+writes DIR/shard-K-of-N.json; `merge` checks that the shard folders'
 plans agree and cover every job once and writes the report. The shards may share one DIR (GNU
 parallel on one machine) or use one DIR each (cluster array jobs). Sharded runs need --seeds
 (every shard must draw the same). Without --shard the run is shard 1/1 and writes the report.
@@ -41,6 +42,7 @@ one line per method, CI bands), runs/<experiment>/L<level>/s<seed>/<method>/ (eh
 folder). Progress and ETA on stderr. Exit code 0, 2 on an error.
 """
 import argparse
+import hashlib
 import json
 import math
 import os
@@ -121,6 +123,32 @@ def plan_jobs(plan):
     """The plan's jobs in their fixed order: experiment, level, seed, method."""
     return [{"id": job_id(e, lv, s, m), "experiment": e, "level": lv, "seed": s, "method": m}
             for e in plan["experiments"] for lv in plan["levels"] for s in plan["seeds"] for m in plan["methods"][e]]
+
+
+def job_cost(plan, job):
+    """A job's estimated CPU time in s at level 0 (balances the shards only: per Exp-1 target about
+    0.15 s, per Exp-2 set of three objects or Exp-3 grasp x 3 approaches about 4.5 s, on this
+    project's 2-core AMD EPYC; any machine keeps the ratios roughly)."""
+    command = EXPERIMENTS[job["experiment"]]["command"]
+    if command == "reach":
+        return 0.3 + 0.15 * plan["exp1_sets"] * plan["exp1_points"]
+    if command == "grasp":
+        return 4.5 * plan["exp2_sets"]
+    return 4.5 * plan["exp3_sets"] * plan["exp3_per_set"]
+
+
+def shard_jobs(plan, jobs, k, n):
+    """Shard k of n: the jobs, dearest first (ties in the order of a hash of their id, so that no
+    shard gets one method's jobs only), each to the least loaded shard (the first on a tie);
+    shard k's in the plan's order. The same plan gives the same split on every machine."""
+    order = sorted(range(len(jobs)), key=lambda i: (-job_cost(plan, jobs[i]),
+                                                    hashlib.sha1(jobs[i]["id"].encode()).hexdigest()))
+    load, owner = [0.0] * n, {}
+    for i in order:
+        s = min(range(n), key=lambda x: (load[x], x))
+        load[s] += job_cost(plan, jobs[i])
+        owner[i] = s
+    return [j for i, j in enumerate(jobs) if owner[i] == k - 1]
 
 
 def job_command(plan, exe, job, out):
@@ -284,30 +312,31 @@ def fmt(v, ci, digits=2):
 
 
 def write_csvs(out, cells, paired):
+    """sweep.csv (one row per cell) and paired.csv; every float in full (repr), no interval: empty."""
     import csv
+
+    def point_ci(v, ci):
+        return [repr(v)] + ([repr(ci[0]), repr(ci[1])] if ci else ["", ""])
     with open(os.path.join(out, "sweep.csv"), "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["experiment", "method", "level", "metric", "better", "mean", "ci95_lo", "ci95_hi", "sets", "trials"])
         for c in cells:
-            ci = c["ci95"] or ["", ""]
-            w.writerow([c["experiment"], c["method"], level_text(c["level"]), c["metric"], c["better"], repr(c["mean"]),
-                        repr(ci[0]) if ci[0] != "" else "", repr(ci[1]) if ci[1] != "" else "", c["sets"], c["trials"]])
+            w.writerow([c["experiment"], c["method"], level_text(c["level"]), c["metric"], c["better"],
+                        *point_ci(c["mean"], c["ci95"]), c["sets"], c["trials"]])
     with open(os.path.join(out, "paired.csv"), "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["experiment", "level", "metric", "a", "b", "diff", "diff_ci95_lo", "diff_ci95_hi", "ratio",
                     "ratio_ci95_lo", "ratio_ci95_hi", "sets"])
         for p in paired:
-            d, r = p["diff_ci95"] or [None, None], p["ratio_ci95"] or [None, None]
-            w.writerow([p["experiment"], level_text(p["level"]), p["metric"], p["a"], p["b"], repr(p["diff"]),
-                        *("" if x is None else repr(x) for x in d), repr(p["ratio"]),
-                        *("" if x is None else repr(x) for x in r), p["sets"]])
+            w.writerow([p["experiment"], level_text(p["level"]), p["metric"], p["a"], p["b"],
+                        *point_ci(p["diff"], p["diff_ci95"]), *point_ci(p["ratio"], p["ratio_ci95"]), p["sets"]])
 
 
 def write_markdown(out, report):
     plan, cells, paired = report["plan"], report["cells"], report["paired"]
     lines = ["# Sweep: method x base imprecision x seed", "",
              "- command: `%s` (DIR = this folder)" % report["rerun"],
-             "- shards: %s" % "; ".join("`%s`" % c for c in report["commands"]),
+             "- run as: %s" % "; ".join("`%s`" % c for c in report["commands"]),
              "- code version: `%s`; machine: %s" % (report["code_version"], report["machine"]),
              "- seeds: %s" % ", ".join("%d (%s)" % (s["seed"], s["role"]) for s in report["seeds"]),
              "- levels: %s%s" % (", ".join(level_text(v) for v in plan["levels"]),
@@ -423,7 +452,7 @@ def main_run(argv):
                          "--seeds $(src/ehc_bringup/scripts/sweep.py seeds 10)" % a.shard)
     plan = make_plan(a, has_imprecision_flag(a.exe))
     jobs = plan_jobs(plan)
-    mine = jobs[k - 1::n]
+    mine = shard_jobs(plan, jobs, k, n)
     sys.stderr.write("[sweep] seeds %s (%s; rerun with --seeds %s); levels %s; bootstrap seed %d; %d jobs, shard %d/%d "
                      "runs %d\n" % (",".join(map(str, plan["seeds"])), ", ".join(sorted({mr.seed_role(s) for s in plan["seeds"]})),
                                     ",".join(map(str, plan["seeds"])), ",".join(level_text(v) for v in plan["levels"]),

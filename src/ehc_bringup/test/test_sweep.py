@@ -77,7 +77,9 @@ def test_merged_shards_give_the_same_report_as_one_run(sweeps):
     assert len(jobs) == 3 * 2 * 2
     m1, m2 = (json.load(open(shards / ("shard-%d-of-2.json" % k))) for k in (1, 2))
     assert sorted(j["id"] for j in m1["jobs"] + m2["jobs"]) == sorted(j["id"] for j in jobs)
-    assert abs(len(m1["jobs"]) - len(m2["jobs"])) <= 1
+    cost = {j["id"]: sweep.job_cost(a["plan"], j) for j in jobs}
+    loads = [sum(cost[j["id"]] for j in m["jobs"]) for m in (m1, m2)]
+    assert abs(loads[0] - loads[1]) <= max(cost.values())  # balanced to within one job
     for j in jobs:
         assert (one / j["id"] / "trials.csv").read_text() == (shards / j["id"] / "trials.csv").read_text(), j["id"]
     assert [s["seed"] for s in a["seeds"]] == seeds and all(s["role"] == "reporting" for s in a["seeds"])
@@ -126,6 +128,20 @@ def test_bad_plans_are_errors_that_say_why(tmp_path):
     if not sweep.has_imprecision_flag(EXE):
         code, log = run("run", "--out", str(tmp_path), "--seeds", "1001", *(SMALL + ["--levels", "0,1"]))
         assert code == 2 and "--base-imprecision" in log and "only level 0" in log, log
+
+
+def test_shards_split_every_plan_into_balanced_disjoint_parts():
+    plan = {"experiments": list(sweep.EXPERIMENTS), "methods": {e: list(s["methods"]) for e, s in sweep.EXPERIMENTS.items()},
+            "levels": [0.0, 1.0, 2.0, 4.0], "seeds": list(range(1000, 1010)), "exp1_sets": 2, "exp1_points": 25,
+            "exp2_sets": 2, "exp3_sets": 1, "exp3_per_set": 2}
+    jobs = sweep.plan_jobs(plan)
+    for n in (1, 3, 8, 32):
+        parts = [sweep.shard_jobs(plan, jobs, k, n) for k in range(1, n + 1)]
+        assert sorted(j["id"] for p in parts for j in p) == sorted(j["id"] for j in jobs)
+        loads = [sum(sweep.job_cost(plan, j) for j in p) for p in parts]
+        assert max(loads) - min(loads) <= max(sweep.job_cost(plan, j) for j in jobs)
+        for p in parts:  # no shard of several jobs holds one method only
+            assert len(p) < 2 * len(sweep.EXPERIMENTS) or len({j["method"] for j in p}) > 1
 
 
 def test_the_job_command_passes_the_level_when_ehc_experiment_takes_it():
