@@ -521,6 +521,9 @@ def main_merge(argv):
 
 def main(argv):
     if len(argv) == 2 and argv[0] == "seeds":
+        if not argv[1].isdigit() or int(argv[1]) < 1:
+            sys.stderr.write("sweep.py seeds: N >= 1 expected, got '%s'\n" % argv[1])
+            return 2
         print(",".join(str(s) for s in draw_seeds(int(argv[1]))))
         return 0
     commands = {"run": main_run, "merge": main_merge}
