@@ -157,7 +157,7 @@ class ControlCycle {
   /// Servo + QP for the supervisor's current state and target.
   ControllerCommand step(double now);
   /// The cycle's motion limit into out->status (after the command is final).
-  void reportMotionLimit(double now, const Vector6d* slack, ControlCycleOutput* out);
+  void reportMotionLimit(double now, const Vector6d* slack, double manipulability, ControlCycleOutput* out);
 
   ControlCycleParams params_;
   std::shared_ptr<const WholeBodyModel> model_;

@@ -77,8 +77,8 @@ class ControllerSupervisor {
   double stateAge(double now) const;
   /// Seconds since the last good obstacle list (-1 if none).
   double obstaclesAge(double now) const { return t_obstacles_ ? now - *t_obstacles_ : -1.0; }
-  /// Obstacles if fresh, else empty.
-  std::vector<ObstaclePair> obstacles(double now) const;
+  /// Obstacles if fresh, else an empty list (valid until the next setObstacles).
+  const std::vector<ObstaclePair>& obstacles(double now) const;
   const SupervisorParams& params() const { return params_; }
   double jointStateTime() const { return t_joints_.value_or(-1.0); }
   long rejected() const { return rejected_; }

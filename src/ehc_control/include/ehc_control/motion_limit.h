@@ -86,6 +86,8 @@ class MotionLimitMonitor {
     Eigen::VectorXd q;                               ///< arm joints
     Eigen::VectorXd command;                         ///< [base twist; arm rates]; empty: none
     const Vector6d* slack = nullptr;                 ///< the QP's task slack, if it ran
+    /// The arm's manipulability at q, if the controller computed it (< 0: computed here).
+    double manipulability = -1.0;
     const std::vector<ObstaclePair>* obstacles = nullptr;  ///< pairs the controller used
     bool has_target = false;
     bool target_in_fov = false;

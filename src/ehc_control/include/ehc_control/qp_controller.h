@@ -152,6 +152,9 @@ struct QpStepFigures {
 struct ControllerCommand : QpStepFigures {
   Eigen::VectorXd velocity;  ///< [base twist; arm rates]; all zero unless ok
   Vector6d slack = Vector6d::Zero();
+  /// The arm's manipulability at the step's state (from the step's TCP Jacobian); < 0 when the
+  /// step stopped before its kinematics (bad input).
+  double manipulability = -1.0;
   bool ok = false;
   QpStatus qp_status = QpStatus::NotRun;        ///< Ok | Failed after step()
   ControlPhase phase = ControlPhase::Tracking;  ///< Tracking | Arrived | TsmmBase | TsmmArm
@@ -232,8 +235,9 @@ class EhcQpController {
   };
   ControllerCommand fail(ControllerCommand c, const std::string& why) const;
   // The stages of step(), in order; a std::string result is the failure ("" = none).
-  /// One FK pass: TCP pose (returned), whole-body Jacobian, manipulability gradient.
-  Eigen::Isometry3d updateKinematics(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q);
+  /// One FK pass: TCP pose (returned), whole-body Jacobian, manipulability and its gradient.
+  Eigen::Isometry3d updateKinematics(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q,
+                                     double* manipulability);
   /// omega and sig(omega) of this cycle (given, evaluated, or none without a weighting).
   void reportWeighting(const Eigen::Vector3d& base_pose, const Eigen::Isometry3d& T_tcp,
                        const Eigen::Isometry3d& target, const EhcWeight* weight, ControllerCommand* out) const;

@@ -166,6 +166,7 @@ ControlCycleOutput ControlCycle::update(double now) {
   const SupervisorDecision d = supervisor_->check(now);
   Vector6d slack = Vector6d::Zero();
   bool have_slack = false;
+  double manipulability = -1.0;  // the QP's, when it ran
   try {
     // TfM: every cycle with a target (served or lost), camera pose from the kinematics.
     if (supervisor_->hasTarget() && (d.run || d.phase == ControlPhase::TargetLost)) {
@@ -193,6 +194,7 @@ ControlCycleOutput ControlCycle::update(double now) {
       if (c.ok) out.velocity = c.velocity;
       slack = c.slack;
       have_slack = c.ok;
+      manipulability = c.manipulability;
       if (!c.event.empty()) out.event += (out.event.empty() ? "" : "; ") + c.event;
       // The solve took time: a cycle over its budget, or a command computed from a state (or
       // target, or obstacles) that went stale meanwhile, is not sent.
@@ -227,11 +229,12 @@ ControlCycleOutput ControlCycle::update(double now) {
     st.controller_error = true;
   }
   if (!out.velocity.allFinite()) out.velocity.setZero();  // never command NaN
-  reportMotionLimit(now, have_slack ? &slack : nullptr, &out);
+  reportMotionLimit(now, have_slack ? &slack : nullptr, manipulability, &out);
   return out;
 }
 
-void ControlCycle::reportMotionLimit(double now, const Vector6d* slack, ControlCycleOutput* out) {
+void ControlCycle::reportMotionLimit(double now, const Vector6d* slack, double manipulability,
+                                     ControlCycleOutput* out) {
   if (supervisor_->stateAge(now) < 0.0) return;  // no joint state or odometry yet
   MotionLimitMonitor::Cycle c;
   c.t = now;
@@ -239,7 +242,8 @@ void ControlCycle::reportMotionLimit(double now, const Vector6d* slack, ControlC
   c.q = supervisor_->q();
   c.command = out->velocity;
   c.slack = slack;
-  const std::vector<ObstaclePair> obstacles = supervisor_->obstacles(now);
+  c.manipulability = manipulability;
+  const std::vector<ObstaclePair>& obstacles = supervisor_->obstacles(now);
   c.obstacles = &obstacles;
   c.has_target = supervisor_->hasTarget();
   c.target_in_fov = out->status.target_in_fov;
@@ -269,7 +273,7 @@ ControllerCommand ControlCycle::step(double now) {
   const Eigen::Isometry3d tcp = model_->fk(base, q, rc.tcp_frame);
   const std::optional<RollJoint> roll = rollJointAt(q);
   const RollJoint* roll_ptr = roll ? &*roll : nullptr;
-  const std::vector<ObstaclePair> obstacles = supervisor_->obstacles(now);
+  const std::vector<ObstaclePair>& obstacles = supervisor_->obstacles(now);
   // A joint-limit stall: the recovery's whole-body reference replaces the servo (ReachRecovery).
   const Eigen::VectorXd* reference = recovery_->update(now, base, q, tcp, target);
   auto withEvent = [this](ControllerCommand c) {

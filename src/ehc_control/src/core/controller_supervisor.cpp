@@ -145,8 +145,9 @@ double ControllerSupervisor::stateAge(double now) const {
   return now - std::min(*t_joints_, *t_base_);
 }
 
-std::vector<ObstaclePair> ControllerSupervisor::obstacles(double now) const {
-  if (isStale(t_obstacles_, now, params_.obstacle_timeout)) return {};
+const std::vector<ObstaclePair>& ControllerSupervisor::obstacles(double now) const {
+  static const std::vector<ObstaclePair> kNone;
+  if (isStale(t_obstacles_, now, params_.obstacle_timeout)) return kNone;
   return obstacles_;
 }
 

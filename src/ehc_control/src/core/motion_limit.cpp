@@ -170,7 +170,8 @@ MotionLimitReport MotionLimitMonitor::update(const Cycle& c) {
   }
   if (c.obstacles && obstacleLimit(*c.obstacles, &r)) return r;
   if (c.q.size() == model_.nArm()) {
-    const double ratio = manipulabilityRatio(c.q);
+    const double ratio =
+        c.manipulability >= 0.0 ? c.manipulability / ready_manipulability_ : manipulabilityRatio(c.q);
     if (ratio < params_.singular_manipulability) {
       r.limit = MotionLimit::Singular;
       r.value = ratio;

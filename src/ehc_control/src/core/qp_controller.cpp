@@ -339,7 +339,7 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
     return fail(out, "reference velocity must have " + std::to_string(nd) + " finite entries");
 
   // --- model: one FK pass; TCP pose, whole-body Jacobian, manipulability gradient
-  const Eigen::Isometry3d T_tcp = updateKinematics(base_pose, q);
+  const Eigen::Isometry3d T_tcp = updateKinematics(base_pose, q, &out.manipulability);
 
   // --- errors and weighting
   const Vector6d e = poseError(T_tcp, target);
@@ -384,7 +384,8 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
   return out;
 }
 
-Eigen::Isometry3d EhcQpController::updateKinematics(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q) {
+Eigen::Isometry3d EhcQpController::updateKinematics(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q,
+                                                   double* manipulability) {
   const WholeBodyModel& m = *model_;
   Workspace& s = *ws_;
   // The previous command's arm rates (for WristFlip); zero unless this step succeeds.
@@ -393,7 +394,7 @@ Eigen::Isometry3d EhcQpController::updateKinematics(const Eigen::Vector3d& base_
   m.updateKinematics(base_pose, q, &s.kinematics);
   const Eigen::Isometry3d T_tcp = s.kinematics.linkPose(s.tcp_link);
   m.jacobian(s.kinematics, s.tcp_link, &s.J, &s.J_arm);
-  m.manipulabilityGradientFromJacobian(s.J_arm, s.Jm);
+  m.manipulabilityGradientFromJacobian(s.J_arm, s.Jm, manipulability);
   return T_tcp;
 }
 
