@@ -1,10 +1,10 @@
 #!/usr/bin/python3
 """docs/RESULTS.md from the result folders (`make results`; the end of `make experiments`).
 
-  make_results.py [--results DIR] [--experiments DIR] [--bench DIR] [--demo DIR] [--out FILE]
+  make_results.py [--results DIR] [--experiments DIR] [--bench DIR] [--demo DIR] [--sweep DIR] [--out FILE]
       Reads DIR/experiments/{exp1,exp2,exp3} (ehc_experiment reach / grasp / poses, written by
-      experiments.sh), DIR/bench (bench.sh) and DIR/demo (demo.sh), DIR = results/ by default,
-      and writes FILE (docs/RESULTS.md). A folder that is not there is listed as "not run". The
+      experiments.sh), DIR/bench (bench.sh), DIR/demo (demo.sh) and DIR/sweep (sweep.py: the
+      verdict of each paper claim), DIR = results/ by default, and writes FILE (docs/RESULTS.md). A folder that is not there is listed as "not run". The
       demo folder and every DIR/demo_<robot> (demo.sh with ROBOT=<name>) make one row each of
       the per-robot demo table.
       Every table comes with the command that made it, the code version, the machine, the date
@@ -140,7 +140,32 @@ def read_meta(folder):
 
 
 # ------------------------------------------------------------------------------ statistics
-def bootstrap(nums, dens, scale=1.0):
+def resamples(n, seed=BOOTSTRAP_SEED):
+    """BOOTSTRAP_RESAMPLES x n indices of n sets drawn with replacement (seeded: the same seed
+    gives the same resamples, so paired statistics resample both series' sets together)."""
+    import numpy as np
+    return np.random.default_rng(seed).integers(0, n, size=(BOOTSTRAP_RESAMPLES, n))
+
+
+def percentile_ci(stats):
+    """The 95 % percentile interval of the finite bootstrap statistics (None when there are none)."""
+    import numpy as np
+    stats = stats[np.isfinite(stats)]
+    if stats.size == 0:
+        return None
+    lo, hi = np.percentile(stats, [2.5, 97.5])
+    return float(lo), float(hi)
+
+
+def ratios(nums, dens, idx, scale):
+    """sum(nums)/sum(dens) * scale of every resample in idx (NaN where the denominator is 0)."""
+    import numpy as np
+    d = dens[idx].sum(axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(d > 0, nums[idx].sum(axis=1) / d * scale, np.nan)
+
+
+def bootstrap(nums, dens, scale=1.0, seed=BOOTSTRAP_SEED):
     """Pooled ratio sum(nums)/sum(dens) * scale over the sets and its 95 % percentile interval
     from resampling the sets with replacement (None when there are fewer than two sets)."""
     import numpy as np
@@ -149,16 +174,27 @@ def bootstrap(nums, dens, scale=1.0):
     point = float(nums.sum() / dens.sum() * scale) if dens.sum() > 0 else float("nan")
     if len(nums) < 2:
         return point, None
-    rng = np.random.default_rng(BOOTSTRAP_SEED)
-    idx = rng.integers(0, len(nums), size=(BOOTSTRAP_RESAMPLES, len(nums)))
-    d = dens[idx].sum(axis=1)
+    return point, percentile_ci(ratios(nums, dens, resamples(len(nums), seed), scale))
+
+
+def paired_bootstrap(a, b, scale=1.0, seed=BOOTSTRAP_SEED):
+    """Two series measured on the same sets, a = (nums, dens) and b = (nums, dens) in the same set
+    order: {"diff": (ratio_a - ratio_b, 95 % CI), "ratio": (ratio_a / ratio_b, 95 % CI)}, each
+    ratio as in bootstrap(); the sets are resampled together (a paired interval)."""
+    import numpy as np
+    an, ad, bn, bd = (np.asarray(x, dtype=float) for x in (a[0], a[1], b[0], b[1]))
+    if len(an) != len(bn):
+        raise ValueError("paired_bootstrap: %d sets against %d" % (len(an), len(bn)))
+    pa = an.sum() / ad.sum() * scale if ad.sum() > 0 else float("nan")
+    pb = bn.sum() / bd.sum() * scale if bd.sum() > 0 else float("nan")
+    ratio = pa / pb if pb != 0 and math.isfinite(pb) else float("nan")
+    if len(an) < 2:
+        return {"diff": (float(pa - pb), None), "ratio": (float(ratio), None)}
+    idx = resamples(len(an), seed)
+    ra, rb = ratios(an, ad, idx, scale), ratios(bn, bd, idx, scale)
     with np.errstate(invalid="ignore", divide="ignore"):
-        stats = nums[idx].sum(axis=1) / d * scale
-    stats = stats[d > 0]
-    if stats.size == 0:
-        return point, None
-    lo, hi = np.percentile(stats, [2.5, 97.5])
-    return point, (float(lo), float(hi))
+        rr = np.where(rb != 0, ra / rb, np.nan)
+    return {"diff": (float(pa - pb), percentile_ci(ra - rb)), "ratio": (float(ratio), percentile_ci(rr))}
 
 
 def per_set(rows, key_fn):
@@ -476,10 +512,137 @@ def robots_section(folders):
     return out
 
 
+# ------------------------------------------------------------------------------ verdicts (sweep)
+# The rule: our 95 % CI against the paper's figure, "inside" (the figure is in the interval),
+# "better" (the interval lies wholly on the better side: lower time or failures, higher success
+# or TfM) or "worse". The paper claims EHC's advantage, so for a figure of EHC (with MPBS) or a
+# difference / ratio EHC against its baseline, inside and better reproduce the claim; a
+# baseline's own figure must be matched (inside only: a baseline that does better than the paper
+# says weakens the claim). Across the sweep's imprecision levels: reproduced at every level, at
+# none, or at the levels named (the stated condition). A cell without an interval (fewer than two
+# sets) is judged on its mean.
+RULE_TEXT = ("Rule: at each level, where our 95 % CI lies from the paper's figure: inside, better (wholly on the "
+             "better side: lower time and failures, higher success and TfM) or worse. A figure of EHC (with MPBS) or "
+             "an EHC-against-baseline difference or ratio is reproduced when inside or better (the paper claims EHC's "
+             "advantage); a baseline's own figure only when inside (a baseline better than the paper's weakens the "
+             "claim). Over the levels: reproduced at every level, at none, or at the levels named (the condition).")
+TUNING_SEEDS_BELOW = 1000  # seeds below are tuning seeds, the others reporting seeds (sweep.py draws these)
+
+
+def seed_role(seed):
+    return "tuning" if seed < TUNING_SEEDS_BELOW else "reporting"
+
+
+def verdict(paper, point, ci, better):
+    """'inside', 'better' or 'worse': where our interval (or the mean alone) lies from the paper's figure;
+    'no data' without a mean (e.g. a time when nothing was reached)."""
+    if ci is None and (point is None or not math.isfinite(point)):
+        return "no data"
+    lo, hi = ci if ci else (point, point)
+    if lo <= paper <= hi:
+        return "inside"
+    if better == "lower":
+        return "better" if hi < paper else "worse"
+    return "better" if lo > paper else "worse"
+
+
+def combined_verdict(per_level, one_sided):
+    """[(level text, verdict)] -> the claim's verdict over the levels; one_sided: 'better' reproduces too."""
+    ok = [lv for lv, v in per_level if v == "inside" or (one_sided and v == "better")]
+    if all(v == "no data" for _, v in per_level):
+        return "not measured"
+    if len(ok) == len(per_level):
+        return "reproduced"
+    if not ok:
+        return "not reproduced"
+    return "reproduced at imprecision level %s only" % ", ".join(ok)
+
+
+def paper_number(text):
+    try:
+        v = float(text)
+    except (TypeError, ValueError):
+        return None
+    return v if math.isfinite(v) else None
+
+
+def sweep_claims(sweep):
+    """(claim text, paper figure, [(level, mean, ci)], better, one-sided) of every paper claim the sweep
+    measured; one-sided: EHC's (with MPBS) own figures and the EHC-against-baseline comparisons."""
+    cells, paired = sweep["cells"], sweep["paired"]
+    claims = []
+
+    def cell_claim(text, paper, exp, method, metric):
+        mine = [c for c in cells if c["experiment"] == exp and c["method"] == method and c["metric"] == metric]
+        if mine and paper is not None:
+            claims.append((text, paper, [(c["level"], c["mean"], c["ci95"]) for c in mine], mine[0]["better"],
+                           method == "ehc"))
+
+    def pair_claim(text, paper, exp, metric, key):
+        mine = [p for p in paired if p["experiment"] == exp and p["metric"] == metric]
+        if mine and paper is not None:
+            claims.append((text, paper, [(p["level"], p[key], p[key + "_ci95"]) for p in mine], mine[0]["better"], True))
+
+    t2, t3 = PAPER_TABLE2, PAPER_TABLE3
+    for exp, proto in (("exp1_sequence", "back to back"), ("exp1_reset", "from the ready pose")):
+        for m, p in t2.items():
+            cell_claim("Table II %s time (s), %s" % (p["name"], proto), paper_number(p["time"]), exp, m, "time_s")
+            cell_claim("Table II %s failures /500, %s" % (p["name"], proto), paper_number(p["failed"]), exp, m,
+                       "failures_per_500")
+        pair_claim("Table II EHC / NEO(e) time, %s" % proto,
+                   paper_number(t2["ehc"]["time"]) / paper_number(t2["neo_e"]["time"]), exp, "time_s", "ratio")
+        pair_claim("Table II EHC - NEO(e) failures /500, %s" % proto,
+                   paper_number(t2["ehc"]["failed"]) - paper_number(t2["neo_e"]["failed"]), exp, "failures_per_500", "diff")
+    for m, p in t3.items():
+        cell_claim("Table III %s success (%%)" % p["name"], paper_number(p["success"]), "exp2", m, "success_pct")
+        cell_claim("Table III %s time (s)" % p["name"], paper_number(p["time"]), "exp2", m, "time_s")
+    pair_claim("Table III EHC - NEO(e) success (points)",
+               paper_number(t3["ehc"]["success"]) - paper_number(t3["neo_e"]["success"]), "exp2", "success_pct", "diff")
+    for m, p in PAPER_TABLE4.items():
+        for a in APPROACHES:
+            cell_claim("Table IV %s TfM %s (%%)" % (p["name"], a), paper_number(p[a]), "exp3", m, "tfm_%s_pct" % a)
+    return claims
+
+
+def seeds_text(sweep):
+    seeds = [s["seed"] for s in sweep["seeds"]]
+    tuning = [s for s in seeds if seed_role(s) == "tuning"]
+    text = ("%d seed(s): %s. Tuning seeds are those below %d (the development runs' fixed seeds: `make experiments` "
+            "SEED=1, the test fixtures' 7, ...); reporting seeds, %d and above, are drawn fresh by "
+            "`sweep.py seeds N` and never tuned on. " % (len(seeds), ", ".join(map(str, seeds)), TUNING_SEEDS_BELOW,
+                                                        TUNING_SEEDS_BELOW))
+    if tuning:
+        return text + "**This sweep includes tuning seed(s) %s: its verdicts are not a report.**" % (
+            ", ".join(map(str, tuning)))
+    return text + "These verdicts rest on reporting seeds only."
+
+
+def verdict_section(folder, meta):
+    path = os.path.join(folder, "sweep.json")
+    sweep = read_json(path)
+    for k in ("plan", "cells", "paired", "seeds", "rerun"):
+        field(sweep, [k], path)
+    command = "`%s && make results` (DIR = `%s`)" % (sweep["rerun"], rel(folder))
+    out = ["## Verdicts: the paper's claims against the sweep", "",
+           "- command: " + command, "- code version: `%s`" % sweep.get("code_version", "?"),
+           "- machine: %s" % sweep.get("machine", "?"), "- seeds: " + seeds_text(sweep),
+           "- bootstrap: %s resamples over the sets (seed x set), bootstrap seed %s" % (
+               sweep.get("bootstrap_resamples", "?"), sweep.get("bootstrap_seed", "?")),
+           "- folder: `%s`" % rel(folder), "",
+           RULE_TEXT + " Tables III and IV are the paper's real robot, ours the simulation.", "",
+           "| Claim | paper | ours per level: mean [95 % CI] (where the figure lies) | verdict |", "|---|---|---|---|"]
+    for text, paper, per_level, better, one_sided in sweep_claims(sweep):
+        judged = [(("%g" % lv), verdict(paper, mean, ci, better)) for lv, mean, ci in per_level]
+        ours = "; ".join("L%g: %s (%s)" % (lv, fmt_ci(mean, ci, 2), v) for (lv, mean, ci), (_, v) in zip(per_level, judged))
+        out.append("| %s | %s | %s | %s |" % (text, "%g" % round(paper, 3), ours, combined_verdict(judged, one_sided)))
+    return out
+
+
 # ------------------------------------------------------------------------------ report
 def sources(args):
     exp = args.experiments or os.path.join(args.results, "experiments")
     return [
+        ("Verdicts", args.sweep or os.path.join(args.results, "sweep"), None, verdict_section, "make sweep"),
         ("Exp-1", os.path.join(exp, "exp1"), exp, exp1_section, "make experiments"),
         ("Exp-2", os.path.join(exp, "exp2"), exp, exp2_section, "make experiments"),
         ("Exp-3", os.path.join(exp, "exp3"), exp, exp3_section, "make experiments"),
@@ -516,6 +679,7 @@ def main_report(argv):
     ap.add_argument("--experiments", help="the experiments folder [RESULTS/experiments]")
     ap.add_argument("--bench", help="the bench folder [RESULTS/bench]")
     ap.add_argument("--demo", help="the demo folder [RESULTS/demo]")
+    ap.add_argument("--sweep", help="the sweep folder, for the verdicts [RESULTS/sweep]")
     ap.add_argument("--out", default=os.path.join(ROOT, "docs", "RESULTS.md"), help="report file [docs/RESULTS.md]")
     args = ap.parse_args(argv)
     try:

@@ -106,28 +106,40 @@ def reach_command(a, robot, generator, methods, first_set, sets, out):
         (["--config", os.path.abspath(a.config)] if a.config else [])
 
 
-def run_all(a, runs):
-    """Runs the reach commands, at most a.jobs at a time; progress and ETA on stderr."""
+def run_all(runs, jobs, tag, label):
+    """Runs the commands of `runs` (dicts with "cmd" and "out"), at most `jobs` at a time, each
+    one's output in its out/run.log. Sets run["cpu_s"] (the process's user + sys time, s);
+    progress, `label(run)` and ETA on stderr prefixed [tag]. A failed run raises RuntimeError
+    naming its command and log."""
     t0 = time.time()
     pending, active, done = list(runs), [], 0
-    while pending or active:
-        while pending and len(active) < a.jobs:
-            r = pending.pop(0)
-            os.makedirs(r["out"], exist_ok=True)
-            log = open(os.path.join(r["out"], "run.log"), "w")
-            r["proc"] = subprocess.Popen(r["cmd"], stdout=log, stderr=subprocess.STDOUT)
-            active.append(r)
-        time.sleep(0.5)
-        for r in list(active):
-            if r["proc"].poll() is None:
-                continue
-            active.remove(r)
-            done += 1
-            if r["proc"].returncode != 0:
-                raise RuntimeError("%s failed (exit %d), see %s/run.log" % (" ".join(r["cmd"]), r["proc"].returncode, r["out"]))
-            el = time.time() - t0
-            sys.stderr.write("[validate] %d/%d runs done (%s %s)  elapsed %.0f s  ETA %.0f s\n"
-                             % (done, len(runs), r["robot"], r["generator"], el, el * (len(runs) - done) / done))
+    try:
+        while pending or active:
+            while pending and len(active) < jobs:
+                r = pending.pop(0)
+                os.makedirs(r["out"], exist_ok=True)
+                with open(os.path.join(r["out"], "run.log"), "w") as log:
+                    r["proc"] = subprocess.Popen(r["cmd"], stdout=log, stderr=subprocess.STDOUT)
+                active.append(r)
+            time.sleep(0.2)
+            for r in list(active):
+                pid, status, usage = os.wait4(r["proc"].pid, os.WNOHANG)
+                if pid == 0:
+                    continue
+                r["proc"].returncode = os.waitstatus_to_exitcode(status)
+                r["cpu_s"] = usage.ru_utime + usage.ru_stime
+                active.remove(r)
+                done += 1
+                if r["proc"].returncode != 0:
+                    raise RuntimeError("%s failed (exit %d), see %s/run.log" % (
+                        " ".join(r["cmd"]), r["proc"].returncode, r["out"]))
+                el = time.time() - t0
+                sys.stderr.write("[%s] %d/%d runs done (%s)  elapsed %.0f s  ETA %.0f s\n"
+                                 % (tag, done, len(runs), label(r), el, el * (len(runs) - done) / done))
+    finally:
+        for r in active:  # an error or a stop: no orphaned runs
+            r["proc"].terminate()
+            r["proc"].wait()
 
 
 def read_trials(path):
@@ -225,7 +237,7 @@ def main(argv):
                          "cmd": reach_command(a, robot, g, a.methods if len(a.methods) == 1 else ["all"], 0, a.sets, out)})
     t0 = time.time()
     try:
-        run_all(a, runs)
+        run_all(runs, a.jobs, "validate", lambda r: "%s %s" % (r["robot"], r["generator"]))
         rows, failures = summarise(a, runs)
     except (RuntimeError, OSError, KeyError, ValueError) as e:
         sys.stderr.write("validate.py: %s\n" % e)

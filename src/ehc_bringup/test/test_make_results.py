@@ -105,7 +105,7 @@ def test_a_missing_folder_is_reported_as_not_run(tmp_path):
     assert "| Benchmarks | `%s` | not run (`make bench`) |" % (tmp_path / "nothing_here") in text
     assert not any(t.startswith("Benchmarks") for t in sections(text))
     text = generate(tmp_path, tmp_path / "no_results_at_all")
-    assert text.count("not run") == 5
+    assert text.count("not run") == 6  # experiments 1-3, bench, demo, sweep (verdicts)
 
 
 def test_a_demo_run_gets_its_table(tmp_path):
@@ -220,3 +220,75 @@ def test_meta_records_command_code_version_machine_and_dates(tmp_path):
     # A run that did not finish says so in its tables.
     lines = make_results.provenance({"command": "x", "started": "then"}, None, str(out), "s")
     assert any("the run did not finish" in line for line in lines)
+
+
+def test_paired_bootstrap_resamples_both_series_together():
+    # The same per-set offset in both series: the paired difference has no spread.
+    a = ([3.0, 5.0, 9.0, 4.0], [1.0, 1.0, 1.0, 1.0])
+    b = ([2.0, 4.0, 8.0, 3.0], [1.0, 1.0, 1.0, 1.0])
+    p = make_results.paired_bootstrap(a, b)
+    assert p["diff"] == (1.0, (1.0, 1.0))
+    assert p["ratio"][0] == pytest.approx(21.0 / 17.0) and p["ratio"][1][0] <= p["ratio"][0] <= p["ratio"][1][1]
+    assert make_results.paired_bootstrap(([1.0], [1.0]), ([2.0], [1.0]))["diff"] == (-1.0, None)
+
+
+def test_the_verdict_rule():
+    v = make_results.verdict
+    # The paper's figure inside our interval, or the interval wholly on its better side: reproduced.
+    assert v(9.98, 10.2, (9.5, 11.0), "lower") == "inside"
+    assert v(9.98, 8.0, (7.5, 8.6), "lower") == "better"
+    assert v(9.98, 12.0, (11.0, 13.0), "lower") == "worse"
+    assert v(95.6, 97.0, (96.0, 98.0), "higher") == "better"
+    assert v(95.6, 80.0, (70.0, 90.0), "higher") == "worse"
+    assert v(95.6, 95.6, None, "higher") == "inside"  # no interval: the mean alone
+    assert v(9.98, float("nan"), None, "lower") == "no data"  # nothing reached: no time
+    c = make_results.combined_verdict
+    # EHC's figures and the comparisons are one-sided (better reproduces), a baseline's figure two-sided.
+    assert c([("0", "inside"), ("1", "better")], True) == "reproduced"
+    assert c([("0", "inside"), ("1", "better")], False) == "reproduced at imprecision level 0 only"
+    assert c([("0", "worse"), ("1", "worse")], True) == "not reproduced"
+    assert c([("0", "better")], False) == "not reproduced"
+    assert c([("0", "no data")], True) == "not measured"
+    assert c([("0", "no data"), ("1", "inside")], True) == "reproduced at imprecision level 1 only"
+    assert c([("0", "worse"), ("2", "better"), ("4", "inside")], True) == "reproduced at imprecision level 2, 4 only"
+
+
+def write_sweep(folder, seeds, cells, paired):
+    folder.mkdir(parents=True)
+    (folder / "sweep.json").write_text(json.dumps({
+        "plan": {}, "rerun": "src/ehc_bringup/scripts/sweep.py run --out DIR --seeds %s" % ",".join(map(str, seeds)),
+        "seeds": [{"seed": s, "role": make_results.seed_role(s)} for s in seeds], "bootstrap_seed": 1,
+        "bootstrap_resamples": 2000, "code_version": "abc1234", "machine": "AMD EPYC, 2 core(s)",
+        "cells": cells, "paired": paired}))
+
+
+def test_the_verdicts_section_judges_every_measured_claim(tmp_path):
+    def cell(exp, method, metric, better, level, mean, lo, hi):
+        return {"experiment": exp, "method": method, "metric": metric, "better": better, "level": level,
+                "mean": mean, "ci95": [lo, hi], "sets": 20, "trials": 100}
+    cells = [cell("exp1_sequence", "ehc", "time_s", "lower", 0.0, 9.0, 8.5, 9.5),        # paper 9.98: better
+             cell("exp1_sequence", "ehc", "time_s", "lower", 1.0, 11.0, 10.5, 11.5),      # worse
+             cell("exp2", "neo_e", "success_pct", "higher", 0.0, 20.0, 10.0, 30.0),       # paper 51.1: worse
+             cell("exp2", "neo_c", "success_pct", "higher", 0.0, 90.0, 80.0, 100.0),      # paper 11.1: better
+             cell("exp3", "ehc", "tfm_downward_pct", "higher", 0.0, 99.0, 97.0, 100.0)]   # paper 100: inside
+    paired = [{"experiment": "exp1_sequence", "level": 0.0, "metric": "time_s", "better": "lower", "a": "ehc",
+               "b": "neo_e", "diff": -1.0, "diff_ci95": [-2.0, 0.0], "ratio": 0.9, "ratio_ci95": [0.8, 1.0], "sets": 20}]
+    results = tmp_path / "results"
+    write_sweep(results / "sweep", [12345, 67890], cells, paired)
+    secs = sections(generate(tmp_path, results))
+    body = secs["Verdicts: the paper's claims against the sweep"]
+    rows = {r[0]: r for r in table_rows(body)[1:]}
+    assert set(rows) == {"Table II EHC time (s), back to back", "Table III NEO(e) success (%)", "Table III NEO(c) success (%)",
+                         "Table IV EHC (MPBS) TfM downward (%)", "Table II EHC / NEO(e) time, back to back"}
+    assert rows["Table II EHC time (s), back to back"][1:] == [
+        "9.98", "L0: 9.00 [8.50, 9.50] (better); L1: 11.00 [10.50, 11.50] (worse)", "reproduced at imprecision level 0 only"]
+    assert rows["Table III NEO(e) success (%)"][3] == "not reproduced"
+    assert rows["Table III NEO(c) success (%)"][3] == "not reproduced"  # a baseline better than the paper's
+    assert rows["Table IV EHC (MPBS) TfM downward (%)"][3] == "reproduced"
+    assert rows["Table II EHC / NEO(e) time, back to back"][1:] == ["0.845", "L0: 0.90 [0.80, 1.00] (inside)", "reproduced"]
+    assert "sweep.py run --out DIR --seeds 12345,67890" in body and "make results" in body
+    assert "reporting seeds only" in body and "Rule:" in body
+    # A sweep on a tuning seed is flagged as no report.
+    write_sweep(tmp_path / "tuned" / "sweep", [7, 12345], cells, paired)
+    body = sections(generate(tmp_path, tmp_path / "tuned"))["Verdicts: the paper's claims against the sweep"]
+    assert "includes tuning seed(s) 7" in body
