@@ -16,7 +16,10 @@
 //            arrived, and an arm joint within pinned_margin of its joint stop or the target
 //            farther than twice the ready pose's reach (the base is not bringing the arm there);
 //   plan     far from the target (beyond twice the ready pose's reach) the arm unwinds to its
-//            ready posture where the base stands; near it, whole-body IK (WholeBodyModel::inverseKinematicsFrom) from `starts` starts, a few
+//            ready posture while the base drives to where the ready TCP is over the target
+//            (readyOver; traces: far stalls came from a base turned to rotate the hand, the
+//            arm in its dampers' zone, unable to absorb the turn back; from ready the base
+//            turns and drives at once); near it, whole-body IK (WholeBodyModel::inverseKinematicsFrom) from `starts` starts, a few
 //            per cycle: the current configuration, the current base with the ready posture,
 //            then base placements around the target, the ready TCP over it; the solution with
 //            the best min(margin, joint_influence) - travel_weight x travel is taken (a joint
@@ -31,7 +34,9 @@
 //            pose-stabilising law (differential: the polar law of Astolfi, forwards or
 //            backwards; holonomic: proportional);
 //   resume   within the tolerances of (b*, q*), where the TCP is on the target, or after
-//            move_timeout; the pose task takes over again. At most max_attempts per target.
+//            move_timeout (a far move: plus its travel at the base's speed limit); the pose
+//            task takes over again. At most max_attempts near and
+//            max_attempts far plans per target.
 // Every method gets it (it acts only after a stall, when the method has failed to make
 // progress), so comparisons between methods stay fair and nothing costs time when no stall occurs.
 
@@ -107,7 +112,10 @@ class ReachRecovery {
  private:
   void startWatching(double now, double position_error, double orientation_error);
   bool stalled(double now, double position_error, double orientation_error, const Eigen::VectorXd& q);
-  void startPlanning(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q);
+  void startPlanning(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q, bool far);
+  /// The base pose, on the line from `base` to the target, at which the ready pose's TCP is
+  /// over the target (facing it as the ready TCP's bearing says).
+  Eigen::Vector3d readyOver(const Eigen::Isometry3d& target, const Eigen::Vector3d& base) const;
   void plan(const Eigen::Isometry3d& target);
   /// Whole-body IK of `target` from (base, q) with joint-limit avoidance (see the .cpp); true
   /// and the solution in (base, q) when it converges.
@@ -125,7 +133,9 @@ class ReachRecovery {
   Eigen::Isometry3d target_ = Eigen::Isometry3d::Identity();
   bool have_target_ = false;
   double best_position_ = 0.0, best_orientation_ = 0.0, progress_t_ = 0.0;
-  int attempts_ = 0;
+  int attempts_ = 0;      ///< near stalls of this target
+  int far_attempts_ = 0;  ///< far stalls of this target (their own count: a far unwind is not a near plan)
+  bool far_ = false;      ///< the current plan is a far one
   // Planning
   Eigen::Vector3d plan_base_ = Eigen::Vector3d::Zero();
   Eigen::VectorXd plan_q_;
@@ -139,6 +149,7 @@ class ReachRecovery {
   double goal_margin_ = 0.0;
   // Moving
   double move_t_ = 0.0;
+  double move_limit_ = 0.0;  ///< s: move_timeout, plus the travel time of a far move
   Eigen::VectorXd reference_;
   std::string event_;
 };

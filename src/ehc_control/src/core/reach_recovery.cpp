@@ -94,6 +94,7 @@ void ReachRecovery::reset() {
   state_ = State::Watching;
   have_target_ = false;
   attempts_ = 0;
+  far_attempts_ = 0;
 }
 
 double ReachRecovery::margin(const Eigen::VectorXd& q) const {
@@ -130,11 +131,12 @@ bool ReachRecovery::stalled(double now, double position_error, double orientatio
   }
   // Near the target a stall with every joint free is the task's own equilibrium (obstacles,
   // singularity: not this mechanism's business); far from it the arm unwinds either way.
-  return now - progress_t_ >= params_.stall_window && attempts_ < params_.max_attempts &&
-         (pinnedJoint(model_.config(), q, joint_stop_ + params_.pinned_margin) >= 0 || position_error > 2.0 * reach_);
+  if (now - progress_t_ < params_.stall_window) return false;
+  if (position_error > 2.0 * reach_) return far_attempts_ < params_.max_attempts;
+  return attempts_ < params_.max_attempts && pinnedJoint(model_.config(), q, joint_stop_ + params_.pinned_margin) >= 0;
 }
 
-void ReachRecovery::startPlanning(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q) {
+void ReachRecovery::startPlanning(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q, bool far) {
   state_ = State::Planning;
   plan_base_ = base_pose;
   plan_q_ = q;
@@ -142,7 +144,17 @@ void ReachRecovery::startPlanning(const Eigen::Vector3d& base_pose, const Eigen:
   next_start_ = 0;
   solutions_ = 0;
   have_goal_ = false;
-  ++attempts_;
+  ++(far ? far_attempts_ : attempts_);
+}
+
+Eigen::Vector3d ReachRecovery::readyOver(const Eigen::Isometry3d& target, const Eigen::Vector3d& base) const {
+  const Eigen::Vector2d t = target.translation().head<2>();
+  const Eigen::Vector2d d = t - base.head<2>();
+  const double bearing = d.norm() > 1e-9 ? std::atan2(d.y(), d.x()) : base.z() + ready_bearing_;
+  Eigen::Vector3d out;
+  out.head<2>() = t - reach_ * Eigen::Vector2d(std::cos(bearing), std::sin(bearing));
+  out.z() = wrap(bearing - ready_bearing_);
+  return out;
 }
 
 void ReachRecovery::start(int k, const Eigen::Isometry3d& target, Eigen::Vector3d* base, Eigen::VectorXd* q) const {
@@ -270,11 +282,13 @@ void ReachRecovery::reference(const Eigen::Vector3d& base_pose, const Eigen::Vec
   } else {
     // Polar law (Astolfi): alpha = bearing of the goal, beta = goal heading beyond it; a goal
     // behind the base is approached backwards (the same law with the base's rear as its front).
+    // A far move's goal faces along the travel: forwards only, turning before driving (cos
+    // alpha), since backwards it would arrive facing away and loop round to turn.
     double alpha = wrap(std::atan2(d.y(), d.x()) - yaw);
-    const bool backwards = std::abs(alpha) > 0.5 * M_PI;
+    const bool backwards = !far_ && std::abs(alpha) > 0.5 * M_PI;
     if (backwards) alpha = wrap(alpha - M_PI);
     const double beta = wrap(goal_base_.z() - yaw - alpha);
-    reference_[0] = (backwards ? -1.0 : 1.0) * params_.base_gain * rho;
+    reference_[0] = (backwards ? -1.0 : 1.0) * params_.base_gain * rho * (far_ ? std::max(0.0, std::cos(alpha)) : 1.0);
     reference_[1] = params_.heading_gain * alpha + params_.final_heading_gain * beta;
   }
   // One scale for the whole reference: its direction survives the velocity limits.
@@ -308,17 +322,18 @@ const Eigen::VectorXd* ReachRecovery::update(double now, const Eigen::Vector3d& 
   switch (state_) {
     case State::Watching:
       if (!stalled(now, position_error, orientation_error, q)) return nullptr;
-      startPlanning(base_pose, q);
+      far_ = position_error > 2.0 * reach_;
+      startPlanning(base_pose, q, far_);
       [[fallthrough]];
     case State::Planning:
-      if (position_error > 2.0 * reach_) {  // far: unwind the arm where the base stands
+      if (far_) {  // far: the arm back to ready while the base drives to the target
         if ((model_.config().arm_ready - q).cwiseAbs().maxCoeff() < params_.joint_tolerance) {
           // Nothing to unwind: the arm is at its ready posture, the stall is not the arm's.
           startWatching(now, position_error, orientation_error);
           return nullptr;
         }
         have_goal_ = true;
-        goal_base_ = plan_base_;
+        goal_base_ = readyOver(target_, plan_base_);
         goal_q_ = model_.config().arm_ready;
         goal_margin_ = margin(goal_q_);
         next_start_ = params_.starts;
@@ -336,13 +351,17 @@ const Eigen::VectorXd* ReachRecovery::update(double now, const Eigen::Vector3d& 
       }
       state_ = State::Moving;
       move_t_ = now;
+      // A far move's time also covers the travel at the base's speed limit.
+      move_limit_ = params_.move_timeout +
+                    (far_ ? (goal_base_.head<2>() - plan_base_.head<2>()).norm() / vmax_[0] : 0.0);
       os << "stall " << position_error * 100.0 << " cm short, smallest joint margin " << plan_margin_
          << " rad: moving to base (" << goal_base_.x() << ", " << goal_base_.y() << ", " << goal_base_.z()
-         << ") with margin " << goal_margin_ << " rad (attempt " << attempts_ << ")";
+         << ") with margin " << goal_margin_ << " rad (" << (far_ ? "far attempt " : "attempt ")
+         << (far_ ? far_attempts_ : attempts_) << ")";
       event_ = os.str();
       [[fallthrough]];
     case State::Moving:
-      if (atGoal(base_pose, q) || now - move_t_ > params_.move_timeout) {
+      if (atGoal(base_pose, q) || now - move_t_ > move_limit_) {
         if (event_.empty()) event_ = atGoal(base_pose, q) ? "recovery configuration reached" : "recovery move timed out";
         startWatching(now, position_error, orientation_error);
         return nullptr;
