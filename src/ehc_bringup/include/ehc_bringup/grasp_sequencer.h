@@ -8,7 +8,10 @@
 //                start position), goal = a look pose search_distance back along its approach
 //                axis, so that the camera finds it again (search_distance 0: no goal, the
 //                controller stops on TARGET_LOST); a target `nearest` a point never seen yet: a
-//                look pose search_distance back from the point, horizontally from the TCP
+//                look pose search_distance back from the point, horizontally from the TCP. A
+//                cloud target seen but without a qualifying candidate: the look pose at it (a
+//                closer view), held until one qualifies; in APPROACH its last grasp holds while
+//                no candidate qualifies
 //   APPROACH     goal = the pre-grasp of the current best grasp (re-chosen as perception and
 //                grasp candidates update; the controller's MPBS watches the object centre), so
 //                the hand arrives from the approach side instead of cutting across the object;
@@ -337,6 +340,7 @@ class GraspSequencer {
   std::string no_target_;  ///< the current object's setNoTarget reason ("" = none / a pose came)
   std::vector<GraspCandidate> candidates_;
   std::optional<GraspChoice> locked_;
+  std::optional<GraspChoice> last_choice_;  ///< the current object's last grasp chosen before the lock
   Eigen::Vector3d locked_object_centre_ = Eigen::Vector3d::Zero();
   /// Object centre in the TCP frame when the gripper closed (the object moves with the hand).
   std::optional<Eigen::Vector3d> centre_in_tcp_;

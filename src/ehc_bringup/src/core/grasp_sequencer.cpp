@@ -335,6 +335,7 @@ void GraspSequencer::startObject(double t, SequencerOutput* out) {
   cur_.name = params_.objects[current_].name;
   cur_.approach = toString(params_.objects[current_].approach);
   no_target_.clear();
+  last_choice_.reset();
   last_controller_phase_.clear();
   phase_ = GraspPhase::WaitTarget;
   phase_t0_ = t;
@@ -600,7 +601,17 @@ void GraspSequencer::advanceWaitTarget(const SequencerInput& in, bool fresh, Seq
     return;
   }
   const auto choice = currentChoice(in);
-  if (!choice) return;  // require_candidate and none yet
+  if (!choice) {  // require_candidate (a cloud target) and none yet
+    if (params_.objects[current_].target.fromCloud() && params_.search_distance > 0.0) {
+      // A cloud target seen but no grasp from this view: a closer look (a view that shows its
+      // graspable parts), held until a grasp qualifies or the time limit fails it (no_grasp).
+      Eigen::Isometry3d look = *currentPose();
+      look.translation() -= params_.search_distance * look.linear().col(2);
+      out->goal = look;
+    }
+    return;
+  }
+  last_choice_ = choice;
   enter(GraspPhase::Approach, t, out,
         choice->from_candidate ? "grasp candidate" : "tag grasp (no candidate yet)");
   out->goal = approachGoal(in, choice->pose);
@@ -612,7 +623,12 @@ void GraspSequencer::advanceApproach(const SequencerInput& in, bool fresh, bool 
     enter(GraspPhase::WaitTarget, t, out, "object pose older than " + num(params_.perception_hold, 1) + " s");
     return;
   }
-  const auto choice = currentChoice(in);
+  std::optional<GraspChoice> choice = currentChoice(in);
+  // A cloud target's candidates come and go with the views (no tag fallback): the last grasp
+  // chosen holds until another qualifies; without a goal the controller would stop the robot
+  // (TARGET_LOST) where no new view comes.
+  if (choice) last_choice_ = choice;
+  else if (params_.objects[current_].target.fromCloud()) choice = last_choice_;
   if (!choice) return;
   // tsmm: the base has stopped d from the object once the controller reports its arm stage
   // for the object centre sent as the goal. No lock before: the lock makes the pre-grasp the
