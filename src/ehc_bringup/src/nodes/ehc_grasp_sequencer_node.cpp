@@ -14,7 +14,8 @@
 // object while every other obstacle keeps its damper. One update per
 // /ehc/status message (lock-step with the simulator). Reads the gripper result from /sim/status.
 // When every object is handled it writes the JSON summary (and the CSV trace) and exits 0.
-// Targets without tags: an ehc_msgs/TargetSelector on node.target_selector_topic sets the target
+// Targets without tags: the `_scene:=` file's `targets:` (if any) are the objects' targets at
+// the start (as in-process); an ehc_msgs/TargetSelector on node.target_selector_topic sets the target
 // of the object it names (GraspSequencer::setTarget; taken with the other inputs at the first
 // status after its stamp); the current object's target is published on node.current_target_topic
 // (latched) whenever it changes, and while it is a cloud target its poses come from the grasp
@@ -115,13 +116,23 @@ class SequencerNode {
     const ehc_control::RobotConfig rc = ehc_control::loadRobotConfig(node_.robot_file);
     node_.applyRobotFrames(ehc_control::WholeBodyModel(rc));  // robot.yaml checked against its URDF, frames too
     arm_joints_ = rc.arm_joints;  // the trace's arm speed
-    const ehc_bringup::GraspSequencerParams sp = ehc_bringup::loadGraspSequencerParams(root);
+    ehc_bringup::GraspSequencerParams sp = ehc_bringup::loadGraspSequencerParams(root);
     root.rejectUnknownKeys();  // both loaders have run: a key neither read is a misspelling
-    seq_ = std::make_unique<GraspSequencer>(sp);
-    // The scene names the body of an obstacle that held the robot when a time limit fires.
+    // The scene names the body of an obstacle that held the robot when a time limit fires, and
+    // its `targets:` (if any) are the objects' targets, as in-process.
     const std::string scene = params.get<std::string>("scene", "");
+    std::optional<ehc_sim::SceneConfig> scene_config;
     if (!scene.empty()) {
-      const std::vector<ehc_sim::BodyConfig> bodies = ehc_sim::loadSceneConfig(scene).bodies();
+      scene_config = ehc_sim::loadSceneConfig(scene);
+      const auto& targets = scene_config->targets;
+      if (!targets.empty() && targets.size() != sp.objects.size())
+        throw std::invalid_argument("[ehc_grasp_sequencer_node] " + scene + ": scene.targets lists " + std::to_string(targets.size()) +
+                                    " target(s) for " + std::to_string(sp.objects.size()) + " sequencer object(s) in " + config);
+      for (std::size_t i = 0; i < targets.size(); ++i) sp.objects[i].target = targets[i];
+    }
+    seq_ = std::make_unique<GraspSequencer>(sp);
+    if (scene_config) {
+      const std::vector<ehc_sim::BodyConfig> bodies = scene_config->bodies();
       seq_->setObstacleNamer([bodies](const Eigen::Vector3d& p) {
         return ehc_sim::nearestBody(bodies, [&bodies](int i) { return bodies[static_cast<std::size_t>(i)].pose(); }, p);
       });
