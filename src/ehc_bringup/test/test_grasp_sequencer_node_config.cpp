@@ -86,6 +86,10 @@ TEST(SequencerNodeParams, ABadValueNamesItsField) {
   EXPECT_NE(errorOf("objects: [{name: a, pose_topic: ''}]\n").find("field 'objects[0].pose_topic' must not be empty"),
             std::string::npos);
   EXPECT_NE(errorOf("node: {robot: no_such_robot}\n"), "");
+  EXPECT_NE(errorOf("node: {current_target_topic: ''}\n").find("field 'node.current_target_topic' must not be empty"),
+            std::string::npos);
+  EXPECT_NE(errorOf("node: {cloud_target_topic: ''}\n").find("field 'node.cloud_target_topic' must not be empty"),
+            std::string::npos);
 }
 
 TEST(SequencerNodeParams, AnUnknownKeyFailsOnceEveryLoaderHasRun) {

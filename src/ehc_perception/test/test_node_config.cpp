@@ -188,6 +188,7 @@ TEST(NodeConfig, ABadValueNamesTheFileAndTheField) {
   grasp("grasp_queue.yaml", "node: {cloud_queue: 3}\n", {"unknown field 'node.cloud_queue'"});  // the newest cloud only
   grasp("grasp_rate.yaml", "node: {max_rate_hz: 0}\n", {"max_rate_hz"});
   grasp("grasp_gen.yaml", "grasp_generator: {top_k: 0}\n", {"grasp_generator"});
+  grasp("grasp_cloud_target.yaml", "node: {cloud_target_topic: ''}\n", {"node.cloud_target_topic", "selector_topic"});
 
   auto obstacle = [](const std::string& name, const std::string& text, const std::vector<std::string>& words) {
     const std::string path = writeTemp(name, text);

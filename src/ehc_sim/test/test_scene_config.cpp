@@ -300,3 +300,29 @@ TEST(SimConfig, RobotStartComesFromTheScene) {
     EXPECT_NE(std::string(e.what()).find("scene"), std::string::npos) << e.what();
   }
 }
+
+TEST(SceneConfig, TargetsSelectObjectsWithoutTagsAndBadOnesNameFileAndField) {
+  const std::string objects = R"(
+scene:
+  objects:
+    - {name: a, shape: box, size: [0.06, 0.06, 0.12], position: [1.5, 0, 0.06], mass: 0.1,
+       tag: {id: 3, size: 0.04, face: "-x"}}
+    - {name: b, shape: box, size: [0.06, 0.06, 0.12], position: [1.5, 0.2, 0.06], mass: 0.1}
+)";
+  const SceneConfig s = loadSceneConfigString(objects + R"(  targets:
+    - {select: kth_from_left, k: 2}
+    - {select: nearest, point: [1.5, 0.2, 0.06]}
+    - {select: tag, tag_id: 3}
+)", "good_scene.yaml");
+  ASSERT_EQ(s.targets.size(), 3u);
+  EXPECT_EQ(s.targets[0].kind, ehc_control::TargetSelectorKind::KthFromLeft);
+  EXPECT_EQ(s.targets[1].kind, ehc_control::TargetSelectorKind::Nearest);
+  EXPECT_EQ(s.targets[2].tag_id, 3);
+  EXPECT_TRUE(loadSceneConfigString(kGoodObject, "no_targets.yaml").targets.empty());  // tags, as before
+  expectSceneError(objects + "  targets:\n    - {select: largest}\n", {"scene.targets[0].select", "largest"});
+  expectSceneError(objects + "  targets:\n    - {select: kth_from_front, k: 3}\n",
+                   {"scene.targets[0].k", "out of range", "2 object(s)"});
+  expectSceneError(objects + "  targets:\n    - {select: kth_from_front, k: 1}\n    - {select: kth_from_left, k: 0}\n",
+                   {"scene.targets[1].k"});
+  expectSceneError(objects + "  targets:\n    - {select: tag, tag_id: 4}\n", {"scene.targets[0].tag_id", "none of"});
+}

@@ -15,6 +15,7 @@
 
 #include "ehc_bringup/grasp_pipeline.h"
 #include "ehc_bringup/reach_experiment.h"
+#include "ehc_sim/object_library.h"
 
 #include <functional>
 #include <limits>
@@ -60,6 +61,15 @@ struct GraspExperimentParams {
   std::optional<double> base_imprecision;
   /// s, WAIT_TARGET..LIFT per object (--object-time-limit): unset = the sequencer file's (30 s).
   std::optional<double> object_time_limit;
+  /// Exp-2 with everyday objects (--library): "" = the scene's own objects (tagged). "validation"
+  /// or "tuning": every run replaces the scene's objects by as many objects of that half of the
+  /// object library (<config_dir>/objects/library.yaml), drawn from the run seed (no object
+  /// twice, none overlapping another's place), each standing where the scene's object stood
+  /// (on its support, turned by a random yaw), without a tag; the sequencer's object i is
+  /// named after its library object and its target is `nearest` the place's centre within
+  /// library_radius (the scene's `targets:`).
+  std::string library_split;
+  double library_radius = 0.08;  ///< m
   void validate() const;       ///< throws "[GraspExperiment] ..."
 };
 
@@ -89,6 +99,7 @@ struct GraspTrial {
   double time_s = 0.0;
   double tfm = 0.0, tfm_until_switch = 0.0, controller_tfm = 0.0;
   std::string failed_phase, reason;
+  std::string cause = "none";  ///< GraspResult::cause (toString(GraspCause)); "none" on success
   /// The object's time limit fired: its cause (GraspResult::stallCause: a MotionLimit name) and
   /// what it names (the pinned joint; the link held at its stop distance and the scene body of
   /// the obstacle point; the detail line). All "" otherwise.
@@ -179,7 +190,15 @@ class GraspExperiment {
   GraspExperimentParams params_;
   std::vector<std::string> methods_;
   std::map<std::string, GraspPipelineConfig> base_;  ///< per approach ("" for Exp-2)
+  std::optional<ehc_sim::ObjectLibrary> library_;     ///< library_split set
 };
+
+/// Replaces the objects of `cfg`'s scene by objects of `library`'s `split` half drawn with `seed`
+/// (see GraspExperimentParams::library_split): scene objects, targets, sequencer names; no tag
+/// targets. Throws "[GraspExperiment] ..." when the half has fewer objects than the scene or no
+/// draw of 1000 fits the places.
+void placeLibraryObjects(GraspPipelineConfig* cfg, const ehc_sim::ObjectLibrary& library, const std::string& split,
+                         double radius, unsigned seed);
 
 /// Paper figures (DESIGN.md section 10, paper Tables III / IV) printed beside the measured ones.
 /// Writes DIR/table.md, trials.csv, summary.json, trace.csv.

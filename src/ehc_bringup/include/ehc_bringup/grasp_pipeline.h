@@ -12,7 +12,9 @@
 //                                takes it (their rate limits)
 //   TagDetector + findTargetInWorld   ehc_tag_node (one detection per image serves every object)
 //   GraspGenerator + generateForTarget ehc_grasp_node (RateLimiter at max_rate_hz; target = the
-//                                sequencer's object pose)
+//                                sequencer's object pose); for a target without a tag
+//                                (the scene's `targets:`) generateForCloudTarget, whose
+//                                object centre is also the object's pose (the tag node's part)
 //   ObstacleMonitor              ehc_obstacle_node (insert rate, exclusions, distances at its
 //                                publish rate)
 //   GraspSequencer               ehc_grasp_sequencer_node
@@ -53,7 +55,7 @@ struct GraspPipelineFiles {
   std::string scene;              ///< scene YAML; "" = the sim file's
   std::string controller;         ///< controller.yaml (ehc_controller_node)
   std::string sequencer;          ///< grasp_sequencer.yaml (objects, in order)
-  std::vector<std::string> tags;  ///< one tag node file per sequencer object (detector + target)
+  std::vector<std::string> tags;  ///< one tag node file per sequencer object (detector + target); none when the scene's `targets:` has no tag target
   std::string grasp;              ///< grasp_node.yaml (generator + targeting)
   std::string obstacles;          ///< obstacle_node.yaml; "" = no obstacle distances (OBSTACLES=0)
   /// The robot (a name or a robot.yaml, ehc_control::resolveRobotFile) for the simulator, the
@@ -174,6 +176,12 @@ class GraspPipeline {
   std::unique_ptr<Clocks> clocks_;
   std::optional<Eigen::Vector3d> grasp_target_;  ///< the sequencer's object pose (grasp node target)
   double grasp_target_t_ = -1.0;
+  std::size_t grasp_target_object_ = 0;  ///< the sequencer object grasp_target_ belongs to
+  /// The grasp node's work on a cloud for a cloud target (ehc_control::TargetSelector): the
+  /// target's pose (ehc_control::cloudTargetPose of its cloud centre) or why there is none, and
+  /// its candidates, to the sequencer.
+  void perceiveCloudTarget(double t, const ehc_perception::PointList& points, const Eigen::Isometry3d& T_world_cam,
+                           std::size_t object);
   bool excluding_ = false;
   std::vector<std::string> arm_names_;
   PipelineCycle last_;

@@ -15,6 +15,12 @@
 //   any       every candidate
 // Without a qualifying candidate the fallback is the tag target turned to the preferred
 // approach (closing axis kept horizontal) and backed off along it by a configured distance.
+// A target without a tag (ehc_control::TargetSelector, a cloud kind) comes as a pose of the same
+// convention (ehc_control::cloudTargetPose: origin at the object's cloud centre, z horizontal from
+// the camera to it): its orientation says nothing of the object's faces and its centre is that of
+// the seen points only, so such a target is chosen with forCloudTarget()'s parameters: no
+// centring on it, no closing axis from it, no fallback (a candidate is required), and the wider
+// cloud_candidate_gate.
 
 #include <Eigen/Geometry>
 
@@ -72,7 +78,13 @@ struct GraspSelectionParams {
   double fallback_backoff_forward = 0.0;   ///< m, fallback TCP moved back along the approach
   double fallback_backoff_downward = 0.03;
   double fallback_backoff_sideways = 0.0;
+  /// m: candidate_gate for a cloud target. Its centre is the centroid of the seen side of the
+  /// object, and a grasp on a part of it (a handle, a rim) lies farther from it than from a tag's
+  /// centre; the candidates come from the target's cluster alone (generateForCloudTarget).
+  double cloud_candidate_gate = 0.10;
   void validate() const;  ///< throws "[GraspSelectionParams] ..."
+  /// These parameters for a target without a tag (see the header comment).
+  GraspSelectionParams forCloudTarget() const;
 };
 
 struct GraspChoice {

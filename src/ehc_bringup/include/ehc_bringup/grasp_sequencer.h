@@ -7,7 +7,11 @@
 //                the object was seen before (every object's pose is remembered, e.g. from the
 //                start position), goal = a look pose search_distance back along its approach
 //                axis, so that the camera finds it again (search_distance 0: no goal, the
-//                controller stops on TARGET_LOST)
+//                controller stops on TARGET_LOST); a target `nearest` a point never seen yet: a
+//                look pose search_distance back from the point, horizontally from the TCP. A
+//                cloud target seen but without a qualifying candidate: the look pose at it (a
+//                closer view), held until one qualifies; in APPROACH its last grasp holds while
+//                no candidate qualifies
 //   APPROACH     goal = the pre-grasp of the current best grasp (re-chosen as perception and
 //                grasp candidates update; the controller's MPBS watches the object centre), so
 //                the hand arrives from the approach side instead of cutting across the object;
@@ -69,6 +73,7 @@
 #include "ehc_control/gripper_state.h"
 #include "ehc_control/motion_limit.h"
 #include "ehc_control/pinhole_camera.h"
+#include "ehc_control/target_selector.h"
 #include "ehc_control/target_tracker.h"
 
 #include <Eigen/Geometry>
@@ -91,6 +96,12 @@ std::string toString(GraspPhase p);
 struct GraspObjectSpec {
   std::string name;
   ApproachDirection approach = ApproachDirection::Forward;
+  /// Which object it is (ehc_control::TargetSelector). Tag (the default): its poses come from
+  /// the tag detector. A cloud kind: from the depth cloud (generateForCloudTarget, the object's
+  /// cloud centre, ehc_control::cloudTargetPose), the grasp chosen with
+  /// GraspSelectionParams::forCloudTarget(); the rest of the sequence is the same. Set by the
+  /// scene's `targets:` (in-process) or the target selector topic (ehc_grasp_sequencer_node).
+  ehc_control::TargetSelector target;
 };
 
 struct GraspSequencerParams {
@@ -177,6 +188,14 @@ struct SequencerOutput {
   std::vector<std::string> events;                 ///< progress lines
 };
 
+/// Why an object was not grasped, in one word (one string map): none (grasped), not_seen (no
+/// pose before the time limit), no_target (perception named no target: setNoTarget), no_grasp (a
+/// pose, but no grasp chosen: a cloud target or require_candidate without a qualifying
+/// candidate), stalled (the time limit in a later phase: GraspResult::stall), closed_empty
+/// (the gripper closed on nothing), gripper_timeout, dropped (lost while lifting).
+enum class GraspCause { None, NotSeen, NoTarget, NoGrasp, Stalled, ClosedEmpty, GripperTimeout, Dropped };
+std::string toString(GraspCause c);
+
 struct GraspResult {
   std::string name;
   bool success = false;
@@ -188,6 +207,7 @@ struct GraspResult {
   double controller_tfm = 0.0;    ///< [0, 1], /ehc/status target_in_fov over the same span
   std::string failed_phase;       ///< "" on success
   std::string reason;             ///< "" on success
+  GraspCause cause = GraspCause::None;
   bool used_candidate = false;    ///< grasp from perception candidates (else the tag fallback)
   /// m, TCP position to the locked grasp position when the gripper was commanded to close;
   /// -1: it never closed. Above grasp_position_tolerance only after a stall (see stall_time).
@@ -218,6 +238,16 @@ class GraspSequencer {
   bool setObjectPose(std::size_t index, double t, const Eigen::Isometry3d& pose);
   /// Latest grasp candidates (world). Non-finite candidates are dropped (counted).
   void setGraspCandidates(double t, const std::vector<GraspCandidate>& candidates);
+  /// Sets object `index`'s target (e.g. from the target selector topic). False, and nothing
+  /// changes, for an unknown index, an invalid selector (TargetSelector::validate), an object
+  /// already handled, or the current one once its grasp is locked. A new target forgets the
+  /// object's pose (it may name another object) and, for the current object, its candidates.
+  bool setTarget(std::size_t index, const ehc_control::TargetSelector& target);
+  /// Perception found no target for object `index` (a cloud target: no object in the view, fewer
+  /// than k, ambiguous; TargetSelection::detail): an event when the reason changes, and the
+  /// reason of the object's failure if its time limit fires before a pose arrives. An accepted
+  /// pose (setObjectPose) clears it.
+  void setNoTarget(std::size_t index, const std::string& why);
   /// Camera intrinsics for TfM (e.g. from camera_info); false (ignored, counted) if invalid
   /// (PinholeCamera::validate). No TfM cycle is counted before the first valid camera.
   bool setCamera(const ehc_control::PinholeCamera& camera);
@@ -307,8 +337,10 @@ class GraspSequencer {
   double object_pose_t_ = -1.0;
   std::optional<Eigen::Isometry3d> currentPose() const;
   std::vector<std::string> pose_events_;  ///< from setObjectPose, out with the next update
+  std::string no_target_;  ///< the current object's setNoTarget reason ("" = none / a pose came)
   std::vector<GraspCandidate> candidates_;
   std::optional<GraspChoice> locked_;
+  std::optional<GraspChoice> last_choice_;  ///< the current object's last grasp chosen before the lock
   Eigen::Vector3d locked_object_centre_ = Eigen::Vector3d::Zero();
   /// Object centre in the TCP frame when the gripper closed (the object moves with the hand).
   std::optional<Eigen::Vector3d> centre_in_tcp_;

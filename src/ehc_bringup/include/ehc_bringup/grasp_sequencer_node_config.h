@@ -31,6 +31,13 @@ struct SequencerNodeParams {
   std::string sim_status_topic = "/sim/status";
   std::string gripper_service = "/sim/gripper";
   std::string exclusion_topic = "/ehc/obstacle_exclusion";  ///< "" = none sent
+  /// Targets without tags (ehc_control::TargetSelector, ehc_msgs/TargetSelector): an object's
+  /// target is set on target_selector_topic ("" = none: every object's is its tag); the current
+  /// object's goes out on current_target_topic (latched, the grasp node's selector), and a cloud
+  /// target's poses come from the grasp node on cloud_target_topic.
+  std::string target_selector_topic = "/ehc/target_selector";
+  std::string current_target_topic = "/ehc/sequencer/target_selector";
+  std::string cloud_target_topic = "/ehc/perception/cloud_target";
   std::vector<std::string> pose_topics;  ///< per object (objects[i].pose_topic)
   bool exit_when_done = true;
 

@@ -57,6 +57,7 @@ void takeResult(const GraspResult& r, GraspTrial* t) {
   t->controller_tfm = r.controller_tfm;
   t->failed_phase = r.failed_phase;
   t->reason = r.reason;
+  t->cause = toString(r.cause);
   t->stall_cause = r.stallCause();
   if (r.timed_out) {
     t->stall_joint = r.stall.joint;
@@ -109,6 +110,10 @@ void GraspExperimentParams::validate() const {
     bad("object_time_limit must be in (0, 3600] s");
   if (base_imprecision && !(*base_imprecision >= 0.0 && *base_imprecision <= 100.0))
     bad("base_imprecision must be in [0, 100]");
+  if (!library_split.empty() && library_split != "validation" && library_split != "tuning")
+    bad("library_split must be validation, tuning or empty (is '" + library_split + "')");
+  if (!library_split.empty() && protocol != GraspProtocol::Table) bad("library objects are an Exp-2 (table) option");
+  if (!(library_radius > 0.0 && library_radius <= 1.0)) bad("library_radius must be in (0, 1] m");
 }
 
 struct GraspExperiment::RunOutput {
@@ -131,6 +136,7 @@ GraspExperiment::GraspExperiment(const GraspExperimentParams& params, std::vecto
     GraspPipelineFiles files = GraspPipelineFiles::demo(dir, scene, dir + "/demo/grasp_sequencer.yaml", {"front", "middle", "back"});
     files.robot = params_.robot;
     base_[""] = loadGraspPipelineConfig(files);
+    if (!params_.library_split.empty()) library_ = ehc_sim::loadObjectLibrary(dir + "/objects/library.yaml");
   } else {
     const std::string scene = params_.scene.empty() ? dir + "/scenes/single_object.yaml" : params_.scene;
     for (const char* a : kApproaches) {
@@ -153,6 +159,7 @@ GraspPipelineConfig GraspExperiment::runConfig(const std::string& method, const 
   if (params_.base_model) c.sim.fake_robot.base_model.type = *params_.base_model;
   if (params_.base_imprecision) c.sim.fake_robot.base_model.imprecision.level = *params_.base_imprecision;
   if (params_.object_time_limit) c.sequencer.object_time_limit = *params_.object_time_limit;
+  if (library_) placeLibraryObjects(&c, *library_, params_.library_split, params_.library_radius, seed);
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   for (auto& o : c.scene.objects) {
@@ -162,6 +169,49 @@ GraspPipelineConfig GraspExperiment::runConfig(const std::string& method, const 
   }
   c.scene.validate();
   return c;
+}
+
+void placeLibraryObjects(GraspPipelineConfig* cfg, const ehc_sim::ObjectLibrary& library, const std::string& split,
+                         double radius, unsigned seed) {
+  std::vector<const ehc_sim::LibraryObject*> half;
+  for (const auto& o : library.objects)
+    if (o.split == split) half.push_back(&o);
+  std::vector<ehc_sim::BodyConfig>& objects = cfg->scene.objects;
+  if (half.size() < objects.size())
+    bad("the library's " + split + " half has " + std::to_string(half.size()) + " object(s), the scene " +
+        std::to_string(objects.size()));
+  // The run's own stream (the jitter after this draws from the run seed itself).
+  std::mt19937 rng(seed ^ 0x9e3779b9u);
+  std::uniform_real_distribution<double> yaw(-M_PI, M_PI);
+  const auto footprint = [](const ehc_sim::LibraryObject& o) { return 0.5 * std::hypot(o.size.x(), o.size.y()); };
+  for (int attempt = 0;; ++attempt) {
+    if (attempt == 1000) bad("no draw of " + split + " library objects fits the scene's places");
+    std::shuffle(half.begin(), half.end(), rng);
+    bool fits = true;  // bounding circles apart (any yaw)
+    for (std::size_t i = 0; i < objects.size() && fits; ++i)
+      for (std::size_t j = 0; j < i && fits; ++j)
+        fits = (objects[i].position - objects[j].position).head<2>().norm() > footprint(*half[i]) + footprint(*half[j]) + 0.01;
+    if (fits) break;
+  }
+  cfg->scene.targets.clear();
+  cfg->tag_targets.clear();
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    const double support = objects[i].position.z() - objects[i].halfExtents().z();
+    ehc_sim::BodyConfig b = ehc_sim::libraryBody(library, half[i]->name);
+    b.position = Eigen::Vector3d(objects[i].position.x(), objects[i].position.y(), support + 0.5 * b.size.z());
+    b.rpy = Eigen::Vector3d(0.0, 0.0, yaw(rng));
+    objects[i] = b;
+    ehc_control::TargetSelector t;
+    t.kind = ehc_control::TargetSelectorKind::Nearest;
+    t.point = b.position;
+    t.radius = radius;
+    cfg->scene.targets.push_back(t);
+    if (i < cfg->sequencer.objects.size()) {
+      cfg->sequencer.objects[i].name = b.name;
+      cfg->sequencer.objects[i].target = t;
+    }
+  }
+  cfg->scene.validate();
 }
 
 GraspExperiment::RunOutput GraspExperiment::runOne(const RunSpec& spec) const {
@@ -576,7 +626,7 @@ void writeTrialsCsv(const std::string& dir, const GraspExperimentResult& result)
        "min_obstacle_phase,min_margin_m,min_margin_link,min_margin_body,min_margin_phase,min_grasped_object_m,"
        "min_grasped_object_link,min_grasped_object_phase,lock_centre_in_grasp_x_m,lock_centre_in_grasp_y_m,"
        "lock_centre_in_grasp_z_m,close_centre_in_tcp_x_m,close_centre_in_tcp_y_m,close_centre_in_tcp_z_m,"
-       "lock_closing_axis_error_deg\n";
+       "lock_closing_axis_error_deg,cause\n";
   for (const auto& t : result.trials) {
     auto quoted = [](std::string text) {
       std::replace(text.begin(), text.end(), '"', '\'');
@@ -594,7 +644,7 @@ void writeTrialsCsv(const std::string& dir, const GraspExperimentResult& result)
     for (int a = 0; a < 3; ++a) writeFiniteField(f, t.lock_centre_in_grasp[a]);
     for (int a = 0; a < 3; ++a) writeFiniteField(f, t.close_centre_in_tcp[a]);
     writeFiniteField(f, t.lock_closing_axis_error_deg);
-    f << "\n";
+    f << "," << t.cause << "\n";
   }
 }
 

@@ -7,6 +7,7 @@
 #include "ehc_sim/sim_world.h"
 #include "ehc_sim/simulated_camera.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <sstream>
@@ -67,7 +68,14 @@ GraspPipelineConfig loadGraspPipelineConfig(const GraspPipelineFiles& files) {
     root.rejectUnknownKeys();
   }
   c.sequencer = loadGraspSequencerParams(ConfigNode::loadFile(files.sequencer, "GraspPipeline"));
-  if (files.tags.size() != c.sequencer.objects.size())
+  const bool all_cloud = !c.scene.targets.empty() &&
+                         std::all_of(c.scene.targets.begin(), c.scene.targets.end(),
+                                     [](const ehc_control::TargetSelector& s) { return s.fromCloud(); });
+  if (!c.scene.targets.empty() && c.scene.targets.size() != c.sequencer.objects.size())
+    throw std::invalid_argument("[GraspPipeline] " + c.scene.source_file + ": scene.targets lists " +
+                                std::to_string(c.scene.targets.size()) + " target(s) for " +
+                                std::to_string(c.sequencer.objects.size()) + " sequencer object(s) in " + files.sequencer);
+  if (!(all_cloud && files.tags.empty()) && files.tags.size() != c.sequencer.objects.size())
     throw std::invalid_argument("[GraspPipeline] " + std::to_string(files.tags.size()) + " tag file(s) for " +
                                 std::to_string(c.sequencer.objects.size()) + " sequencer object(s) in " + files.sequencer);
   for (std::size_t i = 0; i < files.tags.size(); ++i) {
@@ -78,6 +86,18 @@ GraspPipelineConfig loadGraspPipelineConfig(const GraspPipelineFiles& files) {
       throw std::invalid_argument("[GraspPipeline] " + files.tags[i] + ": tag_detector differs from " + files.tags[0] +
                                   "'s (one detection serves every object in-process)");
     c.tag_targets.push_back(ehc_perception::loadTagTargetConfig(root.childOrEmpty("target")));
+  }
+  // Each object's target: the scene's `targets:` entry, else its tag file's tag.
+  for (std::size_t i = 0; i < c.sequencer.objects.size(); ++i) {
+    ehc_control::TargetSelector& target = c.sequencer.objects[i].target;
+    if (!c.scene.targets.empty()) target = c.scene.targets[i];
+    if (target.fromCloud()) continue;
+    const int file_id = c.tag_targets[i].tag_id;
+    if (!c.scene.targets.empty() && target.tag_id != file_id)
+      throw std::invalid_argument("[GraspPipeline] " + c.scene.source_file + ": scene.targets[" + std::to_string(i) +
+                                  "].tag_id " + std::to_string(target.tag_id) + " differs from " + files.tags[i] +
+                                  "'s target.tag_id " + std::to_string(file_id));
+    target.tag_id = file_id;
   }
   {
     const auto root = ConfigNode::loadFile(files.grasp, "GraspPipeline");
@@ -219,7 +239,11 @@ void GraspPipeline::perceive(double t) {
   ++counters_.clouds;
   const Eigen::Isometry3d T_world_cam = stackView(world_->cameraPose());
   const ehc_perception::PointList points = ehc_perception::transformPoints(cam_points, T_world_cam);
-  if (want_grasps) {
+  const std::size_t current = sequencer_->currentObject();
+  if (want_grasps && current < cfg_.sequencer.objects.size() && cfg_.sequencer.objects[current].target.fromCloud()) {
+    StageTimer timer(timing_, &counters_.wall_grasps);
+    perceiveCloudTarget(t, points, T_world_cam, current);
+  } else if (want_grasps) {
     StageTimer timer(timing_, &counters_.wall_grasps);
     const bool fresh = grasp_target_ && t - grasp_target_t_ <= cfg_.targeting.target_timeout;
     const ehc_perception::GraspResult res = ehc_perception::generateForTarget(
@@ -233,6 +257,24 @@ void GraspPipeline::perceive(double t) {
     StageTimer timer(timing_, &counters_.wall_obstacles);
     monitor_->insertCloud(t, points, T_world_cam.translation());
   }
+}
+
+void GraspPipeline::perceiveCloudTarget(double t, const ehc_perception::PointList& points,
+                                        const Eigen::Isometry3d& T_world_cam, std::size_t object) {
+  // Tracked: the sequencer's pose of this object (not of the one before it) is fresh.
+  const bool tracked = grasp_target_ && grasp_target_object_ == object &&
+                       t - grasp_target_t_ <= cfg_.targeting.target_timeout;
+  const ehc_perception::CloudTargetResult r = ehc_perception::generateForCloudTarget(
+      *generator_, points, T_world_cam, cfg_.sequencer.objects[object].target, tracked ? &*grasp_target_ : nullptr,
+      cfg_.targeting);
+  if (r.selection.selected())
+    sequencer_->setObjectPose(object, t, ehc_control::cloudTargetPose(r.selection.centre, T_world_cam.translation(), cfg_.generator.up));
+  else
+    sequencer_->setNoTarget(object, r.selection.detail);
+  std::vector<GraspCandidate> candidates;
+  for (const auto& g : r.grasps.grasps) candidates.push_back({g.pose, g.width, g.score});
+  sequencer_->setGraspCandidates(t, candidates);
+  ++counters_.grasp_runs;
 }
 
 void GraspPipeline::updateObstacles(double t) {
@@ -294,6 +336,7 @@ const PipelineCycle& GraspPipeline::step() {
     if (s.object_pose) {
       grasp_target_ = s.object_pose->translation();
       grasp_target_t_ = t;
+      grasp_target_object_ = last_.object;
     }
     if (s.goal) {
       const std::string err = cycle_->setTarget(t, *s.goal);

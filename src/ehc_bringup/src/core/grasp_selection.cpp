@@ -23,11 +23,21 @@ ApproachDirection approachDirectionFromString(const std::string& s) {
   return ehc_common::enumValue(kApproachNames, s, "GraspSelection", "approach direction");
 }
 
+GraspSelectionParams GraspSelectionParams::forCloudTarget() const {
+  GraspSelectionParams p = *this;
+  p.candidate_gate = cloud_candidate_gate;
+  p.centre_from_tag = false;
+  p.closing_axis_from_tag = false;
+  p.require_candidate = true;
+  return p;
+}
+
 void GraspSelectionParams::validate() const {
   auto check = [](bool ok, const std::string& what) {
     if (!ok) throw std::invalid_argument("[GraspSelectionParams] " + what);
   };
   check(std::isfinite(candidate_gate) && candidate_gate > 0.0, "candidate_gate must be > 0");
+  check(std::isfinite(cloud_candidate_gate) && cloud_candidate_gate > 0.0, "cloud_candidate_gate must be > 0");
   check(std::isfinite(max_angle_deg) && max_angle_deg > 0.0 && max_angle_deg <= 180.0,
         "max_angle_deg must be in (0, 180]");
   check(std::isfinite(max_width) && max_width > 0.0, "max_width must be > 0");

@@ -35,6 +35,21 @@ constexpr ehc_common::EnumNames<GraspPhase, 10> kGraspPhaseNames = {{{GraspPhase
 std::string toString(GraspPhase p) { return ehc_common::enumName(kGraspPhaseNames, p, "GraspSequencer"); }
 
 namespace {
+constexpr ehc_common::EnumNames<GraspCause, 8> kGraspCauseNames = {{
+    {GraspCause::None, "none"},
+    {GraspCause::NotSeen, "not_seen"},
+    {GraspCause::NoTarget, "no_target"},
+    {GraspCause::NoGrasp, "no_grasp"},
+    {GraspCause::Stalled, "stalled"},
+    {GraspCause::ClosedEmpty, "closed_empty"},
+    {GraspCause::GripperTimeout, "gripper_timeout"},
+    {GraspCause::Dropped, "dropped"},
+}};
+}  // namespace
+
+std::string toString(GraspCause c) { return ehc_common::enumName(kGraspCauseNames, c, "GraspSequencer"); }
+
+namespace {
 /// `v` with `precision` decimals for messages ("null" when not finite).
 std::string num(double v, int precision = 3) {
   if (!std::isfinite(v)) return "null";
@@ -56,6 +71,7 @@ void GraspSequencerParams::validate() const {
   check(!objects.empty(), "objects must list at least one object");
   for (std::size_t i = 0; i < objects.size(); ++i) {
     check(!objects[i].name.empty(), "objects[" + std::to_string(i) + "].name must not be empty");
+    objects[i].target.validate();
     for (std::size_t j = 0; j < i; ++j)
       check(objects[i].name != objects[j].name, "object name '" + objects[i].name + "' appears twice");
   }
@@ -106,7 +122,8 @@ void GraspSequencerParams::validate() const {
 std::string GraspSequencerParams::summary() const {
   std::ostringstream s;
   s << "GraspSequencer: " << objects.size() << " object(s):";
-  for (const auto& o : objects) s << " " << o.name << " (" << toString(o.approach) << ")";
+  for (const auto& o : objects)
+    s << " " << o.name << " (" << toString(o.approach) << (o.target.fromCloud() ? ", " + o.target.summary() : std::string()) << ")";
   s << "\n  limit " << object_time_limit << " s/object, perception hold " << perception_hold
     << " s, search " << search_distance << " m, obstacle exclusion " << obstacle_exclusion_radius
     << " m, " << pose_filter.summary() << ", pre-grasp " << pregrasp_distance << " m"
@@ -122,7 +139,7 @@ std::string GraspSequencerParams::summary() const {
     << ", release timeout "
     << release_timeout << " s, retreat " << retreat_distance << " m back + " << retreat_raise << " m up (tol "
     << retreat_tolerance << " m, " << retreat_timeout << " s)"
-    << "\n  selection: gate " << selection.candidate_gate << " m, max angle " << selection.max_angle_deg
+    << "\n  selection: gate " << selection.candidate_gate << " m (cloud targets " << selection.cloud_candidate_gate << " m), max angle " << selection.max_angle_deg
     << " deg, max width " << selection.max_width << " m, "
     << "sideways turned " << selection.sideways_turn_deg << " deg towards forward and tilted "
     << selection.sideways_tilt_deg << " deg down, "
@@ -166,6 +183,7 @@ GraspSequencerParams loadGraspSequencerParams(const ConfigNode& root) {
   p.retreat_timeout = s.get("retreat_timeout", p.retreat_timeout);
   const ConfigNode sel = s.childOrEmpty("selection");
   p.selection.candidate_gate = sel.get("candidate_gate", p.selection.candidate_gate);
+  p.selection.cloud_candidate_gate = sel.get("cloud_candidate_gate", p.selection.cloud_candidate_gate);
   p.selection.max_angle_deg = sel.get("max_angle_deg", p.selection.max_angle_deg);
   p.selection.max_width = sel.get("max_width", p.selection.max_width);
   p.selection.require_candidate = sel.get("require_candidate", p.selection.require_candidate);
@@ -223,7 +241,34 @@ bool GraspSequencer::setObjectPose(std::size_t index, double t, const Eigen::Iso
                            num((f.pose()->translation() - before->translation()).norm(), 3) + " m, confirmed by " +
                            std::to_string(params_.pose_filter.jump_confirmations) + " observations in a row");
   if (current && u != TargetPoseFilter::Update::JumpHeld) object_pose_t_ = t;
+  if (current) no_target_.clear();
   return true;
+}
+
+bool GraspSequencer::setTarget(std::size_t index, const ehc_control::TargetSelector& target) {
+  if (index >= params_.objects.size() || done() || index < current_ || (index == current_ && locked_)) return false;
+  try {
+    target.validate();
+  } catch (const std::invalid_argument&) {
+    return false;
+  }
+  GraspObjectSpec& o = params_.objects[index];
+  if (o.target.summary() == target.summary() && o.target.ambiguity == target.ambiguity) return true;
+  o.target = target;
+  filters_[index].reset();
+  if (index == current_) {
+    object_pose_t_ = -1.0;
+    candidates_.clear();
+    no_target_.clear();
+  }
+  pose_events_.push_back(o.name + ": target " + target.summary());
+  return true;
+}
+
+void GraspSequencer::setNoTarget(std::size_t index, const std::string& why) {
+  if (index != current_ || done() || locked_ || why == no_target_) return;
+  no_target_ = why;
+  pose_events_.push_back(params_.objects[index].name + ": no target: " + why);
 }
 
 long GraspSequencer::poseOutliers() const {
@@ -289,12 +334,15 @@ void GraspSequencer::startObject(double t, SequencerOutput* out) {
   cur_ = GraspResult();
   cur_.name = params_.objects[current_].name;
   cur_.approach = toString(params_.objects[current_].approach);
+  no_target_.clear();
+  last_choice_.reset();
   last_controller_phase_.clear();
   phase_ = GraspPhase::WaitTarget;
   phase_t0_ = t;
   std::ostringstream s;
   s << "object " << (current_ + 1) << "/" << params_.objects.size() << " '" << cur_.name << "' ("
-    << cur_.approach << " grasp): WAIT_TARGET";
+    << cur_.approach << " grasp" << (params_.objects[current_].target.fromCloud() ? ", " + params_.objects[current_].target.summary() : std::string())
+    << "): WAIT_TARGET";
   out->events.push_back(s.str());
 }
 
@@ -359,7 +407,9 @@ std::optional<GraspChoice> GraspSequencer::currentChoice(const SequencerInput& i
   if (!object_pose) return std::nullopt;
   const Eigen::Matrix3d ref = (in.tcp && isValidPose(*in.tcp)) ? Eigen::Matrix3d(in.tcp->linear())
                                                               : Eigen::Matrix3d(object_pose->linear());
-  return chooseGrasp(candidates_, params_.objects[current_].approach, *object_pose, ref, params_.selection);
+  const GraspObjectSpec& o = params_.objects[current_];
+  return chooseGrasp(candidates_, o.approach, *object_pose, ref,
+                     o.target.fromCloud() ? params_.selection.forCloudTarget() : params_.selection);
 }
 
 void GraspSequencer::finishObject(double t, bool success, const std::string& reason,
@@ -368,6 +418,13 @@ void GraspSequencer::finishObject(double t, bool success, const std::string& rea
   cur_.time_s = t - object_t0_;
   cur_.failed_phase = success ? "" : toString(phase_);
   cur_.reason = reason;
+  if (success) cur_.cause = GraspCause::None;
+  else if (phase_ == GraspPhase::WaitTarget)
+    cur_.cause = object_pose_t_ >= 0.0 ? GraspCause::NoGrasp : !no_target_.empty() ? GraspCause::NoTarget : GraspCause::NotSeen;
+  else if (cur_.timed_out) cur_.cause = GraspCause::Stalled;
+  else if (phase_ == GraspPhase::Close)
+    cur_.cause = in.gripper_state == ehc_control::GripperState::ClosedEmpty ? GraspCause::ClosedEmpty : GraspCause::GripperTimeout;
+  else cur_.cause = GraspCause::Dropped;
   cur_.cycles = tfm_distant_.cycles();
   cur_.tfm = tfm_distant_.tfm();
   cur_.tfm_until_switch = tfm_switch_.tfm();
@@ -462,6 +519,7 @@ SequencerOutput GraspSequencer::update(const SequencerInput& in) {
         << (phase_ == GraspPhase::Grasp ? "grasp" : "pre-grasp") << ", " << num(t - best_distance_t_, 1)
         << " s since it last came closer)";
     }
+    if (phase_ == GraspPhase::WaitTarget && !no_target_.empty()) s << " (no target: " << no_target_ << ")";
     recordStall(in);
     s << "; stall: " << cur_.stallCause();
     const std::string detail = cur_.stallDetail();
@@ -528,15 +586,32 @@ void GraspSequencer::advanceWaitTarget(const SequencerInput& in, bool fresh, Seq
   const double t = in.t;
   if (!fresh) {
     const std::optional<Eigen::Isometry3d>& seen = filters_[current_].pose();  // now or before this object
+    const ehc_control::TargetSelector& target = params_.objects[current_].target;
     if (seen && params_.search_distance > 0.0) {
       Eigen::Isometry3d look = *seen;
       look.translation() -= params_.search_distance * seen->linear().col(2);
+      out->goal = look;
+    } else if (target.kind == ehc_control::TargetSelectorKind::Nearest && params_.search_distance > 0.0 && in.tcp &&
+               isValidPose(*in.tcp)) {
+      // Never seen, but where to look is known: a look pose at the point, from the TCP's side.
+      Eigen::Isometry3d look = ehc_control::cloudTargetPose(target.point, in.tcp->translation());
+      look.translation() -= params_.search_distance * look.linear().col(2);
       out->goal = look;
     }
     return;
   }
   const auto choice = currentChoice(in);
-  if (!choice) return;  // require_candidate and none yet
+  if (!choice) {  // require_candidate (a cloud target) and none yet
+    if (params_.objects[current_].target.fromCloud() && params_.search_distance > 0.0) {
+      // A cloud target seen but no grasp from this view: a closer look (a view that shows its
+      // graspable parts), held until a grasp qualifies or the time limit fails it (no_grasp).
+      Eigen::Isometry3d look = *currentPose();
+      look.translation() -= params_.search_distance * look.linear().col(2);
+      out->goal = look;
+    }
+    return;
+  }
+  last_choice_ = choice;
   enter(GraspPhase::Approach, t, out,
         choice->from_candidate ? "grasp candidate" : "tag grasp (no candidate yet)");
   out->goal = approachGoal(in, choice->pose);
@@ -548,7 +623,12 @@ void GraspSequencer::advanceApproach(const SequencerInput& in, bool fresh, bool 
     enter(GraspPhase::WaitTarget, t, out, "object pose older than " + num(params_.perception_hold, 1) + " s");
     return;
   }
-  const auto choice = currentChoice(in);
+  std::optional<GraspChoice> choice = currentChoice(in);
+  // A cloud target's candidates come and go with the views (no tag fallback): the last grasp
+  // chosen holds until another qualifies; without a goal the controller would stop the robot
+  // (TARGET_LOST) where no new view comes.
+  if (choice) last_choice_ = choice;
+  else if (params_.objects[current_].target.fromCloud()) choice = last_choice_;
   if (!choice) return;
   // tsmm: the base has stopped d from the object once the controller reports its arm stage
   // for the object centre sent as the goal. No lock before: the lock makes the pre-grasp the

@@ -29,6 +29,8 @@ std::string SequencerNodeParams::summary() const {
                   " (tf) + " + camera_info_topic + " (TfM)\n  pose topics:";
   for (const auto& t : pose_topics) s += " " + t;
   s += "\n  obstacle exclusion (the object while touched) -> " + (exclusion_topic.empty() ? std::string("off") : exclusion_topic);
+  s += "\n  target selectors <- " + (target_selector_topic.empty() ? std::string("off") : target_selector_topic) +
+       ", current target -> " + current_target_topic + ", cloud target poses <- " + cloud_target_topic;
   return s;
 }
 
@@ -49,8 +51,12 @@ SequencerNodeParams loadSequencerNodeParams(const ehc_common::ConfigNode& root) 
   p.sim_status_topic = n.get("sim_status_topic", p.sim_status_topic);
   p.gripper_service = n.get("gripper_service", p.gripper_service);
   p.exclusion_topic = n.get("exclusion_topic", p.exclusion_topic);
+  p.target_selector_topic = n.get("target_selector_topic", p.target_selector_topic);
+  p.current_target_topic = n.get("current_target_topic", p.current_target_topic);
+  p.cloud_target_topic = n.get("cloud_target_topic", p.cloud_target_topic);
   p.exit_when_done = n.get("exit_when_done", p.exit_when_done);
-  for (const char* k : {"world_frame", "tcp_frame", "goal_topic", "status_topic", "gripper_service"})
+  for (const char* k : {"world_frame", "tcp_frame", "goal_topic", "status_topic", "gripper_service", "current_target_topic",
+                        "cloud_target_topic"})
     if (n.has(k) && n.get<std::string>(k, "").empty()) n.fail(k, "must not be empty");
   for (std::size_t i = 0; i < root.listSize("objects"); ++i) {
     const ehc_common::ConfigNode o = root.element("objects", i);

@@ -55,6 +55,8 @@ const char* kUsage =
     "           [--base-model ideal|water2]   (default: the sim file's, ideal; water2: the stack sees the bridge's /odom)\n"
     "           [--base-imprecision LEVEL]   (default: the sim file's, 0 = off)\n"
     "           [--object-time-limit s]   (per object, WAIT_TARGET..LIFT; default: the sequencer file's, 30 s)\n"
+    "           [--library validation|tuning]   (everyday objects: per run the scene's objects replaced by library objects\n"
+    "                                            of that half, untagged, each the target nearest its place)\n"
     "       ehc_experiment poses --method neo_nompbs|ehc_nompbs|ehc|all --out DIR [--robot <name|robot.yaml>] [--sets 15] [--per-set 5]\n"
     "           [--seed 1] [--scene scene.yaml] [--jobs 1] [--config-dir config] [--jitter-xy 0.01] [--jitter-yaw 3]\n"
     "           [--base-model ideal|water2] [--base-imprecision LEVEL] [--object-time-limit s]\n";
@@ -145,6 +147,7 @@ int runGrasp(int argc, char** argv) {
   std::vector<std::string> options = {"robot", "method", "out", "sets", "seed", "scene", "jobs", "config-dir",
                                       "jitter-xy", "jitter-yaw", "base-model", "base-imprecision", "object-time-limit"};
   if (p.protocol == ehc_bringup::GraspProtocol::Poses) options.push_back("per-set");
+  if (p.protocol == ehc_bringup::GraspProtocol::Table) options.push_back("library");
   const ehc_common::CommandLine cli(argc, argv, options, {}, /*first=*/2);
   const std::string method = cli.text("method", "all");
   const std::string out = cli.text("out");
@@ -161,6 +164,7 @@ int runGrasp(int argc, char** argv) {
   p.jitter_yaw_deg = cli.real("jitter-yaw", p.jitter_yaw_deg);
   if (p.protocol == ehc_bringup::GraspProtocol::Table) p.per_set = 1;
   if (cli.has("object-time-limit")) p.object_time_limit = cli.real("object-time-limit", 30.0);
+  if (cli.has("library")) p.library_split = cli.choice("library", {"validation", "tuning"}, "validation");
   if (cli.has("base-model"))
     p.base_model = ehc_sim::baseModelTypeFromString(cli.choice("base-model", {"ideal", "water2"}, "ideal"));
   if (cli.has("base-imprecision")) p.base_imprecision = baseImprecisionLevel(cli, 0.0);
@@ -192,6 +196,11 @@ int runGrasp(int argc, char** argv) {
                   "(config/demo/grasp_single_<approach>.yaml), each from the start pose; TfM = GraspSequencer's window "
                   "(object centre in the image from its first perceived pose until sig(w) >= tfm_handover_sig or the "
                   "pre-grasp switch). ")
+        << (p.library_split.empty() ? std::string()
+                                    : "Objects: per run, library objects of the " + p.library_split +
+                                          " half (config/objects/library.yaml) drawn from the run seed, placed where the scene's "
+                                          "objects stand with a random yaw, untagged; each object's target is the object nearest "
+                                          "its place (within " + std::to_string(p.library_radius) + " m), from the depth cloud. ")
         << p.sets << " set(s)" << (p.protocol == ehc_bringup::GraspProtocol::Poses ? " x " + std::to_string(p.per_set) + " per approach" : "")
         << ", seed " << p.seed << ": run seed = seed*1000 + set*10 + index (Table I actuation noise, camera noise) and a "
         << "jitter of every object's placement, uniform +-" << p.jitter_xy * 100.0 << " cm in x and y and +-"

@@ -14,6 +14,12 @@
 // object while every other obstacle keeps its damper. One update per
 // /ehc/status message (lock-step with the simulator). Reads the gripper result from /sim/status.
 // When every object is handled it writes the JSON summary (and the CSV trace) and exits 0.
+// Targets without tags: the `_scene:=` file's `targets:` (if any) are the objects' targets at
+// the start (as in-process); an ehc_msgs/TargetSelector on node.target_selector_topic sets the target
+// of the object it names (GraspSequencer::setTarget; taken with the other inputs at the first
+// status after its stamp); the current object's target is published on node.current_target_topic
+// (latched) whenever it changes, and while it is a cloud target its poses come from the grasp
+// node on node.cloud_target_topic (in place of a tag node's).
 // Any exception: log, stop publishing goals (the controller then stops on TARGET_LOST), exit 1.
 
 #include "ehc_common/logging.h"
@@ -23,6 +29,8 @@
 #include "ehc_msgs/ControllerStatus.h"
 #include "ehc_msgs/GraspCandidates.h"
 #include "ehc_msgs/ObstacleExclusion.h"
+#include "ehc_msgs/TargetSelector.h"
+#include "ehc_control/target_selector_msg.h"
 #include "ehc_control/camera_info_msg.h"
 #include "ehc_common/config_node.h"
 #include "ehc_control/pose_math.h"
@@ -45,6 +53,7 @@
 #include <tf2_eigen/tf2_eigen.h>
 #include <tf2_ros/transform_listener.h>
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <iomanip>
@@ -107,13 +116,23 @@ class SequencerNode {
     const ehc_control::RobotConfig rc = ehc_control::loadRobotConfig(node_.robot_file);
     node_.applyRobotFrames(ehc_control::WholeBodyModel(rc));  // robot.yaml checked against its URDF, frames too
     arm_joints_ = rc.arm_joints;  // the trace's arm speed
-    const ehc_bringup::GraspSequencerParams sp = ehc_bringup::loadGraspSequencerParams(root);
+    ehc_bringup::GraspSequencerParams sp = ehc_bringup::loadGraspSequencerParams(root);
     root.rejectUnknownKeys();  // both loaders have run: a key neither read is a misspelling
-    seq_ = std::make_unique<GraspSequencer>(sp);
-    // The scene names the body of an obstacle that held the robot when a time limit fires.
+    // The scene names the body of an obstacle that held the robot when a time limit fires, and
+    // its `targets:` (if any) are the objects' targets, as in-process.
     const std::string scene = params.get<std::string>("scene", "");
+    std::optional<ehc_sim::SceneConfig> scene_config;
     if (!scene.empty()) {
-      const std::vector<ehc_sim::BodyConfig> bodies = ehc_sim::loadSceneConfig(scene).bodies();
+      scene_config = ehc_sim::loadSceneConfig(scene);
+      const auto& targets = scene_config->targets;
+      if (!targets.empty() && targets.size() != sp.objects.size())
+        throw std::invalid_argument("[ehc_grasp_sequencer_node] " + scene + ": scene.targets lists " + std::to_string(targets.size()) +
+                                    " target(s) for " + std::to_string(sp.objects.size()) + " sequencer object(s) in " + config);
+      for (std::size_t i = 0; i < targets.size(); ++i) sp.objects[i].target = targets[i];
+    }
+    seq_ = std::make_unique<GraspSequencer>(sp);
+    if (scene_config) {
+      const std::vector<ehc_sim::BodyConfig> bodies = scene_config->bodies();
       seq_->setObstacleNamer([bodies](const Eigen::Vector3d& p) {
         return ehc_sim::nearestBody(bodies, [&bodies](int i) { return bodies[static_cast<std::size_t>(i)].pose(); }, p);
       });
@@ -144,6 +163,12 @@ class SequencerNode {
           node_.pose_topics[i], 5, [this, i](const geometry_msgs::PoseStamped::ConstPtr& m) { onObjectPose(i, *m); },
           ros::VoidConstPtr(), fast));
     subs_.push_back(inputs_nh.subscribe(node_.candidates_topic, 2, &SequencerNode::onCandidates, this, fast));
+    current_target_pub_ = nh.advertise<ehc_msgs::TargetSelector>(node_.current_target_topic, 1, true);  // latched
+    if (!node_.target_selector_topic.empty())
+      subs_.push_back(inputs_nh.subscribe(node_.target_selector_topic, 10, &SequencerNode::onSelector, this, fast));
+    subs_.push_back(inputs_nh.subscribe<geometry_msgs::PoseStamped>(
+        node_.cloud_target_topic, 5, [this](const geometry_msgs::PoseStamped::ConstPtr& m) { onCloudTarget(*m); },
+        ros::VoidConstPtr(), fast));
     if (!node_.exclusion_topic.empty())
       exclusion_pub_ = nh.advertise<ehc_msgs::ObstacleExclusion>(node_.exclusion_topic, 10);
     subs_.push_back(inputs_nh.subscribe(node_.sim_status_topic, 10, &SequencerNode::onSimStatus, this, fast));
@@ -167,6 +192,43 @@ class SequencerNode {
                                            << node_.pose_topics[i]);
       return true;
     });
+  }
+  void onSelector(const ehc_msgs::TargetSelector& m) {
+    const auto& objs = seq_->params().objects;
+    const auto it = std::find_if(objs.begin(), objs.end(), [&](const ehc_bringup::GraspObjectSpec& o) { return o.name == m.object; });
+    std::size_t index = m.object.empty() ? seq_->currentObject() : static_cast<std::size_t>(it - objs.begin());
+    ehc_control::TargetSelector s;
+    try {
+      if (!m.object.empty() && it == objs.end()) throw std::invalid_argument("no sequencer object '" + m.object + "'");
+      s = ehc_control::selectorFromMsg(m);
+    } catch (const std::invalid_argument& e) {
+      ROS_ERROR_STREAM("[ehc_grasp_sequencer_node] target selector ignored: " << e.what());
+      return;
+    }
+    inbox_.add(m.header.stamp, kSelector, [this, index, s] {
+      if (!seq_->setTarget(index, s))
+        ROS_ERROR_STREAM("[ehc_grasp_sequencer_node] target selector " << s.summary() << " refused for object " << index
+                                                                        << " (handled already, or its grasp is locked)");
+      return true;
+    });
+  }
+  void onCloudTarget(const geometry_msgs::PoseStamped& m) {  // the current object's, if it is a cloud target
+    if (!m.header.frame_id.empty() && m.header.frame_id != node_.world_frame) return;
+    inbox_.add(m.header.stamp, kCloudTarget, [this, pose = toEigen(m.pose), t = m.header.stamp.toSec()] {
+      const std::size_t i = seq_->currentObject();
+      if (i < seq_->params().objects.size() && seq_->params().objects[i].target.fromCloud()) seq_->setObjectPose(i, t, pose);
+      return true;
+    });
+  }
+  /// The current object's target on current_target_topic, when it changes.
+  void publishCurrentTarget(const ros::Time& stamp) {
+    const auto& objs = seq_->params().objects;
+    if (seq_->done()) return;
+    const ehc_bringup::GraspObjectSpec& o = objs[seq_->currentObject()];
+    const std::string key = o.name + " " + o.target.summary();
+    if (key == sent_target_) return;
+    sent_target_ = key;
+    current_target_pub_.publish(ehc_control::selectorToMsg(o.target, o.name, node_.world_frame, stamp));
   }
   void onCandidates(const ehc_msgs::GraspCandidates& m) {
     if (!m.header.frame_id.empty() && m.header.frame_id != node_.world_frame) return;
@@ -289,6 +351,7 @@ class SequencerNode {
     const ehc_bringup::SequencerOutput out = seq_->update(in);
     for (const auto& e : out.events) ROS_INFO_STREAM("[grasp] t=" << std::fixed << std::setprecision(2) << in.t << " " << e);
     const ros::Time now = m.header.stamp;  // every output carries the time it was decided for
+    publishCurrentTarget(now);
     if (out.object_pose) object_pub_.publish(toMsg(*out.object_pose, node_.world_frame, now));
     if (out.goal) goal_pub_.publish(toMsg(*out.goal, node_.world_frame, now));
     publishExclusions(out.exclusions, now);
@@ -354,14 +417,16 @@ class SequencerNode {
   std::unique_ptr<GraspSequencer> seq_;
   tf2_ros::Buffer tf_;
   tf2_ros::TransformListener listener_;
-  ros::Publisher goal_pub_, object_pub_, results_pub_, exclusion_pub_, centre_pub_;
+  ros::Publisher goal_pub_, object_pub_, results_pub_, exclusion_pub_, centre_pub_, current_target_pub_;
+  std::string sent_target_;  ///< the current target last published (object name + selector)
   std::size_t published_results_ = 0;
   ros::ServiceClient gripper_;
   std::vector<ros::Subscriber> subs_;
   std::unique_ptr<ehc_common::LockstepAck> ack_;  ///< _ack_topic (lock-step acknowledgement gate)
   /// Inputs taken at the first status after their stamp: object poses (source = object index),
   /// grasp candidates, the simulator's gripper status, the trace's speeds.
-  static constexpr int kCandidates = 1000000, kSimStatus = 1000001, kJoints = 1000002, kOdom = 1000003;
+  static constexpr int kCandidates = 1000000, kSimStatus = 1000001, kJoints = 1000002, kOdom = 1000003,
+                       kSelector = 1000004, kCloudTarget = 1000005;
   ehc_common::StampedInbox inbox_;
   ros::CallbackQueue inputs_queue_;  ///< every input but the status (taken in onStatus)
   ehc_common::PollPassBarrier poll_pass_;

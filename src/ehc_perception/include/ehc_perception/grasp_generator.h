@@ -66,6 +66,8 @@
 // (into the object), y = finger closing direction, x = y cross z.
 // All geometry is in the cloud's frame; `up` (config) is the gravity-up direction there.
 
+#include "ehc_control/target_selector.h"
+
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
@@ -284,6 +286,23 @@ GraspTargetingParams loadGraspTargetingParams(const ehc_common::ConfigNode& node
 GraspResult generateForTarget(const GraspGenerator& generator, const PointList& scene,
                               const Eigen::Vector3d& viewpoint, const Eigen::Vector3d* target,
                               const GraspTargetingParams& targeting);
+
+/// A target without a tag (ehc_control::TargetSelector, a cloud kind) in one cloud: the object
+/// the selector names, or the one tracked so far, and its grasps.
+struct CloudTargetResult {
+  /// Selected: `centre` is the target's cloud centre (its cluster's centroid); else why there is
+  /// no target (no object, too few, ambiguous, the tracked object gone).
+  ehc_control::TargetSelection selection;
+  GraspResult grasps;  ///< generateForTarget on the target (empty without one)
+};
+/// With `tracked` (the target's pose so far, e.g. the sequencer's filtered pose): generateForTarget
+/// near it, the target's centre the nearest object's (within target_gate). Without: the cloud
+/// (within the point budget) is segmented, the selector picks among the objects' centroids as
+/// seen from `camera` (ehc_control::selectTarget, up = the generator's), then generateForTarget
+/// on the chosen one. What ehc_grasp_node and the in-process pipeline do for a cloud target.
+CloudTargetResult generateForCloudTarget(const GraspGenerator& generator, const PointList& scene,
+                                         const Eigen::Isometry3d& camera, const ehc_control::TargetSelector& selector,
+                                         const Eigen::Vector3d* tracked, const GraspTargetingParams& targeting);
 
 /// PCD files (PCL). loadPcd reads x, y, z of any point type; throws std::invalid_argument
 /// "[PointCloudIO] cannot read '<path>' ..." on a missing or malformed file.

@@ -54,6 +54,11 @@ struct GraspNodeConfig {
   std::string cloud_topic = "/camera/depth/points";
   std::string target_topic = "/ehc/target_pose";  ///< "" = no target: every object
   std::string output_topic = "/ehc/grasp_candidates";
+  /// The current object's target selector (ehc_msgs/TargetSelector, the sequencer's, latched);
+  /// "" = none: every target is a tag's. A cloud selector: generateForCloudTarget, and the
+  /// target's pose (ehc_control::cloudTargetPose) on cloud_target_topic.
+  std::string selector_topic = "/ehc/sequencer/target_selector";
+  std::string cloud_target_topic = "/ehc/perception/cloud_target";
   std::string world_frame = "odom";
   GraspTargetingParams targeting;  ///< max rate, point budget, target timeout and gate
   double tf_timeout = 0.1;  ///< wall s a cloud waits for its camera pose (lock-step: the node's own wait)

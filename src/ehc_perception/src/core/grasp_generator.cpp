@@ -1679,3 +1679,46 @@ GraspResult generateForTarget(const GraspGenerator& generator, const PointList& 
 }
 
 }  // namespace ehc_perception
+
+namespace ehc_perception {
+
+CloudTargetResult generateForCloudTarget(const GraspGenerator& generator, const PointList& scene,
+                                         const Eigen::Isometry3d& camera, const ehc_control::TargetSelector& selector,
+                                         const Eigen::Vector3d* tracked, const GraspTargetingParams& targeting) {
+  using ehc_control::TargetSelectionStatus;
+  CloudTargetResult out;
+  const Eigen::Vector3d viewpoint = camera.translation();
+  if (tracked) {
+    out.grasps = generateForTarget(generator, scene, viewpoint, tracked, targeting);
+    if (out.grasps.centroids.empty() || out.grasps.failure == GraspFailure::TargetTooFar) {
+      out.selection.status = TargetSelectionStatus::NoObject;
+      out.selection.detail = selector.summary() + ": the tracked object is not in the view (" + out.grasps.reason + ")";
+      out.grasps.grasps.clear();
+      return out;
+    }
+    out.selection.status = TargetSelectionStatus::Selected;
+    out.selection.index = out.grasps.grasps.empty() ? 0 : out.grasps.grasps.front().object;
+    out.selection.centre = out.grasps.centroids.front();
+    out.selection.detail = selector.summary() + ": tracked";
+    return out;
+  }
+  const auto budget = static_cast<std::size_t>(targeting.max_input_points);
+  const SceneSegmentation seg = generator.segmentScene(scene.size() > budget ? budgetPoints(scene, budget) : scene);
+  std::vector<Eigen::Vector3d> centres;
+  for (const PointList& o : seg.objects) {
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    for (const auto& p : o) c += p.cast<double>();
+    centres.push_back(c / static_cast<double>(o.size()));
+  }
+  out.selection = ehc_control::selectTarget(selector, centres, camera, generator.config().up);
+  if (!out.selection.selected()) {
+    if (!seg.reason.empty()) out.selection.detail += " (" + seg.reason + ")";
+    out.grasps.reason = out.selection.detail;
+    out.grasps.failure = GraspFailure::NoObject;
+    return out;
+  }
+  out.grasps = generateForTarget(generator, scene, viewpoint, &out.selection.centre, targeting);
+  return out;
+}
+
+}  // namespace ehc_perception

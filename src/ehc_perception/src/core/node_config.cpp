@@ -71,7 +71,9 @@ void GraspNodeConfig::validate() const {
 
 std::string GraspNodeConfig::summary() const {
   return "ehc_grasp_node: " + cloud_topic + " -> " + output_topic + " in '" + world_frame + "', target " +
-         (target_topic.empty() ? std::string("<none>") : target_topic) + ", " + targeting.summary() + ", " +
+         (target_topic.empty() ? std::string("<none>") : target_topic) + ", target selector " +
+         (selector_topic.empty() ? std::string("<none>") : selector_topic + " (cloud target -> " + cloud_target_topic + ")") +
+         ", " + targeting.summary() + ", " +
          "the newest cloud only, stale after " + std::to_string(stale_after) + " s, camera pose waited for " +
          std::to_string(tf_timeout) +
          " wall s\n  " + generator.summary();
@@ -89,6 +91,10 @@ GraspNodeConfig loadGraspNodeConfig(const std::string& path) {
   c.cloud_topic = n.get("cloud_topic", c.cloud_topic);
   c.target_topic = n.get("target_topic", c.target_topic);
   c.output_topic = n.get("output_topic", c.output_topic);
+  c.selector_topic = n.get("selector_topic", c.selector_topic);
+  c.cloud_target_topic = n.get("cloud_target_topic", c.cloud_target_topic);
+  if (!c.selector_topic.empty() && c.cloud_target_topic.empty())
+    n.fail("cloud_target_topic", "must not be empty while selector_topic is set");
   c.world_frame = n.get("world_frame", c.world_frame);
   c.targeting = loadGraspTargetingParams(n);
   c.tf_timeout = n.get("tf_timeout", c.tf_timeout);

@@ -25,10 +25,19 @@
 // _ack_topic:=<topic> every cloud received is acknowledged there exactly once, whatever came
 // of it (processed and its candidates published, skipped by the rate limit, or dropped with a
 // logged reason): a lock-step simulator's acknowledgement gate (ehc_common::LockstepAck, demo.sh).
+// Targets without tags: the current object's target selector comes on node.selector_topic
+// (ehc_msgs/TargetSelector, the sequencer's, latched; taken with the targets). While it is a
+// cloud kind (nearest, kth_from_left, kth_from_front) each processed cloud goes through
+// generateForCloudTarget (tracked near the latest target, else selected), and the target's pose
+// (ehc_control::cloudTargetPose of its cloud centre, stamped with the cloud) is published on
+// node.cloud_target_topic for the sequencer; no target: the reason is logged. A new cloud
+// selector forgets the targets of the one before (they belong to another object).
 // What became of the clouds (processed, over the budget, rate-limited, stale, no camera pose,
 // malformed, failed: ehc_perception::FrameCounts) is logged at most every 10 s while clouds are
 // dropped (and at the first cloud over the point budget).
 #include "ehc_msgs/GraspCandidates.h"
+#include "ehc_msgs/TargetSelector.h"
+#include "ehc_control/target_selector_msg.h"
 #include "ehc_common/logging.h"
 #include "ehc_common/lockstep_ack.h"
 #include "ehc_common/node_init.h"
@@ -73,6 +82,14 @@ class GraspNode {
       opts.transport_hints = fast;
       target_sub_ = nh.subscribe(opts);
     }
+    if (!cfg_.selector_topic.empty()) {  // on the targets' queue: taken when a cloud comes
+      ros::SubscribeOptions opts = ros::SubscribeOptions::create<ehc_msgs::TargetSelector>(
+          cfg_.selector_topic, 5, [this](const ehc_msgs::TargetSelectorConstPtr& m) { onSelector(*m); }, ros::VoidConstPtr(),
+          &target_queue_);
+      opts.transport_hints = fast;
+      selector_sub_ = nh.subscribe(opts);
+      cloud_target_pub_ = nh.advertise<geometry_msgs::PoseStamped>(cfg_.cloud_target_topic, 5);
+    }
   }
 
  private:
@@ -88,6 +105,19 @@ class GraspNode {
       ROS_WARN_STREAM_THROTTLE(kLogThrottle, "ehc_grasp_node: target at " << msg.header.stamp << " came after the cloud at "
                                                 << ros::Time().fromNSec(static_cast<std::uint64_t>(targets_.lastCloud()))
                                                 << ", which used an older one (receipt order)");
+  }
+
+  void onSelector(const ehc_msgs::TargetSelector& msg) {
+    try {
+      const ehc_control::TargetSelector s = ehc_control::selectorFromMsg(msg);
+      if (selector_ && selector_->summary() == s.summary() && selector_object_ == msg.object) return;
+      selector_ = s;
+      selector_object_ = msg.object;
+      if (s.fromCloud()) targets_ = GraspTargetHistory(cfg_.targeting.target_timeout, kMaxTargets);  // another object's
+      ROS_INFO_STREAM("ehc_grasp_node: target of '" << msg.object << "': " << s.summary());
+    } catch (const std::invalid_argument& e) {
+      ROS_ERROR_STREAM("ehc_grasp_node: target selector ignored: " << e.what());
+    }
   }
 
   static StampNs stampNs(const ros::Time& t) { return static_cast<StampNs>(t.toNSec()); }
@@ -136,7 +166,9 @@ class GraspNode {
       const Eigen::Isometry3d T = tf2::transformToEigen(tf);
       const PointList pts = transformPoints(read.points, T);
       const std::optional<Eigen::Vector3d> target = targets_.targetFor(stampNs(msg.header.stamp));
-      const GraspResult res = generateForTarget(gen_, pts, T.translation(), target ? &*target : nullptr, cfg_.targeting);
+      const bool cloud_target = selector_ && selector_->fromCloud();
+      const GraspResult res = cloud_target ? cloudTarget(pts, T, target, msg.header.stamp)
+                                           : generateForTarget(gen_, pts, T.translation(), target ? &*target : nullptr, cfg_.targeting);
       ehc_msgs::GraspCandidates out;
       out.header.stamp = msg.header.stamp;
       out.header.frame_id = cfg_.world_frame;
@@ -155,13 +187,32 @@ class GraspNode {
     }
   }
 
+  /// A cloud target's grasps; its pose published, or why there is none logged.
+  GraspResult cloudTarget(const PointList& pts, const Eigen::Isometry3d& T_world_cam, const std::optional<Eigen::Vector3d>& tracked,
+                          const ros::Time& stamp) {
+    const CloudTargetResult r = generateForCloudTarget(gen_, pts, T_world_cam, *selector_, tracked ? &*tracked : nullptr, cfg_.targeting);
+    if (!r.selection.selected()) {
+      ROS_WARN_STREAM_THROTTLE(kLogThrottle, "ehc_grasp_node: no target: " << r.selection.detail);
+      return r.grasps;
+    }
+    geometry_msgs::PoseStamped p;
+    p.header.frame_id = cfg_.world_frame;
+    p.header.stamp = stamp;
+    p.pose = ros_conv::toPose(ehc_control::cloudTargetPose(r.selection.centre, T_world_cam.translation(), gen_.config().up));
+    cloud_target_pub_.publish(p);
+    return r.grasps;
+  }
+
   GraspNodeConfig cfg_;
   GraspGenerator gen_;
   tf2_ros::Buffer tf_;
   tf2_ros::TransformListener listener_;
   ros::Publisher pub_;
   ros::CallbackQueue target_queue_;  ///< the target subscription's, run when a cloud comes (outlives it)
-  ros::Subscriber cloud_sub_, target_sub_;
+  ros::Subscriber cloud_sub_, target_sub_, selector_sub_;
+  ros::Publisher cloud_target_pub_;
+  std::optional<ehc_control::TargetSelector> selector_;  ///< the current object's (selector_topic)
+  std::string selector_object_;
   RateLimiter limiter_;  ///< targeting.max_rate_hz on the clouds' stamps
   static constexpr std::size_t kMaxTargets = GraspTargetHistory::kDefaultCapacity;  ///< also the target queue
   GraspTargetHistory targets_;  ///< which target serves which cloud, on their stamps

@@ -6,6 +6,7 @@
 // robot's start pose. ROS-free (yaml-cpp via ehc_common::ConfigNode); every error names the
 // file and the field.
 
+#include "ehc_control/target_selector.h"
 #include "ehc_sim/triangle_mesh.h"
 
 #include <Eigen/Core>
@@ -88,6 +89,11 @@ struct SceneConfig {
   std::vector<TableConfig> tables;
   std::vector<BodyConfig> objects;    ///< graspable, dynamic (mass > 0)
   std::vector<BodyConfig> obstacles;  ///< static
+  /// `targets:` (optional): the grasp sequencer's targets in its order (object i of the
+  /// sequencer = targets[i]), for the in-process pipeline and the experiments. Empty: every
+  /// object's target is its tag (the tag files'). A k-th selector's k is at most the number of
+  /// objects, a tag selector names a tag of the scene (errors name the file and the field).
+  std::vector<ehc_control::TargetSelector> targets;
 
   /// Cross-field checks (unique names, sizes, masses, tag fits its face...). Throws
   /// std::invalid_argument "[SceneConfig] <file>: ...".

@@ -3,6 +3,7 @@
 #include "ehc_common/config_node.h"
 #include "ehc_sim/fake_robot_config.h"
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 #include <sstream>
@@ -138,6 +139,20 @@ TableConfig loadTable(const ConfigNode& n) {
   return t;
 }
 
+/// One `targets:` entry (ehc_control::loadTargetSelector), checked against the scene's objects.
+ehc_control::TargetSelector loadSceneTarget(const ConfigNode& n, const SceneConfig& c) {
+  const ehc_control::TargetSelector t = ehc_control::loadTargetSelector(n);
+  using K = ehc_control::TargetSelectorKind;
+  if ((t.kind == K::KthFromLeft || t.kind == K::KthFromFront) && t.k > static_cast<int>(c.objects.size()))
+    n.fail("k", "= " + std::to_string(t.k) + " is out of range: the scene has " + std::to_string(c.objects.size()) +
+                    " object(s)");
+  if (t.kind == K::Tag && std::none_of(c.objects.begin(), c.objects.end(), [&](const BodyConfig& o) {
+        return o.tag.enabled && o.tag.id == t.tag_id;
+      }))
+    n.fail("tag_id", "= " + std::to_string(t.tag_id) + " is on none of the scene's objects");
+  return t;
+}
+
 SceneConfig loadScene(const ConfigNode& root) {
   const ConfigNode s = root.child("scene");
   SceneConfig c;
@@ -157,6 +172,7 @@ SceneConfig loadScene(const ConfigNode& root) {
     c.objects.push_back(loadBody(s.element("objects", i), true, 200));
   for (std::size_t i = 0; i < s.listSize("obstacles"); ++i)
     c.obstacles.push_back(loadBody(s.element("obstacles", i), false, 90));
+  for (std::size_t i = 0; i < s.listSize("targets"); ++i) c.targets.push_back(loadSceneTarget(s.element("targets", i), c));
   root.validate(c);
   root.rejectUnknownKeys();
   return c;
