@@ -3,6 +3,7 @@
 #include "ehc_common/config_node.h"
 #include "ehc_control/fcl_geometry.h"
 #include "ehc_control/whole_body_model.h"
+#include "ehc_perception/octree_shape_distance.h"
 
 #include <fcl/geometry/octree/octree.h>
 #include <fcl/narrowphase/distance.h>
@@ -365,7 +366,6 @@ std::vector<LinkObstacleDistance> ObstacleDistanceField::distances(
   fcl::DistanceRequest<double> req;
   req.enable_nearest_points = true;
   req.enable_signed_distance = true;
-  const fcl::Transform3<double> I = fcl::Transform3<double>::Identity();
   const fcl::OcTree<double>* tree = impl_->queryTree(zones_);
   if (!zones_.empty() && impl_->query_empty) return {};
   for (std::size_t i = 0; i < impl_->shapes.size(); ++i) {
@@ -386,11 +386,11 @@ std::vector<LinkObstacleDistance> ObstacleDistanceField::distances(
     const octomap::OcTree& octree = impl_->queryOctree(zones_);
     const double seeded = std::min(start, impl_->seedBound(i, octree, tf) + kSeedMargin);
     res.min_distance = seeded;
-    fcl::distance(tree, I, impl_->geoms[i].get(), tf, req, res);
+    octreeShapeDistance(*tree, *impl_->geoms[i], tf, req, &res);
     if (!(res.min_distance < seeded) && seeded < start) {  // GJK's tolerance: ask again unseeded
       res = fcl::DistanceResult<double>();
       res.min_distance = start;
-      fcl::distance(tree, I, impl_->geoms[i].get(), tf, req, res);
+      octreeShapeDistance(*tree, *impl_->geoms[i], tf, req, &res);
     }
     if (!(res.min_distance < start)) {
       impl_->last_voxel[i].reset();
