@@ -151,6 +151,10 @@ TagDetectorConfig loadTagDetectorConfig(const ConfigNode& n) {
 // ------------------------------------------------------------------------------ detector
 
 struct TagDetector::Impl {
+  /// The family is given to the constructor: setting it afterwards builds the (large) quick-decode
+  /// table of the default family and then that of the given one.
+  explicit Impl(const TagDetectorConfig& c)
+      : detector(familyFromString(c.family), poseMethodFromString(c.pose_method)) {}
   vpDetectorAprilTag detector;
   vpCameraParameters cam;
   vpCameraParameters window_cam;  ///< cam with the principal point in the window's pixels
@@ -159,15 +163,14 @@ struct TagDetector::Impl {
 };
 
 TagDetector::TagDetector(const TagDetectorConfig& config, const ehc_control::PinholeCamera& camera)
-    : config_(config), camera_(camera), impl_(std::make_unique<Impl>()) {
+    : config_(config), camera_(camera) {
   config_.validate();
   try {
     camera_.validate();
   } catch (const std::invalid_argument& e) {
     fail(std::string("bad camera: ") + e.what());
   }
-  impl_->detector.setAprilTagFamily(familyFromString(config_.family));
-  impl_->detector.setAprilTagPoseEstimationMethod(poseMethodFromString(config_.pose_method));
+  impl_ = std::make_unique<Impl>(config_);
   impl_->detector.setAprilTagQuadDecimate(static_cast<float>(config_.quad_decimate));
   impl_->detector.setAprilTagNbThreads(config_.threads);
   impl_->detector.setDisplayTag(false);
