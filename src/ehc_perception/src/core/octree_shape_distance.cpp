@@ -123,13 +123,14 @@ class PrunedOcTreeDistance {
     }
     return false;
   }
-  /// FCL's test (the shape's AABB against a cube around the node's bounding sphere), then ours.
+  /// Ours (usually the tighter, so first), then FCL's test (the shape's AABB against a cube around
+  /// the node's bounding sphere): a node is entered only if both admit it.
   bool admits(const fcl::AABB<double>& bv) const {
+    const double lower = pointDistance(shape_, tf_inv_ * bv.center()) - 0.5 * (bv.max_ - bv.min_).norm();
+    if (!(lower < result_->min_distance + kPruneMargin)) return false;
     fcl::AABB<double> loose;
     fcl::convertBV(bv, I(), loose);
-    if (!(loose.distance(aabb_) < result_->min_distance)) return false;
-    const double lower = pointDistance(shape_, tf_inv_ * bv.center()) - 0.5 * (bv.max_ - bv.min_).norm();
-    return lower < result_->min_distance + kPruneMargin;
+    return loose.distance(aabb_) < result_->min_distance;
   }
   /// An occupied voxel (or block of voxels) of the map: GJK and the result's update, as FCL.
   bool leaf(const fcl::AABB<double>& bv) {
