@@ -1,16 +1,24 @@
 // ObstacleDistanceField (OctoMap + FCL) on ehc_control::RobotCollisionModel (URDF collisions;
 // the model itself: ehc_control/test/test_robot_collision_model): distances against analytic
 // values, free-space clearing by rays, self filtering, the RealMan robot with its fingers fully
-// open, bad inputs and configs.
+// open, bad inputs and configs; octreeShapeDistance against fcl::distance.
 #include "ehc_common/config_node.h"
 #include "ehc_control/whole_body_model.h"
 #include "ehc_perception/obstacle_distance_field.h"
+#include "ehc_perception/octree_shape_distance.h"
 #include "ehc_test/perception_fixtures.h"
 
+#include <fcl/geometry/shape/box.h>
+#include <fcl/geometry/shape/cylinder.h>
+#include <fcl/geometry/shape/sphere.h>
+#include <fcl/narrowphase/distance.h>
 #include <gtest/gtest.h>
+#include <octomap/OcTree.h>
 
 #include <cmath>
+#include <cstdio>
 #include <limits>
+#include <random>
 
 using namespace ehc_perception;
 using ehc_control::RobotCollisionModel;
@@ -348,4 +356,126 @@ TEST(ObstacleDistanceField, ConfigValidationNamesTheField) {
   const ObstacleMapConfig c = loadObstacleMapConfig(ok.child("obstacle_map"));
   EXPECT_DOUBLE_EQ(c.resolution, 0.05);
   EXPECT_TRUE(c.links.empty());  // = the robot's checked links
+}
+
+// octreeShapeDistance skips only voxels that cannot lower the minimum, so it must give FCL's
+// answer exactly: random maps (scattered voxels, slabs, pruned blocks; point clouds with rays),
+// random boxes, cylinders and spheres at random poses and random starting bounds; with exclusion
+// zones, FCL's answer on the map's copy without the excluded voxels.
+namespace {
+
+struct RandomQueries {
+  explicit RandomQueries(unsigned seed) : rng(seed) {}
+  std::mt19937 rng;
+  double in(double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(rng); }
+
+  /// A map as the field builds it: point clouds (a table-like slab and random boxes' surfaces)
+  /// inserted with rays from a sensor above, pruned as OctoMap keeps it.
+  std::shared_ptr<octomap::OcTree> cloudMap() {
+    auto tree = std::make_shared<octomap::OcTree>(in(0.01, 0.05));
+    octomap::Pointcloud pc;
+    const double z = in(0.0, 0.3);
+    for (double x = -0.4; x < 0.4; x += 0.005)
+      for (double y = -0.3; y < 0.3; y += 0.005) pc.push_back(x, y, z);
+    for (int b = 0; b < 4; ++b) {
+      const Eigen::Vector3d c(in(-0.3, 0.3), in(-0.2, 0.2), z + in(0.02, 0.2));
+      const double h = in(0.02, 0.08);
+      for (int k = 0; k < 400; ++k) pc.push_back(c.x() + in(-h, h), c.y() + in(-h, h), c.z() + h);
+    }
+    for (int rep = 0; rep < 3; ++rep)  // repeated: voxels saturate and prune into blocks
+      tree->insertPointCloud(pc, octomap::point3d(in(-0.5, 0.5), in(-0.5, 0.5), 1.2), 3.0, false, true);
+    return tree;
+  }
+  /// Scattered voxels and a slab set voxel by voxel (leaves of differing values).
+  std::shared_ptr<octomap::OcTree> voxelMap() {
+    auto tree = std::make_shared<octomap::OcTree>(in(0.01, 0.05));
+    for (int i = 0; i < 300; ++i) tree->updateNode(octomap::point3d(in(-0.5, 0.5), in(-0.5, 0.5), in(-0.2, 0.6)), true);
+    const double z = in(-0.1, 0.4);
+    for (double x = -0.4; x < 0.4; x += tree->getResolution())
+      for (double y = -0.3; y < 0.3; y += tree->getResolution())
+        for (int k = 0; k < 4; ++k) tree->updateNode(octomap::point3d(x, y, z), true);
+    tree->updateInnerOccupancy();
+    return tree;
+  }
+  std::shared_ptr<fcl::CollisionGeometry<double>> shape(int kind) {
+    std::shared_ptr<fcl::CollisionGeometry<double>> g;
+    switch (kind % 3) {
+      case 0: g = std::make_shared<fcl::Box<double>>(in(0.01, 0.3), in(0.01, 0.3), in(0.01, 0.3)); break;
+      case 1: g = std::make_shared<fcl::Cylinder<double>>(in(0.01, 0.08), in(0.02, 0.4)); break;
+      default: g = std::make_shared<fcl::Sphere<double>>(in(0.01, 0.1)); break;
+    }
+    g->computeLocalAABB();
+    return g;
+  }
+  fcl::Transform3<double> pose() {
+    fcl::Transform3<double> tf = fcl::Transform3<double>::Identity();
+    tf.linear() = Eigen::Quaterniond(Eigen::Vector4d(in(-1, 1), in(-1, 1), in(-1, 1), in(-1, 1)).normalized())
+                      .toRotationMatrix();
+    tf.translation() = Eigen::Vector3d(in(-0.7, 0.7), in(-0.7, 0.7), in(-0.3, 0.9));
+    return tf;
+  }
+};
+
+/// octreeShapeDistance (with `exclusion`, if given) against fcl::distance on `reference`; returns
+/// whether a voxel was found.
+bool expectSameAsFcl(const fcl::OcTree<double>& tree, const fcl::OcTree<double>& reference,
+                     const fcl::CollisionGeometry<double>& shape, const fcl::Transform3<double>& tf, double bound,
+                     const OcTreeExclusion* exclusion) {
+  fcl::DistanceRequest<double> req;
+  req.enable_nearest_points = true;
+  req.enable_signed_distance = true;
+  fcl::DistanceResult<double> ours, fcls;
+  ours.min_distance = fcls.min_distance = bound;
+  for (auto* r : {&ours, &fcls}) r->nearest_points[0] = r->nearest_points[1] = Eigen::Vector3d::Zero();
+  octreeShapeDistance(tree, shape, tf, req, &ours, exclusion);
+  fcl::distance(&reference, fcl::Transform3<double>::Identity(), &shape, tf, req, fcls);
+  EXPECT_EQ(ours.min_distance, fcls.min_distance);
+  EXPECT_EQ(ours.nearest_points[0], fcls.nearest_points[0]);
+  EXPECT_EQ(ours.nearest_points[1], fcls.nearest_points[1]);
+  return fcls.o1 != nullptr;
+}
+
+}  // namespace
+
+TEST(OctreeShapeDistance, EqualsFclDistanceBitForBit) {
+  const unsigned seed = std::random_device{}();
+  std::printf("seed %u\n", seed);
+  RandomQueries r(seed);
+  int found = 0, queries = 0;
+  for (int map = 0; map < 8; ++map) {
+    const std::shared_ptr<octomap::OcTree> tree = map % 2 ? r.cloudMap() : r.voxelMap();
+    const fcl::OcTree<double> octree(std::static_pointer_cast<const octomap::OcTree>(tree));
+    for (int q = 0; q < 60; ++q, ++queries) {
+      SCOPED_TRACE("seed " + std::to_string(seed) + " map " + std::to_string(map) + " query " + std::to_string(q));
+      const auto shape = r.shape(q);
+      const auto tf = r.pose();
+      found += expectSameAsFcl(octree, octree, *shape, tf, r.in(0.0, 0.4), nullptr);
+      if (::testing::Test::HasFailure()) return;
+    }
+  }
+  EXPECT_GT(found, queries / 10);  // queries near the maps
+}
+
+TEST(OctreeShapeDistance, ExclusionZonesGiveTheAnswerOnTheCopyWithoutThem) {
+  const unsigned seed = std::random_device{}();
+  std::printf("seed %u\n", seed);
+  RandomQueries r(seed);
+  int found = 0, queries = 0;
+  for (int map = 0; map < 8; ++map) {
+    const std::shared_ptr<octomap::OcTree> tree = r.cloudMap();
+    const fcl::OcTree<double> octree(std::static_pointer_cast<const octomap::OcTree>(tree));
+    std::vector<ExclusionZone> zones(1 + map % 3);
+    for (ExclusionZone& z : zones) z = {Eigen::Vector3d(r.in(-0.4, 0.4), r.in(-0.3, 0.3), r.in(0.0, 0.4)), r.in(0.01, 0.3)};
+    const fcl::OcTree<double> copy(copyWithoutZones(*tree, zones));
+    const OcTreeExclusion exclusion{*tree, zones, [&copy]() -> const fcl::OcTree<double>& { return copy; }};
+    for (int q = 0; q < 60; ++q, ++queries) {
+      SCOPED_TRACE("seed " + std::to_string(seed) + " map " + std::to_string(map) + " query " + std::to_string(q));
+      const auto shape = r.shape(q);
+      fcl::Transform3<double> tf = r.pose();
+      if (q % 2) tf.translation() = zones[0].centre + Eigen::Vector3d(r.in(-0.2, 0.2), r.in(-0.2, 0.2), r.in(-0.2, 0.2));
+      found += expectSameAsFcl(octree, copy, *shape, tf, r.in(0.0, 0.4), &exclusion);
+      if (::testing::Test::HasFailure()) return;
+    }
+  }
+  EXPECT_GT(found, queries / 10);
 }

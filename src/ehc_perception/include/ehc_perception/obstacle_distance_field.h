@@ -63,6 +63,13 @@ struct ExclusionZone {
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();  ///< world
   double radius = 0.0;                               ///< m, in [0, kMaxRadius]
   static constexpr double kMaxRadius = 1.0;
+  bool contains(const Eigen::Vector3d& p) const { return (p - centre).norm() <= radius; }
+  /// True if `p` lies in one of `zones`.
+  static bool inAny(const std::vector<ExclusionZone>& zones, const Eigen::Vector3d& p) {
+    for (const ExclusionZone& z : zones)
+      if (z.contains(p)) return true;
+    return false;
+  }
   bool operator==(const ExclusionZone& o) const { return centre == o.centre && radius == o.radius; }
 };
 

@@ -3,6 +3,7 @@
 #include "ehc_common/config_node.h"
 #include "ehc_control/fcl_geometry.h"
 #include "ehc_control/whole_body_model.h"
+#include "ehc_perception/octree_shape_distance.h"
 
 #include <fcl/geometry/octree/octree.h>
 #include <fcl/narrowphase/distance.h>
@@ -74,39 +75,6 @@ ObstacleMapConfig loadObstacleMapConfig(const ehc_common::ConfigNode& n) {
 
 // ------------------------------------------------------------------------------ field
 
-namespace {
-/// Calls f(centre, edge, log-odds) for every occupied leaf of `t` (a pruned one included), and
-/// does not descend into free subtrees: the map's inner nodes hold their children's maximum
-/// (insertions update them), so a free inner node has no occupied voxel below it. The map is
-/// mostly free space the rays cleared; a leaf iterator would visit all of it.
-template <class F>
-void forEachOccupiedLeaf(const octomap::OcTree& t, F&& f) {
-  struct Item {
-    const octomap::OcTreeNode* node;
-    octomap::OcTreeKey key;
-    unsigned depth;
-  };
-  if (!t.getRoot()) return;
-  const auto centre = static_cast<octomap::key_type>(1u << (t.getTreeDepth() - 1));
-  std::vector<Item> stack{{t.getRoot(), octomap::OcTreeKey(centre, centre, centre), 0}};
-  while (!stack.empty()) {
-    const Item it = stack.back();
-    stack.pop_back();
-    if (!t.isNodeOccupied(it.node)) continue;
-    if (!t.nodeHasChildren(it.node)) {
-      f(t.keyToCoord(it.key, it.depth), t.getNodeSize(it.depth), it.node->getLogOdds());
-      continue;
-    }
-    const auto offset = static_cast<octomap::key_type>(centre >> (it.depth + 1));
-    for (unsigned i = 0; i < 8; ++i) {
-      if (!t.nodeChildExists(it.node, i)) continue;
-      octomap::OcTreeKey child;
-      octomap::computeChildKey(i, offset, it.key, child);
-      stack.push_back({t.getNodeChild(it.node, i), child, it.depth + 1});
-    }
-  }
-}
-}  // namespace
 
 namespace {
 /// m: the seeded bound sits this far above the distance to the remembered voxel, well above
@@ -125,25 +93,37 @@ struct ObstacleDistanceField::Impl {
   /// Per shape: a voxel inside the obstacle its last query found (the queries follow the robot
   /// at the publish rate, so that voxel is near the next answer). See seedBound.
   std::vector<std::optional<octomap::OcTreeKey>> last_voxel;
-  // The map without the exclusion zones, rebuilt when the map changes or the zones move
-  // (see zonesMoved).
-  std::shared_ptr<fcl::OcTree<double>> query_tree;
-  std::shared_ptr<const octomap::OcTree> query_octree;  ///< the octomap tree inside query_tree
-  std::vector<ExclusionZone> built_zones;  ///< the zones query_tree was built with
-  bool query_dirty = true;
-  bool query_empty = false;  ///< every occupied voxel is excluded
+  // The exclusion zones the queries use (active_zones): the zones given, taken over when the map
+  // changed or a zone moved (see zonesMoved); the queries leave out the voxels in them
+  // (OcTreeExclusion) and only FCL's fallbacks read the map's copy without them (filtered).
+  std::vector<ExclusionZone> active_zones;
+  bool zones_taken = false;  ///< active_zones were taken at least once
+  bool map_changed = true;   ///< since active_zones were taken
+  std::shared_ptr<fcl::OcTree<double>> filtered_tree;  ///< built from active_zones when first asked
+  bool filtered_stale = true;
 
-  /// A zone carried by the hand is re-sent every control cycle with sub-millimetre motion;
-  /// rebuilding the filtered copy for that would copy the map at the query rate. Rebuild only
-  /// when a zone moved or grew by a quarter voxel since the last build (or the count changed).
+  /// A zone carried by the hand is re-sent every control cycle with sub-millimetre motion; the
+  /// queries keep the zones they have unless the map changed, or a zone moved or grew by a
+  /// quarter voxel since they were taken (or the count changed).
   bool zonesMoved(const std::vector<ExclusionZone>& zones) const {
-    if (zones.size() != built_zones.size()) return true;
+    if (zones.size() != active_zones.size()) return true;
     const double tol = 0.25 * tree->getResolution();
     for (std::size_t i = 0; i < zones.size(); ++i)
-      if ((zones[i].centre - built_zones[i].centre).norm() >= tol ||
-          std::abs(zones[i].radius - built_zones[i].radius) >= tol)
+      if ((zones[i].centre - active_zones[i].centre).norm() >= tol ||
+          std::abs(zones[i].radius - active_zones[i].radius) >= tol)
         return true;
     return false;
+  }
+  /// The zones the queries use given the field's `zones` (empty: none).
+  const std::vector<ExclusionZone>& activeZones(const std::vector<ExclusionZone>& zones) {
+    if (zones.empty()) return zones;
+    if (map_changed || !zones_taken || zonesMoved(zones)) {
+      active_zones = zones;
+      zones_taken = true;
+      map_changed = false;
+      filtered_stale = true;
+    }
+    return active_zones;
   }
 
   void reset(const ObstacleMapConfig& c) {
@@ -156,7 +136,7 @@ struct ObstacleDistanceField::Impl {
     // FCL reads the occupancy threshold from the tree at construction.
     fcl_tree = std::make_shared<fcl::OcTree<double>>(
         std::static_pointer_cast<const octomap::OcTree>(tree));
-    query_dirty = true;
+    map_changed = true;
   }
 
   /// An upper bound on the distance of shape `i` (posed at `tf`) to the obstacles of `octree`:
@@ -164,11 +144,13 @@ struct ObstacleDistanceField::Impl {
   /// otherwise). FCL's octree traversal prunes every node farther than its starting bound, so
   /// starting from this bound instead of the influence distance visits far fewer voxels and finds
   /// the same minimum (every voxel nearer than the bound is still visited).
-  double seedBound(std::size_t i, const octomap::OcTree& octree, const fcl::Transform3<double>& tf) const {
+  double seedBound(std::size_t i, const std::vector<ExclusionZone>& zones, const fcl::Transform3<double>& tf) const {
+    const octomap::OcTree& octree = *tree;
     if (!last_voxel[i]) return std::numeric_limits<double>::infinity();
     const octomap::OcTreeNode* node = octree.search(*last_voxel[i]);
     if (!node || !octree.isNodeOccupied(node)) return std::numeric_limits<double>::infinity();
     const octomap::point3d c = octree.keyToCoord(*last_voxel[i]);
+    if (ExclusionZone::inAny(zones, Eigen::Vector3d(c.x(), c.y(), c.z()))) return std::numeric_limits<double>::infinity();
     const double r = octree.getResolution();
     const fcl::Box<double> voxel(r, r, r);
     fcl::Transform3<double> at = fcl::Transform3<double>::Identity();
@@ -181,55 +163,22 @@ struct ObstacleDistanceField::Impl {
 
   /// Remembers the voxel behind obstacle point `p` (on the voxel's face, `normal` pointing away
   /// from it) for seedBound.
-  void rememberVoxel(std::size_t i, const octomap::OcTree& octree, const Eigen::Vector3d& p, const Eigen::Vector3d& normal) {
-    const Eigen::Vector3d inside = p - 0.25 * octree.getResolution() * normal;
+  void rememberVoxel(std::size_t i, const Eigen::Vector3d& p, const Eigen::Vector3d& normal) {
+    const Eigen::Vector3d inside = p - 0.25 * tree->getResolution() * normal;
     octomap::OcTreeKey key;
-    if (octree.coordToKeyChecked(inside.x(), inside.y(), inside.z(), key)) last_voxel[i] = key;
+    if (tree->coordToKeyChecked(inside.x(), inside.y(), inside.z(), key)) last_voxel[i] = key;
     else last_voxel[i].reset();
   }
 
-  /// The octomap tree behind queryTree (the map or its copy without the excluded voxels).
-  const octomap::OcTree& queryOctree(const std::vector<ExclusionZone>& zones) const {
-    return zones.empty() || !query_octree ? *tree : *query_octree;
-  }
-
-  /// The tree the distance queries use: the map itself, or a copy without the voxels whose
-  /// centre lies in an exclusion zone.
-  const fcl::OcTree<double>* queryTree(const std::vector<ExclusionZone>& zones) {
-    if (zones.empty()) return fcl_tree.get();
-    if (query_dirty || !query_tree || zonesMoved(zones)) {
-      // Only the occupied voxels matter to the distance queries: copy those outside every
-      // zone (pruned nodes voxel by voxel, so a node straddling a zone boundary is split).
-      auto copy = std::make_shared<octomap::OcTree>(tree->getResolution());
-      copy->setOccupancyThres(tree->getOccupancyThres());
-      copy->setClampingThresMin(tree->getClampingThresMin());
-      copy->setClampingThresMax(tree->getClampingThresMax());
-      const double res = tree->getResolution();
-      auto excluded = [&zones](const Eigen::Vector3d& p) {
-        for (const ExclusionZone& z : zones)
-          if ((p - z.centre).norm() <= z.radius) return true;
-        return false;
-      };
-      forEachOccupiedLeaf(*tree, [&](const octomap::point3d& c, double size, float value) {
-        const int n = std::max(1, static_cast<int>(std::lround(size / res)));
-        const double first = -0.5 * (n - 1) * res;
-        for (int i = 0; i < n; ++i)
-          for (int j = 0; j < n; ++j)
-            for (int k = 0; k < n; ++k) {
-              const Eigen::Vector3d p(c.x() + first + i * res, c.y() + first + j * res, c.z() + first + k * res);
-              if (excluded(p)) continue;
-              copy->setNodeValue(p.x(), p.y(), p.z(), value, /*lazy_eval=*/true);
-            }
-      });
-      copy->updateInnerOccupancy();
-      copy->prune();
-      query_empty = copy->size() == 0;
-      query_tree = std::make_shared<fcl::OcTree<double>>(std::static_pointer_cast<const octomap::OcTree>(copy));
-      query_octree = copy;
-      built_zones = zones;
-      query_dirty = false;
+  /// The map without the voxels whose centre lies in an active zone (fcl::distance's fallbacks,
+  /// octreeShapeDistance), rebuilt when the active zones were taken anew.
+  const fcl::OcTree<double>& filteredTree() {
+    if (filtered_stale || !filtered_tree) {
+      const std::shared_ptr<const octomap::OcTree> copy = copyWithoutZones(*tree, active_zones);
+      filtered_tree = std::make_shared<fcl::OcTree<double>>(copy);
+      filtered_stale = false;
     }
-    return query_tree.get();
+    return *filtered_tree;
   }
 };
 
@@ -260,7 +209,7 @@ void ObstacleDistanceField::setExclusionZones(const std::vector<ExclusionZone>& 
       fail("exclusion zone radius " + std::to_string(z.radius) + " m is outside [0, " +
            std::to_string(ExclusionZone::kMaxRadius) + "]");
   }
-  zones_ = zones;  // the filtered copy follows when the zones have moved (Impl::zonesMoved)
+  zones_ = zones;  // the queries take them when they have moved (Impl::activeZones)
 }
 
 ObstacleDistanceField::InsertStats ObstacleDistanceField::insertCloud(
@@ -318,7 +267,7 @@ ObstacleDistanceField::InsertStats ObstacleDistanceField::insertCloud(
   }
   st.inserted = static_cast<int>(pc.size());
   if (!pc.size()) return st;
-  impl_->query_dirty = true;
+  impl_->map_changed = true;
   impl_->tree->insertPointCloud(
       pc, octomap::point3d(static_cast<float>(origin.x()), static_cast<float>(origin.y()),
                            static_cast<float>(origin.z())),
@@ -337,7 +286,7 @@ void ObstacleDistanceField::addOccupiedBox(const Eigen::Vector3d& lo, const Eige
         impl_->tree->updateNode(static_cast<float>(x), static_cast<float>(y),
                                 static_cast<float>(z), true, /*lazy_eval=*/true);
   impl_->tree->updateInnerOccupancy();
-  impl_->query_dirty = true;
+  impl_->map_changed = true;
 }
 
 ObstacleDistanceField::Cell ObstacleDistanceField::cell(const Eigen::Vector3d& p) const {
@@ -365,9 +314,9 @@ std::vector<LinkObstacleDistance> ObstacleDistanceField::distances(
   fcl::DistanceRequest<double> req;
   req.enable_nearest_points = true;
   req.enable_signed_distance = true;
-  const fcl::Transform3<double> I = fcl::Transform3<double>::Identity();
-  const fcl::OcTree<double>* tree = impl_->queryTree(zones_);
-  if (!zones_.empty() && impl_->query_empty) return {};
+  const std::vector<ExclusionZone>& zones = impl_->activeZones(zones_);
+  const OcTreeExclusion exclusion{*impl_->tree, zones, [this]() -> const fcl::OcTree<double>& { return impl_->filteredTree(); }};
+  const OcTreeExclusion* excluding = zones.empty() ? nullptr : &exclusion;
   for (std::size_t i = 0; i < impl_->shapes.size(); ++i) {
     const std::size_t li = impl_->shapes[i].link;
     const ehc_control::RobotLinkGeometry& link = robot_.links()[li];
@@ -383,14 +332,13 @@ std::vector<LinkObstacleDistance> ObstacleDistanceField::distances(
     // still: just above the distance to the voxel the last query found (seedBound).
     const double start = found[li] ? std::min(best[li].distance, config_.influence_distance)
                                    : config_.influence_distance;
-    const octomap::OcTree& octree = impl_->queryOctree(zones_);
-    const double seeded = std::min(start, impl_->seedBound(i, octree, tf) + kSeedMargin);
+    const double seeded = std::min(start, impl_->seedBound(i, zones, tf) + kSeedMargin);
     res.min_distance = seeded;
-    fcl::distance(tree, I, impl_->geoms[i].get(), tf, req, res);
+    octreeShapeDistance(*impl_->fcl_tree, *impl_->geoms[i], tf, req, &res, excluding);
     if (!(res.min_distance < seeded) && seeded < start) {  // GJK's tolerance: ask again unseeded
       res = fcl::DistanceResult<double>();
       res.min_distance = start;
-      fcl::distance(tree, I, impl_->geoms[i].get(), tf, req, res);
+      octreeShapeDistance(*impl_->fcl_tree, *impl_->geoms[i], tf, req, &res, excluding);
     }
     if (!(res.min_distance < start)) {
       impl_->last_voxel[i].reset();
@@ -405,7 +353,7 @@ std::vector<LinkObstacleDistance> ObstacleDistanceField::distances(
     if (d.distance <= 0.0 || nrm.norm() < 1e-9) nrm = Ts.translation() - d.obstacle_point;
     if (nrm.norm() < 1e-9) nrm = Eigen::Vector3d::UnitZ();
     d.normal = nrm.normalized();
-    if (d.distance > 0.0) impl_->rememberVoxel(i, octree, d.obstacle_point, d.normal);
+    if (d.distance > 0.0) impl_->rememberVoxel(i, d.obstacle_point, d.normal);
     else impl_->last_voxel[i].reset();
     best[li] = d;
     found[li] = true;

@@ -11,6 +11,9 @@
 #include <visp3/io/vpImageIo.h>
 
 #include <algorithm>
+#include <map>
+#include <memory>
+#include <mutex>
 #include <cmath>
 #include <limits>
 #include <vector>
@@ -150,8 +153,55 @@ TagDetectorConfig loadTagDetectorConfig(const ConfigNode& n) {
 
 // ------------------------------------------------------------------------------ detector
 
+namespace {
+/// vpDetectorAprilTag instances kept for reuse, per family: building one builds its family's
+/// quick-decode table (tens of ms for 36h11), and the in-process experiments build a TagDetector
+/// per trial. A detector keeps nothing from one detect() to the next that its results depend on,
+/// and TagDetector sets every option it uses when it takes one. Thread-safe (experiment jobs).
+class DetectorPool {
+ public:
+  static DetectorPool& instance() {
+    static DetectorPool pool;
+    return pool;
+  }
+  std::unique_ptr<vpDetectorAprilTag> take(vpDetectorAprilTag::vpAprilTagFamily family) {
+    {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      auto& spare = free_[family];
+      if (!spare.empty()) {
+        std::unique_ptr<vpDetectorAprilTag> d = std::move(spare.back());
+        spare.pop_back();
+        return d;
+      }
+    }
+    return std::make_unique<vpDetectorAprilTag>(family);
+  }
+  void give(vpDetectorAprilTag::vpAprilTagFamily family, std::unique_ptr<vpDetectorAprilTag> d) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    free_[family].push_back(std::move(d));
+  }
+
+ private:
+  std::mutex mutex_;
+  std::map<vpDetectorAprilTag::vpAprilTagFamily, std::vector<std::unique_ptr<vpDetectorAprilTag>>> free_;
+};
+}  // namespace
+
 struct TagDetector::Impl {
-  vpDetectorAprilTag detector;
+  /// A detector of the configured family (DetectorPool), every option set from `c`.
+  explicit Impl(const TagDetectorConfig& c)
+      : family(familyFromString(c.family)), owned(DetectorPool::instance().take(family)), detector(*owned) {
+    detector.setAprilTagPoseEstimationMethod(poseMethodFromString(c.pose_method));
+    detector.setAprilTagQuadDecimate(static_cast<float>(c.quad_decimate));
+    detector.setAprilTagNbThreads(c.threads);
+    detector.setDisplayTag(false);
+  }
+  ~Impl() { DetectorPool::instance().give(family, std::move(owned)); }
+  Impl(const Impl&) = delete;
+  Impl& operator=(const Impl&) = delete;
+  vpDetectorAprilTag::vpAprilTagFamily family;
+  std::unique_ptr<vpDetectorAprilTag> owned;
+  vpDetectorAprilTag& detector;
   vpCameraParameters cam;
   vpCameraParameters window_cam;  ///< cam with the principal point in the window's pixels
   vpImage<unsigned char> buffer;
@@ -159,18 +209,14 @@ struct TagDetector::Impl {
 };
 
 TagDetector::TagDetector(const TagDetectorConfig& config, const ehc_control::PinholeCamera& camera)
-    : config_(config), camera_(camera), impl_(std::make_unique<Impl>()) {
+    : config_(config), camera_(camera) {
   config_.validate();
   try {
     camera_.validate();
   } catch (const std::invalid_argument& e) {
     fail(std::string("bad camera: ") + e.what());
   }
-  impl_->detector.setAprilTagFamily(familyFromString(config_.family));
-  impl_->detector.setAprilTagPoseEstimationMethod(poseMethodFromString(config_.pose_method));
-  impl_->detector.setAprilTagQuadDecimate(static_cast<float>(config_.quad_decimate));
-  impl_->detector.setAprilTagNbThreads(config_.threads);
-  impl_->detector.setDisplayTag(false);
+  impl_ = std::make_unique<Impl>(config_);
   impl_->cam.initPersProjWithoutDistortion(camera_.fx, camera_.fy, camera_.cx, camera_.cy);
 }
 
