@@ -100,3 +100,13 @@ TEST(ExperimentCli, ReachTakesTheTargetGeneratorAndItsFields) {
   EXPECT_EQ(bad.code, 2);
   EXPECT_NE(bad.out.find("min_distance"), std::string::npos) << bad.out;
 }
+
+TEST(ExperimentCli, LibraryIsAnExp2OptionAndPosesRunsWithoutIt) {
+  const std::string out = "/tmp/ehc_cli_exp_poses";
+  const Result ok = run("poses --method ehc --sets 1 --per-set 1 --object-time-limit 1 --out " + out);
+  ASSERT_EQ(ok.code, 0) << ok.out;
+  EXPECT_FALSE(readText(out + "/summary.json").empty());
+  const Result bad = run("poses --method ehc --sets 1 --per-set 1 --library tuning --out " + out + "_bad");
+  EXPECT_EQ(bad.code, 2) << bad.out;
+  EXPECT_NE(bad.out.find("--library"), std::string::npos) << bad.out;
+}

@@ -164,7 +164,8 @@ int runGrasp(int argc, char** argv) {
   p.jitter_yaw_deg = cli.real("jitter-yaw", p.jitter_yaw_deg);
   if (p.protocol == ehc_bringup::GraspProtocol::Table) p.per_set = 1;
   if (cli.has("object-time-limit")) p.object_time_limit = cli.real("object-time-limit", 30.0);
-  if (cli.has("library")) p.library_split = cli.choice("library", {"validation", "tuning"}, "validation");
+  if (p.protocol == ehc_bringup::GraspProtocol::Table && cli.has("library"))
+    p.library_split = cli.choice("library", {"validation", "tuning"}, "validation");
   if (cli.has("base-model"))
     p.base_model = ehc_sim::baseModelTypeFromString(cli.choice("base-model", {"ideal", "water2"}, "ideal"));
   if (cli.has("base-imprecision")) p.base_imprecision = baseImprecisionLevel(cli, 0.0);
