@@ -254,6 +254,88 @@ double angleBetween(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
   return Eigen::AngleAxisd(a.linear().transpose() * b.linear()).angle();
 }
 
+/// Every JointPos frame of [t0, t_reached) was checked on arrival; the stream's rate and jitter.
+void checkJointPosStream(double t0, double t_reached, int frames_before) {
+  // Every JointPos frame was checked on arrival (FakeRmDriver::onFrame); none broke a limit.
+  const auto frames = g_driver->framesBetween(t0, t_reached);
+  ASSERT_GE(frames.size(), 100u) << "the arm was streamed to while the controller ran";
+  EXPECT_GT(g_driver->frames() - frames_before, 0);
+  EXPECT_EQ(g_driver->violations(), 0);
+  EXPECT_LE(g_driver->maxStepRatio(), 1.0 + 1e-3) << "largest step / per-frame bound";
+  bool arm_moved = false;
+  for (std::size_t k = 1; k < frames.size() && !arm_moved; ++k) arm_moved = !(frames[k].q == frames[0].q);
+  EXPECT_TRUE(arm_moved);
+  // Rate and jitter, measured over every frame of the approach (generous under CI load).
+  std::vector<double> dt;
+  for (std::size_t k = 1; k < frames.size(); ++k) dt.push_back(frames[k].time - frames[k - 1].time);
+  std::sort(dt.begin(), dt.end());
+  const double period = 1.0 / g_stream_rate;
+  EXPECT_NEAR(dt[dt.size() / 2], period, 0.5 * period) << "median JointPos period";
+  EXPECT_LT(dt[dt.size() * 95 / 100], 0.1) << "95th percentile JointPos period";
+  const double mean_rate = (frames.size() - 1) / (frames.back().time - frames.front().time);
+  EXPECT_GT(mean_rate, 0.5 * g_stream_rate);
+  testing::Test::RecordProperty("jointpos_frames", static_cast<int>(frames.size()));
+  testing::Test::RecordProperty("jointpos_max_step_over_bound", std::to_string(g_driver->maxStepRatio()));
+  testing::Test::RecordProperty("jointpos_median_period_ms", std::to_string(1e3 * dt[dt.size() / 2]));
+  testing::Test::RecordProperty("jointpos_p95_period_ms", std::to_string(1e3 * dt[dt.size() * 95 / 100]));
+}
+
+/// Every joy_control request of [t0, t_reached): finite, inside the Water2 bounds, resent often.
+void checkJoyControls(double t0, double t_reached) {
+  // Every joy_control request: finite and inside the Water2 bounds; resent >= 10 Hz on average.
+  int joys = 0, moving = 0;
+  for (const auto& r : g_server->requests()) {
+    if (!r.joy || r.time < t0 || r.time >= t_reached) continue;
+    ++joys;
+    EXPECT_TRUE(std::isfinite(r.linear) && std::isfinite(r.angular)) << r.text;
+    EXPECT_LE(std::abs(r.linear), 0.5 + 1e-9) << r.text;
+    EXPECT_LE(std::abs(r.angular), 1.0 + 1e-9) << r.text;
+    moving += r.linear != 0.0 || r.angular != 0.0;
+  }
+  EXPECT_GT(moving, 0);
+  EXPECT_GE(joys / std::max(1e-3, t_reached - t0), 10.0) << joys << " joy_control requests";
+}
+
+/// Without a target the whole chain comes to rest.
+void checkChainComesToRest() {
+  // Target no longer published: the controller stops (TARGET_LOST, zero commands), the adapter
+  // holds, the bridge sends zero. After a settling second the whole chain is at rest.
+  ASSERT_TRUE(waitFor([] { return g_seen->phase() == "TARGET_LOST"; }, 5.0)) << g_seen->phase();
+  sleepFor(1.5);
+  const double t_rest = now();
+  double rx0, ry0, rth0;
+  g_server->pose(rx0, ry0, rth0);
+  sleepFor(2.0);
+  const auto rest = g_driver->framesBetween(t_rest, now());
+  for (const auto& f : rest) EXPECT_TRUE(f.q == rest.front().q) << "arm moved without a target";
+  int rest_joys = 0;
+  for (const auto& r : g_server->requests()) {
+    if (!r.joy || r.time < t_rest) continue;
+    ++rest_joys;
+    EXPECT_EQ(r.linear, 0.0) << r.text;
+    EXPECT_EQ(r.angular, 0.0) << r.text;
+  }
+  double rx1, ry1, rth1;
+  g_server->pose(rx1, ry1, rth1);
+  EXPECT_NEAR(rx1, rx0, 1e-6);
+  EXPECT_NEAR(ry1, ry0, 1e-6);
+  EXPECT_NEAR(rth1, rth0, 1e-6);
+  EXPECT_EQ(g_driver->violations(), 0);
+  EXPECT_FALSE(bridgeExited()) << "water2_base_bridge died during the run";
+}
+
+/// Nothing was NaN anywhere in the loop.
+void checkNothingWasNan() {
+  std::lock_guard<std::mutex> lock(g_seen->mutex);
+  EXPECT_GT(g_seen->cmd_vels, 0);
+  EXPECT_GT(g_seen->arm_cmds, 0);
+  EXPECT_GT(g_seen->odoms, 0);
+  EXPECT_EQ(g_seen->nan_cmd_vel, 0);
+  EXPECT_EQ(g_seen->nan_arm_cmd, 0);
+  EXPECT_EQ(g_seen->nan_status, 0);
+  EXPECT_EQ(g_seen->nan_odom, 0);
+}
+
 }  // namespace
 
 TEST(RealmanClosedLoop, ControllerReachesTargetThroughAdaptersAndEveryFrameObeysTheLimits) {
@@ -324,76 +406,10 @@ TEST(RealmanClosedLoop, ControllerReachesTargetThroughAdaptersAndEveryFrameObeys
   g_server->pose(bx, by, bth);
   EXPECT_GT(bx, 0.3) << "base pose (" << bx << ", " << by << ", " << bth << ")";
 
-  // Every JointPos frame was checked on arrival (FakeRmDriver::onFrame); none broke a limit.
-  const auto frames = g_driver->framesBetween(t0, t_reached);
-  ASSERT_GE(frames.size(), 100u) << "the arm was streamed to while the controller ran";
-  EXPECT_GT(g_driver->frames() - frames_before, 0);
-  EXPECT_EQ(g_driver->violations(), 0);
-  EXPECT_LE(g_driver->maxStepRatio(), 1.0 + 1e-3) << "largest step / per-frame bound";
-  bool arm_moved = false;
-  for (std::size_t k = 1; k < frames.size() && !arm_moved; ++k) arm_moved = !(frames[k].q == frames[0].q);
-  EXPECT_TRUE(arm_moved);
-  // Rate and jitter, measured over every frame of the approach (generous under CI load).
-  std::vector<double> dt;
-  for (std::size_t k = 1; k < frames.size(); ++k) dt.push_back(frames[k].time - frames[k - 1].time);
-  std::sort(dt.begin(), dt.end());
-  const double period = 1.0 / g_stream_rate;
-  EXPECT_NEAR(dt[dt.size() / 2], period, 0.5 * period) << "median JointPos period";
-  EXPECT_LT(dt[dt.size() * 95 / 100], 0.1) << "95th percentile JointPos period";
-  const double mean_rate = (frames.size() - 1) / (frames.back().time - frames.front().time);
-  EXPECT_GT(mean_rate, 0.5 * g_stream_rate);
-  RecordProperty("jointpos_frames", static_cast<int>(frames.size()));
-  RecordProperty("jointpos_max_step_over_bound", std::to_string(g_driver->maxStepRatio()));
-  RecordProperty("jointpos_median_period_ms", std::to_string(1e3 * dt[dt.size() / 2]));
-  RecordProperty("jointpos_p95_period_ms", std::to_string(1e3 * dt[dt.size() * 95 / 100]));
-
-  // Every joy_control request: finite and inside the Water2 bounds; resent >= 10 Hz on average.
-  int joys = 0, moving = 0;
-  for (const auto& r : g_server->requests()) {
-    if (!r.joy || r.time < t0 || r.time >= t_reached) continue;
-    ++joys;
-    EXPECT_TRUE(std::isfinite(r.linear) && std::isfinite(r.angular)) << r.text;
-    EXPECT_LE(std::abs(r.linear), 0.5 + 1e-9) << r.text;
-    EXPECT_LE(std::abs(r.angular), 1.0 + 1e-9) << r.text;
-    moving += r.linear != 0.0 || r.angular != 0.0;
-  }
-  EXPECT_GT(moving, 0);
-  EXPECT_GE(joys / std::max(1e-3, t_reached - t0), 10.0) << joys << " joy_control requests";
-
-  // Target no longer published: the controller stops (TARGET_LOST, zero commands), the adapter
-  // holds, the bridge sends zero. After a settling second the whole chain is at rest.
-  ASSERT_TRUE(waitFor([] { return g_seen->phase() == "TARGET_LOST"; }, 5.0)) << g_seen->phase();
-  sleepFor(1.5);
-  const double t_rest = now();
-  double rx0, ry0, rth0;
-  g_server->pose(rx0, ry0, rth0);
-  sleepFor(2.0);
-  const auto rest = g_driver->framesBetween(t_rest, now());
-  for (const auto& f : rest) EXPECT_TRUE(f.q == rest.front().q) << "arm moved without a target";
-  int rest_joys = 0;
-  for (const auto& r : g_server->requests()) {
-    if (!r.joy || r.time < t_rest) continue;
-    ++rest_joys;
-    EXPECT_EQ(r.linear, 0.0) << r.text;
-    EXPECT_EQ(r.angular, 0.0) << r.text;
-  }
-  double rx1, ry1, rth1;
-  g_server->pose(rx1, ry1, rth1);
-  EXPECT_NEAR(rx1, rx0, 1e-6);
-  EXPECT_NEAR(ry1, ry0, 1e-6);
-  EXPECT_NEAR(rth1, rth0, 1e-6);
-  EXPECT_EQ(g_driver->violations(), 0);
-  EXPECT_FALSE(bridgeExited()) << "water2_base_bridge died during the run";
-
-  // Nothing was NaN anywhere in the loop.
-  std::lock_guard<std::mutex> lock(g_seen->mutex);
-  EXPECT_GT(g_seen->cmd_vels, 0);
-  EXPECT_GT(g_seen->arm_cmds, 0);
-  EXPECT_GT(g_seen->odoms, 0);
-  EXPECT_EQ(g_seen->nan_cmd_vel, 0);
-  EXPECT_EQ(g_seen->nan_arm_cmd, 0);
-  EXPECT_EQ(g_seen->nan_status, 0);
-  EXPECT_EQ(g_seen->nan_odom, 0);
+  checkJointPosStream(t0, t_reached, frames_before);
+  checkJoyControls(t0, t_reached);
+  checkChainComesToRest();
+  checkNothingWasNan();
 }
 
 int main(int argc, char** argv) {
