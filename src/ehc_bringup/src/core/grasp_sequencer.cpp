@@ -57,6 +57,12 @@ std::string num(double v, int precision = 3) {
   s << std::fixed << std::setprecision(precision) << v;
   return s.str();
 }
+
+/// The look pose `distance` back from `pose` along its approach (z) axis: where the camera sees it.
+Eigen::Isometry3d lookPose(Eigen::Isometry3d pose, double distance) {
+  pose.translation() -= distance * pose.linear().col(2);
+  return pose;
+}
 }  // namespace
 
 // ---------------------------------------------------------------- parameters
@@ -588,15 +594,11 @@ void GraspSequencer::advanceWaitTarget(const SequencerInput& in, bool fresh, Seq
     const std::optional<Eigen::Isometry3d>& seen = filters_[current_].pose();  // now or before this object
     const ehc_control::TargetSelector& target = params_.objects[current_].target;
     if (seen && params_.search_distance > 0.0) {
-      Eigen::Isometry3d look = *seen;
-      look.translation() -= params_.search_distance * seen->linear().col(2);
-      out->goal = look;
+      out->goal = lookPose(*seen, params_.search_distance);
     } else if (target.kind == ehc_control::TargetSelectorKind::Nearest && params_.search_distance > 0.0 && in.tcp &&
                isValidPose(*in.tcp)) {
       // Never seen, but where to look is known: a look pose at the point, from the TCP's side.
-      Eigen::Isometry3d look = ehc_control::cloudTargetPose(target.point, in.tcp->translation());
-      look.translation() -= params_.search_distance * look.linear().col(2);
-      out->goal = look;
+      out->goal = lookPose(ehc_control::cloudTargetPose(target.point, in.tcp->translation()), params_.search_distance);
     }
     return;
   }
@@ -605,9 +607,7 @@ void GraspSequencer::advanceWaitTarget(const SequencerInput& in, bool fresh, Seq
     if (params_.objects[current_].target.fromCloud() && params_.search_distance > 0.0) {
       // A cloud target seen but no grasp from this view: a closer look (a view that shows its
       // graspable parts), held until a grasp qualifies or the time limit fails it (no_grasp).
-      Eigen::Isometry3d look = *currentPose();
-      look.translation() -= params_.search_distance * look.linear().col(2);
-      out->goal = look;
+      out->goal = lookPose(*currentPose(), params_.search_distance);
     }
     return;
   }

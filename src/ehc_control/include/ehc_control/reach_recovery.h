@@ -113,8 +113,11 @@ class ReachRecovery {
   void startWatching(double now, double position_error, double orientation_error);
   bool stalled(double now, double position_error, double orientation_error, const Eigen::VectorXd& q);
   void startPlanning(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q, bool far);
-  /// The base pose, on the line from `base` to the target, at which the ready pose's TCP is
-  /// over the target (facing it as the ready TCP's bearing says).
+  /// The base pose `radius` from the target at `angle` (seen from the target), facing so that
+  /// the ready pose's TCP points at the target.
+  Eigen::Vector3d placement(const Eigen::Vector2d& target, double angle, double radius) const;
+  /// The placement on the line from `base` to the target at which the ready pose's TCP is over
+  /// the target.
   Eigen::Vector3d readyOver(const Eigen::Isometry3d& target, const Eigen::Vector3d& base) const;
   void plan(const Eigen::Isometry3d& target);
   /// Whole-body IK of `target` from (base, q) with joint-limit avoidance (see the .cpp); true

@@ -147,14 +147,18 @@ void ReachRecovery::startPlanning(const Eigen::Vector3d& base_pose, const Eigen:
   ++(far ? far_attempts_ : attempts_);
 }
 
+Eigen::Vector3d ReachRecovery::placement(const Eigen::Vector2d& target, double angle, double radius) const {
+  Eigen::Vector3d out;
+  out.head<2>() = target + radius * Eigen::Vector2d(std::cos(angle), std::sin(angle));
+  out.z() = wrap(angle + M_PI - ready_bearing_);
+  return out;
+}
+
 Eigen::Vector3d ReachRecovery::readyOver(const Eigen::Isometry3d& target, const Eigen::Vector3d& base) const {
   const Eigen::Vector2d t = target.translation().head<2>();
-  const Eigen::Vector2d d = t - base.head<2>();
-  const double bearing = d.norm() > 1e-9 ? std::atan2(d.y(), d.x()) : base.z() + ready_bearing_;
-  Eigen::Vector3d out;
-  out.head<2>() = t - reach_ * Eigen::Vector2d(std::cos(bearing), std::sin(bearing));
-  out.z() = wrap(bearing - ready_bearing_);
-  return out;
+  const Eigen::Vector2d away = base.head<2>() - t;
+  const double angle = away.norm() > 1e-9 ? std::atan2(away.y(), away.x()) : base.z() + ready_bearing_ + M_PI;
+  return placement(t, angle, reach_);
 }
 
 void ReachRecovery::start(int k, const Eigen::Isometry3d& target, Eigen::Vector3d* base, Eigen::VectorXd* q) const {
@@ -170,8 +174,7 @@ void ReachRecovery::start(int k, const Eigen::Isometry3d& target, Eigen::Vector3
   const Eigen::Vector2d to_robot = plan_base_.head<2>() - t;
   const double robot_side = to_robot.norm() > 1e-6 ? std::atan2(to_robot.y(), to_robot.x()) : plan_base_.z() + M_PI;
   const double a = robot_side + M_PI * (kPlacementOffsets[i % kOffsets] + (second ? 0.125 : 0.0));
-  base->head<2>() = t + (second ? 0.7 : 1.0) * reach_ * Eigen::Vector2d(std::cos(a), std::sin(a));
-  (*base)[2] = wrap(a + M_PI - ready_bearing_);
+  *base = placement(t, a, (second ? 0.7 : 1.0) * reach_);
 }
 
 bool ReachRecovery::solve(const Eigen::Isometry3d& target, Eigen::Vector3d* base, Eigen::VectorXd* q) const {

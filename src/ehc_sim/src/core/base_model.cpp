@@ -23,6 +23,13 @@ const ehc_realman::Water2BridgeConfig& bridgeDefaults() {
   static const ehc_realman::Water2BridgeConfig c;
   return c;
 }
+
+/// One step of a first-order Gauss-Markov process: x decays over `dt` with correlation time `tau`
+/// and `noise` (a unit normal draw) keeps its stationary deviation at `sigma`.
+double gaussMarkovStep(double x, double dt, double tau, double sigma, double noise) {
+  const double a = std::exp(-dt / tau);
+  return a * x + std::sqrt(1.0 - a * a) * sigma * noise;
+}
 }  // namespace
 
 std::string toString(BaseModelType type) { return ehc_common::enumName(kBaseModelNames, type, "BaseModel"); }
@@ -219,10 +226,8 @@ double BaseImprecision::deadbandAngular(double actuation_deadband) const {
 
 Eigen::Vector3d BaseImprecision::trueTwist(const Eigen::Vector3d& wheel_twist, double dt) {
   // Slip: first-order Gauss-Markov per component, stationary sigma, one update per step.
-  const double a = std::exp(-dt / eff_.slip_correlation_time);
-  const double b = std::sqrt(1.0 - a * a);
-  slip_[0] = a * slip_[0] + b * eff_.slip_linear * gauss_(rng_);
-  slip_[1] = a * slip_[1] + b * eff_.slip_angular * gauss_(rng_);
+  slip_[0] = gaussMarkovStep(slip_[0], dt, eff_.slip_correlation_time, eff_.slip_linear, gauss_(rng_));
+  slip_[1] = gaussMarkovStep(slip_[1], dt, eff_.slip_correlation_time, eff_.slip_angular, gauss_(rng_));
   odometry_ = integrateBaseTwist(odometry_, wheel_twist[0], wheel_twist[1], wheel_twist[2], dt);
   odometry_twist_ = wheel_twist;
   // UMBmark's systematic errors (bounded so that a factor never reverses), then the slip.
@@ -307,12 +312,12 @@ void Water2BaseModel::observe(const Eigen::Vector3d& true_pose, double now, std:
                               std::normal_distribution<double>& gauss) {
   while (now >= next_status_sample_ - kEps) {
     // The map pose's error: first-order Gauss-Markov, stationary sigma, one update per sample.
-    const double a = std::exp(-params_.status_period / params_.localisation_correlation_time);
-    const double b = std::sqrt(1.0 - a * a);
     const Eigen::Vector3d sigma(params_.localisation_position_sigma, params_.localisation_position_sigma,
                                 params_.localisation_heading_sigma);
     for (int i = 0; i < 3; ++i)
-      if (sigma[i] > 0.0) localisation_error_[i] = a * localisation_error_[i] + b * sigma[i] * gauss(rng);
+      if (sigma[i] > 0.0)
+        localisation_error_[i] = gaussMarkovStep(localisation_error_[i], params_.status_period,
+                                                 params_.localisation_correlation_time, sigma[i], gauss(rng));
     const Eigen::Vector3d reported = statusPose(true_pose);
     statuses_in_flight_.push_back({next_status_sample_ + params_.status_latency, next_status_sample_, reported});
     next_status_sample_ += params_.status_period;
