@@ -48,7 +48,8 @@
 // that pose; per bearing the best (R, then travel), bearings in order of their best R. IK from
 // each with the base held at it (the arm alone: the pose keeps its R), then from the best ones
 // again with the base free. Of the solutions a placement whose target voxel is in the map's
-// high-reachability set r_td wins over one that is not; then margin and travel as above. The move hands over to the pose task
+// high-reachability set r_td wins over one that is not, then one with a joint margin of
+// placement_margin over one without, then the least travel (margins beyond it count no more). The move hands over to the pose task
 // (EHC's sig(omega) split) when sig reaches placement_handover_sig, at its goal, or at its
 // time limit (move_timeout plus the travel at the base's speed limit). Not an attempt.
 
@@ -92,6 +93,8 @@ struct ReachRecoveryParams {
   int placement_bearings = 16;
   /// Placement: the move hands over to the pose task once sig(omega) reaches this (1: only at its goal).
   double placement_handover_sig = 0.9;
+  /// Placement: rad of joint margin that is enough; among the placements with it, the least travel.
+  double placement_margin = 0.3;
   void validate() const;                             ///< throws "[ReachRecoveryParams] ..."
   std::string summary() const;
 };

@@ -27,6 +27,14 @@ constexpr double kPlacementYaws[] = {0.0, 0.3, -0.3};
 /// Placement: a solution with the target in r_td wins over any without (score bonus).
 constexpr double kInReachBonus = 10.0;
 double wrap(double a) { return std::remainder(a, 2.0 * M_PI); }
+/// Travel (m) of a differential base from `from` to the pose `to`: its distance, plus per rad the
+/// turns onto the straight line and, at its end, onto the goal heading (holonomic: the yaw change).
+double unicycleTravel(const Eigen::Vector3d& from, const Eigen::Vector3d& to, bool holonomic) {
+  const Eigen::Vector2d d = to.head<2>() - from.head<2>();
+  if (holonomic || d.norm() < 1e-6) return d.norm() + kTurnTravel * std::abs(wrap(to.z() - from.z()));
+  const double line = std::atan2(d.y(), d.x());
+  return d.norm() + kTurnTravel * (std::abs(wrap(line - from.z())) + std::abs(wrap(to.z() - line)));
+}
 }  // namespace
 
 void ReachRecoveryParams::validate() const {
@@ -51,6 +59,7 @@ void ReachRecoveryParams::validate() const {
   requireRange(kOwner, "max_attempts", max_attempts, 0, 100);
   requireRange(kOwner, "placement_bearings", placement_bearings, 1, 360);
   requireRange(kOwner, "placement_handover_sig", placement_handover_sig, 0.0, 1.0);
+  requireRange(kOwner, "placement_margin", placement_margin, 0.0, 3.0);
 }
 
 std::string ReachRecoveryParams::summary() const {
@@ -83,6 +92,7 @@ ReachRecoveryParams loadReachRecoveryParams(const ehc_common::ConfigNode& n) {
   p.max_attempts = n.get("max_attempts", p.max_attempts);
   p.placement_bearings = n.get("placement_bearings", p.placement_bearings);
   p.placement_handover_sig = n.get("placement_handover_sig", p.placement_handover_sig);
+  p.placement_margin = n.get("placement_margin", p.placement_margin);
   n.validate(p);  // errors name the file and the section
   return p;
 }
@@ -142,7 +152,7 @@ std::vector<Eigen::Vector3d> ReachRecovery::placementStarts(const Eigen::Isometr
         c.base.head<2>() = t + r * reach_ * Eigen::Vector2d(std::cos(a), std::sin(a));
         c.base.z() = wrap(a + M_PI - ready_bearing_ + dyaw);
         c.reach = placementReachability(target, c.base);
-        c.travel = (c.base.head<2>() - base_pose.head<2>()).norm() + kTurnTravel * std::abs(wrap(c.base.z() - base_pose.z()));
+        c.travel = unicycleTravel(base_pose, c.base, model_.nBase() == 3);
         if (!have || better(c, top)) top = c, have = true;
       }
     best.push_back(top);
@@ -318,7 +328,12 @@ void ReachRecovery::plan(const Eigen::Isometry3d& target) {
     const double travel = (b.head<2>() - plan_base_.head<2>()).norm() + kTurnTravel * std::abs(wrap(b.z() - plan_base_.z()));
     double score = std::min(m, joint_influence_) - params_.travel_weight * travel;
     const double reach = place_ ? placementReachability(target, b) : 0.0;
-    if (place_ && reach > placement_map_->params().reach_threshold) score += kInReachBonus;
+    if (place_) {  // in r_td first, then a margin of placement_margin, then the least travel
+      score = std::min(m, params_.placement_margin) -
+              params_.travel_weight * unicycleTravel(plan_base_, b, model_.nBase() == 3);
+      if (reach > placement_map_->params().reach_threshold) score += kInReachBonus;
+      if (m >= params_.placement_margin) score += 0.5 * kInReachBonus;
+    }
     if (!have_goal_ || score > goal_score_) {
       have_goal_ = true;
       goal_score_ = score;
