@@ -91,9 +91,9 @@ TEST(ReachRecovery, AFarStallWithTheArmAtReadyStartsNothing) {
 
 // Placement (ehc_place): for a new target the recovery plans at once from starts ranked by the
 // reachability map (inverse reachability); the chosen base pose puts the target where the map
-// says the arm reaches it (R > 0 always; in r_td, R above the weighting's threshold, for most
-// targets whose height has r_td voxels at all: an approach the arm cannot take at any r_td pose
-// inside its joint stops gets a pose outside), the chosen configuration has the TCP on the
+// says the arm reaches it (R > 0 always; in r_td, R above the weighting's threshold, for many of
+// the targets whose height has r_td voxels at all: a joint margin comes first, and an approach
+// the arm cannot take with it at an r_td pose gets a pose outside), the chosen configuration has the TCP on the
 // target, and the move there ends at that configuration. Random targets from every direction
 // around random bases, admitted as Exp-1 admits them (whole-body IK inside the joint stops; seed printed).
 TEST(ReachRecovery, APlacementPutsTheTargetWhereTheMapSaysTheArmReachesIt) {
@@ -108,7 +108,7 @@ TEST(ReachRecovery, APlacementPutsTheTargetWhereTheMapSaysTheArmReachesIt) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> angle(-M_PI, M_PI), dist(1.0, 5.0), height(0.3, 1.0), unit(-1.0, 1.0);
   EhcWeight far;  // sig 0: the placement's move runs to its goal
-  const int kTrials = 8;
+  const int kTrials = 12;
   int placed = 0, with_rtd = 0, in_rtd = 0;
   for (int trial = 0; trial < kTrials; ++trial) {
     SCOPED_TRACE("trial " + std::to_string(trial) + ", seed " + std::to_string(seed));
@@ -171,7 +171,8 @@ TEST(ReachRecovery, APlacementPutsTheTargetWhereTheMapSaysTheArmReachesIt) {
   std::cout << placed << " of " << kTrials << " placed; in r_td " << in_rtd << " of " << with_rtd
             << " whose height has r_td voxels" << std::endl;
   EXPECT_GE(placed, kTrials - 1) << "too few targets placed";
-  EXPECT_GT(2 * in_rtd, with_rtd) << "too few placements in r_td";
+  // Margin before r_td (reach_recovery.h): r_td for many, not all (measured 55-100 % per run).
+  EXPECT_GE(3 * in_rtd, with_rtd) << "too few placements in r_td";
 }
 
 // Placement hands over to the pose task once sig(omega) reaches placement_handover_sig.

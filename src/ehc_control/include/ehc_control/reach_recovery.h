@@ -43,13 +43,15 @@
 // Placement (mode ehc_place only; update() given this cycle's EHC weight): the same plan and
 // move, started at once for every new target instead of after a stall, from starts ranked by
 // inverse reachability: base poses on rings around the target (placement_bearings bearings,
-// radii of 0.6-1.0 the ready reach, headings that put the ready TCP's bearing on the target
-// and +-0.3 rad beside it), each scored by the map's R of the target in the arm base frame at
-// that pose; per bearing the best (R, then travel), bearings in order of their best R. IK from
+// radii of 0.4-1.0 times the farthest horizontal reach of r_td from the arm base, headings that
+// put the ready TCP's bearing on the target and +-0.3 rad beside it), each scored by the map's R
+// of the target in the arm base frame at that pose; per bearing the best (R, then a differential
+// base's travel: distance and turns), bearings in order of their best R. IK from
 // each with the base held at it (the arm alone: the pose keeps its R), then from the best ones
-// again with the base free. Of the solutions a placement whose target voxel is in the map's
-// high-reachability set r_td wins over one that is not, then one with a joint margin of
-// placement_margin over one without, then the least travel (margins beyond it count no more). The move hands over to the pose task
+// again with the base free. Of the solutions one with a joint margin of placement_margin wins
+// over one without (traces: a base under the target, r_td all round, left the arm folded near
+// its stops), then one whose target voxel is in the map's high-reachability set r_td, then the
+// least travel (margins beyond placement_margin count no more). The move hands over to the pose task
 // (EHC's sig(omega) split) when sig reaches placement_handover_sig, at its goal, or at its
 // time limit (move_timeout plus the travel at the base's speed limit). Not an attempt.
 
@@ -177,6 +179,7 @@ class ReachRecovery {
   std::shared_ptr<const EhcWeighting> placement_map_;
   std::vector<Eigen::Vector3d> place_starts_;  ///< the current placement's IK starts
   double goal_reach_ = 0.0;                    ///< the map's R of the target at the chosen placement
+  double place_reach_ = 0.5;  ///< m: the farthest horizontal reach of r_td from the arm base (the rings' scale)
   // Planning
   Eigen::Vector3d plan_base_ = Eigen::Vector3d::Zero();
   Eigen::VectorXd plan_q_;

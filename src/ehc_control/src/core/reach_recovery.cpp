@@ -22,7 +22,7 @@ constexpr int kFallbackSeeds = 30;  ///< random seeds of the fallback solve (as 
 constexpr int kFixedStarts = 2;  ///< the current configuration; the current base with the ready posture
 constexpr double kTurnTravel = 0.3;  ///< m of travel counted per rad of base turn when choosing
 /// Placement candidates: radii (x the ready reach) and heading offsets (rad) per bearing.
-constexpr double kPlacementRadii[] = {1.0, 0.8, 0.6};
+constexpr double kPlacementRadii[] = {1.0, 0.8, 0.6, 0.4};
 constexpr double kPlacementYaws[] = {0.0, 0.3, -0.3};
 /// Placement: a solution with the target in r_td wins over any without (score bonus).
 constexpr double kInReachBonus = 10.0;
@@ -119,6 +119,17 @@ void ReachRecovery::reset() {
 
 void ReachRecovery::setPlacementMap(std::shared_ptr<const EhcWeighting> weighting) {
   placement_map_ = std::move(weighting);
+  // The rings' scale: the farthest horizontal distance from the arm base of a voxel in r_td.
+  place_reach_ = reach_;
+  if (!placement_map_) return;
+  const ReachabilityMap& map = placement_map_->map();
+  const Eigen::Vector3i& n = map.dims();
+  for (int i = 0; i < n.x(); ++i)
+    for (int j = 0; j < n.y(); ++j)
+      for (int k = 0; k < n.z(); ++k) {
+        const Eigen::Vector3d p = map.origin() + map.resolution() * (Eigen::Vector3d(i, j, k) + Eigen::Vector3d::Constant(0.5));
+        if (placement_map_->inReachSet(p)) place_reach_ = std::max(place_reach_, p.head<2>().norm());
+      }
 }
 
 double ReachRecovery::placementReachability(const Eigen::Isometry3d& target, const Eigen::Vector3d& base_pose) const {
@@ -149,7 +160,7 @@ std::vector<Eigen::Vector3d> ReachRecovery::placementStarts(const Eigen::Isometr
     for (double r : kPlacementRadii)
       for (double dyaw : kPlacementYaws) {
         Candidate c;
-        c.base.head<2>() = t + r * reach_ * Eigen::Vector2d(std::cos(a), std::sin(a));
+        c.base.head<2>() = t + r * place_reach_ * Eigen::Vector2d(std::cos(a), std::sin(a));
         c.base.z() = wrap(a + M_PI - ready_bearing_ + dyaw);
         c.reach = placementReachability(target, c.base);
         c.travel = unicycleTravel(base_pose, c.base, model_.nBase() == 3);
@@ -328,11 +339,11 @@ void ReachRecovery::plan(const Eigen::Isometry3d& target) {
     const double travel = (b.head<2>() - plan_base_.head<2>()).norm() + kTurnTravel * std::abs(wrap(b.z() - plan_base_.z()));
     double score = std::min(m, joint_influence_) - params_.travel_weight * travel;
     const double reach = place_ ? placementReachability(target, b) : 0.0;
-    if (place_) {  // in r_td first, then a margin of placement_margin, then the least travel
+    if (place_) {  // a margin of placement_margin first, then in r_td, then the least travel
       score = std::min(m, params_.placement_margin) -
               params_.travel_weight * unicycleTravel(plan_base_, b, model_.nBase() == 3);
-      if (reach > placement_map_->params().reach_threshold) score += kInReachBonus;
-      if (m >= params_.placement_margin) score += 0.5 * kInReachBonus;
+      if (reach > placement_map_->params().reach_threshold) score += 0.5 * kInReachBonus;
+      if (m >= params_.placement_margin) score += kInReachBonus;
     }
     if (!have_goal_ || score > goal_score_) {
       have_goal_ = true;
