@@ -59,11 +59,11 @@ REPORTING_SEED_RANGE = (mr.TUNING_SEEDS_BELOW, 1000000)  # seed*1000 + set*10 + 
 
 # experiment -> ehc_experiment command, extra arguments, methods, the paired (EHC, baseline), paper table
 EXPERIMENTS = {
-    "exp1_sequence": {"command": "reach", "args": ["--protocol", "sequence"], "methods": ("neo_c", "neo_e", "ehc"),
+    "exp1_sequence": {"command": "reach", "args": ["--protocol", "sequence"], "methods": ("neo_c", "neo_e", "ehc", "ehc_place"),
                       "pair": ("ehc", "neo_e"), "table": "Table II", "title": "Exp-1 random reaching, back to back"},
-    "exp1_reset": {"command": "reach", "args": ["--protocol", "reset"], "methods": ("neo_c", "neo_e", "ehc"),
+    "exp1_reset": {"command": "reach", "args": ["--protocol", "reset"], "methods": ("neo_c", "neo_e", "ehc", "ehc_place"),
                    "pair": ("ehc", "neo_e"), "table": "Table II", "title": "Exp-1 random reaching, each from the ready pose"},
-    "exp2": {"command": "grasp", "args": [], "methods": ("tsmm", "neo_c", "neo_e", "ehc"), "pair": ("ehc", "neo_e"),
+    "exp2": {"command": "grasp", "args": [], "methods": ("tsmm", "neo_c", "neo_e", "ehc", "ehc_place"), "pair": ("ehc", "neo_e"),
              "table": "Table III", "title": "Exp-2 three objects in sequence"},
     "exp3": {"command": "poses", "args": [], "methods": ("neo_nompbs", "ehc_nompbs", "ehc"),
              "pair": ("ehc", "neo_nompbs"), "table": "Table IV", "title": "Exp-3 grasp orientations (TfM)"},

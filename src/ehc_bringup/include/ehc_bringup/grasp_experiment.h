@@ -33,7 +33,7 @@ struct GraspMethod {
   ehc_control::ControlMode mode = ehc_control::ControlMode::Ehc;
   bool mpbs = true;
 };
-/// tsmm | neo_c | neo_e | ehc | neo_nompbs | ehc_nompbs; throws "[GraspExperiment] ..." otherwise.
+/// tsmm | neo_c | neo_e | ehc | ehc_place | neo_nompbs | ehc_nompbs; throws "[GraspExperiment] ..." otherwise.
 GraspMethod graspMethod(const std::string& name);
 /// The methods of a protocol ("all": every one, in the paper's table order).
 std::vector<std::string> graspMethodNames(GraspProtocol protocol, const std::string& method);

@@ -80,9 +80,10 @@ GraspMethod graspMethod(const std::string& name) {
   if (name == "neo_c") return {name, ControlMode::NeoC, false};
   if (name == "neo_e") return {name, ControlMode::NeoE, false};
   if (name == "ehc") return {name, ControlMode::Ehc, true};
+  if (name == "ehc_place") return {name, ControlMode::EhcPlace, true};
   if (name == "neo_nompbs") return {name, ControlMode::NeoE, false};
   if (name == "ehc_nompbs") return {name, ControlMode::Ehc, false};
-  bad("unknown method '" + name + "' (tsmm, neo_c, neo_e, ehc, neo_nompbs, ehc_nompbs)");
+  bad("unknown method '" + name + "' (tsmm, neo_c, neo_e, ehc, ehc_place, neo_nompbs, ehc_nompbs)");
 }
 
 std::vector<std::string> graspMethodNames(GraspProtocol protocol, const std::string& method) {
@@ -90,6 +91,8 @@ std::vector<std::string> graspMethodNames(GraspProtocol protocol, const std::str
                                            ? std::vector<std::string>{"tsmm", "neo_c", "neo_e", "ehc"}
                                            : std::vector<std::string>{"neo_nompbs", "ehc_nompbs", "ehc"};
   if (method == "all") return all;
+  // ehc's own placement mode (not one of the paper's methods, so not in "all").
+  if (method == "ehc_place" && protocol == GraspProtocol::Table) return {method};
   if (std::find(all.begin(), all.end(), method) == all.end()) {
     std::string list;
     for (const auto& m : all) list += (list.empty() ? "" : "|") + m;
