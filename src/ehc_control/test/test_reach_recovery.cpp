@@ -6,6 +6,7 @@
 #include "ehc_control/qp_controller.h"
 #include "ehc_control/reach_recovery.h"
 #include "ehc_test/control_fixtures.h"
+#include "ehc_test/test_seed.h"
 
 #include <gtest/gtest.h>
 
@@ -30,9 +31,7 @@ TEST(ReachRecovery, AFarStallDrivesTheBaseToTheTargetWithTheArmAtReady) {
   const WholeBodyModel model(test::realmanConfig());
   const RobotConfig& rc = model.config();
   const QpControllerParams qp;
-  const char* given = std::getenv("EHC_TEST_SEED");  // reruns a printed seed
-  const unsigned seed = given ? static_cast<unsigned>(std::stoul(given)) : std::random_device{}();
-  std::cout << "[ReachRecovery test] seed " << seed << std::endl;
+  const unsigned seed = ehc_test::testSeed("ReachRecovery far stalls");
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> angle(-M_PI, M_PI), dist(3.0, 7.0), height(0.3, 1.0);
   for (int trial = 0; trial < 10; ++trial) {
@@ -102,9 +101,7 @@ TEST(ReachRecovery, APlacementPutsTheTargetWhereTheMapSaysTheArmReachesIt) {
   const QpControllerParams qp;
   const auto map = std::make_shared<const ReachabilityMap>(ReachabilityMap::load(rc.reachability_map_path));
   const auto weighting = std::make_shared<const EhcWeighting>(map, EhcWeightingParams{});
-  const char* given = std::getenv("EHC_TEST_SEED");  // reruns a printed seed
-  const unsigned seed = given ? static_cast<unsigned>(std::stoul(given)) : std::random_device{}();
-  std::cout << "[ReachRecovery placement test] seed " << seed << std::endl;
+  const unsigned seed = ehc_test::testSeed("ReachRecovery placement");
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> angle(-M_PI, M_PI), dist(1.0, 5.0), height(0.3, 1.0), unit(-1.0, 1.0);
   EhcWeight far;  // sig 0: the placement's move runs to its goal
