@@ -1,9 +1,13 @@
 #pragma once
 // Generic test helpers of every package: a fresh temporary folder removed with its contents at
-// the end of the scope, and the file edits that make broken copies of a config folder.
+// the end of the scope, the file edits that make broken copies of a config folder, and the seed
+// of a randomized test.
 
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
+#include <random>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -48,6 +52,15 @@ inline void replaceInFile(const std::string& path, const std::string& from, cons
 /// Copies the folder `from` (its files, recursively) to the new folder `to`.
 inline void copyFolder(const std::string& from, const std::string& to) {
   std::filesystem::copy(from, to, std::filesystem::copy_options::recursive);
+}
+
+/// The seed of a randomized test: EHC_TEST_SEED if set (reruns a printed seed), else a fresh
+/// one; printed with `who`.
+inline unsigned testSeed(const std::string& who) {
+  const char* given = std::getenv("EHC_TEST_SEED");
+  const unsigned seed = given ? static_cast<unsigned>(std::stoul(given)) : std::random_device{}();
+  std::cout << "[" << who << "] seed " << seed << " (EHC_TEST_SEED=" << seed << " reruns it)" << std::endl;
+  return seed;
 }
 
 }  // namespace ehc_test
