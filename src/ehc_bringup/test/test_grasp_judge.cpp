@@ -44,7 +44,7 @@ const Eigen::Vector3d kDown(0, 0, -1);
 }  // namespace
 
 TEST(GraspJudge, VerdictNamesRoundTripAndBadParametersFail) {
-  for (const GraspVerdict v : {GraspVerdict::Valid, GraspVerdict::TooWide, GraspVerdict::PalmCollides})
+  for (const GraspVerdict v : {GraspVerdict::Valid, GraspVerdict::OutsideOpening, GraspVerdict::PalmCollides})
     EXPECT_EQ(ehc_bringup::graspVerdictFromString(ehc_bringup::toString(v)), v);
   EXPECT_THROW(ehc_bringup::graspVerdictFromString("fine"), std::invalid_argument);
   GraspJudgeParams p;
@@ -65,7 +65,7 @@ TEST(GraspJudge, BoxGraspsFromAbove) {
   // Palm into the top: 60 mm below it.
   EXPECT_EQ(judge.judge(graspPose({0, 0, 0.79}, Eigen::Vector3d::UnitY(), kDown)).verdict, GraspVerdict::PalmCollides);
   // 20 mm off the centre along y: the -y finger's inner face (at y = -15 mm) is inside the box.
-  EXPECT_EQ(judge.judge(graspPose({0, 0.02, 0.82}, Eigen::Vector3d::UnitY(), kDown)).verdict, GraspVerdict::TooWide);
+  EXPECT_EQ(judge.judge(graspPose({0, 0.02, 0.82}, Eigen::Vector3d::UnitY(), kDown)).verdict, GraspVerdict::OutsideOpening);
   // 150 mm beside the box: nothing between the fingers.
   EXPECT_EQ(judge.judge(graspPose({0, 0.15, 0.82}, Eigen::Vector3d::UnitY(), kDown)).verdict, GraspVerdict::NothingBetween);
   // Approach from below the horizon by more than 5 deg (the generator's 95 deg from straight down).
@@ -80,7 +80,7 @@ TEST(GraspJudge, BoxGraspsFromAbove) {
 TEST(GraspJudge, WiderThanTheOpeningIsRejected) {
   // 90 mm across y, 40 mm across x: across y it does not fit the 70 mm opening, across x it does.
   const GraspJudge judge(ehc_sim::boxSurface({0.04, 0.09, 0.10}), onTable(0, 0, 0.05), kTable, {}, {});
-  EXPECT_EQ(judge.judge(graspPose({0, 0, 0.82}, Eigen::Vector3d::UnitY(), kDown)).verdict, GraspVerdict::TooWide);
+  EXPECT_EQ(judge.judge(graspPose({0, 0, 0.82}, Eigen::Vector3d::UnitY(), kDown)).verdict, GraspVerdict::OutsideOpening);
   EXPECT_EQ(judge.judge(graspPose({0, 0, 0.82}, Eigen::Vector3d::UnitX(), kDown)).verdict, GraspVerdict::Valid);
 }
 
@@ -144,7 +144,7 @@ GraspVerdict expectedTopDown(double a, double h, double alpha, double delta, dou
   const ehc_perception::GripperGeometry g;
   const double half = 0.5 * g.max_width;
   if (dz <= 0.0 || dz >= 2 * h) return GraspVerdict::NothingBetween;  // the line above or in the table
-  if (reach(a, alpha, delta, eps) > half) return GraspVerdict::TooWide;
+  if (reach(a, alpha, delta, eps) > half) return GraspVerdict::OutsideOpening;
   if (alpha > std::atan(mu)) return GraspVerdict::OutsideFrictionCone;
   if (kTable + 2 * h - dz - g.finger_tip_depth < kTable) return GraspVerdict::HitsTable;
   if (dz > g.finger_length - g.finger_tip_depth) return GraspVerdict::PalmCollides;

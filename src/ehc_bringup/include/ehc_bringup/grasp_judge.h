@@ -9,12 +9,12 @@
 // for. A grasp is valid when, in this order:
 //  1. its approach is one the hand can use: within max_approach_tilt_deg of straight down and,
 //     with a view direction, within max_view_angle_deg of it (the hand comes from the camera's
-//     side; the hand camera is on the hand);
+//     side: the camera is on the hand; both 95 deg by default, the generator's max_approach_tilt_deg);
 //  2. both contacts lie on the closing line inside the opening: a ray cast along the closing axis
 //     from each finger's inner face towards the other meets the mesh entering it; no crossing at
-//     all: nothing between the fingers. The object reaches past a finger (too wide) when that ray's
-//     first crossing leaves the mesh, or when the ray from the finger's inner face outwards first
-//     leaves it (the face is inside the object);
+//     all: nothing between the fingers. A contact is outside the opening (the object too wide
+//     there, or the grasp off its centre) when that ray's first crossing leaves the mesh, or when
+//     the ray from the finger's inner face outwards first leaves it (the face is inside the object);
 //  3. the contacts' surface normals (the triangles' outward normals) are within the friction cone
 //     atan(mu) of the closing axis;
 //  4. the fingers' and the palm's boxes, swept along the approach from the pre-grasp
@@ -50,7 +50,7 @@ enum class GraspVerdict {
   Valid,
   NotFinite,          ///< the pose has a non-finite or non-rotation part
   ApproachExcluded,   ///< approach too far from straight down or from the view direction
-  TooWide,            ///< the object reaches past a finger's inner face on the closing line
+  OutsideOpening,     ///< a contact outside the opening: the object reaches past a finger's inner face on the closing line
   NothingBetween,     ///< the closing line meets nothing between the fingers
   OutsideFrictionCone,  ///< a contact normal is more than atan(mu) off the closing axis
   HitsTable,          ///< a finger or the palm reaches below the table top on the way in
@@ -64,7 +64,7 @@ struct GraspJudgeParams {
   double friction_coefficient = 0.5;   ///< mu of the contacts: cone half-angle atan(mu)
   double pregrasp_distance = 0.10;     ///< m, sweep start back along the approach (the sequencer's)
   double max_approach_tilt_deg = 95.0; ///< approach vs straight down (the generator's)
-  double max_view_angle_deg = 90.0;    ///< approach vs the view direction (when one is given)
+  double max_view_angle_deg = 95.0;    ///< approach vs the view direction (when one is given)
   int samples = 400;                   ///< existence: surface points drawn
   int approach_steps = 12;             ///< existence: approaches around each closing axis
   void validate() const;               ///< throws std::invalid_argument "[GraspJudge] ..."
@@ -128,6 +128,10 @@ class GraspJudge {
 /// One library object's view judged: the generator's grasps (generateForTarget with the object's
 /// true centre as the target, as the grasp node runs it) against the true mesh.
 struct ViewJudgement {
+  /// A valid grasp exists in the view: the search found one, or one of the generator's top five
+  /// is valid (then the search missed it: search_missed).
+  bool exists = false;
+  bool search_missed = false;
   GraspExistence existence;
   ehc_perception::GraspResult result;  ///< the generator's
   GraspJudgement best;                 ///< its best grasp's (NotFinite if none)

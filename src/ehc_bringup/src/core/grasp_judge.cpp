@@ -30,7 +30,7 @@ constexpr ehc_common::EnumNames<GraspVerdict, 9> kVerdictNames = {{
     {GraspVerdict::Valid, "valid"},
     {GraspVerdict::NotFinite, "not_finite"},
     {GraspVerdict::ApproachExcluded, "approach_excluded"},
-    {GraspVerdict::TooWide, "too_wide"},
+    {GraspVerdict::OutsideOpening, "outside_opening"},
     {GraspVerdict::NothingBetween, "nothing_between"},
     {GraspVerdict::OutsideFrictionCone, "outside_friction_cone"},
     {GraspVerdict::HitsTable, "hits_table"},
@@ -173,11 +173,11 @@ GraspVerdict GraspJudge::closingLine(const Eigen::Isometry3d& grasp, GraspJudgem
     const Eigen::Vector3d face = c - dir * half;
     Eigen::Vector3d p, n;
     // The finger's inner face inside the object: the line leaves the object first going outwards.
-    if (firstHit(face, face - dir * kOutwardRay, &p, &n) && n.dot(dir) < 0.0) return GraspVerdict::TooWide;
+    if (firstHit(face, face - dir * kOutwardRay, &p, &n) && n.dot(dir) < 0.0) return GraspVerdict::OutsideOpening;
     if (!firstHit(face, c + dir * half, &p, &n)) return GraspVerdict::NothingBetween;
     // Entering the object: the outward normal faces the finger (against the ray).
     const double facing = -n.dot(dir);
-    if (facing <= 0.0) return GraspVerdict::TooWide;
+    if (facing <= 0.0) return GraspVerdict::OutsideOpening;
     out->contact[static_cast<std::size_t>(i)] = p;
     out->contact_angle_deg[static_cast<std::size_t>(i)] = std::acos(std::min(1.0, facing)) / kDeg;
     if (facing < cos_cone) verdict_cone = true;
@@ -288,6 +288,8 @@ ViewJudgement judgeView(const ObjectViewCloud& view, const ehc_perception::Grasp
     ++out.top5_valid;
     if (out.first_valid_rank == 0) out.first_valid_rank = static_cast<int>(i) + 1;
   }
+  out.exists = out.existence.exists || out.top5_valid > 0;
+  out.search_missed = !out.existence.exists && out.top5_valid > 0;
   return out;
 }
 
@@ -354,7 +356,7 @@ std::string percent(int n, int of) { return of > 0 ? fixed(100.0 * n / of, 0) + 
 
 std::string judgedViewsCsv(const std::vector<JudgedView>& views) {
   std::ostringstream f;
-  f << "object,kind,split,view,distance,elevation_deg,azimuth_deg,noise_seed,exists,candidates_judged,no_grasp_verdict,"
+  f << "object,kind,split,view,distance,elevation_deg,azimuth_deg,noise_seed,exists,search_missed,candidates_judged,no_grasp_verdict,"
        "generator_status,generator_reason,grasps,best_valid,best_verdict,best_measured_width_mm,best_true_width_mm,"
        "best_contact_angle_deg,best_seen_contacts,top5_valid,first_valid_rank\n";
   for (const JudgedView& v : views) {
@@ -362,8 +364,8 @@ std::string judgedViewsCsv(const std::vector<JudgedView>& views) {
     const bool any = !j.result.grasps.empty();
     f << v.object << "," << v.kind << "," << v.split << "," << v.view << "," << fixed(v.pose.distance, 3) << ","
       << fixed(v.pose.elevation_deg, 1) << "," << fixed(v.pose.azimuth_deg, 1) << "," << v.noise_seed << ","
-      << (j.existence.exists ? 1 : 0) << "," << j.existence.candidates << ","
-      << (j.existence.exists ? "" : toString(j.existence.commonest())) << "," << ehc_perception::toString(j.result.failure) << ","
+      << (j.exists ? 1 : 0) << "," << (j.search_missed ? 1 : 0) << "," << j.existence.candidates << ","
+      << (j.exists ? "" : toString(j.existence.commonest())) << "," << ehc_perception::toString(j.result.failure) << ","
       << quoted(j.result.reason) << "," << j.result.grasps.size() << ",";
     if (any) {
       const ehc_perception::Grasp& g = j.result.grasps.front();
@@ -383,12 +385,13 @@ namespace {
 
 /// The summary table's row of one split.
 std::string summaryRow(const std::string& split, const std::vector<JudgedView>& views) {
-  int n = 0, exists = 0, best = 0, top5 = 0, none_proposed = 0, none = 0, no_grasp = 0;
+  int n = 0, exists = 0, best = 0, top5 = 0, none_proposed = 0, none = 0, no_grasp = 0, missed = 0;
   for (const JudgedView& v : views) {
     if (split != "all" && v.split != split) continue;
     const ViewJudgement& j = v.judgement;
     ++n;
-    if (j.existence.exists) {
+    missed += j.search_missed;
+    if (j.exists) {
       ++exists;
       best += j.best.valid();
       top5 += j.top5_valid > 0;
@@ -401,7 +404,8 @@ std::string summaryRow(const std::string& split, const std::vector<JudgedView>& 
   if (n == 0) return "";
   return "| " + split + " | " + std::to_string(n) + " | " + std::to_string(exists) + " | " + std::to_string(best) + " (" +
          percent(best, exists) + ") | " + std::to_string(top5) + " (" + percent(top5, exists) + ") | " +
-         std::to_string(no_grasp) + " | " + std::to_string(none) + " | " + std::to_string(none_proposed) + " |\n";
+         std::to_string(no_grasp) + " | " + std::to_string(none) + " | " + std::to_string(none_proposed) + " | " +
+         std::to_string(missed) + " |\n";
 }
 
 /// Counts of the best grasps' verdicts and the generator's failures, per split.
@@ -411,7 +415,7 @@ std::string verdictTable(const std::vector<JudgedView>& views) {
     const ViewJudgement& j = v.judgement;
     const std::string what = j.result.grasps.empty() ? "no grasp: " + ehc_perception::toString(j.result.failure)
                                                      : "best grasp: " + toString(j.best.verdict);
-    ++counts[v.split][std::string(j.existence.exists ? "exists, " : "none exists, ") + what];
+    ++counts[v.split][std::string(j.exists ? "exists, " : "none exists, ") + what];
   }
   std::string s = "| split | view | outcome | views |\n|---|---|---|---|\n";
   for (const auto& [split, m] : counts)
@@ -429,8 +433,11 @@ std::string judgedViewsSummary(const std::vector<JudgedView>& views, const std::
   s += "A valid grasp: approach allowed, both contacts on the closing line inside the opening, contact normals in the "
        "friction cone, fingers and palm swept in from the pre-grasp without touching the object or the table "
        "(ehc_bringup/grasp_judge.h).\n\n";
+  s += "A valid grasp exists in a view where the search on the true mesh finds one or one of the generator's top five "
+       "is valid (search missed: only the latter). Valid best grasp, valid in top 5 and no grasp proposed count the views "
+       "where one exists.\n\n";
   s += "| split | views | a valid grasp exists | valid best grasp | valid in top 5 | no grasp proposed | none exists | "
-       "grasp proposed where none exists |\n|---|---|---|---|---|---|---|---|\n";
+       "grasp proposed where none exists | search missed |\n|---|---|---|---|---|---|---|---|---|\n";
   for (const char* split : {"tuning", "validation", "all"}) s += summaryRow(split, views);
   s += "\n" + verdictTable(views);
   return s;

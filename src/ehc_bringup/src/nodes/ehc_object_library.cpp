@@ -110,7 +110,7 @@ int judge(int argc, char** argv) {
   const auto root = ehc_common::ConfigNode::loadFile(config, "GraspGenerator");
   const ehc_perception::GraspGeneratorConfig gen_cfg = ehc_perception::loadGraspGeneratorConfig(root.childOrEmpty("grasp_generator"));
   const ehc_perception::GraspTargetingParams targeting = ehc_perception::loadGraspTargetingParams(root.childOrEmpty("node"));
-  p.judge.max_approach_tilt_deg = gen_cfg.max_approach_tilt_deg;
+  p.judge.max_approach_tilt_deg = p.judge.max_view_angle_deg = gen_cfg.max_approach_tilt_deg;
   p.validate();
   const ehc_sim::ObjectLibrary lib = ehc_sim::loadObjectLibrary(cli.text("manifest", defaultManifest()));
   const ehc_sim::SimConfig sim = ehc_sim::loadSimConfig(cli.text("sim", ehc_control::configDirectory() + "/sim/bullet_sim.yaml"));
@@ -123,7 +123,7 @@ int judge(int argc, char** argv) {
       lib, sim, generator, targeting, p, [](const ehc_bringup::JudgedView& v, std::size_t done, std::size_t total) {
         const ehc_bringup::ViewJudgement& j = v.judgement;
         std::cerr << "[" << done << "/" << total << "] " << v.object << " view " << v.view << ": valid grasp "
-                  << (j.existence.exists ? "exists" : "none") << ", "
+                  << (j.exists ? "exists" : "none") << ", "
                   << (j.result.grasps.empty() ? "no grasp (" + ehc_perception::toString(j.result.failure) + ")"
                                               : "best " + ehc_bringup::toString(j.best.verdict))
                   << ", top 5 valid " << j.top5_valid << "\n";
