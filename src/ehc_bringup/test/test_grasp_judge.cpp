@@ -210,6 +210,46 @@ TEST(GraspJudge, AValidGraspExistsOnlyWhereOneFits) {
   const GraspJudge flat(ehc_sim::boxSurface({0.05, 0.05, 0.006}), onTable(0, 0, 0.003), kTable, {}, p, view);
   const auto e4 = flat.findValidGrasp(7);
   EXPECT_FALSE(e4.exists) << toString(e4.commonest());
-  std::printf("standing box: valid after %d candidates; 100 mm cube: %d judged; flat plate: %d judged, mostly %s\n",
-              e1.candidates, e3.candidates, e4.candidates, toString(e4.commonest()).c_str());
+  // A 26 mm rod lying on the table (axis along x): closing across it, parallel to the table, from
+  // above; its closing line must be 10 mm above the table (fingertips) and its contacts within
+  // 26.6 deg of horizontal, a narrow band of the surface.
+  Eigen::Isometry3d lying = onTable(0, 0, 0.013);
+  lying.linear() = Eigen::AngleAxisd(0.5 * M_PI, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  const GraspJudge rod(ehc_sim::cylinderSurface(0.026, 0.20, 48), lying, kTable, {}, p, view);
+  const auto e5 = rod.findValidGrasp(7);
+  EXPECT_TRUE(e5.exists);
+  std::printf("standing box: valid after %d candidates; 100 mm cube: %d judged; flat plate: %d judged, mostly %s; "
+              "lying rod: valid after %d\n",
+              e1.candidates, e3.candidates, e4.candidates, toString(e4.commonest()).c_str(), e5.candidates);
+}
+
+TEST(GraspJudge, LibraryViewsAreTheSameInASplitAndInAll) {
+  const ehc_sim::ObjectLibrary lib = ehc_sim::loadObjectLibrary(std::string(EHC_CONFIG_DIR) + "/objects/library.yaml");
+  const ehc_sim::SimConfig sim = ehc_sim::loadSimConfig(std::string(EHC_CONFIG_DIR) + "/sim/bullet_sim.yaml");
+  const ehc_perception::GraspGenerator generator{ehc_perception::GraspGeneratorConfig()};
+  ehc_bringup::LibraryJudgeParams p;
+  p.views = 1;
+  p.seed = 3;
+  p.judge.samples = 100;
+  p.split = "validation";
+  std::size_t calls = 0;
+  const auto validation = ehc_bringup::judgeLibrary(lib, sim, generator, {}, p, [&](const auto&, std::size_t done, std::size_t total) {
+    ++calls;
+    EXPECT_EQ(done, calls);
+    EXPECT_EQ(total, lib.objects.size() / 2);
+  });
+  p.split = "all";
+  const auto all = ehc_bringup::judgeLibrary(lib, sim, generator, {}, p, nullptr);
+  ASSERT_EQ(all.size(), lib.objects.size());
+  ASSERT_EQ(validation.size(), lib.objects.size() / 2);
+  std::vector<ehc_bringup::JudgedView> subset;
+  for (const auto& v : all)
+    if (v.split == "validation") subset.push_back(v);
+  EXPECT_EQ(ehc_bringup::judgedViewsCsv(subset), ehc_bringup::judgedViewsCsv(validation));
+  const std::string summary = ehc_bringup::judgedViewsSummary(all, "test");
+  std::printf("%s", summary.c_str());
+  EXPECT_NE(summary.find("| tuning | 18 |"), std::string::npos);
+  EXPECT_NE(summary.find("| validation | 18 |"), std::string::npos);
+  p.views = 0;
+  EXPECT_THROW(ehc_bringup::judgeLibrary(lib, sim, generator, {}, p, nullptr), std::invalid_argument);
 }

@@ -25,10 +25,12 @@
 // the solid crosses no triangle; every sweep starts 0.1 m back, outside any graspable object.
 //
 // Existence (findValidGrasp): candidate grasps sampled from the true mesh, judged until one is
-// valid. Surface points are drawn uniformly by area (seeded); each point's outward normal n is a
-// closing axis and the ray from it into the object meets the opposite side q within the opening
-// (first crossing leaving the mesh); the grasp centre is the midpoint of p and q; approaches are
-// approach_steps directions perpendicular to n (evenly spaced, random phase) that pass rule 1.
+// valid. Surface points p are drawn uniformly by area (seeded). Closing axes at p: its outward
+// normal n and, for a tilted n, n's horizontal part (closing parallel to the table, as across a
+// lying handle); along each, the ray from p into the object meets the opposite side q within the
+// opening (the first crossing, leaving the mesh) and the grasp centre is the midpoint of p and q.
+// Approaches: approach_steps directions perpendicular to the closing axis (evenly spaced, random
+// phase) and the ones nearest straight down and the view direction, those that pass rule 1.
 
 #include "ehc_bringup/object_view.h"
 #include "ehc_perception/grasp_generator.h"
@@ -116,6 +118,9 @@ class GraspJudge {
   bool approachAllowed(const Eigen::Vector3d& approach) const;
   GraspVerdict closingLine(const Eigen::Isometry3d& grasp, GraspJudgement* out) const;
   GraspVerdict sweep(const Eigen::Isometry3d& grasp) const;
+  /// Existence: the candidates of surface point `p` closing along `y` (the outward side of p);
+  /// true when one is valid (then in `ex`).
+  bool tryAxis(const Eigen::Vector3d& p, const Eigen::Vector3d& y, double phase, GraspExistence* ex) const;
 
   struct Impl;
   std::unique_ptr<Impl> impl_;

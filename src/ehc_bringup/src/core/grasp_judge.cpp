@@ -225,6 +225,41 @@ GraspJudgement GraspJudge::judge(const Eigen::Isometry3d& grasp) const {
   return out;
 }
 
+bool GraspJudge::tryAxis(const Eigen::Vector3d& p, const Eigen::Vector3d& y, double phase, GraspExistence* ex) const {
+  // The opposite side: where the ray from p into the object along -y leaves it, within the opening.
+  Eigen::Vector3d q, nq;
+  const Eigen::Vector3d inside = p - 1e-6 * y;
+  if (!firstHit(inside, inside - gripper_.max_width * y, &q, &nq) || nq.dot(y) > 0.0) return false;
+  Eigen::Isometry3d grasp = Eigen::Isometry3d::Identity();
+  grasp.translation() = 0.5 * (p + q);
+  // Evenly spaced approaches around y, and the ones nearest straight down and the view direction.
+  std::vector<Eigen::Vector3d> approaches;
+  const Eigen::Vector3d e1 = y.unitOrthogonal(), e2 = y.cross(e1);
+  for (int k = 0; k < params_.approach_steps; ++k) {
+    const double th = phase + 2.0 * M_PI * k / params_.approach_steps;
+    approaches.push_back(std::cos(th) * e1 + std::sin(th) * e2);
+  }
+  for (const Eigen::Vector3d& d : {Eigen::Vector3d(-Eigen::Vector3d::UnitZ()), view_}) {
+    const Eigen::Vector3d along = d - d.dot(y) * y;
+    if (along.norm() > 1e-6) approaches.push_back(along.normalized());
+  }
+  for (const Eigen::Vector3d& z : approaches) {
+    if (!approachAllowed(z)) continue;
+    grasp.linear().col(0) = y.cross(z);
+    grasp.linear().col(1) = y;
+    grasp.linear().col(2) = z;
+    const GraspJudgement j = judge(grasp);
+    ++ex->candidates;
+    ++ex->verdicts[j.verdict];
+    if (j.valid()) {
+      ex->exists = true;
+      ex->grasp = grasp;
+      return true;
+    }
+  }
+  return false;
+}
+
 GraspExistence GraspJudge::findValidGrasp(unsigned seed) const {
   const Impl& m = *impl_;
   GraspExistence ex;
@@ -244,29 +279,10 @@ GraspExistence GraspJudge::findValidGrasp(unsigned seed) const {
     const Eigen::Vector3d n = m.T_world_object.linear() * m.mesh.normal(t);
     if (n.isZero()) continue;
     const Eigen::Vector3d p = m.T_world_object * local;
-    // The opposite side: where the ray into the object leaves it, within the opening.
-    Eigen::Vector3d q, nq;
-    const Eigen::Vector3d inside = p - 1e-6 * n;
-    if (!firstHit(inside, inside - gripper_.max_width * n, &q, &nq) || nq.dot(n) > 0.0) continue;
-    Eigen::Isometry3d grasp = Eigen::Isometry3d::Identity();
-    grasp.translation() = 0.5 * (p + q);
-    const Eigen::Vector3d e1 = n.unitOrthogonal(), e2 = n.cross(e1);
-    for (int k = 0; k < params_.approach_steps; ++k) {
-      const double th = phase + 2.0 * M_PI * k / params_.approach_steps;
-      const Eigen::Vector3d z = std::cos(th) * e1 + std::sin(th) * e2;
-      if (!approachAllowed(z)) continue;
-      grasp.linear().col(0) = n.cross(z);
-      grasp.linear().col(1) = n;
-      grasp.linear().col(2) = z;
-      const GraspJudgement j = judge(grasp);
-      ++ex.candidates;
-      ++ex.verdicts[j.verdict];
-      if (j.valid()) {
-        ex.exists = true;
-        ex.grasp = grasp;
-        return ex;
-      }
-    }
+    // The point's normal, and its horizontal part (closing parallel to the table).
+    if (tryAxis(p, n, phase, &ex)) return ex;
+    const Eigen::Vector3d level(n.x(), n.y(), 0.0);
+    if (level.norm() > 0.1 && std::abs(n.z()) > 1e-6 && tryAxis(p, level.normalized(), phase, &ex)) return ex;
   }
   return ex;
 }
