@@ -67,7 +67,7 @@ struct GraspJudgeParams {
   double pregrasp_distance = 0.10;     ///< m, sweep start back along the approach (the sequencer's)
   double max_approach_tilt_deg = 95.0; ///< approach vs straight down (the generator's)
   double max_view_angle_deg = 95.0;    ///< approach vs the view direction (when one is given)
-  int samples = 400;                   ///< existence: surface points drawn
+  int samples = 2000;                  ///< existence: surface points drawn
   int approach_steps = 12;             ///< existence: approaches around each closing axis
   void validate() const;               ///< throws std::invalid_argument "[GraspJudge] ..."
 };

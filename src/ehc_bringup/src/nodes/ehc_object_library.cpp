@@ -10,7 +10,7 @@
 //       the camera position, the object's pose and the point count go to stdout as JSON.
 //   ehc_object_library judge [--split tuning|validation|all] [--views N] [--seed S] --out <dir>
 //       [--manifest <library.yaml>] [--sim <bullet_sim.yaml>] [--config <grasp_node.yaml>]
-//       [--mu 0.5] [--samples 400]
+//       [--mu 0.5] [--samples 2000]
 //       every object of the split from N random views (0.5-0.7 m, 30-60 deg above the table): the
 //       grasp generator's grasps judged against the true mesh (ehc_bringup/grasp_judge.h);
 //       <dir>/views.csv (one row per view) and <dir>/summary.md; progress on stderr.
@@ -36,7 +36,7 @@ const char* kUsage =
     "                          [--distance 0.6] [--elevation 45] [--azimuth 0] [--seed 1] [--sim <bullet_sim.yaml>]\n"
     "       ehc_object_library judge --out <dir> [--split all|tuning|validation] [--views 2] [--seed 1]\n"
     "                          [--manifest <library.yaml>] [--sim <bullet_sim.yaml>] [--config <grasp_node.yaml>]\n"
-    "                          [--mu 0.5] [--samples 400]\n"
+    "                          [--mu 0.5] [--samples 2000]\n"
     "The default manifest is config/objects/library.yaml.\n";
 
 std::string defaultManifest() { return ehc_control::configDirectory() + "/objects/library.yaml"; }
