@@ -248,7 +248,7 @@ TEST(GraspJudge, LibraryViewsAreTheSameInASplitAndInAll) {
   EXPECT_EQ(ehc_bringup::judgedViewsCsv(subset), ehc_bringup::judgedViewsCsv(validation));
   const std::string summary = ehc_bringup::judgedViewsSummary(all, "test");
   std::printf("%s", summary.c_str());
-  EXPECT_NE(summary.find("| tuning | 18 |"), std::string::npos);
+  EXPECT_NE(summary.find("| tuning | 18 |"), std::string::npos) << "18 tuning objects, one view each";
   EXPECT_NE(summary.find("| validation | 18 |"), std::string::npos);
   p.views = 0;
   EXPECT_THROW(ehc_bringup::judgeLibrary(lib, sim, generator, {}, p, nullptr), std::invalid_argument);

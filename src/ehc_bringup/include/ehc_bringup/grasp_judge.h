@@ -140,6 +140,9 @@ struct ViewJudgement {
   GraspExistence existence;
   ehc_perception::GraspResult result;  ///< the generator's
   GraspJudgement best;                 ///< its best grasp's (NotFinite if none)
+  /// Its best grasp's without the view rule (approaches from any side within the tilt limit: a
+  /// mobile base could walk round); the same as `best` unless that is approach_excluded.
+  GraspJudgement best_any_side;
   int top5_valid = 0;                  ///< valid grasps among its first five
   int first_valid_rank = 0;            ///< 1-based rank of its first valid grasp in the top five, 0: none
 };

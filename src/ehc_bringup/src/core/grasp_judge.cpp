@@ -298,7 +298,13 @@ ViewJudgement judgeView(const ObjectViewCloud& view, const ehc_perception::Grasp
   out.existence = judge.findValidGrasp(seed);
   out.result = ehc_perception::generateForTarget(generator, view.points, eye, &centre, targeting);
   const std::vector<ehc_perception::Grasp>& grasps = out.result.grasps;
-  if (!grasps.empty()) out.best = judge.judge(grasps.front().pose);
+  if (!grasps.empty()) {
+    out.best = judge.judge(grasps.front().pose);
+    out.best_any_side = out.best;
+    if (out.best.verdict == GraspVerdict::ApproachExcluded)
+      out.best_any_side = GraspJudge(*view.body.mesh, view.T_world_object, view.table_height, generator.config().gripper, params)
+                              .judge(grasps.front().pose);
+  }
   for (std::size_t i = 0; i < std::min<std::size_t>(5, grasps.size()); ++i) {
     if (!(i == 0 ? out.best : judge.judge(grasps[i].pose)).valid()) continue;
     ++out.top5_valid;
@@ -373,7 +379,7 @@ std::string percent(int n, int of) { return of > 0 ? fixed(100.0 * n / of, 0) + 
 std::string judgedViewsCsv(const std::vector<JudgedView>& views) {
   std::ostringstream f;
   f << "object,kind,split,view,distance,elevation_deg,azimuth_deg,noise_seed,exists,search_missed,candidates_judged,no_grasp_verdict,"
-       "generator_status,generator_reason,grasps,best_valid,best_verdict,best_measured_width_mm,best_true_width_mm,"
+       "generator_status,generator_reason,grasps,best_valid,best_verdict,best_verdict_any_side,best_measured_width_mm,best_true_width_mm,"
        "best_contact_angle_deg,best_seen_contacts,top5_valid,first_valid_rank\n";
   for (const JudgedView& v : views) {
     const ViewJudgement& j = v.judgement;
@@ -386,11 +392,12 @@ std::string judgedViewsCsv(const std::vector<JudgedView>& views) {
     if (any) {
       const ehc_perception::Grasp& g = j.result.grasps.front();
       const double angle = std::max(j.best.contact_angle_deg[0], j.best.contact_angle_deg[1]);
-      f << (j.best.valid() ? 1 : 0) << "," << toString(j.best.verdict) << "," << fixed(1e3 * g.measured_width, 1) << ","
+      f << (j.best.valid() ? 1 : 0) << "," << toString(j.best.verdict) << "," << toString(j.best_any_side.verdict) << ","
+        << fixed(1e3 * g.measured_width, 1) << ","
         << (j.best.width > 0.0 ? fixed(1e3 * j.best.width, 1) : "") << "," << (angle >= 0.0 ? fixed(angle, 1) : "") << ","
         << g.seen_contacts << ",";
     } else {
-      f << ",,,,,,";
+      f << ",,,,,,,";
     }
     f << j.top5_valid << "," << j.first_valid_rank << "\n";
   }
@@ -401,7 +408,7 @@ namespace {
 
 /// The summary table's row of one split.
 std::string summaryRow(const std::string& split, const std::vector<JudgedView>& views) {
-  int n = 0, exists = 0, best = 0, top5 = 0, none_proposed = 0, none = 0, no_grasp = 0, missed = 0;
+  int n = 0, exists = 0, best = 0, any_side = 0, top5 = 0, none_proposed = 0, none = 0, no_grasp = 0, missed = 0;
   for (const JudgedView& v : views) {
     if (split != "all" && v.split != split) continue;
     const ViewJudgement& j = v.judgement;
@@ -410,6 +417,7 @@ std::string summaryRow(const std::string& split, const std::vector<JudgedView>& 
     if (j.exists) {
       ++exists;
       best += j.best.valid();
+      any_side += j.best_any_side.valid();
       top5 += j.top5_valid > 0;
       no_grasp += j.result.grasps.empty();
     } else {
@@ -419,7 +427,7 @@ std::string summaryRow(const std::string& split, const std::vector<JudgedView>& 
   }
   if (n == 0) return "";
   return "| " + split + " | " + std::to_string(n) + " | " + std::to_string(exists) + " | " + std::to_string(best) + " (" +
-         percent(best, exists) + ") | " + std::to_string(top5) + " (" + percent(top5, exists) + ") | " +
+         percent(best, exists) + ") | " + std::to_string(any_side) + " | " + std::to_string(top5) + " (" + percent(top5, exists) + ") | " +
          std::to_string(no_grasp) + " | " + std::to_string(none) + " | " + std::to_string(none_proposed) + " | " +
          std::to_string(missed) + " |\n";
 }
@@ -451,9 +459,9 @@ std::string judgedViewsSummary(const std::vector<JudgedView>& views, const std::
        "(ehc_bringup/grasp_judge.h).\n\n";
   s += "A valid grasp exists in a view where the search on the true mesh finds one or one of the generator's top five "
        "is valid (search missed: only the latter). Valid best grasp, valid in top 5 and no grasp proposed count the views "
-       "where one exists.\n\n";
-  s += "| split | views | a valid grasp exists | valid best grasp | valid in top 5 | no grasp proposed | none exists | "
-       "grasp proposed where none exists | search missed |\n|---|---|---|---|---|---|---|---|---|\n";
+       "where one exists; from any side: the best grasp valid without the view rule (approaching from any side).\n\n";
+  s += "| split | views | a valid grasp exists | valid best grasp | ... from any side | valid in top 5 | no grasp proposed | "
+       "none exists | grasp proposed where none exists | search missed |\n|---|---|---|---|---|---|---|---|---|---|\n";
   for (const char* split : {"tuning", "validation", "all"}) s += summaryRow(split, views);
   s += "\n" + verdictTable(views);
   return s;
