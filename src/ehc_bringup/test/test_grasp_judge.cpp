@@ -62,6 +62,7 @@ TEST(GraspJudge, BoxGraspsFromAbove) {
   EXPECT_NEAR(good.width, 0.05, 1e-6);
   EXPECT_NEAR(good.contact_angle_deg[0], 0.0, 1e-3);
   EXPECT_NEAR(good.contact[1].y(), 0.025, 1e-6);
+  EXPECT_NEAR(judge.closedWidth(graspPose({0, 0, 0.82}, Eigen::Vector3d::UnitY(), kDown)), 0.05, 1e-6);
   // Palm into the top: 60 mm below it.
   EXPECT_EQ(judge.judge(graspPose({0, 0, 0.79}, Eigen::Vector3d::UnitY(), kDown)).verdict, GraspVerdict::PalmCollides);
   // 20 mm off the centre along y: the -y finger's inner face (at y = -15 mm) is inside the box.
@@ -98,6 +99,10 @@ TEST(GraspJudge, ContactNormalOutsideTheFrictionCone) {
   GraspJudgeParams p;
   p.friction_coefficient = 1.2;
   EXPECT_EQ(GraspJudge(box, T, kTable, {}, p).judge(g).verdict, GraspVerdict::Valid);
+  // Between the contacts on the closing line 2 x (28.3 - 5) mm; the pads (20 mm broad) stop at the
+  // box's edge on the centre line (its 56.6 mm diagonal) if a ray of the 1 mm grid meets it.
+  EXPECT_NEAR(j.width, 2 * (0.02 * std::sqrt(2.0) - 0.005), 1e-6);
+  EXPECT_NEAR(strict.closedWidth(g, 0.001), 0.04 * std::sqrt(2.0), 1e-6);  // a ray on the centre line
 }
 
 TEST(GraspJudge, FingerIntoTheTable) {

@@ -77,6 +77,8 @@ struct GraspJudgement {
   bool valid() const { return verdict == GraspVerdict::Valid; }
   /// m, distance between the two contacts on the closing line (0 if there are not two).
   double width = 0.0;
+  /// m, where the closing pads stop (closedWidth; judgeView fills it for the best grasp).
+  double closed_width = 0.0;
   /// deg, each contact's normal from the closing axis (-1 if that contact does not exist);
   /// [0]: the finger on -y, [1]: on +y.
   std::array<double, 2> contact_angle_deg = {{-1.0, -1.0}};
@@ -108,6 +110,12 @@ class GraspJudge {
   /// Candidates sampled from the mesh with `seed` (same seed, same candidates), judged until one
   /// is valid.
   GraspExistence findValidGrasp(unsigned seed) const;
+
+  /// The opening at which the closing fingers stop: the object's extent along the closing axis
+  /// within the fingers' slab (finger breadth x finger length), from rays cast from each finger's
+  /// inner face towards the other on a grid of `step` m over the pad; 0 if no ray meets the mesh.
+  /// What a generator's measured width estimates.
+  double closedWidth(const Eigen::Isometry3d& grasp, double step = 0.002) const;
 
   /// First crossing of the mesh by the segment from `from` to `to` (world): false if none;
   /// else its point and the crossed triangle's outward normal (world).

@@ -186,6 +186,26 @@ GraspVerdict GraspJudge::closingLine(const Eigen::Isometry3d& grasp, GraspJudgem
   return verdict_cone ? GraspVerdict::OutsideFrictionCone : GraspVerdict::Valid;
 }
 
+double GraspJudge::closedWidth(const Eigen::Isometry3d& grasp, double step) const {
+  const ehc_perception::GripperGeometry& g = gripper_;
+  const double half = 0.5 * g.max_width, z1 = g.finger_tip_depth, z0 = z1 - g.finger_length;
+  const int nx = std::max(1, static_cast<int>(std::ceil(g.finger_breadth / step))), nz = std::max(1, static_cast<int>(std::ceil(g.finger_length / step)));
+  std::array<double, 2> stop = {{-1.0, -1.0}};  // the nearest crossing's distance from each finger
+  for (int i = 0; i < 2; ++i) {
+    const double s = i == 0 ? -1.0 : 1.0;
+    for (int ix = 0; ix <= nx; ++ix)
+      for (int iz = 0; iz <= nz; ++iz) {
+        const Eigen::Vector3d face(-0.5 * g.finger_breadth + g.finger_breadth * ix / nx, s * half, z0 + (z1 - z0) * iz / nz);
+        Eigen::Vector3d p, n;
+        if (!firstHit(grasp * face, grasp * Eigen::Vector3d(face.x(), -face.y(), face.z()), &p, &n)) continue;
+        const double d = (p - grasp * face).norm();
+        if (stop[static_cast<std::size_t>(i)] < 0.0 || d < stop[static_cast<std::size_t>(i)]) stop[static_cast<std::size_t>(i)] = d;
+      }
+  }
+  if (stop[0] < 0.0 || stop[1] < 0.0) return 0.0;
+  return std::max(0.0, g.max_width - stop[0] - stop[1]);
+}
+
 GraspVerdict GraspJudge::sweep(const Eigen::Isometry3d& grasp) const {
   const ehc_perception::GripperGeometry& g = gripper_;
   const double d = params_.pregrasp_distance;
@@ -300,6 +320,7 @@ ViewJudgement judgeView(const ObjectViewCloud& view, const ehc_perception::Grasp
   const std::vector<ehc_perception::Grasp>& grasps = out.result.grasps;
   if (!grasps.empty()) {
     out.best = judge.judge(grasps.front().pose);
+    if (out.best.width > 0.0) out.best.closed_width = judge.closedWidth(grasps.front().pose);
     out.best_any_side = out.best;
     if (out.best.verdict == GraspVerdict::ApproachExcluded)
       out.best_any_side = GraspJudge(*view.body.mesh, view.T_world_object, view.table_height, generator.config().gripper, params)
@@ -379,7 +400,7 @@ std::string percent(int n, int of) { return of > 0 ? fixed(100.0 * n / of, 0) + 
 std::string judgedViewsCsv(const std::vector<JudgedView>& views) {
   std::ostringstream f;
   f << "object,kind,split,view,distance,elevation_deg,azimuth_deg,noise_seed,exists,search_missed,candidates_judged,no_grasp_verdict,"
-       "generator_status,generator_reason,grasps,best_valid,best_verdict,best_verdict_any_side,best_measured_width_mm,best_true_width_mm,"
+       "generator_status,generator_reason,grasps,best_valid,best_verdict,best_verdict_any_side,best_measured_width_mm,best_true_width_mm,best_closed_width_mm,"
        "best_contact_angle_deg,best_seen_contacts,top5_valid,first_valid_rank\n";
   for (const JudgedView& v : views) {
     const ViewJudgement& j = v.judgement;
@@ -394,10 +415,11 @@ std::string judgedViewsCsv(const std::vector<JudgedView>& views) {
       const double angle = std::max(j.best.contact_angle_deg[0], j.best.contact_angle_deg[1]);
       f << (j.best.valid() ? 1 : 0) << "," << toString(j.best.verdict) << "," << toString(j.best_any_side.verdict) << ","
         << fixed(1e3 * g.measured_width, 1) << ","
-        << (j.best.width > 0.0 ? fixed(1e3 * j.best.width, 1) : "") << "," << (angle >= 0.0 ? fixed(angle, 1) : "") << ","
+        << (j.best.width > 0.0 ? fixed(1e3 * j.best.width, 1) : "") << ","
+        << (j.best.closed_width > 0.0 ? fixed(1e3 * j.best.closed_width, 1) : "") << "," << (angle >= 0.0 ? fixed(angle, 1) : "") << ","
         << g.seen_contacts << ",";
     } else {
-      f << ",,,,,,,";
+      f << ",,,,,,,,";
     }
     f << j.top5_valid << "," << j.first_valid_rank << "\n";
   }
