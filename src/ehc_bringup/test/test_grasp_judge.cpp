@@ -105,6 +105,25 @@ TEST(GraspJudge, ContactNormalOutsideTheFrictionCone) {
   EXPECT_NEAR(strict.closedWidth(g, 0.001), 0.04 * std::sqrt(2.0), 1e-6);  // a ray on the centre line
 }
 
+TEST(GraspJudge, FingerThroughAPartOfTheObject) {
+  // A 50 mm box with a 6 mm bar standing beside it, 40 mm from its centre along y (a handle): the
+  // +y finger (inner face at 35 mm, 10 mm thick) comes down onto the bar.
+  ehc_sim::TriangleMesh mesh = ehc_sim::boxSurface({0.05, 0.05, 0.10});
+  ehc_sim::TriangleMesh bar = ehc_sim::boxSurface({0.006, 0.006, 0.10});
+  for (Eigen::Vector3d& v : bar.vertices) v.y() += 0.04;
+  mesh.append(bar);
+  const GraspJudge judge(mesh, onTable(0, 0, 0.05), kTable, {}, {});
+  EXPECT_EQ(judge.judge(graspPose({0, 0, 0.82}, Eigen::Vector3d::UnitY(), kDown)).verdict, GraspVerdict::FingerCollides);
+  // Closing across x instead: the fingers at x = +-35..45 mm miss the bar; the palm (110 mm along
+  // x, 60 mm along y) stays above the top.
+  EXPECT_EQ(judge.judge(graspPose({0, 0, 0.82}, Eigen::Vector3d::UnitX(), kDown)).verdict, GraspVerdict::Valid);
+  // The same with the pre-grasp sweep off: only the fingers at the grasp pose, still on the bar.
+  GraspJudgeParams p;
+  p.pregrasp_distance = 0.0;
+  EXPECT_EQ(GraspJudge(mesh, onTable(0, 0, 0.05), kTable, {}, p).judge(graspPose({0, 0, 0.82}, Eigen::Vector3d::UnitY(), kDown)).verdict,
+            GraspVerdict::FingerCollides);
+}
+
 TEST(GraspJudge, FingerIntoTheTable) {
   // A 20 mm high box: the closing line 5 mm above the table puts the fingertips 5 mm below it.
   const GraspJudge judge(ehc_sim::boxSurface({0.05, 0.05, 0.02}), onTable(0, 0, 0.01), kTable, {}, {});
