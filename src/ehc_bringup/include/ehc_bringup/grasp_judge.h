@@ -31,6 +31,8 @@
 // opening (the first crossing, leaving the mesh) and the grasp centre is the midpoint of p and q.
 // Approaches: approach_steps directions perpendicular to the closing axis (evenly spaced, random
 // phase) and the ones nearest straight down and the view direction, those that pass rule 1.
+// A sampling search, not a proof: where it finds none a narrow grasp may still exist (more
+// samples search more; judgeView also counts a valid grasp of the generator's as one).
 
 #include "ehc_bringup/object_view.h"
 #include "ehc_perception/grasp_generator.h"
