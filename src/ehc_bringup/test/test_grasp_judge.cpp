@@ -4,7 +4,6 @@
 
 #include "ehc_bringup/grasp_judge.h"
 
-#include "ehc_test/temp_dir.h"
 #include "ehc_test/test_seed.h"
 
 #include <gtest/gtest.h>
