@@ -348,7 +348,9 @@ def write_markdown(out, report):
                                  "" if plan["imprecision_flag"] else " (ehc_experiment without --base-imprecision)"),
              "- mean [95 %% CI]: percentile bootstrap over the sets (seed x set), %d resamples, bootstrap seed %d"
              % (mr.BOOTSTRAP_RESAMPLES, plan["bootstrap_seed"]),
-             "- CPU time of the jobs: %.0f s (user + sys)" % report["cpu_s"]]
+             "- CPU time of the jobs: %.0f s (user + sys)%s" % (report["cpu_s"], (
+                 ", %d resumed run(s) without a record of theirs" % report["cpu_unrecorded"])
+                 if report.get("cpu_unrecorded") else "")]
     for exp in plan["experiments"]:
         metrics = [m[0] for m in METRICS[EXPERIMENTS[exp]["command"]]]
         lines += ["", "## %s (%s)" % (EXPERIMENTS[exp]["title"], exp), "",
@@ -410,7 +412,8 @@ def write_report(out, plan, manifests, folders):
               "bootstrap_seed": plan["bootstrap_seed"], "bootstrap_resamples": mr.BOOTSTRAP_RESAMPLES,
               "commands": [m["command"] for m in manifests], "code_version": manifests[0]["code_version"],
               "machine": "%s, %s core(s)" % (manifests[0]["machine"]["cpu"], manifests[0]["machine"]["cores"]),
-              "cpu_s": round(sum(j["cpu_s"] for m in manifests for j in m["jobs"]), 1),
+              "cpu_s": round(sum(j["cpu_s"] or 0.0 for m in manifests for j in m["jobs"]), 1),
+              "cpu_unrecorded": sum(j["cpu_s"] is None for m in manifests for j in m["jobs"]),
               "wall_s": round(sum(m["wall_s"] for m in manifests), 1), "cells": cells, "paired": paired}
     os.makedirs(out, exist_ok=True)
     with open(os.path.join(out, "sweep.json"), "w") as f:
@@ -442,6 +445,8 @@ def parse_run_args(argv):
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--shard", default="1/1")
     ap.add_argument("--devel", default=os.path.join(mr.ROOT, "devel"))
+    ap.add_argument("--resume", action="store_true",
+                    help="keep the runs of an earlier, interrupted run into --out that finished (same command)")
     a = ap.parse_args(argv)
     if a.jobs < 1 or a.seed_count < 1:
         ap.error("--jobs and --seed-count must be >= 1")
@@ -468,15 +473,17 @@ def main_run(argv):
         j["out"] = os.path.join(a.out, j["id"])
         j["cmd"] = job_command(plan, a.exe, j, j["out"])
     t0 = time.time()
-    run_all(mine, a.jobs, "sweep", lambda j: j["id"][len("runs/"):])
+    run_all(mine, a.jobs, "sweep", lambda j: j["id"][len("runs/"):], resume=a.resume)
+    versions = sorted({j["code_version"] for j in mine})
     manifest = {"plan": plan, "shard": [k, n], "command": " ".join([mr.rel(sys.argv[0])] + sys.argv[1:]),
-                "code_version": mr.code_version(), "machine": mr.machine(), "finished": mr.now(),
+                "code_version": " + ".join(versions), "machine": mr.machine(), "finished": mr.now(),
                 "wall_s": round(time.time() - t0, 1),
-                "jobs": [{"id": j["id"], "cpu_s": round(j["cpu_s"], 2), "cmd": " ".join(j["cmd"])} for j in mine]}
+                "jobs": [{"id": j["id"], "cpu_s": None if j["cpu_s"] is None else round(j["cpu_s"], 2),
+                          "cmd": " ".join(j["cmd"])} for j in mine]}
     with open(os.path.join(a.out, manifest_name(k, n)), "w") as f:
         json.dump(manifest, f, indent=1)
         f.write("\n")
-    cpu = sum(j["cpu_s"] for j in mine)
+    cpu = sum(j["cpu_s"] or 0.0 for j in mine)
     if n > 1:
         sys.stderr.write("[sweep] shard %d/%d done: %.0f s CPU; when every shard is done: sweep.py merge --out DIR %s ...\n"
                          % (k, n, cpu, a.out))
