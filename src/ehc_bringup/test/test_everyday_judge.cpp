@@ -71,17 +71,17 @@ GraspTrial trial(const std::string& method, bool success, const AttemptJudgement
 }
 
 /// The judge columns of trials.csv by method: counts as JudgeCounts defines them. The judge
-/// columns are the last six (no commas in them); method and success lead the row.
+/// columns are the last seven (no commas in them); method and success lead the row.
 std::map<std::string, JudgeCounts> countRows(const std::string& csv) {
   std::istringstream in(csv);
   std::string line;
   std::getline(in, line);
-  EXPECT_NE(line.find(",cause,judge_view,valid_exists,attempted,attempt_valid,grasp_verdict,judge_reason"), std::string::npos) << line;
+  EXPECT_NE(line.find(",cause,judge_view,valid_exists,attempted,attempt_valid,grasp_verdict,candidate_verdict,judge_reason"), std::string::npos) << line;
   std::map<std::string, JudgeCounts> out;
   while (std::getline(in, line)) {
     std::vector<std::string> tail;
     std::string rest = line;
-    for (int k = 0; k < 6; ++k) {
+    for (int k = 0; k < 7; ++k) {
       const std::size_t c = rest.rfind(',');
       tail.insert(tail.begin(), rest.substr(c + 1));
       rest = rest.substr(0, c);
@@ -100,7 +100,7 @@ std::map<std::string, JudgeCounts> countRows(const std::string& csv) {
     c.attempted_where_none += !exists && attempted;
     c.grasped_where_none += !exists && success;
     EXPECT_FALSE(valid && !attempted) << line;
-    EXPECT_EQ(tail[5].rfind("attempted_where_none", 0) == 0, !exists && attempted && !success) << line;
+    EXPECT_EQ(tail[6].rfind("attempted_where_none", 0) == 0, !exists && attempted && !success) << line;
   }
   return out;
 }
@@ -144,8 +144,14 @@ TEST(EverydayJudge, AttemptsAreJudgedAgainstTheTrueMesh) {
   EXPECT_TRUE(good.attempted && good.attemptValid() && good.valid_exists);
   EXPECT_EQ(good.reason(true), "grasped");
   EXPECT_EQ(good.reason(false), "valid_grasp_failed");
-  // 20 mm off the centre along the closing axis: invalid, and a valid grasp exists.
-  const AttemptJudgement off = judgeAttempt(record(0.10, topDown({1.7, 0.02, 0.82})), box, scene, kGripper, p, 1);
+  EXPECT_FALSE(good.has_candidate);
+  // 20 mm off the centre along the closing axis: invalid, and a valid grasp exists; the candidate
+  // it came from (centred) was valid.
+  GraspAttemptRecord moved = record(0.10, topDown({1.7, 0.02, 0.82}));
+  moved.candidate = GraspCandidate{topDown({1.7, 0.0, 0.82}), 0.06, 1.0};
+  const AttemptJudgement off = judgeAttempt(moved, box, scene, kGripper, p, 1);
+  EXPECT_TRUE(off.has_candidate);
+  EXPECT_EQ(off.candidate_verdict, GraspVerdict::Valid);
   EXPECT_TRUE(off.attempted);
   EXPECT_FALSE(off.attemptValid());
   EXPECT_EQ(off.verdict, GraspVerdict::OutsideOpening);
@@ -214,6 +220,7 @@ TEST(EverydayJudge, OneEverydaySetIsJudgedObjectByObject) {
     if (t.cause == "no_grasp" || t.cause == "not_seen" || t.cause == "no_target") EXPECT_FALSE(j.attempted);
     if (t.cause == "closed_empty" || t.cause == "dropped" || t.success) EXPECT_TRUE(j.attempted);
     if (j.attempted) EXPECT_EQ(j.view, "grasp");
+    if (j.chosen) EXPECT_TRUE(j.has_candidate);  // a cloud target's grasps are candidates
     if (t.success) EXPECT_TRUE(j.valid_exists || j.reason(t.success) == "grasped_where_none");
   }
   const ehc_test::TempDir dir("ehc_everyday_set");

@@ -104,6 +104,10 @@ struct AttemptJudgement {
   bool chosen = false;         ///< a grasp was chosen (GraspAttemptRecord::chosen)
   bool attempted = false;      ///< it was locked: the gripper went for it
   GraspVerdict verdict = GraspVerdict::NotFinite;  ///< the chosen grasp's (chosen only)
+  /// The generator's candidate it came from, as generated (GraspAttemptRecord::candidate): the
+  /// verdict tells a generator's invalid grasp from one the selection's turn made invalid.
+  bool has_candidate = false;
+  GraspVerdict candidate_verdict = GraspVerdict::NotFinite;
   /// A valid grasp exists in the view: the chosen grasp is valid, or the existence search
   /// (GraspJudge::findValidGrasp, run only when it is not) finds one.
   bool valid_exists = false;

@@ -122,6 +122,7 @@ struct ObjectViewRecord {
   double t = -1.0;  ///< s, sim time of the view's depth cloud; -1: none
   Eigen::Isometry3d T_world_cam = Eigen::Isometry3d::Identity();     ///< the true camera pose
   Eigen::Isometry3d T_world_object = Eigen::Isometry3d::Identity();  ///< the object's true pose
+  std::vector<GraspCandidate> candidates;  ///< the grasp generator's in this view (the stack's world frame)
 };
 
 /// What one sequencer object's attempt committed to, recorded for the grasp judge
@@ -135,6 +136,9 @@ struct GraspAttemptRecord {
   /// robot drove to its pre-grasp and the object failed before the lock).
   bool chosen = false;
   GraspCandidate grasp;           ///< that grasp: pose (true world) and width (score unset)
+  /// The generator's candidate it was chosen from, as generated (true world): before the
+  /// selection turned it onto the wanted approach or centred it (GraspSelectionParams).
+  std::optional<GraspCandidate> candidate;
   ObjectViewRecord grasp_view;    ///< the view its candidate set came from (GraspChoice::candidates_t)
   Eigen::Isometry3d T_world_object_at_choice = Eigen::Isometry3d::Identity();  ///< at the lock (else at the end)
   /// The last depth view taken for the object's grasps in which its true centre projected into
@@ -196,9 +200,10 @@ class GraspPipeline {
   Eigen::Isometry3d trueView(const Eigen::Isometry3d& T_stack_frame) const;
   /// Ground truth now: the true camera pose and object `object`'s true pose, stamped t.
   ObjectViewRecord viewNow(double t, std::size_t object) const;
-  /// A depth view taken for object `object`'s grasps (stamped t): kept until the object changes,
+  /// A depth view taken for object `object`'s grasps (stamped t) and the candidates the generator
+  /// found in it: kept until the object changes,
   /// and its last_seen when the object's centre projects into the image.
-  void recordView(double t, std::size_t object);
+  void recordView(double t, std::size_t object, const std::vector<GraspCandidate>& candidates);
   /// After the sequencer's update of `object`: its grasp record when it locks a grasp or ends.
   void recordAttempt(double t, std::size_t object, std::size_t results_before);
 

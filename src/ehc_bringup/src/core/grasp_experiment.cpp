@@ -257,6 +257,8 @@ AttemptJudgement judgeAttempt(const GraspAttemptRecord& record, const ehc_sim::T
   const GraspJudge judge(mesh, object, tableHeightUnder(scene, object.translation().head<2>()), gripper, params,
                          view->T_world_object.translation() - view->T_world_cam.translation());
   if (record.chosen) j.verdict = judge.judge(record.grasp.pose).verdict;
+  j.has_candidate = record.candidate.has_value();
+  if (j.has_candidate) j.candidate_verdict = judge.judge(record.candidate->pose).verdict;
   j.valid_exists = j.chosen && j.verdict == GraspVerdict::Valid;
   if (!j.valid_exists) {
     const GraspExistence e = judge.findValidGrasp(seed);
@@ -750,7 +752,7 @@ void writeTrialsCsv(const std::string& dir, const GraspExperimentResult& result)
        "min_obstacle_phase,min_margin_m,min_margin_link,min_margin_body,min_margin_phase,min_grasped_object_m,"
        "min_grasped_object_link,min_grasped_object_phase,lock_centre_in_grasp_x_m,lock_centre_in_grasp_y_m,"
        "lock_centre_in_grasp_z_m,close_centre_in_tcp_x_m,close_centre_in_tcp_y_m,close_centre_in_tcp_z_m,"
-       "lock_closing_axis_error_deg,cause,judge_view,valid_exists,attempted,attempt_valid,grasp_verdict,judge_reason\n";
+       "lock_closing_axis_error_deg,cause,judge_view,valid_exists,attempted,attempt_valid,grasp_verdict,candidate_verdict,judge_reason\n";
   for (const auto& t : result.trials) {
     auto quoted = [](std::string text) {
       std::replace(text.begin(), text.end(), '"', '\'');
@@ -772,9 +774,10 @@ void writeTrialsCsv(const std::string& dir, const GraspExperimentResult& result)
     const AttemptJudgement& j = t.judge;
     if (j.judged)
       f << "," << j.view << "," << j.valid_exists << "," << j.attempted << "," << j.attemptValid() << ","
-        << (j.chosen ? toString(j.verdict) : "") << "," << j.reason(t.success);
+        << (j.chosen ? toString(j.verdict) : "") << "," << (j.has_candidate ? toString(j.candidate_verdict) : "") << ","
+        << j.reason(t.success);
     else
-      f << ",,,,,,";
+      f << ",,,,,,,";
     f << "\n";
   }
 }

@@ -242,7 +242,6 @@ void GraspPipeline::perceive(double t) {
   const Eigen::Isometry3d T_world_cam = stackView(world_->cameraPose());
   const ehc_perception::PointList points = ehc_perception::transformPoints(cam_points, T_world_cam);
   const std::size_t current = sequencer_->currentObject();
-  if (want_grasps) recordView(t, current);
   if (want_grasps && current < cfg_.sequencer.objects.size() && cfg_.sequencer.objects[current].target.fromCloud()) {
     StageTimer timer(timing_, &counters_.wall_grasps);
     perceiveCloudTarget(t, points, T_world_cam, current);
@@ -254,6 +253,7 @@ void GraspPipeline::perceive(double t) {
     std::vector<GraspCandidate> candidates;
     for (const auto& g : res.grasps) candidates.push_back({g.pose, g.width, g.score});
     sequencer_->setGraspCandidates(t, candidates);
+    recordView(t, current, candidates);
     ++counters_.grasp_runs;
   }
   if (want_obstacles) {
@@ -277,6 +277,7 @@ void GraspPipeline::perceiveCloudTarget(double t, const ehc_perception::PointLis
   std::vector<GraspCandidate> candidates;
   for (const auto& g : r.grasps.grasps) candidates.push_back({g.pose, g.width, g.score});
   sequencer_->setGraspCandidates(t, candidates);
+  recordView(t, object, candidates);
   ++counters_.grasp_runs;
 }
 
@@ -404,11 +405,12 @@ ObjectViewRecord GraspPipeline::viewNow(double t, std::size_t object) const {
   return v;
 }
 
-void GraspPipeline::recordView(double t, std::size_t object) {
+void GraspPipeline::recordView(double t, std::size_t object, const std::vector<GraspCandidate>& candidates) {
   if (object >= attempts_.size() || object >= cfg_.scene.objects.size()) return;
   if (object != views_object_) views_.clear();
   views_object_ = object;
-  const ObjectViewRecord v = viewNow(t, object);
+  ObjectViewRecord v = viewNow(t, object);
+  v.candidates = candidates;
   views_.push_back(v);
   if (intrinsics_.projectsInside(v.T_world_cam.inverse() * v.T_world_object.translation())) attempts_[object].last_seen = v;
 }
@@ -429,9 +431,15 @@ void GraspPipeline::recordAttempt(double t, std::size_t object, std::size_t resu
     a.grasp.width = c.width;
     a.T_world_object_at_choice = world_->objectPose(static_cast<int>(object));
     a.grasp_view = ObjectViewRecord{};
+    a.candidate.reset();
     if (object == views_object_)
       for (const ObjectViewRecord& v : views_)
         if (v.t == c.candidates_t) a.grasp_view = v;
+    const auto k = static_cast<std::size_t>(c.candidate_index);
+    if (c.from_candidate && a.grasp_view.t >= 0.0 && k < a.grasp_view.candidates.size()) {
+      a.candidate = a.grasp_view.candidates[k];
+      a.candidate->pose = trueView(a.candidate->pose);
+    }
   }
   if (ended) a.end = viewNow(t, object);
 }
