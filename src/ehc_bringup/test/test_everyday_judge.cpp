@@ -217,11 +217,21 @@ TEST(EverydayJudge, OneEverydaySetIsJudgedObjectByObject) {
     SCOPED_TRACE(t.object + ": cause " + t.cause + ", " + j.view + ", " + j.reason(t.success));
     ASSERT_TRUE(j.judged);
     // No lock before these causes; a lock is judged from the view its grasp came from.
-    if (t.cause == "no_grasp" || t.cause == "not_seen" || t.cause == "no_target") EXPECT_FALSE(j.attempted);
-    if (t.cause == "closed_empty" || t.cause == "dropped" || t.success) EXPECT_TRUE(j.attempted);
-    if (j.attempted) EXPECT_EQ(j.view, "grasp");
-    if (j.chosen) EXPECT_TRUE(j.has_candidate);  // a cloud target's grasps are candidates
-    if (t.success) EXPECT_TRUE(j.valid_exists || j.reason(t.success) == "grasped_where_none");
+    if (t.cause == "no_grasp" || t.cause == "not_seen" || t.cause == "no_target") {
+      EXPECT_FALSE(j.attempted);
+    }
+    if (t.cause == "closed_empty" || t.cause == "dropped" || t.success) {
+      EXPECT_TRUE(j.attempted);
+    }
+    if (j.attempted) {
+      EXPECT_EQ(j.view, "grasp");
+    }
+    if (j.chosen) {  // a cloud target's grasps are candidates
+      EXPECT_TRUE(j.has_candidate);
+    }
+    if (t.success) {
+      EXPECT_TRUE(j.valid_exists || j.reason(t.success) == "grasped_where_none");
+    }
   }
   const ehc_test::TempDir dir("ehc_everyday_set");
   writeGraspResults(dir.path, p, r, "");

@@ -155,7 +155,7 @@ struct PipelineCounters {
   long collision_steps = 0, joint_limit_violations = 0;
   double wall_image = 0.0, wall_depth = 0.0, wall_tags = 0.0, wall_grasps = 0.0, wall_obstacles = 0.0,
          wall_control = 0.0, wall_sequencer = 0.0, wall_physics = 0.0;
-  PipelineCounters& operator+=(const PipelineCounters& o);
+  PipelineCounters& add(const PipelineCounters& o);  ///< adds another run's counts and times
 };
 
 class GraspPipeline {

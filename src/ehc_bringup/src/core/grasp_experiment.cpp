@@ -515,7 +515,7 @@ GraspExperimentResult GraspExperiment::run(const Progress& progress) const {
       res.trace.insert(res.trace.end(), o.trace.begin(), o.trace.end());
       s.sim_time_s += o.sim_time_s;
       s.wall_time_s += wall[i];
-      res.counters += o.counters;
+      res.counters.add(o.counters);
     }
     for (auto& e : tfm) e.second.first /= std::max(1, e.second.second);
     s.tfm = tfm;

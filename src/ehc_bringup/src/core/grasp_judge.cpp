@@ -1,5 +1,6 @@
 #include "ehc_bringup/grasp_judge.h"
 
+#include "ehc_bringup/grasp_selection.h"
 #include "ehc_common/enum_names.h"
 
 #include <BulletCollision/CollisionShapes/btBvhTriangleMeshShape.h>
@@ -58,12 +59,6 @@ struct ClosestCrossing : btTriangleRaycastCallback {
   int best_triangle = -1;
 };
 
-bool finitePose(const Eigen::Isometry3d& T) {
-  if (!T.matrix().allFinite()) return false;
-  const Eigen::Matrix3d R = T.linear();
-  return (R.transpose() * R - Eigen::Matrix3d::Identity()).norm() < 1e-6 && R.determinant() > 0.0;
-}
-
 /// A box of `size` centred at `centre` in the grasp frame.
 struct GraspBox {
   Eigen::Vector3d centre, size;
@@ -113,7 +108,7 @@ GraspJudge::GraspJudge(const ehc_sim::TriangleMesh& mesh, const Eigen::Isometry3
     : impl_(new Impl), gripper_(gripper), params_(params), table_height_(table_height) {
   params_.validate();
   if (mesh.empty()) fail("the object's mesh is empty");
-  if (!finitePose(T_world_object) || !std::isfinite(table_height)) fail("the object's pose or the table height is not finite");
+  if (!isValidPose(T_world_object) || !std::isfinite(table_height)) fail("the object's pose or the table height is not finite");
   if (!view_direction.allFinite()) fail("the view direction is not finite");
   view_ = view_direction.norm() > 1e-9 ? view_direction.normalized() : Eigen::Vector3d::Zero();
   Impl& m = *impl_;
@@ -237,7 +232,7 @@ GraspVerdict GraspJudge::sweep(const Eigen::Isometry3d& grasp) const {
 
 GraspJudgement GraspJudge::judge(const Eigen::Isometry3d& grasp) const {
   GraspJudgement out;
-  if (!finitePose(grasp)) return out;
+  if (!isValidPose(grasp)) return out;
   out.verdict = GraspVerdict::ApproachExcluded;
   if (!approachAllowed(grasp.linear().col(2))) return out;
   out.verdict = closingLine(grasp, &out);

@@ -136,7 +136,7 @@ std::string GraspPipelineConfig::summary() const {
   return os.str();
 }
 
-PipelineCounters& PipelineCounters::operator+=(const PipelineCounters& o) {
+PipelineCounters& PipelineCounters::add(const PipelineCounters& o) {
   cycles += o.cycles;
   images += o.images;
   clouds += o.clouds;

@@ -170,6 +170,7 @@ class ReachRecovery {
   ReachRecoveryParams params_;
   double joint_stop_ = 0.0, joint_influence_ = 0.0;
   double reach_ = 0.5, ready_bearing_ = 0.0;  ///< the ready pose's TCP in the base frame (horizontal)
+  Eigen::Isometry3d T_base_arm_ready_ = Eigen::Isometry3d::Identity();  ///< the arm base at the ready pose
   Eigen::VectorXd vmax_;
   State state_ = State::Watching;
   Eigen::Isometry3d target_ = Eigen::Isometry3d::Identity();

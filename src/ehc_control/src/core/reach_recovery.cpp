@@ -105,6 +105,7 @@ ReachRecovery::ReachRecovery(const WholeBodyModel& model, const ReachRecoveryPar
   const Eigen::Vector3d tcp = model_.linkPoseInBase(rc.arm_ready, rc.tcp_frame).translation();
   reach_ = std::max(0.2, tcp.head<2>().norm());
   ready_bearing_ = std::atan2(tcp.y(), tcp.x());
+  T_base_arm_ready_ = model_.linkPoseInBase(rc.arm_ready, rc.arm_base_frame);
   vmax_ = rc.velocityLimits();
   reference_ = Eigen::VectorXd::Zero(model_.nDof());
 }
@@ -134,9 +135,7 @@ void ReachRecovery::setPlacementMap(std::shared_ptr<const EhcWeighting> weightin
 
 double ReachRecovery::placementReachability(const Eigen::Isometry3d& target, const Eigen::Vector3d& base_pose) const {
   if (!placement_map_) throw std::invalid_argument("[ReachRecovery] placement needs a reachability map");
-  const RobotConfig& rc = model_.config();
-  const Eigen::Isometry3d world_T_arm =
-      WholeBodyModel::baseTransform(base_pose) * model_.linkPoseInBase(rc.arm_ready, rc.arm_base_frame);
+  const Eigen::Isometry3d world_T_arm = WholeBodyModel::baseTransform(base_pose) * T_base_arm_ready_;
   return placement_map_->map().reachability(world_T_arm.inverse() * target.translation());
 }
 
