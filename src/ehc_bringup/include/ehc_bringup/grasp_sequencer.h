@@ -309,6 +309,9 @@ class GraspSequencer {
   /// Enters RELEASE: holds the TCP where it is (hold_goal_) and opens the gripper.
   void startRelease(double t, const SequencerInput& in, SequencerOutput* out, const std::string& why);
   std::optional<GraspChoice> currentChoice(const SequencerInput& in) const;
+  /// Position of the other object (not the current one) nearest `from` whose pose was ever
+  /// perceived; nullopt if none.
+  std::optional<Eigen::Vector3d> nearestSeenObject(const Eigen::Vector3d& from) const;
   Eigen::Isometry3d preGrasp(const Eigen::Isometry3d& grasp) const;
   Eigen::Isometry3d placePose() const;  ///< PLACE goal: the locked grasp raised by place_height
   /// APPROACH goal: the pre-grasp of `grasp`; the object centre while the controller is in the

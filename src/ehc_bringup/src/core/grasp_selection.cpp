@@ -81,8 +81,15 @@ std::optional<Eigen::Vector3d> wantedApproach(ApproachDirection direction,
                                               const Eigen::Vector3d& hint) {
   const Eigen::Vector3d fwd = tag_target.linear().col(2).normalized();
   switch (direction) {
-    case ApproachDirection::Tag:
-    case ApproachDirection::Forward: return fwd;
+    case ApproachDirection::Tag: return fwd;
+    case ApproachDirection::Forward: {
+      // Into a side face (shallow): horizontal, as the face of an upright object is vertical.
+      // The tag's tilt is the noisiest part of its pose (a small tag seen from afar: a few deg);
+      // followed, it tilted the whole hand, and a grasp near the support brought the wrist down
+      // by its length x the tilt (UR5e: 1.6 cm at 4 deg, into its stop distance from the table).
+      const Eigen::Vector3d level(fwd.x(), fwd.y(), 0.0);
+      return std::abs(fwd.z()) < kShallow && level.norm() > 1e-6 ? Eigen::Vector3d(level.normalized()) : fwd;
+    }
     case ApproachDirection::Downward: return Eigen::Vector3d(0, 0, -1);
     case ApproachDirection::Sideways: {
       const Eigen::Vector3d a = sideApproach(fwd, p.sideways_turn_deg, p.sideways_tilt_deg, 1.0);
@@ -225,12 +232,13 @@ std::optional<GraspChoice> chooseGrasp(const std::vector<GraspCandidate>& candid
     if (p.require_candidate && direction != ApproachDirection::Tag) return std::nullopt;
     const double backoff = fallbackBackoff(direction, p);
     Eigen::Vector3d approach = tag_target.linear().col(2);
-    if (direction == ApproachDirection::Downward || direction == ApproachDirection::Sideways) {
-      // Sideways: the side facing the reference orientation's approach better.
+    if (direction == ApproachDirection::Downward || direction == ApproachDirection::Sideways ||
+        direction == ApproachDirection::Forward) {
+      // Sideways: the side facing the reference orientation's approach better; forward: levelled.
       approach = *wantedApproach(direction, tag_target, p, reference.col(2));
     }
-    if (direction == ApproachDirection::Tag || direction == ApproachDirection::Forward ||
-        direction == ApproachDirection::Any) {
+    if (direction == ApproachDirection::Tag || direction == ApproachDirection::Any ||
+        approach.dot(tag_target.linear().col(2)) > 1.0 - 1e-12) {
       best.pose = tag_target;
       best.pose.translation() -= backoff * tag_target.linear().col(2);
     } else {

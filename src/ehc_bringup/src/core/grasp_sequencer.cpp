@@ -590,6 +590,16 @@ void GraspSequencer::advance(const SequencerInput& in, SequencerOutput* out) {
   }
 }
 
+std::optional<Eigen::Vector3d> GraspSequencer::nearestSeenObject(const Eigen::Vector3d& from) const {
+  std::optional<Eigen::Vector3d> best;
+  for (std::size_t i = 0; i < filters_.size(); ++i) {
+    const std::optional<Eigen::Isometry3d>& seen = filters_[i].pose();
+    if (i == current_ || !seen) continue;
+    if (!best || (seen->translation() - from).norm() < (*best - from).norm()) best = seen->translation();
+  }
+  return best;
+}
+
 void GraspSequencer::advanceWaitTarget(const SequencerInput& in, bool fresh, SequencerOutput* out) {
   const double t = in.t;
   if (!fresh) {
@@ -601,6 +611,13 @@ void GraspSequencer::advanceWaitTarget(const SequencerInput& in, bool fresh, Seq
                isValidPose(*in.tcp)) {
       // Never seen, but where to look is known: a look pose at the point, from the TCP's side.
       out->goal = lookPose(ehc_control::cloudTargetPose(target.point, in.tcp->translation()), params_.search_distance);
+    } else if (params_.search_distance > 0.0 && in.tcp && isValidPose(*in.tcp)) {
+      // Never seen, but other objects of the list were: a look pose at the one nearest the TCP,
+      // from the TCP's side. The objects share a scene, and a target too small to find in the
+      // image from afar (a tag at ~2 px per cell) is found on the way there; without a goal the
+      // robot waited where it could not see it until the time limit.
+      if (const auto near = nearestSeenObject(in.tcp->translation()))
+        out->goal = lookPose(ehc_control::cloudTargetPose(*near, in.tcp->translation()), params_.search_distance);
     }
     return;
   }
