@@ -3,6 +3,7 @@
 #include "ehc_common/config_node.h"
 #include "ehc_common/json.h"
 #include "ehc_control/pose_math.h"
+#include "ehc_test/test_seed.h"
 
 #include <gtest/gtest.h>
 
@@ -503,6 +504,41 @@ TEST(GraspSequencer, NextObjectIsSearchedWhereItWasSeen) {
   ASSERT_TRUE(h.last_goal);
   EXPECT_NEAR(h.last_goal->translation().x(), 1.6, 1e-9);
   EXPECT_NEAR(h.last_goal->translation().y(), -0.2, 1e-9);
+}
+
+TEST(GraspSequencer, ATargetNeverSeenIsSearchedFromTheNearestSeenObject) {
+  GraspSequencerParams p;
+  p.objects = {{"a", ApproachDirection::Forward, {}}, {"b", ApproachDirection::Forward, {}}, {"c", ApproachDirection::Forward, {}}};
+  {
+    Harness none(p);  // nothing seen at all: no goal (the controller stops)
+    none.follow = false;
+    none.run(0.5);
+    EXPECT_EQ(none.seq.phase(), GraspPhase::WaitTarget);
+    EXPECT_FALSE(none.last_goal);
+  }
+  Harness h(p);
+  h.follow = false;
+  h.seq.setObjectPose(2, h.t, forwardTarget(3.0, 0.5, 0.8));
+  h.seq.setObjectPose(1, h.t, forwardTarget(2.0, -0.3, 0.8));  // nearer the TCP (0.3, 0, 0.9)
+  h.run(0.5);
+  ASSERT_EQ(h.seq.currentObject(), 0u);
+  ASSERT_EQ(h.seq.phase(), GraspPhase::WaitTarget);
+  ASSERT_TRUE(h.last_goal);
+  // search_distance back from b, horizontally towards the TCP, looking at b.
+  const Eigen::Vector3d b(2.0, -0.3, 0.8);
+  const Eigen::Vector3d towards = Eigen::Vector3d(b.x() - 0.3, b.y(), 0.0).normalized();
+  EXPECT_TRUE(h.last_goal->translation().isApprox(b - p.search_distance * towards, 1e-9));
+  EXPECT_TRUE(h.last_goal->linear().col(2).isApprox(towards, 1e-9));
+  // Seen at last: the search ends, the approach begins.
+  h.seq.setObjectPose(0, h.t, forwardTarget());
+  h.step();
+  EXPECT_EQ(h.seq.phase(), GraspPhase::Approach);
+  // search_distance 0: no search of any kind.
+  p.search_distance = 0.0;
+  Harness off(p);
+  off.seq.setObjectPose(1, off.t, forwardTarget(2.0, -0.3, 0.8));
+  off.run(0.5);
+  EXPECT_FALSE(off.last_goal);
 }
 
 TEST(GraspSequencer, LockedGraspKeepsTheGoalWithoutPerception) {
@@ -1109,6 +1145,49 @@ TEST(GraspSelection, ChosenCandidateIsTurnedOntoTheWantedApproachAboutItsCentre)
   EXPECT_NEAR(s->pose.linear().col(1).z(), 0.0, 1e-9);   // level closing axis
   EXPECT_GT(s->pose.linear().col(0).z(), 0.99);          // wrist camera up
   EXPECT_TRUE(s->pose.translation().isApprox(side.translation(), 1e-12));
+}
+
+TEST(GraspSelection, AForwardGraspIntoASideFaceApproachesLevelWhateverTheTagsTilt) {
+  // Tag targets on side faces, turned by a random yaw and tilted by up to 10 deg about both axes
+  // across the approach (the tag pose's noisiest part): the forward grasp, from a candidate or
+  // the tag fallback, approaches level along the tag normal's horizontal direction; `tag` keeps
+  // the tag target as perceived; a tag on a top face keeps its (vertical) approach.
+  std::mt19937 rng(ehc_test::testSeed("forward grasp level"));
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const GraspSelectionParams p;
+  for (int i = 0; i < 200; ++i) {
+    Eigen::Isometry3d tag = forwardTarget(1.5, 0.2 * u(rng), 0.8);
+    tag.linear() = Eigen::AngleAxisd(M_PI * u(rng), Eigen::Vector3d::UnitZ()).toRotationMatrix() * tag.linear() *
+                   Eigen::AngleAxisd(10 * M_PI / 180 * u(rng), Eigen::Vector3d::UnitX()).toRotationMatrix() *
+                   Eigen::AngleAxisd(10 * M_PI / 180 * u(rng), Eigen::Vector3d::UnitY()).toRotationMatrix();
+    const Eigen::Vector3d normal = tag.linear().col(2);
+    const Eigen::Vector3d level = Eigen::Vector3d(normal.x(), normal.y(), 0.0).normalized();
+    Eigen::Isometry3d candidate = tag;  // the tag target tilted a little more, 1 cm off
+    candidate.linear() = candidate.linear() * Eigen::AngleAxisd(0.1 * u(rng), Eigen::Vector3d::UnitX()).toRotationMatrix();
+    candidate.translation() += Eigen::Vector3d(0.01 * u(rng), 0.01 * u(rng), 0.01 * u(rng));
+    for (const bool with_candidate : {true, false}) {
+      SCOPED_TRACE("draw " + std::to_string(i) + (with_candidate ? " candidate" : " fallback"));
+      std::vector<GraspCandidate> cands;
+      if (with_candidate) cands.push_back({candidate, 0.05, 0.8});
+      const auto d = chooseGrasp(cands, ApproachDirection::Forward, tag, tag.linear(), p);
+      ASSERT_TRUE(d);
+      EXPECT_EQ(d->from_candidate, with_candidate);
+      EXPECT_TRUE(isValidPose(d->pose));
+      EXPECT_TRUE(d->pose.linear().col(2).isApprox(level, 1e-9));
+      EXPECT_NEAR(d->pose.linear().col(1).z(), 0.0, 1e-9);  // closing level
+      EXPECT_GT(d->pose.linear().col(0).z(), 0.99);          // wrist camera up
+      // Across the approach at the tag target's centre (centre_from_tag, the fallback itself).
+      const Eigen::Vector3d off = d->pose.translation() - tag.translation();
+      EXPECT_LT((off - off.dot(level) * level).norm(), 1e-9);
+    }
+    const auto raw = chooseGrasp({}, ApproachDirection::Tag, tag, tag.linear(), p);
+    ASSERT_TRUE(raw);
+    EXPECT_TRUE(raw->pose.linear().col(2).isApprox(normal, 1e-9));
+  }
+  const Eigen::Isometry3d top = downwardAt(Eigen::Vector3d(1.5, 0.0, 0.8));  // a tag facing up
+  const auto d = chooseGrasp({}, ApproachDirection::Forward, top, top.linear(), p);
+  ASSERT_TRUE(d);
+  EXPECT_NEAR(d->pose.linear().col(2).z(), -1.0, 1e-9);
 }
 
 TEST(GraspSelection, SidewaysAcceptsEitherSide) {

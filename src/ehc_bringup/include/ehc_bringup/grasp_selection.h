@@ -6,7 +6,11 @@
 // the grasp candidates of the perception grasp node (same frame convention, world frame).
 // The preferred approach direction decides which candidates qualify:
 //   tag       the tag target itself (no candidates)
-//   forward   approach along the tag target's z axis (into the tagged face)
+//   forward   approach along the tag target's z axis (into the tagged face); into a side face
+//             (that axis within ~64 deg of horizontal) its horizontal direction: the face of
+//             an upright object is vertical, and the tag's tilt is the noisiest part of its
+//             pose (a few deg from afar), which would tilt the hand and bring the wrist down
+//             towards the support by its length x the tilt
 //   downward  approach straight down (world -z)
 //   sideways  approach horizontally from either side, perpendicular to the forward axis or
 //             turned by sideways_turn_deg towards it (the hand then comes from the robot's
@@ -99,7 +103,7 @@ struct GraspChoice {
 };
 
 /// Unit approach direction wanted for `direction` given the tag target; nullopt for Any
-/// (the tag target's z for Tag / Forward, world -z for Downward). Sideways has one direction
+/// (the tag target's z for Tag, levelled for Forward into a side face, world -z for Downward). Sideways has one direction
 /// per side (see sideways_turn_deg): the one closer to `hint` (e.g. a candidate's approach or
 /// the current TCP's) is returned.
 std::optional<Eigen::Vector3d> wantedApproach(ApproachDirection direction,

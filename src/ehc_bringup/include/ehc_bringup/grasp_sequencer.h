@@ -8,8 +8,11 @@
 //                start position), goal = a look pose search_distance back along its approach
 //                axis, so that the camera finds it again (search_distance 0: no goal, the
 //                controller stops on TARGET_LOST); a target `nearest` a point never seen yet: a
-//                look pose search_distance back from the point, horizontally from the TCP. A
-//                cloud target seen but without a qualifying candidate: the look pose at it (a
+//                look pose search_distance back from the point, horizontally from the TCP; any
+//                other target never seen yet while other objects of the list were: the same
+//                look pose at the seen object nearest the TCP (the objects share a scene; a tag
+//                too small in the image from afar is found on the way there; none seen: no
+//                goal). A cloud target seen but without a qualifying candidate: the look pose at it (a
 //                closer view), held until one qualifies; in APPROACH its last grasp holds while
 //                no candidate qualifies
 //   APPROACH     goal = the pre-grasp of the current best grasp (re-chosen as perception and
