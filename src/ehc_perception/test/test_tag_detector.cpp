@@ -260,7 +260,8 @@ TEST(TagDetector, TargetOffsetIsAppliedInTheTagFrame) {
 
 // The tracking window (roi_margin): on a stream of a moving tag (noisy, as the simulator renders
 // it) it finds the tag in every image with the pose and corners of the whole-image search, while
-// searching most images in the window only; a jump out of the window loses one image, the next
+// searching most images in the window only, with its quads found on the full window or on the
+// window decimated (roi_decimated_tag_px); a jump out of the window loses one image, the next
 // is searched whole and finds it again; a wanted tag missing makes the next search whole.
 TEST(TagDetector, TheTrackingWindowFollowsATagAndRecoversFromAJump) {
   const ehc_control::PinholeCamera cam = d435();
@@ -270,7 +271,9 @@ TEST(TagDetector, TheTrackingWindowFollowsATagAndRecoversFromAJump) {
   TagDetectorConfig tracked_cfg = whole_cfg;
   tracked_cfg.roi_margin = 40;
   tracked_cfg.roi_full_frame_every = 15;
-  TagDetector whole(whole_cfg, cam), tracked(tracked_cfg, cam);
+  TagDetectorConfig decimated_cfg = tracked_cfg;  // the windows' quads found at half resolution
+  decimated_cfg.roi_decimated_tag_px = 24;
+  TagDetector whole(whole_cfg, cam), tracked(tracked_cfg, cam), decimated(decimated_cfg, cam);
   std::mt19937 rng(3);
   auto frame = [&](const std::vector<TagPlacement>& tags) {
     vpImage<unsigned char> I = renderer.render(tags);
@@ -281,16 +284,22 @@ TEST(TagDetector, TheTrackingWindowFollowsATagAndRecoversFromAJump) {
   for (int k = 0; k < 30; ++k) {
     const Eigen::Isometry3d truth = tagPose(-0.06 + 0.005 * k, 0.02, 0.5 + 0.003 * k, 0.2, 0.1, 0.0175 * k);
     const vpImage<unsigned char> I = frame({{2, 0.04, truth}});
-    const auto a = whole.detect(I), b = tracked.detect(I);
+    const auto a = whole.detect(I);
     ASSERT_EQ(a.size(), 1u) << "image " << k;
-    ASSERT_EQ(b.size(), 1u) << "image " << k;
-    EXPECT_LT((a[0].T_cam_tag.translation() - b[0].T_cam_tag.translation()).norm(), 1e-3) << "image " << k;
-    EXPECT_LT(rotationError(a[0].T_cam_tag, b[0].T_cam_tag), 1.0 * kDeg) << "image " << k;
-    for (std::size_t c = 0; c < 4; ++c) EXPECT_LT((a[0].corners[c] - b[0].corners[c]).norm(), 0.2) << "image " << k;
-    EXPECT_LT((b[0].T_cam_tag.translation() - truth.translation()).norm(), 0.01) << "image " << k;
+    for (TagDetector* t : {&tracked, &decimated}) {
+      const auto b = t->detect(I);
+      const std::string what = "image " + std::to_string(k) + (t == &decimated ? ", decimated" : "");
+      ASSERT_EQ(b.size(), 1u) << what;
+      EXPECT_LT((a[0].T_cam_tag.translation() - b[0].T_cam_tag.translation()).norm(), 1e-3) << what;
+      EXPECT_LT(rotationError(a[0].T_cam_tag, b[0].T_cam_tag), 1.0 * kDeg) << what;
+      for (std::size_t c = 0; c < 4; ++c) EXPECT_LT((a[0].corners[c] - b[0].corners[c]).norm(), 0.2) << what;
+      EXPECT_LT((b[0].T_cam_tag.translation() - truth.translation()).norm(), 0.01) << what;
+    }
   }
-  EXPECT_EQ(tracked.fullFrameSearches(), 2);  // the first image and the 16th
-  EXPECT_EQ(tracked.windowSearches(), 28);
+  for (const TagDetector* t : {&tracked, &decimated}) {
+    EXPECT_EQ(t->fullFrameSearches(), 2);  // the first image and the 16th
+    EXPECT_EQ(t->windowSearches(), 28);
+  }
 
   // The tag jumps 25 cm across the view: the window misses it once, the whole image finds it.
   const Eigen::Isometry3d left = tagPose(-0.12, 0.0, 0.55, 0.0, 0.0, 0.0);

@@ -57,6 +57,11 @@ struct TagDetectorConfig {
   int roi_margin = 0;
   /// Every this-many images one is searched whole even while tracking (>= 1; 1 = every image).
   int roi_full_frame_every = 5;
+  /// px (0 = off): in a window, quads are found on the image decimated by the largest whole
+  /// factor (at most 4, at least quad_decimate) that keeps the expected tag's side at least this
+  /// long; the tag is decoded and its corners refined on the full image. A close tag (100 px and
+  /// more) costs a quarter of the search or less.
+  double roi_decimated_tag_px = 0.0;
   std::string pose_method = "homography_virtual_vs";  ///< see poseMethodNames()
   double max_reprojection_error = 2.0;     ///< px (RMS); detections above are dropped
   /// Pose prior for ambiguous detections: the tag axis `prior_tag_axis` (tag frame) points as
@@ -139,8 +144,9 @@ class TagDetector {
   /// `u0`, `v0`: the searched region's top-left pixel, `cam`: its camera.
   bool search(const vpImage<unsigned char>& gray, const Eigen::Isometry3d* T_world_cam, int* u0, int* v0,
               const vpCameraParameters** cam);
-  /// The window (InView) around the wanted tags' last world poses seen from T_world_cam.
-  Prediction predict(const Eigen::Isometry3d& T_world_cam, std::array<int, 4>* window) const;
+  /// The window (InView) around the wanted tags' last world poses seen from T_world_cam, and the
+  /// shortest side (px) of those tags in it.
+  Prediction predict(const Eigen::Isometry3d& T_world_cam, std::array<int, 4>* window, double* tag_px) const;
   /// The box [lo, hi] (px) grown by roi_margin + half its size, clipped to the image; width 0
   /// when less than 16 px of it is inside.
   std::array<int, 4> windowAround(const Eigen::Vector2d& lo, const Eigen::Vector2d& hi) const;
@@ -153,6 +159,7 @@ class TagDetector {
   /// Tracking window for the next image: column, row of its top-left pixel, width, height;
   /// width 0 = search the next image whole.
   std::array<int, 4> window_{{0, 0, 0, 0}};
+  double window_tag_px_ = 0.0;  ///< the shortest side (px) of the tags the window was set around
   int images_since_full_ = 0;
   std::vector<int> wanted_tags_;
   std::map<int, Eigen::Isometry3d> seen_in_world_;  ///< tag id -> its last pose found with a camera pose

@@ -91,6 +91,7 @@ void TagDetectorConfig::validate() const {
   requireRange(kOwner, "threads", threads, 1, 64);
   requireRange(kOwner, "roi_margin", roi_margin, 0, 10000);
   requireRange(kOwner, "roi_full_frame_every", roi_full_frame_every, 1, 1000);
+  requireRange(kOwner, "roi_decimated_tag_px", roi_decimated_tag_px, 0.0, 10000.0);
   ehc_common::requirePositive(kOwner, "max_reprojection_error", max_reprojection_error);
   if (!prior_tag_axis.allFinite() || prior_tag_axis.norm() < 1e-9)
     fail("pose_prior.tag_axis must be a finite, non-zero vector");
@@ -108,7 +109,10 @@ std::string TagDetectorConfig::summary() const {
      << pose_method << ", tracking window "
      << (roi_margin > 0 ? "+" + std::to_string(roi_margin) + " px, whole image every " +
                               std::to_string(roi_full_frame_every)
-                        : std::string("off"))
+                        : std::string("off"));
+  if (roi_margin > 0 && roi_decimated_tag_px > 0.0)
+    os << ", windows decimated to tags of >= " << roi_decimated_tag_px << " px";
+  os
      << ", max reprojection error " << max_reprojection_error
      << " px, ambiguous poses (within " << ambiguity_margin << " px): tag axis ["
      << prior_tag_axis.transpose() << "] nearest the world's [" << prior_world_direction.transpose()
@@ -139,6 +143,7 @@ TagDetectorConfig loadTagDetectorConfig(const ConfigNode& n) {
   c.threads = n.get<int>("threads", c.threads);
   c.roi_margin = n.get<int>("roi_margin", c.roi_margin);
   c.roi_full_frame_every = n.get<int>("roi_full_frame_every", c.roi_full_frame_every);
+  c.roi_decimated_tag_px = n.get<double>("roi_decimated_tag_px", c.roi_decimated_tag_px);
   c.pose_method = n.get<std::string>("pose_method", c.pose_method);
   c.max_reprojection_error = n.get<double>("max_reprojection_error", c.max_reprojection_error);
   if (n.has("pose_prior")) {
@@ -249,6 +254,15 @@ std::vector<TagDetection> TagDetector::detect(const vpImage<unsigned char>& I,
   return detectResolving(I, &T_world_cam);
 }
 
+namespace {
+/// The shortest side (px) of a tag's quadrilateral in the image.
+double shortestSide(const std::array<Eigen::Vector2d, 4>& corners) {
+  double side = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < 4; ++k) side = std::min(side, (corners[(k + 1) % 4] - corners[k]).norm());
+  return side;
+}
+}  // namespace
+
 std::array<int, 4> TagDetector::windowAround(const Eigen::Vector2d& lo, const Eigen::Vector2d& hi) const {
   const Eigen::Vector2d grow = Eigen::Vector2d::Constant(config_.roi_margin) + 0.5 * (hi - lo);
   const double c0 = std::max(0.0, std::floor(lo.x() - grow.x())), r0 = std::max(0.0, std::floor(lo.y() - grow.y()));
@@ -258,11 +272,12 @@ std::array<int, 4> TagDetector::windowAround(const Eigen::Vector2d& lo, const Ei
   return {{static_cast<int>(c0), static_cast<int>(r0), static_cast<int>(c1 - c0), static_cast<int>(r1 - r0)}};
 }
 
-TagDetector::Prediction TagDetector::predict(const Eigen::Isometry3d& T_world_cam,
-                                             std::array<int, 4>* window) const {
+TagDetector::Prediction TagDetector::predict(const Eigen::Isometry3d& T_world_cam, std::array<int, 4>* window,
+                                             double* tag_px) const {
   if (config_.roi_margin <= 0 || wanted_tags_.empty()) return Prediction::Unknown;
   Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
   bool any_visible = false;
+  *tag_px = std::numeric_limits<double>::infinity();
   for (int id : wanted_tags_) {
     const auto it = seen_in_world_.find(id);
     if (it == seen_in_world_.end()) return Prediction::Unknown;
@@ -282,13 +297,16 @@ TagDetector::Prediction TagDetector::predict(const Eigen::Isometry3d& T_world_ca
     const Eigen::Vector2d m = Eigen::Vector2d::Constant(config_.roi_margin);
     const Eigen::Vector2d size(camera_.width, camera_.height);
     Eigen::Vector2d tag_lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity()), tag_hi = -tag_lo;
-    for (const Eigen::Vector3d& p : corners) {
-      tag_lo = tag_lo.cwiseMin(camera_.pixel(p));
-      tag_hi = tag_hi.cwiseMax(camera_.pixel(p));
+    std::array<Eigen::Vector2d, 4> pixels;
+    for (std::size_t i = 0; i < 4; ++i) {
+      pixels[i] = camera_.pixel(corners[i]);
+      tag_lo = tag_lo.cwiseMin(pixels[i]);
+      tag_hi = tag_hi.cwiseMax(pixels[i]);
     }
     if ((tag_lo.array() < -m.array()).any() || (tag_hi.array() > (size + m).array()).any()) continue;
     lo = lo.cwiseMin(tag_lo);
     hi = hi.cwiseMax(tag_hi);
+    *tag_px = std::min(*tag_px, shortestSide(pixels));
     any_visible = true;
   }
   if (!any_visible) return Prediction::OutOfView;
@@ -301,9 +319,10 @@ bool TagDetector::search(const vpImage<unsigned char>& I, const Eigen::Isometry3
   // The window of the next search: from the last image's detections, else from where the wanted
   // tags were last seen in the world (the camera pose known).
   std::array<int, 4> window = window_;
+  double tag_px = window_tag_px_;
   window_ = {{0, 0, 0, 0}};
   Prediction prediction = Prediction::Unknown;
-  if (window[2] == 0 && T_world_cam) prediction = predict(*T_world_cam, &window);
+  if (window[2] == 0 && T_world_cam) prediction = predict(*T_world_cam, &window, &tag_px);
   const bool whole = (window[2] == 0 && prediction != Prediction::OutOfView) ||
                      ++images_since_full_ >= config_.roi_full_frame_every;
   *u0 = 0;
@@ -325,7 +344,15 @@ bool TagDetector::search(const vpImage<unsigned char>& I, const Eigen::Isometry3
   vpImageTools::crop(I, *v0, *u0, static_cast<unsigned>(window[3]), static_cast<unsigned>(window[2]), W);
   impl_->window_cam.initPersProjWithoutDistortion(camera_.fx, camera_.fy, camera_.cx - *u0, camera_.cy - *v0);
   *cam = &impl_->window_cam;
-  return impl_->detector.detect(W);
+  // Quads on the decimated window (the expected tag stays >= roi_decimated_tag_px long).
+  const double decimate = config_.roi_decimated_tag_px > 0.0
+                              ? std::clamp(std::floor(tag_px / config_.roi_decimated_tag_px), 1.0, 4.0)
+                              : 1.0;
+  if (decimate <= config_.quad_decimate) return impl_->detector.detect(W);
+  impl_->detector.setAprilTagQuadDecimate(static_cast<float>(decimate));
+  const bool found = impl_->detector.detect(W);
+  impl_->detector.setAprilTagQuadDecimate(static_cast<float>(config_.quad_decimate));
+  return found;
 }
 
 std::vector<TagDetection> TagDetector::detectResolving(const vpImage<unsigned char>& I,
@@ -423,12 +450,15 @@ void TagDetector::track(const std::vector<TagDetection>& out) {
     return wanted_tags_.empty() || std::find(wanted_tags_.begin(), wanted_tags_.end(), d.id) != wanted_tags_.end();
   };
   Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  window_tag_px_ = std::numeric_limits<double>::infinity();
   for (const TagDetection& d : out)
-    if (tracked(d))
+    if (tracked(d)) {
+      window_tag_px_ = std::min(window_tag_px_, shortestSide(d.corners));
       for (const Eigen::Vector2d& c : d.corners) {
         lo = lo.cwiseMin(c);
         hi = hi.cwiseMax(c);
       }
+    }
   window_ = windowAround(lo, hi);
 }
 
