@@ -39,7 +39,8 @@ ReachSummary runReach(const std::string& robot, ReachProtocol protocol, std::vec
   auto weighting = std::make_shared<const ehc_control::EhcWeighting>(
       std::make_shared<const ehc_control::ReachabilityMap>(ehc_control::ReachabilityMap::load(rc.reachability_map_path)),
       ehc_control::loadEhcWeightingParams(cfg.child("weighting")));
-  auto reachable = [&](const Eigen::Isometry3d& T) { return model->inverseKinematics(T, 1, 30); };
+  // Reachable as the runner and the failure classification define it: inside the joint stops.
+  auto reachable = [&](const Eigen::Isometry3d& T) { return kinematicallyReachable(*model, T, ctrl.joint_stop); };
   std::vector<Eigen::Isometry3d> targets = ReachTargetGenerator{}.generate(
       6, ehc_test::testSeed(robot + " Exp-1 " + toString(protocol)), Eigen::Vector2d::Zero(), reachable);
   if (protocol == ReachProtocol::Reset) targets = relativeToPrevious(targets);

@@ -4,6 +4,7 @@
 #include "ehc_perception/tag_detector.h"
 #include "ehc_perception/tag_image_renderer.h"
 #include "ehc_test/perception_fixtures.h"
+#include "ehc_test/test_seed.h"
 
 #include <gtest/gtest.h>
 #include <visp3/io/vpImageIo.h>
@@ -259,7 +260,8 @@ TEST(TagDetector, TargetOffsetIsAppliedInTheTagFrame) {
 
 // The tracking window (roi_margin): on a stream of a moving tag (noisy, as the simulator renders
 // it) it finds the tag in every image with the pose and corners of the whole-image search, while
-// searching most images in the window only; a jump out of the window loses one image, the next
+// searching most images in the window only, with its quads found on the full window or on the
+// window decimated (roi_decimated_tag_px); a jump out of the window loses one image, the next
 // is searched whole and finds it again; a wanted tag missing makes the next search whole.
 TEST(TagDetector, TheTrackingWindowFollowsATagAndRecoversFromAJump) {
   const ehc_control::PinholeCamera cam = d435();
@@ -269,7 +271,9 @@ TEST(TagDetector, TheTrackingWindowFollowsATagAndRecoversFromAJump) {
   TagDetectorConfig tracked_cfg = whole_cfg;
   tracked_cfg.roi_margin = 40;
   tracked_cfg.roi_full_frame_every = 15;
-  TagDetector whole(whole_cfg, cam), tracked(tracked_cfg, cam);
+  TagDetectorConfig decimated_cfg = tracked_cfg;  // the windows' quads found at half resolution
+  decimated_cfg.roi_decimated_tag_px = 24;
+  TagDetector whole(whole_cfg, cam), tracked(tracked_cfg, cam), decimated(decimated_cfg, cam);
   std::mt19937 rng(3);
   auto frame = [&](const std::vector<TagPlacement>& tags) {
     vpImage<unsigned char> I = renderer.render(tags);
@@ -280,16 +284,22 @@ TEST(TagDetector, TheTrackingWindowFollowsATagAndRecoversFromAJump) {
   for (int k = 0; k < 30; ++k) {
     const Eigen::Isometry3d truth = tagPose(-0.06 + 0.005 * k, 0.02, 0.5 + 0.003 * k, 0.2, 0.1, 0.0175 * k);
     const vpImage<unsigned char> I = frame({{2, 0.04, truth}});
-    const auto a = whole.detect(I), b = tracked.detect(I);
+    const auto a = whole.detect(I);
     ASSERT_EQ(a.size(), 1u) << "image " << k;
-    ASSERT_EQ(b.size(), 1u) << "image " << k;
-    EXPECT_LT((a[0].T_cam_tag.translation() - b[0].T_cam_tag.translation()).norm(), 1e-3) << "image " << k;
-    EXPECT_LT(rotationError(a[0].T_cam_tag, b[0].T_cam_tag), 1.0 * kDeg) << "image " << k;
-    for (std::size_t c = 0; c < 4; ++c) EXPECT_LT((a[0].corners[c] - b[0].corners[c]).norm(), 0.2) << "image " << k;
-    EXPECT_LT((b[0].T_cam_tag.translation() - truth.translation()).norm(), 0.01) << "image " << k;
+    for (TagDetector* t : {&tracked, &decimated}) {
+      const auto b = t->detect(I);
+      const std::string what = "image " + std::to_string(k) + (t == &decimated ? ", decimated" : "");
+      ASSERT_EQ(b.size(), 1u) << what;
+      EXPECT_LT((a[0].T_cam_tag.translation() - b[0].T_cam_tag.translation()).norm(), 1e-3) << what;
+      EXPECT_LT(rotationError(a[0].T_cam_tag, b[0].T_cam_tag), 1.0 * kDeg) << what;
+      for (std::size_t c = 0; c < 4; ++c) EXPECT_LT((a[0].corners[c] - b[0].corners[c]).norm(), 0.2) << what;
+      EXPECT_LT((b[0].T_cam_tag.translation() - truth.translation()).norm(), 0.01) << what;
+    }
   }
-  EXPECT_EQ(tracked.fullFrameSearches(), 2);  // the first image and the 16th
-  EXPECT_EQ(tracked.windowSearches(), 28);
+  for (const TagDetector* t : {&tracked, &decimated}) {
+    EXPECT_EQ(t->fullFrameSearches(), 2);  // the first image and the 16th
+    EXPECT_EQ(t->windowSearches(), 28);
+  }
 
   // The tag jumps 25 cm across the view: the window misses it once, the whole image finds it.
   const Eigen::Isometry3d left = tagPose(-0.12, 0.0, 0.55, 0.0, 0.0, 0.0);
@@ -327,6 +337,86 @@ TEST(TagDetector, TheTrackingWindowFollowsATagAndRecoversFromAJump) {
   const long windows1 = tracked.windowSearches();
   EXPECT_EQ(tracked.detect(frame({{2, 0.04, right}, {5, 0.04, left}})).size(), 2u);
   EXPECT_EQ(tracked.windowSearches(), windows1 + 1);
+}
+
+// With the camera's world pose, an image after one that missed the wanted tag is searched where
+// the tag was last seen in the world, projected into this image: on random tag poses and random
+// camera pans that throw the tag out of the tracking window (seed printed), the window misses it
+// once and the predicted window finds it, with no whole-image search; a camera turned away (or
+// behind the tag) searches nothing until the roi_full_frame_every-th image, which is whole; a tag
+// that moved while unseen is found again by that whole image. Without a camera pose nothing is
+// predicted (the previous test).
+TEST(TagDetector, TheWindowIsPredictedFromWhereTheWantedTagWasLastSeen) {
+  const ehc_control::PinholeCamera cam = d435();
+  TagImageRenderer renderer(cam);
+  TagDetectorConfig cfg;
+  cfg.default_tag_size = 0.04;
+  cfg.roi_margin = 40;
+  cfg.roi_full_frame_every = 15;
+  std::mt19937 rng(ehc_test::testSeed("TagDetector.PredictedWindow"));
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  // The image of the tag T_world_tag seen from the camera T_world_cam, with the simulator's noise.
+  auto frame = [&](const Eigen::Isometry3d& T_world_cam, const Eigen::Isometry3d& T_world_tag) {
+    vpImage<unsigned char> I = renderer.render({{5, 0.04, T_world_cam.inverse() * T_world_tag}});
+    ehc_perception::test::addPixelNoise(&I, &rng);
+    return I;
+  };
+  auto pan = [](double angle) {  // the camera turned about its y axis (the image shifts sideways)
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitY()).toRotationMatrix();
+    return T;
+  };
+  auto inImage = [&](const Eigen::Isometry3d& T_world_cam, const Eigen::Isometry3d& T_world_tag) {
+    for (const Eigen::Vector2d& c : {Eigen::Vector2d(-0.04, -0.04), Eigen::Vector2d(0.04, 0.04),
+                                     Eigen::Vector2d(-0.04, 0.04), Eigen::Vector2d(0.04, -0.04)})
+      if (!cam.projectsInside(T_world_cam.inverse() * T_world_tag * Eigen::Vector3d(c.x(), c.y(), 0.0))) return false;
+    return true;
+  };
+  const Eigen::Isometry3d T_world_cam0 = Eigen::Isometry3d::Identity();
+  for (int trial = 0; trial < 6; ++trial) {
+    const Eigen::Isometry3d T_world_tag =
+        tagPose(0.08 * u(rng), 0.06 * u(rng), 0.55 + 0.1 * u(rng), 0.3 * u(rng), 0.3 * u(rng), M_PI * u(rng));
+    // A pan of 12-18 deg (100-150 px at this distance), to whichever side keeps the tag in view.
+    const double angle = (12.0 + 3.0 * (1.0 + u(rng))) * kDeg;
+    Eigen::Isometry3d T_world_cam1 = T_world_cam0 * pan(angle);
+    if (!inImage(T_world_cam1, T_world_tag)) T_world_cam1 = T_world_cam0 * pan(-angle);
+    ASSERT_TRUE(inImage(T_world_cam1, T_world_tag)) << "trial " << trial;
+    TagDetector det(cfg, cam);
+    det.setWantedTags({5});
+    ASSERT_EQ(det.detect(frame(T_world_cam0, T_world_tag), T_world_cam0).size(), 1u) << "trial " << trial;
+    EXPECT_TRUE(det.detect(frame(T_world_cam1, T_world_tag), T_world_cam1).empty())
+        << "trial " << trial << ": the tracking window missed the panned tag";
+    const auto found = det.detect(frame(T_world_cam1, T_world_tag), T_world_cam1);
+    ASSERT_EQ(found.size(), 1u) << "trial " << trial << ": the predicted window finds it";
+    EXPECT_LT(((T_world_cam1 * found[0].T_cam_tag).translation() - T_world_tag.translation()).norm(), 0.01)
+        << "trial " << trial;
+    EXPECT_EQ(det.fullFrameSearches(), 1) << "trial " << trial << ": only the first image was searched whole";
+    EXPECT_EQ(det.windowSearches(), 2) << "trial " << trial;
+
+    // Turned away (the tag outside the image), or behind the tag: nothing is searched until the
+    // roi_full_frame_every-th image after the last whole one.
+    const Eigen::Isometry3d away = T_world_cam0 * pan(M_PI / 2.0);
+    Eigen::Isometry3d behind = Eigen::Isometry3d::Identity();
+    behind.translation() = T_world_tag * Eigen::Vector3d(0.0, 0.0, -0.5);  // 0.5 m behind its face
+    behind.linear() = T_world_tag.linear();  // looking along the tag's normal: at its back
+    // The first of them is searched in the tracking window of the last detection.
+    int images = 0;
+    while (det.fullFrameSearches() == 1 && images < 20) {
+      const Eigen::Isometry3d& T_world_cam = images % 2 ? away : behind;
+      EXPECT_TRUE(det.detect(frame(T_world_cam, T_world_tag), T_world_cam).empty());
+      ++images;
+    }
+    EXPECT_EQ(images, cfg.roi_full_frame_every - 2) << "trial " << trial << ": the 15th image since the whole one";
+    EXPECT_EQ(det.windowSearches(), 3) << "trial " << trial;
+    EXPECT_EQ(det.skippedSearches(), images - 2) << "trial " << trial;
+
+    // The tag moved while unseen (to where the camera pan looks): the prediction points at its
+    // old place, and a whole image finds it within roi_full_frame_every images.
+    const Eigen::Isometry3d moved = T_world_cam0 * T_world_cam1.inverse() * T_world_tag;
+    int waited = 0;
+    while (det.detect(frame(T_world_cam0, moved), T_world_cam0).empty() && waited < 20) ++waited;
+    EXPECT_LT(waited, cfg.roi_full_frame_every) << "trial " << trial;
+  }
 }
 
 TEST(TagDetector, ConfigsAndCamerasAreValidated) {

@@ -151,7 +151,8 @@ struct GraspAttemptRecord {
 struct PipelineCounters {
   long cycles = 0, images = 0, clouds = 0, tag_detections = 0, grasp_runs = 0, obstacle_updates = 0;
   long images_without_tags = 0;  ///< images due but not rendered: no tag to find (SimulatedCamera::tagInView)
-  long tag_whole_searches = 0, tag_window_searches = 0;  ///< TagDetector: whole images / tracking windows
+  /// TagDetector: images searched whole / in a window / not searched (no wanted tag can be in view)
+  long tag_whole_searches = 0, tag_window_searches = 0, tag_skipped_searches = 0;
   long collision_steps = 0, joint_limit_violations = 0;
   double wall_image = 0.0, wall_depth = 0.0, wall_tags = 0.0, wall_grasps = 0.0, wall_obstacles = 0.0,
          wall_control = 0.0, wall_sequencer = 0.0, wall_physics = 0.0;

@@ -538,7 +538,8 @@ std::string pipelineStageCosts(const PipelineCounters& c, double sim_time_s) {
   j["cycles"] = c.cycles;
   j["images"] = c.images;
   j["images_without_tags"] = c.images_without_tags;
-  j["tag_searches"] = {{"whole", c.tag_whole_searches}, {"window", c.tag_window_searches}};
+  j["tag_searches"] = {{"whole", c.tag_whole_searches}, {"window", c.tag_window_searches},
+                       {"skipped", c.tag_skipped_searches}};
   j["clouds"] = c.clouds;
   j["grasp_runs"] = c.grasp_runs;
   j["obstacle_updates"] = c.obstacle_updates;

@@ -146,6 +146,7 @@ PipelineCounters& PipelineCounters::add(const PipelineCounters& o) {
   images_without_tags += o.images_without_tags;
   tag_whole_searches += o.tag_whole_searches;
   tag_window_searches += o.tag_window_searches;
+  tag_skipped_searches += o.tag_skipped_searches;
   collision_steps += o.collision_steps;
   joint_limit_violations += o.joint_limit_violations;
   wall_image += o.wall_image;
@@ -217,6 +218,7 @@ void GraspPipeline::perceive(double t) {
       detections = detector_->detect(image, T_world_cam);  // the camera pose: ambiguity prior
       counters_.tag_whole_searches = detector_->fullFrameSearches();
       counters_.tag_window_searches = detector_->windowSearches();
+      counters_.tag_skipped_searches = detector_->skippedSearches();
     } else {
       ++counters_.images_without_tags;
       detector_->resetTracking();  // as a search that found nothing: the next image is searched whole

@@ -12,13 +12,19 @@
 // given the camera's pose in the world at the image's time (detect(image, T_world_cam)).
 // Tracking window (roi_margin > 0): after an image in which tags were found, the next image is
 // searched only in the box around them (around the wanted tags when some are wanted: other tags
-// are found again in the next whole image), grown by the margin; the image after one in which a
-// wanted tag (setWantedTags: the target) was not found, and every roi_full_frame_every-th image,
-// is searched whole (new tags are found then). Why: the
-// search's cost grows with the area searched, and pixel noise in flat regions makes it costly
-// (2 grey levels of i.i.d. noise, the simulator's: 57 ms instead of 4 ms a 640x480 frame, see
-// bench_perception), more than a 15 Hz stream allows. The window follows the tags from image to
-// image: successive images must come from one camera stream (a jump costs one image).
+// are found again in the next whole image), grown by the margin; every roi_full_frame_every-th
+// image is searched whole (new tags are found then). The image after one in which a wanted tag
+// (setWantedTags: the target) was not found is searched whole, unless the camera's world pose is
+// given (detect(image, T_world_cam)) and every wanted tag has been seen before: then the window is
+// the box around where those tags were last seen in the world, projected into this image (grown
+// the same way), and when none of them can be in view (not whole in the image grown by
+// roi_margin, a corner behind the camera, or its printed face turned away) the image is not
+// searched at all until the next whole one. So a target that is hidden, out of view or lost costs
+// a window or nothing per image instead of a whole search, and a target that moved while unseen
+// is found again within roi_full_frame_every images. Why: the search's cost grows with the area searched, and pixel noise in flat regions
+// makes it costly (2 grey levels of i.i.d. noise, the simulator's: 57 ms instead of 4 ms a 640x480
+// frame, see bench_perception), more than a 15 Hz stream allows. The window follows the tags from
+// image to image: successive images must come from one camera stream (a jump costs one image).
 // ROS-free; not thread-safe (the ViSP detector and the window keep state).
 
 #include "ehc_control/pinhole_camera.h"
@@ -31,6 +37,8 @@
 #include <memory>
 #include <string>
 #include <vector>
+
+class vpCameraParameters;
 
 namespace ehc_common {
 class ConfigNode;
@@ -49,6 +57,11 @@ struct TagDetectorConfig {
   int roi_margin = 0;
   /// Every this-many images one is searched whole even while tracking (>= 1; 1 = every image).
   int roi_full_frame_every = 5;
+  /// px (0 = off): in a window, quads are found on the image decimated by the largest whole
+  /// factor (at most 4, at least quad_decimate) that keeps the expected tag's side at least this
+  /// long; the tag is decoded and its corners refined on the full image. A close tag (100 px and
+  /// more) costs a quarter of the search or less.
+  double roi_decimated_tag_px = 0.0;
   std::string pose_method = "homography_virtual_vs";  ///< see poseMethodNames()
   double max_reprojection_error = 2.0;     ///< px (RMS); detections above are dropped
   /// Pose prior for ambiguous detections: the tag axis `prior_tag_axis` (tag frame) points as
@@ -107,19 +120,38 @@ class TagDetector {
   /// image's detections, the next image is searched whole. A change of the set also makes the
   /// next image a whole one.
   void setWantedTags(const std::vector<int>& ids);
-  /// Forgets the tracking window: the next image is searched whole.
+  /// Forgets the tracking window: the next image is searched whole, or where the wanted tags
+  /// were last seen (see above).
   void resetTracking();
-  /// Images searched whole / in the tracking window since construction.
+  /// Images searched whole / in a window (tracking or predicted) / not searched because no
+  /// wanted tag could be in view, since construction.
   long fullFrameSearches() const { return full_searches_; }
   long windowSearches() const { return window_searches_; }
+  long skippedSearches() const { return skipped_searches_; }
 
   const TagDetectorConfig& config() const { return config_; }
   const ehc_control::PinholeCamera& camera() const { return camera_; }
 
  private:
-  /// `prior_in_camera`: the prior's world direction in the camera frame (unit), or null.
-  std::vector<TagDetection> detectResolving(const vpImage<unsigned char>& gray,
-                                            const Eigen::Vector3d* prior_in_camera);
+  /// Where the wanted tags can be in the next image, from their last world poses.
+  enum class Prediction { Unknown, InView, OutOfView };
+  /// A predicted corner nearer than this (m) to the camera plane: the tag cannot be in view.
+  static constexpr double kMinPredictionDepth = 0.02;
+  /// `T_world_cam`: the camera's world pose at the image's time (the ambiguity prior and the
+  /// predicted window), or null.
+  std::vector<TagDetection> detectResolving(const vpImage<unsigned char>& gray, const Eigen::Isometry3d* T_world_cam);
+  /// Runs ViSP on the whole image or on the window (false: nothing found, or not searched);
+  /// `u0`, `v0`: the searched region's top-left pixel, `cam`: its camera.
+  bool search(const vpImage<unsigned char>& gray, const Eigen::Isometry3d* T_world_cam, int* u0, int* v0,
+              const vpCameraParameters** cam);
+  /// The window (InView) around the wanted tags' last world poses seen from T_world_cam, and the
+  /// shortest side (px) of those tags in it.
+  Prediction predict(const Eigen::Isometry3d& T_world_cam, std::array<int, 4>* window, double* tag_px) const;
+  /// The box [lo, hi] (px) grown by roi_margin + half its size, clipped to the image; width 0
+  /// when less than 16 px of it is inside.
+  std::array<int, 4> windowAround(const Eigen::Vector2d& lo, const Eigen::Vector2d& hi) const;
+  /// Sets the next image's tracking window from this image's detections.
+  void track(const std::vector<TagDetection>& found);
   struct Impl;
   TagDetectorConfig config_;
   ehc_control::PinholeCamera camera_;
@@ -127,9 +159,11 @@ class TagDetector {
   /// Tracking window for the next image: column, row of its top-left pixel, width, height;
   /// width 0 = search the next image whole.
   std::array<int, 4> window_{{0, 0, 0, 0}};
+  double window_tag_px_ = 0.0;  ///< the shortest side (px) of the tags the window was set around
   int images_since_full_ = 0;
   std::vector<int> wanted_tags_;
-  long full_searches_ = 0, window_searches_ = 0;
+  std::map<int, Eigen::Isometry3d> seen_in_world_;  ///< tag id -> its last pose found with a camera pose
+  long full_searches_ = 0, window_searches_ = 0, skipped_searches_ = 0;
 };
 
 /// Reads a PNG / PGM / PPM / JPEG file as 8-bit grey (ViSP vpImageIo).

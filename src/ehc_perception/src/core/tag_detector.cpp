@@ -91,6 +91,7 @@ void TagDetectorConfig::validate() const {
   requireRange(kOwner, "threads", threads, 1, 64);
   requireRange(kOwner, "roi_margin", roi_margin, 0, 10000);
   requireRange(kOwner, "roi_full_frame_every", roi_full_frame_every, 1, 1000);
+  requireRange(kOwner, "roi_decimated_tag_px", roi_decimated_tag_px, 0.0, 10000.0);
   ehc_common::requirePositive(kOwner, "max_reprojection_error", max_reprojection_error);
   if (!prior_tag_axis.allFinite() || prior_tag_axis.norm() < 1e-9)
     fail("pose_prior.tag_axis must be a finite, non-zero vector");
@@ -108,7 +109,10 @@ std::string TagDetectorConfig::summary() const {
      << pose_method << ", tracking window "
      << (roi_margin > 0 ? "+" + std::to_string(roi_margin) + " px, whole image every " +
                               std::to_string(roi_full_frame_every)
-                        : std::string("off"))
+                        : std::string("off"));
+  if (roi_margin > 0 && roi_decimated_tag_px > 0.0)
+    os << ", windows decimated to tags of >= " << roi_decimated_tag_px << " px";
+  os
      << ", max reprojection error " << max_reprojection_error
      << " px, ambiguous poses (within " << ambiguity_margin << " px): tag axis ["
      << prior_tag_axis.transpose() << "] nearest the world's [" << prior_world_direction.transpose()
@@ -139,6 +143,7 @@ TagDetectorConfig loadTagDetectorConfig(const ConfigNode& n) {
   c.threads = n.get<int>("threads", c.threads);
   c.roi_margin = n.get<int>("roi_margin", c.roi_margin);
   c.roi_full_frame_every = n.get<int>("roi_full_frame_every", c.roi_full_frame_every);
+  c.roi_decimated_tag_px = n.get<double>("roi_decimated_tag_px", c.roi_decimated_tag_px);
   c.pose_method = n.get<std::string>("pose_method", c.pose_method);
   c.max_reprojection_error = n.get<double>("max_reprojection_error", c.max_reprojection_error);
   if (n.has("pose_prior")) {
@@ -246,43 +251,129 @@ std::vector<TagDetection> TagDetector::detect(const vpImage<unsigned char>& I) {
 std::vector<TagDetection> TagDetector::detect(const vpImage<unsigned char>& I,
                                               const Eigen::Isometry3d& T_world_cam) {
   if (!T_world_cam.matrix().allFinite()) fail("camera pose is not finite");
-  const Eigen::Vector3d prior =
-      T_world_cam.linear().transpose() * config_.prior_world_direction.normalized();
-  return detectResolving(I, &prior);
+  return detectResolving(I, &T_world_cam);
+}
+
+namespace {
+/// The shortest side (px) of a tag's quadrilateral in the image.
+double shortestSide(const std::array<Eigen::Vector2d, 4>& corners) {
+  double side = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < 4; ++k) side = std::min(side, (corners[(k + 1) % 4] - corners[k]).norm());
+  return side;
+}
+}  // namespace
+
+std::array<int, 4> TagDetector::windowAround(const Eigen::Vector2d& lo, const Eigen::Vector2d& hi) const {
+  const Eigen::Vector2d grow = Eigen::Vector2d::Constant(config_.roi_margin) + 0.5 * (hi - lo);
+  const double c0 = std::max(0.0, std::floor(lo.x() - grow.x())), r0 = std::max(0.0, std::floor(lo.y() - grow.y()));
+  const double c1 = std::min<double>(camera_.width, std::ceil(hi.x() + grow.x()) + 1);
+  const double r1 = std::min<double>(camera_.height, std::ceil(hi.y() + grow.y()) + 1);
+  if (c1 - c0 < 16 || r1 - r0 < 16) return {{0, 0, 0, 0}};  // also: the box lies outside the image
+  return {{static_cast<int>(c0), static_cast<int>(r0), static_cast<int>(c1 - c0), static_cast<int>(r1 - r0)}};
+}
+
+TagDetector::Prediction TagDetector::predict(const Eigen::Isometry3d& T_world_cam, std::array<int, 4>* window,
+                                             double* tag_px) const {
+  if (config_.roi_margin <= 0 || wanted_tags_.empty()) return Prediction::Unknown;
+  Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  bool any_visible = false;
+  *tag_px = std::numeric_limits<double>::infinity();
+  for (int id : wanted_tags_) {
+    const auto it = seen_in_world_.find(id);
+    if (it == seen_in_world_.end()) return Prediction::Unknown;
+    const Eigen::Isometry3d T_cam_tag = T_world_cam.inverse() * it->second;
+    // A tag seen edge-on or from behind cannot be detected: it is predicted out of view.
+    if (T_cam_tag.linear().col(2).dot(T_cam_tag.translation()) >= 0.0) continue;
+    // So can a tag with a corner behind the camera, or outside the image grown by roi_margin (the
+    // prediction's error): a tag is found only when it is whole in the image.
+    const double h = 0.5 * config_.tagSize(id);
+    std::array<Eigen::Vector3d, 4> corners;
+    int k = 0;
+    for (const Eigen::Vector2d& c : {Eigen::Vector2d(-h, -h), Eigen::Vector2d(h, -h), Eigen::Vector2d(h, h),
+                                     Eigen::Vector2d(-h, h)})
+      corners[k++] = T_cam_tag * Eigen::Vector3d(c.x(), c.y(), 0.0);
+    if (std::any_of(corners.begin(), corners.end(), [](const Eigen::Vector3d& p) { return p.z() < kMinPredictionDepth; }))
+      continue;
+    const Eigen::Vector2d m = Eigen::Vector2d::Constant(config_.roi_margin);
+    const Eigen::Vector2d size(camera_.width, camera_.height);
+    Eigen::Vector2d tag_lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity()), tag_hi = -tag_lo;
+    std::array<Eigen::Vector2d, 4> pixels;
+    for (std::size_t i = 0; i < 4; ++i) {
+      pixels[i] = camera_.pixel(corners[i]);
+      tag_lo = tag_lo.cwiseMin(pixels[i]);
+      tag_hi = tag_hi.cwiseMax(pixels[i]);
+    }
+    if ((tag_lo.array() < -m.array()).any() || (tag_hi.array() > (size + m).array()).any()) continue;
+    lo = lo.cwiseMin(tag_lo);
+    hi = hi.cwiseMax(tag_hi);
+    *tag_px = std::min(*tag_px, shortestSide(pixels));
+    any_visible = true;
+  }
+  if (!any_visible) return Prediction::OutOfView;
+  *window = windowAround(lo, hi);
+  return (*window)[2] == 0 ? Prediction::OutOfView : Prediction::InView;
+}
+
+bool TagDetector::search(const vpImage<unsigned char>& I, const Eigen::Isometry3d* T_world_cam, int* u0, int* v0,
+                         const vpCameraParameters** cam) {
+  // The window of the next search: from the last image's detections, else from where the wanted
+  // tags were last seen in the world (the camera pose known).
+  std::array<int, 4> window = window_;
+  double tag_px = window_tag_px_;
+  window_ = {{0, 0, 0, 0}};
+  Prediction prediction = Prediction::Unknown;
+  if (window[2] == 0 && T_world_cam) prediction = predict(*T_world_cam, &window, &tag_px);
+  const bool whole = (window[2] == 0 && prediction != Prediction::OutOfView) ||
+                     ++images_since_full_ >= config_.roi_full_frame_every;
+  *u0 = 0;
+  *v0 = 0;
+  *cam = &impl_->cam;
+  if (whole) {
+    images_since_full_ = 0;
+    ++full_searches_;
+    return impl_->detector.detect(I);
+  }
+  if (window[2] == 0) {  // predicted out of view: not searched until the next whole image
+    ++skipped_searches_;
+    return false;
+  }
+  ++window_searches_;
+  *u0 = window[0];
+  *v0 = window[1];
+  vpImage<unsigned char>& W = impl_->window;
+  vpImageTools::crop(I, *v0, *u0, static_cast<unsigned>(window[3]), static_cast<unsigned>(window[2]), W);
+  impl_->window_cam.initPersProjWithoutDistortion(camera_.fx, camera_.fy, camera_.cx - *u0, camera_.cy - *v0);
+  *cam = &impl_->window_cam;
+  // Quads on the decimated window (the expected tag stays >= roi_decimated_tag_px long).
+  const double decimate = config_.roi_decimated_tag_px > 0.0
+                              ? std::clamp(std::floor(tag_px / config_.roi_decimated_tag_px), 1.0, 4.0)
+                              : 1.0;
+  if (decimate <= config_.quad_decimate) return impl_->detector.detect(W);
+  impl_->detector.setAprilTagQuadDecimate(static_cast<float>(decimate));
+  const bool found = impl_->detector.detect(W);
+  impl_->detector.setAprilTagQuadDecimate(static_cast<float>(config_.quad_decimate));
+  return found;
 }
 
 std::vector<TagDetection> TagDetector::detectResolving(const vpImage<unsigned char>& I,
-                                                       const Eigen::Vector3d* prior_in_camera) {
+                                                       const Eigen::Isometry3d* T_world_cam) {
   if (I.getSize() == 0) fail("image is empty");
   if (static_cast<int>(I.getWidth()) != camera_.width ||
       static_cast<int>(I.getHeight()) != camera_.height)
     fail("image is " + std::to_string(I.getWidth()) + "x" + std::to_string(I.getHeight()) +
          " but camera '" + camera_.name + "' is " + std::to_string(camera_.width) + "x" +
          std::to_string(camera_.height));
+  Eigen::Vector3d prior = Eigen::Vector3d::Zero();
+  if (T_world_cam) prior = T_world_cam->linear().transpose() * config_.prior_world_direction.normalized();
+  const Eigen::Vector3d* prior_in_camera = T_world_cam ? &prior : nullptr;
 
   std::vector<TagDetection> out;
   vpDetectorAprilTag& det = impl_->detector;
-  // Whole image or the tracking window (then ViSP sees the window, its camera the window's
-  // principal point, and the corners are shifted back to image pixels).
-  const bool whole = window_[2] == 0 || ++images_since_full_ >= config_.roi_full_frame_every;
-  const int u0 = whole ? 0 : window_[0], v0 = whole ? 0 : window_[1];
-  const vpCameraParameters* cam = &impl_->cam;
-  bool found = false;
-  if (whole) {
-    images_since_full_ = 0;
-    ++full_searches_;
-    found = det.detect(I);
-  } else {
-    ++window_searches_;
-    vpImage<unsigned char>& W = impl_->window;
-    vpImageTools::crop(I, v0, u0, static_cast<unsigned>(window_[3]), static_cast<unsigned>(window_[2]), W);
-    impl_->window_cam.initPersProjWithoutDistortion(camera_.fx, camera_.fy, camera_.cx - u0,
-                                                    camera_.cy - v0);
-    cam = &impl_->window_cam;
-    found = det.detect(W);
-  }
-  window_ = {{0, 0, 0, 0}};
-  if (!found) return out;
+  // Whole image or a window (then ViSP sees the window, its camera the window's principal
+  // point, and the corners are shifted back to image pixels).
+  int u0 = 0, v0 = 0;
+  const vpCameraParameters* cam = nullptr;
+  if (!search(I, T_world_cam, &u0, &v0, &cam)) return out;
   const std::vector<int> ids = det.getTagsId();
   std::map<int, double> sizes;
   for (int id : ids) sizes[id] = config_.tagSize(id);
@@ -341,31 +432,34 @@ std::vector<TagDetection> TagDetector::detectResolving(const vpImage<unsigned ch
     if (d.reprojection_error > config_.max_reprojection_error) continue;
     out.push_back(d);
   }
+  if (T_world_cam)
+    for (const TagDetection& d : out) seen_in_world_[d.id] = *T_world_cam * d.T_cam_tag;
+  track(out);
+  return out;
+}
+
+void TagDetector::track(const std::vector<TagDetection>& out) {
   const bool wanted_found = std::all_of(wanted_tags_.begin(), wanted_tags_.end(), [&](int id) {
     return std::any_of(out.begin(), out.end(), [id](const TagDetection& d) { return d.id == id; });
   });
-  if (config_.roi_margin > 0 && !out.empty() && wanted_found) {
-    // The box around the wanted tags (every tag found when none is wanted): other tags in view
-    // would widen the window (three on a table: most of the image) and are found again in the
-    // next whole image.
-    const auto tracked = [&](const TagDetection& d) {
-      return wanted_tags_.empty() || std::find(wanted_tags_.begin(), wanted_tags_.end(), d.id) != wanted_tags_.end();
-    };
-    Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
-    for (const TagDetection& d : out)
-      if (tracked(d))
-        for (const Eigen::Vector2d& c : d.corners) {
-          lo = lo.cwiseMin(c);
-          hi = hi.cwiseMax(c);
-        }
-    const Eigen::Vector2d grow = Eigen::Vector2d::Constant(config_.roi_margin) + 0.5 * (hi - lo);
-    const int c0 = std::max(0, static_cast<int>(std::floor(lo.x() - grow.x())));
-    const int r0 = std::max(0, static_cast<int>(std::floor(lo.y() - grow.y())));
-    const int c1 = std::min(camera_.width, static_cast<int>(std::ceil(hi.x() + grow.x())) + 1);
-    const int r1 = std::min(camera_.height, static_cast<int>(std::ceil(hi.y() + grow.y())) + 1);
-    if (c1 - c0 >= 16 && r1 - r0 >= 16) window_ = {{c0, r0, c1 - c0, r1 - r0}};
-  }
-  return out;
+  if (config_.roi_margin <= 0 || out.empty() || !wanted_found) return;
+  // The box around the wanted tags (every tag found when none is wanted): other tags in view
+  // would widen the window (three on a table: most of the image) and are found again in the
+  // next whole image.
+  const auto tracked = [&](const TagDetection& d) {
+    return wanted_tags_.empty() || std::find(wanted_tags_.begin(), wanted_tags_.end(), d.id) != wanted_tags_.end();
+  };
+  Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  window_tag_px_ = std::numeric_limits<double>::infinity();
+  for (const TagDetection& d : out)
+    if (tracked(d)) {
+      window_tag_px_ = std::min(window_tag_px_, shortestSide(d.corners));
+      for (const Eigen::Vector2d& c : d.corners) {
+        lo = lo.cwiseMin(c);
+        hi = hi.cwiseMax(c);
+      }
+    }
+  window_ = windowAround(lo, hi);
 }
 
 void TagDetector::setWantedTags(const std::vector<int>& ids) {
