@@ -116,6 +116,15 @@ struct GraspGeneratorConfig {
   /// Contact pairs, the fitted contact surfaces' normals and the measured contacts are checked
   /// against it.
   double friction_coefficient = 0.36;
+  /// deg: a side whose contact patch is not within the friction cone but whose outermost
+  /// points' normals are within this angle of the closing axis is a contact the view shows at
+  /// a slant: the finger would slip, the grasp is refused (a face running along the closing
+  /// axis, e.g. a top face up to its unseen far edge, is beyond it: that side is unseen).
+  double slanted_contact_deg = 65.0;
+  /// Fingers at seen contacts and the palm must stay out of the volume the view hides behind
+  /// the object's points (seen from the viewpoint given to generate, the camera's origin); off
+  /// when the cloud's viewpoint is not known.
+  bool hidden_volume_check = true;
   double max_approach_tilt_deg = 95.0;  ///< max angle between approach and straight down
   int max_collision_points = 2;       ///< cloud points tolerated inside fingers/palm (noise)
   double outlier_fraction = 0.03;     ///< ... or this fraction of the points there, if more
@@ -183,6 +192,8 @@ enum class GraspFailure {
   TooWide,           ///< the object is wider than the opening across every closing axis tried
   NoAntipodalPair,   ///< no contact pair within the friction cone and the opening
   Collides,          ///< every candidate collides with the cloud or the support, or does not fit
+  Friction,          ///< every fitting candidate touches a seen surface outside the friction cone
+  HiddenVolume,      ///< every fitting candidate puts a finger or the palm in the volume hidden behind the view
   TargetTooFar,      ///< generateForTarget: the nearest object is outside the target gate
 };
 std::string toString(GraspFailure f);

@@ -19,6 +19,7 @@
 #include <pcl/segmentation/sac_segmentation.h>
 
 #include <algorithm>
+#include <array>
 #include <map>
 #include <cmath>
 #include <numeric>
@@ -35,7 +36,7 @@ namespace {
 
 const char* kOwner = "GraspGenerator";
 
-constexpr ehc_common::EnumNames<GraspFailure, 11> kFailureNames = {{
+constexpr ehc_common::EnumNames<GraspFailure, 13> kFailureNames = {{
     {GraspFailure::None, "none"},
     {GraspFailure::EmptyCloud, "empty_cloud"},
     {GraspFailure::NoFinitePoints, "no_finite_points"},
@@ -46,6 +47,8 @@ constexpr ehc_common::EnumNames<GraspFailure, 11> kFailureNames = {{
     {GraspFailure::TooWide, "too_wide"},
     {GraspFailure::NoAntipodalPair, "no_antipodal_pair"},
     {GraspFailure::Collides, "collides"},
+    {GraspFailure::Friction, "friction"},
+    {GraspFailure::HiddenVolume, "hidden_volume"},
     {GraspFailure::TargetTooFar, "target_too_far"},
 }};
 constexpr double kDeg = M_PI / 180.0;
@@ -152,6 +155,9 @@ struct SurfacePoint {
 /// One side of the object along a grasp's closing axis, as measured between the fingers.
 struct ContactSide {
   bool seen = false;     ///< fitted from the points whose normals face along the closing axis
+  /// Fitted, but the fitted surface's normal at the contact is outside the friction cone: the
+  /// finger would touch it and slip (not `seen`).
+  bool slips = false;
   double y = 0.0;        ///< position along the closing axis (grasp-local, from c0)
   double cos_n = 0.0;    ///< |cos| of the fitted surface's normal at the contact and the axis
 };
@@ -163,37 +169,41 @@ struct Measurement {
   int seen() const { return side[0].seen + side[1].seen; }
 };
 
-/// The contact surfaces' fit: the object's points between the fingers whose estimated normal
-/// lies within the friction cone of the closing axis y and that are near one side's outermost
-/// points are that side's contact patch; the patch is fitted by least squares with a surface
+/// The contact surfaces' fit: the object's points in the fingers' slab whose estimated outward
+/// normal lies within the friction cone of the closing axis y and that are near one side's
+/// outermost points are that side's contact patch; the patch is fitted by least squares with a
+/// surface
 /// y = a + b x + c x^2 + d z + e z^2 over the finger's breadth (x) and length (z) (a flat face
 /// or a curved one: a cylinder's mantle, a ball), refitted without the points beyond 3 RMS,
-/// and the side's position is the fitted surface's outermost value over the patch (where the
-/// fingers first touch it). Noise averages out in the fit instead of pushing the extreme points
-/// outwards: a 66 mm cylinder under 2 mm noise measures 66 mm, not 75. Every point of a patch
-/// has its estimated normal within the friction cone (the antipodal check of the contacts);
-/// the contact's quality is their mean cosine with the axis.
+/// and the side's position is the fitted surface's outermost value over the finger's footprint
+/// (where the finger first touches it). Noise averages out in the fit instead of pushing the
+/// extreme points outwards: a 66 mm cylinder under 2 mm noise measures 66 mm, not 75. The
+/// contact's quality is the cosine of the fitted surface's normal there with the axis. Without
+/// such a patch, if the outermost points face the finger at a slant (normals within
+/// slanted_contact_deg of the axis) the view shows a contact outside the friction cone: the
+/// side slips; else the side is unseen.
 class ContactSurfaceFit {
  public:
-  ContactSurfaceFit(double cos_cone, int min_points, double noise, double leaf)
-      : cos_cone_(cos_cone), min_points_(min_points), band_(4.0 * noise + 2.0 * leaf) {}
+  ContactSurfaceFit(double cos_cone, double cos_slanted, int min_points, double noise, double leaf)
+      : cos_cone_(cos_cone), cos_slanted_(cos_slanted), min_points_(min_points), band_(4.0 * noise + 2.0 * leaf) {}
 
-  /// `pts`: (y, x, z) grasp-local coordinates of the object's points between the fingers and
-  /// `ny` the cos of their outward normals with y; `lo`, `hi`: the trimmed extremes along y.
-  /// Side `s` (+1: +y, -1: -y): the points whose outward normal is within the cone of s y.
+  /// `pts`: (y, x, z) grasp-local coordinates of the object's points in the slab and `ny` the
+  /// cos of their outward normals with y; `lo`, `hi`: the trimmed extremes along y. Side `s`
+  /// (+1: +y, -1: -y).
   ContactSide fit(const std::vector<Eigen::Vector3d>& pts, const std::vector<double>& ny, double lo,
                   double hi, int s) const {
     ContactSide out;
     const double mid = 0.5 * (lo + hi), outer = s > 0 ? hi : lo;
     std::vector<const Eigen::Vector3d*> patch;
-    double cos_sum = 0.0;
+    int slanted = 0;
     for (std::size_t i = 0; i < pts.size(); ++i) {
       const double y = pts[i].x();
-      if (s * ny[i] < cos_cone_ || s * (y - mid) <= 0.0 || s * (outer - y) > band_) continue;
-      patch.push_back(&pts[i]);
-      cos_sum += s * ny[i];
+      if (s * (y - mid) <= 0.0 || s * (outer - y) > band_ || s * ny[i] < cos_slanted_) continue;
+      if (s * ny[i] >= cos_cone_) patch.push_back(&pts[i]);
+      else ++slanted;
     }
     Eigen::Matrix<double, 5, 1> c;
+    out.slips = static_cast<int>(patch.size()) < min_points_ && slanted >= min_points_;
     if (static_cast<int>(patch.size()) < min_points_ || !solve(patch, &c)) return out;
     // Refit without the points farther than 3 RMS from the first fit (flying pixels, strays).
     double ss = 0.0;
@@ -205,9 +215,9 @@ class ContactSurfaceFit {
     if (static_cast<int>(kept.size()) < min_points_ || !solve(kept, &c)) return out;
     // Where the fingers touch: along x and along z (separable terms) the fitted surface's
     // vertex where it bends away from the finger significantly (more than twice its standard
-    // error) inside the patch, a cylinder's or a ball's crest; the outer end of a significant
-    // slope (a face tilted from the closing axis); else the patch's mean (a flat face: its
-    // mean position; the maximum of a noisy fit over the patch would be biased out).
+    // error) inside the footprint, a cylinder's or a ball's crest; the outer end of a
+    // significant slope (a face tilted from the closing axis); else the patch's mean (a flat
+    // face: its mean position; the maximum of a noisy fit would be biased out).
     Eigen::Matrix<double, 5, 5> A = Eigen::Matrix<double, 5, 5>::Zero();
     double x0 = kept[0]->y(), x1 = x0, z0 = kept[0]->z(), z1 = z0, xm = 0.0, zm = 0.0, res = 0.0;
     for (const auto* q : kept) {
@@ -228,9 +238,11 @@ class ContactSurfaceFit {
     auto se = [&](int i) { return std::sqrt(std::max(0.0, cov(i, i))); };
     const double x = crest(c[1], c[2], se(1), se(2), x0, x1, xm / n, s);
     const double z = crest(c[3], c[4], se(3), se(4), z0, z1, zm / n, s);
-    out.seen = true;
     out.y = value(c, x, z);
-    out.cos_n = cos_sum / static_cast<double>(patch.size());
+    // The fitted surface's normal at the contact, against the friction cone.
+    out.cos_n = 1.0 / std::hypot(1.0, std::hypot(c[1] + 2.0 * c[2] * x, c[3] + 2.0 * c[4] * z));
+    out.seen = out.cos_n >= cos_cone_;
+    out.slips = !out.seen;  // a fitted slope beyond the cone (the points' normals within it)
     return out;
   }
 
@@ -242,7 +254,8 @@ class ContactSurfaceFit {
   /// are significant (more than twice their standard errors se_b, se_a): a crest (s a < 0)
   /// inside the range; else the outer end of a significant slope (a tilted face); else `mean`.
   static double crest(double b, double a, double se_b, double se_a, double t0, double t1, double mean, int s) {
-    if (s * a < 0.0 && std::abs(a) > 2.0 * se_a) {
+    static const double ksig = getenv("KSIG") ? atof(getenv("KSIG")) : 2.0;
+    if (s * a < 0.0 && std::abs(a) > ksig * se_a) {
       const double tv = -b / (2.0 * a);
       if (tv >= t0 && tv <= t1) return tv;
     }
@@ -269,7 +282,7 @@ class ContactSurfaceFit {
     return c->allFinite();
   }
 
-  double cos_cone_;
+  double cos_cone_, cos_slanted_;
   int min_points_;
   double band_;
 };
@@ -293,16 +306,117 @@ double supportedQuality(double q, const Measurement& m, double single_weight) {
   return std::min(q, single_weight) * seen_cos;
 }
 
+/// The volume the view hides: along the rays from the camera, behind the object's points whose
+/// outward normal faces the camera (where a ray enters the object) and not behind a point facing
+/// away (where it leaves, seen in clouds of several views). A range image over the directions
+/// from the camera (bins of 1.5 voxels at the object's distance) holds per bin the nearest
+/// entering and the farthest leaving point. A point is hidden if it is more than `margin`
+/// behind the entering surface in its bin and in the four bins around it (the shadow eroded by
+/// a bin: a finger beside a surface seen at a grazing angle is not in it), and not beyond the
+/// leaving surface. Disabled (nothing hidden) without a camera.
+class HiddenVolume {
+ public:
+  HiddenVolume() = default;
+  HiddenVolume(const Cloud& cloud, const Normals& normals, const Eigen::Vector3d& centroid, const Eigen::Vector3d& eye,
+               double leaf, double margin) {
+    const Eigen::Vector3d d0 = centroid - eye;
+    if (d0.norm() < 1e-6) return;
+    eye_ = eye;
+    fwd_ = d0.normalized();
+    e1_ = fwd_.unitOrthogonal();
+    e2_ = fwd_.cross(e1_);
+    res_ = 1.5 * leaf / d0.norm();
+    margin_ = margin;
+    double u1 = -1e9, v1 = -1e9;
+    u0_ = v0_ = 1e9;
+    for (const auto& pf : cloud) {
+      double u = 0, v = 0, r = 0;
+      if (!project(pf.getVector3fMap().cast<double>(), &u, &v, &r)) continue;
+      u0_ = std::min(u0_, u), v0_ = std::min(v0_, v), u1 = std::max(u1, u), v1 = std::max(v1, v);
+    }
+    if (u1 < u0_) return;
+    res_ = std::max({res_, (u1 - u0_) / 511.0, (v1 - v0_) / 511.0});  // at most 512 x 512 bins
+    nu_ = static_cast<int>((u1 - u0_) / res_) + 1;
+    nv_ = static_cast<int>((v1 - v0_) / res_) + 1;
+    entry_.assign(static_cast<std::size_t>(nu_ * nv_), std::numeric_limits<float>::infinity());
+    exit_.assign(entry_.size(), -std::numeric_limits<float>::infinity());
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+      const Eigen::Vector3d p = cloud[i].getVector3fMap().cast<double>();
+      Eigen::Vector3d n = normals[i].getNormalVector3fMap().cast<double>();
+      int k = 0;
+      double r = 0;
+      if (!n.allFinite() || n.norm() < 0.5 || !bin(p, 0, 0, &k, &r)) continue;
+      if (n.dot(p - centroid) < 0) n = -n;  // outwards, as the contact fits assume
+      float& e = n.dot(eye - p) > 0 ? entry_[static_cast<std::size_t>(k)] : exit_[static_cast<std::size_t>(k)];
+      e = n.dot(eye - p) > 0 ? std::min(e, static_cast<float>(r)) : std::max(e, static_cast<float>(r));
+    }
+    enabled_ = true;
+  }
+  bool enabled() const { return enabled_; }
+  bool hidden(const Eigen::Vector3d& q) const {
+    if (!enabled_) return false;
+    static const int du[5] = {0, 1, -1, 0, 0}, dv[5] = {0, 0, 0, 1, -1};
+    for (int j = 0; j < 5; ++j) {
+      int k = 0;
+      double r = 0;
+      if (!bin(q, du[j], dv[j], &k, &r)) return false;
+      const double behind = r - margin_;
+      if (!(entry_[static_cast<std::size_t>(k)] < behind) || exit_[static_cast<std::size_t>(k)] > entry_[static_cast<std::size_t>(k)] && exit_[static_cast<std::size_t>(k)] < behind)
+        return false;
+    }
+    return true;
+  }
+
+ private:
+  bool project(const Eigen::Vector3d& p, double* u, double* v, double* r) const {
+    const Eigen::Vector3d d = p - eye_;
+    const double z = d.dot(fwd_);
+    if (z <= 1e-6) return false;
+    *u = d.dot(e1_) / z;
+    *v = d.dot(e2_) / z;
+    *r = d.norm();
+    return true;
+  }
+  /// The bin of q's direction, offset by (du, dv) bins, and q's range.
+  bool bin(const Eigen::Vector3d& q, int du, int dv, int* k, double* r) const {
+    double u = 0, v = 0;
+    if (!project(q, &u, &v, r)) return false;
+    const int iu = static_cast<int>(std::floor((u - u0_) / res_)) + du, iv = static_cast<int>(std::floor((v - v0_) / res_)) + dv;
+    if (iu < 0 || iv < 0 || iu >= nu_ || iv >= nv_) return false;
+    *k = iv * nu_ + iu;
+    return true;
+  }
+
+  bool enabled_ = false;
+  Eigen::Vector3d eye_ = Eigen::Vector3d::Zero(), fwd_ = Eigen::Vector3d::UnitZ(), e1_ = Eigen::Vector3d::UnitX(),
+                  e2_ = Eigen::Vector3d::UnitY();
+  double res_ = 1.0, u0_ = 0, v0_ = 0, margin_ = 0;
+  int nu_ = 0, nv_ = 0;
+  std::vector<float> entry_, exit_;
+};
+
+/// What became of a gripper pose in GripperCheck::evaluate (the first check it failed).
+enum class CheckOutcome {
+  Pass,
+  TooFewPoints,  ///< too few object points between the fingers, or one surface's noise
+  TooWide,       ///< the measured width needs more than the opening
+  Friction,      ///< a contact the view shows is outside the friction cone
+  Collides,      ///< fingers or palm hit the cloud, or reach the support
+  Hidden,        ///< a finger at a seen contact, or the palm, is in the volume the view hides
+};
+constexpr int kOutcomes = 6;
+
 /// Evaluates the gripper at (R, c0): centres it along the closing axis on the object between
-/// the fingers, measures it there (ContactSurfaceFit), checks width, finger / palm collisions
-/// and the support plane.
+/// the fingers, measures it there (ContactSurfaceFit), checks width, friction, finger / palm
+/// collisions, the support plane and the hidden volume.
 class GripperCheck {
  public:
   /// `noise`: the object cloud's estimated noise (m, see estimateNoise), `leaf` its voxel edge.
   GripperCheck(const GraspGeneratorConfig& cfg, const Eigen::Vector4d& plane, bool has_plane, double noise,
-               double leaf)
-      : cfg_(cfg), g_(cfg.gripper), plane_(plane), has_plane_(has_plane), noise_(noise),
-        fit_(std::cos(std::atan(cfg.friction_coefficient)), cfg.min_contact_points, noise, leaf) {}
+               double leaf, const HiddenVolume& hidden)
+      : cfg_(cfg), g_(cfg.gripper), plane_(plane), has_plane_(has_plane), noise_(noise), hidden_(hidden),
+        fit_(std::cos(std::atan(cfg.friction_coefficient)), std::cos(cfg.slanted_contact_deg * kDeg),
+             cfg.min_contact_points, noise, leaf) {}
 
   /// A closing axis y at c0 with the neighbourhood expressed in its (y, u, v) frame (u, v
   /// span the approach plane, v = y x u).
@@ -334,15 +448,22 @@ class GripperCheck {
     // The object rests on the support: the unseen volume below each seen point, down to the
     // support, may be object too (single views miss the lower far side). Its extent along y
     // is that of the points and of their projections onto the support (k most extreme per
-    // side dropped as noise); a round section's or a ball's fitted extremes replace it.
+    // side dropped as noise), of the part the fingers can reach: the points within the
+    // fingers' reach of the closing line through c0, and of the segments below the points
+    // down to the support the point of each nearest to that line if within reach (a handle's
+    // extent, not the mug's). A round section's or a ball's fitted extremes replace it.
     ext_.clear();
     if (object && !hint.valid) {
-      const double yn = has_plane_ ? y.dot(plane_.head<3>()) : 0.0;
+      const double reach2 = std::pow(g_.finger_length, 2) + std::pow(0.5 * g_.finger_breadth, 2);
+      const Eigen::Vector3d n = plane_.head<3>(), n_perp = n - n.dot(y) * y;
       for (const auto& pf : *object) {
-        const Eigen::Vector3d p = pf.getVector3fMap().cast<double>();
-        const double e = y.dot(p - c0);
-        ext_.push_back(e);
-        if (has_plane_ && std::abs(yn) > 1e-9) ext_.push_back(e - (plane_.head<3>().dot(p) + plane_[3]) * yn);
+        const Eigen::Vector3d d = pf.getVector3fMap().cast<double>() - c0;
+        const Eigen::Vector3d d_perp = d - d.dot(y) * y;
+        if (d_perp.squaredNorm() <= reach2) ext_.push_back(y.dot(d));
+        if (!has_plane_ || n_perp.squaredNorm() < 1e-12) continue;
+        const double h = n.dot(d + c0) + plane_[3];  // the point's height above the support
+        const double t = std::clamp(d_perp.dot(n_perp) / n_perp.squaredNorm(), 0.0, std::max(0.0, h));
+        if (t > 0.0 && (d_perp - t * n_perp).squaredNorm() <= reach2) ext_.push_back(y.dot(d - t * n));
       }
     }
     const std::size_t k = static_cast<std::size_t>(cfg_.max_collision_points);
@@ -394,8 +515,8 @@ class GripperCheck {
   /// Gripper with approach a = cos(phi) u + sin(phi) v: centres it along y on the object
   /// between the fingers (measured by its contact surfaces), checks the opening, finger / palm
   /// collisions and the support plane.
-  bool evaluate(const Prepared& pr, double cphi, double sphi, Eigen::Matrix3d* Rout,
-                Eigen::Vector3d* c, double* width, Measurement* m);
+  CheckOutcome evaluate(const Prepared& pr, double cphi, double sphi, Eigen::Matrix3d* Rout,
+                        Eigen::Vector3d* c, double* width, Measurement* m);
 
  private:
   /// The object's points in the fingers' slab in grasp coordinates (y, x, z) with the cos of
@@ -403,14 +524,21 @@ class GripperCheck {
   void surfaceInSlab(const Prepared& pr, double cphi, double sphi);
   /// The two sides: fitted where the view shows them (ContactSurfaceFit), else bounded by
   /// the fitted completion, or by the trimmed extremes of the points between the fingers and
-  /// the object's extent. False if a fitted contact's normal is outside the friction cone.
-  bool measure(const Prepared& pr, double lo, double hi, Measurement* m) const;
+  /// the object's extent. Friction if the view shows a side outside the friction cone.
+  CheckOutcome measure(const Prepared& pr, double lo, double hi, Measurement* m) const;
+  /// Collisions of the fingers and palm (grasp frame R, centre, opening w) with the cloud and
+  /// the support.
+  bool collides(const Eigen::Matrix3d& R, const Eigen::Vector3d& centre, double yc, double ymin, double ymax,
+                double w, int k) const;
+  /// Fingers at seen contacts or the palm in the hidden volume (a quarter of their samples).
+  bool inHiddenVolume(const Eigen::Matrix3d& R, const Eigen::Vector3d& centre, double w, const Measurement& m) const;
 
   const GraspGeneratorConfig& cfg_;
   const GripperGeometry& g_;
   Eigen::Vector4d plane_;
   bool has_plane_;
   double noise_;
+  const HiddenVolume& hidden_;
   ContactSurfaceFit fit_;
   std::vector<double> ys_, inner_, palm_;
   std::vector<double> ext_;
@@ -426,23 +554,27 @@ void GripperCheck::surfaceInSlab(const Prepared& pr, double cphi, double sphi) {
     const Eigen::Vector3d& l = pr.surface[i];
     const double qz = cphi * l.y() + sphi * l.z();
     const double qx = cphi * l.z() - sphi * l.y();
-    if (qz > z1 || qz < z0 || std::abs(qx) > 0.5 * g_.finger_breadth || std::abs(l.x()) > 0.5 * g_.max_width)
+    // Across the closing axis up to the fingers' outer faces: a side near the opening's edge
+    // keeps its noise beyond it (cut there, its fit would be biased inwards).
+    if (qz > z1 || qz < z0 || std::abs(qx) > 0.5 * g_.finger_breadth ||
+        std::abs(l.x()) > 0.5 * g_.max_width + g_.finger_thickness)
       continue;
     slab_.emplace_back(l.x(), qx, qz);
     slab_ny_.push_back(pr.surface_n[i].x());
   }
 }
 
-bool GripperCheck::measure(const Prepared& pr, double lo, double hi, Measurement* m) const {
+CheckOutcome GripperCheck::measure(const Prepared& pr, double lo, double hi, Measurement* m) const {
   for (int i = 0; i < 2; ++i) {
     const int s = i == 0 ? -1 : 1;
     ContactSide& side = m->side[i];
     side = fit_.fit(slab_, slab_ny_, lo, hi, s);
     if (side.seen) continue;
-    if (pr.hint) {
+    if (pr.hint) {  // the completion's extreme is the contact, beyond the seen slope
       side.y = s > 0 ? pr.ext_max : pr.ext_min;
       continue;
     }
+    if (side.slips) return CheckOutcome::Friction;
     // Bounded by the last samples of the surfaces running up to it (a top face's far edge):
     // their trimmed extreme, short of the true side by up to one sample spacing.
     side.y = s > 0 ? hi : lo;
@@ -450,14 +582,15 @@ bool GripperCheck::measure(const Prepared& pr, double lo, double hi, Measurement
   }
   m->width = m->side[1].y - m->side[0].y;
   // Two sides closer than the noise can tell apart are one surface's noise.
-  return m->width > 4.0 * noise_;
+  return m->width > 4.0 * noise_ ? CheckOutcome::Pass : CheckOutcome::TooFewPoints;
 }
 
-bool GripperCheck::evaluate(const Prepared& pr, double cphi, double sphi, Eigen::Matrix3d* Rout,
-                            Eigen::Vector3d* c, double* width, Measurement* m) {
+CheckOutcome GripperCheck::evaluate(const Prepared& pr, double cphi, double sphi, Eigen::Matrix3d* Rout,
+                                    Eigen::Vector3d* c, double* width, Measurement* m) {
   const double z1 = g_.finger_tip_depth, z0 = z1 - g_.finger_length;
   const double zp = z0 - g_.palm_height;
   const double W = g_.max_width, t = g_.finger_thickness;
+  if (pr.too_wide) return CheckOutcome::TooWide;
   ys_.clear();
   inner_.clear();
   palm_.clear();
@@ -480,12 +613,10 @@ bool GripperCheck::evaluate(const Prepared& pr, double cphi, double sphi, Eigen:
   R.col(1) = pr.y;
   R.col(2) = cphi * pr.u + sphi * pr.v;
   R.col(0) = cphi * pr.v - sphi * pr.u;
-  const Eigen::Vector3d& c0 = pr.c0;
-  if (pr.too_wide) return false;
   // Outliers tolerated per side: max_collision_points, or outlier_fraction of the points.
   const int k = std::max(cfg_.max_collision_points,
                          static_cast<int>(cfg_.outlier_fraction * inner_.size()));
-  if (static_cast<int>(inner_.size()) < cfg_.min_points_between_fingers + 2 * k) return false;
+  if (static_cast<int>(inner_.size()) < cfg_.min_points_between_fingers + 2 * k) return CheckOutcome::TooFewPoints;
   // What is between the fingers: its trimmed extremes (the k most extreme points per side are
   // noise) locate the two sides; their contact surfaces measure them.
   const auto kk = static_cast<long>(k);
@@ -494,45 +625,75 @@ bool GripperCheck::evaluate(const Prepared& pr, double cphi, double sphi, Eigen:
   std::nth_element(inner_.begin(), inner_.end() - 1 - kk, inner_.end());
   const double hi = inner_[inner_.size() - 1 - static_cast<std::size_t>(k)];
   surfaceInSlab(pr, cphi, sphi);
-  if (!measure(pr, lo, hi, m)) return false;
+  const CheckOutcome measured = measure(pr, lo, hi, m);
+  if (measured != CheckOutcome::Pass) return measured;
   const double ymin = m->side[0].y, ymax = m->side[1].y;
   const double w = ymax - ymin + 2.0 * g_.clearance;
-  if (w > W) return false;
+  if (w > W) return CheckOutcome::TooWide;
   const double yc = 0.5 * (ymin + ymax);
+  const Eigen::Vector3d centre = pr.c0 + R.col(1) * yc;
+  if (collides(R, centre, yc, ymin, ymax, w, k)) return CheckOutcome::Collides;
+  if (inHiddenVolume(R, centre, w, *m)) return CheckOutcome::Hidden;
+  *Rout = R;
+  *c = centre;
+  *width = w;
+  return CheckOutcome::Pass;
+}
+
+bool GripperCheck::collides(const Eigen::Matrix3d& R, const Eigen::Vector3d& centre, double yc, double ymin,
+                            double ymax, double w, int k) const {
+  const double z1 = g_.finger_tip_depth, z0 = z1 - g_.finger_length;
+  const double zp = z0 - g_.palm_height;
   // Points under the fingers or in the clearance gap, beyond the measured sides by more than
   // the noise (3 x the cloud's estimated noise: points of the contact surfaces themselves).
   const double half = 0.5 * (ymax - ymin) + 3.0 * noise_;
   int finger_hits = 0;
   for (double y : ys_) {
     const double d = std::abs(y - yc);
-    if (d > half + 1e-9 && d <= 0.5 * w + t) ++finger_hits;
+    if (d > half + 1e-9 && d <= 0.5 * w + g_.finger_thickness) ++finger_hits;
   }
-  if (finger_hits > 2 * k) return false;
+  if (finger_hits > 2 * k) return true;
   int palm_hits = 0;
   for (double y : palm_)
     if (std::abs(y - yc) <= 0.5 * g_.palm_width) ++palm_hits;
-  if (palm_hits > std::max(cfg_.max_collision_points,
-                           static_cast<int>(cfg_.outlier_fraction * palm_.size())))
-    return false;
-  const Eigen::Vector3d centre = c0 + R.col(1) * yc;
-  if (has_plane_) {
-    const double fy = 0.5 * w + g_.finger_thickness;
-    const double xs[2] = {0.5 * g_.finger_breadth, 0.5 * g_.palm_breadth};
-    const double yss[2] = {fy, 0.5 * g_.palm_width};
-    const double zs[2][2] = {{z0, z1}, {zp, z0}};
-    for (int b = 0; b < 2; ++b)
-      for (double sx : {-1.0, 1.0})
-        for (double sy : {-1.0, 1.0})
-          for (int iz = 0; iz < 2; ++iz) {
-            const Eigen::Vector3d corner =
-                centre + R * Eigen::Vector3d(sx * xs[b], sy * yss[b], zs[b][iz]);
-            if (plane_.head<3>().dot(corner) + plane_[3] < cfg_.support_clearance) return false;
-          }
+  if (palm_hits > std::max(cfg_.max_collision_points, static_cast<int>(cfg_.outlier_fraction * palm_.size())))
+    return true;
+  if (!has_plane_) return false;
+  const double fy = 0.5 * w + g_.finger_thickness;
+  const double xs[2] = {0.5 * g_.finger_breadth, 0.5 * g_.palm_breadth};
+  const double yss[2] = {fy, 0.5 * g_.palm_width};
+  const double zs[2][2] = {{z0, z1}, {zp, z0}};
+  for (int b = 0; b < 2; ++b)
+    for (double sx : {-1.0, 1.0})
+      for (double sy : {-1.0, 1.0})
+        for (int iz = 0; iz < 2; ++iz) {
+          const Eigen::Vector3d corner = centre + R * Eigen::Vector3d(sx * xs[b], sy * yss[b], zs[b][iz]);
+          if (plane_.head<3>().dot(corner) + plane_[3] < cfg_.support_clearance) return true;
+        }
+  return false;
+}
+
+bool GripperCheck::inHiddenVolume(const Eigen::Matrix3d& R, const Eigen::Vector3d& centre, double w,
+                                  const Measurement& m) const {
+  if (!hidden_.enabled()) return false;
+  const double z1 = g_.finger_tip_depth, z0 = z1 - g_.finger_length;
+  // Each finger on 3 x 5 points of its mid-plane; a finger at an unseen contact is in the hidden
+  // volume by construction (it ranks lower, see supportedQuality).
+  for (int i = 0; i < 2; ++i) {
+    if (!m.side[i].seen) continue;
+    const double y = (i == 0 ? -1.0 : 1.0) * (0.5 * w + 0.5 * g_.finger_thickness);
+    int n = 0;
+    for (double x : {-0.4, 0.0, 0.4})
+      for (int j = 0; j < 5; ++j)
+        n += hidden_.hidden(centre + R * Eigen::Vector3d(x * g_.finger_breadth, y, z0 + (z1 - z0) * j / 4.0));
+    if (n >= 4) return true;
   }
-  *Rout = R;
-  *c = centre;
-  *width = w;
-  return true;
+  // The palm's face (behind the fingers) on 3 x 3 points.
+  int n = 0;
+  const double yp = std::min(0.5 * g_.palm_width, 0.5 * w + g_.finger_thickness);
+  for (double x : {-0.4, 0.0, 0.4})
+    for (double y : {-1.0, 0.0, 1.0}) n += hidden_.hidden(centre + R * Eigen::Vector3d(x * g_.palm_breadth, y * yp, z0));
+  return n >= 3;
 }
 
 /// Footprint of an object resting on a support plane: its points projected onto the plane, and
@@ -790,6 +951,7 @@ void GraspGeneratorConfig::validate() const {
   range("pairs_per_seed", pairs_per_seed, 1, 100);
   range("approach_steps", approach_steps, 1, 360);
   range("friction_coefficient", friction_coefficient, 0.02, 2.0);
+  range("slanted_contact_deg", slanted_contact_deg, std::atan(friction_coefficient) / kDeg, 90.0);
   range("max_approach_tilt_deg", max_approach_tilt_deg, 0.0, 180.0);
   range("max_collision_points", max_collision_points, 0, 1000);
   range("outlier_fraction", outlier_fraction, 0.0, 0.2);
@@ -840,7 +1002,8 @@ std::string GraspGeneratorConfig::summary() const {
      << voxel_size << " m (coarser above " << max_object_points << " points per object), normals r "
      << normal_radius << " m, " << max_seeds << " seeds x "
      << pairs_per_seed << " pairs x " << approach_steps << " approaches, friction mu "
-     << friction_coefficient << " (cone " << std::atan(friction_coefficient) / kDeg << " deg), contact fits >= "
+     << friction_coefficient << " (cone " << std::atan(friction_coefficient) / kDeg << " deg; slanted contacts within " << slanted_contact_deg << " deg refused), hidden-volume check "
+     << (hidden_volume_check ? "on" : "off") << ", contact fits >= "
      << min_contact_points << " points, centroid sigma " << centroid_sigma_deg << " deg, pca power "
      << pca_power << "/" << pca_approach_power << ", refine shift <= " << max_refine_shift
      << " m, depth shift <= " << max_depth_shift << " m (step " << depth_step << " m, margin "
@@ -871,6 +1034,8 @@ GraspGeneratorConfig loadGraspGeneratorConfig(const ConfigNode& n) {
   c.pairs_per_seed = n.get("pairs_per_seed", c.pairs_per_seed);
   c.approach_steps = n.get("approach_steps", c.approach_steps);
   c.friction_coefficient = n.get("friction_coefficient", c.friction_coefficient);
+  c.slanted_contact_deg = n.get("slanted_contact_deg", c.slanted_contact_deg);
+  c.hidden_volume_check = n.get("hidden_volume_check", c.hidden_volume_check);
   c.max_approach_tilt_deg = n.get("max_approach_tilt_deg", c.max_approach_tilt_deg);
   c.max_collision_points = n.get("max_collision_points", c.max_collision_points);
   c.outlier_fraction = n.get("outlier_fraction", c.outlier_fraction);
@@ -930,6 +1095,7 @@ struct PreparedObject {
   Eigen::Vector4d plane = Eigen::Vector4d::Zero();
   bool has_plane = false;
   double noise = 0.0;  ///< m, the filtered cloud's estimated noise (estimateNoise)
+  HiddenVolume hidden;  ///< behind the view from the camera (disabled without hidden_volume_check)
 };
 
 /// The noise of a cloud from its normals' plane fits: a flat patch of radius r with points
@@ -1026,7 +1192,7 @@ bool describeObject(const GraspGeneratorConfig& cfg, const Eigen::Vector4d* supp
 /// Normals (sign-free use: antipodality is tested with |n . y|) and the collision environment
 /// (the object, plus `collision_cloud` if given, voxel-filtered together).
 void estimateNormalsAndEnvironment(const GraspGeneratorConfig& cfg, const PointList* collision_cloud,
-                                   PreparedObject* po) {
+                                   const Eigen::Vector3d& viewpoint, PreparedObject* po) {
   // Unsorted radius results: the neighbourhoods here are large and their order is irrelevant.
   po->tree.reset(new pcl::search::KdTree<pcl::PointXYZ>(false));
   po->tree->setInputCloud(po->cloud);
@@ -1038,6 +1204,8 @@ void estimateNormalsAndEnvironment(const GraspGeneratorConfig& cfg, const PointL
   ne.setRadiusSearch(radius);
   ne.compute(*po->normals);
   po->noise = estimateNoise(*po->normals, radius);
+  if (cfg.hidden_volume_check)
+    po->hidden = HiddenVolume(*po->cloud, *po->normals, po->centroid, viewpoint, po->leaf, 3.0 * po->noise + 2.0 * po->leaf);
 
   // Collision environment (the object, plus other geometry if given).
   po->env = po->cloud;
@@ -1085,7 +1253,7 @@ struct Pending {
 class GraspSearch {
  public:
   GraspSearch(const GraspGeneratorConfig& cfg, const PreparedObject& po)
-      : cfg_(cfg), g_(cfg.gripper), po_(po), check_(cfg, po.plane, po.has_plane, po.noise, po.leaf),
+      : cfg_(cfg), g_(cfg.gripper), po_(po), check_(cfg, po.plane, po.has_plane, po.noise, po.leaf, po.hidden),
         cos_fc_(std::cos(std::atan(cfg.friction_coefficient))),
         cos_tilt_(std::cos(cfg.max_approach_tilt_deg * kDeg)),
         check_radius_(std::sqrt(
@@ -1100,6 +1268,9 @@ class GraspSearch {
   void addFootprintHypotheses(std::vector<Hyp>* hyps);
   /// The margin rule's "too wide" reason ("" if the footprint fits the opening, or no footprint).
   std::string tooWide() const;
+  /// Why no candidate passed: the check most of them failed (after enough points between the
+  /// fingers), with the counts of every check.
+  GraspFailure refusal(std::string* reason) const;
   /// Every (hypothesis, approach) within the tilt limit, best optimistic score first; sets each
   /// hypothesis's approach basis (u, v).
   std::vector<Pending> rankApproaches(std::vector<Hyp>* hyps);
@@ -1136,6 +1307,8 @@ class GraspSearch {
   std::vector<float> d2_;
   std::vector<Eigen::Vector3d> nbrs_;
   std::vector<SurfacePoint> surf_;  ///< the object's points (with normals) gathered with nbrs_
+  std::array<int, kOutcomes> outcomes_{};  ///< checkCandidates' evaluations per CheckOutcome
+  std::array<double, kOutcomes> weights_{};  ///< ... the sum of their scores before the checks
 };
 
 void GraspSearch::score(Candidate& cd) const {
@@ -1231,6 +1404,10 @@ void GraspSearch::addFootprintHypotheses(std::vector<Hyp>* hyps) {
     for (Hyp& h : *hyps) {
       const Eigen::Vector3d yh = h.y - h.y.dot(plane.head<3>()) * plane.head<3>();
       if (yh.norm() < 0.5) continue;  // closing across the support: not this section
+      // Only closings across the round body, through its middle half (a handle's, a rim's or
+      // a part's contact pair elsewhere is measured on its own).
+      const Eigen::Vector3d off = h.c0 - c;
+      if ((off - off.dot(plane.head<3>()) * plane.head<3>()).norm() > 0.5 * r) continue;
       // A closing axis tilted from the support crosses the mantle's section obliquely: the
       // object is 2 r / |yh| long along it (its height not counted).
       h.hint = {true, c - r / yh.norm() * h.y, c + r / yh.norm() * h.y};
@@ -1267,6 +1444,34 @@ std::string GraspSearch::tooWide() const {
          num(g_.max_width) + " m and needs " + num(g_.clearance) +
          " m clearance each side (objects up to " + num(g_.max_width - 2.0 * g_.clearance) +
          " m)";
+}
+
+GraspFailure GraspSearch::refusal(std::string* reason) const {
+  // The kind: what refused the most promising poses (the refusals weighted by the poses'
+  // scores before the checks).
+  static const std::pair<CheckOutcome, GraspFailure> kinds[] = {{CheckOutcome::TooWide, GraspFailure::TooWide},
+                                                                {CheckOutcome::Friction, GraspFailure::Friction},
+                                                                {CheckOutcome::Collides, GraspFailure::Collides},
+                                                                {CheckOutcome::Hidden, GraspFailure::HiddenVolume}};
+  auto count = [&](CheckOutcome o) { return outcomes_[static_cast<std::size_t>(o)]; };
+  GraspFailure most = GraspFailure::Collides;
+  double best = 0.0;
+  for (const auto& k : kinds)
+    if (weights_[static_cast<std::size_t>(k.first)] > best) {
+      best = weights_[static_cast<std::size_t>(k.first)];
+      most = k.second;
+    }
+  int total = 0;
+  for (int n : outcomes_) total += n;
+  std::ostringstream os;
+  os << "no grasp fits: of " << total << " gripper poses checked, " << count(CheckOutcome::TooFewPoints)
+     << " hold too little of the object, " << count(CheckOutcome::TooWide) << " need more than the " << g_.max_width
+     << " m opening, " << count(CheckOutcome::Friction) << " touch a seen surface outside the friction cone (mu "
+     << cfg_.friction_coefficient << "), " << count(CheckOutcome::Collides)
+     << " collide with the cloud or the support, " << count(CheckOutcome::Hidden)
+     << " put a finger or the palm in the volume hidden behind the view";
+  *reason = os.str();
+  return most;
 }
 
 std::vector<Pending> GraspSearch::rankApproaches(std::vector<Hyp>* hyps) {
@@ -1319,8 +1524,10 @@ std::vector<Candidate> GraspSearch::checkCandidates(const std::vector<Hyp>& hyps
     }
     const double phi = 2.0 * M_PI * pd.step / cfg_.approach_steps;
     Candidate cd;
-    if (!check_.evaluate(it->second, std::cos(phi), std::sin(phi), &cd.R, &cd.c, &cd.width, &cd.m))
-      continue;
+    const CheckOutcome o = check_.evaluate(it->second, std::cos(phi), std::sin(phi), &cd.R, &cd.c, &cd.width, &cd.m);
+    ++outcomes_[static_cast<std::size_t>(o)];
+    weights_[static_cast<std::size_t>(o)] += pd.prescore;
+    if (o != CheckOutcome::Pass) continue;
     cd.q = hp.q;
     cd.antipodal = supportedQuality(hp.q, cd.m, cfg_.single_contact_weight);
     cd.single = hp.single;
@@ -1371,7 +1578,7 @@ bool GraspSearch::checkAt(const Candidate& cd, const Eigen::Vector3d& c0, Candid
   GripperCheck::Prepared pr;
   check_.prepare(c0, cd.R.col(1), cd.R.col(2), nbrs_, surf_, cd.single ? po_.cloud.get() : nullptr, cd.hint, &pr);
   *out = cd;
-  if (!check_.evaluate(pr, 1.0, 0.0, &out->R, &out->c, &out->width, &out->m)) return false;
+  if (check_.evaluate(pr, 1.0, 0.0, &out->R, &out->c, &out->width, &out->m) != CheckOutcome::Pass) return false;
   out->antipodal = supportedQuality(cd.q, out->m, cfg_.single_contact_weight);
   return true;
 }
@@ -1460,7 +1667,7 @@ GraspResult GraspGenerator::generate(const PointList& object, const Eigen::Vecto
   PreparedObject po;
   if (!filterObject(cfg, object, viewpoint, &po, &res)) return res;
   if (!describeObject(cfg, support_plane, &po, &res)) return res;
-  estimateNormalsAndEnvironment(cfg, collision_cloud, &po);
+  estimateNormalsAndEnvironment(cfg, collision_cloud, viewpoint, &po);
   const std::vector<int> seeds = sampleSeeds(static_cast<int>(po.cloud->size()), cfg);
 
   // Hypotheses (contact pairs, single contacts, footprint axes), their approaches best
@@ -1471,13 +1678,15 @@ GraspResult GraspGenerator::generate(const PointList& object, const Eigen::Vecto
   search.addFootprintHypotheses(&hyps);
   const std::vector<Pending> pending = search.rankApproaches(&hyps);
   std::vector<Candidate> cands = search.checkCandidates(hyps, pending);
-  if (!any_pair && cands.empty()) {
-    res.reason = search.tooWide();
-    res.failure = GraspFailure::TooWide;
-    if (!res.reason.empty()) return res;
+  if (cands.empty()) {
+    res.failure = search.refusal(&res.reason);
+    // Too wide: the margin rule's reason with the object's narrowest footprint, if it breaks it.
+    const std::string wide = res.failure == GraspFailure::TooWide ? search.tooWide() : "";
+    if (!wide.empty()) res.reason = wide + "; " + res.reason;
+    if (any_pair || res.failure != GraspFailure::Collides) return res;
     res.failure = GraspFailure::NoAntipodalPair;
     res.reason = "no antipodal contact pair within the gripper opening (" + num(g.max_width) +
-                 " m) and the friction cone (mu " + num(cfg.friction_coefficient) + ")";
+                 " m) and the friction cone (mu " + num(cfg.friction_coefficient) + "); " + res.reason;
     return res;
   }
 
@@ -1496,13 +1705,6 @@ GraspResult GraspGenerator::generate(const PointList& object, const Eigen::Vecto
   kept = search.suppress(kept, want);
 
   for (const Candidate& cd : kept) res.grasps.push_back(toGrasp(cd));
-  if (res.grasps.empty()) res.reason = search.tooWide();
-  if (!res.reason.empty()) res.failure = GraspFailure::TooWide;
-  if (res.grasps.empty() && res.reason.empty()) {
-    res.failure = GraspFailure::Collides;
-    res.reason = "every grasp candidate collides with the cloud or the support, or needs more "
-                 "than the " + std::to_string(g.max_width) + " m opening";
-  }
   return res;
 }
 
