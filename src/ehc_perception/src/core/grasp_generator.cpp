@@ -254,8 +254,7 @@ class ContactSurfaceFit {
   /// are significant (more than twice their standard errors se_b, se_a): a crest (s a < 0)
   /// inside the range; else the outer end of a significant slope (a tilted face); else `mean`.
   static double crest(double b, double a, double se_b, double se_a, double t0, double t1, double mean, int s) {
-    static const double ksig = getenv("KSIG") ? atof(getenv("KSIG")) : 2.0;
-    if (s * a < 0.0 && std::abs(a) > ksig * se_a) {
+    if (s * a < 0.0 && std::abs(a) > 2.0 * se_a) {
       const double tv = -b / (2.0 * a);
       if (tv >= t0 && tv <= t1) return tv;
     }
@@ -299,11 +298,14 @@ struct Candidate {
 
 /// Antipodal quality of a measured grasp: the fitted contacts' normals (min |cos| with the
 /// closing axis) where both sides were fitted; otherwise the hypothesis's quality, at most
-/// single_contact_weight (a contact the view does not show ranks below seen ones).
-double supportedQuality(double q, const Measurement& m, double single_weight) {
+/// single_contact_weight (a contact the view does not show ranks below seen ones), or halfway
+/// from it to 1 for a side completed by a fitted circle or sphere (`completed`).
+double supportedQuality(double q, const Measurement& m, double single_weight, bool completed) {
   if (m.seen() == 2) return std::min(m.side[0].cos_n, m.side[1].cos_n);
   const double seen_cos = m.side[0].seen ? m.side[0].cos_n : m.side[1].seen ? m.side[1].cos_n : 1.0;
-  return std::min(q, single_weight) * seen_cos;
+  // An unseen side bounded by a fitted circle or sphere is supported by the shape's fit:
+  // between seen and merely bounded ones.
+  return std::min(q, completed ? 0.5 * (1.0 + single_weight) : single_weight) * seen_cos;
 }
 
 /// The volume the view hides: along the rays from the camera, behind the object's points whose
@@ -414,7 +416,7 @@ class GripperCheck {
   /// `noise`: the object cloud's estimated noise (m, see estimateNoise), `leaf` its voxel edge.
   GripperCheck(const GraspGeneratorConfig& cfg, const Eigen::Vector4d& plane, bool has_plane, double noise,
                double leaf, const HiddenVolume& hidden)
-      : cfg_(cfg), g_(cfg.gripper), plane_(plane), has_plane_(has_plane), noise_(noise), hidden_(hidden),
+      : cfg_(cfg), g_(cfg.gripper), plane_(plane), has_plane_(has_plane), noise_(noise), hidden_(hidden), leaf_(leaf),
         fit_(std::cos(std::atan(cfg.friction_coefficient)), std::cos(cfg.slanted_contact_deg * kDeg),
              cfg.min_contact_points, noise, leaf) {}
 
@@ -430,14 +432,18 @@ class GripperCheck {
     bool too_wide = false;               ///< object extent along y exceeds the opening
     double ext_min = 0, ext_max = 0;
     bool hint = false;                   ///< ext_min / ext_max are a fitted circle's or sphere's
+    /// A contact pair's hypothesis: both sides were seen by the pair's points; a side the
+    /// measurement does not see is bounded by the last samples only (see inHiddenVolume).
+    bool pair = false;
   };
 
-  /// Drops points no gripper pose around y can touch. `object` (optional): the object's
-  /// points; its extent along y then bounds the part of the object between the fingers
-  /// where a side is not seen. `surface`: the object's points near c0 with their normals.
+  /// Drops points no gripper pose around y can touch. `object`: the object's points; with
+  /// `bound_by_extent` (single-contact and footprint hypotheses) their extent along y bounds the
+  /// part of the object between the fingers where a side is not seen (else the hypothesis is a
+  /// contact pair's). `surface`: the object's points near c0 with their normals.
   void prepare(const Eigen::Vector3d& c0, const Eigen::Vector3d& y, const Eigen::Vector3d& u,
                const std::vector<Eigen::Vector3d>& nbrs, const std::vector<SurfacePoint>& surface,
-               const Cloud* object, const ExtentHint& hint, Prepared* pr) {
+               const Cloud& object, bool bound_by_extent, const ExtentHint& hint, Prepared* pr) {
     pr->c0 = c0;
     pr->y = y;
     pr->u = u;
@@ -445,25 +451,19 @@ class GripperCheck {
     pr->use_extent = false;
     pr->too_wide = false;
     pr->hint = false;
+    pr->pair = !bound_by_extent;
     // The object rests on the support: the unseen volume below each seen point, down to the
     // support, may be object too (single views miss the lower far side). Its extent along y
     // is that of the points and of their projections onto the support (k most extreme per
-    // side dropped as noise), of the part the fingers can reach: the points within the
-    // fingers' reach of the closing line through c0, and of the segments below the points
-    // down to the support the point of each nearest to that line if within reach (a handle's
-    // extent, not the mug's). A round section's or a ball's fitted extremes replace it.
+    // side dropped as noise); a round section's or a ball's fitted extremes replace it.
     ext_.clear();
-    if (object && !hint.valid) {
-      const double reach2 = std::pow(g_.finger_length, 2) + std::pow(0.5 * g_.finger_breadth, 2);
-      const Eigen::Vector3d n = plane_.head<3>(), n_perp = n - n.dot(y) * y;
-      for (const auto& pf : *object) {
-        const Eigen::Vector3d d = pf.getVector3fMap().cast<double>() - c0;
-        const Eigen::Vector3d d_perp = d - d.dot(y) * y;
-        if (d_perp.squaredNorm() <= reach2) ext_.push_back(y.dot(d));
-        if (!has_plane_ || n_perp.squaredNorm() < 1e-12) continue;
-        const double h = n.dot(d + c0) + plane_[3];  // the point's height above the support
-        const double t = std::clamp(d_perp.dot(n_perp) / n_perp.squaredNorm(), 0.0, std::max(0.0, h));
-        if (t > 0.0 && (d_perp - t * n_perp).squaredNorm() <= reach2) ext_.push_back(y.dot(d - t * n));
+    if (bound_by_extent && !hint.valid) {
+      const double yn = has_plane_ ? y.dot(plane_.head<3>()) : 0.0;
+      for (const auto& pf : object) {
+        const Eigen::Vector3d p = pf.getVector3fMap().cast<double>();
+        const double e = y.dot(p - c0);
+        ext_.push_back(e);
+        if (has_plane_ && std::abs(yn) > 1e-9) ext_.push_back(e - (plane_.head<3>().dot(p) + plane_[3]) * yn);
       }
     }
     const std::size_t k = static_cast<std::size_t>(cfg_.max_collision_points);
@@ -530,8 +530,13 @@ class GripperCheck {
   /// the support.
   bool collides(const Eigen::Matrix3d& R, const Eigen::Vector3d& centre, double yc, double ymin, double ymax,
                 double w, int k) const;
-  /// Fingers at seen contacts or the palm in the hidden volume (a quarter of their samples).
-  bool inHiddenVolume(const Eigen::Matrix3d& R, const Eigen::Vector3d& centre, double w, const Measurement& m) const;
+  /// Fingers at seen contacts, or at a contact pair's side bounded by its last samples only, or
+  /// the palm in the hidden volume (a quarter of their samples).
+  bool inHiddenVolume(const Prepared& pr, const Eigen::Matrix3d& R, const Eigen::Vector3d& centre, double w,
+                      const Measurement& m) const;
+  /// A finger (frame R, the middle of its inner face at `at`, closing towards -s y) in the
+  /// hidden volume: 4 of the 3 x 5 points of its mid-plane.
+  bool fingerHidden(const Eigen::Matrix3d& R, const Eigen::Vector3d& at, int s) const;
 
   const GraspGeneratorConfig& cfg_;
   const GripperGeometry& g_;
@@ -539,6 +544,7 @@ class GripperCheck {
   bool has_plane_;
   double noise_;
   const HiddenVolume& hidden_;
+  double leaf_;
   ContactSurfaceFit fit_;
   std::vector<double> ys_, inner_, palm_;
   std::vector<double> ext_;
@@ -633,7 +639,7 @@ CheckOutcome GripperCheck::evaluate(const Prepared& pr, double cphi, double sphi
   const double yc = 0.5 * (ymin + ymax);
   const Eigen::Vector3d centre = pr.c0 + R.col(1) * yc;
   if (collides(R, centre, yc, ymin, ymax, w, k)) return CheckOutcome::Collides;
-  if (inHiddenVolume(R, centre, w, *m)) return CheckOutcome::Hidden;
+  if (inHiddenVolume(pr, R, centre, w, *m)) return CheckOutcome::Hidden;
   *Rout = R;
   *c = centre;
   *width = w;
@@ -673,20 +679,28 @@ bool GripperCheck::collides(const Eigen::Matrix3d& R, const Eigen::Vector3d& cen
   return false;
 }
 
-bool GripperCheck::inHiddenVolume(const Eigen::Matrix3d& R, const Eigen::Vector3d& centre, double w,
-                                  const Measurement& m) const {
-  if (!hidden_.enabled()) return false;
+bool GripperCheck::fingerHidden(const Eigen::Matrix3d& R, const Eigen::Vector3d& at, int s) const {
   const double z1 = g_.finger_tip_depth, z0 = z1 - g_.finger_length;
-  // Each finger on 3 x 5 points of its mid-plane; a finger at an unseen contact is in the hidden
-  // volume by construction (it ranks lower, see supportedQuality).
+  int n = 0;
+  for (double x : {-0.4, 0.0, 0.4})
+    for (int j = 0; j < 5; ++j)
+      n += hidden_.hidden(at + R * Eigen::Vector3d(x * g_.finger_breadth, s * 0.5 * g_.finger_thickness,
+                                                   z0 + (z1 - z0) * j / 4.0));
+  return n >= 4;
+}
+
+bool GripperCheck::inHiddenVolume(const Prepared& pr, const Eigen::Matrix3d& R, const Eigen::Vector3d& centre,
+                                  double w, const Measurement& m) const {
+  if (!hidden_.enabled()) return false;
+  const double z0 = g_.finger_tip_depth - g_.finger_length;
+  // Each finger on its mid-plane. A finger at an unseen contact of a single-contact or
+  // footprint hypothesis is in the hidden volume by construction (that side is bounded by the
+  // object's extent or a fitted completion; it ranks lower, see supportedQuality); a contact
+  // pair's side bounded by its last samples only is not, where the view hides the finger.
   for (int i = 0; i < 2; ++i) {
-    if (!m.side[i].seen) continue;
-    const double y = (i == 0 ? -1.0 : 1.0) * (0.5 * w + 0.5 * g_.finger_thickness);
-    int n = 0;
-    for (double x : {-0.4, 0.0, 0.4})
-      for (int j = 0; j < 5; ++j)
-        n += hidden_.hidden(centre + R * Eigen::Vector3d(x * g_.finger_breadth, y, z0 + (z1 - z0) * j / 4.0));
-    if (n >= 4) return true;
+    const int s = i == 0 ? -1 : 1;
+    const bool checked = m.side[i].seen || (pr.pair && !pr.hint);
+    if (checked && fingerHidden(R, centre + R.col(1) * (s * 0.5 * w), s)) return true;
   }
   // The palm's face (behind the fingers) on 3 x 3 points.
   int n = 0;
@@ -1308,7 +1322,8 @@ class GraspSearch {
   std::vector<Eigen::Vector3d> nbrs_;
   std::vector<SurfacePoint> surf_;  ///< the object's points (with normals) gathered with nbrs_
   std::array<int, kOutcomes> outcomes_{};  ///< checkCandidates' evaluations per CheckOutcome
-  std::array<double, kOutcomes> weights_{};  ///< ... the sum of their scores before the checks
+  /// The outcome of the first pose checked (best first) that held enough of the object.
+  CheckOutcome first_refusal_ = CheckOutcome::TooFewPoints;
 };
 
 void GraspSearch::score(Candidate& cd) const {
@@ -1447,20 +1462,13 @@ std::string GraspSearch::tooWide() const {
 }
 
 GraspFailure GraspSearch::refusal(std::string* reason) const {
-  // The kind: what refused the most promising poses (the refusals weighted by the poses'
-  // scores before the checks).
-  static const std::pair<CheckOutcome, GraspFailure> kinds[] = {{CheckOutcome::TooWide, GraspFailure::TooWide},
-                                                                {CheckOutcome::Friction, GraspFailure::Friction},
-                                                                {CheckOutcome::Collides, GraspFailure::Collides},
-                                                                {CheckOutcome::Hidden, GraspFailure::HiddenVolume}};
+  // The kind: what refused the most promising pose (the best score before the checks) that
+  // held enough of the object between its fingers.
   auto count = [&](CheckOutcome o) { return outcomes_[static_cast<std::size_t>(o)]; };
-  GraspFailure most = GraspFailure::Collides;
-  double best = 0.0;
-  for (const auto& k : kinds)
-    if (weights_[static_cast<std::size_t>(k.first)] > best) {
-      best = weights_[static_cast<std::size_t>(k.first)];
-      most = k.second;
-    }
+  const GraspFailure most = first_refusal_ == CheckOutcome::TooWide    ? GraspFailure::TooWide
+                            : first_refusal_ == CheckOutcome::Friction ? GraspFailure::Friction
+                            : first_refusal_ == CheckOutcome::Hidden   ? GraspFailure::HiddenVolume
+                                                                       : GraspFailure::Collides;
   int total = 0;
   for (int n : outcomes_) total += n;
   std::ostringstream os;
@@ -1520,16 +1528,16 @@ std::vector<Candidate> GraspSearch::checkCandidates(const std::vector<Hyp>& hyps
       // Neighbourhood of the grasp for the collision checks (shared by all approaches).
       gather(hp.c0, check_radius_);
       it = prepared.emplace(pd.hyp, GripperCheck::Prepared()).first;
-      check_.prepare(hp.c0, hp.y, hp.u, nbrs_, surf_, hp.single ? po_.cloud.get() : nullptr, hp.hint, &it->second);
+      check_.prepare(hp.c0, hp.y, hp.u, nbrs_, surf_, *po_.cloud, hp.single, hp.hint, &it->second);
     }
     const double phi = 2.0 * M_PI * pd.step / cfg_.approach_steps;
     Candidate cd;
     const CheckOutcome o = check_.evaluate(it->second, std::cos(phi), std::sin(phi), &cd.R, &cd.c, &cd.width, &cd.m);
     ++outcomes_[static_cast<std::size_t>(o)];
-    weights_[static_cast<std::size_t>(o)] += pd.prescore;
+    if (first_refusal_ == CheckOutcome::TooFewPoints) first_refusal_ = o;
     if (o != CheckOutcome::Pass) continue;
     cd.q = hp.q;
-    cd.antipodal = supportedQuality(hp.q, cd.m, cfg_.single_contact_weight);
+    cd.antipodal = supportedQuality(hp.q, cd.m, cfg_.single_contact_weight, hp.hint.valid);
     cd.single = hp.single;
     cd.hint = hp.hint;
     cands.push_back(cd);
@@ -1576,10 +1584,10 @@ void GraspSearch::gather(const Eigen::Vector3d& centre, double radius) {
 
 bool GraspSearch::checkAt(const Candidate& cd, const Eigen::Vector3d& c0, Candidate* out) {
   GripperCheck::Prepared pr;
-  check_.prepare(c0, cd.R.col(1), cd.R.col(2), nbrs_, surf_, cd.single ? po_.cloud.get() : nullptr, cd.hint, &pr);
+  check_.prepare(c0, cd.R.col(1), cd.R.col(2), nbrs_, surf_, *po_.cloud, cd.single, cd.hint, &pr);
   *out = cd;
   if (check_.evaluate(pr, 1.0, 0.0, &out->R, &out->c, &out->width, &out->m) != CheckOutcome::Pass) return false;
-  out->antipodal = supportedQuality(cd.q, out->m, cfg_.single_contact_weight);
+  out->antipodal = supportedQuality(cd.q, out->m, cfg_.single_contact_weight, cd.hint.valid);
   return true;
 }
 
