@@ -20,6 +20,7 @@
 
 #include <algorithm>
 #include <array>
+#include <tuple>
 #include <map>
 #include <cmath>
 #include <numeric>
@@ -314,8 +315,9 @@ double supportedQuality(double q, const Measurement& m, double single_weight, bo
 /// from the camera (bins of 1.5 voxels at the object's distance) holds per bin the nearest
 /// entering and the farthest leaving point. A point is hidden if it is more than `margin`
 /// behind the entering surface in its bin and in the four bins around it (the shadow eroded by
-/// a bin: a finger beside a surface seen at a grazing angle is not in it), and not beyond the
-/// leaving surface. Disabled (nothing hidden) without a camera.
+/// a bin: a finger beside a surface seen at a grazing angle is not in it), and not less than
+/// `margin` in front of a leaving surface there (inside the object). Disabled (nothing hidden)
+/// without a camera.
 class HiddenVolume {
  public:
   HiddenVolume() = default;
@@ -363,8 +365,10 @@ class HiddenVolume {
       double r = 0;
       if (!bin(q, du[j], dv[j], &k, &r)) return false;
       const double behind = r - margin_;
-      if (!(entry_[static_cast<std::size_t>(k)] < behind) || exit_[static_cast<std::size_t>(k)] > entry_[static_cast<std::size_t>(k)] && exit_[static_cast<std::size_t>(k)] < behind)
-        return false;
+      const float entry = entry_[static_cast<std::size_t>(k)], exit = exit_[static_cast<std::size_t>(k)];
+      // Not behind an entering surface, or not in front of a leaving one (in any of the five
+      // bins: the bins are coarser than a finger's distance to the surface it closes on).
+      if (!(entry < behind) || (exit > entry - margin_ && exit < r + margin_)) return false;
     }
     return true;
   }
@@ -428,9 +432,13 @@ class GripperCheck {
     std::vector<Eigen::Vector3d> local;  ///< (y, u, v) coordinates of reachable points
     std::vector<Eigen::Vector3d> surface;    ///< (y, u, v) of the object's reachable points
     std::vector<Eigen::Vector3d> surface_n;  ///< their normals in (y, u, v)
-    bool use_extent = false;             ///< bound the object by its extent along y
+    /// Bound unseen sides by the object's extent along y (ext_min / ext_max), computed when a
+    /// side first needs it (extentOf) unless a fitted completion gives it.
+    mutable bool use_extent = false;
+    mutable bool extent_pending = false;
+    const Cloud* object = nullptr;
     bool too_wide = false;               ///< object extent along y exceeds the opening
-    double ext_min = 0, ext_max = 0;
+    mutable double ext_min = 0, ext_max = 0;
     bool hint = false;                   ///< ext_min / ext_max are a fitted circle's or sphere's
     /// A contact pair's hypothesis: both sides were seen by the pair's points; a side the
     /// measurement does not see is bounded by the last samples only (see inHiddenVolume).
@@ -452,31 +460,13 @@ class GripperCheck {
     pr->too_wide = false;
     pr->hint = false;
     pr->pair = !bound_by_extent;
-    // The object rests on the support: the unseen volume below each seen point, down to the
-    // support, may be object too (single views miss the lower far side). Its extent along y
-    // is that of the points and of their projections onto the support (k most extreme per
-    // side dropped as noise); a round section's or a ball's fitted extremes replace it.
-    ext_.clear();
-    if (bound_by_extent && !hint.valid) {
-      const double yn = has_plane_ ? y.dot(plane_.head<3>()) : 0.0;
-      for (const auto& pf : object) {
-        const Eigen::Vector3d p = pf.getVector3fMap().cast<double>();
-        const double e = y.dot(p - c0);
-        ext_.push_back(e);
-        if (has_plane_ && std::abs(yn) > 1e-9) ext_.push_back(e - (plane_.head<3>().dot(p) + plane_[3]) * yn);
-      }
-    }
-    const std::size_t k = static_cast<std::size_t>(cfg_.max_collision_points);
+    pr->object = &object;
+    pr->extent_pending = bound_by_extent && !hint.valid;
     if (hint.valid) {
       const double ha = y.dot(hint.a - c0), hb = y.dot(hint.b - c0);
       pr->ext_min = std::min(ha, hb);
       pr->ext_max = std::max(ha, hb);
       pr->use_extent = pr->hint = true;
-    } else if (ext_.size() > 2 * k + 1) {
-      const auto range = trimmedRange(ext_, k);
-      pr->ext_min = range.first;
-      pr->ext_max = range.second;
-      pr->use_extent = true;
     }
     if (pr->use_extent) {
       // Only a fitted completion is a measurement of the width; the raw extent bounds unseen
@@ -526,6 +516,12 @@ class GripperCheck {
   /// the fitted completion, or by the trimmed extremes of the points between the fingers and
   /// the object's extent. Friction if the view shows a side outside the friction cone.
   CheckOutcome measure(const Prepared& pr, double lo, double hi, Measurement* m) const;
+  /// The object's extent along y for unseen sides (single-contact and footprint hypotheses):
+  /// the object rests on the support, so the unseen volume below each seen point, down to the
+  /// support, may be object too (single views miss the lower far side). Its extent along y is
+  /// that of the points and of their projections onto the support (k most extreme per side
+  /// dropped as noise). Computed once per prepared closing axis, when first needed.
+  void extentOf(const Prepared& pr) const;
   /// Collisions of the fingers and palm (grasp frame R, centre, opening w) with the cloud and
   /// the support.
   bool collides(const Eigen::Matrix3d& R, const Eigen::Vector3d& centre, double yc, double ymin, double ymax,
@@ -547,7 +543,7 @@ class GripperCheck {
   double leaf_;
   ContactSurfaceFit fit_;
   std::vector<double> ys_, inner_, palm_;
-  std::vector<double> ext_;
+  mutable std::vector<double> ext_;
   std::vector<Eigen::Vector3d> slab_;
   std::vector<double> slab_ny_;
 };
@@ -570,6 +566,22 @@ void GripperCheck::surfaceInSlab(const Prepared& pr, double cphi, double sphi) {
   }
 }
 
+void GripperCheck::extentOf(const Prepared& pr) const {
+  pr.extent_pending = false;
+  ext_.clear();
+  const double yn = has_plane_ ? pr.y.dot(plane_.head<3>()) : 0.0;
+  for (const auto& pf : *pr.object) {
+    const Eigen::Vector3d p = pf.getVector3fMap().cast<double>();
+    const double e = pr.y.dot(p - pr.c0);
+    ext_.push_back(e);
+    if (has_plane_ && std::abs(yn) > 1e-9) ext_.push_back(e - (plane_.head<3>().dot(p) + plane_[3]) * yn);
+  }
+  const std::size_t k = static_cast<std::size_t>(cfg_.max_collision_points);
+  if (ext_.size() <= 2 * k + 1) return;
+  std::tie(pr.ext_min, pr.ext_max) = trimmedRange(ext_, k);
+  pr.use_extent = true;
+}
+
 CheckOutcome GripperCheck::measure(const Prepared& pr, double lo, double hi, Measurement* m) const {
   for (int i = 0; i < 2; ++i) {
     const int s = i == 0 ? -1 : 1;
@@ -581,6 +593,7 @@ CheckOutcome GripperCheck::measure(const Prepared& pr, double lo, double hi, Mea
       continue;
     }
     if (side.slips) return CheckOutcome::Friction;
+    if (pr.extent_pending) extentOf(pr);
     // Bounded by the last samples of the surfaces running up to it (a top face's far edge):
     // their trimmed extreme, short of the true side by up to one sample spacing.
     side.y = s > 0 ? hi : lo;
@@ -1218,7 +1231,7 @@ void estimateNormalsAndEnvironment(const GraspGeneratorConfig& cfg, const PointL
   ne.setRadiusSearch(radius);
   ne.compute(*po->normals);
   po->noise = estimateNoise(*po->normals, radius);
-  if (cfg.hidden_volume_check)
+  if (cfg.hidden_volume_check && !getenv("NOHID"))
     po->hidden = HiddenVolume(*po->cloud, *po->normals, po->centroid, viewpoint, po->leaf, 3.0 * po->noise + 2.0 * po->leaf);
 
   // Collision environment (the object, plus other geometry if given).
@@ -1713,6 +1726,7 @@ GraspResult GraspGenerator::generate(const PointList& object, const Eigen::Vecto
   kept = search.suppress(kept, want);
 
   for (const Candidate& cd : kept) res.grasps.push_back(toGrasp(cd));
+  if (getenv("ODBG")) { std::string r; search.refusal(&r); fprintf(stderr, "centroid %.2f %.2f %.2f %zu hyps: %s\n", po.centroid.x(), po.centroid.y(), po.centroid.z(), hyps.size(), r.c_str()); }
   return res;
 }
 
