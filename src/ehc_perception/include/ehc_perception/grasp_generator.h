@@ -62,6 +62,23 @@
 // parallel to the support; the gripper opens 0.07 m and needs C m clearance each side
 // (objects up to X m)" and the failure GraspFailure::TooWide.
 //
+// Slanted contacts: a side without a contact patch in the friction cone whose outermost points
+// face the finger within slanted_contact_deg (a face tilted from the closing axis), or whose
+// fitted surface's normal at the contact is outside the cone, is a seen contact that slips: the
+// pose is refused (friction). A face running along the closing axis (a top face up to its
+// unseen far edge) leaves the side unseen.
+//
+// Hidden volume (hidden_volume_check; the viewpoint given to generate is the camera's origin):
+// along the rays from the camera, the space behind the object's points facing the camera and
+// not in front of a point facing away (clouds seen from several sides). A finger at a seen
+// contact, or at a contact pair's side bounded only by its last samples, and the palm's face
+// must stay out of it (3 x 5 and 3 x 3 samples, a quarter tolerated); a finger at an unseen
+// side of a single-contact or footprint hypothesis is in it by construction and ranks lower.
+//
+// No grasp: the failure is what refused the best-ranked pose that held enough of the object
+// (too wide, friction, collides, hidden volume), the reason counts every check's refusals; an
+// object whose footprint breaks the margin rule is too wide, with the sentence below.
+//
 // Grasp frame: origin between the fingertips at the grasp centre, z = approach direction
 // (into the object), y = finger closing direction, x = y cross z.
 // All geometry is in the cloud's frame; `up` (config) is the gravity-up direction there.

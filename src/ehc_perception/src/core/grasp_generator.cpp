@@ -609,7 +609,10 @@ CheckOutcome GripperCheck::evaluate(const Prepared& pr, double cphi, double sphi
   const double z1 = g_.finger_tip_depth, z0 = z1 - g_.finger_length;
   const double zp = z0 - g_.palm_height;
   const double W = g_.max_width, t = g_.finger_thickness;
-  if (pr.too_wide) return CheckOutcome::TooWide;
+  if (pr.too_wide) {
+    m->width = pr.ext_max - pr.ext_min;
+    return CheckOutcome::TooWide;
+  }
   ys_.clear();
   inner_.clear();
   palm_.clear();
@@ -648,7 +651,7 @@ CheckOutcome GripperCheck::evaluate(const Prepared& pr, double cphi, double sphi
   if (measured != CheckOutcome::Pass) return measured;
   const double ymin = m->side[0].y, ymax = m->side[1].y;
   const double w = ymax - ymin + 2.0 * g_.clearance;
-  if (w > W) return CheckOutcome::TooWide;
+  if (w > W) return CheckOutcome::TooWide;  // m->width: the measured width
   const double yc = 0.5 * (ymin + ymax);
   const Eigen::Vector3d centre = pr.c0 + R.col(1) * yc;
   if (collides(R, centre, yc, ymin, ymax, w, k)) return CheckOutcome::Collides;
@@ -1231,7 +1234,7 @@ void estimateNormalsAndEnvironment(const GraspGeneratorConfig& cfg, const PointL
   ne.setRadiusSearch(radius);
   ne.compute(*po->normals);
   po->noise = estimateNoise(*po->normals, radius);
-  if (cfg.hidden_volume_check && !getenv("NOHID"))
+  if (cfg.hidden_volume_check)
     po->hidden = HiddenVolume(*po->cloud, *po->normals, po->centroid, viewpoint, po->leaf, 3.0 * po->noise + 2.0 * po->leaf);
 
   // Collision environment (the object, plus other geometry if given).
@@ -1337,6 +1340,7 @@ class GraspSearch {
   std::array<int, kOutcomes> outcomes_{};  ///< checkCandidates' evaluations per CheckOutcome
   /// The outcome of the first pose checked (best first) that held enough of the object.
   CheckOutcome first_refusal_ = CheckOutcome::TooFewPoints;
+  double first_width_ = 0.0;  ///< its measured width
 };
 
 void GraspSearch::score(Candidate& cd) const {
@@ -1485,6 +1489,9 @@ GraspFailure GraspSearch::refusal(std::string* reason) const {
   int total = 0;
   for (int n : outcomes_) total += n;
   std::ostringstream os;
+  if (most == GraspFailure::TooWide)
+    os << "too wide: the object measures " << num(first_width_) << " m across the best-ranked closing axis; the gripper opens "
+       << num(g_.max_width) << " m and needs " << num(g_.clearance) << " m clearance each side; ";
   os << "no grasp fits: of " << total << " gripper poses checked, " << count(CheckOutcome::TooFewPoints)
      << " hold too little of the object, " << count(CheckOutcome::TooWide) << " need more than the " << g_.max_width
      << " m opening, " << count(CheckOutcome::Friction) << " touch a seen surface outside the friction cone (mu "
@@ -1547,7 +1554,10 @@ std::vector<Candidate> GraspSearch::checkCandidates(const std::vector<Hyp>& hyps
     Candidate cd;
     const CheckOutcome o = check_.evaluate(it->second, std::cos(phi), std::sin(phi), &cd.R, &cd.c, &cd.width, &cd.m);
     ++outcomes_[static_cast<std::size_t>(o)];
-    if (first_refusal_ == CheckOutcome::TooFewPoints) first_refusal_ = o;
+    if (first_refusal_ == CheckOutcome::TooFewPoints) {
+      first_refusal_ = o;
+      first_width_ = cd.m.width;
+    }
     if (o != CheckOutcome::Pass) continue;
     cd.q = hp.q;
     cd.antipodal = supportedQuality(hp.q, cd.m, cfg_.single_contact_weight, hp.hint.valid);
@@ -1702,8 +1712,11 @@ GraspResult GraspGenerator::generate(const PointList& object, const Eigen::Vecto
   if (cands.empty()) {
     res.failure = search.refusal(&res.reason);
     // Too wide: the margin rule's reason with the object's narrowest footprint, if it breaks it.
-    const std::string wide = res.failure == GraspFailure::TooWide ? search.tooWide() : "";
-    if (!wide.empty()) res.reason = wide + "; " + res.reason;
+    const std::string wide = search.tooWide();
+    if (!wide.empty()) {
+      res.reason = wide + "; " + res.reason;
+      res.failure = GraspFailure::TooWide;
+    }
     if (any_pair || res.failure != GraspFailure::Collides) return res;
     res.failure = GraspFailure::NoAntipodalPair;
     res.reason = "no antipodal contact pair within the gripper opening (" + num(g.max_width) +
@@ -1726,7 +1739,6 @@ GraspResult GraspGenerator::generate(const PointList& object, const Eigen::Vecto
   kept = search.suppress(kept, want);
 
   for (const Candidate& cd : kept) res.grasps.push_back(toGrasp(cd));
-  if (getenv("ODBG")) { std::string r; search.refusal(&r); fprintf(stderr, "centroid %.2f %.2f %.2f %zu hyps: %s\n", po.centroid.x(), po.centroid.y(), po.centroid.z(), hyps.size(), r.c_str()); }
   return res;
 }
 
