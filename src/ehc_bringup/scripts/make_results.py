@@ -566,6 +566,11 @@ def paper_number(text):
     return v if math.isfinite(v) else None
 
 
+# The methods held against NEO(e) on the paper's EHC claims: the paper's EHC, and ehc_place (EHC whose base
+# goal comes from its reachability map; not a paper method, judged by the same claim).
+PAIRED_METHODS = (("ehc", "EHC"), ("ehc_place", "EHC-place"))
+
+
 def sweep_claims(sweep):
     """(claim text, paper figure, [(level, mean, ci)], better, one-sided) of every paper claim the sweep
     measured; one-sided: EHC's (with MPBS) own figures and the EHC-against-baseline comparisons."""
@@ -578,8 +583,8 @@ def sweep_claims(sweep):
             claims.append((text, paper, [(c["level"], c["mean"], c["ci95"]) for c in mine], mine[0]["better"],
                            method == "ehc"))
 
-    def pair_claim(text, paper, exp, metric, key):
-        mine = [p for p in paired if p["experiment"] == exp and p["metric"] == metric]
+    def pair_claim(text, paper, exp, metric, key, method="ehc"):
+        mine = [p for p in paired if p["experiment"] == exp and p["metric"] == metric and p.get("a", "ehc") == method]
         if mine and paper is not None:
             claims.append((text, paper, [(p["level"], p[key], p[key + "_ci95"]) for p in mine], mine[0]["better"], True))
 
@@ -589,15 +594,19 @@ def sweep_claims(sweep):
             cell_claim("Table II %s time (s), %s" % (p["name"], proto), paper_number(p["time"]), exp, m, "time_s")
             cell_claim("Table II %s failures /500, %s" % (p["name"], proto), paper_number(p["failed"]), exp, m,
                        "failures_per_500")
-        pair_claim("Table II EHC / NEO(e) time, %s" % proto,
-                   paper_number(t2["ehc"]["time"]) / paper_number(t2["neo_e"]["time"]), exp, "time_s", "ratio")
-        pair_claim("Table II EHC - NEO(e) failures /500, %s" % proto,
-                   paper_number(t2["ehc"]["failed"]) - paper_number(t2["neo_e"]["failed"]), exp, "failures_per_500", "diff")
+        for m, name in PAIRED_METHODS:
+            pair_claim("Table II %s / NEO(e) time, %s" % (name, proto),
+                       paper_number(t2["ehc"]["time"]) / paper_number(t2["neo_e"]["time"]), exp, "time_s", "ratio", m)
+            pair_claim("Table II %s - NEO(e) failures /500, %s" % (name, proto),
+                       paper_number(t2["ehc"]["failed"]) - paper_number(t2["neo_e"]["failed"]), exp,
+                       "failures_per_500", "diff", m)
     for m, p in t3.items():
         cell_claim("Table III %s success (%%)" % p["name"], paper_number(p["success"]), "exp2", m, "success_pct")
         cell_claim("Table III %s time (s)" % p["name"], paper_number(p["time"]), "exp2", m, "time_s")
-    pair_claim("Table III EHC - NEO(e) success (points)",
-               paper_number(t3["ehc"]["success"]) - paper_number(t3["neo_e"]["success"]), "exp2", "success_pct", "diff")
+    for m, name in PAIRED_METHODS:
+        pair_claim("Table III %s - NEO(e) success (points)" % name,
+                   paper_number(t3["ehc"]["success"]) - paper_number(t3["neo_e"]["success"]), "exp2", "success_pct",
+                   "diff", m)
     for m, p in PAPER_TABLE4.items():
         for a in APPROACHES:
             cell_claim("Table IV %s TfM %s (%%)" % (p["name"], a), paper_number(p[a]), "exp3", m, "tfm_%s_pct" % a)

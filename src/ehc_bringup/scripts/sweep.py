@@ -57,16 +57,20 @@ from validate import run_all  # noqa: E402  (one home for the job runner)
 
 REPORTING_SEED_RANGE = (mr.TUNING_SEEDS_BELOW, 1000000)  # seed*1000 + set*10 + index fits 32 bits
 
-# experiment -> ehc_experiment command, extra arguments, methods, the paired (EHC, baseline), paper table
+# experiment -> ehc_experiment command, extra arguments, methods, the paired (method, baseline) comparisons,
+# paper table
 EXPERIMENTS = {
-    "exp1_sequence": {"command": "reach", "args": ["--protocol", "sequence"], "methods": ("neo_c", "neo_e", "ehc"),
-                      "pair": ("ehc", "neo_e"), "table": "Table II", "title": "Exp-1 random reaching, back to back"},
-    "exp1_reset": {"command": "reach", "args": ["--protocol", "reset"], "methods": ("neo_c", "neo_e", "ehc"),
-                   "pair": ("ehc", "neo_e"), "table": "Table II", "title": "Exp-1 random reaching, each from the ready pose"},
-    "exp2": {"command": "grasp", "args": [], "methods": ("tsmm", "neo_c", "neo_e", "ehc"), "pair": ("ehc", "neo_e"),
+    "exp1_sequence": {"command": "reach", "args": ["--protocol", "sequence"], "methods": ("neo_c", "neo_e", "ehc", "ehc_place"),
+                      "pairs": (("ehc", "neo_e"), ("ehc_place", "neo_e")), "table": "Table II",
+                      "title": "Exp-1 random reaching, back to back"},
+    "exp1_reset": {"command": "reach", "args": ["--protocol", "reset"], "methods": ("neo_c", "neo_e", "ehc", "ehc_place"),
+                   "pairs": (("ehc", "neo_e"), ("ehc_place", "neo_e")), "table": "Table II",
+                   "title": "Exp-1 random reaching, each from the ready pose"},
+    "exp2": {"command": "grasp", "args": [], "methods": ("tsmm", "neo_c", "neo_e", "ehc", "ehc_place"),
+             "pairs": (("ehc", "neo_e"), ("ehc_place", "neo_e")),
              "table": "Table III", "title": "Exp-2 three objects in sequence"},
     "exp3": {"command": "poses", "args": [], "methods": ("neo_nompbs", "ehc_nompbs", "ehc"),
-             "pair": ("ehc", "neo_nompbs"), "table": "Table IV", "title": "Exp-3 grasp orientations (TfM)"},
+             "pairs": (("ehc", "neo_nompbs"),), "table": "Table IV", "title": "Exp-3 grasp orientations (TfM)"},
 }
 
 
@@ -282,8 +286,9 @@ def experiment_stats(plan, exp, level, folders):
                                      plan["bootstrap_seed"])
             cells.append({"experiment": exp, "method": m, "level": level, "metric": metric, "better": better,
                           "mean": point, "ci95": ci_list(ci), "sets": len(keys), "trials": len(trials[m])})
-        a, b = spec["pair"]
-        if a in sums and b in sums:
+        for a, b in spec["pairs"]:
+            if a not in sums or b not in sums:
+                continue
             keys = sorted(sums[a])
             if keys != sorted(sums[b]):
                 raise SweepError("%s level %s: %s and %s ran different sets" % (exp, level_text(level), a, b))
@@ -343,7 +348,9 @@ def write_markdown(out, report):
                                  "" if plan["imprecision_flag"] else " (ehc_experiment without --base-imprecision)"),
              "- mean [95 %% CI]: percentile bootstrap over the sets (seed x set), %d resamples, bootstrap seed %d"
              % (mr.BOOTSTRAP_RESAMPLES, plan["bootstrap_seed"]),
-             "- CPU time of the jobs: %.0f s (user + sys)" % report["cpu_s"]]
+             "- CPU time of the jobs: %.0f s (user + sys)%s" % (report["cpu_s"], (
+                 ", %d resumed run(s) without a record of theirs" % report["cpu_unrecorded"])
+                 if report.get("cpu_unrecorded") else "")]
     for exp in plan["experiments"]:
         metrics = [m[0] for m in METRICS[EXPERIMENTS[exp]["command"]]]
         lines += ["", "## %s (%s)" % (EXPERIMENTS[exp]["title"], exp), "",
@@ -353,10 +360,12 @@ def write_markdown(out, report):
                 mine = {c["metric"]: c for c in cells if c["experiment"] == exp and c["method"] == m and c["level"] == lv}
                 lines.append("| %s | %s | %s | %d |" % (m, level_text(lv), " | ".join(
                     fmt(mine[k]["mean"], mine[k]["ci95"]) for k in metrics), mine[metrics[0]]["sets"]))
-        mine = [p for p in paired if p["experiment"] == exp]
-        if mine:
+        for a, b in EXPERIMENTS[exp]["pairs"]:
+            mine = [p for p in paired if p["experiment"] == exp and p["a"] == a and p["b"] == b]
+            if not mine:
+                continue
             lines += ["", "Paired on the same sets:", "", "| Level | Metric | %s - %s [95 %% CI] | %s / %s [95 %% CI] |"
-                      % (mine[0]["a"], mine[0]["b"], mine[0]["a"], mine[0]["b"]), "|---|---|---|---|"]
+                      % (a, b, a, b), "|---|---|---|---|"]
             lines += ["| %s | %s | %s | %s |" % (level_text(p["level"]), p["metric"], fmt(p["diff"], p["diff_ci95"]),
                                                  fmt(p["ratio"], p["ratio_ci95"], 3)) for p in mine]
         lines += ["", "![%s](%s.png)" % (exp, exp)]
@@ -403,7 +412,8 @@ def write_report(out, plan, manifests, folders):
               "bootstrap_seed": plan["bootstrap_seed"], "bootstrap_resamples": mr.BOOTSTRAP_RESAMPLES,
               "commands": [m["command"] for m in manifests], "code_version": manifests[0]["code_version"],
               "machine": "%s, %s core(s)" % (manifests[0]["machine"]["cpu"], manifests[0]["machine"]["cores"]),
-              "cpu_s": round(sum(j["cpu_s"] for m in manifests for j in m["jobs"]), 1),
+              "cpu_s": round(sum(j["cpu_s"] or 0.0 for m in manifests for j in m["jobs"]), 1),
+              "cpu_unrecorded": sum(j["cpu_s"] is None for m in manifests for j in m["jobs"]),
               "wall_s": round(sum(m["wall_s"] for m in manifests), 1), "cells": cells, "paired": paired}
     os.makedirs(out, exist_ok=True)
     with open(os.path.join(out, "sweep.json"), "w") as f:
@@ -435,6 +445,8 @@ def parse_run_args(argv):
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--shard", default="1/1")
     ap.add_argument("--devel", default=os.path.join(mr.ROOT, "devel"))
+    ap.add_argument("--resume", action="store_true",
+                    help="keep the runs of an earlier, interrupted run into --out that finished (same command)")
     a = ap.parse_args(argv)
     if a.jobs < 1 or a.seed_count < 1:
         ap.error("--jobs and --seed-count must be >= 1")
@@ -461,15 +473,17 @@ def main_run(argv):
         j["out"] = os.path.join(a.out, j["id"])
         j["cmd"] = job_command(plan, a.exe, j, j["out"])
     t0 = time.time()
-    run_all(mine, a.jobs, "sweep", lambda j: j["id"][len("runs/"):])
+    run_all(mine, a.jobs, "sweep", lambda j: j["id"][len("runs/"):], resume=a.resume)
+    versions = sorted({j["code_version"] for j in mine})
     manifest = {"plan": plan, "shard": [k, n], "command": " ".join([mr.rel(sys.argv[0])] + sys.argv[1:]),
-                "code_version": mr.code_version(), "machine": mr.machine(), "finished": mr.now(),
+                "code_version": " + ".join(versions), "machine": mr.machine(), "finished": mr.now(),
                 "wall_s": round(time.time() - t0, 1),
-                "jobs": [{"id": j["id"], "cpu_s": round(j["cpu_s"], 2), "cmd": " ".join(j["cmd"])} for j in mine]}
+                "jobs": [{"id": j["id"], "cpu_s": None if j["cpu_s"] is None else round(j["cpu_s"], 2),
+                          "cmd": " ".join(j["cmd"])} for j in mine]}
     with open(os.path.join(a.out, manifest_name(k, n)), "w") as f:
         json.dump(manifest, f, indent=1)
         f.write("\n")
-    cpu = sum(j["cpu_s"] for j in mine)
+    cpu = sum(j["cpu_s"] or 0.0 for j in mine)
     if n > 1:
         sys.stderr.write("[sweep] shard %d/%d done: %.0f s CPU; when every shard is done: sweep.py merge --out DIR %s ...\n"
                          % (k, n, cpu, a.out))

@@ -34,7 +34,7 @@ import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from make_results import ROOT, bootstrap, per_set  # noqa: E402  (one home for the statistics)
+from make_results import ROOT, bootstrap, code_version, per_set  # noqa: E402  (one home for the statistics)
 
 GENERATORS = ("paper", "any")
 METHODS = ("neo_c", "neo_e", "ehc")
@@ -106,13 +106,37 @@ def reach_command(a, robot, generator, methods, first_set, sets, out):
         (["--config", os.path.abspath(a.config)] if a.config else [])
 
 
-def run_all(runs, jobs, tag, label):
+DONE_FILE = "done.json"  # written into a run's folder when its command succeeded
+
+
+def finished_before(r):
+    """The record of an earlier successful run of exactly r["cmd"] into r["out"], or None."""
+    try:
+        with open(os.path.join(r["out"], DONE_FILE)) as f:
+            done = json.load(f)
+    except (OSError, ValueError):
+        return None
+    return done if done.get("cmd") == r["cmd"] else None
+
+
+def run_all(runs, jobs, tag, label, resume=False):
     """Runs the commands of `runs` (dicts with "cmd" and "out"), at most `jobs` at a time, each
-    one's output in its out/run.log. Sets run["cpu_s"] (the process's user + sys time, s);
-    progress, `label(run)` and ETA on stderr prefixed [tag]. A failed run raises RuntimeError
-    naming its command and log."""
+    one's output in its out/run.log and, on success, out/done.json (the command, its CPU time and
+    the code version). Sets run["cpu_s"] (the process's user + sys time, s); progress, `label(run)`
+    and ETA on stderr prefixed [tag]. A failed run raises RuntimeError naming its command and log.
+    resume: a run whose done.json records the same command is not run again (its record is kept;
+    its cpu_s may be None: not recorded)."""
     t0 = time.time()
     pending, active, done = list(runs), [], 0
+    if resume:
+        for r in [r for r in pending if finished_before(r)]:
+            rec = finished_before(r)
+            r["cpu_s"], r["code_version"] = rec["cpu_s"], rec.get("code_version", "?")
+            pending.remove(r)
+        sys.stderr.write("[%s] resuming: %d of %d runs done before, %d to run\n" % (
+            tag, len(runs) - len(pending), len(runs), len(pending)))
+        runs = pending[:]
+    version = code_version()
     try:
         while pending or active:
             while pending and len(active) < jobs:
@@ -133,6 +157,9 @@ def run_all(runs, jobs, tag, label):
                 if r["proc"].returncode != 0:
                     raise RuntimeError("%s failed (exit %d), see %s/run.log" % (
                         " ".join(r["cmd"]), r["proc"].returncode, r["out"]))
+                r["code_version"] = version
+                with open(os.path.join(r["out"], DONE_FILE), "w") as f:
+                    json.dump({"cmd": r["cmd"], "cpu_s": r["cpu_s"], "code_version": version}, f)
                 el = time.time() - t0
                 sys.stderr.write("[%s] %d/%d runs done (%s)  elapsed %.0f s  ETA %.0f s\n"
                                  % (tag, done, len(runs), label(r), el, el * (len(runs) - done) / done))

@@ -57,6 +57,11 @@ TEST(GraspExperiment, MethodNamesPerProtocol) {
   EXPECT_THROW(graspMethodNames(GraspProtocol::Poses, "tsmm"), std::invalid_argument);
   EXPECT_FALSE(graspMethod("ehc_nompbs").mpbs);
   EXPECT_TRUE(graspMethod("ehc").mpbs);
+  // ehc's placement mode: Exp-2 only, by name (not one of the paper's methods in "all").
+  EXPECT_EQ(graspMethodNames(GraspProtocol::Table, "ehc_place"), (std::vector<std::string>{"ehc_place"}));
+  EXPECT_THROW(graspMethodNames(GraspProtocol::Poses, "ehc_place"), std::invalid_argument);
+  EXPECT_EQ(graspMethod("ehc_place").mode, ehc_control::ControlMode::EhcPlace);
+  EXPECT_TRUE(graspMethod("ehc_place").mpbs);
 }
 
 TEST(GraspExperiment, APenetratingPairIsTheWorstCaseNotNone) {

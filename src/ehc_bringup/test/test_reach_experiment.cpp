@@ -63,6 +63,25 @@ TEST(ReachExperiment, DeterministicPerSeedAndSafe) {
     }
 }
 
+TEST(ReachExperiment, EhcPlaceReachesMostTargetsFromItsPlacements) {
+  // ehc_place closed loop (the placement's move, then ehc) on the same targets as above.
+  ExpSetup s = makeSetup(8);
+  std::vector<ReachTrial> trials;
+  const ReachSummary r = run(s, ehc_control::ControlMode::EhcPlace, &trials);
+  std::printf("ehc_place: %d of %d failed, mean %.2f s (targets seed 3000, noise seed 3)\n", r.failed, r.targets,
+              r.mean_time_s);
+  EXPECT_EQ(r.method, "ehc_place");
+  EXPECT_EQ(r.targets, 8);
+  EXPECT_LE(r.failed, 1);
+  EXPECT_EQ(r.qp_failures, 0);
+  EXPECT_GT(r.min_joint_limit_margin, 0.0);
+  for (const auto& t : trials)
+    if (t.reached) {
+      EXPECT_LT(t.final_position_error, 0.01);
+      EXPECT_LT(t.final_orientation_error, 2.0 * M_PI / 180.0);
+    }
+}
+
 TEST(ReachExperiment, ReachesMostTargetsWithTheBaseImprecisionAtLevelOne) {
   // The controller runs on the imprecise odometry (latency, minimum speed, drift, localisation
   // jumps); arrival is judged on the true pose. Same targets as above.

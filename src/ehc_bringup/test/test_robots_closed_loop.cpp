@@ -7,13 +7,15 @@
 //  - one Exp-2 set (the demo's table, three objects) with EHC: all three grasped, no robot-scene
 //    contact, no joint-limit violation, and the perceived link-obstacle distance never below the
 //    robot's smallest obstacle stop distance (minus one 5 mm tolerance).
-// Deterministic: seeded noise and lock-step sim time, no wall clock.
+// Seeded noise and lock-step sim time, no wall clock: the Exp-1 targets are drawn on every run
+// and printed (EHC_TEST_SEED=<seed> reruns them); the Exp-2 set uses seed 1.
 
 #include "ehc_bringup/grasp_experiment.h"
 #include "ehc_bringup/reach_experiment.h"
 #include "ehc_bringup/reach_targets.h"
 #include "ehc_common/config_node.h"
 #include "ehc_control/robot_config.h"
+#include "ehc_test/test_seed.h"
 
 #include <gtest/gtest.h>
 
@@ -37,7 +39,8 @@ ReachSummary runReach(const std::string& robot, ReachProtocol protocol, std::vec
       std::make_shared<const ehc_control::ReachabilityMap>(ehc_control::ReachabilityMap::load(rc.reachability_map_path)),
       ehc_control::loadEhcWeightingParams(cfg.child("weighting")));
   auto reachable = [&](const Eigen::Isometry3d& T) { return model->inverseKinematics(T, 1, 30); };
-  std::vector<Eigen::Isometry3d> targets = ReachTargetGenerator{}.generate(6, 4000, Eigen::Vector2d::Zero(), reachable);
+  std::vector<Eigen::Isometry3d> targets = ReachTargetGenerator{}.generate(
+      6, ehc_test::testSeed(robot + " Exp-1 " + toString(protocol)), Eigen::Vector2d::Zero(), reachable);
   if (protocol == ReachProtocol::Reset) targets = relativeToPrevious(targets);
   ReachExperiment exp(model, ctrl, weighting, params);
   return exp.run({targets}, 5, trials);
@@ -69,6 +72,9 @@ TEST_P(RobotClosedLoop, Exp2OneSetGraspsAllThreeObjectsKeepingTheStopDistance) {
   p.robot = GetParam();
   p.sets = 1;
   p.per_set = 1;
+  // A fixed seed: with drawn seeds an object fails now and then (a UR5e wrist held at its stop
+  // distance from the table top in GRASP; a RealMan target that stays out of the image), so
+  // drawn seeds are judged by the experiments, not by this test.
   p.seed = 1;
   p.jobs = 1;
   const GraspExperimentResult r = GraspExperiment(p, {"ehc"}).run();

@@ -1,5 +1,6 @@
 // jsonNumber: the project's one JSON number format (6 significant digits, non-finite -> null).
 #include "ehc_common/json.h"
+#include "ehc_test/test_seed.h"
 
 #include <gtest/gtest.h>
 
@@ -27,8 +28,7 @@ TEST(JsonNumber, NonFiniteIsNull) {
 }
 
 TEST(JsonNumber, ParsesBackToThePrintedSixDigitValue) {
-  const unsigned seed = std::random_device{}();
-  std::printf("seed %u\n", seed);
+  const unsigned seed = ehc_test::testSeed("JsonNumber");
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> mantissa(-10.0, 10.0);
   std::uniform_int_distribution<int> exponent(-8, 8);

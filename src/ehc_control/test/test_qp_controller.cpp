@@ -218,13 +218,43 @@ TEST(QpControllerParams, ValidationAndLoading) {
     loadQpControllerParams(cfg.child("controller"));
     FAIL();
   } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("field 'controller.mode' must be ehc, neo_e, neo_c or tsmm"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("field 'controller.mode' must be ehc, ehc_place, neo_e, neo_c or tsmm"),
+              std::string::npos)
         << e.what();
   }
   const auto ok = ConfigNode::loadFile(std::string(EHC_CONFIG_DIR) + "/control/controller.yaml", "Test");
   EXPECT_EQ(loadQpControllerParams(ok.child("controller")).mode, ControlMode::Ehc);
   EXPECT_THROW(EhcQpController(std::make_shared<const WholeBodyModel>(realmanWithoutStopDistances()), QpControllerParams{}, nullptr),
                std::invalid_argument);  // ehc needs a map
+  // ehc_place: loads, needs a map too.
+  const auto place = ConfigNode::loadString("controller: {mode: ehc_place}", "test.yaml", "Test");
+  QpControllerParams pp = loadQpControllerParams(place.child("controller"));
+  EXPECT_EQ(pp.mode, ControlMode::EhcPlace);
+  try {
+    EhcQpController(std::make_shared<const WholeBodyModel>(realmanWithoutStopDistances()), pp, nullptr);
+    FAIL() << "ehc_place without a map accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("mode ehc_place needs a reachability map"), std::string::npos) << e.what();
+  }
+  // The placement's parameters: out of range fails naming the file and the field.
+  const auto bad_place =
+      ConfigNode::loadString("controller: {recovery: {placement_handover_sig: 1.5}}", "place.yaml", "Test");
+  try {
+    loadQpControllerParams(bad_place.child("controller"));
+    FAIL() << "placement_handover_sig 1.5 accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("place.yaml"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("placement_handover_sig"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ControlMode, EveryModeNameRoundTrips) {
+  for (ControlMode m : {ControlMode::Ehc, ControlMode::EhcPlace, ControlMode::NeoE, ControlMode::NeoC, ControlMode::Tsmm})
+    EXPECT_EQ(controlModeFromString(toString(m)), m) << toString(m);
+  EXPECT_EQ(toString(ControlMode::EhcPlace), "ehc_place");
+  EXPECT_TRUE(usesWeighting(ControlMode::EhcPlace));
+  EXPECT_FALSE(usesWeighting(ControlMode::NeoE));
+  EXPECT_THROW(controlModeFromString("ehc_placement"), std::invalid_argument);
 }
 
 namespace {

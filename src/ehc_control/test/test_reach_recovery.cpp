@@ -6,6 +6,7 @@
 #include "ehc_control/qp_controller.h"
 #include "ehc_control/reach_recovery.h"
 #include "ehc_test/control_fixtures.h"
+#include "ehc_test/test_seed.h"
 
 #include <gtest/gtest.h>
 
@@ -30,9 +31,7 @@ TEST(ReachRecovery, AFarStallDrivesTheBaseToTheTargetWithTheArmAtReady) {
   const WholeBodyModel model(test::realmanConfig());
   const RobotConfig& rc = model.config();
   const QpControllerParams qp;
-  const char* given = std::getenv("EHC_TEST_SEED");  // reruns a printed seed
-  const unsigned seed = given ? static_cast<unsigned>(std::stoul(given)) : std::random_device{}();
-  std::cout << "[ReachRecovery test] seed " << seed << std::endl;
+  const unsigned seed = ehc_test::testSeed("ReachRecovery far stalls");
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> angle(-M_PI, M_PI), dist(3.0, 7.0), height(0.3, 1.0);
   for (int trial = 0; trial < 10; ++trial) {
@@ -87,4 +86,113 @@ TEST(ReachRecovery, AFarStallWithTheArmAtReadyStartsNothing) {
   const Eigen::Isometry3d target = test::approachPose(5.0, 0.0, 0.7, Eigen::Vector3d(1.0, 0.0, 0.0));
   for (double t = 0.0; t < 3.0 * qp.recovery.stall_window; t += kDt)
     EXPECT_EQ(rec.update(t, base, q, tcpOf(model, base, q), target), nullptr) << "t " << t;
+}
+
+// Placement (ehc_place): for a new target the recovery plans at once from starts ranked by the
+// reachability map (inverse reachability); the chosen base pose puts the target where the map
+// says the arm reaches it (R > 0 always; in r_td, R above the weighting's threshold, for many of
+// the targets whose height has r_td voxels at all: a joint margin comes first, and an approach
+// the arm cannot take with it at an r_td pose gets a pose outside), the chosen configuration has the TCP on the
+// target, and the move there ends at that configuration. Random targets from every direction
+// around random bases, admitted as Exp-1 admits them (whole-body IK inside the joint stops; seed printed).
+TEST(ReachRecovery, APlacementPutsTheTargetWhereTheMapSaysTheArmReachesIt) {
+  const WholeBodyModel model(test::realmanConfig());
+  const RobotConfig& rc = model.config();
+  const QpControllerParams qp;
+  const auto map = std::make_shared<const ReachabilityMap>(ReachabilityMap::load(rc.reachability_map_path));
+  const auto weighting = std::make_shared<const EhcWeighting>(map, EhcWeightingParams{});
+  const unsigned seed = ehc_test::testSeed("ReachRecovery placement");
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> angle(-M_PI, M_PI), dist(1.0, 5.0), height(0.3, 1.0), unit(-1.0, 1.0);
+  EhcWeight far;  // sig 0: the placement's move runs to its goal
+  const int kTrials = 12;
+  int placed = 0, with_rtd = 0, in_rtd = 0;
+  for (int trial = 0; trial < kTrials; ++trial) {
+    SCOPED_TRACE("trial " + std::to_string(trial) + ", seed " + std::to_string(seed));
+    ReachRecovery rec(model, qp.recovery, qp.joint_stop, qp.joint_influence);
+    rec.setPlacementMap(weighting);
+    test::KinematicSim sim;
+    sim.base = test::randomBase(rng);
+    sim.q = rc.arm_ready;
+    const double a = angle(rng), d = dist(rng);
+    Eigen::Vector3d approach(unit(rng), unit(rng), unit(rng));
+    if (approach.norm() < 1e-3) approach = Eigen::Vector3d::UnitX();
+    const Eigen::Isometry3d target = test::approachPose(sim.base.x() + d * std::cos(a), sim.base.y() + d * std::sin(a),
+                                                        height(rng), approach.normalized());
+    if (!model.inverseKinematics(target, seed + trial, 30, nullptr, nullptr, qp.joint_stop)) {
+      --trial;  // not a target of Exp-1: drawn again
+      continue;
+    }
+    // The starts: every bearing once, the best reachability first.
+    const std::vector<Eigen::Vector3d> starts = rec.placementStarts(target, sim.base);
+    ASSERT_EQ(static_cast<int>(starts.size()), qp.recovery.placement_bearings);
+    for (std::size_t i = 1; i < starts.size(); ++i)
+      EXPECT_GE(rec.placementReachability(target, starts[i - 1]), rec.placementReachability(target, starts[i]));
+    const double best_start = rec.placementReachability(target, starts.front());
+    // Planning over a few cycles, then the move.
+    const Eigen::VectorXd* ref = nullptr;
+    double t = 0.0;
+    for (; t < 2.0 && !ref; t += kDt) ref = rec.update(t, sim.base, sim.q, tcpOf(model, sim.base, sim.q), target, &far);
+    if (!ref) {  // no IK solution inside the joint stops (an approach the arm cannot take)
+      std::cout << "trial " << trial << ": no placement (" << rec.event() << ")\n";
+      continue;
+    }
+    ++placed;
+    EXPECT_NE(rec.event().find("placement: moving to base"), std::string::npos) << rec.event();
+    EXPECT_TRUE(rec.placing());
+    EXPECT_EQ(rec.attempts(), 0) << "a placement is not a stall's attempt";
+    const double goal_r = rec.placementReachability(target, rec.goalBase());
+    EXPECT_GT(goal_r, 0.0) << "the chosen base puts the target where the map has no reach";
+    if (best_start > weighting->params().reach_threshold) {
+      ++with_rtd;
+      in_rtd += goal_r > weighting->params().reach_threshold ? 1 : 0;
+    }
+    std::cout << "trial " << trial << ": R at the placement " << goal_r << ", best start " << best_start << "\n";
+    const Eigen::Isometry3d goal_tcp = tcpOf(model, rec.goalBase(), rec.goalArm());
+    EXPECT_LT((goal_tcp.translation() - target.translation()).norm(), 2e-3);
+    // Closed loop on the reference: the move ends at the placement with the TCP near the target.
+    const double start = t;
+    while (ref && t < start + 60.0) {
+      sim.step(model, *ref, kDt);
+      if (std::getenv("EHC_TRACE") && std::fmod(t - start, 0.5) < kDt)
+        std::cout << "t " << t - start << " base " << sim.base.transpose() << " goal " << rec.goalBase().transpose()
+                  << " ref " << ref->head(2).transpose() << "\n";
+      t += kDt;
+      ref = rec.update(t, sim.base, sim.q, tcpOf(model, sim.base, sim.q), target, &far);
+    }
+    EXPECT_EQ(ref, nullptr) << "the move did not end";
+    EXPECT_EQ(rec.event(), "recovery configuration reached");
+    EXPECT_FALSE(rec.placing());
+    EXPECT_LT((tcpOf(model, sim.base, sim.q).translation() - target.translation()).norm(), 0.15);
+  }
+  std::cout << placed << " of " << kTrials << " placed; in r_td " << in_rtd << " of " << with_rtd
+            << " whose height has r_td voxels" << std::endl;
+  EXPECT_GE(placed, kTrials - 1) << "too few targets placed";
+  // Margin before r_td (reach_recovery.h): r_td for many, not all (measured 55-100 % per run).
+  EXPECT_GE(3 * in_rtd, with_rtd) << "too few placements in r_td";
+}
+
+// Placement hands over to the pose task once sig(omega) reaches placement_handover_sig.
+TEST(ReachRecovery, APlacementHandsOverWhenSigReachesTheHandOverLevel) {
+  const WholeBodyModel model(test::realmanConfig());
+  const RobotConfig& rc = model.config();
+  const QpControllerParams qp;
+  const auto map = std::make_shared<const ReachabilityMap>(ReachabilityMap::load(rc.reachability_map_path));
+  ReachRecovery rec(model, qp.recovery, qp.joint_stop, qp.joint_influence);
+  rec.setPlacementMap(std::make_shared<const EhcWeighting>(map, EhcWeightingParams{}));
+  const Eigen::Vector3d base = Eigen::Vector3d::Zero();
+  const Eigen::VectorXd q = rc.arm_ready;
+  const Eigen::Isometry3d target = test::approachPose(3.0, 1.0, 0.7, Eigen::Vector3d(1.0, 0.0, -1.0));
+  EhcWeight w;
+  const Eigen::VectorXd* ref = nullptr;
+  double t = 0.0;
+  for (; t < 2.0 && !ref; t += kDt) ref = rec.update(t, base, q, tcpOf(model, base, q), target, &w);
+  ASSERT_NE(ref, nullptr) << rec.event();
+  w.sig = qp.recovery.placement_handover_sig;
+  EXPECT_EQ(rec.update(t, base, q, tcpOf(model, base, q), target, &w), nullptr);
+  EXPECT_NE(rec.event().find("handing over"), std::string::npos) << rec.event();
+  EXPECT_FALSE(rec.placing());
+  // Without a map a placement is refused with the class named.
+  ReachRecovery bare(model, qp.recovery, qp.joint_stop, qp.joint_influence);
+  EXPECT_THROW(bare.update(0.0, base, q, tcpOf(model, base, q), target, &w), std::invalid_argument);
 }

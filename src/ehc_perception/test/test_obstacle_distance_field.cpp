@@ -7,6 +7,7 @@
 #include "ehc_perception/obstacle_distance_field.h"
 #include "ehc_perception/octree_shape_distance.h"
 #include "ehc_test/perception_fixtures.h"
+#include "ehc_test/test_seed.h"
 
 #include <fcl/geometry/shape/box.h>
 #include <fcl/geometry/shape/cylinder.h>
@@ -438,8 +439,7 @@ bool expectSameAsFcl(const fcl::OcTree<double>& tree, const fcl::OcTree<double>&
 }  // namespace
 
 TEST(OctreeShapeDistance, EqualsFclDistanceBitForBit) {
-  const unsigned seed = std::random_device{}();
-  std::printf("seed %u\n", seed);
+  const unsigned seed = ehc_test::testSeed("OctreeShapeDistance against FCL");
   RandomQueries r(seed);
   int found = 0, queries = 0;
   for (int map = 0; map < 8; ++map) {
@@ -457,8 +457,7 @@ TEST(OctreeShapeDistance, EqualsFclDistanceBitForBit) {
 }
 
 TEST(OctreeShapeDistance, ExclusionZonesGiveTheAnswerOnTheCopyWithoutThem) {
-  const unsigned seed = std::random_device{}();
-  std::printf("seed %u\n", seed);
+  const unsigned seed = ehc_test::testSeed("OctreeShapeDistance exclusion zones");
   RandomQueries r(seed);
   int found = 0, queries = 0;
   for (int map = 0; map < 8; ++map) {

@@ -13,6 +13,7 @@
 // Methods: tsmm, neo_c, neo_e (MPBS off: the baselines' plain PBVS to the goal), ehc (MPBS on);
 //   Exp-3: neo_nompbs (neo_e, MPBS off), ehc_nompbs (ehc, MPBS off), ehc (MPBS on).
 
+#include "ehc_bringup/grasp_judge.h"
 #include "ehc_bringup/grasp_pipeline.h"
 #include "ehc_bringup/reach_experiment.h"
 #include "ehc_sim/object_library.h"
@@ -33,7 +34,7 @@ struct GraspMethod {
   ehc_control::ControlMode mode = ehc_control::ControlMode::Ehc;
   bool mpbs = true;
 };
-/// tsmm | neo_c | neo_e | ehc | neo_nompbs | ehc_nompbs; throws "[GraspExperiment] ..." otherwise.
+/// tsmm | neo_c | neo_e | ehc | ehc_place | neo_nompbs | ehc_nompbs; throws "[GraspExperiment] ..." otherwise.
 GraspMethod graspMethod(const std::string& name);
 /// The methods of a protocol ("all": every one, in the paper's table order).
 std::vector<std::string> graspMethodNames(GraspProtocol protocol, const std::string& method);
@@ -89,6 +90,47 @@ struct ObstacleExtreme {
   }
 };
 
+/// One object's attempt judged against the object's true mesh (GraspJudge), from what the
+/// pipeline recorded (GraspAttemptRecord): the grasp the sequencer chose and whether a valid
+/// grasp existed in the view it came from. The view (`view`): `grasp`, the one the chosen grasp's
+/// candidate set came from; without a chosen grasp from a candidate set, `last_seen`, the last
+/// depth view taken for the object's grasps in which its true centre was in the image; without
+/// one, `end`, the camera when the object's attempt ended. The view's camera gives the judge its
+/// view direction (the approach rule); the object stands where it was at the lock (at the end of
+/// the attempt for a grasp chosen but never locked; in the view without a chosen grasp).
+struct AttemptJudgement {
+  bool judged = false;         ///< false: not judged (no library object, or the run ended first)
+  std::string view;            ///< grasp | last_seen | end
+  bool chosen = false;         ///< a grasp was chosen (GraspAttemptRecord::chosen)
+  bool attempted = false;      ///< it was locked: the gripper went for it
+  GraspVerdict verdict = GraspVerdict::NotFinite;  ///< the chosen grasp's (chosen only)
+  /// The generator's candidate it came from, as generated (GraspAttemptRecord::candidate): the
+  /// verdict tells a generator's invalid grasp from one the selection's turn made invalid.
+  bool has_candidate = false;
+  GraspVerdict candidate_verdict = GraspVerdict::NotFinite;
+  /// A valid grasp exists in the view: the chosen grasp is valid, or the existence search
+  /// (GraspJudge::findValidGrasp, run only when it is not) finds one.
+  bool valid_exists = false;
+  GraspVerdict search_verdict = GraspVerdict::Valid;  ///< none exists: the search's commonest verdict
+  /// Grasps the search judged (0: no closing line through the mesh fits the opening; 0 also
+  /// when it did not search).
+  int search_candidates = 0;
+  bool attemptValid() const { return attempted && verdict == GraspVerdict::Valid; }
+  /// One token for the bar (a valid grasp exists -> grasped and lifted; none -> not attempted):
+  /// grasped; valid_grasp_failed (a valid grasp attempted, not lifted: the cause column says
+  /// why); invalid_grasp:<verdict> (attempted); not_locked:<verdict> (chosen, the object failed
+  /// before the lock); no_grasp_chosen; and where none exists attempted_where_none:<verdict>,
+  /// grasped_where_none (the judge is stricter than the simulator) or none_exists:<search verdict>
+/// (none_exists:wider_than_opening when the search found no closing line that fits the opening).
+  std::string reason(bool success) const;
+};
+
+/// Judges `record` (world frame, ground truth) against `mesh` (the object's surface in its body
+/// frame) standing on the top of `scene`'s table under it (the floor if none); the existence
+/// search seeded with `seed`. Not judged (judged false) when the record has no view at all.
+AttemptJudgement judgeAttempt(const GraspAttemptRecord& record, const ehc_sim::TriangleMesh& mesh, const ehc_sim::SceneConfig& scene,
+                              const ehc_perception::GripperGeometry& gripper, const GraspJudgeParams& params, unsigned seed);
+
 /// One grasp (one row of trials.csv).
 struct GraspTrial {
   std::string method;
@@ -122,6 +164,21 @@ struct GraspTrial {
   /// Ground truth at the lock: the angle of the grasp's finger closing axis (y) from the nearest
   /// axis of the object's frame (a box's face normals), deg; NaN: no lock.
   double lock_closing_axis_error_deg = std::numeric_limits<double>::quiet_NaN();
+  /// Everyday objects (library_split): the attempt judged against the object's true mesh.
+  AttemptJudgement judge;
+};
+
+/// Counts over judged grasps (summary.json "judge", table.md): the everyday Exp-2's bar is
+/// grasped_where_exists / valid_exists >= 90 % and attempted_where_none == 0.
+struct JudgeCounts {
+  int objects = 0;               ///< grasps judged
+  int valid_exists = 0;          ///< a valid grasp exists in the view
+  int grasped_where_exists = 0;  ///< ... and the object was grasped and lifted
+  int attempted = 0;             ///< a grasp locked (attempted)
+  int attempted_invalid = 0;     ///< ... judged invalid
+  int attempted_where_none = 0;  ///< a grasp attempted where no valid grasp exists in the view
+  int grasped_where_none = 0;    ///< lifted although no valid grasp exists (the judge is stricter)
+  void add(const GraspTrial& t);
 };
 
 /// ‖TCP - object‖ (ground truth) and the commanded speeds (commandSpeeds), sampled every
@@ -150,6 +207,7 @@ struct GraspMethodSummary {
   long contact_steps = 0, joint_limit_violations = 0;
   std::map<std::string, int> stall_causes;  ///< grasps whose time limit fired, per cause (GraspTrial::stall_cause)
   ObstacleExtreme nearest, tightest, grasped;  ///< over every grasp of the method (see GraspTrial)
+  JudgeCounts judge;  ///< judged grasps only (library_split)
   double sim_time_s = 0.0, wall_time_s = 0.0;
 };
 

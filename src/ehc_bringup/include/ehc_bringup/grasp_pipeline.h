@@ -116,6 +116,37 @@ struct PipelineCycle {
   std::vector<std::string> events;       ///< the sequencer's progress lines of this cycle
 };
 
+/// Ground truth of one depth view taken for a sequencer object's grasps (world frame): what the
+/// grasp judge needs to say whether a valid grasp existed in it.
+struct ObjectViewRecord {
+  double t = -1.0;  ///< s, sim time of the view's depth cloud; -1: none
+  Eigen::Isometry3d T_world_cam = Eigen::Isometry3d::Identity();     ///< the true camera pose
+  Eigen::Isometry3d T_world_object = Eigen::Isometry3d::Identity();  ///< the object's true pose
+  std::vector<GraspCandidate> candidates;  ///< the grasp generator's in this view (the stack's world frame)
+};
+
+/// What one sequencer object's attempt committed to, recorded for the grasp judge
+/// (GraspExperiment judges it after the run; the control loop only copies these). Ground truth,
+/// world frame: the grasp is the stack's, moved into the true world (the same pose when the
+/// odometry is the truth, see GraspPipeline::stackView).
+struct GraspAttemptRecord {
+  /// A grasp was locked (PRE_GRASP): the grasp the sequencer committed to and went for.
+  bool locked = false;
+  /// A grasp was chosen: the locked one, else the last one chosen before the object ended (the
+  /// robot drove to its pre-grasp and the object failed before the lock).
+  bool chosen = false;
+  GraspCandidate grasp;           ///< that grasp: pose (true world) and width (score unset)
+  /// The generator's candidate it was chosen from, as generated (true world): before the
+  /// selection turned it onto the wanted approach or centred it (GraspSelectionParams).
+  std::optional<GraspCandidate> candidate;
+  ObjectViewRecord grasp_view;    ///< the view its candidate set came from (GraspChoice::candidates_t)
+  Eigen::Isometry3d T_world_object_at_choice = Eigen::Isometry3d::Identity();  ///< at the lock (else at the end)
+  /// The last depth view taken for the object's grasps in which its true centre projected into
+  /// the image (t -1: none).
+  ObjectViewRecord last_seen;
+  ObjectViewRecord end;           ///< camera and object when the object's attempt ended (t -1: never)
+};
+
 /// Work done so far (counts, and wall seconds per stage for `make bench`).
 struct PipelineCounters {
   long cycles = 0, images = 0, clouds = 0, tag_detections = 0, grasp_runs = 0, obstacle_updates = 0;
@@ -124,7 +155,7 @@ struct PipelineCounters {
   long collision_steps = 0, joint_limit_violations = 0;
   double wall_image = 0.0, wall_depth = 0.0, wall_tags = 0.0, wall_grasps = 0.0, wall_obstacles = 0.0,
          wall_control = 0.0, wall_sequencer = 0.0, wall_physics = 0.0;
-  PipelineCounters& operator+=(const PipelineCounters& o);
+  PipelineCounters& add(const PipelineCounters& o);  ///< adds another run's counts and times
 };
 
 class GraspPipeline {
@@ -148,6 +179,8 @@ class GraspPipeline {
   const ehc_control::ControlCycle& cycle() const { return *cycle_; }
   const PipelineCounters& counters() const { return counters_; }
   const PipelineCycle& last() const { return last_; }
+  /// Per sequencer object: the grasp it committed to and the views it came from (for the judge).
+  const std::vector<GraspAttemptRecord>& attempts() const { return attempts_; }
   /// Measure wall time per stage (counters().wall_*); off by default (no clock reads).
   void setTiming(bool on) { timing_ = on; }
 
@@ -163,6 +196,16 @@ class GraspPipeline {
   Eigen::Isometry3d stackView(const Eigen::Isometry3d& T_world_frame) const;
   /// The base pose the nodes get from /odom (x, y, yaw).
   Eigen::Vector3d odometryPose() const;
+  /// stackView's inverse: a pose the stack gives (its world frame) in the true world.
+  Eigen::Isometry3d trueView(const Eigen::Isometry3d& T_stack_frame) const;
+  /// Ground truth now: the true camera pose and object `object`'s true pose, stamped t.
+  ObjectViewRecord viewNow(double t, std::size_t object) const;
+  /// A depth view taken for object `object`'s grasps (stamped t) and the candidates the generator
+  /// found in it: kept until the object changes,
+  /// and its last_seen when the object's centre projects into the image.
+  void recordView(double t, std::size_t object, const std::vector<GraspCandidate>& candidates);
+  /// After the sequencer's update of `object`: its grasp record when it locks a grasp or ends.
+  void recordAttempt(double t, std::size_t object, std::size_t results_before);
 
   GraspPipelineConfig cfg_;
   std::unique_ptr<ehc_sim::SimWorld> world_;
@@ -186,6 +229,10 @@ class GraspPipeline {
   std::vector<std::string> arm_names_;
   PipelineCycle last_;
   PipelineCounters counters_;
+  ehc_control::PinholeCamera intrinsics_;
+  std::vector<GraspAttemptRecord> attempts_;
+  std::vector<ObjectViewRecord> views_;  ///< the current object's grasp views (recordView)
+  std::size_t views_object_ = 0;
   bool timing_ = false;
 };
 

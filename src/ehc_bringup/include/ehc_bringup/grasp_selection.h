@@ -92,6 +92,10 @@ struct GraspChoice {
   bool from_candidate = false;
   double score = 0.0;
   int candidate_index = -1;
+  double width = 0.0;  ///< m, the candidate's opening (0: the tag fallback)
+  /// s, time stamp of the candidate set it was chosen from (GraspSequencer::setGraspCandidates;
+  /// the view its grasp came from); -1: not from a candidate set.
+  double candidates_t = -1.0;
 };
 
 /// Unit approach direction wanted for `direction` given the tag target; nullopt for Any

@@ -269,6 +269,9 @@ class GraspSequencer {
   const GraspSequencerParams& params() const { return params_; }
   /// Locked grasp of the current object (PRE_GRASP onwards).
   const std::optional<GraspChoice>& lockedGrasp() const { return locked_; }
+  /// The current object's last grasp chosen (APPROACH on; kept until the next object starts):
+  /// the one the robot drove to when the object failed before its grasp was locked.
+  const std::optional<GraspChoice>& lastChoice() const { return last_choice_; }
   /// Whether perceived poses and grasp candidates can change what the sequencer does: until the
   /// current object's grasp is locked. From the lock until the next object starts they would only
   /// refresh the remembered poses of later objects (the in-process pipeline then skips the image
@@ -339,6 +342,7 @@ class GraspSequencer {
   std::vector<std::string> pose_events_;  ///< from setObjectPose, out with the next update
   std::string no_target_;  ///< the current object's setNoTarget reason ("" = none / a pose came)
   std::vector<GraspCandidate> candidates_;
+  double candidates_t_ = -1.0;  ///< time stamp of candidates_ (GraspChoice::candidates_t)
   std::optional<GraspChoice> locked_;
   std::optional<GraspChoice> last_choice_;  ///< the current object's last grasp chosen before the lock
   Eigen::Vector3d locked_object_centre_ = Eigen::Vector3d::Zero();

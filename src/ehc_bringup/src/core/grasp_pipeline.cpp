@@ -136,7 +136,7 @@ std::string GraspPipelineConfig::summary() const {
   return os.str();
 }
 
-PipelineCounters& PipelineCounters::operator+=(const PipelineCounters& o) {
+PipelineCounters& PipelineCounters::add(const PipelineCounters& o) {
   cycles += o.cycles;
   images += o.images;
   clouds += o.clouds;
@@ -168,6 +168,8 @@ GraspPipeline::GraspPipeline(const GraspPipelineConfig& cfg, unsigned seed) : cf
   cfg_.sim.fake_robot.seed = seed;
   const ehc_control::RobotConfig robot = ehc_control::loadRobotConfig(cfg_.sim.fake_robot.robot_file);
   const ehc_control::PinholeCamera intrinsics = ehc_control::loadPinholeCamera(ehc_sim::simCameraFile(cfg_.sim, robot));
+  intrinsics_ = intrinsics;
+  attempts_.resize(cfg_.sequencer.objects.size());
   world_ = std::make_unique<ehc_sim::SimWorld>(cfg_.sim, robot, cfg_.scene);
   camera_ = std::make_unique<ehc_sim::SimulatedCamera>(intrinsics, cfg_.sim.camera, seed);
   camera_->setScene(world_->bodies(), cfg_.scene.floor_shade);
@@ -251,6 +253,7 @@ void GraspPipeline::perceive(double t) {
     std::vector<GraspCandidate> candidates;
     for (const auto& g : res.grasps) candidates.push_back({g.pose, g.width, g.score});
     sequencer_->setGraspCandidates(t, candidates);
+    recordView(t, current, candidates);
     ++counters_.grasp_runs;
   }
   if (want_obstacles) {
@@ -274,6 +277,7 @@ void GraspPipeline::perceiveCloudTarget(double t, const ehc_perception::PointLis
   std::vector<GraspCandidate> candidates;
   for (const auto& g : r.grasps.grasps) candidates.push_back({g.pose, g.width, g.score});
   sequencer_->setGraspCandidates(t, candidates);
+  recordView(t, object, candidates);
   ++counters_.grasp_runs;
 }
 
@@ -332,7 +336,9 @@ const PipelineCycle& GraspPipeline::step() {
     in.motion_limit = out.status.motion_limit;
     in.tcp = stackView(world_->linkPose(cycle_->model().config().tcp_frame));
     in.camera = stackView(world_->cameraPose());
+    const std::size_t results_before = sequencer_->results().size();
     const SequencerOutput s = sequencer_->update(in);
+    recordAttempt(t, last_.object, results_before);
     if (s.object_pose) {
       grasp_target_ = s.object_pose->translation();
       grasp_target_t_ = t;
@@ -381,6 +387,61 @@ Eigen::Isometry3d GraspPipeline::stackView(const Eigen::Isometry3d& T_world_fram
   using ehc_control::WholeBodyModel;
   return WholeBodyModel::baseTransform(robot.odometryPose()) * WholeBodyModel::baseTransform(robot.basePose()).inverse() *
          T_world_frame;
+}
+
+Eigen::Isometry3d GraspPipeline::trueView(const Eigen::Isometry3d& T_stack_frame) const {
+  const ehc_sim::KinematicFakeRobot& robot = world_->robot();
+  if (robot.odometryIsTruth()) return T_stack_frame;
+  using ehc_control::WholeBodyModel;
+  return WholeBodyModel::baseTransform(robot.basePose()) * WholeBodyModel::baseTransform(robot.odometryPose()).inverse() *
+         T_stack_frame;
+}
+
+ObjectViewRecord GraspPipeline::viewNow(double t, std::size_t object) const {
+  ObjectViewRecord v;
+  v.t = t;
+  v.T_world_cam = world_->cameraPose();
+  v.T_world_object = world_->objectPose(static_cast<int>(object));
+  return v;
+}
+
+void GraspPipeline::recordView(double t, std::size_t object, const std::vector<GraspCandidate>& candidates) {
+  if (object >= attempts_.size() || object >= cfg_.scene.objects.size()) return;
+  if (object != views_object_) views_.clear();
+  views_object_ = object;
+  ObjectViewRecord v = viewNow(t, object);
+  v.candidates = candidates;
+  views_.push_back(v);
+  if (intrinsics_.projectsInside(v.T_world_cam.inverse() * v.T_world_object.translation())) attempts_[object].last_seen = v;
+}
+
+void GraspPipeline::recordAttempt(double t, std::size_t object, std::size_t results_before) {
+  if (object >= attempts_.size() || object >= cfg_.scene.objects.size()) return;
+  GraspAttemptRecord& a = attempts_[object];
+  const bool ended = sequencer_->results().size() > results_before;
+  const std::optional<GraspChoice>& locked = sequencer_->lockedGrasp();
+  const std::optional<GraspChoice>* take = nullptr;
+  if (locked && !a.locked) take = &locked;
+  else if (ended && !a.locked && sequencer_->lastChoice()) take = &sequencer_->lastChoice();
+  if (take) {
+    const GraspChoice& c = **take;
+    a.locked = locked.has_value();
+    a.chosen = true;
+    a.grasp.pose = trueView(c.pose);
+    a.grasp.width = c.width;
+    a.T_world_object_at_choice = world_->objectPose(static_cast<int>(object));
+    a.grasp_view = ObjectViewRecord{};
+    a.candidate.reset();
+    if (object == views_object_)
+      for (const ObjectViewRecord& v : views_)
+        if (v.t == c.candidates_t) a.grasp_view = v;
+    const auto k = static_cast<std::size_t>(c.candidate_index);
+    if (c.from_candidate && a.grasp_view.t >= 0.0 && k < a.grasp_view.candidates.size()) {
+      a.candidate = a.grasp_view.candidates[k];
+      a.candidate->pose = trueView(a.candidate->pose);
+    }
+  }
+  if (ended) a.end = viewNow(t, object);
 }
 
 bool GraspPipeline::runUntilDone(double sim_time_limit) {

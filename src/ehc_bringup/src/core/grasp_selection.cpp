@@ -165,6 +165,7 @@ std::optional<GraspChoice> chooseGrasp(const std::vector<GraspCandidate>& candid
       best.score = c.score;
       best.from_candidate = true;
       best.candidate_index = static_cast<int>(i);
+      best.width = c.width;
       found = true;
     }
   }
@@ -238,6 +239,7 @@ std::optional<GraspChoice> chooseGrasp(const std::vector<GraspCandidate>& candid
     best.from_candidate = false;
     best.score = 0.0;
     best.candidate_index = -1;
+    best.width = 0.0;
   }
   best.pose.linear() = closerHalfTurn(best.pose.linear(), reference);
   return best;

@@ -308,8 +308,8 @@ bool GraspSequencer::setCamera(const ehc_control::PinholeCamera& camera) {
 }
 
 void GraspSequencer::setGraspCandidates(double t, const std::vector<GraspCandidate>& candidates) {
-  (void)t;
   if (locked_) return;
+  candidates_t_ = t;
   candidates_.clear();
   for (const auto& c : candidates) {
     if (isValidPose(c.pose) && std::isfinite(c.width) && std::isfinite(c.score)) candidates_.push_back(c);
@@ -414,8 +414,10 @@ std::optional<GraspChoice> GraspSequencer::currentChoice(const SequencerInput& i
   const Eigen::Matrix3d ref = (in.tcp && isValidPose(*in.tcp)) ? Eigen::Matrix3d(in.tcp->linear())
                                                               : Eigen::Matrix3d(object_pose->linear());
   const GraspObjectSpec& o = params_.objects[current_];
-  return chooseGrasp(candidates_, o.approach, *object_pose, ref,
-                     o.target.fromCloud() ? params_.selection.forCloudTarget() : params_.selection);
+  std::optional<GraspChoice> choice = chooseGrasp(candidates_, o.approach, *object_pose, ref,
+                                                  o.target.fromCloud() ? params_.selection.forCloudTarget() : params_.selection);
+  if (choice && choice->from_candidate) choice->candidates_t = candidates_t_;
+  return choice;
 }
 
 void GraspSequencer::finishObject(double t, bool success, const std::string& reason,

@@ -1,11 +1,11 @@
 // ehc_experiment: the paper's experiments, in-process (no ROS master needed).
-//   rosrun ehc_bringup ehc_experiment reach --robot robot.yaml --method ehc|neo_e|neo_c|all
+//   rosrun ehc_bringup ehc_experiment reach --robot robot.yaml --method ehc|ehc_place|neo_e|neo_c|all
 //       [--sets 10] [--points 50] [--seed S] [--targets targets.csv] [--noise on|off]
 //       [--base-model ideal|water2] [--base-imprecision LEVEL] [--protocol sequence|reset]
 //       [--config controller.yaml] [--map reachability_map.bin] --out DIR
 // Writes DIR/summary.json, DIR/table.md (paper Table II layout), DIR/trials.csv and
 // DIR/targets.csv; progress and ETA on stderr. Errors: stderr, exit code 2.
-//   rosrun ehc_bringup ehc_experiment grasp --method tsmm|neo_c|neo_e|ehc|all [--sets 15] [--seed S]
+//   rosrun ehc_bringup ehc_experiment grasp --method tsmm|neo_c|neo_e|ehc|ehc_place|all [--sets 15] [--seed S]
 //       [--scene scene.yaml] [--jobs N] [--config-dir config] [--base-imprecision LEVEL] --out DIR  (paper Exp-2)
 //   rosrun ehc_bringup ehc_experiment poses --method neo_nompbs|ehc_nompbs|ehc|all [--sets 15]
 //       [--per-set 5] [--seed S] [--scene ...] [--jobs N] --out DIR             (paper Exp-3)
@@ -34,7 +34,7 @@
 namespace {
 
 const char* kUsage =
-    "usage: ehc_experiment reach --robot <name|robot.yaml> --method ehc|neo_e|neo_c|all --out DIR\n"
+    "usage: ehc_experiment reach --robot <name|robot.yaml> --method ehc|ehc_place|neo_e|neo_c|all --out DIR\n"
     "           [--sets 10] [--points 50] [--seed 1] [--targets targets.csv] [--noise on|off]\n"
     "           [--base-model ideal|water2]   (water2: the Water2 chain of ehc_sim/base_model.h with\n"
     "                                          its default parameters; the controller sees its odometry)\n"
@@ -50,7 +50,7 @@ const char* kUsage =
     "                                      of the travel direction; any = 0-7 m apart, approach from any direction)\n"
     "           [--min-distance m] [--max-distance m] [--min-height m] [--max-height m] [--max-tilt deg]\n"
     "           [--azimuth-spread deg] [--tilt-sampling uniform|sphere]   (override the generator's fields)\n"
-    "       ehc_experiment grasp --method tsmm|neo_c|neo_e|ehc|all --out DIR [--robot <name|robot.yaml>] [--sets 15] [--seed 1]\n"
+    "       ehc_experiment grasp --method tsmm|neo_c|neo_e|ehc|ehc_place|all --out DIR [--robot <name|robot.yaml>] [--sets 15] [--seed 1]\n"
     "           [--scene scene.yaml] [--jobs 1] [--config-dir config] [--jitter-xy 0.01] [--jitter-yaw 3]\n"
     "           [--base-model ideal|water2]   (default: the sim file's, ideal; water2: the stack sees the bridge's /odom)\n"
     "           [--base-imprecision LEVEL]   (default: the sim file's, 0 = off)\n"

@@ -8,9 +8,18 @@
 //       [--distance m] [--elevation deg] [--azimuth deg] [--seed S] [--sim <bullet_sim.yaml>]
 //       the object on a table, one depth cloud of the simulated camera (world frame, binary PCD);
 //       the camera position, the object's pose and the point count go to stdout as JSON.
+//   ehc_object_library judge [--split tuning|validation|all] [--views N] [--seed S] --out <dir>
+//       [--manifest <library.yaml>] [--sim <bullet_sim.yaml>] [--config <grasp_node.yaml>]
+//       [--mu 0.5] [--samples 2000]
+//       every object of the split from N random views (0.5-0.7 m, 30-60 deg above the table): the
+//       grasp generator's grasps judged against the true mesh (ehc_bringup/grasp_judge.h);
+//       <dir>/views.csv (one row per view) and <dir>/summary.md; progress on stderr.
 // Exit 0: done. Exit 2: bad arguments or files.
+#include "ehc_bringup/grasp_judge.h"
 #include "ehc_bringup/object_view.h"
 #include "ehc_common/command_line.h"
+#include "ehc_common/config_node.h"
+#include "ehc_common/output_dir.h"
 #include "ehc_common/json.h"
 #include "ehc_control/robot_config.h"
 
@@ -25,6 +34,9 @@ const char* kUsage =
     "       ehc_object_library meshes [--manifest <library.yaml>] [--out <dir>]\n"
     "       ehc_object_library cloud --object <name> --out <cloud.pcd> [--manifest <library.yaml>]\n"
     "                          [--distance 0.6] [--elevation 45] [--azimuth 0] [--seed 1] [--sim <bullet_sim.yaml>]\n"
+    "       ehc_object_library judge --out <dir> [--split all|tuning|validation] [--views 2] [--seed 1]\n"
+    "                          [--manifest <library.yaml>] [--sim <bullet_sim.yaml>] [--config <grasp_node.yaml>]\n"
+    "                          [--mu 0.5] [--samples 2000]\n"
     "The default manifest is config/objects/library.yaml.\n";
 
 std::string defaultManifest() { return ehc_control::configDirectory() + "/objects/library.yaml"; }
@@ -83,6 +95,46 @@ int cloud(int argc, char** argv) {
   std::cout << ehc_common::jsonLine(j) << "\n";
   return 0;
 }
+int judge(int argc, char** argv) {
+  const ehc_common::CommandLine cli(
+      argc, argv, {"manifest", "split", "views", "seed", "out", "sim", "config", "mu", "samples"}, {}, 2);
+  const std::string dir = cli.text("out");
+  ehc_common::prepareOutputDir(dir);
+  ehc_bringup::LibraryJudgeParams p;
+  p.split = cli.choice("split", {"all", "tuning", "validation"}, p.split);
+  p.views = static_cast<int>(cli.integer("views", p.views, 1, 10000));
+  p.seed = static_cast<unsigned>(cli.integer("seed", p.seed, 0, 1000000000));
+  p.judge.friction_coefficient = cli.real("mu", p.judge.friction_coefficient);
+  p.judge.samples = static_cast<int>(cli.integer("samples", p.judge.samples, 1, 1000000));
+  const std::string config = cli.text("config", ehc_control::configDirectory() + "/perception/grasp_node.yaml");
+  const auto root = ehc_common::ConfigNode::loadFile(config, "GraspGenerator");
+  const ehc_perception::GraspGeneratorConfig gen_cfg = ehc_perception::loadGraspGeneratorConfig(root.childOrEmpty("grasp_generator"));
+  const ehc_perception::GraspTargetingParams targeting = ehc_perception::loadGraspTargetingParams(root.childOrEmpty("node"));
+  p.judge.max_approach_tilt_deg = p.judge.max_view_angle_deg = gen_cfg.max_approach_tilt_deg;
+  p.validate();
+  const ehc_sim::ObjectLibrary lib = ehc_sim::loadObjectLibrary(cli.text("manifest", defaultManifest()));
+  const ehc_sim::SimConfig sim = ehc_sim::loadSimConfig(cli.text("sim", ehc_control::configDirectory() + "/sim/bullet_sim.yaml"));
+  const ehc_perception::GraspGenerator generator(gen_cfg);
+  std::string command = "ehc_object_library judge";
+  for (int i = 2; i < argc; ++i) command += std::string(" ") + argv[i];
+  std::cerr << "ehc_object_library judge: seed " << p.seed << ", split " << p.split << ", " << p.views
+            << " views per object, mu " << p.judge.friction_coefficient << "\n";
+  const auto rows = ehc_bringup::judgeLibrary(
+      lib, sim, generator, targeting, p, [](const ehc_bringup::JudgedView& v, std::size_t done, std::size_t total) {
+        const ehc_bringup::ViewJudgement& j = v.judgement;
+        std::cerr << "[" << done << "/" << total << "] " << v.object << " view " << v.view << ": valid grasp "
+                  << (j.exists ? "exists" : "none") << ", "
+                  << (j.result.grasps.empty() ? "no grasp (" + ehc_perception::toString(j.result.failure) + ")"
+                                              : "best " + ehc_bringup::toString(j.best.verdict))
+                  << ", top 5 valid " << j.top5_valid << "\n";
+      });
+  std::ofstream csv(dir + "/views.csv"), md(dir + "/summary.md");
+  csv << ehc_bringup::judgedViewsCsv(rows);
+  md << ehc_bringup::judgedViewsSummary(rows, command);
+  if (!csv || !md) throw std::invalid_argument("cannot write to '" + dir + "'");
+  std::cerr << "ehc_object_library: " << rows.size() << " views -> " << dir << "/views.csv, summary.md\n";
+  return 0;
+}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -91,6 +143,7 @@ int main(int argc, char** argv) {
     if (command == "manifest") return manifest(argc, argv);
     if (command == "meshes") return meshes(argc, argv);
     if (command == "cloud") return cloud(argc, argv);
+    if (command == "judge") return judge(argc, argv);
     std::cerr << kUsage;
     return command == "--help" || command == "-h" ? 0 : 2;
   } catch (const std::exception& e) {

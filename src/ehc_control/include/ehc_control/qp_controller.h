@@ -18,6 +18,10 @@
 //   V_lim: joint-limit centring potential (JointLimitCentring)
 //
 // Modes (one parameter): ehc  w_base = w_min + (w_max - w_min) sig(omega)
+//                        ehc_place  ehc, and the base's goal chosen per target by inverse
+//                              reachability (ReachRecovery's placement, reach_recovery.h,
+//                              run by ControlCycle): while sig(omega) is below the hand-over
+//                              level the QP tracks the drive to that base pose, then ehc
 //                        neo_e w_base = w_arm / |e|        (NEO: base weight 1/|e|)
 //                        neo_c w_base = constant
 //                        tsmm  base only (arm held) until the TCP is within d of the target
@@ -53,8 +57,10 @@ namespace ehc_control {
 
 using Vector6d = Eigen::Matrix<double, 6, 1>;
 
-enum class ControlMode { Ehc, NeoE, NeoC, Tsmm };
+enum class ControlMode { Ehc, EhcPlace, NeoE, NeoC, Tsmm };
 std::string toString(ControlMode m);
+/// The modes whose base weight is sig(omega) (ehc, ehc_place): they need an EhcWeighting.
+inline bool usesWeighting(ControlMode m) { return m == ControlMode::Ehc || m == ControlMode::EhcPlace; }
 ControlMode controlModeFromString(const std::string& s);  ///< throws std::invalid_argument
 
 struct QpControllerParams {

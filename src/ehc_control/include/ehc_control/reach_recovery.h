@@ -39,14 +39,32 @@
 //            max_attempts far plans per target.
 // Every method gets it (it acts only after a stall, when the method has failed to make
 // progress), so comparisons between methods stay fair and nothing costs time when no stall occurs.
+//
+// Placement (mode ehc_place only; update() given this cycle's EHC weight): the same plan and
+// move, started at once for every new target instead of after a stall, from starts ranked by
+// inverse reachability: base poses on rings around the target (placement_bearings bearings,
+// radii of 0.4-1.0 times the farthest horizontal reach of r_td from the arm base, headings that
+// put the ready TCP's bearing on the target and +-0.3 rad beside it), each scored by the map's R
+// of the target in the arm base frame at that pose; per bearing the best (R, then a differential
+// base's travel: distance and turns), bearings in order of their best R. IK from
+// each with the base held at it (the arm alone: the pose keeps its R), then from the best ones
+// again with the base free. Of the solutions one with a joint margin of placement_margin wins
+// over one without (traces: a base under the target, r_td all round, left the arm folded near
+// its stops), then one whose target voxel is in the map's high-reachability set r_td, then the
+// least travel (margins beyond placement_margin count no more). The move hands over to the pose task
+// (EHC's sig(omega) split) when sig reaches placement_handover_sig, at its goal, or at its
+// time limit (move_timeout plus the travel at the base's speed limit). Not an attempt.
 
+#include "ehc_control/ehc_weighting.h"
 #include "ehc_control/whole_body_model.h"
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace ehc_common {
 class ConfigNode;
@@ -73,6 +91,12 @@ struct ReachRecoveryParams {
   double joint_tolerance = 0.1;                      ///< rad
   double move_timeout = 10.0;                        ///< s
   int max_attempts = 2;                              ///< per target
+  /// Placement (ehc_place): bearings around the target of the candidate base poses.
+  int placement_bearings = 16;
+  /// Placement: the move hands over to the pose task once sig(omega) reaches this (1: only at its goal).
+  double placement_handover_sig = 0.9;
+  /// Placement: rad of joint margin that is enough; among the placements with it, the least travel.
+  double placement_margin = 0.3;
   void validate() const;                             ///< throws "[ReachRecoveryParams] ..."
   std::string summary() const;
 };
@@ -90,10 +114,22 @@ class ReachRecovery {
 
   /// Per control cycle at time `now` (s), before the QP: the state, the TCP pose and the target.
   /// Returns the whole-body reference velocity while moving (size nDof), else nullptr.
+  /// `place`: this cycle's EHC weight in mode ehc_place (a new target starts a placement, see
+  /// the top of this file; needs setPlacementMap()), nullptr otherwise.
   const Eigen::VectorXd* update(double now, const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q,
-                                const Eigen::Isometry3d& tcp, const Eigen::Isometry3d& target);
+                                const Eigen::Isometry3d& tcp, const Eigen::Isometry3d& target,
+                                const EhcWeight* place = nullptr);
   /// A new approach: forgets the progress history and the attempts.
   void reset();
+  /// The reachability map and its r_td threshold (the EHC weighting) of the placements.
+  void setPlacementMap(std::shared_ptr<const EhcWeighting> weighting);
+  /// The map's R of the target position in the arm base frame with the base at `base_pose`
+  /// (needs setPlacementMap(); throws "[ReachRecovery] ..." otherwise).
+  double placementReachability(const Eigen::Isometry3d& target, const Eigen::Vector3d& base_pose) const;
+  /// The ranked placement starts for a target seen from `base_pose` (see the top of this file).
+  std::vector<Eigen::Vector3d> placementStarts(const Eigen::Isometry3d& target, const Eigen::Vector3d& base_pose) const;
+  /// True while a placement (not a stall recovery) is planned or moved to.
+  bool placing() const { return place_ && state_ != State::Watching; }
 
   State state() const { return state_; }
   int attempts() const { return attempts_; }
@@ -116,13 +152,16 @@ class ReachRecovery {
   /// The base pose `radius` from the target at `angle` (seen from the target), facing so that
   /// the ready pose's TCP points at the target.
   Eigen::Vector3d placement(const Eigen::Vector2d& target, double angle, double radius) const;
-  /// The placement on the line from `base` to the target at which the ready pose's TCP is over
-  /// the target.
+  /// A placement plan for target_ (ehc_place): startPlanning from the ranked placement starts.
+  void startPlacement(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q);
+  /// The base pose, on the line from `base` to the target, at which the ready pose's TCP is
+  /// over the target (facing it as the ready TCP's bearing says).
   Eigen::Vector3d readyOver(const Eigen::Isometry3d& target, const Eigen::Vector3d& base) const;
   void plan(const Eigen::Isometry3d& target);
   /// Whole-body IK of `target` from (base, q) with joint-limit avoidance (see the .cpp); true
   /// and the solution in (base, q) when it converges.
-  bool solve(const Eigen::Isometry3d& target, Eigen::Vector3d* base, Eigen::VectorXd* q) const;
+  /// `fixed_base`: the arm alone (the base stays at `base`).
+  bool solve(const Eigen::Isometry3d& target, Eigen::Vector3d* base, Eigen::VectorXd* q, bool fixed_base = false) const;
   void start(int k, const Eigen::Isometry3d& target, Eigen::Vector3d* base, Eigen::VectorXd* q) const;
   void reference(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q);
   bool atGoal(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q) const;
@@ -131,6 +170,7 @@ class ReachRecovery {
   ReachRecoveryParams params_;
   double joint_stop_ = 0.0, joint_influence_ = 0.0;
   double reach_ = 0.5, ready_bearing_ = 0.0;  ///< the ready pose's TCP in the base frame (horizontal)
+  Eigen::Isometry3d T_base_arm_ready_ = Eigen::Isometry3d::Identity();  ///< the arm base at the ready pose
   Eigen::VectorXd vmax_;
   State state_ = State::Watching;
   Eigen::Isometry3d target_ = Eigen::Isometry3d::Identity();
@@ -139,6 +179,11 @@ class ReachRecovery {
   int attempts_ = 0;      ///< near stalls of this target
   int far_attempts_ = 0;  ///< far stalls of this target (their own count: a far unwind is not a near plan)
   bool far_ = false;      ///< the current plan is a far one
+  bool place_ = false;    ///< the current plan is a placement (ehc_place)
+  std::shared_ptr<const EhcWeighting> placement_map_;
+  std::vector<Eigen::Vector3d> place_starts_;  ///< the current placement's IK starts
+  double goal_reach_ = 0.0;                    ///< the map's R of the target at the chosen placement
+  double place_reach_ = 0.5;  ///< m: the farthest horizontal reach of r_td from the arm base (the rings' scale)
   // Planning
   Eigen::Vector3d plan_base_ = Eigen::Vector3d::Zero();
   Eigen::VectorXd plan_q_;

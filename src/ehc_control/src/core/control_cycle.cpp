@@ -87,6 +87,7 @@ ControlCycle::ControlCycle(std::shared_ptr<const WholeBodyModel> model, std::sha
   controller_ = std::make_unique<EhcQpController>(model_, params_.controller, weighting_);
   recovery_ = std::make_unique<ReachRecovery>(*model_, params_.controller.recovery, params_.controller.joint_stop,
                                               params_.controller.joint_influence);
+  if (weighting_) recovery_->setPlacementMap(weighting_);
   supervisor_ = std::make_unique<ControllerSupervisor>(rc, params_.watchdog);
   limits_ = std::make_unique<MotionLimitMonitor>(*model_, controller_->params(), params_.motion_limit);
   // Camera: mount on the hand (URDF) for MPBS and TfM, intrinsics from robot.yaml's
@@ -274,19 +275,21 @@ ControllerCommand ControlCycle::step(double now) {
   const std::optional<RollJoint> roll = rollJointAt(q);
   const RollJoint* roll_ptr = roll ? &*roll : nullptr;
   const std::vector<ObstaclePair>& obstacles = supervisor_->obstacles(now);
-  // A joint-limit stall: the recovery's whole-body reference replaces the servo (ReachRecovery).
-  const Eigen::VectorXd* reference = recovery_->update(now, base, q, tcp, target);
+  // sig(omega) once per cycle, shared by the placement (ehc_place), MPBS (eq. 14) and the QP weighting.
+  std::optional<EhcWeight> w;
+  if (controller_->hasWeighting()) w = controller_->weight(base, tcp.translation(), target.translation());
+  // A joint-limit stall, or in ehc_place a new target's placement: the recovery's whole-body
+  // reference replaces the servo (ReachRecovery).
+  const bool place = controller_->params().mode == ControlMode::EhcPlace && w;
+  const Eigen::VectorXd* reference = recovery_->update(now, base, q, tcp, target, place ? &*w : nullptr);
   auto withEvent = [this](ControllerCommand c) {
     if (!recovery_->event().empty()) c.event += (c.event.empty() ? "" : "; ") + recovery_->event();
-    c.recovering = recovery_->state() == ReachRecovery::State::Moving;
+    c.recovering = recovery_->state() == ReachRecovery::State::Moving && !recovery_->placing();  // not a placement
     return c;
   };
   if (params_.servo_type == ServoType::Proportional)
     return withEvent(controller_->step(base, q, target, proportionalPoseServo(tcp, target, params_.servo, roll_ptr),
-                                       obstacles, nullptr, reference));
-  // sig(omega) once per cycle, shared by MPBS (eq. 14) and the QP weighting.
-  std::optional<EhcWeight> w;
-  if (controller_->hasWeighting()) w = controller_->weight(base, tcp.translation(), target.translation());
+                                       obstacles, w ? &*w : nullptr, reference));
   const Eigen::Vector3d centre = watchedCentre(now);
   const MpbsOutput servo = mpbs_->compute(tcp, target, w ? w->sig : 1.0, roll_ptr, &centre);
   return withEvent(controller_->step(base, q, target, servo.twist, obstacles, w ? &*w : nullptr, reference));

@@ -28,7 +28,8 @@ std::string knownQpSolvers() {
 }  // namespace
 
 namespace {
-constexpr ehc_common::EnumNames<ControlMode, 4> kControlModeNames = {{{ControlMode::Ehc, "ehc"},
+constexpr ehc_common::EnumNames<ControlMode, 5> kControlModeNames = {{{ControlMode::Ehc, "ehc"},
+                                                                      {ControlMode::EhcPlace, "ehc_place"},
                                                                       {ControlMode::NeoE, "neo_e"},
                                                                       {ControlMode::NeoC, "neo_c"},
                                                                       {ControlMode::Tsmm, "tsmm"}}};
@@ -109,7 +110,7 @@ QpControllerParams loadQpControllerParams(const ehc_common::ConfigNode& n) {
     try {
       p.mode = controlModeFromString(m);
     } catch (const std::invalid_argument&) {
-      n.fail("mode", "must be ehc, neo_e, neo_c or tsmm (got '" + m + "')");
+      n.fail("mode", "must be ehc, ehc_place, neo_e, neo_c or tsmm (got '" + m + "')");
     }
   }
   p.arm_weight = n.get("arm_weight", p.arm_weight);
@@ -206,8 +207,8 @@ EhcQpController::EhcQpController(std::shared_ptr<const WholeBodyModel> model,
       throw std::invalid_argument("[EhcQpController] obstacle_stop_links names link '" + kv.first +
                                   "' which is not in the robot's URDF");
   params_.validate();
-  if (params_.mode == ControlMode::Ehc && !weighting_)
-    throw std::invalid_argument("[EhcQpController] mode ehc needs a reachability map (EhcWeighting)");
+  if (usesWeighting(params_.mode) && !weighting_)
+    throw std::invalid_argument("[EhcQpController] mode " + toString(params_.mode) + " needs a reachability map (EhcWeighting)");
   const RobotConfig& rc = model_->config();
   base_T_arm_ = model_->linkPoseInBase(rc.arm_ready, rc.arm_base_frame);
   vmax_ = rc.velocityLimits();
@@ -253,8 +254,8 @@ void EhcQpController::reset() {
 }
 
 void EhcQpController::setMode(ControlMode m) {
-  if (m == ControlMode::Ehc && !weighting_)
-    throw std::invalid_argument("[EhcQpController] mode ehc needs a reachability map (EhcWeighting)");
+  if (usesWeighting(m) && !weighting_)
+    throw std::invalid_argument("[EhcQpController] mode " + toString(m) + " needs a reachability map (EhcWeighting)");
   params_.mode = m;
   reset();
   tsmm_arm_stage_ = false;
@@ -416,6 +417,7 @@ EhcQpController::HeldGroups EhcQpController::applyMode(const Vector6d& e, const 
   HeldGroups held;
   switch (params_.mode) {
     case ControlMode::Ehc:
+    case ControlMode::EhcPlace:
       out->base_weight = params_.ehc_base_weight_min +
                          (params_.ehc_base_weight_max - params_.ehc_base_weight_min) * out->sig;
       break;

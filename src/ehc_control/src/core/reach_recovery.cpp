@@ -21,7 +21,20 @@ constexpr int kOffsets = static_cast<int>(sizeof(kPlacementOffsets) / sizeof(kPl
 constexpr int kFallbackSeeds = 30;  ///< random seeds of the fallback solve (as Exp-1's reachability check)
 constexpr int kFixedStarts = 2;  ///< the current configuration; the current base with the ready posture
 constexpr double kTurnTravel = 0.3;  ///< m of travel counted per rad of base turn when choosing
+/// Placement candidates: radii (x the ready reach) and heading offsets (rad) per bearing.
+constexpr double kPlacementRadii[] = {1.0, 0.8, 0.6, 0.4};
+constexpr double kPlacementYaws[] = {0.0, 0.3, -0.3};
+/// Placement: a solution with the target in r_td wins over any without (score bonus).
+constexpr double kInReachBonus = 10.0;
 double wrap(double a) { return std::remainder(a, 2.0 * M_PI); }
+/// Travel (m) of a differential base from `from` to the pose `to`: its distance, plus per rad the
+/// turns onto the straight line and, at its end, onto the goal heading (holonomic: the yaw change).
+double unicycleTravel(const Eigen::Vector3d& from, const Eigen::Vector3d& to, bool holonomic) {
+  const Eigen::Vector2d d = to.head<2>() - from.head<2>();
+  if (holonomic || d.norm() < 1e-6) return d.norm() + kTurnTravel * std::abs(wrap(to.z() - from.z()));
+  const double line = std::atan2(d.y(), d.x());
+  return d.norm() + kTurnTravel * (std::abs(wrap(line - from.z())) + std::abs(wrap(to.z() - line)));
+}
 }  // namespace
 
 void ReachRecoveryParams::validate() const {
@@ -44,6 +57,9 @@ void ReachRecoveryParams::validate() const {
   requireRange(kOwner, "joint_tolerance", joint_tolerance, 1e-4, 1.0);
   requireRange(kOwner, "move_timeout", move_timeout, 0.1, 1000.0);
   requireRange(kOwner, "max_attempts", max_attempts, 0, 100);
+  requireRange(kOwner, "placement_bearings", placement_bearings, 1, 360);
+  requireRange(kOwner, "placement_handover_sig", placement_handover_sig, 0.0, 1.0);
+  requireRange(kOwner, "placement_margin", placement_margin, 0.0, 3.0);
 }
 
 std::string ReachRecoveryParams::summary() const {
@@ -74,6 +90,9 @@ ReachRecoveryParams loadReachRecoveryParams(const ehc_common::ConfigNode& n) {
   p.joint_tolerance = n.get("joint_tolerance", p.joint_tolerance);
   p.move_timeout = n.get("move_timeout", p.move_timeout);
   p.max_attempts = n.get("max_attempts", p.max_attempts);
+  p.placement_bearings = n.get("placement_bearings", p.placement_bearings);
+  p.placement_handover_sig = n.get("placement_handover_sig", p.placement_handover_sig);
+  p.placement_margin = n.get("placement_margin", p.placement_margin);
   n.validate(p);  // errors name the file and the section
   return p;
 }
@@ -86,6 +105,7 @@ ReachRecovery::ReachRecovery(const WholeBodyModel& model, const ReachRecoveryPar
   const Eigen::Vector3d tcp = model_.linkPoseInBase(rc.arm_ready, rc.tcp_frame).translation();
   reach_ = std::max(0.2, tcp.head<2>().norm());
   ready_bearing_ = std::atan2(tcp.y(), tcp.x());
+  T_base_arm_ready_ = model_.linkPoseInBase(rc.arm_ready, rc.arm_base_frame);
   vmax_ = rc.velocityLimits();
   reference_ = Eigen::VectorXd::Zero(model_.nDof());
 }
@@ -95,6 +115,62 @@ void ReachRecovery::reset() {
   have_target_ = false;
   attempts_ = 0;
   far_attempts_ = 0;
+  place_ = false;
+}
+
+void ReachRecovery::setPlacementMap(std::shared_ptr<const EhcWeighting> weighting) {
+  placement_map_ = std::move(weighting);
+  // The rings' scale: the farthest horizontal distance from the arm base of a voxel in r_td.
+  place_reach_ = reach_;
+  if (!placement_map_) return;
+  const ReachabilityMap& map = placement_map_->map();
+  const Eigen::Vector3i& n = map.dims();
+  for (int i = 0; i < n.x(); ++i)
+    for (int j = 0; j < n.y(); ++j)
+      for (int k = 0; k < n.z(); ++k) {
+        const Eigen::Vector3d p = map.origin() + map.resolution() * (Eigen::Vector3d(i, j, k) + Eigen::Vector3d::Constant(0.5));
+        if (placement_map_->inReachSet(p)) place_reach_ = std::max(place_reach_, p.head<2>().norm());
+      }
+}
+
+double ReachRecovery::placementReachability(const Eigen::Isometry3d& target, const Eigen::Vector3d& base_pose) const {
+  if (!placement_map_) throw std::invalid_argument("[ReachRecovery] placement needs a reachability map");
+  const Eigen::Isometry3d world_T_arm = WholeBodyModel::baseTransform(base_pose) * T_base_arm_ready_;
+  return placement_map_->map().reachability(world_T_arm.inverse() * target.translation());
+}
+
+std::vector<Eigen::Vector3d> ReachRecovery::placementStarts(const Eigen::Isometry3d& target,
+                                                            const Eigen::Vector3d& base_pose) const {
+  struct Candidate {
+    Eigen::Vector3d base;
+    double reach = 0.0, travel = 0.0;
+  };
+  const Eigen::Vector2d t = target.translation().head<2>();
+  const Eigen::Vector2d to_robot = base_pose.head<2>() - t;
+  const double robot_side = to_robot.norm() > 1e-6 ? std::atan2(to_robot.y(), to_robot.x()) : base_pose.z() + M_PI;
+  const auto better = [](const Candidate& a, const Candidate& b) {
+    return a.reach != b.reach ? a.reach > b.reach : a.travel < b.travel;
+  };
+  std::vector<Candidate> best;  // per bearing
+  for (int i = 0; i < params_.placement_bearings; ++i) {
+    const double a = robot_side + 2.0 * M_PI * i / params_.placement_bearings;
+    Candidate top;
+    bool have = false;
+    for (double r : kPlacementRadii)
+      for (double dyaw : kPlacementYaws) {
+        Candidate c;
+        c.base = placement(t, a, r * place_reach_);
+        c.base.z() = wrap(c.base.z() + dyaw);
+        c.reach = placementReachability(target, c.base);
+        c.travel = unicycleTravel(base_pose, c.base, model_.nBase() == 3);
+        if (!have || better(c, top)) top = c, have = true;
+      }
+    best.push_back(top);
+  }
+  std::stable_sort(best.begin(), best.end(), better);
+  std::vector<Eigen::Vector3d> out;
+  for (const Candidate& c : best) out.push_back(c.base);
+  return out;
 }
 
 double ReachRecovery::margin(const Eigen::VectorXd& q) const {
@@ -136,6 +212,15 @@ bool ReachRecovery::stalled(double now, double position_error, double orientatio
   return attempts_ < params_.max_attempts && pinnedJoint(model_.config(), q, joint_stop_ + params_.pinned_margin) >= 0;
 }
 
+void ReachRecovery::startPlacement(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q) {
+  if (!placement_map_) throw std::invalid_argument("[ReachRecovery] placement needs a reachability map");
+  startPlanning(base_pose, q, false);
+  --attempts_;  // a placement is not a stall's attempt
+  place_ = true;
+  far_ = false;
+  place_starts_ = placementStarts(target_, base_pose);
+}
+
 void ReachRecovery::startPlanning(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q, bool far) {
   state_ = State::Planning;
   plan_base_ = base_pose;
@@ -165,6 +250,11 @@ void ReachRecovery::start(int k, const Eigen::Isometry3d& target, Eigen::Vector3
   const RobotConfig& rc = model_.config();
   *base = plan_base_;
   *q = widestTurn(k == 0 ? plan_q_ : rc.arm_ready);
+  if (place_) {  // the ranked placements, the arm at ready
+    *q = widestTurn(rc.arm_ready);
+    *base = place_starts_[static_cast<std::size_t>(k) % place_starts_.size()];
+    return;
+  }
   if (k < kFixedStarts) return;
   // Around the target: the base on a circle of the ready reach (second round: 0.7 of it,
   // between the first round's bearings), facing so that the ready TCP is over the target.
@@ -177,7 +267,8 @@ void ReachRecovery::start(int k, const Eigen::Isometry3d& target, Eigen::Vector3
   *base = placement(t, a, (second ? 0.7 : 1.0) * reach_);
 }
 
-bool ReachRecovery::solve(const Eigen::Isometry3d& target, Eigen::Vector3d* base, Eigen::VectorXd* q) const {
+bool ReachRecovery::solve(const Eigen::Isometry3d& target, Eigen::Vector3d* base, Eigen::VectorXd* q,
+                          bool fixed_base) const {
   // Whole-body IK over (x, y, yaw, q) with joint-limit avoidance by gradient projection: each
   // step is a damped least-squares step onto the target plus, in the task's null space, a step
   // of every joint within joint_influence of its nearer limit away from it, so that the base
@@ -211,6 +302,7 @@ bool ReachRecovery::solve(const Eigen::Isometry3d& target, Eigen::Vector3d* base
     J(0, 2) = -r.y();
     J(1, 2) = r.x();
     J(5, 2) = 1.0;
+    if (fixed_base) J.leftCols<3>().setZero();  // the arm alone: the base stays where it stands
     J.block(0, 3, 3, na) = world_T_base.linear() * Ja.topRows<3>();
     J.block(3, 3, 3, na) = world_T_base.linear() * Ja.bottomRows<3>();
     const Eigen::MatrixXd Jp = J.completeOrthogonalDecomposition().pseudoInverse();
@@ -240,18 +332,28 @@ void ReachRecovery::plan(const Eigen::Isometry3d& target) {
     start(next_start_, target, &b0, &q0);
     b = b0;
     q = q0;
-    if (!solve(target, &b, &q)) continue;
+    // A placement's first round solves with the base at the ranked pose (the map's R is that
+    // pose's); the starts beyond it, from the best poses again, with the base free.
+    if (!solve(target, &b, &q, place_ && next_start_ < static_cast<int>(place_starts_.size()))) continue;
     ++solutions_;
     q = widestTurn(q);
     const double m = margin(q);
     const double travel = (b.head<2>() - plan_base_.head<2>()).norm() + kTurnTravel * std::abs(wrap(b.z() - plan_base_.z()));
-    const double score = std::min(m, joint_influence_) - params_.travel_weight * travel;
+    double score = std::min(m, joint_influence_) - params_.travel_weight * travel;
+    const double reach = place_ ? placementReachability(target, b) : 0.0;
+    if (place_) {  // a margin of placement_margin first, then in r_td, then the least travel
+      score = std::min(m, params_.placement_margin) -
+              params_.travel_weight * unicycleTravel(plan_base_, b, model_.nBase() == 3);
+      if (reach > placement_map_->params().reach_threshold) score += 0.5 * kInReachBonus;
+      if (m >= params_.placement_margin) score += kInReachBonus;
+    }
     if (!have_goal_ || score > goal_score_) {
       have_goal_ = true;
       goal_score_ = score;
       goal_base_ = b;
       goal_q_ = q;
       goal_margin_ = m;
+      goal_reach_ = reach;
     }
   }
   if (have_goal_ || next_start_ < params_.starts) return;
@@ -268,6 +370,7 @@ void ReachRecovery::plan(const Eigen::Isometry3d& target) {
   goal_q_ = widestTurn(q);
   goal_margin_ = margin(goal_q_);
   goal_score_ = std::min(goal_margin_, joint_influence_);
+  goal_reach_ = place_ ? placementReachability(target, b) : 0.0;
 }
 
 void ReachRecovery::reference(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q) {
@@ -288,11 +391,14 @@ void ReachRecovery::reference(const Eigen::Vector3d& base_pose, const Eigen::Vec
     // A far move's goal faces along the travel: forwards only, turning before driving (cos
     // alpha), since backwards it would arrive facing away and loop round to turn.
     double alpha = wrap(std::atan2(d.y(), d.x()) - yaw);
-    const bool backwards = !far_ && std::abs(alpha) > 0.5 * M_PI;
+    const bool forwards = far_ || (place_ && rho > 2.0 * reach_);  // a long drive: facing along it
+    const bool backwards = !forwards && std::abs(alpha) > 0.5 * M_PI;
     if (backwards) alpha = wrap(alpha - M_PI);
     const double beta = wrap(goal_base_.z() - yaw - alpha);
-    reference_[0] = (backwards ? -1.0 : 1.0) * params_.base_gain * rho * (far_ ? std::max(0.0, std::cos(alpha)) : 1.0);
-    reference_[1] = params_.heading_gain * alpha + params_.final_heading_gain * beta;
+    reference_[0] = (backwards ? -1.0 : 1.0) * params_.base_gain * rho * (forwards ? std::max(0.0, std::cos(alpha)) : 1.0);
+    // A long drive turns to its bearing only (a goal heading across the travel would hold the
+    // clamped law at alpha ~ 90 deg, the two turn terms cancelling); the heading comes near the goal.
+    reference_[1] = params_.heading_gain * alpha + (forwards ? 0.0 : params_.final_heading_gain * beta);
   }
   // One scale for the whole reference: its direction survives the velocity limits.
   double scale = 1.0;
@@ -308,7 +414,8 @@ bool ReachRecovery::atGoal(const Eigen::Vector3d& base_pose, const Eigen::Vector
 }
 
 const Eigen::VectorXd* ReachRecovery::update(double now, const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q,
-                                             const Eigen::Isometry3d& tcp, const Eigen::Isometry3d& target) {
+                                             const Eigen::Isometry3d& tcp, const Eigen::Isometry3d& target,
+                                             const EhcWeight* place) {
   event_.clear();
   if (!params_.enabled) return nullptr;
   const double position_error = (target.translation() - tcp.translation()).norm();
@@ -320,6 +427,7 @@ const Eigen::VectorXd* ReachRecovery::update(double now, const Eigen::Vector3d& 
     target_ = target;
     have_target_ = true;
     startWatching(now, position_error, orientation_error);
+    if (place) startPlacement(base_pose, q);
   }
   std::ostringstream os;
   switch (state_) {
@@ -344,11 +452,12 @@ const Eigen::VectorXd* ReachRecovery::update(double now, const Eigen::Vector3d& 
       plan(target_);
       if (next_start_ < params_.starts) return nullptr;
       if (!have_goal_) {
-        os << "stall " << position_error * 100.0 << " cm short, smallest joint margin " << plan_margin_
+        os << (place_ ? "placement" : "stall") << " " << position_error * 100.0 << " cm short, smallest joint margin " << plan_margin_
            << " rad: no whole-body configuration inside the joint stops found (" << solutions_ << " IK solutions of "
            << params_.starts << " starts";
         os << ")";
         event_ = os.str();
+        place_ = false;
         startWatching(now, position_error, orientation_error);
         return nullptr;
       }
@@ -356,7 +465,11 @@ const Eigen::VectorXd* ReachRecovery::update(double now, const Eigen::Vector3d& 
       move_t_ = now;
       // A far move's time also covers the travel at the base's speed limit.
       move_limit_ = params_.move_timeout +
-                    (far_ ? (goal_base_.head<2>() - plan_base_.head<2>()).norm() / vmax_[0] : 0.0);
+                    (far_ || place_ ? (goal_base_.head<2>() - plan_base_.head<2>()).norm() / vmax_[0] : 0.0);
+      if (place_)
+        os << "placement: moving to base (" << goal_base_.x() << ", " << goal_base_.y() << ", " << goal_base_.z()
+           << ") where the map gives the target R " << goal_reach_ << ", margin " << goal_margin_ << " rad";
+      else
       os << "stall " << position_error * 100.0 << " cm short, smallest joint margin " << plan_margin_
          << " rad: moving to base (" << goal_base_.x() << ", " << goal_base_.y() << ", " << goal_base_.z()
          << ") with margin " << goal_margin_ << " rad (" << (far_ ? "far attempt " : "attempt ")
@@ -364,8 +477,16 @@ const Eigen::VectorXd* ReachRecovery::update(double now, const Eigen::Vector3d& 
       event_ = os.str();
       [[fallthrough]];
     case State::Moving:
+      if (place_ && place && place->sig >= params_.placement_handover_sig) {
+        event_ += (event_.empty() ? "" : "; ") + std::string("placement: handing over to the pose task at sig ") +
+                  std::to_string(place->sig);
+        place_ = false;
+        startWatching(now, position_error, orientation_error);
+        return nullptr;
+      }
       if (atGoal(base_pose, q) || now - move_t_ > move_limit_) {
         if (event_.empty()) event_ = atGoal(base_pose, q) ? "recovery configuration reached" : "recovery move timed out";
+        place_ = false;
         startWatching(now, position_error, orientation_error);
         return nullptr;
       }

@@ -1,7 +1,7 @@
 // ehc_controller_node: ROS wrapper of ehc_control::ControlCycle (control_cycle.h: watchdog, TfM,
 // sig(omega), proportional or PBVS/MPBS servo, EHC QP).
 //   rosrun ehc_control ehc_controller_node _config:=config/control/controller.yaml [_robot:=robot.yaml]
-//       [_mode:=ehc|neo_e|neo_c|tsmm] [_servo:=pbvs|proportional] [_mpbs:=true|false] [_target_timeout:=<s>]
+//       [_mode:=ehc|ehc_place|neo_e|neo_c|tsmm] [_servo:=pbvs|proportional] [_mpbs:=true|false] [_target_timeout:=<s>]
 //       [_require_obstacles:=false] [_trigger:=state|timer]   (private parameters: ehc_common::initNode, docs/NODES.md)
 // Subscribes /joint_states, /odom, /ehc/target_pose (PoseStamped, world frame: the TCP goal),
 // /ehc/obstacles, /ehc/target_centre (PointStamped, world frame: the point the camera watches when
