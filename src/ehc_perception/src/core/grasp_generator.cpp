@@ -53,6 +53,8 @@ constexpr ehc_common::EnumNames<GraspFailure, 13> kFailureNames = {{
     {GraspFailure::TargetTooFar, "target_too_far"},
 }};
 constexpr double kDeg = M_PI / 180.0;
+/// An upright round body's fitted circle is at most this much wider than its seen footprint.
+constexpr double kRoundFootprintRatio = 1.25;
 
 using Cloud = pcl::PointCloud<pcl::PointXYZ>;
 using Normals = pcl::PointCloud<pcl::Normal>;
@@ -418,9 +420,16 @@ constexpr int kOutcomes = 6;
 class GripperCheck {
  public:
   /// `noise`: the object cloud's estimated noise (m, see estimateNoise), `leaf` its voxel edge.
+  /// `spacing`: its sample spacing (sampleSpacing): min_points_between_fingers holds at the
+  /// voxel grid's density (voxel_size); a sparser cloud needs as much of the object's surface
+  /// between the fingers, in fewer points (the count scaled by the squared spacing ratio, at
+  /// least 3).
   GripperCheck(const GraspGeneratorConfig& cfg, const Eigen::Vector4d& plane, bool has_plane, double noise,
-               double leaf, const HiddenVolume& hidden)
+               double leaf, double spacing, const HiddenVolume& hidden)
       : cfg_(cfg), g_(cfg.gripper), plane_(plane), has_plane_(has_plane), noise_(noise), hidden_(hidden), leaf_(leaf),
+        min_between_(std::max(std::min(3, cfg.min_points_between_fingers),
+                              static_cast<int>(std::lround(cfg.min_points_between_fingers *
+                                                           std::pow(cfg.voxel_size / std::max(spacing, cfg.voxel_size), 2))))),
         fit_(std::cos(std::atan(cfg.friction_coefficient)), std::cos(cfg.slanted_contact_deg * kDeg),
              cfg.min_contact_points, noise, leaf) {}
 
@@ -541,6 +550,7 @@ class GripperCheck {
   double noise_;
   const HiddenVolume& hidden_;
   double leaf_;
+  int min_between_;  ///< object points needed between the fingers (see the constructor)
   ContactSurfaceFit fit_;
   std::vector<double> ys_, inner_, palm_;
   mutable std::vector<double> ext_;
@@ -638,7 +648,7 @@ CheckOutcome GripperCheck::evaluate(const Prepared& pr, double cphi, double sphi
   // Outliers tolerated per side: max_collision_points, or outlier_fraction of the points.
   const int k = std::max(cfg_.max_collision_points,
                          static_cast<int>(cfg_.outlier_fraction * inner_.size()));
-  if (static_cast<int>(inner_.size()) < cfg_.min_points_between_fingers + 2 * k) return CheckOutcome::TooFewPoints;
+  if (static_cast<int>(inner_.size()) < min_between_ + 2 * k) return CheckOutcome::TooFewPoints;
   // What is between the fingers: its trimmed extremes (the k most extreme points per side are
   // noise) locate the two sides; their contact surfaces measure them.
   const auto kk = static_cast<long>(k);
@@ -1125,6 +1135,7 @@ struct PreparedObject {
   Eigen::Vector4d plane = Eigen::Vector4d::Zero();
   bool has_plane = false;
   double noise = 0.0;  ///< m, the filtered cloud's estimated noise (estimateNoise)
+  double spacing = 0.0;  ///< m, the filtered cloud's sample spacing (sampleSpacing), at least `leaf`
   HiddenVolume hidden;  ///< behind the view from the camera (disabled without hidden_volume_check)
 };
 
@@ -1143,6 +1154,21 @@ double estimateNoise(const Normals& normals, double radius) {
   if (s.empty()) return 0.0;
   std::nth_element(s.begin(), s.begin() + static_cast<long>(s.size() / 2), s.end());
   return s[s.size() / 2];
+}
+
+/// The cloud's sample spacing: the median distance from a point to its nearest neighbour (over
+/// at most 256 points, evenly strided). A camera's cloud of a small or distant object can be
+/// sparser than the voxel filter's grid.
+double sampleSpacing(const Cloud& cloud, pcl::search::KdTree<pcl::PointXYZ>& tree) {
+  const std::size_t n = cloud.size(), stride = std::max<std::size_t>(1, n / 256);
+  std::vector<int> idx(2);
+  std::vector<float> d2(2);
+  std::vector<double> d;
+  for (std::size_t i = 0; i < n; i += stride)
+    if (tree.nearestKSearch(cloud[i], 2, idx, d2) == 2) d.push_back(std::sqrt(static_cast<double>(d2[1])));
+  if (d.empty()) return 0.0;
+  std::nth_element(d.begin(), d.begin() + static_cast<long>(d.size() / 2), d.end());
+  return d[d.size() / 2];
 }
 
 /// Input checks and the voxel filter: false (and res->reason) if there is nothing to grasp.
@@ -1226,6 +1252,7 @@ void estimateNormalsAndEnvironment(const GraspGeneratorConfig& cfg, const PointL
   // Unsorted radius results: the neighbourhoods here are large and their order is irrelevant.
   po->tree.reset(new pcl::search::KdTree<pcl::PointXYZ>(false));
   po->tree->setInputCloud(po->cloud);
+  po->spacing = std::max(po->leaf, sampleSpacing(*po->cloud, *po->tree));
   po->normals.reset(new Normals);
   pcl::NormalEstimation<pcl::PointXYZ, pcl::Normal> ne;
   ne.setInputCloud(po->cloud);
@@ -1283,14 +1310,14 @@ struct Pending {
 class GraspSearch {
  public:
   GraspSearch(const GraspGeneratorConfig& cfg, const PreparedObject& po)
-      : cfg_(cfg), g_(cfg.gripper), po_(po), check_(cfg, po.plane, po.has_plane, po.noise, po.leaf, po.hidden),
+      : cfg_(cfg), g_(cfg.gripper), po_(po), check_(cfg, po.plane, po.has_plane, po.noise, po.leaf, po.spacing, po.hidden),
         cos_fc_(std::cos(std::atan(cfg.friction_coefficient))),
         cos_tilt_(std::cos(cfg.max_approach_tilt_deg * kDeg)),
         check_radius_(std::sqrt(
             std::pow(0.5 * std::max(g_.palm_width, g_.max_width + 2 * g_.finger_thickness), 2) +
             std::pow(0.5 * std::max(g_.palm_breadth, g_.finger_breadth), 2) +
             std::pow(g_.finger_length + g_.palm_height, 2))),
-        sigma_(cfg.centroid_sigma_deg * kDeg) {}
+        sigma_(cfg.centroid_sigma_deg * kDeg), centre_(po.centroid) {}
 
   /// Antipodal pairs and single-contact hypotheses of the seeds; *any_pair: a pair was found.
   std::vector<Hyp> contactHypotheses(const std::vector<int>& seeds, bool* any_pair);
@@ -1333,6 +1360,9 @@ class GraspSearch {
   const double sigma_;
   Footprint footprint_;
   bool use_footprint_ = false;
+  /// The object's middle for the refinement (see addFootprintHypotheses): the centroid without
+  /// a support, else the completed footprint's centre, a round body's axis or a ball's centre.
+  Eigen::Vector3d centre_;
   std::vector<int> idx_;
   std::vector<float> d2_;
   std::vector<Eigen::Vector3d> nbrs_;
@@ -1346,7 +1376,7 @@ class GraspSearch {
 void GraspSearch::score(Candidate& cd) const {
   const Eigen::Vector3d a = cd.R.col(2);
   const Eigen::Vector3d o = cd.c - cfg_.approach_standoff * a;
-  const Eigen::Vector3d to_g = po_.centroid - o;
+  const Eigen::Vector3d to_g = centre_ - o;
   const double th = std::acos(std::max(-1.0, std::min(1.0, a.dot(to_g.normalized()))));
   cd.wc = std::exp(-0.5 * (th / sigma_) * (th / sigma_));
   cd.wp = std::pow(alignment(po_.subspaces, cd.R.col(1)), cfg_.pca_power) *
@@ -1417,6 +1447,7 @@ void GraspSearch::addFootprintHypotheses(std::vector<Hyp>* hyps) {
   Footprint& footprint = footprint_;
   footprint = supportFootprint(cloud, plane, static_cast<std::size_t>(cfg_.max_collision_points), po_.centroid);
   if (ball) {
+    centre_ = ball_c;
     for (int a = 0; a < 2; ++a) {
       footprint.width[a] = 2.0 * ball_r;
       footprint.centre += footprint.axis[a] * footprint.axis[a].dot(ball_c - footprint.centre);
@@ -1428,11 +1459,18 @@ void GraspSearch::addFootprintHypotheses(std::vector<Hyp>* hyps) {
   // An upright round object (its footprint a circle, the far side unseen): the circle gives
   // its width across every axis parallel to the support, for every hypothesis (a closing on
   // a chord short of the diameter would push it until the diameter is between the fingers).
-  const ExtentHint upright = roundCrossSection(cloud, normals, plane, footprint.axis[0], plane.head<3>(),
-                                               po_.centroid, tol);
+  ExtentHint upright = roundCrossSection(cloud, normals, plane, footprint.axis[0], plane.head<3>(),
+                                         po_.centroid, tol);
+  // A round body's seen footprint spans its diameter across the view (the mantle's silhouette,
+  // short only by its grazing sides' missing samples): a circle much wider than the footprint
+  // is an arc of something else (a banana's bent side fits a circle several times its width).
+  if (upright.valid &&
+      (upright.b - upright.a).norm() > kRoundFootprintRatio * std::max(footprint.width[0], footprint.width[1]))
+    upright.valid = false;
   if (upright.valid) {
     const Eigen::Vector3d c = 0.5 * (upright.a + upright.b);
     const double r = 0.5 * (upright.b - upright.a).norm();
+    centre_ = c;
     for (Hyp& h : *hyps) {
       const Eigen::Vector3d yh = h.y - h.y.dot(plane.head<3>()) * plane.head<3>();
       if (yh.norm() < 0.5) continue;  // closing across the support: not this section
@@ -1463,6 +1501,9 @@ void GraspSearch::addFootprintHypotheses(std::vector<Hyp>* hyps) {
     }
     hyps->push_back({footprint.axis[a], footprint.centre, {}, {}, cfg_.footprint_weight, true, hint});
   }
+  // The object's middle: the completed footprint's centre (the cloud's centroid lies towards
+  // the camera, where one view shows the most surface), unless a round body's axis gives it.
+  if (!upright.valid) centre_ = footprint.centre;
 }
 
 std::string GraspSearch::tooWide() const {
@@ -1618,7 +1659,7 @@ void GraspSearch::refineOntoCentroid(std::vector<Candidate>* kept) {
   for (Candidate& cd : *kept) {
     const Eigen::Vector3d x = cd.R.col(0);
     const double shift =
-        std::max(-cfg_.max_refine_shift, std::min(cfg_.max_refine_shift, x.dot(po_.centroid - cd.c)));
+        std::max(-cfg_.max_refine_shift, std::min(cfg_.max_refine_shift, x.dot(centre_ - cd.c)));
     if (std::abs(shift) < 1e-6) continue;
     const Eigen::Vector3d c0 = cd.c + shift * x;
     gather(c0, check_radius_);
