@@ -409,10 +409,11 @@ enum class CheckOutcome {
   TooFewPoints,  ///< too few object points between the fingers, or one surface's noise
   TooWide,       ///< the measured width needs more than the opening
   Friction,      ///< a contact the view shows is outside the friction cone
-  Collides,      ///< fingers or palm hit the cloud, or reach the support
+  Collides,      ///< fingers or palm hit the cloud
+  Support,       ///< fingers or palm come nearer the support than support_clearance
   Hidden,        ///< a finger at a seen contact, or the palm, is in the volume the view hides
 };
-constexpr int kOutcomes = 6;
+constexpr int kOutcomes = 7;
 
 /// Evaluates the gripper at (R, c0): centres it along the closing axis on the object between
 /// the fingers, measures it there (ContactSurfaceFit), checks width, friction, finger / palm
@@ -533,8 +534,8 @@ class GripperCheck {
   void extentOf(const Prepared& pr) const;
   /// Collisions of the fingers and palm (grasp frame R, centre, opening w) with the cloud and
   /// the support.
-  bool collides(const Eigen::Matrix3d& R, const Eigen::Vector3d& centre, double yc, double ymin, double ymax,
-                double w, int k) const;
+  CheckOutcome collides(const Eigen::Matrix3d& R, const Eigen::Vector3d& centre, double yc, double ymin,
+                        double ymax, double w, int k) const;
   /// Fingers at seen contacts, or at a contact pair's side bounded by its last samples only, or
   /// the palm in the hidden volume (a quarter of their samples).
   bool inHiddenVolume(const Prepared& pr, const Eigen::Matrix3d& R, const Eigen::Vector3d& centre, double w,
@@ -664,7 +665,8 @@ CheckOutcome GripperCheck::evaluate(const Prepared& pr, double cphi, double sphi
   if (w > W) return CheckOutcome::TooWide;  // m->width: the measured width
   const double yc = 0.5 * (ymin + ymax);
   const Eigen::Vector3d centre = pr.c0 + R.col(1) * yc;
-  if (collides(R, centre, yc, ymin, ymax, w, k)) return CheckOutcome::Collides;
+  const CheckOutcome collision = collides(R, centre, yc, ymin, ymax, w, k);
+  if (collision != CheckOutcome::Pass) return collision;
   if (inHiddenVolume(pr, R, centre, w, *m)) return CheckOutcome::Hidden;
   *Rout = R;
   *c = centre;
@@ -672,8 +674,8 @@ CheckOutcome GripperCheck::evaluate(const Prepared& pr, double cphi, double sphi
   return CheckOutcome::Pass;
 }
 
-bool GripperCheck::collides(const Eigen::Matrix3d& R, const Eigen::Vector3d& centre, double yc, double ymin,
-                            double ymax, double w, int k) const {
+CheckOutcome GripperCheck::collides(const Eigen::Matrix3d& R, const Eigen::Vector3d& centre, double yc,
+                                    double ymin, double ymax, double w, int k) const {
   const double z1 = g_.finger_tip_depth, z0 = z1 - g_.finger_length;
   const double zp = z0 - g_.palm_height;
   // Points under the fingers or in the clearance gap, beyond the measured sides by more than
@@ -684,13 +686,13 @@ bool GripperCheck::collides(const Eigen::Matrix3d& R, const Eigen::Vector3d& cen
     const double d = std::abs(y - yc);
     if (d > half + 1e-9 && d <= 0.5 * w + g_.finger_thickness) ++finger_hits;
   }
-  if (finger_hits > 2 * k) return true;
+  if (finger_hits > 2 * k) return CheckOutcome::Collides;
   int palm_hits = 0;
   for (double y : palm_)
     if (std::abs(y - yc) <= 0.5 * g_.palm_width) ++palm_hits;
   if (palm_hits > std::max(cfg_.max_collision_points, static_cast<int>(cfg_.outlier_fraction * palm_.size())))
-    return true;
-  if (!has_plane_) return false;
+    return CheckOutcome::Collides;
+  if (!has_plane_) return CheckOutcome::Pass;
   const double fy = 0.5 * w + g_.finger_thickness;
   const double xs[2] = {0.5 * g_.finger_breadth, 0.5 * g_.palm_breadth};
   const double yss[2] = {fy, 0.5 * g_.palm_width};
@@ -700,9 +702,9 @@ bool GripperCheck::collides(const Eigen::Matrix3d& R, const Eigen::Vector3d& cen
       for (double sy : {-1.0, 1.0})
         for (int iz = 0; iz < 2; ++iz) {
           const Eigen::Vector3d corner = centre + R * Eigen::Vector3d(sx * xs[b], sy * yss[b], zs[b][iz]);
-          if (plane_.head<3>().dot(corner) + plane_[3] < cfg_.support_clearance) return true;
+          if (plane_.head<3>().dot(corner) + plane_[3] < cfg_.support_clearance) return CheckOutcome::Support;
         }
-  return false;
+  return CheckOutcome::Pass;
 }
 
 bool GripperCheck::fingerHidden(const Eigen::Matrix3d& R, const Eigen::Vector3d& at, int s) const {
@@ -1348,7 +1350,7 @@ class GraspSearch {
   /// The gripper with cd's rotation, centred near c0 (re-centred along the closing axis by
   /// evaluate), approach unchanged ((cphi, sphi) = (1, 0)). nbrs_ must hold the environment
   /// within check_radius_ of c0.
-  bool checkAt(const Candidate& cd, const Eigen::Vector3d& c0, Candidate* out);
+  CheckOutcome checkAt(const Candidate& cd, const Eigen::Vector3d& c0, Candidate* out);
 
   const GraspGeneratorConfig& cfg_;
   const GripperGeometry& g_;
@@ -1536,7 +1538,7 @@ GraspFailure GraspSearch::refusal(std::string* reason) const {
   os << "no grasp fits: of " << total << " gripper poses checked, " << count(CheckOutcome::TooFewPoints)
      << " hold too little of the object, " << count(CheckOutcome::TooWide) << " need more than the " << g_.max_width
      << " m opening, " << count(CheckOutcome::Friction) << " touch a seen surface outside the friction cone (mu "
-     << cfg_.friction_coefficient << "), " << count(CheckOutcome::Collides)
+     << cfg_.friction_coefficient << "), " << count(CheckOutcome::Collides) + count(CheckOutcome::Support)
      << " collide with the cloud or the support, " << count(CheckOutcome::Hidden)
      << " put a finger or the palm in the volume hidden behind the view";
   *reason = os.str();
@@ -1646,13 +1648,14 @@ void GraspSearch::gather(const Eigen::Vector3d& centre, double radius) {
   }
 }
 
-bool GraspSearch::checkAt(const Candidate& cd, const Eigen::Vector3d& c0, Candidate* out) {
+CheckOutcome GraspSearch::checkAt(const Candidate& cd, const Eigen::Vector3d& c0, Candidate* out) {
   GripperCheck::Prepared pr;
   check_.prepare(c0, cd.R.col(1), cd.R.col(2), nbrs_, surf_, *po_.cloud, cd.single, cd.hint, &pr);
   *out = cd;
-  if (check_.evaluate(pr, 1.0, 0.0, &out->R, &out->c, &out->width, &out->m) != CheckOutcome::Pass) return false;
+  const CheckOutcome o = check_.evaluate(pr, 1.0, 0.0, &out->R, &out->c, &out->width, &out->m);
+  if (o != CheckOutcome::Pass) return o;
   out->antipodal = supportedQuality(cd.q, out->m, cfg_.single_contact_weight, cd.hint.valid);
-  return true;
+  return CheckOutcome::Pass;
 }
 
 void GraspSearch::refineOntoCentroid(std::vector<Candidate>* kept) {
@@ -1664,7 +1667,7 @@ void GraspSearch::refineOntoCentroid(std::vector<Candidate>* kept) {
     const Eigen::Vector3d c0 = cd.c + shift * x;
     gather(c0, check_radius_);
     Candidate r;
-    if (checkAt(cd, c0, &r)) {
+    if (checkAt(cd, c0, &r) == CheckOutcome::Pass) {
       score(r);
       cd = r;
     }
@@ -1673,9 +1676,12 @@ void GraspSearch::refineOntoCentroid(std::vector<Candidate>* kept) {
 
 void GraspSearch::refineDepth(std::vector<Candidate>* kept) {
   // Push the grasp along its approach axis (z) while the check passes, stop at the first
-  // failing step, back off by depth_margin if a step failed (see the header). One
-  // neighbourhood covers every step: radius check_radius + max/2 around the middle of the
-  // search segment.
+  // failing step, back off by depth_margin if a step failed on the cloud (see the header). A
+  // step stopped by the support alone (its plane is fitted on many points, not one noisy
+  // surface) is not backed off: the deepest passing depth is narrowed down by halving the last
+  // step twice, so an object lower than the fingers is closed on near its middle. One
+  // neighbourhood covers every step: radius check_radius + max/2 around the middle of the search
+  // segment.
   const double smax = cfg_.max_depth_shift;
   std::vector<std::pair<double, Candidate>> passed;  // (shift, checked pose), increasing
   for (Candidate& cd : *kept) {
@@ -1683,19 +1689,38 @@ void GraspSearch::refineDepth(std::vector<Candidate>* kept) {
     const Eigen::Vector3d base = cd.c;
     gather(base + 0.5 * smax * a, check_radius_ + 0.5 * smax);
     passed.clear();
-    bool blocked = false;
+    CheckOutcome stop = CheckOutcome::Pass;
+    double failed_at = smax;
     for (int k = 1;; ++k) {
       const double s = k * cfg_.depth_step >= smax - 1e-9 ? smax : k * cfg_.depth_step;
       Candidate r;
-      if (!checkAt(cd, base + s * a, &r)) {
-        blocked = true;
+      stop = checkAt(cd, base + s * a, &r);
+      if (stop != CheckOutcome::Pass) {
+        failed_at = s;
         break;
       }
       passed.emplace_back(s, r);
       if (s >= smax) break;
     }
+    if (stop == CheckOutcome::Support) {
+      double lo = passed.empty() ? 0.0 : passed.back().first, hi = failed_at;
+      for (int h = 0; h < 2; ++h) {
+        const double mid = 0.5 * (lo + hi);
+        Candidate r;
+        if (checkAt(cd, base + mid * a, &r) == CheckOutcome::Pass) {
+          passed.emplace_back(mid, r);
+          lo = mid;
+        } else {
+          hi = mid;
+        }
+      }
+      if (passed.empty()) continue;
+      cd = passed.back().second;
+      score(cd);
+      continue;
+    }
     if (passed.empty()) continue;  // the first step already fails: depth kept
-    const double target = passed.back().first - (blocked ? cfg_.depth_margin : 0.0);
+    const double target = passed.back().first - (stop != CheckOutcome::Pass ? cfg_.depth_margin : 0.0);
     if (target <= 1e-9) continue;  // never behind the original depth
     // The target pose if it is a checked step or passes the check; else the deepest
     // checked step in front of it.
@@ -1707,7 +1732,7 @@ void GraspSearch::refineDepth(std::vector<Candidate>* kept) {
         checked = std::abs(sp.first - target) < 1e-9;
       }
     Candidate r;
-    if (!checked && checkAt(cd, base + target * a, &r)) best = &r;
+    if (!checked && checkAt(cd, base + target * a, &r) == CheckOutcome::Pass) best = &r;
     if (!best) continue;
     cd = *best;
     score(cd);
