@@ -1378,7 +1378,7 @@ class GraspSearch {
 void GraspSearch::score(Candidate& cd) const {
   const Eigen::Vector3d a = cd.R.col(2);
   const Eigen::Vector3d o = cd.c - cfg_.approach_standoff * a;
-  const Eigen::Vector3d to_g = centre_ - o;
+  const Eigen::Vector3d to_g = po_.centroid - o;
   const double th = std::acos(std::max(-1.0, std::min(1.0, a.dot(to_g.normalized()))));
   cd.wc = std::exp(-0.5 * (th / sigma_) * (th / sigma_));
   cd.wp = std::pow(alignment(po_.subspaces, cd.R.col(1)), cfg_.pca_power) *
@@ -1503,9 +1503,13 @@ void GraspSearch::addFootprintHypotheses(std::vector<Hyp>* hyps) {
     }
     hyps->push_back({footprint.axis[a], footprint.centre, {}, {}, cfg_.footprint_weight, true, hint});
   }
-  // The object's middle: the completed footprint's centre (the cloud's centroid lies towards
-  // the camera, where one view shows the most surface), unless a round body's axis gives it.
-  if (!upright.valid) centre_ = footprint.centre;
+  // The object's middle, unless a round body's axis gives it: across the footprint's narrow
+  // side its completed centre (the grasp closes on the middle line; one view's centroid lies
+  // towards the camera, where it shows the most surface), along the long side the centroid
+  // (the centre of mass: a view shows an object's length).
+  const int narrow = footprint.width[0] <= footprint.width[1] ? 0 : 1;
+  if (!upright.valid)
+    centre_ = po_.centroid + footprint.axis[narrow] * footprint.axis[narrow].dot(footprint.centre - po_.centroid);
 }
 
 std::string GraspSearch::tooWide() const {
