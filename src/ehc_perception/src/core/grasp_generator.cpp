@@ -500,6 +500,9 @@ class GripperCheck {
       return true;
     };
     pr->local.clear();
+    pr->local.reserve(nbrs.size());
+    pr->surface.reserve(surface.size());
+    pr->surface_n.reserve(surface.size());
     Eigen::Vector3d l;
     for (const Eigen::Vector3d& p : nbrs)
       if (toLocal(p, &l)) pr->local.push_back(l);
@@ -749,6 +752,49 @@ struct Footprint {
   Eigen::Vector3d centre;    ///< rectangle centre at the height of `ref` above the plane
 };
 
+/// The points of the first `layers` convex layers of `pts` (onion peeling; a layer: the points
+/// on the boundary of the convex hull of what the layers before left). The j-th most extreme
+/// point along any direction lies on one of the first j layers, so the trimmed extents of the
+/// whole set along every direction are those of these points (k trimmed: k + 1 layers).
+std::vector<Eigen::Vector2d> convexLayers(std::vector<Eigen::Vector2d> pts, std::size_t layers) {
+  std::vector<Eigen::Vector2d> out;
+  auto cross = [](const Eigen::Vector2d& o, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    return (a - o).x() * (b - o).y() - (a - o).y() * (b - o).x();
+  };
+  for (std::size_t l = 0; l < layers && pts.size() > 2; ++l) {
+    std::sort(pts.begin(), pts.end(), [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+      return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
+    });
+    // Andrew's monotone chain (strict hull vertices).
+    std::vector<Eigen::Vector2d> hull(2 * pts.size());
+    std::size_t h = 0;
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      while (h >= 2 && cross(hull[h - 2], hull[h - 1], pts[i]) <= 0) --h;
+      hull[h++] = pts[i];
+    }
+    for (std::size_t i = pts.size() - 1, t = h + 1; i-- > 0;) {
+      while (h >= t && cross(hull[h - 2], hull[h - 1], pts[i]) <= 0) --h;
+      hull[h++] = pts[i];
+    }
+    hull.resize(h > 1 ? h - 1 : h);
+    // The layer: every point on the hull's boundary (ties along an edge included).
+    std::vector<Eigen::Vector2d> rest;
+    for (const Eigen::Vector2d& p : pts) {
+      bool on = false;
+      for (std::size_t e = 0; e < hull.size() && !on; ++e) {
+        const Eigen::Vector2d& a = hull[e];
+        const Eigen::Vector2d& b = hull[(e + 1) % hull.size()];
+        on = std::abs(cross(a, b, p)) <= 1e-12 * std::max(1.0, (b - a).squaredNorm()) &&
+             (p - a).dot(b - a) >= -1e-12 && (p - b).dot(a - b) >= -1e-12;
+      }
+      (on ? out : rest).push_back(p);
+    }
+    pts.swap(rest);
+  }
+  out.insert(out.end(), pts.size() <= 2 ? pts.begin() : pts.end(), pts.end());
+  return out;
+}
+
 Footprint supportFootprint(const Cloud& cloud, const Eigen::Vector4d& plane, std::size_t k,
                            const Eigen::Vector3d& ref) {
   const Eigen::Vector3d n = plane.head<3>();
@@ -759,6 +805,7 @@ Footprint supportFootprint(const Cloud& cloud, const Eigen::Vector4d& plane, std
     const Eigen::Vector3d v = p.getVector3fMap().cast<double>();
     q.emplace_back(e1.dot(v), e2.dot(v));
   }
+  q = convexLayers(std::move(q), k + 1);
   Footprint f;
   double best_area = std::numeric_limits<double>::max();
   std::vector<double> a(q.size()), b(q.size());
@@ -1319,7 +1366,19 @@ class GraspSearch {
             std::pow(0.5 * std::max(g_.palm_width, g_.max_width + 2 * g_.finger_thickness), 2) +
             std::pow(0.5 * std::max(g_.palm_breadth, g_.finger_breadth), 2) +
             std::pow(g_.finger_length + g_.palm_height, 2))),
-        sigma_(cfg.centroid_sigma_deg * kDeg), centre_(po.centroid) {}
+        sigma_(cfg.centroid_sigma_deg * kDeg), centre_(po.centroid) {
+    obj_p_.reserve(po.cloud->size());
+    obj_n_.reserve(po.cloud->size());
+    for (std::size_t i = 0; i < po.cloud->size(); ++i) {
+      const Eigen::Vector3d p = pt(*po.cloud, static_cast<int>(i));
+      const Eigen::Vector3d n = (*po.normals)[i].getNormalVector3fMap().cast<double>();
+      obj_p_.push_back(p);
+      obj_n_.push_back(!n.allFinite() || n.norm() < 0.5 ? Eigen::Vector3d::Zero()
+                                                         : n.dot(p - po.centroid) >= 0.0 ? n : Eigen::Vector3d(-n));
+    }
+    if (po.env != po.cloud)
+      for (std::size_t i = 0; i < po.env->size(); ++i) env_p_.push_back(pt(*po.env, static_cast<int>(i)));
+  }
 
   /// Antipodal pairs and single-contact hypotheses of the seeds; *any_pair: a pair was found.
   std::vector<Hyp> contactHypotheses(const std::vector<int>& seeds, bool* any_pair);
@@ -1365,8 +1424,11 @@ class GraspSearch {
   /// The object's middle for the refinement (see addFootprintHypotheses): the centroid without
   /// a support, else the completed footprint's centre, a round body's axis or a ball's centre.
   Eigen::Vector3d centre_;
-  std::vector<int> idx_;
-  std::vector<float> d2_;
+  /// The object's points, their normals (oriented outwards from the centroid; zero where none
+  /// was estimated) and the collision environment's points, for the neighbourhood scans (a
+  /// linear scan: the gripper's reach covers most of an object, where a tree search returns
+  /// nearly every point).
+  std::vector<Eigen::Vector3d> obj_p_, obj_n_, env_p_;
   std::vector<Eigen::Vector3d> nbrs_;
   std::vector<SurfacePoint> surf_;  ///< the object's points (with normals) gathered with nbrs_
   std::array<int, kOutcomes> outcomes_{};  ///< checkCandidates' evaluations per CheckOutcome
@@ -1394,15 +1456,15 @@ std::vector<Hyp> GraspSearch::contactHypotheses(const std::vector<int>& seeds, b
     const Eigen::Vector3d pi = pt(cloud, i);
     const Eigen::Vector3d ni = normals[static_cast<std::size_t>(i)].getNormalVector3fMap().cast<double>();
     if (!ni.allFinite() || ni.norm() < 0.5) continue;
-    po_.tree->radiusSearch(cloud[static_cast<std::size_t>(i)], g_.max_width, idx_, d2_);
     std::vector<std::pair<double, int>> partners;
-    for (int j : idx_) {
-      const Eigen::Vector3d d = pt(cloud, j) - pi;
-      const double L = d.norm();
-      if (L < 2.0 * cfg_.voxel_size || L + 2.0 * g_.clearance > g_.max_width) continue;
+    const double lmin2 = std::pow(2.0 * cfg_.voxel_size, 2), lmax2 = std::pow(g_.max_width - 2.0 * g_.clearance, 2);
+    for (int j = 0; j < static_cast<int>(obj_p_.size()); ++j) {
+      const Eigen::Vector3d d = obj_p_[static_cast<std::size_t>(j)] - pi;
+      const double L2 = d.squaredNorm();
+      if (L2 < lmin2 || L2 > lmax2) continue;
+      const double L = std::sqrt(L2);
       const Eigen::Vector3d y = d / L;
-      const Eigen::Vector3d nj = normals[static_cast<std::size_t>(j)].getNormalVector3fMap().cast<double>();
-      if (!nj.allFinite()) continue;
+      const Eigen::Vector3d& nj = obj_n_[static_cast<std::size_t>(j)];
       const double q = std::min(std::abs(ni.dot(y)), std::abs(nj.dot(y)));
       if (q >= cos_fc_) partners.emplace_back(q, j);
     }
@@ -1584,6 +1646,9 @@ std::vector<Pending> GraspSearch::rankApproaches(std::vector<Hyp>* hyps) {
 std::vector<Candidate> GraspSearch::checkCandidates(const std::vector<Hyp>& hyps, const std::vector<Pending>& pending) {
   std::vector<Candidate> cands;
   std::map<int, GripperCheck::Prepared> prepared;
+  // A hypothesis's prepared neighbourhood is kept until its last approach is checked.
+  std::vector<int> remaining(hyps.size(), 0);
+  for (const Pending& pd : pending) ++remaining[static_cast<std::size_t>(pd.hyp)];
   const std::size_t enough = static_cast<std::size_t>(std::max(4 * cfg_.top_k, 40));
   int evaluations = 0;
   for (const Pending& pd : pending) {
@@ -1600,6 +1665,7 @@ std::vector<Candidate> GraspSearch::checkCandidates(const std::vector<Hyp>& hyps
     const double phi = 2.0 * M_PI * pd.step / cfg_.approach_steps;
     Candidate cd;
     const CheckOutcome o = check_.evaluate(it->second, std::cos(phi), std::sin(phi), &cd.R, &cd.c, &cd.width, &cd.m);
+    if (--remaining[static_cast<std::size_t>(pd.hyp)] == 0) prepared.erase(it);
     ++outcomes_[static_cast<std::size_t>(o)];
     if (first_refusal_ == CheckOutcome::TooFewPoints) {
       first_refusal_ = o;
@@ -1636,20 +1702,18 @@ std::vector<Candidate> GraspSearch::suppress(const std::vector<Candidate>& in, s
 }
 
 void GraspSearch::gather(const Eigen::Vector3d& centre, double radius) {
-  pcl::PointXYZ pc(static_cast<float>(centre.x()), static_cast<float>(centre.y()),
-                   static_cast<float>(centre.z()));
-  po_.env_tree->radiusSearch(pc, radius, idx_, d2_);
+  const double r2 = radius * radius;
   nbrs_.clear();
-  for (int e : idx_) nbrs_.push_back(pt(*po_.env, e));
-  po_.tree->radiusSearch(pc, radius, idx_, d2_);
   surf_.clear();
-  for (int e : idx_) {
-    // Normals oriented outwards from the object's centre (convex objects; a cloud of one view
-    // or of several).
-    const Eigen::Vector3d p = pt(*po_.cloud, e);
-    const Eigen::Vector3d n = (*po_.normals)[static_cast<std::size_t>(e)].getNormalVector3fMap().cast<double>();
-    if (n.allFinite() && n.norm() > 0.5) surf_.push_back({p, n.dot(p - po_.centroid) >= 0.0 ? n : Eigen::Vector3d(-n)});
+  // The object's points (with their normals, oriented outwards from the object's centre: convex
+  // objects; a cloud of one view or of several), and the environment's when it is more.
+  for (std::size_t e = 0; e < obj_p_.size(); ++e) {
+    if ((obj_p_[e] - centre).squaredNorm() > r2) continue;
+    if (env_p_.empty()) nbrs_.push_back(obj_p_[e]);
+    if (!obj_n_[e].isZero()) surf_.push_back({obj_p_[e], obj_n_[e]});
   }
+  for (const Eigen::Vector3d& p : env_p_)
+    if ((p - centre).squaredNorm() <= r2) nbrs_.push_back(p);
 }
 
 CheckOutcome GraspSearch::checkAt(const Candidate& cd, const Eigen::Vector3d& c0, Candidate* out) {
