@@ -142,7 +142,9 @@ struct GraspGeneratorConfig {
   /// the object's points (seen from the viewpoint given to generate, the camera's origin); off
   /// when the cloud's viewpoint is not known.
   bool hidden_volume_check = true;
-  double max_approach_tilt_deg = 95.0;  ///< max angle between approach and straight down
+  /// max angle between the approach and straight down, and (the viewpoint known: with
+  /// hidden_volume_check) between the approach and the view direction (camera to centroid)
+  double max_approach_tilt_deg = 95.0;
   int max_collision_points = 2;       ///< cloud points tolerated inside fingers/palm (noise)
   double outlier_fraction = 0.03;     ///< ... or this fraction of the points there, if more
   int min_points_between_fingers = 10;

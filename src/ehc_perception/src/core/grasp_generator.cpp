@@ -1186,6 +1186,9 @@ struct PreparedObject {
   double noise = 0.0;  ///< m, the filtered cloud's estimated noise (estimateNoise)
   double spacing = 0.0;  ///< m, the filtered cloud's sample spacing (sampleSpacing), at least `leaf`
   HiddenVolume hidden;  ///< behind the view from the camera (disabled without hidden_volume_check)
+  /// From the camera to the centroid (unit), zero when the viewpoint is not known (without
+  /// hidden_volume_check): approaches are kept within max_approach_tilt_deg of it.
+  Eigen::Vector3d view_dir = Eigen::Vector3d::Zero();
 };
 
 /// The noise of a cloud from its normals' plane fits: a flat patch of radius r with points
@@ -1310,6 +1313,8 @@ void estimateNormalsAndEnvironment(const GraspGeneratorConfig& cfg, const PointL
   ne.setRadiusSearch(radius);
   ne.compute(*po->normals);
   po->noise = estimateNoise(*po->normals, radius);
+  if (cfg.hidden_volume_check && (po->centroid - viewpoint).norm() > 1e-6)
+    po->view_dir = (po->centroid - viewpoint).normalized();
   if (cfg.hidden_volume_check)
     po->hidden = HiddenVolume(*po->cloud, *po->normals, po->centroid, viewpoint, po->leaf, 3.0 * po->noise + 2.0 * po->leaf);
 
@@ -1627,7 +1632,10 @@ std::vector<Pending> GraspSearch::rankApproaches(std::vector<Hyp>* hyps) {
     for (int s = 0; s < cfg_.approach_steps; ++s) {
       const double phi = 2.0 * M_PI * s / cfg_.approach_steps;
       const Eigen::Vector3d a = std::cos(phi) * hp.u + std::sin(phi) * hp.v;
-      if (a.dot(-up) < cos_tilt_ - 1e-12) continue;
+      // Within the tilt limit of straight down and, the gripper coming from the side the view
+      // shows (its path through seen free space), of the view direction.
+      if (a.dot(-up) < cos_tilt_ - 1e-12 || (!po_.view_dir.isZero() && a.dot(po_.view_dir) < cos_tilt_ - 1e-12))
+        continue;
       Candidate cd;
       cd.R.col(2) = a;
       cd.R.col(1) = hp.y;
