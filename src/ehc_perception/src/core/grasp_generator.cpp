@@ -832,9 +832,11 @@ Footprint supportFootprint(const Cloud& cloud, const Eigen::Vector4d& plane, std
 
 /// Circle through 2-D points by Gauss-Newton on the geometric distances, from centre `c` and
 /// radius `r`; with `resting`, the circle touches the line h = 0 (centre (u, r)). Points farther
-/// than 3 x tolerance are dropped after the first iterations (edges of flat faces, strays).
-/// Valid (true) if at least 2/3 of the points are kept and their RMS distance is within
-/// `tolerance`.
+/// than 3 x tolerance are dropped after the first iterations (edges of flat faces, strays);
+/// upright (not `resting`), points inside it by more than `tolerance` too (a narrower section of
+/// the body, e.g. a bottle's shoulder, whose sloped mantle passes the normal filter: the widest
+/// section is the one the fingers must clear). Valid (true) if at least 2/3 of the points are
+/// kept and their RMS distance is within `tolerance`.
 bool fitCircle(const std::vector<Eigen::Vector2d>& q, bool resting, double tolerance,
                Eigen::Vector2d* c, double* r) {
   if (q.size() < 10 || *r <= 0.0) return false;
@@ -850,7 +852,7 @@ bool fitCircle(const std::vector<Eigen::Vector2d>& q, bool resting, double toler
       const double rho = w.norm();
       if (rho < 1e-9) continue;
       const double d = rho - *r;
-      if (it >= 3 && std::abs(d) > 3.0 * tolerance) continue;
+      if (it >= 3 && (std::abs(d) > 3.0 * tolerance || (!resting && d < -tolerance))) continue;
       const Eigen::Vector3d J = resting ? Eigen::Vector3d(-w.x() / rho, -w.y() / rho - 1.0, 0.0)
                                         : Eigen::Vector3d(-w.x() / rho, -w.y() / rho, -1.0);
       JtJ += J * J.transpose();
