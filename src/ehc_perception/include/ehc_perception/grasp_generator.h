@@ -13,17 +13,22 @@
 // approach direction and the direction from the gripper's approach origin to the centroid)
 // x PCA weight (finger closing axis, and approach axis, aligned with the object's principal
 // axes). Refinement: the grasp is centred between the object's measured sides along the
-// closing axis and moved along the finger breadth axis onto the centroid's projection.
+// closing axis and moved along the finger breadth axis onto the object's middle: on a support,
+// across the footprint's narrow side the completed footprint's centre and along its long side
+// the centroid (one view's centroid lies towards the camera, where it shows the most surface;
+// along its length it is the centre of mass), a round body's axis or a ball's centre.
 // Depth refinement: the contact pairs give a grasp centre near the contacts, often close to
 // an edge (e.g. just below the top face of a standing box, fingers overlapping the object by
 // ~2 cm). The grasp is then pushed forward along its approach axis (z) in steps of
 // depth_step, up to max_depth_shift, re-running the same finger / palm / width / support
 // check at each step; the search stops at the first step that fails (palm reaching the
 // object's top, fingertips reaching support_clearance above the support, ...). When a step
-// failed, the grasp is backed off by depth_margin from the deepest passing step (never
-// behind its original depth), so depth noise does not bring the palm onto the object: the
-// gripper then keeps at least ~depth_margin from whatever stopped it. When no step failed
-// (max_depth_shift reached) there is no back-off. Refined grasps are rescored, and as
+// failed on the cloud, the grasp is backed off by depth_margin from the deepest passing step
+// (never behind its original depth), so depth noise does not bring the palm onto the object:
+// the gripper then keeps at least ~depth_margin from whatever stopped it. A step stopped by the
+// support alone (support_clearance; the plane is fitted on many points) is not backed off: the
+// last step is halved twice, so an object lower than the fingers is closed on near its middle
+// height. When no step failed (max_depth_shift reached) there is no back-off. Refined grasps are rescored, and as
 // several candidates can converge onto the same deep pose, suppressed again.
 //
 // Single-view clouds of objects on a support. Besides the antipodal pairs and
@@ -35,8 +40,11 @@
 // angles (no antipodal pair there, the seeds' normals tilted up). The object's extent across a
 // closing axis counts the unseen volume below the seen points down to the support, and round
 // sections are completed by a fitted circle (round_fit_tolerance): a cylinder lying across the
-// axis (circle resting on the support) or standing (circular footprint of its mantle); an
-// upright round object's circle bounds every hypothesis closing parallel to the support.
+// axis (circle resting on the support) or standing (circular footprint of its mantle; the points
+// inside the circle by more than the tolerance, a narrower section such as a bottle's shoulder,
+// are left out of its fit, and a circle more than 1.25 x the seen footprint's longer side is an
+// arc of something else, e.g. a banana's bent side); an upright round object's circle bounds
+// every hypothesis closing parallel to the support through its middle half.
 //
 // Measured width (robust estimates, not extreme points): each side of the object between the
 // fingers is its contact surface fitted by least squares: the object's points in the fingers'
@@ -147,6 +155,9 @@ struct GraspGeneratorConfig {
   double max_approach_tilt_deg = 95.0;
   int max_collision_points = 2;       ///< cloud points tolerated inside fingers/palm (noise)
   double outlier_fraction = 0.03;     ///< ... or this fraction of the points there, if more
+  /// Object points needed between the fingers, at the voxel grid's density: a cloud sparser than
+  /// voxel_size (its median nearest-neighbour spacing s, e.g. a small object far from a coarse
+  /// camera) needs the same surface in fewer points: min_points x (voxel_size / s)^2, at least 3.
   int min_points_between_fingers = 10;
   double support_clearance = 0.005;   ///< m, gripper must stay this far above the support
   bool assume_support_below = true;   ///< object clouds: support plane at the lowest point
