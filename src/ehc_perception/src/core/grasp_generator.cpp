@@ -1438,6 +1438,7 @@ class GraspSearch {
   std::vector<Eigen::Vector3d> obj_p_, obj_n_, env_p_;
   std::vector<Eigen::Vector3d> nbrs_;
   std::vector<SurfacePoint> surf_;  ///< the object's points (with normals) gathered with nbrs_
+  GripperCheck::Prepared scratch_;  ///< checkAt's (its buffers reused)
   std::array<int, kOutcomes> outcomes_{};  ///< checkCandidates' evaluations per CheckOutcome
   /// The outcome of the first pose checked (best first) that held enough of the object.
   CheckOutcome first_refusal_ = CheckOutcome::TooFewPoints;
@@ -1658,6 +1659,7 @@ std::vector<Candidate> GraspSearch::checkCandidates(const std::vector<Hyp>& hyps
   std::map<int, GripperCheck::Prepared> prepared;
   // A hypothesis's prepared neighbourhood is kept until its last approach is checked.
   std::vector<int> remaining(hyps.size(), 0);
+  std::vector<GripperCheck::Prepared> spare;
   for (const Pending& pd : pending) ++remaining[static_cast<std::size_t>(pd.hyp)];
   const std::size_t enough = static_cast<std::size_t>(std::max(4 * cfg_.top_k, 40));
   int evaluations = 0;
@@ -1669,13 +1671,18 @@ std::vector<Candidate> GraspSearch::checkCandidates(const std::vector<Hyp>& hyps
     if (it == prepared.end()) {
       // Neighbourhood of the grasp for the collision checks (shared by all approaches).
       gather(hp.c0, check_radius_);
-      it = prepared.emplace(pd.hyp, GripperCheck::Prepared()).first;
+      // A freed hypothesis's buffers are reused (large allocations would go back to the system).
+      it = prepared.emplace(pd.hyp, spare.empty() ? GripperCheck::Prepared() : std::move(spare.back())).first;
+      if (!spare.empty()) spare.pop_back();
       check_.prepare(hp.c0, hp.y, hp.u, nbrs_, surf_, *po_.cloud, hp.single, hp.hint, &it->second);
     }
     const double phi = 2.0 * M_PI * pd.step / cfg_.approach_steps;
     Candidate cd;
     const CheckOutcome o = check_.evaluate(it->second, std::cos(phi), std::sin(phi), &cd.R, &cd.c, &cd.width, &cd.m);
-    if (--remaining[static_cast<std::size_t>(pd.hyp)] == 0) prepared.erase(it);
+    if (--remaining[static_cast<std::size_t>(pd.hyp)] == 0) {
+      spare.push_back(std::move(it->second));
+      prepared.erase(it);
+    }
     ++outcomes_[static_cast<std::size_t>(o)];
     if (first_refusal_ == CheckOutcome::TooFewPoints) {
       first_refusal_ = o;
@@ -1727,7 +1734,7 @@ void GraspSearch::gather(const Eigen::Vector3d& centre, double radius) {
 }
 
 CheckOutcome GraspSearch::checkAt(const Candidate& cd, const Eigen::Vector3d& c0, Candidate* out) {
-  GripperCheck::Prepared pr;
+  GripperCheck::Prepared& pr = scratch_;
   check_.prepare(c0, cd.R.col(1), cd.R.col(2), nbrs_, surf_, *po_.cloud, cd.single, cd.hint, &pr);
   *out = cd;
   const CheckOutcome o = check_.evaluate(pr, 1.0, 0.0, &out->R, &out->c, &out->width, &out->m);
