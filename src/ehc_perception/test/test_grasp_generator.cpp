@@ -3,6 +3,7 @@
 #include "ehc_common/config_node.h"
 #include "ehc_perception/grasp_generator.h"
 #include "ehc_test/perception_fixtures.h"
+#include "ehc_test/test_seed.h"
 
 #include <gtest/gtest.h>
 
@@ -93,6 +94,33 @@ TEST(GraspGenerator, StandingBoxSeenFromOneViewpoint) {
   EXPECT_LE(angleToAxis(R.col(1), T.linear().col(0)), 10 * kDeg);
   EXPECT_LT(best.width, 0.07);
   EXPECT_GT(best.width, 0.045);
+}
+
+// Random boxes seen from random viewpoints (any azimuth, 20-60 deg up): every grasp approaches
+// from the side the view shows (within max_approach_tilt_deg of the view direction), and a box
+// narrower than the opening keeps a grasp.
+TEST(GraspGenerator, ApproachesComeFromTheSideTheViewShows) {
+  std::mt19937 rng(ehc_test::testSeed("GraspGenerator.ApproachesComeFromTheSideTheViewShows"));
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const GraspGeneratorConfig cfg;
+  const GraspGenerator gen(cfg);
+  for (int i = 0; i < 6; ++i) {
+    const Eigen::Vector3d size(0.03 + 0.03 * unit(rng), 0.03 + 0.09 * unit(rng), 0.04 + 0.08 * unit(rng));
+    const Eigen::Isometry3d T = pose(0.6, 0.0, 0.5 * size.z(), 2.0 * M_PI * unit(rng));
+    Surface s = boxSurface(size, 0.003);
+    s.transform(T);
+    const double az = 2.0 * M_PI * unit(rng), el = (20.0 + 40.0 * unit(rng)) * kDeg, d = 0.5 + 0.2 * unit(rng);
+    const Eigen::Vector3d eye =
+        T.translation() + d * Eigen::Vector3d(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
+    const Surface visible = s.visibleFrom(eye);
+    const GraspResult r = gen.generate(visible.noisy(0.0015, static_cast<unsigned>(i + 1)), eye);
+    SCOPED_TRACE("box " + std::to_string(i) + ", azimuth " + std::to_string(az / kDeg) + " deg, elevation " +
+                 std::to_string(el / kDeg) + " deg");
+    ASSERT_FALSE(r.grasps.empty()) << r.reason;
+    const Eigen::Vector3d view = (r.centroids.front() - eye).normalized();
+    for (const Grasp& g : r.grasps)
+      EXPECT_GE(g.pose.linear().col(2).dot(view), std::cos(cfg.max_approach_tilt_deg * kDeg) - 1e-9);
+  }
 }
 
 TEST(GraspGenerator, StandingCylinderWithNoise) {
