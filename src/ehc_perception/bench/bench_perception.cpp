@@ -226,8 +226,12 @@ void benchCloudPaths(double* sink) {
 
 }  // namespace
 
-int main() {
+int main(int argc, char** argv) {
   double sink = 0.0;
+  if (argc > 1 && std::string(argv[1]) == "grasps") {  // the grasp generator's cases only
+    benchGrasps(&sink);
+    return sink == 12345.678 ? 1 : 0;
+  }
   benchTags();
   benchGrasps(&sink);
   benchObstacles();

@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#include <map>
 #include <random>
 #include <string>
 #include <vector>
@@ -59,6 +60,35 @@ struct Surface {
     for (std::size_t i = 0; i < points.size(); ++i)
       if (normals[i].cast<double>().dot(view - points[i].cast<double>()) > 0)
         s.add(points[i].cast<double>(), normals[i].cast<double>());
+    return s;
+  }
+  /// Keeps what a camera at `view` sees of a non-convex surface: the points facing it that are
+  /// nearest to it in their direction (a z-buffer over bins of `bin` rad around the direction
+  /// to the centroid; a point more than `depth_tol` m behind the nearest of its bin is occluded).
+  Surface occludedFrom(const Eigen::Vector3d& view, double bin = 0.006, double depth_tol = 0.003) const {
+    const Eigen::Vector3d fwd = (centroid() - view).normalized();
+    const Eigen::Vector3d e1 = fwd.unitOrthogonal(), e2 = fwd.cross(e1);
+    auto key = [&](const Eigen::Vector3d& p, double* range) {
+      const Eigen::Vector3d d = p - view;
+      *range = d.norm();
+      const double z = d.dot(fwd);
+      return std::make_pair(static_cast<long>(std::floor(d.dot(e1) / z / bin)),
+                            static_cast<long>(std::floor(d.dot(e2) / z / bin)));
+    };
+    std::map<std::pair<long, long>, double> nearest;
+    const Surface facing = visibleFrom(view);
+    for (const auto& pf : facing.points) {
+      double r = 0.0;
+      const auto k = key(pf.cast<double>(), &r);
+      auto it = nearest.find(k);
+      if (it == nearest.end() || r < it->second) nearest[k] = r;
+    }
+    Surface s;
+    for (std::size_t i = 0; i < facing.points.size(); ++i) {
+      double r = 0.0;
+      const auto k = key(facing.points[i].cast<double>(), &r);
+      if (r <= nearest[k] + depth_tol) s.add(facing.points[i].cast<double>(), facing.normals[i].cast<double>());
+    }
     return s;
   }
   PointList noisy(double sigma, unsigned seed) const {
@@ -159,6 +189,60 @@ inline Surface bottleSurface(double r_body, double body_len, double shoulder_len
   Surface neck = cylinderSurface(r_neck, body_len + shoulder_len,
                                  body_len + shoulder_len + neck_len, step, false, true);
   s.append(neck);
+  return s;
+}
+
+/// A mug standing on z = 0, its axis along z: an open cylindrical body (outer radius r, wall
+/// `wall` thick, `height` high: outer and inner mantle, the rim's annulus on top, the inner
+/// bottom `wall` above the support) and a handle on its +x side: a torus arc (the bar's radius
+/// `bar`) in the xz plane whose centre line, a half circle from the wall, runs out to `reach` m
+/// beyond the mantle.
+inline Surface mugSurface(double r, double wall, double height, double bar, double reach, double step) {
+  Surface s = cylinderSurface(r, 0.0, height, step, false, false);
+  Surface inner = cylinderSurface(r - wall, wall, height, step, true, false);
+  for (auto& n : inner.normals) n = -n;  // facing the axis (the bottom up)
+  s.append(inner);
+  const int na = std::max(8, static_cast<int>(std::round(2 * M_PI * r / step)));
+  for (double rr = r - wall; rr <= r + 1e-9; rr += 0.5 * step)
+    for (int i = 0; i < na; ++i) {
+      const double a = 2 * M_PI * i / na;
+      s.add(Eigen::Vector3d(rr * std::cos(a), rr * std::sin(a), height), Eigen::Vector3d::UnitZ());
+    }
+  // Handle: centre line a half circle of radius R about (r, 0, height / 2) in the xz plane.
+  const double R = reach + 0.5 * bar, zc = 0.5 * height;
+  const int nu = std::max(8, static_cast<int>(std::round(M_PI * R / step)));
+  const int nv = std::max(8, static_cast<int>(std::round(2 * M_PI * bar / step)));
+  for (int i = 0; i <= nu; ++i) {
+    const double u = -0.5 * M_PI + M_PI * i / nu;
+    const Eigen::Vector3d c(r - 0.5 * bar + R * std::cos(u), 0.0, zc + R * std::sin(u));
+    const Eigen::Vector3d radial(std::cos(u), 0.0, std::sin(u));
+    for (int j = 0; j < nv; ++j) {
+      const double v = 2 * M_PI * j / nv;
+      const Eigen::Vector3d n = std::cos(v) * radial + std::sin(v) * Eigen::Vector3d::UnitY();
+      const Eigen::Vector3d p = c + bar * n;
+      if (std::hypot(p.x(), p.y()) > r) s.add(p, n);  // the part inside the body is not surface
+    }
+  }
+  return s;
+}
+
+/// A prism lying on z = 0 along y, `length` long, its section a right isosceles triangle with
+/// the right angle on top (a roof: faces 45 deg from the horizontal, `base` wide); the bottom
+/// is not sampled.
+inline Surface roofPrismSurface(double base, double length, double step) {
+  Surface s;
+  const double h = 0.5 * base;
+  const Eigen::Vector3d nl = Eigen::Vector3d(-1, 0, 1).normalized(), nr = Eigen::Vector3d(1, 0, 1).normalized();
+  for (double y = -0.5 * length; y <= 0.5 * length + 1e-9; y += step)
+    for (double t = 0.0; t <= h * std::sqrt(2.0) + 1e-9; t += step) {
+      const double d = t / std::sqrt(2.0);
+      s.add(Eigen::Vector3d(-h + d, y, d), nl);
+      s.add(Eigen::Vector3d(h - d, y, d), nr);
+    }
+  for (int e : {-1, 1})
+    for (double x = -h; x <= h + 1e-9; x += step)
+      for (double z = 0.0; z <= h - std::abs(x) + 1e-9; z += step)
+        s.add(Eigen::Vector3d(x, 0.5 * e * length, z), Eigen::Vector3d(0, e, 0));
   return s;
 }
 

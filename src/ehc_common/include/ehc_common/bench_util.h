@@ -1,12 +1,14 @@
 #pragma once
 // Tiny benchmark helper shared by the bench_* executables: times `n` calls of `fn(i)` one by
 // one with steady_clock and prints one JSON line with the median, p99 and mean in microseconds
-// (ehc_common::Json, the project's one number format).
+// (ehc_common::Json, the project's one number format), and the median of the calling thread's
+// CPU time (cpu_median_us: what the call costs whatever else runs on the machine).
 
 #include "ehc_common/json.h"
 
 #include <algorithm>
 #include <chrono>
+#include <ctime>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -52,18 +54,30 @@ inline void benchPrint(const std::string& name, std::size_t n, const BenchStats&
   benchPrintValues(name, values);
 }
 
+/// CPU time of the calling thread, in microseconds.
+inline double threadCpuUs() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return 1e6 * static_cast<double>(ts.tv_sec) + 1e-3 * static_cast<double>(ts.tv_nsec);
+}
+
 template <class Fn>
 BenchStats benchReport(const std::string& name, int n, Fn&& fn, const Json& extra = Json::object()) {
-  std::vector<double> us;
+  std::vector<double> us, cpu;
   us.reserve(static_cast<std::size_t>(n));
+  cpu.reserve(static_cast<std::size_t>(n));
   for (int i = 0; i < n; ++i) {
+    const double c0 = threadCpuUs();
     const auto t0 = std::chrono::steady_clock::now();
     fn(i);
     const auto t1 = std::chrono::steady_clock::now();
+    cpu.push_back(threadCpuUs() - c0);
     us.push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
   }
   const BenchStats s = benchStats(us);
-  benchPrint(name, us.size(), s, extra);
+  Json values = extra;
+  values["cpu_median_us"] = jsonNumber(benchStats(cpu).median_us);
+  benchPrint(name, us.size(), s, values);
   return s;
 }
 

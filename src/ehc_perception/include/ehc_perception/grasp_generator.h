@@ -13,17 +13,22 @@
 // approach direction and the direction from the gripper's approach origin to the centroid)
 // x PCA weight (finger closing axis, and approach axis, aligned with the object's principal
 // axes). Refinement: the grasp is centred between the object's measured sides along the
-// closing axis and moved along the finger breadth axis onto the centroid's projection.
+// closing axis and moved along the finger breadth axis onto the object's middle: on a support,
+// across the footprint's narrow side the completed footprint's centre and along its long side
+// the centroid (one view's centroid lies towards the camera, where it shows the most surface;
+// along its length it is the centre of mass), a round body's axis or a ball's centre.
 // Depth refinement: the contact pairs give a grasp centre near the contacts, often close to
 // an edge (e.g. just below the top face of a standing box, fingers overlapping the object by
 // ~2 cm). The grasp is then pushed forward along its approach axis (z) in steps of
 // depth_step, up to max_depth_shift, re-running the same finger / palm / width / support
 // check at each step; the search stops at the first step that fails (palm reaching the
 // object's top, fingertips reaching support_clearance above the support, ...). When a step
-// failed, the grasp is backed off by depth_margin from the deepest passing step (never
-// behind its original depth), so depth noise does not bring the palm onto the object: the
-// gripper then keeps at least ~depth_margin from whatever stopped it. When no step failed
-// (max_depth_shift reached) there is no back-off. Refined grasps are rescored, and as
+// failed on the cloud, the grasp is backed off by depth_margin from the deepest passing step
+// (never behind its original depth), so depth noise does not bring the palm onto the object:
+// the gripper then keeps at least ~depth_margin from whatever stopped it. A step stopped by the
+// support alone (support_clearance; the plane is fitted on many points) is not backed off: the
+// last step is halved twice, so an object lower than the fingers is closed on near its middle
+// height. When no step failed (max_depth_shift reached) there is no back-off. Refined grasps are rescored, and as
 // several candidates can converge onto the same deep pose, suppressed again.
 //
 // Single-view clouds of objects on a support. Besides the antipodal pairs and
@@ -35,8 +40,11 @@
 // angles (no antipodal pair there, the seeds' normals tilted up). The object's extent across a
 // closing axis counts the unseen volume below the seen points down to the support, and round
 // sections are completed by a fitted circle (round_fit_tolerance): a cylinder lying across the
-// axis (circle resting on the support) or standing (circular footprint of its mantle); an
-// upright round object's circle bounds every hypothesis closing parallel to the support.
+// axis (circle resting on the support) or standing (circular footprint of its mantle; the points
+// inside the circle by more than the tolerance, a narrower section such as a bottle's shoulder,
+// are left out of its fit, and a circle more than 1.25 x the seen footprint's longer side is an
+// arc of something else, e.g. a banana's bent side); an upright round object's circle bounds
+// every hypothesis closing parallel to the support through its middle half.
 //
 // Measured width (robust estimates, not extreme points): each side of the object between the
 // fingers is its contact surface fitted by least squares: the object's points in the fingers'
@@ -61,6 +69,23 @@
 // the rule, the reason is "too wide: the object measures W m across its narrowest axis
 // parallel to the support; the gripper opens 0.07 m and needs C m clearance each side
 // (objects up to X m)" and the failure GraspFailure::TooWide.
+//
+// Slanted contacts: a side without a contact patch in the friction cone whose outermost points
+// face the finger within slanted_contact_deg (a face tilted from the closing axis), or whose
+// fitted surface's normal at the contact is outside the cone, is a seen contact that slips: the
+// pose is refused (friction). A face running along the closing axis (a top face up to its
+// unseen far edge) leaves the side unseen.
+//
+// Hidden volume (hidden_volume_check; the viewpoint given to generate is the camera's origin):
+// along the rays from the camera, the space behind the object's points facing the camera and
+// not in front of a point facing away (clouds seen from several sides). A finger at a seen
+// contact, or at a contact pair's side bounded only by its last samples, and the palm's face
+// must stay out of it (3 x 5 and 3 x 3 samples, a quarter tolerated); a finger at an unseen
+// side of a single-contact or footprint hypothesis is in it by construction and ranks lower.
+//
+// No grasp: the failure is what refused the best-ranked pose that held enough of the object
+// (too wide, friction, collides, hidden volume), the reason counts every check's refusals; an
+// object whose footprint breaks the margin rule is too wide, with the sentence below.
 //
 // Grasp frame: origin between the fingertips at the grasp centre, z = approach direction
 // (into the object), y = finger closing direction, x = y cross z.
@@ -116,9 +141,23 @@ struct GraspGeneratorConfig {
   /// Contact pairs, the fitted contact surfaces' normals and the measured contacts are checked
   /// against it.
   double friction_coefficient = 0.36;
-  double max_approach_tilt_deg = 95.0;  ///< max angle between approach and straight down
+  /// deg: a side whose contact patch is not within the friction cone but whose outermost
+  /// points' normals are within this angle of the closing axis is a contact the view shows at
+  /// a slant: the finger would slip, the grasp is refused (a face running along the closing
+  /// axis, e.g. a top face up to its unseen far edge, is beyond it: that side is unseen).
+  double slanted_contact_deg = 65.0;
+  /// Fingers at seen contacts and the palm must stay out of the volume the view hides behind
+  /// the object's points (seen from the viewpoint given to generate, the camera's origin); off
+  /// when the cloud's viewpoint is not known.
+  bool hidden_volume_check = true;
+  /// max angle between the approach and straight down, and (the viewpoint known: with
+  /// hidden_volume_check) between the approach and the view direction (camera to centroid)
+  double max_approach_tilt_deg = 95.0;
   int max_collision_points = 2;       ///< cloud points tolerated inside fingers/palm (noise)
   double outlier_fraction = 0.03;     ///< ... or this fraction of the points there, if more
+  /// Object points needed between the fingers, at the voxel grid's density: a cloud sparser than
+  /// voxel_size (its median nearest-neighbour spacing s, e.g. a small object far from a coarse
+  /// camera) needs the same surface in fewer points: min_points x (voxel_size / s)^2, at least 3.
   int min_points_between_fingers = 10;
   double support_clearance = 0.005;   ///< m, gripper must stay this far above the support
   bool assume_support_below = true;   ///< object clouds: support plane at the lowest point
@@ -183,6 +222,8 @@ enum class GraspFailure {
   TooWide,           ///< the object is wider than the opening across every closing axis tried
   NoAntipodalPair,   ///< no contact pair within the friction cone and the opening
   Collides,          ///< every candidate collides with the cloud or the support, or does not fit
+  Friction,          ///< every fitting candidate touches a seen surface outside the friction cone
+  HiddenVolume,      ///< every fitting candidate puts a finger or the palm in the volume hidden behind the view
   TargetTooFar,      ///< generateForTarget: the nearest object is outside the target gate
 };
 std::string toString(GraspFailure f);

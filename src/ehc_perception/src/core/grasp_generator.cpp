@@ -19,6 +19,8 @@
 #include <pcl/segmentation/sac_segmentation.h>
 
 #include <algorithm>
+#include <array>
+#include <tuple>
 #include <map>
 #include <cmath>
 #include <numeric>
@@ -35,7 +37,7 @@ namespace {
 
 const char* kOwner = "GraspGenerator";
 
-constexpr ehc_common::EnumNames<GraspFailure, 11> kFailureNames = {{
+constexpr ehc_common::EnumNames<GraspFailure, 13> kFailureNames = {{
     {GraspFailure::None, "none"},
     {GraspFailure::EmptyCloud, "empty_cloud"},
     {GraspFailure::NoFinitePoints, "no_finite_points"},
@@ -46,9 +48,13 @@ constexpr ehc_common::EnumNames<GraspFailure, 11> kFailureNames = {{
     {GraspFailure::TooWide, "too_wide"},
     {GraspFailure::NoAntipodalPair, "no_antipodal_pair"},
     {GraspFailure::Collides, "collides"},
+    {GraspFailure::Friction, "friction"},
+    {GraspFailure::HiddenVolume, "hidden_volume"},
     {GraspFailure::TargetTooFar, "target_too_far"},
 }};
 constexpr double kDeg = M_PI / 180.0;
+/// An upright round body's fitted circle is at most this much wider than its seen footprint.
+constexpr double kRoundFootprintRatio = 1.25;
 
 using Cloud = pcl::PointCloud<pcl::PointXYZ>;
 using Normals = pcl::PointCloud<pcl::Normal>;
@@ -152,6 +158,9 @@ struct SurfacePoint {
 /// One side of the object along a grasp's closing axis, as measured between the fingers.
 struct ContactSide {
   bool seen = false;     ///< fitted from the points whose normals face along the closing axis
+  /// Fitted, but the fitted surface's normal at the contact is outside the friction cone: the
+  /// finger would touch it and slip (not `seen`).
+  bool slips = false;
   double y = 0.0;        ///< position along the closing axis (grasp-local, from c0)
   double cos_n = 0.0;    ///< |cos| of the fitted surface's normal at the contact and the axis
 };
@@ -163,37 +172,41 @@ struct Measurement {
   int seen() const { return side[0].seen + side[1].seen; }
 };
 
-/// The contact surfaces' fit: the object's points between the fingers whose estimated normal
-/// lies within the friction cone of the closing axis y and that are near one side's outermost
-/// points are that side's contact patch; the patch is fitted by least squares with a surface
+/// The contact surfaces' fit: the object's points in the fingers' slab whose estimated outward
+/// normal lies within the friction cone of the closing axis y and that are near one side's
+/// outermost points are that side's contact patch; the patch is fitted by least squares with a
+/// surface
 /// y = a + b x + c x^2 + d z + e z^2 over the finger's breadth (x) and length (z) (a flat face
 /// or a curved one: a cylinder's mantle, a ball), refitted without the points beyond 3 RMS,
-/// and the side's position is the fitted surface's outermost value over the patch (where the
-/// fingers first touch it). Noise averages out in the fit instead of pushing the extreme points
-/// outwards: a 66 mm cylinder under 2 mm noise measures 66 mm, not 75. Every point of a patch
-/// has its estimated normal within the friction cone (the antipodal check of the contacts);
-/// the contact's quality is their mean cosine with the axis.
+/// and the side's position is the fitted surface's outermost value over the finger's footprint
+/// (where the finger first touches it). Noise averages out in the fit instead of pushing the
+/// extreme points outwards: a 66 mm cylinder under 2 mm noise measures 66 mm, not 75. The
+/// contact's quality is the cosine of the fitted surface's normal there with the axis. Without
+/// such a patch, if the outermost points face the finger at a slant (normals within
+/// slanted_contact_deg of the axis) the view shows a contact outside the friction cone: the
+/// side slips; else the side is unseen.
 class ContactSurfaceFit {
  public:
-  ContactSurfaceFit(double cos_cone, int min_points, double noise, double leaf)
-      : cos_cone_(cos_cone), min_points_(min_points), band_(4.0 * noise + 2.0 * leaf) {}
+  ContactSurfaceFit(double cos_cone, double cos_slanted, int min_points, double noise, double leaf)
+      : cos_cone_(cos_cone), cos_slanted_(cos_slanted), min_points_(min_points), band_(4.0 * noise + 2.0 * leaf) {}
 
-  /// `pts`: (y, x, z) grasp-local coordinates of the object's points between the fingers and
-  /// `ny` the cos of their outward normals with y; `lo`, `hi`: the trimmed extremes along y.
-  /// Side `s` (+1: +y, -1: -y): the points whose outward normal is within the cone of s y.
+  /// `pts`: (y, x, z) grasp-local coordinates of the object's points in the slab and `ny` the
+  /// cos of their outward normals with y; `lo`, `hi`: the trimmed extremes along y. Side `s`
+  /// (+1: +y, -1: -y).
   ContactSide fit(const std::vector<Eigen::Vector3d>& pts, const std::vector<double>& ny, double lo,
                   double hi, int s) const {
     ContactSide out;
     const double mid = 0.5 * (lo + hi), outer = s > 0 ? hi : lo;
     std::vector<const Eigen::Vector3d*> patch;
-    double cos_sum = 0.0;
+    int slanted = 0;
     for (std::size_t i = 0; i < pts.size(); ++i) {
       const double y = pts[i].x();
-      if (s * ny[i] < cos_cone_ || s * (y - mid) <= 0.0 || s * (outer - y) > band_) continue;
-      patch.push_back(&pts[i]);
-      cos_sum += s * ny[i];
+      if (s * (y - mid) <= 0.0 || s * (outer - y) > band_ || s * ny[i] < cos_slanted_) continue;
+      if (s * ny[i] >= cos_cone_) patch.push_back(&pts[i]);
+      else ++slanted;
     }
     Eigen::Matrix<double, 5, 1> c;
+    out.slips = static_cast<int>(patch.size()) < min_points_ && slanted >= min_points_;
     if (static_cast<int>(patch.size()) < min_points_ || !solve(patch, &c)) return out;
     // Refit without the points farther than 3 RMS from the first fit (flying pixels, strays).
     double ss = 0.0;
@@ -205,9 +218,9 @@ class ContactSurfaceFit {
     if (static_cast<int>(kept.size()) < min_points_ || !solve(kept, &c)) return out;
     // Where the fingers touch: along x and along z (separable terms) the fitted surface's
     // vertex where it bends away from the finger significantly (more than twice its standard
-    // error) inside the patch, a cylinder's or a ball's crest; the outer end of a significant
-    // slope (a face tilted from the closing axis); else the patch's mean (a flat face: its
-    // mean position; the maximum of a noisy fit over the patch would be biased out).
+    // error) inside the footprint, a cylinder's or a ball's crest; the outer end of a
+    // significant slope (a face tilted from the closing axis); else the patch's mean (a flat
+    // face: its mean position; the maximum of a noisy fit would be biased out).
     Eigen::Matrix<double, 5, 5> A = Eigen::Matrix<double, 5, 5>::Zero();
     double x0 = kept[0]->y(), x1 = x0, z0 = kept[0]->z(), z1 = z0, xm = 0.0, zm = 0.0, res = 0.0;
     for (const auto* q : kept) {
@@ -228,9 +241,11 @@ class ContactSurfaceFit {
     auto se = [&](int i) { return std::sqrt(std::max(0.0, cov(i, i))); };
     const double x = crest(c[1], c[2], se(1), se(2), x0, x1, xm / n, s);
     const double z = crest(c[3], c[4], se(3), se(4), z0, z1, zm / n, s);
-    out.seen = true;
     out.y = value(c, x, z);
-    out.cos_n = cos_sum / static_cast<double>(patch.size());
+    // The fitted surface's normal at the contact, against the friction cone.
+    out.cos_n = 1.0 / std::hypot(1.0, std::hypot(c[1] + 2.0 * c[2] * x, c[3] + 2.0 * c[4] * z));
+    out.seen = out.cos_n >= cos_cone_;
+    out.slips = !out.seen;  // a fitted slope beyond the cone (the points' normals within it)
     return out;
   }
 
@@ -269,7 +284,7 @@ class ContactSurfaceFit {
     return c->allFinite();
   }
 
-  double cos_cone_;
+  double cos_cone_, cos_slanted_;
   int min_points_;
   double band_;
 };
@@ -286,23 +301,138 @@ struct Candidate {
 
 /// Antipodal quality of a measured grasp: the fitted contacts' normals (min |cos| with the
 /// closing axis) where both sides were fitted; otherwise the hypothesis's quality, at most
-/// single_contact_weight (a contact the view does not show ranks below seen ones).
-double supportedQuality(double q, const Measurement& m, double single_weight) {
+/// single_contact_weight (a contact the view does not show ranks below seen ones), or halfway
+/// from it to 1 for a side completed by a fitted circle or sphere (`completed`).
+double supportedQuality(double q, const Measurement& m, double single_weight, bool completed) {
   if (m.seen() == 2) return std::min(m.side[0].cos_n, m.side[1].cos_n);
   const double seen_cos = m.side[0].seen ? m.side[0].cos_n : m.side[1].seen ? m.side[1].cos_n : 1.0;
-  return std::min(q, single_weight) * seen_cos;
+  // An unseen side bounded by a fitted circle or sphere is supported by the shape's fit:
+  // between seen and merely bounded ones.
+  return std::min(q, completed ? 0.5 * (1.0 + single_weight) : single_weight) * seen_cos;
 }
 
+/// The volume the view hides: along the rays from the camera, behind the object's points whose
+/// outward normal faces the camera (where a ray enters the object) and not behind a point facing
+/// away (where it leaves, seen in clouds of several views). A range image over the directions
+/// from the camera (bins of 1.5 voxels at the object's distance) holds per bin the nearest
+/// entering and the farthest leaving point. A point is hidden if it is more than `margin`
+/// behind the entering surface in its bin and in the four bins around it (the shadow eroded by
+/// a bin: a finger beside a surface seen at a grazing angle is not in it), and not less than
+/// `margin` in front of a leaving surface there (inside the object). Disabled (nothing hidden)
+/// without a camera.
+class HiddenVolume {
+ public:
+  HiddenVolume() = default;
+  HiddenVolume(const Cloud& cloud, const Normals& normals, const Eigen::Vector3d& centroid, const Eigen::Vector3d& eye,
+               double leaf, double margin) {
+    const Eigen::Vector3d d0 = centroid - eye;
+    if (d0.norm() < 1e-6) return;
+    eye_ = eye;
+    fwd_ = d0.normalized();
+    e1_ = fwd_.unitOrthogonal();
+    e2_ = fwd_.cross(e1_);
+    res_ = 1.5 * leaf / d0.norm();
+    margin_ = margin;
+    double u1 = -1e9, v1 = -1e9;
+    u0_ = v0_ = 1e9;
+    for (const auto& pf : cloud) {
+      double u = 0, v = 0, r = 0;
+      if (!project(pf.getVector3fMap().cast<double>(), &u, &v, &r)) continue;
+      u0_ = std::min(u0_, u), v0_ = std::min(v0_, v), u1 = std::max(u1, u), v1 = std::max(v1, v);
+    }
+    if (u1 < u0_) return;
+    res_ = std::max({res_, (u1 - u0_) / 511.0, (v1 - v0_) / 511.0});  // at most 512 x 512 bins
+    nu_ = static_cast<int>((u1 - u0_) / res_) + 1;
+    nv_ = static_cast<int>((v1 - v0_) / res_) + 1;
+    entry_.assign(static_cast<std::size_t>(nu_ * nv_), std::numeric_limits<float>::infinity());
+    exit_.assign(entry_.size(), -std::numeric_limits<float>::infinity());
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+      const Eigen::Vector3d p = cloud[i].getVector3fMap().cast<double>();
+      Eigen::Vector3d n = normals[i].getNormalVector3fMap().cast<double>();
+      int k = 0;
+      double r = 0;
+      if (!n.allFinite() || n.norm() < 0.5 || !bin(p, 0, 0, &k, &r)) continue;
+      if (n.dot(p - centroid) < 0) n = -n;  // outwards, as the contact fits assume
+      float& e = n.dot(eye - p) > 0 ? entry_[static_cast<std::size_t>(k)] : exit_[static_cast<std::size_t>(k)];
+      e = n.dot(eye - p) > 0 ? std::min(e, static_cast<float>(r)) : std::max(e, static_cast<float>(r));
+    }
+    enabled_ = true;
+  }
+  bool enabled() const { return enabled_; }
+  bool hidden(const Eigen::Vector3d& q) const {
+    if (!enabled_) return false;
+    static const int du[5] = {0, 1, -1, 0, 0}, dv[5] = {0, 0, 0, 1, -1};
+    for (int j = 0; j < 5; ++j) {
+      int k = 0;
+      double r = 0;
+      if (!bin(q, du[j], dv[j], &k, &r)) return false;
+      const double behind = r - margin_;
+      const float entry = entry_[static_cast<std::size_t>(k)], exit = exit_[static_cast<std::size_t>(k)];
+      // Not behind an entering surface, or not in front of a leaving one (in any of the five
+      // bins: the bins are coarser than a finger's distance to the surface it closes on).
+      if (!(entry < behind) || (exit > entry - margin_ && exit < r + margin_)) return false;
+    }
+    return true;
+  }
+
+ private:
+  bool project(const Eigen::Vector3d& p, double* u, double* v, double* r) const {
+    const Eigen::Vector3d d = p - eye_;
+    const double z = d.dot(fwd_);
+    if (z <= 1e-6) return false;
+    *u = d.dot(e1_) / z;
+    *v = d.dot(e2_) / z;
+    *r = d.norm();
+    return true;
+  }
+  /// The bin of q's direction, offset by (du, dv) bins, and q's range.
+  bool bin(const Eigen::Vector3d& q, int du, int dv, int* k, double* r) const {
+    double u = 0, v = 0;
+    if (!project(q, &u, &v, r)) return false;
+    const int iu = static_cast<int>(std::floor((u - u0_) / res_)) + du, iv = static_cast<int>(std::floor((v - v0_) / res_)) + dv;
+    if (iu < 0 || iv < 0 || iu >= nu_ || iv >= nv_) return false;
+    *k = iv * nu_ + iu;
+    return true;
+  }
+
+  bool enabled_ = false;
+  Eigen::Vector3d eye_ = Eigen::Vector3d::Zero(), fwd_ = Eigen::Vector3d::UnitZ(), e1_ = Eigen::Vector3d::UnitX(),
+                  e2_ = Eigen::Vector3d::UnitY();
+  double res_ = 1.0, u0_ = 0, v0_ = 0, margin_ = 0;
+  int nu_ = 0, nv_ = 0;
+  std::vector<float> entry_, exit_;
+};
+
+/// What became of a gripper pose in GripperCheck::evaluate (the first check it failed).
+enum class CheckOutcome {
+  Pass,
+  TooFewPoints,  ///< too few object points between the fingers, or one surface's noise
+  TooWide,       ///< the measured width needs more than the opening
+  Friction,      ///< a contact the view shows is outside the friction cone
+  Collides,      ///< fingers or palm hit the cloud
+  Support,       ///< fingers or palm come nearer the support than support_clearance
+  Hidden,        ///< a finger at a seen contact, or the palm, is in the volume the view hides
+};
+constexpr int kOutcomes = 7;
+
 /// Evaluates the gripper at (R, c0): centres it along the closing axis on the object between
-/// the fingers, measures it there (ContactSurfaceFit), checks width, finger / palm collisions
-/// and the support plane.
+/// the fingers, measures it there (ContactSurfaceFit), checks width, friction, finger / palm
+/// collisions, the support plane and the hidden volume.
 class GripperCheck {
  public:
   /// `noise`: the object cloud's estimated noise (m, see estimateNoise), `leaf` its voxel edge.
+  /// `spacing`: its sample spacing (sampleSpacing): min_points_between_fingers holds at the
+  /// voxel grid's density (voxel_size); a sparser cloud needs as much of the object's surface
+  /// between the fingers, in fewer points (the count scaled by the squared spacing ratio, at
+  /// least 3).
   GripperCheck(const GraspGeneratorConfig& cfg, const Eigen::Vector4d& plane, bool has_plane, double noise,
-               double leaf)
-      : cfg_(cfg), g_(cfg.gripper), plane_(plane), has_plane_(has_plane), noise_(noise),
-        fit_(std::cos(std::atan(cfg.friction_coefficient)), cfg.min_contact_points, noise, leaf) {}
+               double leaf, double spacing, const HiddenVolume& hidden)
+      : cfg_(cfg), g_(cfg.gripper), plane_(plane), has_plane_(has_plane), noise_(noise), hidden_(hidden), leaf_(leaf),
+        min_between_(std::max(std::min(3, cfg.min_points_between_fingers),
+                              static_cast<int>(std::lround(cfg.min_points_between_fingers *
+                                                           std::pow(cfg.voxel_size / std::max(spacing, cfg.voxel_size), 2))))),
+        fit_(std::cos(std::atan(cfg.friction_coefficient)), std::cos(cfg.slanted_contact_deg * kDeg),
+             cfg.min_contact_points, noise, leaf) {}
 
   /// A closing axis y at c0 with the neighbourhood expressed in its (y, u, v) frame (u, v
   /// span the approach plane, v = y x u).
@@ -312,18 +442,26 @@ class GripperCheck {
     std::vector<Eigen::Vector3d> local;  ///< (y, u, v) coordinates of reachable points
     std::vector<Eigen::Vector3d> surface;    ///< (y, u, v) of the object's reachable points
     std::vector<Eigen::Vector3d> surface_n;  ///< their normals in (y, u, v)
-    bool use_extent = false;             ///< bound the object by its extent along y
+    /// Bound unseen sides by the object's extent along y (ext_min / ext_max), computed when a
+    /// side first needs it (extentOf) unless a fitted completion gives it.
+    mutable bool use_extent = false;
+    mutable bool extent_pending = false;
+    const Cloud* object = nullptr;
     bool too_wide = false;               ///< object extent along y exceeds the opening
-    double ext_min = 0, ext_max = 0;
+    mutable double ext_min = 0, ext_max = 0;
     bool hint = false;                   ///< ext_min / ext_max are a fitted circle's or sphere's
+    /// A contact pair's hypothesis: both sides were seen by the pair's points; a side the
+    /// measurement does not see is bounded by the last samples only (see inHiddenVolume).
+    bool pair = false;
   };
 
-  /// Drops points no gripper pose around y can touch. `object` (optional): the object's
-  /// points; its extent along y then bounds the part of the object between the fingers
-  /// where a side is not seen. `surface`: the object's points near c0 with their normals.
+  /// Drops points no gripper pose around y can touch. `object`: the object's points; with
+  /// `bound_by_extent` (single-contact and footprint hypotheses) their extent along y bounds the
+  /// part of the object between the fingers where a side is not seen (else the hypothesis is a
+  /// contact pair's). `surface`: the object's points near c0 with their normals.
   void prepare(const Eigen::Vector3d& c0, const Eigen::Vector3d& y, const Eigen::Vector3d& u,
                const std::vector<Eigen::Vector3d>& nbrs, const std::vector<SurfacePoint>& surface,
-               const Cloud* object, const ExtentHint& hint, Prepared* pr) {
+               const Cloud& object, bool bound_by_extent, const ExtentHint& hint, Prepared* pr) {
     pr->c0 = c0;
     pr->y = y;
     pr->u = u;
@@ -331,31 +469,14 @@ class GripperCheck {
     pr->use_extent = false;
     pr->too_wide = false;
     pr->hint = false;
-    // The object rests on the support: the unseen volume below each seen point, down to the
-    // support, may be object too (single views miss the lower far side). Its extent along y
-    // is that of the points and of their projections onto the support (k most extreme per
-    // side dropped as noise); a round section's or a ball's fitted extremes replace it.
-    ext_.clear();
-    if (object && !hint.valid) {
-      const double yn = has_plane_ ? y.dot(plane_.head<3>()) : 0.0;
-      for (const auto& pf : *object) {
-        const Eigen::Vector3d p = pf.getVector3fMap().cast<double>();
-        const double e = y.dot(p - c0);
-        ext_.push_back(e);
-        if (has_plane_ && std::abs(yn) > 1e-9) ext_.push_back(e - (plane_.head<3>().dot(p) + plane_[3]) * yn);
-      }
-    }
-    const std::size_t k = static_cast<std::size_t>(cfg_.max_collision_points);
+    pr->pair = !bound_by_extent;
+    pr->object = &object;
+    pr->extent_pending = bound_by_extent && !hint.valid;
     if (hint.valid) {
       const double ha = y.dot(hint.a - c0), hb = y.dot(hint.b - c0);
       pr->ext_min = std::min(ha, hb);
       pr->ext_max = std::max(ha, hb);
       pr->use_extent = pr->hint = true;
-    } else if (ext_.size() > 2 * k + 1) {
-      const auto range = trimmedRange(ext_, k);
-      pr->ext_min = range.first;
-      pr->ext_max = range.second;
-      pr->use_extent = true;
     }
     if (pr->use_extent) {
       // Only a fitted completion is a measurement of the width; the raw extent bounds unseen
@@ -379,6 +500,9 @@ class GripperCheck {
       return true;
     };
     pr->local.clear();
+    pr->local.reserve(nbrs.size());
+    pr->surface.reserve(surface.size());
+    pr->surface_n.reserve(surface.size());
     Eigen::Vector3d l;
     for (const Eigen::Vector3d& p : nbrs)
       if (toLocal(p, &l)) pr->local.push_back(l);
@@ -394,8 +518,8 @@ class GripperCheck {
   /// Gripper with approach a = cos(phi) u + sin(phi) v: centres it along y on the object
   /// between the fingers (measured by its contact surfaces), checks the opening, finger / palm
   /// collisions and the support plane.
-  bool evaluate(const Prepared& pr, double cphi, double sphi, Eigen::Matrix3d* Rout,
-                Eigen::Vector3d* c, double* width, Measurement* m);
+  CheckOutcome evaluate(const Prepared& pr, double cphi, double sphi, Eigen::Matrix3d* Rout,
+                        Eigen::Vector3d* c, double* width, Measurement* m);
 
  private:
   /// The object's points in the fingers' slab in grasp coordinates (y, x, z) with the cos of
@@ -403,17 +527,37 @@ class GripperCheck {
   void surfaceInSlab(const Prepared& pr, double cphi, double sphi);
   /// The two sides: fitted where the view shows them (ContactSurfaceFit), else bounded by
   /// the fitted completion, or by the trimmed extremes of the points between the fingers and
-  /// the object's extent. False if a fitted contact's normal is outside the friction cone.
-  bool measure(const Prepared& pr, double lo, double hi, Measurement* m) const;
+  /// the object's extent. Friction if the view shows a side outside the friction cone.
+  CheckOutcome measure(const Prepared& pr, double lo, double hi, Measurement* m) const;
+  /// The object's extent along y for unseen sides (single-contact and footprint hypotheses):
+  /// the object rests on the support, so the unseen volume below each seen point, down to the
+  /// support, may be object too (single views miss the lower far side). Its extent along y is
+  /// that of the points and of their projections onto the support (k most extreme per side
+  /// dropped as noise). Computed once per prepared closing axis, when first needed.
+  void extentOf(const Prepared& pr) const;
+  /// Collisions of the fingers and palm (grasp frame R, centre, opening w) with the cloud and
+  /// the support.
+  CheckOutcome collides(const Eigen::Matrix3d& R, const Eigen::Vector3d& centre, double yc, double ymin,
+                        double ymax, double w, int k) const;
+  /// Fingers at seen contacts, or at a contact pair's side bounded by its last samples only, or
+  /// the palm in the hidden volume (a quarter of their samples).
+  bool inHiddenVolume(const Prepared& pr, const Eigen::Matrix3d& R, const Eigen::Vector3d& centre, double w,
+                      const Measurement& m) const;
+  /// A finger (frame R, the middle of its inner face at `at`, closing towards -s y) in the
+  /// hidden volume: 4 of the 3 x 5 points of its mid-plane.
+  bool fingerHidden(const Eigen::Matrix3d& R, const Eigen::Vector3d& at, int s) const;
 
   const GraspGeneratorConfig& cfg_;
   const GripperGeometry& g_;
   Eigen::Vector4d plane_;
   bool has_plane_;
   double noise_;
+  const HiddenVolume& hidden_;
+  double leaf_;
+  int min_between_;  ///< object points needed between the fingers (see the constructor)
   ContactSurfaceFit fit_;
   std::vector<double> ys_, inner_, palm_;
-  std::vector<double> ext_;
+  mutable std::vector<double> ext_;
   std::vector<Eigen::Vector3d> slab_;
   std::vector<double> slab_ny_;
 };
@@ -426,23 +570,44 @@ void GripperCheck::surfaceInSlab(const Prepared& pr, double cphi, double sphi) {
     const Eigen::Vector3d& l = pr.surface[i];
     const double qz = cphi * l.y() + sphi * l.z();
     const double qx = cphi * l.z() - sphi * l.y();
-    if (qz > z1 || qz < z0 || std::abs(qx) > 0.5 * g_.finger_breadth || std::abs(l.x()) > 0.5 * g_.max_width)
+    // Across the closing axis up to the fingers' outer faces: a side near the opening's edge
+    // keeps its noise beyond it (cut there, its fit would be biased inwards).
+    if (qz > z1 || qz < z0 || std::abs(qx) > 0.5 * g_.finger_breadth ||
+        std::abs(l.x()) > 0.5 * g_.max_width + g_.finger_thickness)
       continue;
     slab_.emplace_back(l.x(), qx, qz);
     slab_ny_.push_back(pr.surface_n[i].x());
   }
 }
 
-bool GripperCheck::measure(const Prepared& pr, double lo, double hi, Measurement* m) const {
+void GripperCheck::extentOf(const Prepared& pr) const {
+  pr.extent_pending = false;
+  ext_.clear();
+  const double yn = has_plane_ ? pr.y.dot(plane_.head<3>()) : 0.0;
+  for (const auto& pf : *pr.object) {
+    const Eigen::Vector3d p = pf.getVector3fMap().cast<double>();
+    const double e = pr.y.dot(p - pr.c0);
+    ext_.push_back(e);
+    if (has_plane_ && std::abs(yn) > 1e-9) ext_.push_back(e - (plane_.head<3>().dot(p) + plane_[3]) * yn);
+  }
+  const std::size_t k = static_cast<std::size_t>(cfg_.max_collision_points);
+  if (ext_.size() <= 2 * k + 1) return;
+  std::tie(pr.ext_min, pr.ext_max) = trimmedRange(ext_, k);
+  pr.use_extent = true;
+}
+
+CheckOutcome GripperCheck::measure(const Prepared& pr, double lo, double hi, Measurement* m) const {
   for (int i = 0; i < 2; ++i) {
     const int s = i == 0 ? -1 : 1;
     ContactSide& side = m->side[i];
     side = fit_.fit(slab_, slab_ny_, lo, hi, s);
     if (side.seen) continue;
-    if (pr.hint) {
+    if (pr.hint) {  // the completion's extreme is the contact, beyond the seen slope
       side.y = s > 0 ? pr.ext_max : pr.ext_min;
       continue;
     }
+    if (side.slips) return CheckOutcome::Friction;
+    if (pr.extent_pending) extentOf(pr);
     // Bounded by the last samples of the surfaces running up to it (a top face's far edge):
     // their trimmed extreme, short of the true side by up to one sample spacing.
     side.y = s > 0 ? hi : lo;
@@ -450,14 +615,18 @@ bool GripperCheck::measure(const Prepared& pr, double lo, double hi, Measurement
   }
   m->width = m->side[1].y - m->side[0].y;
   // Two sides closer than the noise can tell apart are one surface's noise.
-  return m->width > 4.0 * noise_;
+  return m->width > 4.0 * noise_ ? CheckOutcome::Pass : CheckOutcome::TooFewPoints;
 }
 
-bool GripperCheck::evaluate(const Prepared& pr, double cphi, double sphi, Eigen::Matrix3d* Rout,
-                            Eigen::Vector3d* c, double* width, Measurement* m) {
+CheckOutcome GripperCheck::evaluate(const Prepared& pr, double cphi, double sphi, Eigen::Matrix3d* Rout,
+                                    Eigen::Vector3d* c, double* width, Measurement* m) {
   const double z1 = g_.finger_tip_depth, z0 = z1 - g_.finger_length;
   const double zp = z0 - g_.palm_height;
   const double W = g_.max_width, t = g_.finger_thickness;
+  if (pr.too_wide) {
+    m->width = pr.ext_max - pr.ext_min;
+    return CheckOutcome::TooWide;
+  }
   ys_.clear();
   inner_.clear();
   palm_.clear();
@@ -480,12 +649,10 @@ bool GripperCheck::evaluate(const Prepared& pr, double cphi, double sphi, Eigen:
   R.col(1) = pr.y;
   R.col(2) = cphi * pr.u + sphi * pr.v;
   R.col(0) = cphi * pr.v - sphi * pr.u;
-  const Eigen::Vector3d& c0 = pr.c0;
-  if (pr.too_wide) return false;
   // Outliers tolerated per side: max_collision_points, or outlier_fraction of the points.
   const int k = std::max(cfg_.max_collision_points,
                          static_cast<int>(cfg_.outlier_fraction * inner_.size()));
-  if (static_cast<int>(inner_.size()) < cfg_.min_points_between_fingers + 2 * k) return false;
+  if (static_cast<int>(inner_.size()) < min_between_ + 2 * k) return CheckOutcome::TooFewPoints;
   // What is between the fingers: its trimmed extremes (the k most extreme points per side are
   // noise) locate the two sides; their contact surfaces measure them.
   const auto kk = static_cast<long>(k);
@@ -494,45 +661,84 @@ bool GripperCheck::evaluate(const Prepared& pr, double cphi, double sphi, Eigen:
   std::nth_element(inner_.begin(), inner_.end() - 1 - kk, inner_.end());
   const double hi = inner_[inner_.size() - 1 - static_cast<std::size_t>(k)];
   surfaceInSlab(pr, cphi, sphi);
-  if (!measure(pr, lo, hi, m)) return false;
+  const CheckOutcome measured = measure(pr, lo, hi, m);
+  if (measured != CheckOutcome::Pass) return measured;
   const double ymin = m->side[0].y, ymax = m->side[1].y;
   const double w = ymax - ymin + 2.0 * g_.clearance;
-  if (w > W) return false;
+  if (w > W) return CheckOutcome::TooWide;  // m->width: the measured width
   const double yc = 0.5 * (ymin + ymax);
+  const Eigen::Vector3d centre = pr.c0 + R.col(1) * yc;
+  const CheckOutcome collision = collides(R, centre, yc, ymin, ymax, w, k);
+  if (collision != CheckOutcome::Pass) return collision;
+  if (inHiddenVolume(pr, R, centre, w, *m)) return CheckOutcome::Hidden;
+  *Rout = R;
+  *c = centre;
+  *width = w;
+  return CheckOutcome::Pass;
+}
+
+CheckOutcome GripperCheck::collides(const Eigen::Matrix3d& R, const Eigen::Vector3d& centre, double yc,
+                                    double ymin, double ymax, double w, int k) const {
+  const double z1 = g_.finger_tip_depth, z0 = z1 - g_.finger_length;
+  const double zp = z0 - g_.palm_height;
   // Points under the fingers or in the clearance gap, beyond the measured sides by more than
   // the noise (3 x the cloud's estimated noise: points of the contact surfaces themselves).
   const double half = 0.5 * (ymax - ymin) + 3.0 * noise_;
   int finger_hits = 0;
   for (double y : ys_) {
     const double d = std::abs(y - yc);
-    if (d > half + 1e-9 && d <= 0.5 * w + t) ++finger_hits;
+    if (d > half + 1e-9 && d <= 0.5 * w + g_.finger_thickness) ++finger_hits;
   }
-  if (finger_hits > 2 * k) return false;
+  if (finger_hits > 2 * k) return CheckOutcome::Collides;
   int palm_hits = 0;
   for (double y : palm_)
     if (std::abs(y - yc) <= 0.5 * g_.palm_width) ++palm_hits;
-  if (palm_hits > std::max(cfg_.max_collision_points,
-                           static_cast<int>(cfg_.outlier_fraction * palm_.size())))
-    return false;
-  const Eigen::Vector3d centre = c0 + R.col(1) * yc;
-  if (has_plane_) {
-    const double fy = 0.5 * w + g_.finger_thickness;
-    const double xs[2] = {0.5 * g_.finger_breadth, 0.5 * g_.palm_breadth};
-    const double yss[2] = {fy, 0.5 * g_.palm_width};
-    const double zs[2][2] = {{z0, z1}, {zp, z0}};
-    for (int b = 0; b < 2; ++b)
-      for (double sx : {-1.0, 1.0})
-        for (double sy : {-1.0, 1.0})
-          for (int iz = 0; iz < 2; ++iz) {
-            const Eigen::Vector3d corner =
-                centre + R * Eigen::Vector3d(sx * xs[b], sy * yss[b], zs[b][iz]);
-            if (plane_.head<3>().dot(corner) + plane_[3] < cfg_.support_clearance) return false;
-          }
+  if (palm_hits > std::max(cfg_.max_collision_points, static_cast<int>(cfg_.outlier_fraction * palm_.size())))
+    return CheckOutcome::Collides;
+  if (!has_plane_) return CheckOutcome::Pass;
+  const double fy = 0.5 * w + g_.finger_thickness;
+  const double xs[2] = {0.5 * g_.finger_breadth, 0.5 * g_.palm_breadth};
+  const double yss[2] = {fy, 0.5 * g_.palm_width};
+  const double zs[2][2] = {{z0, z1}, {zp, z0}};
+  for (int b = 0; b < 2; ++b)
+    for (double sx : {-1.0, 1.0})
+      for (double sy : {-1.0, 1.0})
+        for (int iz = 0; iz < 2; ++iz) {
+          const Eigen::Vector3d corner = centre + R * Eigen::Vector3d(sx * xs[b], sy * yss[b], zs[b][iz]);
+          if (plane_.head<3>().dot(corner) + plane_[3] < cfg_.support_clearance) return CheckOutcome::Support;
+        }
+  return CheckOutcome::Pass;
+}
+
+bool GripperCheck::fingerHidden(const Eigen::Matrix3d& R, const Eigen::Vector3d& at, int s) const {
+  const double z1 = g_.finger_tip_depth, z0 = z1 - g_.finger_length;
+  int n = 0;
+  for (double x : {-0.4, 0.0, 0.4})
+    for (int j = 0; j < 5; ++j)
+      n += hidden_.hidden(at + R * Eigen::Vector3d(x * g_.finger_breadth, s * 0.5 * g_.finger_thickness,
+                                                   z0 + (z1 - z0) * j / 4.0));
+  return n >= 4;
+}
+
+bool GripperCheck::inHiddenVolume(const Prepared& pr, const Eigen::Matrix3d& R, const Eigen::Vector3d& centre,
+                                  double w, const Measurement& m) const {
+  if (!hidden_.enabled()) return false;
+  const double z0 = g_.finger_tip_depth - g_.finger_length;
+  // Each finger on its mid-plane. A finger at an unseen contact of a single-contact or
+  // footprint hypothesis is in the hidden volume by construction (that side is bounded by the
+  // object's extent or a fitted completion; it ranks lower, see supportedQuality); a contact
+  // pair's side bounded by its last samples only is not, where the view hides the finger.
+  for (int i = 0; i < 2; ++i) {
+    const int s = i == 0 ? -1 : 1;
+    const bool checked = m.side[i].seen || (pr.pair && !pr.hint);
+    if (checked && fingerHidden(R, centre + R.col(1) * (s * 0.5 * w), s)) return true;
   }
-  *Rout = R;
-  *c = centre;
-  *width = w;
-  return true;
+  // The palm's face (behind the fingers) on 3 x 3 points.
+  int n = 0;
+  const double yp = std::min(0.5 * g_.palm_width, 0.5 * w + g_.finger_thickness);
+  for (double x : {-0.4, 0.0, 0.4})
+    for (double y : {-1.0, 0.0, 1.0}) n += hidden_.hidden(centre + R * Eigen::Vector3d(x * g_.palm_breadth, y * yp, z0));
+  return n >= 3;
 }
 
 /// Footprint of an object resting on a support plane: its points projected onto the plane, and
@@ -546,6 +752,49 @@ struct Footprint {
   Eigen::Vector3d centre;    ///< rectangle centre at the height of `ref` above the plane
 };
 
+/// The points of the first `layers` convex layers of `pts` (onion peeling; a layer: the points
+/// on the boundary of the convex hull of what the layers before left). The j-th most extreme
+/// point along any direction lies on one of the first j layers, so the trimmed extents of the
+/// whole set along every direction are those of these points (k trimmed: k + 1 layers).
+std::vector<Eigen::Vector2d> convexLayers(std::vector<Eigen::Vector2d> pts, std::size_t layers) {
+  std::vector<Eigen::Vector2d> out;
+  auto cross = [](const Eigen::Vector2d& o, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    return (a - o).x() * (b - o).y() - (a - o).y() * (b - o).x();
+  };
+  for (std::size_t l = 0; l < layers && pts.size() > 2; ++l) {
+    std::sort(pts.begin(), pts.end(), [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+      return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
+    });
+    // Andrew's monotone chain (strict hull vertices).
+    std::vector<Eigen::Vector2d> hull(2 * pts.size());
+    std::size_t h = 0;
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      while (h >= 2 && cross(hull[h - 2], hull[h - 1], pts[i]) <= 0) --h;
+      hull[h++] = pts[i];
+    }
+    for (std::size_t i = pts.size() - 1, t = h + 1; i-- > 0;) {
+      while (h >= t && cross(hull[h - 2], hull[h - 1], pts[i]) <= 0) --h;
+      hull[h++] = pts[i];
+    }
+    hull.resize(h > 1 ? h - 1 : h);
+    // The layer: every point on the hull's boundary (ties along an edge included).
+    std::vector<Eigen::Vector2d> rest;
+    for (const Eigen::Vector2d& p : pts) {
+      bool on = false;
+      for (std::size_t e = 0; e < hull.size() && !on; ++e) {
+        const Eigen::Vector2d& a = hull[e];
+        const Eigen::Vector2d& b = hull[(e + 1) % hull.size()];
+        on = std::abs(cross(a, b, p)) <= 1e-12 * std::max(1.0, (b - a).squaredNorm()) &&
+             (p - a).dot(b - a) >= -1e-12 && (p - b).dot(a - b) >= -1e-12;
+      }
+      (on ? out : rest).push_back(p);
+    }
+    pts.swap(rest);
+  }
+  out.insert(out.end(), pts.size() <= 2 ? pts.begin() : pts.end(), pts.end());
+  return out;
+}
+
 Footprint supportFootprint(const Cloud& cloud, const Eigen::Vector4d& plane, std::size_t k,
                            const Eigen::Vector3d& ref) {
   const Eigen::Vector3d n = plane.head<3>();
@@ -556,6 +805,7 @@ Footprint supportFootprint(const Cloud& cloud, const Eigen::Vector4d& plane, std
     const Eigen::Vector3d v = p.getVector3fMap().cast<double>();
     q.emplace_back(e1.dot(v), e2.dot(v));
   }
+  q = convexLayers(std::move(q), k + 1);
   Footprint f;
   double best_area = std::numeric_limits<double>::max();
   std::vector<double> a(q.size()), b(q.size());
@@ -582,9 +832,11 @@ Footprint supportFootprint(const Cloud& cloud, const Eigen::Vector4d& plane, std
 
 /// Circle through 2-D points by Gauss-Newton on the geometric distances, from centre `c` and
 /// radius `r`; with `resting`, the circle touches the line h = 0 (centre (u, r)). Points farther
-/// than 3 x tolerance are dropped after the first iterations (edges of flat faces, strays).
-/// Valid (true) if at least 2/3 of the points are kept and their RMS distance is within
-/// `tolerance`.
+/// than 3 x tolerance are dropped after the first iterations (edges of flat faces, strays);
+/// upright (not `resting`), points inside it by more than `tolerance` too (a narrower section of
+/// the body, e.g. a bottle's shoulder, whose sloped mantle passes the normal filter: the widest
+/// section is the one the fingers must clear). Valid (true) if at least 2/3 of the points are
+/// kept and their RMS distance is within `tolerance`.
 bool fitCircle(const std::vector<Eigen::Vector2d>& q, bool resting, double tolerance,
                Eigen::Vector2d* c, double* r) {
   if (q.size() < 10 || *r <= 0.0) return false;
@@ -600,7 +852,7 @@ bool fitCircle(const std::vector<Eigen::Vector2d>& q, bool resting, double toler
       const double rho = w.norm();
       if (rho < 1e-9) continue;
       const double d = rho - *r;
-      if (it >= 3 && std::abs(d) > 3.0 * tolerance) continue;
+      if (it >= 3 && (std::abs(d) > 3.0 * tolerance || (!resting && d < -tolerance))) continue;
       const Eigen::Vector3d J = resting ? Eigen::Vector3d(-w.x() / rho, -w.y() / rho - 1.0, 0.0)
                                         : Eigen::Vector3d(-w.x() / rho, -w.y() / rho, -1.0);
       JtJ += J * J.transpose();
@@ -790,6 +1042,7 @@ void GraspGeneratorConfig::validate() const {
   range("pairs_per_seed", pairs_per_seed, 1, 100);
   range("approach_steps", approach_steps, 1, 360);
   range("friction_coefficient", friction_coefficient, 0.02, 2.0);
+  range("slanted_contact_deg", slanted_contact_deg, std::atan(friction_coefficient) / kDeg, 90.0);
   range("max_approach_tilt_deg", max_approach_tilt_deg, 0.0, 180.0);
   range("max_collision_points", max_collision_points, 0, 1000);
   range("outlier_fraction", outlier_fraction, 0.0, 0.2);
@@ -840,7 +1093,8 @@ std::string GraspGeneratorConfig::summary() const {
      << voxel_size << " m (coarser above " << max_object_points << " points per object), normals r "
      << normal_radius << " m, " << max_seeds << " seeds x "
      << pairs_per_seed << " pairs x " << approach_steps << " approaches, friction mu "
-     << friction_coefficient << " (cone " << std::atan(friction_coefficient) / kDeg << " deg), contact fits >= "
+     << friction_coefficient << " (cone " << std::atan(friction_coefficient) / kDeg << " deg; slanted contacts within " << slanted_contact_deg << " deg refused), hidden-volume check "
+     << (hidden_volume_check ? "on" : "off") << ", contact fits >= "
      << min_contact_points << " points, centroid sigma " << centroid_sigma_deg << " deg, pca power "
      << pca_power << "/" << pca_approach_power << ", refine shift <= " << max_refine_shift
      << " m, depth shift <= " << max_depth_shift << " m (step " << depth_step << " m, margin "
@@ -871,6 +1125,8 @@ GraspGeneratorConfig loadGraspGeneratorConfig(const ConfigNode& n) {
   c.pairs_per_seed = n.get("pairs_per_seed", c.pairs_per_seed);
   c.approach_steps = n.get("approach_steps", c.approach_steps);
   c.friction_coefficient = n.get("friction_coefficient", c.friction_coefficient);
+  c.slanted_contact_deg = n.get("slanted_contact_deg", c.slanted_contact_deg);
+  c.hidden_volume_check = n.get("hidden_volume_check", c.hidden_volume_check);
   c.max_approach_tilt_deg = n.get("max_approach_tilt_deg", c.max_approach_tilt_deg);
   c.max_collision_points = n.get("max_collision_points", c.max_collision_points);
   c.outlier_fraction = n.get("outlier_fraction", c.outlier_fraction);
@@ -930,6 +1186,11 @@ struct PreparedObject {
   Eigen::Vector4d plane = Eigen::Vector4d::Zero();
   bool has_plane = false;
   double noise = 0.0;  ///< m, the filtered cloud's estimated noise (estimateNoise)
+  double spacing = 0.0;  ///< m, the filtered cloud's sample spacing (sampleSpacing), at least `leaf`
+  HiddenVolume hidden;  ///< behind the view from the camera (disabled without hidden_volume_check)
+  /// From the camera to the centroid (unit), zero when the viewpoint is not known (without
+  /// hidden_volume_check): approaches are kept within max_approach_tilt_deg of it.
+  Eigen::Vector3d view_dir = Eigen::Vector3d::Zero();
 };
 
 /// The noise of a cloud from its normals' plane fits: a flat patch of radius r with points
@@ -947,6 +1208,21 @@ double estimateNoise(const Normals& normals, double radius) {
   if (s.empty()) return 0.0;
   std::nth_element(s.begin(), s.begin() + static_cast<long>(s.size() / 2), s.end());
   return s[s.size() / 2];
+}
+
+/// The cloud's sample spacing: the median distance from a point to its nearest neighbour (over
+/// at most 256 points, evenly strided). A camera's cloud of a small or distant object can be
+/// sparser than the voxel filter's grid.
+double sampleSpacing(const Cloud& cloud, pcl::search::KdTree<pcl::PointXYZ>& tree) {
+  const std::size_t n = cloud.size(), stride = std::max<std::size_t>(1, n / 256);
+  std::vector<int> idx(2);
+  std::vector<float> d2(2);
+  std::vector<double> d;
+  for (std::size_t i = 0; i < n; i += stride)
+    if (tree.nearestKSearch(cloud[i], 2, idx, d2) == 2) d.push_back(std::sqrt(static_cast<double>(d2[1])));
+  if (d.empty()) return 0.0;
+  std::nth_element(d.begin(), d.begin() + static_cast<long>(d.size() / 2), d.end());
+  return d[d.size() / 2];
 }
 
 /// Input checks and the voxel filter: false (and res->reason) if there is nothing to grasp.
@@ -1026,10 +1302,11 @@ bool describeObject(const GraspGeneratorConfig& cfg, const Eigen::Vector4d* supp
 /// Normals (sign-free use: antipodality is tested with |n . y|) and the collision environment
 /// (the object, plus `collision_cloud` if given, voxel-filtered together).
 void estimateNormalsAndEnvironment(const GraspGeneratorConfig& cfg, const PointList* collision_cloud,
-                                   PreparedObject* po) {
+                                   const Eigen::Vector3d& viewpoint, PreparedObject* po) {
   // Unsorted radius results: the neighbourhoods here are large and their order is irrelevant.
   po->tree.reset(new pcl::search::KdTree<pcl::PointXYZ>(false));
   po->tree->setInputCloud(po->cloud);
+  po->spacing = std::max(po->leaf, sampleSpacing(*po->cloud, *po->tree));
   po->normals.reset(new Normals);
   pcl::NormalEstimation<pcl::PointXYZ, pcl::Normal> ne;
   ne.setInputCloud(po->cloud);
@@ -1038,6 +1315,10 @@ void estimateNormalsAndEnvironment(const GraspGeneratorConfig& cfg, const PointL
   ne.setRadiusSearch(radius);
   ne.compute(*po->normals);
   po->noise = estimateNoise(*po->normals, radius);
+  if (cfg.hidden_volume_check && (po->centroid - viewpoint).norm() > 1e-6)
+    po->view_dir = (po->centroid - viewpoint).normalized();
+  if (cfg.hidden_volume_check)
+    po->hidden = HiddenVolume(*po->cloud, *po->normals, po->centroid, viewpoint, po->leaf, 3.0 * po->noise + 2.0 * po->leaf);
 
   // Collision environment (the object, plus other geometry if given).
   po->env = po->cloud;
@@ -1085,14 +1366,26 @@ struct Pending {
 class GraspSearch {
  public:
   GraspSearch(const GraspGeneratorConfig& cfg, const PreparedObject& po)
-      : cfg_(cfg), g_(cfg.gripper), po_(po), check_(cfg, po.plane, po.has_plane, po.noise, po.leaf),
+      : cfg_(cfg), g_(cfg.gripper), po_(po), check_(cfg, po.plane, po.has_plane, po.noise, po.leaf, po.spacing, po.hidden),
         cos_fc_(std::cos(std::atan(cfg.friction_coefficient))),
         cos_tilt_(std::cos(cfg.max_approach_tilt_deg * kDeg)),
         check_radius_(std::sqrt(
             std::pow(0.5 * std::max(g_.palm_width, g_.max_width + 2 * g_.finger_thickness), 2) +
             std::pow(0.5 * std::max(g_.palm_breadth, g_.finger_breadth), 2) +
             std::pow(g_.finger_length + g_.palm_height, 2))),
-        sigma_(cfg.centroid_sigma_deg * kDeg) {}
+        sigma_(cfg.centroid_sigma_deg * kDeg), centre_(po.centroid) {
+    obj_p_.reserve(po.cloud->size());
+    obj_n_.reserve(po.cloud->size());
+    for (std::size_t i = 0; i < po.cloud->size(); ++i) {
+      const Eigen::Vector3d p = pt(*po.cloud, static_cast<int>(i));
+      const Eigen::Vector3d n = (*po.normals)[i].getNormalVector3fMap().cast<double>();
+      obj_p_.push_back(p);
+      obj_n_.push_back(!n.allFinite() || n.norm() < 0.5 ? Eigen::Vector3d::Zero()
+                                                         : n.dot(p - po.centroid) >= 0.0 ? n : Eigen::Vector3d(-n));
+    }
+    if (po.env != po.cloud)
+      for (std::size_t i = 0; i < po.env->size(); ++i) env_p_.push_back(pt(*po.env, static_cast<int>(i)));
+  }
 
   /// Antipodal pairs and single-contact hypotheses of the seeds; *any_pair: a pair was found.
   std::vector<Hyp> contactHypotheses(const std::vector<int>& seeds, bool* any_pair);
@@ -1100,6 +1393,9 @@ class GraspSearch {
   void addFootprintHypotheses(std::vector<Hyp>* hyps);
   /// The margin rule's "too wide" reason ("" if the footprint fits the opening, or no footprint).
   std::string tooWide() const;
+  /// Why no candidate passed: the check most of them failed (after enough points between the
+  /// fingers), with the counts of every check.
+  GraspFailure refusal(std::string* reason) const;
   /// Every (hypothesis, approach) within the tilt limit, best optimistic score first; sets each
   /// hypothesis's approach basis (u, v).
   std::vector<Pending> rankApproaches(std::vector<Hyp>* hyps);
@@ -1120,7 +1416,7 @@ class GraspSearch {
   /// The gripper with cd's rotation, centred near c0 (re-centred along the closing axis by
   /// evaluate), approach unchanged ((cphi, sphi) = (1, 0)). nbrs_ must hold the environment
   /// within check_radius_ of c0.
-  bool checkAt(const Candidate& cd, const Eigen::Vector3d& c0, Candidate* out);
+  CheckOutcome checkAt(const Candidate& cd, const Eigen::Vector3d& c0, Candidate* out);
 
   const GraspGeneratorConfig& cfg_;
   const GripperGeometry& g_;
@@ -1132,10 +1428,21 @@ class GraspSearch {
   const double sigma_;
   Footprint footprint_;
   bool use_footprint_ = false;
-  std::vector<int> idx_;
-  std::vector<float> d2_;
+  /// The object's middle for the refinement (see addFootprintHypotheses): the centroid without
+  /// a support, else the completed footprint's centre, a round body's axis or a ball's centre.
+  Eigen::Vector3d centre_;
+  /// The object's points, their normals (oriented outwards from the centroid; zero where none
+  /// was estimated) and the collision environment's points, for the neighbourhood scans (a
+  /// linear scan: the gripper's reach covers most of an object, where a tree search returns
+  /// nearly every point).
+  std::vector<Eigen::Vector3d> obj_p_, obj_n_, env_p_;
   std::vector<Eigen::Vector3d> nbrs_;
   std::vector<SurfacePoint> surf_;  ///< the object's points (with normals) gathered with nbrs_
+  GripperCheck::Prepared scratch_;  ///< checkAt's (its buffers reused)
+  std::array<int, kOutcomes> outcomes_{};  ///< checkCandidates' evaluations per CheckOutcome
+  /// The outcome of the first pose checked (best first) that held enough of the object.
+  CheckOutcome first_refusal_ = CheckOutcome::TooFewPoints;
+  double first_width_ = 0.0;  ///< its measured width
 };
 
 void GraspSearch::score(Candidate& cd) const {
@@ -1157,15 +1464,15 @@ std::vector<Hyp> GraspSearch::contactHypotheses(const std::vector<int>& seeds, b
     const Eigen::Vector3d pi = pt(cloud, i);
     const Eigen::Vector3d ni = normals[static_cast<std::size_t>(i)].getNormalVector3fMap().cast<double>();
     if (!ni.allFinite() || ni.norm() < 0.5) continue;
-    po_.tree->radiusSearch(cloud[static_cast<std::size_t>(i)], g_.max_width, idx_, d2_);
     std::vector<std::pair<double, int>> partners;
-    for (int j : idx_) {
-      const Eigen::Vector3d d = pt(cloud, j) - pi;
-      const double L = d.norm();
-      if (L < 2.0 * cfg_.voxel_size || L + 2.0 * g_.clearance > g_.max_width) continue;
+    const double lmin2 = std::pow(2.0 * cfg_.voxel_size, 2), lmax2 = std::pow(g_.max_width - 2.0 * g_.clearance, 2);
+    for (int j = 0; j < static_cast<int>(obj_p_.size()); ++j) {
+      const Eigen::Vector3d d = obj_p_[static_cast<std::size_t>(j)] - pi;
+      const double L2 = d.squaredNorm();
+      if (L2 < lmin2 || L2 > lmax2) continue;
+      const double L = std::sqrt(L2);
       const Eigen::Vector3d y = d / L;
-      const Eigen::Vector3d nj = normals[static_cast<std::size_t>(j)].getNormalVector3fMap().cast<double>();
-      if (!nj.allFinite()) continue;
+      const Eigen::Vector3d& nj = obj_n_[static_cast<std::size_t>(j)];
       const double q = std::min(std::abs(ni.dot(y)), std::abs(nj.dot(y)));
       if (q >= cos_fc_) partners.emplace_back(q, j);
     }
@@ -1212,6 +1519,7 @@ void GraspSearch::addFootprintHypotheses(std::vector<Hyp>* hyps) {
   Footprint& footprint = footprint_;
   footprint = supportFootprint(cloud, plane, static_cast<std::size_t>(cfg_.max_collision_points), po_.centroid);
   if (ball) {
+    centre_ = ball_c;
     for (int a = 0; a < 2; ++a) {
       footprint.width[a] = 2.0 * ball_r;
       footprint.centre += footprint.axis[a] * footprint.axis[a].dot(ball_c - footprint.centre);
@@ -1223,14 +1531,25 @@ void GraspSearch::addFootprintHypotheses(std::vector<Hyp>* hyps) {
   // An upright round object (its footprint a circle, the far side unseen): the circle gives
   // its width across every axis parallel to the support, for every hypothesis (a closing on
   // a chord short of the diameter would push it until the diameter is between the fingers).
-  const ExtentHint upright = roundCrossSection(cloud, normals, plane, footprint.axis[0], plane.head<3>(),
-                                               po_.centroid, tol);
+  ExtentHint upright = roundCrossSection(cloud, normals, plane, footprint.axis[0], plane.head<3>(),
+                                         po_.centroid, tol);
+  // A round body's seen footprint spans its diameter across the view (the mantle's silhouette,
+  // short only by its grazing sides' missing samples): a circle much wider than the footprint
+  // is an arc of something else (a banana's bent side fits a circle several times its width).
+  if (upright.valid &&
+      (upright.b - upright.a).norm() > kRoundFootprintRatio * std::max(footprint.width[0], footprint.width[1]))
+    upright.valid = false;
   if (upright.valid) {
     const Eigen::Vector3d c = 0.5 * (upright.a + upright.b);
     const double r = 0.5 * (upright.b - upright.a).norm();
+    centre_ = c;
     for (Hyp& h : *hyps) {
       const Eigen::Vector3d yh = h.y - h.y.dot(plane.head<3>()) * plane.head<3>();
       if (yh.norm() < 0.5) continue;  // closing across the support: not this section
+      // Only closings across the round body, through its middle half (a handle's, a rim's or
+      // a part's contact pair elsewhere is measured on its own).
+      const Eigen::Vector3d off = h.c0 - c;
+      if ((off - off.dot(plane.head<3>()) * plane.head<3>()).norm() > 0.5 * r) continue;
       // A closing axis tilted from the support crosses the mantle's section obliquely: the
       // object is 2 r / |yh| long along it (its height not counted).
       h.hint = {true, c - r / yh.norm() * h.y, c + r / yh.norm() * h.y};
@@ -1254,6 +1573,13 @@ void GraspSearch::addFootprintHypotheses(std::vector<Hyp>* hyps) {
     }
     hyps->push_back({footprint.axis[a], footprint.centre, {}, {}, cfg_.footprint_weight, true, hint});
   }
+  // The object's middle, unless a round body's axis gives it: across the footprint's narrow
+  // side its completed centre (the grasp closes on the middle line; one view's centroid lies
+  // towards the camera, where it shows the most surface), along the long side the centroid
+  // (the centre of mass: a view shows an object's length).
+  const int narrow = footprint.width[0] <= footprint.width[1] ? 0 : 1;
+  if (!upright.valid)
+    centre_ = po_.centroid + footprint.axis[narrow] * footprint.axis[narrow].dot(footprint.centre - po_.centroid);
 }
 
 std::string GraspSearch::tooWide() const {
@@ -1267,6 +1593,30 @@ std::string GraspSearch::tooWide() const {
          num(g_.max_width) + " m and needs " + num(g_.clearance) +
          " m clearance each side (objects up to " + num(g_.max_width - 2.0 * g_.clearance) +
          " m)";
+}
+
+GraspFailure GraspSearch::refusal(std::string* reason) const {
+  // The kind: what refused the most promising pose (the best score before the checks) that
+  // held enough of the object between its fingers.
+  auto count = [&](CheckOutcome o) { return outcomes_[static_cast<std::size_t>(o)]; };
+  const GraspFailure most = first_refusal_ == CheckOutcome::TooWide    ? GraspFailure::TooWide
+                            : first_refusal_ == CheckOutcome::Friction ? GraspFailure::Friction
+                            : first_refusal_ == CheckOutcome::Hidden   ? GraspFailure::HiddenVolume
+                                                                       : GraspFailure::Collides;
+  int total = 0;
+  for (int n : outcomes_) total += n;
+  std::ostringstream os;
+  if (most == GraspFailure::TooWide)
+    os << "too wide: the object measures " << num(first_width_) << " m across the best-ranked closing axis; the gripper opens "
+       << num(g_.max_width) << " m and needs " << num(g_.clearance) << " m clearance each side; ";
+  os << "no grasp fits: of " << total << " gripper poses checked, " << count(CheckOutcome::TooFewPoints)
+     << " hold too little of the object, " << count(CheckOutcome::TooWide) << " need more than the " << g_.max_width
+     << " m opening, " << count(CheckOutcome::Friction) << " touch a seen surface outside the friction cone (mu "
+     << cfg_.friction_coefficient << "), " << count(CheckOutcome::Collides) + count(CheckOutcome::Support)
+     << " collide with the cloud or the support, " << count(CheckOutcome::Hidden)
+     << " put a finger or the palm in the volume hidden behind the view";
+  *reason = os.str();
+  return most;
 }
 
 std::vector<Pending> GraspSearch::rankApproaches(std::vector<Hyp>* hyps) {
@@ -1285,7 +1635,10 @@ std::vector<Pending> GraspSearch::rankApproaches(std::vector<Hyp>* hyps) {
     for (int s = 0; s < cfg_.approach_steps; ++s) {
       const double phi = 2.0 * M_PI * s / cfg_.approach_steps;
       const Eigen::Vector3d a = std::cos(phi) * hp.u + std::sin(phi) * hp.v;
-      if (a.dot(-up) < cos_tilt_ - 1e-12) continue;
+      // Within the tilt limit of straight down and, the gripper coming from the side the view
+      // shows (its path through seen free space), of the view direction.
+      if (a.dot(-up) < cos_tilt_ - 1e-12 || (!po_.view_dir.isZero() && a.dot(po_.view_dir) < cos_tilt_ - 1e-12))
+        continue;
       Candidate cd;
       cd.R.col(2) = a;
       cd.R.col(1) = hp.y;
@@ -1304,6 +1657,10 @@ std::vector<Pending> GraspSearch::rankApproaches(std::vector<Hyp>* hyps) {
 std::vector<Candidate> GraspSearch::checkCandidates(const std::vector<Hyp>& hyps, const std::vector<Pending>& pending) {
   std::vector<Candidate> cands;
   std::map<int, GripperCheck::Prepared> prepared;
+  // A hypothesis's prepared neighbourhood is kept until its last approach is checked.
+  std::vector<int> remaining(hyps.size(), 0);
+  std::vector<GripperCheck::Prepared> spare;
+  for (const Pending& pd : pending) ++remaining[static_cast<std::size_t>(pd.hyp)];
   const std::size_t enough = static_cast<std::size_t>(std::max(4 * cfg_.top_k, 40));
   int evaluations = 0;
   for (const Pending& pd : pending) {
@@ -1314,15 +1671,26 @@ std::vector<Candidate> GraspSearch::checkCandidates(const std::vector<Hyp>& hyps
     if (it == prepared.end()) {
       // Neighbourhood of the grasp for the collision checks (shared by all approaches).
       gather(hp.c0, check_radius_);
-      it = prepared.emplace(pd.hyp, GripperCheck::Prepared()).first;
-      check_.prepare(hp.c0, hp.y, hp.u, nbrs_, surf_, hp.single ? po_.cloud.get() : nullptr, hp.hint, &it->second);
+      // A freed hypothesis's buffers are reused (large allocations would go back to the system).
+      it = prepared.emplace(pd.hyp, spare.empty() ? GripperCheck::Prepared() : std::move(spare.back())).first;
+      if (!spare.empty()) spare.pop_back();
+      check_.prepare(hp.c0, hp.y, hp.u, nbrs_, surf_, *po_.cloud, hp.single, hp.hint, &it->second);
     }
     const double phi = 2.0 * M_PI * pd.step / cfg_.approach_steps;
     Candidate cd;
-    if (!check_.evaluate(it->second, std::cos(phi), std::sin(phi), &cd.R, &cd.c, &cd.width, &cd.m))
-      continue;
+    const CheckOutcome o = check_.evaluate(it->second, std::cos(phi), std::sin(phi), &cd.R, &cd.c, &cd.width, &cd.m);
+    if (--remaining[static_cast<std::size_t>(pd.hyp)] == 0) {
+      spare.push_back(std::move(it->second));
+      prepared.erase(it);
+    }
+    ++outcomes_[static_cast<std::size_t>(o)];
+    if (first_refusal_ == CheckOutcome::TooFewPoints) {
+      first_refusal_ = o;
+      first_width_ = cd.m.width;
+    }
+    if (o != CheckOutcome::Pass) continue;
     cd.q = hp.q;
-    cd.antipodal = supportedQuality(hp.q, cd.m, cfg_.single_contact_weight);
+    cd.antipodal = supportedQuality(hp.q, cd.m, cfg_.single_contact_weight, hp.hint.valid);
     cd.single = hp.single;
     cd.hint = hp.hint;
     cands.push_back(cd);
@@ -1351,41 +1719,40 @@ std::vector<Candidate> GraspSearch::suppress(const std::vector<Candidate>& in, s
 }
 
 void GraspSearch::gather(const Eigen::Vector3d& centre, double radius) {
-  pcl::PointXYZ pc(static_cast<float>(centre.x()), static_cast<float>(centre.y()),
-                   static_cast<float>(centre.z()));
-  po_.env_tree->radiusSearch(pc, radius, idx_, d2_);
+  const double r2 = radius * radius;
   nbrs_.clear();
-  for (int e : idx_) nbrs_.push_back(pt(*po_.env, e));
-  po_.tree->radiusSearch(pc, radius, idx_, d2_);
   surf_.clear();
-  for (int e : idx_) {
-    // Normals oriented outwards from the object's centre (convex objects; a cloud of one view
-    // or of several).
-    const Eigen::Vector3d p = pt(*po_.cloud, e);
-    const Eigen::Vector3d n = (*po_.normals)[static_cast<std::size_t>(e)].getNormalVector3fMap().cast<double>();
-    if (n.allFinite() && n.norm() > 0.5) surf_.push_back({p, n.dot(p - po_.centroid) >= 0.0 ? n : Eigen::Vector3d(-n)});
+  // The object's points (with their normals, oriented outwards from the object's centre: convex
+  // objects; a cloud of one view or of several), and the environment's when it is more.
+  for (std::size_t e = 0; e < obj_p_.size(); ++e) {
+    if ((obj_p_[e] - centre).squaredNorm() > r2) continue;
+    if (env_p_.empty()) nbrs_.push_back(obj_p_[e]);
+    if (!obj_n_[e].isZero()) surf_.push_back({obj_p_[e], obj_n_[e]});
   }
+  for (const Eigen::Vector3d& p : env_p_)
+    if ((p - centre).squaredNorm() <= r2) nbrs_.push_back(p);
 }
 
-bool GraspSearch::checkAt(const Candidate& cd, const Eigen::Vector3d& c0, Candidate* out) {
-  GripperCheck::Prepared pr;
-  check_.prepare(c0, cd.R.col(1), cd.R.col(2), nbrs_, surf_, cd.single ? po_.cloud.get() : nullptr, cd.hint, &pr);
+CheckOutcome GraspSearch::checkAt(const Candidate& cd, const Eigen::Vector3d& c0, Candidate* out) {
+  GripperCheck::Prepared& pr = scratch_;
+  check_.prepare(c0, cd.R.col(1), cd.R.col(2), nbrs_, surf_, *po_.cloud, cd.single, cd.hint, &pr);
   *out = cd;
-  if (!check_.evaluate(pr, 1.0, 0.0, &out->R, &out->c, &out->width, &out->m)) return false;
-  out->antipodal = supportedQuality(cd.q, out->m, cfg_.single_contact_weight);
-  return true;
+  const CheckOutcome o = check_.evaluate(pr, 1.0, 0.0, &out->R, &out->c, &out->width, &out->m);
+  if (o != CheckOutcome::Pass) return o;
+  out->antipodal = supportedQuality(cd.q, out->m, cfg_.single_contact_weight, cd.hint.valid);
+  return CheckOutcome::Pass;
 }
 
 void GraspSearch::refineOntoCentroid(std::vector<Candidate>* kept) {
   for (Candidate& cd : *kept) {
     const Eigen::Vector3d x = cd.R.col(0);
     const double shift =
-        std::max(-cfg_.max_refine_shift, std::min(cfg_.max_refine_shift, x.dot(po_.centroid - cd.c)));
+        std::max(-cfg_.max_refine_shift, std::min(cfg_.max_refine_shift, x.dot(centre_ - cd.c)));
     if (std::abs(shift) < 1e-6) continue;
     const Eigen::Vector3d c0 = cd.c + shift * x;
     gather(c0, check_radius_);
     Candidate r;
-    if (checkAt(cd, c0, &r)) {
+    if (checkAt(cd, c0, &r) == CheckOutcome::Pass) {
       score(r);
       cd = r;
     }
@@ -1394,9 +1761,12 @@ void GraspSearch::refineOntoCentroid(std::vector<Candidate>* kept) {
 
 void GraspSearch::refineDepth(std::vector<Candidate>* kept) {
   // Push the grasp along its approach axis (z) while the check passes, stop at the first
-  // failing step, back off by depth_margin if a step failed (see the header). One
-  // neighbourhood covers every step: radius check_radius + max/2 around the middle of the
-  // search segment.
+  // failing step, back off by depth_margin if a step failed on the cloud (see the header). A
+  // step stopped by the support alone (its plane is fitted on many points, not one noisy
+  // surface) is not backed off: the deepest passing depth is narrowed down by halving the last
+  // step twice, so an object lower than the fingers is closed on near its middle. One
+  // neighbourhood covers every step: radius check_radius + max/2 around the middle of the search
+  // segment.
   const double smax = cfg_.max_depth_shift;
   std::vector<std::pair<double, Candidate>> passed;  // (shift, checked pose), increasing
   for (Candidate& cd : *kept) {
@@ -1404,19 +1774,38 @@ void GraspSearch::refineDepth(std::vector<Candidate>* kept) {
     const Eigen::Vector3d base = cd.c;
     gather(base + 0.5 * smax * a, check_radius_ + 0.5 * smax);
     passed.clear();
-    bool blocked = false;
+    CheckOutcome stop = CheckOutcome::Pass;
+    double failed_at = smax;
     for (int k = 1;; ++k) {
       const double s = k * cfg_.depth_step >= smax - 1e-9 ? smax : k * cfg_.depth_step;
       Candidate r;
-      if (!checkAt(cd, base + s * a, &r)) {
-        blocked = true;
+      stop = checkAt(cd, base + s * a, &r);
+      if (stop != CheckOutcome::Pass) {
+        failed_at = s;
         break;
       }
       passed.emplace_back(s, r);
       if (s >= smax) break;
     }
+    if (stop == CheckOutcome::Support) {
+      double lo = passed.empty() ? 0.0 : passed.back().first, hi = failed_at;
+      for (int h = 0; h < 2; ++h) {
+        const double mid = 0.5 * (lo + hi);
+        Candidate r;
+        if (checkAt(cd, base + mid * a, &r) == CheckOutcome::Pass) {
+          passed.emplace_back(mid, r);
+          lo = mid;
+        } else {
+          hi = mid;
+        }
+      }
+      if (passed.empty()) continue;
+      cd = passed.back().second;
+      score(cd);
+      continue;
+    }
     if (passed.empty()) continue;  // the first step already fails: depth kept
-    const double target = passed.back().first - (blocked ? cfg_.depth_margin : 0.0);
+    const double target = passed.back().first - (stop != CheckOutcome::Pass ? cfg_.depth_margin : 0.0);
     if (target <= 1e-9) continue;  // never behind the original depth
     // The target pose if it is a checked step or passes the check; else the deepest
     // checked step in front of it.
@@ -1428,7 +1817,7 @@ void GraspSearch::refineDepth(std::vector<Candidate>* kept) {
         checked = std::abs(sp.first - target) < 1e-9;
       }
     Candidate r;
-    if (!checked && checkAt(cd, base + target * a, &r)) best = &r;
+    if (!checked && checkAt(cd, base + target * a, &r) == CheckOutcome::Pass) best = &r;
     if (!best) continue;
     cd = *best;
     score(cd);
@@ -1460,7 +1849,7 @@ GraspResult GraspGenerator::generate(const PointList& object, const Eigen::Vecto
   PreparedObject po;
   if (!filterObject(cfg, object, viewpoint, &po, &res)) return res;
   if (!describeObject(cfg, support_plane, &po, &res)) return res;
-  estimateNormalsAndEnvironment(cfg, collision_cloud, &po);
+  estimateNormalsAndEnvironment(cfg, collision_cloud, viewpoint, &po);
   const std::vector<int> seeds = sampleSeeds(static_cast<int>(po.cloud->size()), cfg);
 
   // Hypotheses (contact pairs, single contacts, footprint axes), their approaches best
@@ -1471,13 +1860,18 @@ GraspResult GraspGenerator::generate(const PointList& object, const Eigen::Vecto
   search.addFootprintHypotheses(&hyps);
   const std::vector<Pending> pending = search.rankApproaches(&hyps);
   std::vector<Candidate> cands = search.checkCandidates(hyps, pending);
-  if (!any_pair && cands.empty()) {
-    res.reason = search.tooWide();
-    res.failure = GraspFailure::TooWide;
-    if (!res.reason.empty()) return res;
+  if (cands.empty()) {
+    res.failure = search.refusal(&res.reason);
+    // Too wide: the margin rule's reason with the object's narrowest footprint, if it breaks it.
+    const std::string wide = search.tooWide();
+    if (!wide.empty()) {
+      res.reason = wide + "; " + res.reason;
+      res.failure = GraspFailure::TooWide;
+    }
+    if (any_pair || res.failure != GraspFailure::Collides) return res;
     res.failure = GraspFailure::NoAntipodalPair;
     res.reason = "no antipodal contact pair within the gripper opening (" + num(g.max_width) +
-                 " m) and the friction cone (mu " + num(cfg.friction_coefficient) + ")";
+                 " m) and the friction cone (mu " + num(cfg.friction_coefficient) + "); " + res.reason;
     return res;
   }
 
@@ -1496,13 +1890,6 @@ GraspResult GraspGenerator::generate(const PointList& object, const Eigen::Vecto
   kept = search.suppress(kept, want);
 
   for (const Candidate& cd : kept) res.grasps.push_back(toGrasp(cd));
-  if (res.grasps.empty()) res.reason = search.tooWide();
-  if (!res.reason.empty()) res.failure = GraspFailure::TooWide;
-  if (res.grasps.empty() && res.reason.empty()) {
-    res.failure = GraspFailure::Collides;
-    res.reason = "every grasp candidate collides with the cloud or the support, or needs more "
-                 "than the " + std::to_string(g.max_width) + " m opening";
-  }
   return res;
 }
 

@@ -17,7 +17,8 @@ const char* kUsage =
     "usage: ehc_grasps --cloud <file.pcd> --out <grasps.json> [--viewpoint x,y,z] [--top K]\n"
     "                  [--up x,y,z] [--mode scene|object] [--config <file.yaml>]\n"
     "Writes [{\"position\":[x,y,z], \"orientation\":[qx,qy,qz,qw], \"width\":w, \"score\":s}]\n"
-    "best first (grasp frame: z = approach, y = finger closing). Exit 3 if no grasp.\n";
+    "best first (grasp frame: z = approach, y = finger closing). Exit 3 if no grasp.\n"
+    "--viewpoint: the camera's origin in the cloud's frame (without it, no hidden-volume check).\n";
 }
 
 int main(int argc, char** argv) {
@@ -41,6 +42,8 @@ int main(int argc, char** argv) {
     }
     cfg.top_k = static_cast<int>(cli.integer("top", cfg.top_k, 1, 1000000));
     cfg.up = cli.vector3("up", cfg.up);
+    // Without the camera's origin the volume its view hides is not known.
+    if (!cli.has("viewpoint")) cfg.hidden_volume_check = false;
     const Eigen::Vector3d viewpoint = cli.vector3("viewpoint", Eigen::Vector3d::Zero());
     const std::string mode = cli.choice("mode", {"scene", "object"}, "scene");
     const GraspGenerator gen(cfg);
