@@ -570,6 +570,32 @@ TEST(GraspSequencer, TimeLimitFailsTheObjectAndMovesOn) {
   EXPECT_EQ(h.seq.currentObject(), 1u);  // next object after release + retreat
 }
 
+// A target seen all along, but no grasp qualifies (require_candidate, no candidates): the cause
+// is no_grasp, and the stall names no motion limit (nothing held the robot back), not
+// target_not_seen.
+TEST(GraspSequencer, TimeLimitWithTheTargetSeenButNoGraspIsNoGraspNotTargetNotSeen) {
+  GraspSequencerParams p = twoObjects();
+  p.selection.require_candidate = true;
+  Harness h(p);
+  h.perceive = forwardTarget();
+  h.run(30.2);
+  ASSERT_EQ(h.seq.results().size(), 1u);
+  const GraspResult& r = h.seq.results()[0];
+  EXPECT_FALSE(r.success);
+  EXPECT_EQ(r.failed_phase, "WAIT_TARGET");
+  EXPECT_EQ(toString(r.cause), "no_grasp");
+  EXPECT_EQ(r.stallCause(), "none");
+  EXPECT_NE(r.reason.find("target seen, no grasp chosen"), std::string::npos) << r.reason;
+
+  // Never seen: the stall is target_not_seen, for the whole time limit.
+  Harness unseen(twoObjects());
+  unseen.run(30.2);
+  ASSERT_EQ(unseen.seq.results().size(), 1u);
+  EXPECT_EQ(toString(unseen.seq.results()[0].cause), "not_seen");
+  EXPECT_EQ(unseen.seq.results()[0].stallCause(), "target_not_seen");
+  EXPECT_EQ(unseen.seq.results()[0].reason.find("no grasp chosen"), std::string::npos);
+}
+
 TEST(GraspSequencer, TimeLimitWhileApproachingAConfiguredLimit) {
   GraspSequencerParams p = twoObjects();
   p.object_time_limit = 5.0;

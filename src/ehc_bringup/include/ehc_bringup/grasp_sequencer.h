@@ -375,6 +375,8 @@ class GraspSequencer {
   ObstacleNamer namer_;
   /// The stall's cause when the object's time limit fires in the current phase (see above).
   void recordStall(const SequencerInput& in);
+  /// The current object's pose came within perception_hold of `t`.
+  bool targetSeenRecently(double t) const;
 };
 
 /// JSON summary: {"mode": ..., "objects": [{"name", "success", "time_s", "tfm", ...}], "successes": n,

@@ -528,6 +528,7 @@ SequencerOutput GraspSequencer::update(const SequencerInput& in) {
         << " s since it last came closer)";
     }
     if (phase_ == GraspPhase::WaitTarget && !no_target_.empty()) s << " (no target: " << no_target_ << ")";
+    if (phase_ == GraspPhase::WaitTarget && targetSeenRecently(t)) s << " (target seen, no grasp chosen)";
     recordStall(in);
     s << "; stall: " << cur_.stallCause();
     const std::string detail = cur_.stallDetail();
@@ -543,14 +544,23 @@ SequencerOutput GraspSequencer::update(const SequencerInput& in) {
   return out;
 }
 
+bool GraspSequencer::targetSeenRecently(double t) const {
+  return object_pose_t_ >= 0.0 && t - object_pose_t_ <= params_.perception_hold;
+}
+
 void GraspSequencer::recordStall(const SequencerInput& in) {
   cur_.timed_out = true;
   cur_.stall = in.motion_limit;
   cur_.stall_body.clear();
-  if (phase_ == GraspPhase::WaitTarget) {  // perception has no pose of the object: that is the cause
+  if (phase_ == GraspPhase::WaitTarget) {
+    // Perception has no recent pose of the object: that is the cause. With a recent pose nothing
+    // held the robot back: no grasp was chosen from its views (cause no_grasp, stall none).
     cur_.stall = ehc_control::MotionLimitReport{};
-    cur_.stall.limit = ehc_control::MotionLimit::TargetNotSeen;
-    cur_.stall.value = in.t - std::max(object_t0_, object_pose_t_);
+    const double unseen = in.t - std::max(object_t0_, object_pose_t_);
+    if (!targetSeenRecently(in.t)) {
+      cur_.stall.limit = ehc_control::MotionLimit::TargetNotSeen;
+      cur_.stall.value = unseen;
+    }
   } else if (cur_.stall.limit == ehc_control::MotionLimit::Obstacle && namer_) {
     cur_.stall_body = namer_(cur_.stall.obstacle_point);
   }
