@@ -556,10 +556,9 @@ void GraspSequencer::recordStall(const SequencerInput& in) {
     // Perception has no recent pose of the object: that is the cause. With a recent pose nothing
     // held the robot back: no grasp was chosen from its views (cause no_grasp, stall none).
     cur_.stall = ehc_control::MotionLimitReport{};
-    const double unseen = in.t - std::max(object_t0_, object_pose_t_);
     if (!targetSeenRecently(in.t)) {
       cur_.stall.limit = ehc_control::MotionLimit::TargetNotSeen;
-      cur_.stall.value = unseen;
+      cur_.stall.value = in.t - std::max(object_t0_, object_pose_t_);
     }
   } else if (cur_.stall.limit == ehc_control::MotionLimit::Obstacle && namer_) {
     cur_.stall_body = namer_(cur_.stall.obstacle_point);

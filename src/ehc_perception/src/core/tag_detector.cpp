@@ -278,10 +278,13 @@ TagDetector::Prediction TagDetector::predict(const Eigen::Isometry3d& T_world_ca
   Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
   bool any_visible = false;
   *tag_px = std::numeric_limits<double>::infinity();
+  const Eigen::Isometry3d T_cam_world = T_world_cam.inverse();
+  const Eigen::Vector2d m = Eigen::Vector2d::Constant(config_.roi_margin);
+  const Eigen::Vector2d size(camera_.width, camera_.height);
   for (int id : wanted_tags_) {
     const auto it = seen_in_world_.find(id);
     if (it == seen_in_world_.end()) return Prediction::Unknown;
-    const Eigen::Isometry3d T_cam_tag = T_world_cam.inverse() * it->second;
+    const Eigen::Isometry3d T_cam_tag = T_cam_world * it->second;
     // A tag seen edge-on or from behind cannot be detected: it is predicted out of view.
     if (T_cam_tag.linear().col(2).dot(T_cam_tag.translation()) >= 0.0) continue;
     // So can a tag with a corner behind the camera, or outside the image grown by roi_margin (the
@@ -294,8 +297,6 @@ TagDetector::Prediction TagDetector::predict(const Eigen::Isometry3d& T_world_ca
       corners[k++] = T_cam_tag * Eigen::Vector3d(c.x(), c.y(), 0.0);
     if (std::any_of(corners.begin(), corners.end(), [](const Eigen::Vector3d& p) { return p.z() < kMinPredictionDepth; }))
       continue;
-    const Eigen::Vector2d m = Eigen::Vector2d::Constant(config_.roi_margin);
-    const Eigen::Vector2d size(camera_.width, camera_.height);
     Eigen::Vector2d tag_lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity()), tag_hi = -tag_lo;
     std::array<Eigen::Vector2d, 4> pixels;
     for (std::size_t i = 0; i < 4; ++i) {
