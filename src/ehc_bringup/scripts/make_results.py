@@ -424,7 +424,11 @@ def fmt_us(v):
 
 def bench_figure(r):
     if "median_us" in r:
-        return "median %s, p99 %s (n %s)" % (fmt_us(r["median_us"]), fmt_us(r.get("p99_us")), r.get("n", "?"))
+        runs = r.get("run_medians_us")
+        of_runs = "; the lowest of %d runs' medians: %s" % (len(runs), ", ".join(fmt_us(v) for v in runs)) \
+            if isinstance(runs, list) and len(runs) > 1 else ""
+        return "median %s, p99 %s (n %s%s)" % (fmt_us(r["median_us"]), fmt_us(r.get("p99_us")), r.get("n", "?"),
+                                              of_runs)
     if "cpu_real_time_factor" in r:
         return "%.2fx real time per core (wall %.2fx), %s/%s grasped" % (
             r["cpu_real_time_factor"], r.get("wall_real_time_factor", float("nan")), r.get("successes", "?"),
