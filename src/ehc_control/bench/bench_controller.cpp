@@ -14,6 +14,7 @@
 // ("Collected" / 2000).
 
 #include "ehc_common/bench_util.h"
+#include "ehc_test/control_fixtures.h"
 #include "ehc_control/pose_servo.h"
 #include "ehc_control/qp_controller.h"
 
@@ -42,18 +43,16 @@ Run runClosedLoop(const RobotConfig& rc, const std::shared_ptr<const WholeBodyMo
                                           "link6", "gripper_base_link", "camera_link", "arm_base_link", "ee_link"};
   EhcQpController ctrl(model, QpControllerParams{}, weighting);
   std::mt19937 rng(3);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  Eigen::Vector3d base = Eigen::Vector3d::Zero();
-  Eigen::VectorXd q = rc.arm_ready;
+  test::KinematicSim sim;
+  sim.q = rc.arm_ready;
+  const Eigen::Vector3d& base = sim.base;
+  const Eigen::VectorXd& q = sim.q;
   Run run;
   run.us.reserve(static_cast<std::size_t>(steps));
   Eigen::Isometry3d target = Eigen::Isometry3d::Identity();
   for (int k = 0; k < steps; ++k) {
     if (k % 400 == 0) {  // a new target every 4 s
-      target = Eigen::Isometry3d::Identity();
-      target.linear() = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitY()).toRotationMatrix() *
-                        Eigen::AngleAxisd(0.4 * u(rng), Eigen::Vector3d::UnitX()).toRotationMatrix();
-      target.translation() << base.x() + 1.2 * u(rng), base.y() + 1.2 * u(rng), 0.7 + 0.2 * u(rng);
+      target = test::randomDownwardTarget(rng, base);
       ctrl.reset();
     }
     const Eigen::Isometry3d tcp = model->fk(base, q, rc.tcp_frame);
@@ -75,12 +74,7 @@ Run runClosedLoop(const RobotConfig& rc, const std::shared_ptr<const WholeBodyMo
     run.failed += !c.ok;
     run.iterations += c.qp_iterations;
     run.max_iterations = std::max(run.max_iterations, c.qp_iterations);
-    // Integrate (differential base, 100 Hz).
-    const double dt = 0.01;
-    base.x() += std::cos(base.z()) * c.velocity[0] * dt;
-    base.y() += std::sin(base.z()) * c.velocity[0] * dt;
-    base.z() += c.velocity[1] * dt;
-    q += c.velocity.tail(rc.nArm()) * dt;
+    sim.step(*model, c.velocity, 0.01);  // 100 Hz
   }
   return run;
 }

@@ -7,6 +7,7 @@
 
 #include "ehc_common/bench_util.h"
 #include "ehc_control/control_cycle.h"
+#include "ehc_test/control_fixtures.h"
 
 #include <chrono>
 #include <random>
@@ -31,19 +32,15 @@ int main() {
     const WholeBodyModel& model = cycle.model();
     const RobotConfig& rc = model.config();
     std::mt19937 rng(3);
-    std::uniform_real_distribution<double> u(-1.0, 1.0);
-    Eigen::Vector3d base = Eigen::Vector3d::Zero();
-    Eigen::VectorXd q = rc.arm_ready;
+    test::KinematicSim sim;
+    sim.q = rc.arm_ready;
+    const Eigen::Vector3d& base = sim.base;
+    const Eigen::VectorXd& q = sim.q;
     std::vector<double> weight_us, servo_us, fov_us, pieces_us, update_us;
     Eigen::Isometry3d target = Eigen::Isometry3d::Identity();
     long failed = 0;
     for (int k = 0; k < steps; ++k) {
-      if (k % 400 == 0) {  // a new target every 4 s
-        target = Eigen::Isometry3d::Identity();
-        target.linear() = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitY()).toRotationMatrix() *
-                          Eigen::AngleAxisd(0.4 * u(rng), Eigen::Vector3d::UnitX()).toRotationMatrix();
-        target.translation() << base.x() + 1.2 * u(rng), base.y() + 1.2 * u(rng), 0.7 + 0.2 * u(rng);
-      }
+      if (k % 400 == 0) target = test::randomDownwardTarget(rng, base);  // a new target every 4 s
       const double now = k * dt;
       cycle.setJointState(now, rc.arm_joints, std::vector<double>(q.data(), q.data() + q.size()));
       cycle.setBasePose(now, base);
@@ -72,11 +69,7 @@ int main() {
       pieces_us.push_back(us(t0, t4) + out.status.solve_time_us);
       update_us.push_back(us(t4, t5));
       failed += out.status.qp_status != QpStatus::Ok;
-      const Eigen::VectorXd& v = out.velocity;
-      base.x() += std::cos(base.z()) * v[0] * dt;
-      base.y() += std::sin(base.z()) * v[0] * dt;
-      base.z() += v[1] * dt;
-      q += v.tail(rc.nArm()) * dt;
+      sim.step(model, out.velocity, dt);
     }
     const std::string tag = mpbs ? "mpbs" : "pbvs";
     const ehc_common::Json failures = {{"qp_failures", failed}};

@@ -61,6 +61,19 @@ struct KinematicSim {
   }
 };
 
+/// A random TCP target for closed loops: the hand pointing down (tilted up to 0.4 rad about its
+/// x axis), within 1.2 m of `base` in x and y and 0.5-0.9 m high.
+inline Eigen::Isometry3d randomDownwardTarget(std::mt19937& rng, const Eigen::Vector3d& base) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Eigen::Isometry3d target = Eigen::Isometry3d::Identity();
+  const double tilt = 0.4 * u(rng);
+  target.linear() = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitY()).toRotationMatrix() *
+                    Eigen::AngleAxisd(tilt, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  const double x = base.x() + 1.2 * u(rng), y = base.y() + 1.2 * u(rng), z = 0.7 + 0.2 * u(rng);
+  target.translation() << x, y, z;
+  return target;
+}
+
 /// TCP pose at (x, y, z) whose z axis is `approach`, x axis horizontal.
 inline Eigen::Isometry3d approachPose(double x, double y, double z, const Eigen::Vector3d& approach) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
