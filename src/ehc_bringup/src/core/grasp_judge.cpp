@@ -2,6 +2,7 @@
 
 #include "ehc_bringup/grasp_selection.h"
 #include "ehc_common/enum_names.h"
+#include "ehc_common/text_format.h"
 
 #include <BulletCollision/CollisionShapes/btBvhTriangleMeshShape.h>
 #include <BulletCollision/CollisionShapes/btTriangleIndexVertexArray.h>
@@ -13,7 +14,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 #include <random>
 #include <sstream>
@@ -375,11 +375,7 @@ std::vector<JudgedView> judgeLibrary(const ehc_sim::ObjectLibrary& library, cons
 
 namespace {
 
-std::string fixed(double v, int digits) {
-  char buf[64];
-  std::snprintf(buf, sizeof(buf), "%.*f", digits, v);
-  return buf;
-}
+using ehc_common::fixedDecimals;
 
 /// A CSV field: quoted, inner quotes doubled.
 std::string quoted(const std::string& s) {
@@ -388,7 +384,7 @@ std::string quoted(const std::string& s) {
   return q + "\"";
 }
 
-std::string percent(int n, int of) { return of > 0 ? fixed(100.0 * n / of, 0) + " %" : "-"; }
+std::string percent(int n, int of) { return of > 0 ? fixedDecimals(100.0 * n / of, 0) + " %" : "-"; }
 
 }  // namespace
 
@@ -400,8 +396,8 @@ std::string judgedViewsCsv(const std::vector<JudgedView>& views) {
   for (const JudgedView& v : views) {
     const ViewJudgement& j = v.judgement;
     const bool any = !j.result.grasps.empty();
-    f << v.object << "," << v.kind << "," << v.split << "," << v.view << "," << fixed(v.pose.distance, 3) << ","
-      << fixed(v.pose.elevation_deg, 1) << "," << fixed(v.pose.azimuth_deg, 1) << "," << v.noise_seed << ","
+    f << v.object << "," << v.kind << "," << v.split << "," << v.view << "," << fixedDecimals(v.pose.distance, 3) << ","
+      << fixedDecimals(v.pose.elevation_deg, 1) << "," << fixedDecimals(v.pose.azimuth_deg, 1) << "," << v.noise_seed << ","
       << (j.exists ? 1 : 0) << "," << (j.search_missed ? 1 : 0) << "," << j.existence.candidates << ","
       << (j.exists ? "" : toString(j.existence.commonest())) << "," << ehc_perception::toString(j.result.failure) << ","
       << quoted(j.result.reason) << "," << j.result.grasps.size() << ",";
@@ -409,9 +405,9 @@ std::string judgedViewsCsv(const std::vector<JudgedView>& views) {
       const ehc_perception::Grasp& g = j.result.grasps.front();
       const double angle = std::max(j.best.contact_angle_deg[0], j.best.contact_angle_deg[1]);
       f << (j.best.valid() ? 1 : 0) << "," << toString(j.best.verdict) << "," << toString(j.best_any_side.verdict) << ","
-        << fixed(1e3 * g.measured_width, 1) << ","
-        << (j.best.width > 0.0 ? fixed(1e3 * j.best.width, 1) : "") << ","
-        << (j.best.closed_width > 0.0 ? fixed(1e3 * j.best.closed_width, 1) : "") << "," << (angle >= 0.0 ? fixed(angle, 1) : "") << ","
+        << fixedDecimals(1e3 * g.measured_width, 1) << ","
+        << (j.best.width > 0.0 ? fixedDecimals(1e3 * j.best.width, 1) : "") << ","
+        << (j.best.closed_width > 0.0 ? fixedDecimals(1e3 * j.best.closed_width, 1) : "") << "," << (angle >= 0.0 ? fixedDecimals(angle, 1) : "") << ","
         << g.seen_contacts << ",";
     } else {
       f << ",,,,,,,,";

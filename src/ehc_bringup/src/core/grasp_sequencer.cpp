@@ -1,6 +1,7 @@
 #include "ehc_bringup/grasp_sequencer.h"
 
 #include "ehc_common/config_node.h"
+#include "ehc_common/text_format.h"
 #include "ehc_control/control_status.h"
 #include "ehc_common/enum_names.h"
 #include "ehc_common/json.h"
@@ -50,13 +51,7 @@ constexpr ehc_common::EnumNames<GraspCause, 8> kGraspCauseNames = {{
 std::string toString(GraspCause c) { return ehc_common::enumName(kGraspCauseNames, c, "GraspSequencer"); }
 
 namespace {
-/// `v` with `precision` decimals for messages ("null" when not finite).
-std::string num(double v, int precision = 3) {
-  if (!std::isfinite(v)) return "null";
-  std::ostringstream s;
-  s << std::fixed << std::setprecision(precision) << v;
-  return s.str();
-}
+std::string num(double v, int precision = 3) { return ehc_common::fixedDecimals(v, precision); }
 
 /// The look pose `distance` back from `pose` along its approach (z) axis: where the camera sees it.
 Eigen::Isometry3d lookPose(Eigen::Isometry3d pose, double distance) {

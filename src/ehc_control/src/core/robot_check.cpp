@@ -1,6 +1,7 @@
 #include "ehc_control/robot_check.h"
 
 #include "ehc_common/config_node.h"
+#include "ehc_common/text_format.h"
 #include "ehc_control/pinhole_camera.h"
 #include "ehc_control/qp_controller.h"
 #include "ehc_control/reachability_map.h"
@@ -14,7 +15,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <iomanip>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
@@ -39,12 +39,7 @@ class Report {
   std::vector<RobotCheckLine> lines_;
 };
 
-std::string num(double v, int digits = 3) {
-  if (std::abs(v) < 0.5 * std::pow(10.0, -digits)) v = 0.0;  // no "-0"
-  std::ostringstream os;
-  os << std::fixed << std::setprecision(digits) << v;
-  return os.str();
-}
+std::string num(double v, int digits = 3) { return ehc_common::fixedDecimals(v, digits); }
 
 std::string vec(const Eigen::Vector3d& v, int digits = 2) {
   return "[" + num(v.x(), digits) + ", " + num(v.y(), digits) + ", " + num(v.z(), digits) + "]";
