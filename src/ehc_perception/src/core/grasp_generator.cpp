@@ -584,9 +584,15 @@ void GripperCheck::extentOf(const Prepared& pr) const {
   pr.extent_pending = false;
   ext_.clear();
   const double yn = has_plane_ ? pr.y.dot(plane_.head<3>()) : 0.0;
+  // Only the part of the object the fingers can close on: its points within the fingers' reach
+  // of the closing line (the slab of any approach around it), not the whole object's extent (a
+  // handle's, a bar's or a rim's far side is bounded by that part, not by the body beyond it).
+  const double z_reach = std::max(g_.finger_tip_depth, g_.finger_length - g_.finger_tip_depth);
+  const double reach2 = z_reach * z_reach + 0.25 * g_.finger_breadth * g_.finger_breadth;
   for (const auto& pf : *pr.object) {
     const Eigen::Vector3d p = pf.getVector3fMap().cast<double>();
     const double e = pr.y.dot(p - pr.c0);
+    if ((p - pr.c0 - e * pr.y).squaredNorm() > reach2) continue;
     ext_.push_back(e);
     if (has_plane_ && std::abs(yn) > 1e-9) ext_.push_back(e - (plane_.head<3>().dot(p) + plane_[3]) * yn);
   }
@@ -1663,8 +1669,12 @@ std::vector<Candidate> GraspSearch::checkCandidates(const std::vector<Hyp>& hyps
   for (const Pending& pd : pending) ++remaining[static_cast<std::size_t>(pd.hyp)];
   const std::size_t enough = static_cast<std::size_t>(std::max(4 * cfg_.top_k, 40));
   int evaluations = 0;
+  // Hypotheses whose fitted completion is wider than the opening: refused once, whatever the
+  // approach (their approaches are not checked and do not count against max_evaluations).
+  std::vector<char> refused(hyps.size(), 0);
   for (const Pending& pd : pending) {
     if (cands.size() >= enough || evaluations >= cfg_.max_evaluations) break;
+    if (refused[static_cast<std::size_t>(pd.hyp)]) continue;
     ++evaluations;
     const Hyp& hp = hyps[static_cast<std::size_t>(pd.hyp)];
     auto it = prepared.find(pd.hyp);
@@ -1675,6 +1685,11 @@ std::vector<Candidate> GraspSearch::checkCandidates(const std::vector<Hyp>& hyps
       it = prepared.emplace(pd.hyp, spare.empty() ? GripperCheck::Prepared() : std::move(spare.back())).first;
       if (!spare.empty()) spare.pop_back();
       check_.prepare(hp.c0, hp.y, hp.u, nbrs_, surf_, *po_.cloud, hp.single, hp.hint, &it->second);
+    }
+    if (it->second.too_wide) {
+      refused[static_cast<std::size_t>(pd.hyp)] = 1;
+      remaining[static_cast<std::size_t>(pd.hyp)] = 1;  // its buffers are freed below
+      --evaluations;
     }
     const double phi = 2.0 * M_PI * pd.step / cfg_.approach_steps;
     Candidate cd;
