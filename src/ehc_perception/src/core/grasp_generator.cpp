@@ -584,15 +584,9 @@ void GripperCheck::extentOf(const Prepared& pr) const {
   pr.extent_pending = false;
   ext_.clear();
   const double yn = has_plane_ ? pr.y.dot(plane_.head<3>()) : 0.0;
-  // Only the part of the object the fingers can close on: its points within the fingers' reach
-  // of the closing line (the slab of any approach around it), not the whole object's extent (a
-  // handle's, a bar's or a rim's far side is bounded by that part, not by the body beyond it).
-  const double z_reach = std::max(g_.finger_tip_depth, g_.finger_length - g_.finger_tip_depth);
-  const double reach2 = z_reach * z_reach + 0.25 * g_.finger_breadth * g_.finger_breadth;
   for (const auto& pf : *pr.object) {
     const Eigen::Vector3d p = pf.getVector3fMap().cast<double>();
     const double e = pr.y.dot(p - pr.c0);
-    if ((p - pr.c0 - e * pr.y).squaredNorm() > reach2) continue;
     ext_.push_back(e);
     if (has_plane_ && std::abs(yn) > 1e-9) ext_.push_back(e - (plane_.head<3>().dot(p) + plane_[3]) * yn);
   }
