@@ -70,17 +70,27 @@ GraspTrial trial(const std::string& method, bool success, const AttemptJudgement
   return t;
 }
 
-/// The judge columns of trials.csv by method: counts as JudgeCounts defines them. The judge
-/// columns are the last seven (no commas in them); method and success lead the row.
+/// The judge columns of trials.csv by method: counts as JudgeCounts defines them. The row ends
+/// with the generator's reason (quoted, may hold commas), after the target selection and the
+/// generator's failure; before them the seven judge columns (no commas in them); method and
+/// success lead the row.
 std::map<std::string, JudgeCounts> countRows(const std::string& csv) {
   std::istringstream in(csv);
   std::string line;
   std::getline(in, line);
-  EXPECT_NE(line.find(",cause,judge_view,valid_exists,attempted,attempt_valid,grasp_verdict,candidate_verdict,judge_reason"), std::string::npos) << line;
+  EXPECT_NE(line.find(",cause,judge_view,valid_exists,attempted,attempt_valid,grasp_verdict,candidate_verdict,judge_reason,"
+                      "target_selection,generator_failure,generator_reason"),
+            std::string::npos)
+      << line;
   std::map<std::string, JudgeCounts> out;
   while (std::getline(in, line)) {
+    std::string rest = line.back() == '"' ? line.substr(0, line.rfind(",\"")) : line.substr(0, line.rfind(','));
+    std::string generator[2];  // target selection, generator failure
+    for (int k = 1; k >= 0; --k) {
+      generator[k] = rest.substr(rest.rfind(',') + 1);
+      rest = rest.substr(0, rest.rfind(','));
+    }
     std::vector<std::string> tail;
-    std::string rest = line;
     for (int k = 0; k < 7; ++k) {
       const std::size_t c = rest.rfind(',');
       tail.insert(tail.begin(), rest.substr(c + 1));
@@ -101,6 +111,13 @@ std::map<std::string, JudgeCounts> countRows(const std::string& csv) {
     c.grasped_where_none += !exists && success;
     EXPECT_FALSE(valid && !attempted) << line;
     EXPECT_EQ(tail[6].rfind("attempted_where_none", 0) == 0, !exists && attempted && !success) << line;
+    // The generator's failure and the selection are names of their enums.
+    EXPECT_NO_THROW(ehc_perception::graspFailureFromString(generator[1])) << line;
+    EXPECT_FALSE(generator[0].empty()) << line;
+    if (exists && !success && tail[6] == "no_grasp_chosen") {
+      const bool unselected = generator[0] != "selected" && generator[0] != "not_cloud_target";
+      ++c.no_grasp_failures[unselected ? "no_target:" + generator[0] : generator[1]];
+    }
   }
   return out;
 }
@@ -123,6 +140,10 @@ void expectSummaryMatchesRows(const std::string& dir, const GraspExperimentResul
     EXPECT_EQ(j["attempted_invalid"], c.attempted_invalid) << method;
     EXPECT_EQ(j["attempted_where_none"], c.attempted_where_none) << method;
     EXPECT_EQ(j["grasped_where_none"], c.grasped_where_none) << method;
+    EXPECT_EQ(j["no_grasp_failures"], ehc_common::Json(c.no_grasp_failures)) << method;
+    int reasons = 0;
+    for (const auto& [reason, n] : j["reasons"].items()) reasons += n.get<int>();
+    EXPECT_EQ(reasons, c.objects) << method;
     EXPECT_NE(table.find("| " + method + " | " + std::to_string(c.objects) + " | " + std::to_string(c.valid_exists) + " | " +
                          std::to_string(c.grasped_where_exists) + " ("),
               std::string::npos)
@@ -157,8 +178,20 @@ TEST(EverydayJudge, AttemptsAreJudgedAgainstTheTrueMesh) {
   EXPECT_EQ(off.verdict, GraspVerdict::OutsideOpening);
   EXPECT_TRUE(off.valid_exists);
   EXPECT_EQ(off.reason(false), "invalid_grasp:outside_opening");
-  // No grasp chosen: existence from the last view with the object in the image.
-  const AttemptJudgement none_chosen = judgeAttempt(record(0.10, std::nullopt), box, scene, kGripper, p, 1);
+  // No grasp chosen: existence from the last view with the object in the image, and what the
+  // generator and the cloud target's selection said in it.
+  GraspAttemptRecord refused = record(0.10, std::nullopt);
+  refused.last_seen.failure = ehc_perception::GraspFailure::TooWide;
+  refused.last_seen.reason = "too wide: 0.08 m, across";
+  refused.last_seen.target = ehc_control::TargetSelectionStatus::Selected;
+  const AttemptJudgement none_chosen = judgeAttempt(refused, box, scene, kGripper, p, 1);
+  EXPECT_EQ(none_chosen.generator_failure, ehc_perception::GraspFailure::TooWide);
+  EXPECT_EQ(none_chosen.generator_reason, "too wide: 0.08 m, across");
+  EXPECT_EQ(noGraspCause(none_chosen), "too_wide");
+  AttemptJudgement ambiguous = none_chosen;
+  ambiguous.target = ehc_control::TargetSelectionStatus::Ambiguous;
+  EXPECT_EQ(noGraspCause(ambiguous), "no_target:" + ehc_control::toString(ehc_control::TargetSelectionStatus::Ambiguous));
+  EXPECT_EQ(good.generator_failure, ehc_perception::GraspFailure::None);
   EXPECT_EQ(none_chosen.view, "last_seen");
   EXPECT_FALSE(none_chosen.attempted || none_chosen.chosen);
   EXPECT_TRUE(none_chosen.valid_exists);
@@ -194,6 +227,8 @@ TEST(EverydayJudge, AttemptsAreJudgedAgainstTheTrueMesh) {
   EXPECT_EQ(s.judge.attempted, 3);
   EXPECT_EQ(s.judge.attempted_invalid, 2);
   EXPECT_EQ(s.judge.attempted_where_none, 1);
+  EXPECT_EQ(s.judge.no_grasp_failures, (std::map<std::string, int>{{"too_wide", 1}}));
+  EXPECT_EQ(s.judge.reasons.at("no_grasp_chosen"), 1);
   r.summaries.push_back(s);
   GraspExperimentParams params;
   params.config_dir = EHC_CONFIG_DIR;

@@ -115,6 +115,12 @@ struct AttemptJudgement {
   /// Grasps the search judged (0: no closing line through the mesh fits the opening; 0 also
   /// when it did not search).
   int search_candidates = 0;
+  /// The grasp generator's outcome in the view (ObjectViewRecord::failure / reason; None where
+  /// it gave grasps, e.g. the view a chosen grasp came from) and, for a target without a tag,
+  /// the cloud target's selection there.
+  ehc_perception::GraspFailure generator_failure = ehc_perception::GraspFailure::None;
+  std::string generator_reason;
+  ehc_control::TargetSelectionStatus target = ehc_control::TargetSelectionStatus::NotCloudTarget;
   bool attemptValid() const { return attempted && verdict == GraspVerdict::Valid; }
   /// One token for the bar (a valid grasp exists -> grasped and lifted; none -> not attempted):
   /// grasped; valid_grasp_failed (a valid grasp attempted, not lifted: the cause column says
@@ -168,6 +174,11 @@ struct GraspTrial {
   AttemptJudgement judge;
 };
 
+/// Why no grasp was chosen for a judged attempt, one token: "no_target:<selection>" when a cloud
+/// target was not selected in the judged view (ehc_control::TargetSelectionStatus), else the
+/// generator's failure there (toString(GraspFailure)).
+std::string noGraspCause(const AttemptJudgement& j);
+
 /// Counts over judged grasps (summary.json "judge", table.md): the everyday Exp-2's bar is
 /// grasped_where_exists / valid_exists >= 90 % and attempted_where_none == 0.
 struct JudgeCounts {
@@ -178,6 +189,10 @@ struct JudgeCounts {
   int attempted_invalid = 0;     ///< ... judged invalid
   int attempted_where_none = 0;  ///< a grasp attempted where no valid grasp exists in the view
   int grasped_where_none = 0;    ///< lifted although no valid grasp exists (the judge is stricter)
+  /// Judged grasps per outcome (AttemptJudgement::reason), and the misses where a valid grasp
+  /// exists and none was chosen per the generator's failure in the judged view (toString of
+  /// GraspFailure; "no_target:<selection>" when a cloud target was not selected there).
+  std::map<std::string, int> reasons, no_grasp_failures;
   void add(const GraspTrial& t);
 };
 

@@ -123,6 +123,13 @@ struct ObjectViewRecord {
   Eigen::Isometry3d T_world_cam = Eigen::Isometry3d::Identity();     ///< the true camera pose
   Eigen::Isometry3d T_world_object = Eigen::Isometry3d::Identity();  ///< the object's true pose
   std::vector<GraspCandidate> candidates;  ///< the grasp generator's in this view (the stack's world frame)
+  /// The grasp generator's outcome in this view: why it gave no grasp (None: it gave some) and
+  /// its reason line (GraspResult::failure / reason).
+  ehc_perception::GraspFailure failure = ehc_perception::GraspFailure::None;
+  std::string reason;
+  /// A target without a tag: what the cloud's target selection gave in this view (NotCloudTarget
+  /// for a tag target).
+  ehc_control::TargetSelectionStatus target = ehc_control::TargetSelectionStatus::NotCloudTarget;
 };
 
 /// What one sequencer object's attempt committed to, recorded for the grasp judge
@@ -202,9 +209,11 @@ class GraspPipeline {
   /// Ground truth now: the true camera pose and object `object`'s true pose, stamped t.
   ObjectViewRecord viewNow(double t, std::size_t object) const;
   /// A depth view taken for object `object`'s grasps (stamped t) and the candidates the generator
-  /// found in it: kept until the object changes,
+  /// found in it (with the generator's outcome and the cloud target's selection): kept until the object changes,
   /// and its last_seen when the object's centre projects into the image.
-  void recordView(double t, std::size_t object, const std::vector<GraspCandidate>& candidates);
+  void recordView(double t, std::size_t object, const std::vector<GraspCandidate>& candidates,
+                  const ehc_perception::GraspResult& result,
+                  ehc_control::TargetSelectionStatus target = ehc_control::TargetSelectionStatus::NotCloudTarget);
   /// After the sequencer's update of `object`: its grasp record when it locks a grasp or ends.
   void recordAttempt(double t, std::size_t object, std::size_t results_before);
 

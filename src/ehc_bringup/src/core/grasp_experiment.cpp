@@ -251,6 +251,9 @@ AttemptJudgement judgeAttempt(const GraspAttemptRecord& record, const ehc_sim::T
   else if (record.end.t >= 0.0) view = &record.end, j.view = "end";
   if (!view) return j;
   j.judged = true;
+  j.generator_failure = view->failure;
+  j.generator_reason = view->reason;
+  j.target = view->target;
   j.chosen = record.chosen;
   j.attempted = record.locked;
   const Eigen::Isometry3d object = record.chosen ? record.T_world_object_at_choice : view->T_world_object;
@@ -269,10 +272,19 @@ AttemptJudgement judgeAttempt(const GraspAttemptRecord& record, const ehc_sim::T
   return j;
 }
 
+std::string noGraspCause(const AttemptJudgement& j) {
+  using ehc_control::TargetSelectionStatus;
+  if (j.target != TargetSelectionStatus::NotCloudTarget && j.target != TargetSelectionStatus::Selected)
+    return "no_target:" + ehc_control::toString(j.target);
+  return ehc_perception::toString(j.generator_failure);
+}
+
 void JudgeCounts::add(const GraspTrial& t) {
   const AttemptJudgement& j = t.judge;
   if (!j.judged) return;
   ++objects;
+  ++reasons[j.reason(t.success)];
+  if (j.valid_exists && !t.success && !j.chosen) ++no_grasp_failures[noGraspCause(j)];
   attempted += j.attempted;
   attempted_invalid += j.attempted && !j.attemptValid();
   if (j.valid_exists) {
@@ -596,7 +608,9 @@ ehc_common::Json graspSummaryJsonValue(const GraspMethodSummary& s) {
                   {"attempted", c.attempted},
                   {"attempted_invalid", c.attempted_invalid},
                   {"attempted_where_none", c.attempted_where_none},
-                  {"grasped_where_none", c.grasped_where_none}};
+                  {"grasped_where_none", c.grasped_where_none},
+                  {"reasons", c.reasons},
+                  {"no_grasp_failures", c.no_grasp_failures}};
   }
   j["min_obstacle"] = obstacleJson(s.nearest);
   j["min_obstacle_margin"] = obstacleJson(s.tightest);
@@ -753,7 +767,8 @@ void writeTrialsCsv(const std::string& dir, const GraspExperimentResult& result)
        "min_obstacle_phase,min_margin_m,min_margin_link,min_margin_body,min_margin_phase,min_grasped_object_m,"
        "min_grasped_object_link,min_grasped_object_phase,lock_centre_in_grasp_x_m,lock_centre_in_grasp_y_m,"
        "lock_centre_in_grasp_z_m,close_centre_in_tcp_x_m,close_centre_in_tcp_y_m,close_centre_in_tcp_z_m,"
-       "lock_closing_axis_error_deg,cause,judge_view,valid_exists,attempted,attempt_valid,grasp_verdict,candidate_verdict,judge_reason\n";
+       "lock_closing_axis_error_deg,cause,judge_view,valid_exists,attempted,attempt_valid,grasp_verdict,candidate_verdict,judge_reason,"
+       "target_selection,generator_failure,generator_reason\n";
   for (const auto& t : result.trials) {
     auto quoted = [](std::string text) {
       std::replace(text.begin(), text.end(), '"', '\'');
@@ -776,9 +791,10 @@ void writeTrialsCsv(const std::string& dir, const GraspExperimentResult& result)
     if (j.judged)
       f << "," << j.view << "," << j.valid_exists << "," << j.attempted << "," << j.attemptValid() << ","
         << (j.chosen ? toString(j.verdict) : "") << "," << (j.has_candidate ? toString(j.candidate_verdict) : "") << ","
-        << j.reason(t.success);
+        << j.reason(t.success) << "," << ehc_control::toString(j.target) << ","
+        << ehc_perception::toString(j.generator_failure) << "," << quoted(j.generator_reason);
     else
-      f << ",,,,,,,";
+      f << ",,,,,,,,,,";
     f << "\n";
   }
 }

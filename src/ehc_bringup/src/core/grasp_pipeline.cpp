@@ -255,7 +255,7 @@ void GraspPipeline::perceive(double t) {
     std::vector<GraspCandidate> candidates;
     for (const auto& g : res.grasps) candidates.push_back({g.pose, g.width, g.score});
     sequencer_->setGraspCandidates(t, candidates);
-    recordView(t, current, candidates);
+    recordView(t, current, candidates, res);
     ++counters_.grasp_runs;
   }
   if (want_obstacles) {
@@ -279,7 +279,7 @@ void GraspPipeline::perceiveCloudTarget(double t, const ehc_perception::PointLis
   std::vector<GraspCandidate> candidates;
   for (const auto& g : r.grasps.grasps) candidates.push_back({g.pose, g.width, g.score});
   sequencer_->setGraspCandidates(t, candidates);
-  recordView(t, object, candidates);
+  recordView(t, object, candidates, r.grasps, r.selection.status);
   ++counters_.grasp_runs;
 }
 
@@ -407,12 +407,16 @@ ObjectViewRecord GraspPipeline::viewNow(double t, std::size_t object) const {
   return v;
 }
 
-void GraspPipeline::recordView(double t, std::size_t object, const std::vector<GraspCandidate>& candidates) {
+void GraspPipeline::recordView(double t, std::size_t object, const std::vector<GraspCandidate>& candidates,
+                              const ehc_perception::GraspResult& result, ehc_control::TargetSelectionStatus target) {
   if (object >= attempts_.size() || object >= cfg_.scene.objects.size()) return;
   if (object != views_object_) views_.clear();
   views_object_ = object;
   ObjectViewRecord v = viewNow(t, object);
   v.candidates = candidates;
+  v.failure = result.failure;
+  v.reason = result.reason;
+  v.target = target;
   views_.push_back(v);
   if (intrinsics_.projectsInside(v.T_world_cam.inverse() * v.T_world_object.translation())) attempts_[object].last_seen = v;
 }

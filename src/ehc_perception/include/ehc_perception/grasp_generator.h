@@ -174,7 +174,8 @@ struct GraspGeneratorConfig {
   /// behind the original depth); < max_depth_shift.
   double depth_margin = 0.005;
   /// Collision checks per object at most (candidates are checked best first); bounds the
-  /// time on objects where most candidates fail.
+  /// time on objects where most candidates fail. A hypothesis whose fitted completion (circle,
+  /// sphere) is wider than the opening is refused once, its approaches unchecked and not counted.
   int max_evaluations = 800;
   /// Antipodal quality given to single-contact hypotheses (closing axis = the seed's normal,
   /// far side unseen, as in one-view clouds); 0 disables them.

@@ -1663,8 +1663,12 @@ std::vector<Candidate> GraspSearch::checkCandidates(const std::vector<Hyp>& hyps
   for (const Pending& pd : pending) ++remaining[static_cast<std::size_t>(pd.hyp)];
   const std::size_t enough = static_cast<std::size_t>(std::max(4 * cfg_.top_k, 40));
   int evaluations = 0;
+  // Hypotheses whose fitted completion is wider than the opening: refused once, whatever the
+  // approach (their approaches are not checked and do not count against max_evaluations).
+  std::vector<char> refused(hyps.size(), 0);
   for (const Pending& pd : pending) {
     if (cands.size() >= enough || evaluations >= cfg_.max_evaluations) break;
+    if (refused[static_cast<std::size_t>(pd.hyp)]) continue;
     ++evaluations;
     const Hyp& hp = hyps[static_cast<std::size_t>(pd.hyp)];
     auto it = prepared.find(pd.hyp);
@@ -1675,6 +1679,11 @@ std::vector<Candidate> GraspSearch::checkCandidates(const std::vector<Hyp>& hyps
       it = prepared.emplace(pd.hyp, spare.empty() ? GripperCheck::Prepared() : std::move(spare.back())).first;
       if (!spare.empty()) spare.pop_back();
       check_.prepare(hp.c0, hp.y, hp.u, nbrs_, surf_, *po_.cloud, hp.single, hp.hint, &it->second);
+    }
+    if (it->second.too_wide) {
+      refused[static_cast<std::size_t>(pd.hyp)] = 1;
+      remaining[static_cast<std::size_t>(pd.hyp)] = 1;  // its buffers are freed below
+      --evaluations;
     }
     const double phi = 2.0 * M_PI * pd.step / cfg_.approach_steps;
     Candidate cd;
