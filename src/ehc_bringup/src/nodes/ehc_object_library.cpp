@@ -14,9 +14,16 @@
 //       every object of the split from N random views (0.5-0.7 m, 30-60 deg above the table): the
 //       grasp generator's grasps judged against the true mesh (ehc_bringup/grasp_judge.h);
 //       <dir>/views.csv (one row per view) and <dir>/summary.md; progress on stderr.
+//   ehc_object_library segment [--split tuning|validation|all] [--views N] [--seed S] --out <dir>
+//       [--objects 3] [--min-gap 0.01] [--max-gap 0.03] [--kinds bowl,mug] [--manifest <library.yaml>]
+//       [--sim <bullet_sim.yaml>] [--config <grasp_node.yaml>]
+//       N random scenes of library objects of the split, each seen once: the scene segmentation
+//       of tagless targets against the truth (ehc_bringup/segmentation_check.h);
+//       <dir>/segment.csv (one row per object in view) and <dir>/summary.md; progress on stderr.
 // Exit 0: done. Exit 2: bad arguments or files.
 #include "ehc_bringup/grasp_judge.h"
 #include "ehc_bringup/object_view.h"
+#include "ehc_bringup/segmentation_check.h"
 #include "ehc_common/command_line.h"
 #include "ehc_common/config_node.h"
 #include "ehc_common/output_dir.h"
@@ -27,6 +34,7 @@
 
 #include <fstream>
 #include <iostream>
+#include <sstream>
 
 namespace {
 const char* kUsage =
@@ -37,6 +45,9 @@ const char* kUsage =
     "       ehc_object_library judge --out <dir> [--split all|tuning|validation] [--views 2] [--seed 1]\n"
     "                          [--manifest <library.yaml>] [--sim <bullet_sim.yaml>] [--config <grasp_node.yaml>]\n"
     "                          [--mu 0.5] [--samples 2000]\n"
+    "       ehc_object_library segment --out <dir> [--split all|tuning|validation] [--views 20] [--seed 1]\n"
+    "                          [--objects 3] [--min-gap 0.01] [--max-gap 0.03] [--kinds K1,K2]\n"
+    "                          [--manifest <library.yaml>] [--sim <bullet_sim.yaml>] [--config <grasp_node.yaml>]\n"
     "The default manifest is config/objects/library.yaml.\n";
 
 std::string defaultManifest() { return ehc_control::configDirectory() + "/objects/library.yaml"; }
@@ -135,6 +146,45 @@ int judge(int argc, char** argv) {
   std::cerr << "ehc_object_library: " << rows.size() << " views -> " << dir << "/views.csv, summary.md\n";
   return 0;
 }
+
+int segment(int argc, char** argv) {
+  const ehc_common::CommandLine cli(
+      argc, argv, {"manifest", "split", "views", "seed", "out", "sim", "config", "objects", "min-gap", "max-gap", "kinds"}, {}, 2);
+  const std::string dir = cli.text("out");
+  ehc_common::prepareOutputDir(dir);
+  ehc_bringup::SegmentationCheckParams p;
+  p.split = cli.choice("split", {"all", "tuning", "validation"}, p.split);
+  p.views = static_cast<int>(cli.integer("views", p.views, 1, 1000000));
+  p.seed = static_cast<unsigned>(cli.integer("seed", p.seed, 0, 1000000000));
+  p.objects = static_cast<int>(cli.integer("objects", p.objects, 1, 10));
+  p.min_gap = cli.real("min-gap", p.min_gap);
+  p.max_gap = cli.real("max-gap", p.max_gap);
+  std::istringstream kinds(cli.text("kinds", ""));
+  for (std::string k; std::getline(kinds, k, ',');)
+    if (!k.empty()) p.kinds.push_back(k);
+  p.validate();
+  const std::string config = cli.text("config", ehc_control::configDirectory() + "/perception/grasp_node.yaml");
+  const auto root = ehc_common::ConfigNode::loadFile(config, "GraspGenerator");
+  const ehc_perception::GraspGenerator generator(ehc_perception::loadGraspGeneratorConfig(root.childOrEmpty("grasp_generator")));
+  const ehc_perception::GraspTargetingParams targeting = ehc_perception::loadGraspTargetingParams(root.childOrEmpty("node"));
+  const ehc_sim::ObjectLibrary lib = ehc_sim::loadObjectLibrary(cli.text("manifest", defaultManifest()));
+  const ehc_sim::SimConfig sim = ehc_sim::loadSimConfig(cli.text("sim", ehc_control::configDirectory() + "/sim/bullet_sim.yaml"));
+  std::string command = "ehc_object_library segment";
+  for (int i = 2; i < argc; ++i) command += std::string(" ") + argv[i];
+  std::cerr << "ehc_object_library segment: seed " << p.seed << ", split " << p.split << ", " << p.views << " views\n";
+  const auto views = ehc_bringup::checkSegmentation(
+      lib, sim, generator, targeting, p, [](const ehc_bringup::SegmentedView& v, int done, int total) {
+        std::cerr << "[" << done << "/" << total << "] " << v.clusters << " cluster(s):";
+        for (const auto& o : v.objects) std::cerr << " " << o.object << " " << ehc_bringup::toString(o.outcome);
+        std::cerr << "\n";
+      });
+  std::ofstream csv(dir + "/segment.csv"), md(dir + "/summary.md");
+  csv << ehc_bringup::segmentationCsv(views);
+  md << ehc_bringup::segmentationSummary(views, command);
+  if (!csv || !md) throw std::invalid_argument("cannot write to '" + dir + "'");
+  std::cerr << "ehc_object_library: " << views.size() << " views -> " << dir << "/segment.csv, summary.md\n";
+  return 0;
+}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -144,6 +194,7 @@ int main(int argc, char** argv) {
     if (command == "meshes") return meshes(argc, argv);
     if (command == "cloud") return cloud(argc, argv);
     if (command == "judge") return judge(argc, argv);
+    if (command == "segment") return segment(argc, argv);
     std::cerr << kUsage;
     return command == "--help" || command == "-h" ? 0 : 2;
   } catch (const std::exception& e) {

@@ -200,8 +200,16 @@ struct GraspGeneratorConfig {
   double plane_distance = 0.008;      ///< m, RANSAC inlier distance
   double plane_max_tilt_deg = 15.0;   ///< plane normal vs up
   double min_plane_fraction = 0.2;    ///< plane inliers / points to accept a support plane
-  double cluster_tolerance = 0.015;   ///< m, Euclidean clustering distance
-  int min_cluster_points = 30;
+  double cluster_tolerance = 0.015;   ///< m, Euclidean clustering distance (at least)
+  /// With a viewpoint, a point's clustering distance grows to this x the cloud's angular point
+  /// pitch x its range (a far surface is sampled sparsely); 0 keeps cluster_tolerance.
+  double cluster_spacing_factor = 3.0;
+  /// m, clusters whose footprints on the support (convex hulls) overlap or are closer than this
+  /// are one object (a bowl's near and far walls); below the gap between neighbouring objects.
+  /// Negative: no merging.
+  double footprint_merge_gap = 0.005;
+  double max_object_extent = 0.35;    ///< m, a merge never makes a footprint wider than this
+  int min_cluster_points = 30;        ///< points of an object (after merging)
   int max_objects = 10;
 
   void validate() const;  ///< throws std::invalid_argument "[GraspGenerator] ..."
@@ -286,8 +294,10 @@ class GraspGenerator {
                        const PointList* collision_cloud = nullptr) const;
 
   /// Removes the support plane (RANSAC, normal within plane_max_tilt_deg of up) and clusters
-  /// the rest (Euclidean). Without a plane, the whole finite cloud is one object.
-  SceneSegmentation segmentScene(const PointList& scene) const;
+  /// the rest: connected within cluster_tolerance (with `viewpoint`, grown with the range by
+  /// cluster_spacing_factor), parts whose footprints on the support overlap merged (see
+  /// footprint_merge_gap). Without a plane, the whole finite cloud is clustered.
+  SceneSegmentation segmentScene(const PointList& scene, const Eigen::Vector3d* viewpoint = nullptr) const;
 
   /// segmentScene + generate per object (the other objects are collision geometry), merged
   /// best first. With `near`, only the object whose centroid is closest to it is used.

@@ -5,6 +5,7 @@
 #include "ehc_common/enum_names.h"
 #include "ehc_control/pose_math.h"
 #include "ehc_perception/point_cloud_layout.h"
+#include "scene_clusters.h"
 
 #include <Eigen/Eigenvalues>
 #include <pcl/common/centroid.h>
@@ -1081,6 +1082,9 @@ void GraspGeneratorConfig::validate() const {
   range("plane_max_tilt_deg", plane_max_tilt_deg, 0.0, 90.0);
   range("min_plane_fraction", min_plane_fraction, 0.0, 1.0);
   range("cluster_tolerance", cluster_tolerance, 0.001, 0.5);
+  range("cluster_spacing_factor", cluster_spacing_factor, 0.0, 10.0);
+  range("footprint_merge_gap", footprint_merge_gap, -1.0, 0.5);
+  range("max_object_extent", max_object_extent, 0.01, 10.0);
   range("min_cluster_points", min_cluster_points, 1, 1e7);
   range("max_objects", max_objects, 1, 1000);
 }
@@ -1155,6 +1159,9 @@ GraspGeneratorConfig loadGraspGeneratorConfig(const ConfigNode& n) {
   c.plane_max_tilt_deg = n.get("plane_max_tilt_deg", c.plane_max_tilt_deg);
   c.min_plane_fraction = n.get("min_plane_fraction", c.min_plane_fraction);
   c.cluster_tolerance = n.get("cluster_tolerance", c.cluster_tolerance);
+  c.cluster_spacing_factor = n.get("cluster_spacing_factor", c.cluster_spacing_factor);
+  c.footprint_merge_gap = n.get("footprint_merge_gap", c.footprint_merge_gap);
+  c.max_object_extent = n.get("max_object_extent", c.max_object_extent);
   c.min_cluster_points = n.get("min_cluster_points", c.min_cluster_points);
   c.max_objects = n.get("max_objects", c.max_objects);
   n.validate(c);
@@ -1904,7 +1911,7 @@ GraspResult GraspGenerator::generate(const PointList& object, const Eigen::Vecto
 
 // ------------------------------------------------------------------------------ scenes
 
-SceneSegmentation GraspGenerator::segmentScene(const PointList& scene) const {
+SceneSegmentation GraspGenerator::segmentScene(const PointList& scene, const Eigen::Vector3d* viewpoint) const {
   const GraspGeneratorConfig& cfg = config_;
   SceneSegmentation seg;
   int finite = 0;
@@ -1950,21 +1957,10 @@ SceneSegmentation GraspGenerator::segmentScene(const PointList& scene) const {
     seg.failure = GraspFailure::NoObject;
     return seg;
   }
-  pcl::search::KdTree<pcl::PointXYZ>::Ptr tree(new pcl::search::KdTree<pcl::PointXYZ>);
-  tree->setInputCloud(above);
-  std::vector<pcl::PointIndices> clusters;
-  pcl::EuclideanClusterExtraction<pcl::PointXYZ> ec;
-  ec.setClusterTolerance(cfg.cluster_tolerance);
-  ec.setMinClusterSize(cfg.min_cluster_points);
-  ec.setMaxClusterSize(static_cast<int>(above->size()));
-  ec.setSearchMethod(tree);
-  ec.setInputCloud(above);
-  ec.extract(clusters);  // sorted largest first
-  for (const pcl::PointIndices& ci : clusters) {
-    if (static_cast<int>(seg.objects.size()) >= cfg.max_objects) break;
+  for (const std::vector<int>& part : detail::clusterObjects(*above, *cloud, viewpoint, cfg.up, cfg)) {
     PointList obj;
-    obj.reserve(ci.indices.size());
-    for (int i : ci.indices) obj.push_back((*above)[static_cast<std::size_t>(i)].getVector3fMap());
+    obj.reserve(part.size());
+    for (int i : part) obj.push_back((*above)[static_cast<std::size_t>(i)].getVector3fMap());
     seg.objects.push_back(std::move(obj));
   }
   if (seg.objects.empty())
@@ -1976,7 +1972,7 @@ SceneSegmentation GraspGenerator::segmentScene(const PointList& scene) const {
 GraspResult GraspGenerator::generateFromScene(const PointList& scene,
                                               const Eigen::Vector3d& viewpoint,
                                               const Eigen::Vector3d* near) const {
-  const SceneSegmentation seg = segmentScene(scene);
+  const SceneSegmentation seg = segmentScene(scene, &viewpoint);
   GraspResult res;
   res.input_points = static_cast<int>(scene.size());
   res.support_plane_found = seg.plane_found;
@@ -2099,7 +2095,8 @@ CloudTargetResult generateForCloudTarget(const GraspGenerator& generator, const 
     return out;
   }
   const auto budget = static_cast<std::size_t>(targeting.max_input_points);
-  const SceneSegmentation seg = generator.segmentScene(scene.size() > budget ? budgetPoints(scene, budget) : scene);
+  const SceneSegmentation seg =
+      generator.segmentScene(scene.size() > budget ? budgetPoints(scene, budget) : scene, &viewpoint);
   std::vector<Eigen::Vector3d> centres;
   for (const PointList& o : seg.objects) {
     Eigen::Vector3d c = Eigen::Vector3d::Zero();

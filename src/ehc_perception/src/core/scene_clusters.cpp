@@ -1,0 +1,275 @@
+#include "scene_clusters.h"
+
+#include <pcl/kdtree/kdtree_flann.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+namespace ehc_perception {
+namespace detail {
+
+namespace {
+
+struct UnionFind {
+  std::vector<int> parent;
+  explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
+  int find(int i) {
+    while (parent[static_cast<std::size_t>(i)] != i) i = parent[static_cast<std::size_t>(i)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(i)])];
+    return i;
+  }
+  bool join(int a, int b) {
+    a = find(a), b = find(b);
+    if (a == b) return false;
+    parent[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
+    return true;
+  }
+};
+
+double cross(const Eigen::Vector2d& o, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  return (a - o).x() * (b - o).y() - (a - o).y() * (b - o).x();
+}
+
+double pointSegment(const Eigen::Vector2d& p, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  const Eigen::Vector2d ab = b - a;
+  const double l2 = ab.squaredNorm();
+  const double t = l2 > 0.0 ? std::clamp((p - a).dot(ab) / l2, 0.0, 1.0) : 0.0;
+  return (a + t * ab - p).norm();
+}
+
+bool segmentsCross(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c, const Eigen::Vector2d& d) {
+  const double d1 = cross(c, d, a), d2 = cross(c, d, b), d3 = cross(a, b, c), d4 = cross(a, b, d);
+  return ((d1 > 0) != (d2 > 0)) && ((d3 > 0) != (d4 > 0)) && d1 != 0 && d2 != 0 && d3 != 0 && d4 != 0;
+}
+
+/// Inside or on a counter-clockwise convex polygon of at least three vertices.
+bool inside(const Eigen::Vector2d& p, const std::vector<Eigen::Vector2d>& poly) {
+  if (poly.size() < 3) return false;
+  for (std::size_t i = 0; i < poly.size(); ++i)
+    if (cross(poly[i], poly[(i + 1) % poly.size()], p) < 0.0) return false;
+  return true;
+}
+
+double diameter(const std::vector<Eigen::Vector2d>& hull) {
+  double d = 0.0;
+  for (std::size_t i = 0; i < hull.size(); ++i)
+    for (std::size_t j = i + 1; j < hull.size(); ++j) d = std::max(d, (hull[i] - hull[j]).norm());
+  return d;
+}
+
+/// Connected parts of `above` (see the header, step 1), each a list of indices.
+std::vector<std::vector<int>> connectedParts(const pcl::PointCloud<pcl::PointXYZ>& above,
+                                             const pcl::PointCloud<pcl::PointXYZ>& all, const Eigen::Vector3d* viewpoint,
+                                             const GraspGeneratorConfig& cfg) {
+  const std::size_t n = above.size();
+  std::vector<float> reach(n, static_cast<float>(cfg.cluster_tolerance));
+  if (viewpoint && cfg.cluster_spacing_factor > 0.0) {
+    const double k = cfg.cluster_spacing_factor * angularPitch(all, *viewpoint);
+    for (std::size_t i = 0; i < n; ++i)
+      reach[i] = static_cast<float>(std::max(cfg.cluster_tolerance, k * (above[i].getVector3fMap().cast<double>() - *viewpoint).norm()));
+  }
+  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>(above));
+  pcl::KdTreeFLANN<pcl::PointXYZ> tree;
+  tree.setInputCloud(cloud);
+  UnionFind uf(n);
+  std::vector<int> idx;
+  std::vector<float> d2;
+  for (std::size_t i = 0; i < n; ++i) {
+    tree.radiusSearch(above[i], reach[i], idx, d2);
+    for (int j : idx) uf.join(static_cast<int>(i), j);
+  }
+  std::vector<std::vector<int>> parts(n);
+  for (std::size_t i = 0; i < n; ++i) parts[static_cast<std::size_t>(uf.find(static_cast<int>(i)))].push_back(static_cast<int>(i));
+  parts.erase(std::remove_if(parts.begin(), parts.end(), [](const std::vector<int>& p) { return p.empty(); }), parts.end());
+  return parts;
+}
+
+
+/// A part seen from inside (the far inner wall of a bowl, a cup, a pot): its footprint is an arc
+/// of a circle whose centre lies on the camera's side of it, spanning at least kMinConcaveArc
+/// (a bent part seen from its hollow side, e.g. a banana's, spans less). The circle (centre,
+/// radius) is then the object's footprint, as far as the view shows it; false otherwise.
+constexpr double kMinConcaveArc = 100.0 * M_PI / 180.0;
+bool concaveFootprint(const std::vector<Eigen::Vector2d>& pts, const Eigen::Vector2d& camera, double max_radius,
+                      Eigen::Vector2d* centre, double* radius) {
+  if (pts.size() < 10) return false;
+  // Algebraic (Kasa) circle fit: x^2 + y^2 + D x + E y + F = 0.
+  Eigen::MatrixXd A(pts.size(), 3);
+  Eigen::VectorXd b(pts.size());
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  for (const auto& p : pts) mean += p;
+  mean /= static_cast<double>(pts.size());
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    const Eigen::Vector2d q = pts[i] - mean;  // centred: well conditioned
+    A.row(static_cast<Eigen::Index>(i)) << q.x(), q.y(), 1.0;
+    b(static_cast<Eigen::Index>(i)) = -q.squaredNorm();
+  }
+  const Eigen::Vector3d x = A.colPivHouseholderQr().solve(b);
+  const Eigen::Vector2d c = mean - 0.5 * x.head<2>();
+  const double r2 = 0.25 * x.head<2>().squaredNorm() - x(2);
+  if (!(r2 > 0.0) || !c.allFinite()) return false;
+  const double r = std::sqrt(r2);
+  if (r < 0.01 || r > max_radius) return false;
+  double sq = 0.0;
+  std::vector<double> angles;
+  for (const auto& p : pts) {
+    sq += std::pow((p - c).norm() - r, 2);
+    angles.push_back(std::atan2(p.y() - c.y(), p.x() - c.x()));
+  }
+  if (std::sqrt(sq / static_cast<double>(pts.size())) > 0.2 * r) return false;
+  std::sort(angles.begin(), angles.end());
+  double gap = angles.front() + 2.0 * M_PI - angles.back();
+  for (std::size_t i = 1; i < angles.size(); ++i) gap = std::max(gap, angles[i] - angles[i - 1]);
+  if (2.0 * M_PI - gap < kMinConcaveArc) return false;
+  if ((c - mean).dot(camera - mean) <= 0.0) return false;  // the hollow faces away: convex as seen
+  *centre = c;
+  *radius = r;
+  return true;
+}
+
+}  // namespace
+
+double angularPitch(const pcl::PointCloud<pcl::PointXYZ>& cloud, const Eigen::Vector3d& viewpoint) {
+  if (cloud.size() < 2) return 0.0;
+  pcl::PointCloud<pcl::PointXYZ>::Ptr c(new pcl::PointCloud<pcl::PointXYZ>(cloud));
+  pcl::KdTreeFLANN<pcl::PointXYZ> tree;
+  tree.setInputCloud(c);
+  const std::size_t step = std::max<std::size_t>(1, cloud.size() / 2000);
+  std::vector<double> ratios;
+  std::vector<int> idx(2);
+  std::vector<float> d2(2);
+  for (std::size_t i = 0; i < cloud.size(); i += step) {
+    if (tree.nearestKSearch(cloud[i], 2, idx, d2) < 2) continue;
+    const double range = (cloud[i].getVector3fMap().cast<double>() - viewpoint).norm();
+    if (range > 1e-6) ratios.push_back(std::sqrt(static_cast<double>(d2[1])) / range);
+  }
+  if (ratios.empty()) return 0.0;
+  std::nth_element(ratios.begin(), ratios.begin() + static_cast<long>(ratios.size() / 2), ratios.end());
+  return ratios[ratios.size() / 2];
+}
+
+std::vector<Eigen::Vector2d> convexHull2d(std::vector<Eigen::Vector2d> pts) {
+  std::sort(pts.begin(), pts.end(), [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
+  });
+  pts.erase(std::unique(pts.begin(), pts.end()), pts.end());
+  if (pts.size() < 3) return pts;
+  std::vector<Eigen::Vector2d> h(2 * pts.size());
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < pts.size(); ++i) {  // lower hull
+    while (k >= 2 && cross(h[k - 2], h[k - 1], pts[i]) <= 0.0) --k;
+    h[k++] = pts[i];
+  }
+  for (std::size_t i = pts.size() - 1, t = k + 1; i > 0; --i) {  // upper hull
+    while (k >= t && cross(h[k - 2], h[k - 1], pts[i - 1]) <= 0.0) --k;
+    h[k++] = pts[i - 1];
+  }
+  h.resize(k - 1);
+  return h;
+}
+
+double hullDistance(const std::vector<Eigen::Vector2d>& a, const std::vector<Eigen::Vector2d>& b) {
+  if (a.empty() || b.empty()) return std::numeric_limits<double>::infinity();
+  if (inside(a.front(), b) || inside(b.front(), a)) return 0.0;
+  double best = std::numeric_limits<double>::infinity();
+  const auto edges = [](const std::vector<Eigen::Vector2d>& p, std::size_t i) {
+    return std::make_pair(p[i], p[(i + 1) % p.size()]);
+  };
+  for (std::size_t i = 0; i < a.size(); ++i)
+    for (std::size_t j = 0; j < b.size(); ++j) {
+      const auto [a0, a1] = edges(a, i);
+      const auto [b0, b1] = edges(b, j);
+      if (segmentsCross(a0, a1, b0, b1)) return 0.0;
+      best = std::min({best, pointSegment(a0, b0, b1), pointSegment(b0, a0, a1)});
+    }
+  return best;
+}
+
+std::vector<std::vector<int>> clusterObjects(const pcl::PointCloud<pcl::PointXYZ>& above,
+                                             const pcl::PointCloud<pcl::PointXYZ>& all,
+                                             const Eigen::Vector3d* viewpoint, const Eigen::Vector3d& up,
+                                             const GraspGeneratorConfig& cfg) {
+  std::vector<std::vector<int>> parts = connectedParts(above, all, viewpoint, cfg);
+  // Footprints in the support plane's basis.
+  const Eigen::Vector3d u = up.normalized();
+  const Eigen::Vector3d e1 = u.unitOrthogonal(), e2 = u.cross(e1);
+  std::vector<std::vector<Eigen::Vector2d>> flat(parts.size());
+  std::vector<std::vector<Eigen::Vector2d>> hulls(parts.size());
+  for (std::size_t k = 0; k < parts.size(); ++k) {
+    for (int i : parts[k]) {
+      const Eigen::Vector3d p = above[static_cast<std::size_t>(i)].getVector3fMap().cast<double>();
+      flat[k].emplace_back(p.dot(e1), p.dot(e2));
+    }
+    hulls[k] = convexHull2d(flat[k]);
+  }
+  const auto join = [&](std::size_t a, std::size_t b, std::vector<Eigen::Vector2d> hull) {
+    parts[a].insert(parts[a].end(), parts[b].begin(), parts[b].end());
+    flat[a].insert(flat[a].end(), flat[b].begin(), flat[b].end());
+    hulls[a] = std::move(hull);
+    parts.erase(parts.begin() + static_cast<long>(b));
+    flat.erase(flat.begin() + static_cast<long>(b));
+    hulls.erase(hulls.begin() + static_cast<long>(b));
+  };
+  const auto joinedHull = [&](std::size_t a, std::size_t b) {
+    std::vector<Eigen::Vector2d> both = hulls[a];
+    both.insert(both.end(), hulls[b].begin(), hulls[b].end());
+    return convexHull2d(both);
+  };
+  // A part seen from inside takes the parts within its circle (most of their points).
+  if (viewpoint) {
+    const Eigen::Vector2d eye(viewpoint->dot(e1), viewpoint->dot(e2));
+    for (std::size_t b = 0; b < parts.size(); ++b) {
+      Eigen::Vector2d c;
+      double r = 0.0;
+      if (!concaveFootprint(flat[b], eye, 0.5 * cfg.max_object_extent, &c, &r)) continue;
+      std::vector<std::size_t> takes;
+      for (std::size_t a = 0; a < parts.size(); ++a) {
+        // Its centre about inside the circle, and most of it within a quarter of the radius beyond
+        // (the circle is fitted to the inner wall, narrower than the rim where it slopes; an arc's
+        // centre lies inside its circle).
+        Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+        for (const auto& p : flat[a]) mean += p;
+        mean /= static_cast<double>(flat[a].size());
+        const auto within = std::count_if(flat[a].begin(), flat[a].end(), [&](const Eigen::Vector2d& p) {
+          return (p - c).norm() <= 1.25 * r + std::max(0.0, cfg.footprint_merge_gap);
+        });
+        if (a != b && (mean - c).norm() <= 1.1 * r && static_cast<double>(within) >= 0.8 * static_cast<double>(flat[a].size()))
+          takes.push_back(a);
+      }
+      for (auto it = takes.rbegin(); it != takes.rend(); ++it) {  // from the last: the indices below stay
+        const std::size_t lo = std::min(*it, b), hi = std::max(*it, b);
+        std::vector<Eigen::Vector2d> hull = joinedHull(lo, hi);
+        if (diameter(hull) > cfg.max_object_extent) continue;
+        join(lo, hi, std::move(hull));
+        b = lo;
+      }
+    }
+  }
+  // Merge the closest pair within the gap first, until none is left.
+  for (bool merged = true; merged && cfg.footprint_merge_gap >= 0.0;) {
+    merged = false;
+    double best = std::numeric_limits<double>::infinity();
+    std::size_t ba = 0, bb = 0;
+    std::vector<Eigen::Vector2d> joined;
+    for (std::size_t a = 0; a < parts.size(); ++a)
+      for (std::size_t b = a + 1; b < parts.size(); ++b) {
+        const double d = hullDistance(hulls[a], hulls[b]);
+        if (d > cfg.footprint_merge_gap || d >= best) continue;
+        std::vector<Eigen::Vector2d> both = joinedHull(a, b);
+        if (diameter(both) > cfg.max_object_extent) continue;
+        best = d, ba = a, bb = b, joined = both;
+      }
+    if (!std::isfinite(best)) break;
+    join(ba, bb, joined);
+    merged = true;
+  }
+  parts.erase(std::remove_if(parts.begin(), parts.end(),
+                             [&](const std::vector<int>& p) { return static_cast<int>(p.size()) < cfg.min_cluster_points; }),
+              parts.end());
+  std::stable_sort(parts.begin(), parts.end(), [](const std::vector<int>& a, const std::vector<int>& b) { return a.size() > b.size(); });
+  if (static_cast<int>(parts.size()) > cfg.max_objects) parts.resize(static_cast<std::size_t>(cfg.max_objects));
+  return parts;
+}
+
+}  // namespace detail
+}  // namespace ehc_perception
