@@ -763,21 +763,7 @@ std::vector<Eigen::Vector2d> convexLayers(std::vector<Eigen::Vector2d> pts, std:
     return (a - o).x() * (b - o).y() - (a - o).y() * (b - o).x();
   };
   for (std::size_t l = 0; l < layers && pts.size() > 2; ++l) {
-    std::sort(pts.begin(), pts.end(), [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
-      return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
-    });
-    // Andrew's monotone chain (strict hull vertices).
-    std::vector<Eigen::Vector2d> hull(2 * pts.size());
-    std::size_t h = 0;
-    for (std::size_t i = 0; i < pts.size(); ++i) {
-      while (h >= 2 && cross(hull[h - 2], hull[h - 1], pts[i]) <= 0) --h;
-      hull[h++] = pts[i];
-    }
-    for (std::size_t i = pts.size() - 1, t = h + 1; i-- > 0;) {
-      while (h >= t && cross(hull[h - 2], hull[h - 1], pts[i]) <= 0) --h;
-      hull[h++] = pts[i];
-    }
-    hull.resize(h > 1 ? h - 1 : h);
+    const std::vector<Eigen::Vector2d> hull = detail::convexHull2d(pts);  // strict hull vertices
     // The layer: every point on the hull's boundary (ties along an edge included).
     std::vector<Eigen::Vector2d> rest;
     for (const Eigen::Vector2d& p : pts) {
