@@ -114,6 +114,14 @@ struct QpControllerParams {
     return it == obstacle_stop_links.end() ? obstacle_stop : it->second;
   }
   double obstacle_damper_gain = 1.0;   ///< xi of the obstacle dampers, 1/s
+  /// 1/s: a pair closer than its d_s must open at least at this rate x (d_s - d), or at the
+  /// damper's own xi (d_s - d) / (d_i - d_s) if that is faster. The damper alone lets a link
+  /// held at d_s (the damper active, the task pulling the link on) back out at only 3.7/s x the
+  /// depth (xi 1, d_i - d_s 0.27 m), while actuation noise (Table I's base noise moves a wrist
+  /// link by about 7 cm/s per 10 ms step) keeps pushing it in: a link held at d_s then sits
+  /// inside it by a few mm (a random walk pulled back at the recovery rate: its spread falls
+  /// with the square root of the rate). 0 = the damper alone.
+  double obstacle_recovery_gain = 20.0;
   /// At most this many obstacle damper rows per QP: of the pairs within obstacle_influence,
   /// the nearest (smallest distance - d_s) are kept, the rest dropped for this cycle. Bounds
   /// the build (one link Jacobian per row) and the solve whatever the obstacle node sends.

@@ -72,6 +72,7 @@ void QpControllerParams::validate() const {
       throw std::invalid_argument("[QpControllerParams] obstacle_influence must be > obstacle_stop_links." + link);
   }
   requireRange(kOwner, "obstacle_damper_gain", obstacle_damper_gain, 1e-3, 100.0);
+  requireRange(kOwner, "obstacle_recovery_gain", obstacle_recovery_gain, 0.0, 100.0);
   requireRange(kOwner, "max_obstacle_rows", max_obstacle_rows, 0, 1000);
   requireRange(kOwner, "max_qp_iterations", max_qp_iterations, 1, 100000);
   const std::vector<std::string> solvers = qpSolverNames();
@@ -96,7 +97,7 @@ std::string QpControllerParams::summary() const {
      << " rad, gain " << joint_damper_gain << "; obstacle dampers: d_i " << obstacle_influence
      << " m, d_s " << obstacle_stop << " m";
   for (const auto& [link, d] : obstacle_stop_links) os << " (" << link << " " << d << " m)";
-  os << ", gain " << obstacle_damper_gain << ", at most " << max_obstacle_rows << " rows (nearest first)"
+  os << ", gain " << obstacle_damper_gain << ", recovery inside d_s " << obstacle_recovery_gain << " 1/s, at most " << max_obstacle_rows << " rows (nearest first)"
      << "; QP " << qp_solver << ", at most " << max_qp_iterations << " iterations"
      << "; tsmm switch " << tsmm_switch_distance << " m; arrival " << arrival_position << " m / "
      << arrival_orientation * 180.0 / M_PI << " deg";
@@ -141,6 +142,7 @@ QpControllerParams loadQpControllerParams(const ehc_common::ConfigNode& n) {
   if (n.has("obstacle_stop_links"))  // robot-specific: lives in robot.yaml now
     n.fail("obstacle_stop_links", "names robot links: move it to the robot's robot.yaml as robot.obstacle_stop_distances");
   p.obstacle_damper_gain = n.get("obstacle_damper_gain", p.obstacle_damper_gain);
+  p.obstacle_recovery_gain = n.get("obstacle_recovery_gain", p.obstacle_recovery_gain);
   p.max_obstacle_rows = n.get("max_obstacle_rows", p.max_obstacle_rows);
   p.max_qp_iterations = n.get("max_qp_iterations", p.max_qp_iterations);
   p.qp_solver = n.get("qp_solver", p.qp_solver);
@@ -573,6 +575,8 @@ std::string EhcQpController::buildObstacleRows(const std::vector<ObstaclePair>& 
     for (int i = 0; i < nd; ++i)
       if (held[static_cast<std::size_t>(i)]) a[i] = 0.0;
     double b = params_.obstacle_damper_gain * (o.distance - ds) / (di - ds);
+    // Inside d_s: out at least at the recovery rate (QpControllerParams::obstacle_recovery_gain).
+    if (o.distance < ds) b = std::min(b, params_.obstacle_recovery_gain * (o.distance - ds));
     const double norm = a.norm();
     ++out->obstacle_rows;
     if (norm < 1e-9) continue;  // the link point cannot move along n: nothing to constrain
