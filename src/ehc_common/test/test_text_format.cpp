@@ -1,4 +1,5 @@
-// fixedDecimals: the one "number with N decimals" of the text EHC-MM writes.
+// fixedDecimals and csvField: the one "number with N decimals" and the one CSV field of the text
+// EHC-MM writes.
 #include "ehc_common/text_format.h"
 #include "ehc_test/test_seed.h"
 
@@ -46,4 +47,11 @@ TEST(FixedDecimals, ReadsBackWithinHalfALastDigitOnRandomValues) {
     const double back = std::strtod(s.c_str(), nullptr);
     ASSERT_LE(std::abs(back - v), 0.5 * std::pow(10.0, -d) + 1e-15 * std::abs(v)) << v << " -> " << s;
   }
+}
+
+TEST(CsvField, QuotesTheFieldAndDoublesInnerQuotes) {
+  EXPECT_EQ(ehc_common::csvField(""), "\"\"");
+  EXPECT_EQ(ehc_common::csvField("a, b"), "\"a, b\"");
+  EXPECT_EQ(ehc_common::csvField("say \"hi\""), "\"say \"\"hi\"\"\"");
+  EXPECT_EQ(ehc_common::csvField("two\nlines"), "\"two\nlines\"");
 }

@@ -3,6 +3,7 @@
 #include "ehc_common/config_node.h"
 #include "ehc_common/output_dir.h"
 #include "ehc_common/stop_signal.h"
+#include "ehc_common/text_format.h"
 #include "ehc_sim/sim_world.h"
 
 #include <algorithm>
@@ -770,14 +771,10 @@ void writeTrialsCsv(const std::string& dir, const GraspExperimentResult& result)
        "lock_closing_axis_error_deg,cause,judge_view,valid_exists,attempted,attempt_valid,grasp_verdict,candidate_verdict,judge_reason,"
        "target_selection,generator_failure,generator_reason\n";
   for (const auto& t : result.trials) {
-    auto quoted = [](std::string text) {
-      std::replace(text.begin(), text.end(), '"', '\'');
-      return "\"" + text + "\"";
-    };
     f << t.method << "," << t.set << "," << t.index << "," << t.seed << "," << t.object << "," << t.approach << ","
       << (t.success ? 1 : 0) << "," << t.time_s << "," << t.tfm << "," << t.tfm_until_switch << ","
-      << t.controller_tfm << "," << t.failed_phase << "," << quoted(t.reason) << "," << t.stall_cause << ","
-      << t.stall_joint << "," << t.stall_link << "," << t.stall_body << "," << quoted(t.stall_detail) << "," << t.close_offset << "," << t.contact_steps << ","
+      << t.controller_tfm << "," << t.failed_phase << "," << ehc_common::csvField(t.reason) << "," << t.stall_cause << ","
+      << t.stall_joint << "," << t.stall_link << "," << t.stall_body << "," << ehc_common::csvField(t.stall_detail) << "," << t.close_offset << "," << t.contact_steps << ","
       << t.joint_limit_violations << "," << obstacleCsvValue(t.nearest, t.nearest.distance) << "," << t.nearest.link << ","
       << t.nearest.body << "," << t.nearest.phase << "," << obstacleCsvValue(t.tightest, t.tightest.margin()) << ","
       << t.tightest.link << "," << t.tightest.body << "," << t.tightest.phase << ","
@@ -792,7 +789,7 @@ void writeTrialsCsv(const std::string& dir, const GraspExperimentResult& result)
       f << "," << j.view << "," << j.valid_exists << "," << j.attempted << "," << j.attemptValid() << ","
         << (j.chosen ? toString(j.verdict) : "") << "," << (j.has_candidate ? toString(j.candidate_verdict) : "") << ","
         << j.reason(t.success) << "," << ehc_control::toString(j.target) << ","
-        << ehc_perception::toString(j.generator_failure) << "," << quoted(j.generator_reason);
+        << ehc_perception::toString(j.generator_failure) << "," << ehc_common::csvField(j.generator_reason);
     else
       f << ",,,,,,,,,,";
     f << "\n";

@@ -377,12 +377,6 @@ namespace {
 
 using ehc_common::fixedDecimals;
 
-/// A CSV field: quoted, inner quotes doubled.
-std::string quoted(const std::string& s) {
-  std::string q = "\"";
-  for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
-  return q + "\"";
-}
 
 std::string percent(int n, int of) { return of > 0 ? fixedDecimals(100.0 * n / of, 0) + " %" : "-"; }
 
@@ -400,7 +394,7 @@ std::string judgedViewsCsv(const std::vector<JudgedView>& views) {
       << fixedDecimals(v.pose.elevation_deg, 1) << "," << fixedDecimals(v.pose.azimuth_deg, 1) << "," << v.noise_seed << ","
       << (j.exists ? 1 : 0) << "," << (j.search_missed ? 1 : 0) << "," << j.existence.candidates << ","
       << (j.exists ? "" : toString(j.existence.commonest())) << "," << ehc_perception::toString(j.result.failure) << ","
-      << quoted(j.result.reason) << "," << j.result.grasps.size() << ",";
+      << ehc_common::csvField(j.result.reason) << "," << j.result.grasps.size() << ",";
     if (any) {
       const ehc_perception::Grasp& g = j.result.grasps.front();
       const double angle = std::max(j.best.contact_angle_deg[0], j.best.contact_angle_deg[1]);

@@ -14,4 +14,10 @@ std::string fixedDecimals(double v, int decimals) {
   return s;
 }
 
+std::string csvField(const std::string& text) {
+  std::string q = "\"";
+  for (char c : text) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return q + "\"";
+}
+
 }  // namespace ehc_common
