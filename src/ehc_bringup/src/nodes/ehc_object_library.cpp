@@ -106,32 +106,52 @@ int cloud(int argc, char** argv) {
   std::cout << ehc_common::jsonLine(j) << "\n";
   return 0;
 }
+/// What the judge and segment commands share: the output folder (prepared), the object library,
+/// the simulator's settings, the grasp generator and targeting of the grasp node's file, and the
+/// command line for the report. Reads --split, --views and --seed into the given fields (their
+/// values are the defaults).
+struct LibraryRun {
+  std::string dir, command;
+  ehc_sim::ObjectLibrary lib;
+  ehc_sim::SimConfig sim;
+  ehc_perception::GraspGenerator generator;
+  ehc_perception::GraspTargetingParams targeting;
+};
+
+LibraryRun loadLibraryRun(const ehc_common::CommandLine& cli, int argc, char** argv, std::string* split, int* views,
+                          unsigned* seed) {
+  *split = cli.choice("split", {"all", "tuning", "validation"}, *split);
+  *views = static_cast<int>(cli.integer("views", *views, 1, 1000000));
+  *seed = static_cast<unsigned>(cli.integer("seed", *seed, 0, 1000000000));
+  const std::string config = cli.text("config", ehc_control::configDirectory() + "/perception/grasp_node.yaml");
+  const auto root = ehc_common::ConfigNode::loadFile(config, "GraspGenerator");
+  std::string command = std::string("ehc_object_library ") + argv[1];
+  for (int i = 2; i < argc; ++i) command += std::string(" ") + argv[i];
+  LibraryRun run{cli.text("out"),
+                 command,
+                 ehc_sim::loadObjectLibrary(cli.text("manifest", defaultManifest())),
+                 ehc_sim::loadSimConfig(cli.text("sim", ehc_control::configDirectory() + "/sim/bullet_sim.yaml")),
+                 ehc_perception::GraspGenerator(ehc_perception::loadGraspGeneratorConfig(root.childOrEmpty("grasp_generator"))),
+                 ehc_perception::loadGraspTargetingParams(root.childOrEmpty("node"))};
+  ehc_common::prepareOutputDir(run.dir);
+  return run;
+}
+
 int judge(int argc, char** argv) {
   const ehc_common::CommandLine cli(
       argc, argv, {"manifest", "split", "views", "seed", "out", "sim", "config", "mu", "samples"}, {}, 2);
-  const std::string dir = cli.text("out");
-  ehc_common::prepareOutputDir(dir);
   ehc_bringup::LibraryJudgeParams p;
-  p.split = cli.choice("split", {"all", "tuning", "validation"}, p.split);
-  p.views = static_cast<int>(cli.integer("views", p.views, 1, 10000));
-  p.seed = static_cast<unsigned>(cli.integer("seed", p.seed, 0, 1000000000));
+  const LibraryRun run = loadLibraryRun(cli, argc, argv, &p.split, &p.views, &p.seed);
   p.judge.friction_coefficient = cli.real("mu", p.judge.friction_coefficient);
   p.judge.samples = static_cast<int>(cli.integer("samples", p.judge.samples, 1, 1000000));
-  const std::string config = cli.text("config", ehc_control::configDirectory() + "/perception/grasp_node.yaml");
-  const auto root = ehc_common::ConfigNode::loadFile(config, "GraspGenerator");
-  const ehc_perception::GraspGeneratorConfig gen_cfg = ehc_perception::loadGraspGeneratorConfig(root.childOrEmpty("grasp_generator"));
-  const ehc_perception::GraspTargetingParams targeting = ehc_perception::loadGraspTargetingParams(root.childOrEmpty("node"));
-  p.judge.max_approach_tilt_deg = p.judge.max_view_angle_deg = gen_cfg.max_approach_tilt_deg;
+  p.judge.max_approach_tilt_deg = p.judge.max_view_angle_deg = run.generator.config().max_approach_tilt_deg;
   p.validate();
-  const ehc_sim::ObjectLibrary lib = ehc_sim::loadObjectLibrary(cli.text("manifest", defaultManifest()));
-  const ehc_sim::SimConfig sim = ehc_sim::loadSimConfig(cli.text("sim", ehc_control::configDirectory() + "/sim/bullet_sim.yaml"));
-  const ehc_perception::GraspGenerator generator(gen_cfg);
-  std::string command = "ehc_object_library judge";
-  for (int i = 2; i < argc; ++i) command += std::string(" ") + argv[i];
+  const std::string& dir = run.dir;
+  const std::string& command = run.command;
   std::cerr << "ehc_object_library judge: seed " << p.seed << ", split " << p.split << ", " << p.views
             << " views per object, mu " << p.judge.friction_coefficient << "\n";
   const auto rows = ehc_bringup::judgeLibrary(
-      lib, sim, generator, targeting, p, [](const ehc_bringup::JudgedView& v, std::size_t done, std::size_t total) {
+      run.lib, run.sim, run.generator, run.targeting, p, [](const ehc_bringup::JudgedView& v, std::size_t done, std::size_t total) {
         const ehc_bringup::ViewJudgement& j = v.judgement;
         std::cerr << "[" << done << "/" << total << "] " << v.object << " view " << v.view << ": valid grasp "
                   << (j.exists ? "exists" : "none") << ", "
@@ -150,12 +170,8 @@ int judge(int argc, char** argv) {
 int segment(int argc, char** argv) {
   const ehc_common::CommandLine cli(
       argc, argv, {"manifest", "split", "views", "seed", "out", "sim", "config", "objects", "min-gap", "max-gap", "kinds"}, {}, 2);
-  const std::string dir = cli.text("out");
-  ehc_common::prepareOutputDir(dir);
   ehc_bringup::SegmentationCheckParams p;
-  p.split = cli.choice("split", {"all", "tuning", "validation"}, p.split);
-  p.views = static_cast<int>(cli.integer("views", p.views, 1, 1000000));
-  p.seed = static_cast<unsigned>(cli.integer("seed", p.seed, 0, 1000000000));
+  const LibraryRun run = loadLibraryRun(cli, argc, argv, &p.split, &p.views, &p.seed);
   p.objects = static_cast<int>(cli.integer("objects", p.objects, 1, 10));
   p.min_gap = cli.real("min-gap", p.min_gap);
   p.max_gap = cli.real("max-gap", p.max_gap);
@@ -163,17 +179,11 @@ int segment(int argc, char** argv) {
   for (std::string k; std::getline(kinds, k, ',');)
     if (!k.empty()) p.kinds.push_back(k);
   p.validate();
-  const std::string config = cli.text("config", ehc_control::configDirectory() + "/perception/grasp_node.yaml");
-  const auto root = ehc_common::ConfigNode::loadFile(config, "GraspGenerator");
-  const ehc_perception::GraspGenerator generator(ehc_perception::loadGraspGeneratorConfig(root.childOrEmpty("grasp_generator")));
-  const ehc_perception::GraspTargetingParams targeting = ehc_perception::loadGraspTargetingParams(root.childOrEmpty("node"));
-  const ehc_sim::ObjectLibrary lib = ehc_sim::loadObjectLibrary(cli.text("manifest", defaultManifest()));
-  const ehc_sim::SimConfig sim = ehc_sim::loadSimConfig(cli.text("sim", ehc_control::configDirectory() + "/sim/bullet_sim.yaml"));
-  std::string command = "ehc_object_library segment";
-  for (int i = 2; i < argc; ++i) command += std::string(" ") + argv[i];
+  const std::string& dir = run.dir;
+  const std::string& command = run.command;
   std::cerr << "ehc_object_library segment: seed " << p.seed << ", split " << p.split << ", " << p.views << " views\n";
   const auto views = ehc_bringup::checkSegmentation(
-      lib, sim, generator, targeting, p, [](const ehc_bringup::SegmentedView& v, int done, int total) {
+      run.lib, run.sim, run.generator, run.targeting, p, [](const ehc_bringup::SegmentedView& v, int done, int total) {
         std::cerr << "[" << done << "/" << total << "] " << v.clusters << " cluster(s):";
         for (const auto& o : v.objects) std::cerr << " " << o.object << " " << ehc_bringup::toString(o.outcome);
         std::cerr << "\n";
