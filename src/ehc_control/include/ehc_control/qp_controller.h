@@ -11,7 +11,8 @@
 //        x- <= x <= x+                       (velocity limits, slack bound)
 //   Q = blkdiag(w_base I, w_arm I, 1/max(|e|, e_min) I_6)
 //   C = [0 .. -k_eps b (w_z column); -k_m J_m + k_p (q - q_ready) + dV_lim/dq; 0]
-//   b: TCP bearing atan2(y_e, x_e) in the base frame, on the 2 pi branch nearest the winding of
+//   b: bearing in the base frame of TCP + (1 - sig(omega)) (target - TCP) (the TCP's within
+//      reach, the target's far from it; base_turn_to_target), on the 2 pi branch nearest the winding of
 //      the arm's yaw joint (q_yaw - q_yaw,ready), so that turning towards the TCP unwinds it;
 //      with the TCP over the shoulder (> 90 deg from the yaw joint's direction) on the previous
 //      cycle's branch (no 2 pi flips from noise at the branch border)
@@ -76,6 +77,13 @@ struct QpControllerParams {
   /// (unwoundBearing); false: plain atan2 (paper, NEO), which near +-pi turns the base the way
   /// that winds the yaw joint further into its limit.
   bool base_turn_unwinding = true;
+  /// The point the turn term turns the base towards: the TCP (paper, NEO) while the target is
+  /// within the arm's reach, the target while it is not. The bearing is that of
+  /// TCP + (1 - sig(omega)) (target - TCP), so with the target metres away the base faces its
+  /// way even when the arm is folded over the base or pinned (a TCP bearing near 0 would leave
+  /// a differential base driving past the target), and within reach the paper's term is
+  /// unchanged. false, or no reachability map (no sig): the TCP's bearing alone.
+  bool base_turn_to_target = true;
   double manipulability_gain = 1.0;    ///< k_m: weight of -J_m in C
   /// m; > 0: k_m fades linearly to 0 as the TCP comes within this distance of the target.
   /// Near a stretched pose the manipulability gradient is large and, with the 1/|e| slack
@@ -249,11 +257,13 @@ class EhcQpController {
                        const Eigen::Isometry3d& target, const EhcWeight* weight, ControllerCommand* out) const;
   /// The mode's base weight and held groups (tsmm stage switch), and the arrival phase.
   HeldGroups applyMode(const Vector6d& e, const Eigen::Isometry3d& target, double e_floor, ControllerCommand* out);
-  /// The turn term's TCP bearing in the base frame (unwound, see base_turn_unwinding).
-  double turnBearing(const Eigen::VectorXd& q);
+  /// The turn term's bearing in the base frame: of the TCP, led towards the target far from it
+  /// (base_turn_to_target; `target_in_base`: the target position in the base frame), unwound
+  /// (base_turn_unwinding).
+  double turnBearing(const Eigen::VectorXd& q, const Eigen::Vector3d& target_in_base, double sig);
   /// Cost diagonal h and linear term c of [qd; delta].
-  void buildCost(const Eigen::VectorXd& q, double e_floor, const ControllerCommand& out,
-                 const Eigen::VectorXd* reference);
+  void buildCost(const Eigen::VectorXd& q, const Eigen::Vector3d& target_in_base, double e_floor,
+                 const ControllerCommand& out, const Eigen::VectorXd* reference);
   /// Velocity and slack bounds, the held variables, the joint dampers as tightened bounds.
   std::string buildBounds(const Eigen::VectorXd& q, const HeldGroups& held, ControllerCommand* out);
   /// Obstacle damper rows (nearest pairs first, parallel rows merged).

@@ -9,6 +9,8 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cstdio>
+#include <cstdlib>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -88,7 +90,8 @@ std::string QpControllerParams::summary() const {
   os << "controller: mode " << toString(mode) << ", w_arm " << arm_weight << ", ehc base weight ["
      << ehc_base_weight_min << ", " << ehc_base_weight_max << "], neo_c base weight "
      << neo_c_base_weight << ", |e| floor " << min_error << ", slack bound " << slack_bound
-     << ", k_eps " << base_turn_gain << (base_turn_unwinding ? " (unwound)" : "") << ", k_m " << manipulability_gain
+     << ", k_eps " << base_turn_gain << (base_turn_unwinding ? " (unwound)" : "")
+     << (base_turn_to_target ? " towards the target while out of reach" : " towards the TCP") << ", k_m " << manipulability_gain
      << (manipulability_fade_distance > 0.0 ? " (fading within " + std::to_string(manipulability_fade_distance) + " m)" : std::string())
      << ", k_p "
      << posture_gain << ", limit centring " << limit_centring_gain << "; " << wrist_flip.summary() << "; " << recovery.summary() << "\n"
@@ -121,6 +124,7 @@ QpControllerParams loadQpControllerParams(const ehc_common::ConfigNode& n) {
   p.slack_bound = n.get("slack_bound", p.slack_bound);
   p.base_turn_gain = n.get("base_turn_gain", p.base_turn_gain);
   p.base_turn_unwinding = n.get("base_turn_unwinding", p.base_turn_unwinding);
+  p.base_turn_to_target = n.get("base_turn_to_target", p.base_turn_to_target);
   p.manipulability_gain = n.get("manipulability_gain", p.manipulability_gain);
   p.manipulability_fade_distance = n.get("manipulability_fade_distance", p.manipulability_fade_distance);
   p.posture_gain = n.get("posture_gain", p.posture_gain);
@@ -352,7 +356,7 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
   const HeldGroups held = applyMode(e, target, e_floor, &out);
 
   // --- cost, bounds and joint dampers, obstacle dampers, wrist flip
-  buildCost(q, e_floor, out, reference);
+  buildCost(q, ws_->kinematics.baseTransform().inverse() * target.translation(), e_floor, out, reference);
   std::string failure = buildBounds(q, held, &out);
   if (!failure.empty()) return fail(out, failure);
   failure = buildObstacleRows(obstacles, &out);
@@ -382,6 +386,16 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
   if (solved != QpSolveResult::Solved) return fail(out, "QP infeasible");
   failure = assembleCommand(&out);
   if (!failure.empty()) return fail(out, failure);
+  if (std::getenv("EHC_DBG")) {  // DEBUG-REMOVE
+    static int dbg = 0;
+    if (dbg++ % 50 == 0) {
+      const Eigen::Vector3d tb = s.kinematics.linkPoseInBase(s.tcp_link).translation();
+      const Eigen::Vector3d tw = WholeBodyModel::baseTransform(base_pose).inverse() * target.translation();
+      fprintf(stderr, "DBG tcp_b %.2f %.2f %.2f brg %.2f tgt_brg %.2f c_w %.3f nu %.2f %.2f %.2f %.2f %.2f %.2f slack %.2f %.2f %.2f %.2f %.2f %.2f vel %.2f %.2f\n",
+              tb.x(), tb.y(), tb.z(), last_bearing_, std::atan2(tw.y(), tw.x()), s.c[model_->nBase() - 1], nu_e[0], nu_e[1], nu_e[2], nu_e[3], nu_e[4], nu_e[5],
+              out.slack[0], out.slack[1], out.slack[2], out.slack[3], out.slack[4], out.slack[5], out.velocity[0], out.velocity[1]);
+    }
+  }
   return out;
 }
 
@@ -448,11 +462,15 @@ EhcQpController::HeldGroups EhcQpController::applyMode(const Vector6d& e, const 
   return held;
 }
 
-double EhcQpController::turnBearing(const Eigen::VectorXd& q) {
+double EhcQpController::turnBearing(const Eigen::VectorXd& q, const Eigen::Vector3d& target_in_base, double sig) {
   const Workspace& s = *ws_;
   const RobotConfig& rc = model_->config();
-  const Eigen::Vector3d tcp_in_base = s.kinematics.linkPoseInBase(s.tcp_link).translation();
-  double bearing = std::atan2(tcp_in_base.y(), tcp_in_base.x());
+  Eigen::Vector3d towards = s.kinematics.linkPoseInBase(s.tcp_link).translation();
+  // Far from the target the base faces the target's way, not the TCP's: the TCP bearing only
+  // says where to go while the arm reaches towards the target; a folded or pinned arm holds the
+  // TCP near the base's axis (bearing ~0) while the target lies metres away to the side.
+  if (params_.base_turn_to_target && weighting_) towards += (1.0 - sig) * (target_in_base - towards);
+  double bearing = std::atan2(towards.y(), towards.x());
   if (params_.base_turn_unwinding && yaw_joint_ >= 0) {
     // The branch of the yaw joint's winding, while the TCP lies on the side the yaw joint
     // points to. Reaching over the shoulder (the TCP more than 90 deg from that direction)
@@ -469,8 +487,8 @@ double EhcQpController::turnBearing(const Eigen::VectorXd& q) {
   return bearing;
 }
 
-void EhcQpController::buildCost(const Eigen::VectorXd& q, double e_floor, const ControllerCommand& out,
-                                const Eigen::VectorXd* reference) {
+void EhcQpController::buildCost(const Eigen::VectorXd& q, const Eigen::Vector3d& target_in_base, double e_floor,
+                                const ControllerCommand& out, const Eigen::VectorXd* reference) {
   const RobotConfig& rc = model_->config();
   const int nb = model_->nBase(), na = model_->nArm(), nx = model_->nDof() + 6;
   Workspace& s = *ws_;
@@ -485,7 +503,7 @@ void EhcQpController::buildCost(const Eigen::VectorXd& q, double e_floor, const 
     c.head(nb + na) = -h.head(nb + na).cwiseProduct(*reference);
     return;
   }
-  const double bearing = turnBearing(q);
+  const double bearing = turnBearing(q, target_in_base, out.sig);
   c[nb - 1] = -params_.base_turn_gain * bearing;
   const double fade = params_.manipulability_fade_distance > 0.0
                           ? std::min(1.0, out.position_error / params_.manipulability_fade_distance)
