@@ -9,8 +9,6 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
-#include <cstdio>
-#include <cstdlib>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -386,16 +384,6 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
   if (solved != QpSolveResult::Solved) return fail(out, "QP infeasible");
   failure = assembleCommand(&out);
   if (!failure.empty()) return fail(out, failure);
-  if (std::getenv("EHC_DBG")) {  // DEBUG-REMOVE
-    static int dbg = 0;
-    if (dbg++ % 50 == 0) {
-      const Eigen::Vector3d tb = s.kinematics.linkPoseInBase(s.tcp_link).translation();
-      const Eigen::Vector3d tw = WholeBodyModel::baseTransform(base_pose).inverse() * target.translation();
-      fprintf(stderr, "DBG tcp_b %.2f %.2f %.2f brg %.2f tgt_brg %.2f c_w %.3f nu %.2f %.2f %.2f %.2f %.2f %.2f slack %.2f %.2f %.2f %.2f %.2f %.2f vel %.2f %.2f\n",
-              tb.x(), tb.y(), tb.z(), last_bearing_, std::atan2(tw.y(), tw.x()), s.c[model_->nBase() - 1], nu_e[0], nu_e[1], nu_e[2], nu_e[3], nu_e[4], nu_e[5],
-              out.slack[0], out.slack[1], out.slack[2], out.slack[3], out.slack[4], out.slack[5], out.velocity[0], out.velocity[1]);
-    }
-  }
   return out;
 }
 
