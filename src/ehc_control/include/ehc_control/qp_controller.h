@@ -83,7 +83,7 @@ struct FarApproachParams {
   double posture_gain = 0.05;  ///< added to posture_gain times the far fraction; 0 = off
   /// The TCP orientation rows of the task are weighed by 1 - f orientation_release: 0 keeps the
   /// servo's orientation (MPBS: looking at the target) while far, 1 leaves it to the posture.
-  double orientation_release = 0.9;
+  double orientation_release = 0.8;
   /// The far fraction for a TCP-target distance (m).
   double fraction(double position_error) const {
     return std::clamp(position_error / distance - 1.0, 0.0, 1.0);
