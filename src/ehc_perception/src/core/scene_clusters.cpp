@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <set>
+#include <tuple>
 
 namespace ehc_perception {
 namespace detail {
@@ -127,6 +129,56 @@ bool concaveFootprint(const std::vector<Eigen::Vector2d>& pts, const Eigen::Vect
   return true;
 }
 
+std::vector<Eigen::Vector2d> joinedHull(const std::vector<Eigen::Vector2d>& a, const std::vector<Eigen::Vector2d>& b) {
+  std::vector<Eigen::Vector2d> both = a;
+  both.insert(both.end(), b.begin(), b.end());
+  return convexHull2d(both);
+}
+
+/// Step 2 of the header: merges the closest pair of footprints within footprint_merge_gap first
+/// (the lower index keeps the part), until none is left. A pair's distance and joined width
+/// only change when one of its parts grows, so the candidate pairs are kept and only the grown
+/// part's recomputed; parts whose bounding boxes are farther apart than the gap are never
+/// compared. Noisy views bring hundreds of small parts, so the order matters.
+void mergeCloseFootprints(std::vector<std::vector<int>>& parts, std::vector<std::vector<Eigen::Vector2d>>& hulls,
+                          const GraspGeneratorConfig& cfg) {
+  if (cfg.footprint_merge_gap < 0.0) return;
+  const std::size_t n = parts.size();
+  std::vector<Eigen::AlignedBox2d> boxes(n);
+  for (std::size_t k = 0; k < n; ++k)
+    for (const auto& p : hulls[k]) boxes[k].extend(p);
+  std::vector<bool> alive(n, true);
+  std::set<std::tuple<double, std::size_t, std::size_t>> pairs;  // (distance, lower, higher): ties by index
+  const auto consider = [&](std::size_t a, std::size_t b) {
+    if (boxes[a].exteriorDistance(boxes[b]) > cfg.footprint_merge_gap) return;  // a box holds its hull
+    const double d = hullDistance(hulls[a], hulls[b]);
+    if (d <= cfg.footprint_merge_gap && diameter(joinedHull(hulls[a], hulls[b])) <= cfg.max_object_extent)
+      pairs.emplace(d, a, b);
+  };
+  for (std::size_t a = 0; a < n; ++a)
+    for (std::size_t b = a + 1; b < n; ++b) consider(a, b);
+  while (!pairs.empty()) {
+    const auto [d, a, b] = *pairs.begin();
+    parts[a].insert(parts[a].end(), parts[b].begin(), parts[b].end());
+    hulls[a] = joinedHull(hulls[a], hulls[b]);
+    boxes[a].extend(boxes[b]);
+    alive[b] = false;
+    for (auto it = pairs.begin(); it != pairs.end();) {
+      const std::size_t i = std::get<1>(*it), j = std::get<2>(*it);
+      it = (i == a || j == a || i == b || j == b) ? pairs.erase(it) : std::next(it);
+    }
+    for (std::size_t k = 0; k < n; ++k)
+      if (alive[k] && k != a) consider(std::min(a, k), std::max(a, k));
+  }
+  std::size_t kept = 0;
+  for (std::size_t k = 0; k < n; ++k)
+    if (alive[k]) {
+      if (kept != k) parts[kept] = std::move(parts[k]);
+      ++kept;
+    }
+  parts.resize(kept);
+}
+
 }  // namespace
 
 double angularPitch(const pcl::PointCloud<pcl::PointXYZ>& cloud, const Eigen::Vector3d& viewpoint) {
@@ -210,11 +262,6 @@ std::vector<std::vector<int>> clusterObjects(const pcl::PointCloud<pcl::PointXYZ
     flat.erase(flat.begin() + static_cast<long>(b));
     hulls.erase(hulls.begin() + static_cast<long>(b));
   };
-  const auto joinedHull = [&](std::size_t a, std::size_t b) {
-    std::vector<Eigen::Vector2d> both = hulls[a];
-    both.insert(both.end(), hulls[b].begin(), hulls[b].end());
-    return convexHull2d(both);
-  };
   // A part seen from inside takes the parts within its circle (most of their points).
   if (viewpoint) {
     const Eigen::Vector2d eye(viewpoint->dot(e1), viewpoint->dot(e2));
@@ -238,31 +285,14 @@ std::vector<std::vector<int>> clusterObjects(const pcl::PointCloud<pcl::PointXYZ
       }
       for (auto it = takes.rbegin(); it != takes.rend(); ++it) {  // from the last: the indices below stay
         const std::size_t lo = std::min(*it, b), hi = std::max(*it, b);
-        std::vector<Eigen::Vector2d> hull = joinedHull(lo, hi);
+        std::vector<Eigen::Vector2d> hull = joinedHull(hulls[lo], hulls[hi]);
         if (diameter(hull) > cfg.max_object_extent) continue;
         join(lo, hi, std::move(hull));
         b = lo;
       }
     }
   }
-  // Merge the closest pair within the gap first, until none is left.
-  for (bool merged = true; merged && cfg.footprint_merge_gap >= 0.0;) {
-    merged = false;
-    double best = std::numeric_limits<double>::infinity();
-    std::size_t ba = 0, bb = 0;
-    std::vector<Eigen::Vector2d> joined;
-    for (std::size_t a = 0; a < parts.size(); ++a)
-      for (std::size_t b = a + 1; b < parts.size(); ++b) {
-        const double d = hullDistance(hulls[a], hulls[b]);
-        if (d > cfg.footprint_merge_gap || d >= best) continue;
-        std::vector<Eigen::Vector2d> both = joinedHull(a, b);
-        if (diameter(both) > cfg.max_object_extent) continue;
-        best = d, ba = a, bb = b, joined = both;
-      }
-    if (!std::isfinite(best)) break;
-    join(ba, bb, joined);
-    merged = true;
-  }
+  mergeCloseFootprints(parts, hulls, cfg);
   parts.erase(std::remove_if(parts.begin(), parts.end(),
                              [&](const std::vector<int>& p) { return static_cast<int>(p.size()) < cfg.min_cluster_points; }),
               parts.end());
