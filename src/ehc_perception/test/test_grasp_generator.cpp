@@ -840,3 +840,94 @@ TEST(GraspContacts, AContactPair45DegOffIsRefusedWithMu05) {
   const GraspResult r = GraspGenerator(cfg).generate(roof.noisy(0.001, 1), kView);
   EXPECT_FALSE(r.grasps.empty()) << r.reason;
 }
+
+namespace {
+
+/// Points of `truth` inside either finger of `g` opened to its width (the fingers' boxes: 10 mm
+/// thick beyond +-width / 2, finger_breadth across, finger_length along the approach).
+int pointsInFingers(const Grasp& g, const GripperGeometry& gr, const PointList& truth) {
+  const Eigen::Isometry3d T = g.pose.inverse();
+  int n = 0;
+  for (const auto& pf : truth) {
+    const Eigen::Vector3d p = T * pf.cast<double>();
+    const double ay = std::abs(p.y());
+    n += std::abs(p.x()) <= 0.5 * gr.finger_breadth && p.z() <= gr.finger_tip_depth &&
+         p.z() >= gr.finger_tip_depth - gr.finger_length && ay > 0.5 * g.width + 1e-4 &&
+         ay < 0.5 * g.width + gr.finger_thickness;
+  }
+  return n;
+}
+
+/// A camera 0.5-0.7 m from `centre`, 30-60 deg above the support, any azimuth.
+Eigen::Vector3d randomView(const Eigen::Vector3d& centre, std::mt19937* rng) {
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const double az = 2 * M_PI * unit(*rng), el = (30 + 30 * unit(*rng)) * kDeg, dist = 0.5 + 0.2 * unit(*rng);
+  return centre + dist * Eigen::Vector3d(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
+}
+
+}  // namespace
+
+// Random cups 100-160 mm across (wider than the opening), walls 3-6 mm, 40-80 mm high, seen
+// once from a random view under 1.5 mm noise: no wall is seen from both sides, yet the best
+// grasp is a wall grasp across the rim: the true cup between its fingers is the wall (at most
+// 3 x its thickness), within the measured width, and no true surface point is inside a finger.
+TEST(WallGrasps, ARandomCupsRimIsGraspedAcrossItsWallFromOneView) {
+  const unsigned seed = ehc_test::testSeed("WallGrasps random cups");
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const GraspGeneratorConfig cfg;
+  const GraspGenerator gen(cfg);
+  for (int trial = 0; trial < 6; ++trial) {
+    const double r = 0.05 + 0.03 * unit(rng), wall = 0.003 + 0.003 * unit(rng), height = 0.04 + 0.04 * unit(rng);
+    Surface truth = cupSurface(r, wall, height, 0.002);
+    truth.transform(pose(0.6, 0.0, 0.0, 2 * M_PI * unit(rng)));
+    const Eigen::Vector3d view = randomView(Eigen::Vector3d(0.6, 0.0, 0.5 * height), &rng);
+    const GraspResult res = gen.generate(truth.occludedFrom(view).noisy(0.0015, seed + static_cast<unsigned>(trial)), view);
+    const std::string what = "cup r " + std::to_string(1e3 * r) + " mm, wall " + std::to_string(1e3 * wall) +
+                             " mm, height " + std::to_string(1e3 * height) + " mm, view " +
+                             std::to_string(view.x()) + " " + std::to_string(view.y()) + " " + std::to_string(view.z());
+    SCOPED_TRACE(what);
+    ASSERT_FALSE(res.grasps.empty()) << res.reason;
+    const Grasp& best = res.grasps.front();
+    const double between = trueWidthBetweenFingers(best, cfg.gripper, truth.points);
+    std::printf("%s: best %s, measured %.1f mm, true %.1f mm between the fingers\n", what.c_str(),
+                best.wall ? "wall grasp" : "grasp", 1e3 * best.measured_width, 1e3 * between);
+    EXPECT_TRUE(best.wall);
+    EXPECT_LE(between, best.measured_width + 0.0015);
+    EXPECT_LT(between, 3.0 * wall);
+    EXPECT_EQ(pointsInFingers(best, cfg.gripper, truth.points), 0);
+  }
+}
+
+// Random lying and standing cylinders 15-90 mm across seen once under 1.5 mm noise: every wall
+// grasp's measured width holds the true cylinder between its fingers (never under-measured,
+// within the noise), no true surface point is inside a finger, and a cylinder wider than the
+// opening gets none.
+TEST(WallGrasps, ARandomCylindersWidthIsNeverUnderMeasured) {
+  const unsigned seed = ehc_test::testSeed("WallGrasps random cylinders");
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const GraspGeneratorConfig cfg;
+  const GraspGenerator gen(cfg);
+  int walls = 0;
+  for (int trial = 0; trial < 12; ++trial) {
+    const Solid solid = trial % 2 == 0 ? Solid::LyingCylinder : Solid::StandingCylinder;
+    const double w = 0.015 + 0.075 * unit(rng);
+    const Surface truth = solidOnSupport(solid, w, 2 * M_PI * unit(rng), 0.002);
+    const Eigen::Vector3d view = randomView(Eigen::Vector3d(0.6, 0.0, 0.03), &rng);
+    const GraspResult res = gen.generate(truth.visibleFrom(view).noisy(0.0015, seed + static_cast<unsigned>(trial)), view);
+    const std::string what = std::string(solidName(solid)) + " " + std::to_string(1e3 * w) + " mm";
+    SCOPED_TRACE(what);
+    for (const Grasp& g : res.grasps) {
+      if (!g.wall) continue;
+      ++walls;
+      const double between = trueWidthBetweenFingers(g, cfg.gripper, truth.points);
+      std::printf("%s: wall grasp measured %.1f mm, true %.1f mm between the fingers\n", what.c_str(),
+                  1e3 * g.measured_width, 1e3 * between);
+      EXPECT_LT(w, cfg.gripper.max_width);
+      EXPECT_LE(between, g.measured_width + 0.0015);
+      EXPECT_EQ(pointsInFingers(g, cfg.gripper, truth.points), 0);
+    }
+  }
+  std::printf("%d wall grasps checked\n", walls);
+}
