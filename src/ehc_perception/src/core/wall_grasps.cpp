@@ -118,9 +118,13 @@ class WallSearch {
   /// The finger beyond the wall, its inner face at yo: neither its volume nor its path in from
   /// approach_standoff above may lie behind a seen point (fingertip first: most likely hidden).
   bool outerFingerFree(double yo) const;
-  /// Shadow samples of the seen-side finger's mid-plane (4 of 15 tolerated) and the palm's face
-  /// (3 of 9).
-  bool seenSideHidden(double y_in, double yc, double w) const;
+  /// Shadow samples of the seen-side finger's mid-plane at ym (4 of 15 tolerated) and the palm's
+  /// face (3 of 9).
+  bool seenSideHidden(double ym, double yc, double w) const;
+  /// Gathers the points around p_ and measures the seen contact: where the finger first touches
+  /// its points (the outermost after dropping one as noise, *y_in) and the median of their
+  /// normals' cosines with -y (*cos_n); false with fewer than 3 such points.
+  bool seenContact(double* y_in, double* cos_n);
 
   const GraspGeneratorConfig& cfg_;
   const GripperGeometry& g_;
@@ -171,8 +175,7 @@ bool WallSearch::outerFingerFree(double yo) const {
   return true;
 }
 
-bool WallSearch::seenSideHidden(double y_in, double yc, double w) const {
-  const double ym = y_in - g_.clearance - 0.5 * g_.finger_thickness;
+bool WallSearch::seenSideHidden(double ym, double yc, double w) const {
   int n = 0;
   for (double fx : {-0.4, 0.0, 0.4})
     for (int j = 0; j < 5; ++j) n += in_.shadow->mayBeSolid(world(ym, fx * g_.finger_breadth, z0_ + (z1_ - z0_) * j / 4.0));
@@ -182,6 +185,18 @@ bool WallSearch::seenSideHidden(double y_in, double yc, double w) const {
   for (double fx : {-0.4, 0.0, 0.4})
     for (double fy : {-1.0, 0.0, 1.0}) n += in_.shadow->mayBeSolid(world(yc + fy * yp, fx * g_.palm_breadth, z0_));
   return n >= 3;
+}
+
+bool WallSearch::seenContact(double* y_in, double* cos_n) {
+  gather();
+  if (contact_.size() < 3) return false;
+  std::vector<double> ys, cs;
+  for (const auto& yc : contact_) ys.push_back(yc.first), cs.push_back(yc.second);
+  std::sort(ys.begin(), ys.end());
+  std::nth_element(cs.begin(), cs.begin() + static_cast<long>(cs.size() / 2), cs.end());
+  *y_in = ys[ys.size() >= 5 ? 1 : 0];
+  *cos_n = cs[cs.size() / 2];
+  return true;
 }
 
 bool WallSearch::at(std::size_t i, WallGrasp* out) {
@@ -194,16 +209,20 @@ bool WallSearch::at(std::size_t i, WallGrasp* out) {
   y_ = -nh.normalized();
   a_ = -up_;
   x_ = y_.cross(a_);
-  gather();
-  if (contact_.size() < 3) return false;
-  // The seen contact: where the finger first touches its points (the outermost after dropping
-  // one as noise), the median of their normals' cosines.
-  std::vector<double> ys, cs;
-  for (const auto& yc : contact_) ys.push_back(yc.first), cs.push_back(yc.second);
-  std::sort(ys.begin(), ys.end());
-  std::nth_element(cs.begin(), cs.begin() + static_cast<long>(cs.size() / 2), cs.end());
-  const double y_in = ys[ys.size() >= 5 ? 1 : 0], cos_n = cs[cs.size() / 2];
-  const double c = g_.clearance, t = g_.finger_thickness;
+  double y_in = 0.0, cos_n = 0.0;
+  if (!seenContact(&y_in, &cos_n)) return false;
+  // The closing line at least 3 x the noise + half a voxel below the seen surface's top there
+  // (a seed at the rim's edge would close on its noise above the rim).
+  double top = 0.0;
+  for (const Eigen::Vector3d& l : near_)
+    if (std::abs(l.y()) <= 0.5 * g_.finger_breadth && l.x() >= y_in - band_ && l.x() <= y_in + 2.0 * band_)
+      top = std::min(top, l.z());
+  const double below = 3.0 * in_.noise + 0.5 * in_.leaf;
+  if (top > -below) {
+    p_ += a_ * (below + top);
+    if (up_.dot(p_) + in_.plane[3] - z1_ < cfg_.support_clearance || !seenContact(&y_in, &cos_n)) return false;
+  }
+  const double c = g_.clearance, t = g_.finger_thickness, W = g_.max_width;
   // The seen-side finger and its path: nothing beyond the contact surface's noise.
   if (fingerCount(y_in - c - t, y_in - 3.0 * in_.noise - 0.5 * in_.leaf) > k_) return false;
   // The other finger at the nearest position the view proves free (1 mm steps).
@@ -211,10 +230,14 @@ bool WallSearch::at(std::size_t i, WallGrasp* out) {
   for (double yo = y_in + c + std::max(step, 2.0 * in_.noise); yo <= y_in + g_.max_width - c + 1e-9; yo += step) {
     if (fingerCount(yo - c, yo + t) > k_ || !outerFingerFree(yo)) continue;
     const double w = yo - (y_in - c), yc = 0.5 * (yo + y_in - c);
+    // The fingers come in fully open, centred on yc: both free there too.
+    if (fingerCount(yc - 0.5 * W - t, yc - 0.5 * W) > k_ || fingerCount(yc + 0.5 * W, yc + 0.5 * W + t) > k_ ||
+        !outerFingerFree(yc + 0.5 * W))
+      continue;
     // The palm and its path, then the hidden volume at the seen side's finger and the palm.
     if (countIn(yc - 0.5 * g_.palm_width, yc + 0.5 * g_.palm_width, 0.5 * g_.palm_breadth,
                 z0_ - g_.palm_height - sweep_, z0_) > k_ ||
-        seenSideHidden(y_in, yc, w))
+        seenSideHidden(y_in - c - 0.5 * t, yc, w) || seenSideHidden(yc - 0.5 * W - 0.5 * t, yc, w))
       return false;
     out->R.col(1) = y_;
     out->R.col(2) = a_;
