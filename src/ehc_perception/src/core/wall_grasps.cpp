@@ -225,13 +225,15 @@ bool WallSearch::at(std::size_t i, WallGrasp* out) {
   const double c = g_.clearance, t = g_.finger_thickness, W = g_.max_width;
   // The seen-side finger and its path: nothing beyond the contact surface's noise.
   if (fingerCount(y_in - c - t, y_in - 3.0 * in_.noise - 0.5 * in_.leaf) > k_) return false;
-  // The other finger at the nearest position the view proves free (1 mm steps).
+  // The other finger at the nearest position the view proves free (1 mm steps): no point seen in
+  // it or its path (a seen point there contradicts the bound; none is tolerated as noise), none
+  // of it behind a seen point.
   const double step = 0.001;
   for (double yo = y_in + c + std::max(step, 2.0 * in_.noise); yo <= y_in + g_.max_width - c + 1e-9; yo += step) {
-    if (fingerCount(yo - c, yo + t) > k_ || !outerFingerFree(yo)) continue;
+    if (fingerCount(yo - c, yo + t) > 0 || !outerFingerFree(yo)) continue;
     const double w = yo - (y_in - c), yc = 0.5 * (yo + y_in - c);
     // The fingers come in fully open, centred on yc: both free there too.
-    if (fingerCount(yc - 0.5 * W - t, yc - 0.5 * W) > k_ || fingerCount(yc + 0.5 * W, yc + 0.5 * W + t) > k_ ||
+    if (fingerCount(yc - 0.5 * W - t, yc - 0.5 * W) > 0 || fingerCount(yc + 0.5 * W, yc + 0.5 * W + t) > 0 ||
         !outerFingerFree(yc + 0.5 * W))
       continue;
     // The palm and its path, then the hidden volume at the seen side's finger and the palm.
