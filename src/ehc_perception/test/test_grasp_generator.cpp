@@ -768,12 +768,41 @@ bool onHandleOrRim(const Eigen::Vector3d& p, double r, double wall, double heigh
 
 }  // namespace
 
+namespace {
+
+constexpr double kNoise = 0.0015;  ///< m, the depth noise of the wall grasps' tests
+
+/// Points of `truth` inside either finger of `g` opened to its width by more than `depth` (the
+/// fingers' boxes: 10 mm thick beyond +-width / 2, finger_breadth across, finger_length along the
+/// approach; `depth`: what the measurement's noise may leave of a seen contact in its finger).
+int pointsInFingers(const Grasp& g, const GripperGeometry& gr, const PointList& truth, double depth) {
+  const Eigen::Isometry3d T = g.pose.inverse();
+  int n = 0;
+  for (const auto& pf : truth) {
+    const Eigen::Vector3d p = T * pf.cast<double>();
+    const double ay = std::abs(p.y());
+    n += std::abs(p.x()) <= 0.5 * gr.finger_breadth && p.z() <= gr.finger_tip_depth &&
+         p.z() >= gr.finger_tip_depth - gr.finger_length && ay > 0.5 * g.width + depth &&
+         ay < 0.5 * g.width + gr.finger_thickness;
+  }
+  return n;
+}
+
+/// A camera 0.5-0.7 m from `centre`, 30-60 deg above the support, any azimuth.
+Eigen::Vector3d randomView(const Eigen::Vector3d& centre, std::mt19937* rng) {
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const double az = 2 * M_PI * unit(*rng), el = (30 + 30 * unit(*rng)) * kDeg, dist = 0.5 + 0.2 * unit(*rng);
+  return centre + dist * Eigen::Vector3d(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
+}
+
+}  // namespace
+
 // A mug whose body is 90 mm wide (the gripper opens 70 mm) standing on the support, sampled
 // all round or seen from one view from the handle's side (occlusion by z-buffer) under 1.5 mm
 // noise: where it is grasped, it is on its handle or its rim and across the part (the true
-// surface between the fingers narrower than the opening), never across the body. How many
-// trials are grasped is printed: on this seed one of the three all-round clouds (handle), the
-// others refused (too wide, friction).
+// surface between the fingers narrower than the opening), never across the body; a wall grasp
+// across the body's wall, nothing of the mug more than the noise inside its fingers. Every
+// trial of this seed is grasped: one all-round cloud on its handle, the others by wall grasps.
 TEST(GraspParts, A90mmMugIsGraspedOnlyByItsHandleOrRim) {
   const unsigned seed = 90;
   std::printf("seed %u\n", seed);
@@ -804,7 +833,15 @@ TEST(GraspParts, A90mmMugIsGraspedOnlyByItsHandleOrRim) {
     }
     const Grasp& best = res.grasps.front();
     const Eigen::Vector3d local = T.inverse() * best.pose.translation();
-    EXPECT_TRUE(onHandleOrRim(local, r, wall, height, 0.012)) << "grasp at " << local.transpose();
+    // A wall grasp closes across the body's wall (from its top down to finger_length - its
+    // fingertip depth below it), its centre between its seen contact and the far finger's bound:
+    // the wall is what is between its fingers, and nothing of the mug inside them.
+    if (best.wall) {
+      EXPECT_LT(trueWidthBetweenFingers(best, cfg.gripper, truth.points), 3.0 * wall);
+      EXPECT_EQ(pointsInFingers(best, cfg.gripper, truth.points, kNoise), 0);
+    } else {
+      EXPECT_TRUE(onHandleOrRim(local, r, wall, height, 0.012)) << "grasp at " << local.transpose();
+    }
     EXPECT_LT(trueWidthBetweenFingers(best, cfg.gripper, truth.points), cfg.gripper.max_width);
     std::printf("trial %d (%s): %zu grasps, best at (%.3f %.3f %.3f) in the mug's frame, measured %.1f mm, %d seen\n",
                 trial, one_view ? "one view" : "all round", res.grasps.size(), local.x(), local.y(), local.z(),
@@ -839,4 +876,78 @@ TEST(GraspContacts, AContactPair45DegOffIsRefusedWithMu05) {
   cfg.friction_coefficient = 1.2;
   const GraspResult r = GraspGenerator(cfg).generate(roof.noisy(0.001, 1), kView);
   EXPECT_FALSE(r.grasps.empty()) << r.reason;
+}
+
+
+// Random cups 100-160 mm across (wider than the opening), walls 3-6 mm, 40-80 mm high, seen
+// once from a random view under 1.5 mm noise: no wall is seen from both sides, yet there are
+// wall grasps across the rim: the true cup between the fingers of the best of them is the wall
+// (at most 3 x its thickness); under none of them is the cup under-measured (the true surface
+// between the fingers within the measured width + the noise) or inside a finger. How often a
+// wall grasp is the best grasp is printed.
+TEST(WallGrasps, ARandomCupsRimIsGraspedAcrossItsWallFromOneView) {
+  const unsigned seed = ehc_test::testSeed("WallGrasps random cups");
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const GraspGeneratorConfig cfg;
+  const GraspGenerator gen(cfg);
+  int best_wall = 0;
+  for (int trial = 0; trial < 6; ++trial) {
+    const double r = 0.05 + 0.03 * unit(rng), wall = 0.003 + 0.003 * unit(rng), height = 0.04 + 0.04 * unit(rng);
+    Surface truth = cupSurface(r, wall, height, 0.002);
+    truth.transform(pose(0.6, 0.0, 0.0, 2 * M_PI * unit(rng)));
+    const Eigen::Vector3d view = randomView(Eigen::Vector3d(0.6, 0.0, 0.5 * height), &rng);
+    const GraspResult res = gen.generate(truth.occludedFrom(view).noisy(kNoise, seed + static_cast<unsigned>(trial)), view);
+    const std::string what = "cup r " + std::to_string(1e3 * r) + " mm, wall " + std::to_string(1e3 * wall) +
+                             " mm, height " + std::to_string(1e3 * height) + " mm, view " +
+                             std::to_string(view.x()) + " " + std::to_string(view.y()) + " " + std::to_string(view.z());
+    SCOPED_TRACE(what);
+    const Grasp* first = nullptr;
+    for (const Grasp& g : res.grasps) {
+      if (!g.wall) continue;
+      if (!first) first = &g;
+      EXPECT_LE(trueWidthBetweenFingers(g, cfg.gripper, truth.points), g.measured_width + kNoise);
+      EXPECT_EQ(pointsInFingers(g, cfg.gripper, truth.points, kNoise), 0);
+    }
+    ASSERT_NE(first, nullptr) << res.reason;
+    best_wall += res.grasps.front().wall;
+    const double between = trueWidthBetweenFingers(*first, cfg.gripper, truth.points);
+    std::printf("%s: best grasp %s; best wall grasp measured %.1f mm, true %.1f mm between the fingers\n", what.c_str(),
+                res.grasps.front().wall ? "a wall grasp" : "not a wall grasp", 1e3 * first->measured_width, 1e3 * between);
+    EXPECT_LT(between, 3.0 * wall);
+  }
+  std::printf("the best grasp is a wall grasp in %d of 6 views\n", best_wall);
+}
+
+// Random lying and standing cylinders 15-90 mm across seen once under 1.5 mm noise: every wall
+// grasp's measured width holds the true cylinder between its fingers (never under-measured,
+// within the noise), no true surface point is inside a finger, and a cylinder wider than the
+// opening gets none.
+TEST(WallGrasps, ARandomCylindersWidthIsNeverUnderMeasured) {
+  const unsigned seed = ehc_test::testSeed("WallGrasps random cylinders");
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const GraspGeneratorConfig cfg;
+  const GraspGenerator gen(cfg);
+  int walls = 0;
+  for (int trial = 0; trial < 12; ++trial) {
+    const Solid solid = trial % 2 == 0 ? Solid::LyingCylinder : Solid::StandingCylinder;
+    const double w = 0.015 + 0.075 * unit(rng);
+    const Surface truth = solidOnSupport(solid, w, 2 * M_PI * unit(rng), 0.002);
+    const Eigen::Vector3d view = randomView(Eigen::Vector3d(0.6, 0.0, 0.03), &rng);
+    const GraspResult res = gen.generate(truth.visibleFrom(view).noisy(kNoise, seed + static_cast<unsigned>(trial)), view);
+    const std::string what = std::string(solidName(solid)) + " " + std::to_string(1e3 * w) + " mm";
+    SCOPED_TRACE(what);
+    for (const Grasp& g : res.grasps) {
+      if (!g.wall) continue;
+      ++walls;
+      const double between = trueWidthBetweenFingers(g, cfg.gripper, truth.points);
+      std::printf("%s: wall grasp measured %.1f mm, true %.1f mm between the fingers\n", what.c_str(),
+                  1e3 * g.measured_width, 1e3 * between);
+      EXPECT_LT(w, cfg.gripper.max_width);
+      EXPECT_LE(between, g.measured_width + kNoise);
+      EXPECT_EQ(pointsInFingers(g, cfg.gripper, truth.points, kNoise), 0);
+    }
+  }
+  std::printf("%d wall grasps checked\n", walls);
 }

@@ -192,12 +192,10 @@ inline Surface bottleSurface(double r_body, double body_len, double shoulder_len
   return s;
 }
 
-/// A mug standing on z = 0, its axis along z: an open cylindrical body (outer radius r, wall
+/// A cup standing on z = 0, its axis along z: an open cylindrical body (outer radius r, wall
 /// `wall` thick, `height` high: outer and inner mantle, the rim's annulus on top, the inner
-/// bottom `wall` above the support) and a handle on its +x side: a torus arc (the bar's radius
-/// `bar`) in the xz plane whose centre line, a half circle from the wall, runs out to `reach` m
-/// beyond the mantle.
-inline Surface mugSurface(double r, double wall, double height, double bar, double reach, double step) {
+/// bottom `wall` above the support).
+inline Surface cupSurface(double r, double wall, double height, double step) {
   Surface s = cylinderSurface(r, 0.0, height, step, false, false);
   Surface inner = cylinderSurface(r - wall, wall, height, step, true, false);
   for (auto& n : inner.normals) n = -n;  // facing the axis (the bottom up)
@@ -208,6 +206,13 @@ inline Surface mugSurface(double r, double wall, double height, double bar, doub
       const double a = 2 * M_PI * i / na;
       s.add(Eigen::Vector3d(rr * std::cos(a), rr * std::sin(a), height), Eigen::Vector3d::UnitZ());
     }
+  return s;
+}
+
+/// cupSurface with a handle on its +x side: a torus arc (the bar's radius `bar`) in the xz plane
+/// whose centre line, a half circle from the wall, runs out to `reach` m beyond the mantle.
+inline Surface mugSurface(double r, double wall, double height, double bar, double reach, double step) {
+  Surface s = cupSurface(r, wall, height, step);
   // Handle: centre line a half circle of radius R about (r, 0, height / 2) in the xz plane.
   const double R = reach + 0.5 * bar, zc = 0.5 * height;
   const int nu = std::max(8, static_cast<int>(std::round(M_PI * R / step)));

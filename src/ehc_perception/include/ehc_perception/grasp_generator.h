@@ -83,6 +83,13 @@
 // must stay out of it (3 x 5 and 3 x 3 samples, a quarter tolerated); a finger at an unseen
 // side of a single-contact or footprint hypothesis is in it by construction and ranks lower.
 //
+// Wall grasps (wall_weight; the viewpoint known): one finger on a seen surface facing
+// horizontally, the other beyond the object's far side at the nearest position where neither
+// the finger nor its path in may lie behind a seen point along the camera's rays: the width is
+// bounded by what the view proves, never assumed (a bowl's rim, whose wall a view never shows
+// from both sides, is grasped across the wall and the shadow behind it). One contact is seen:
+// they rank with the single-contact hypotheses.
+//
 // No grasp: the failure is what refused the best-ranked pose that held enough of the object
 // (too wide, friction, collides, hidden volume), the reason counts every check's refusals; an
 // object whose footprint breaks the margin rule is too wide, with the sentence below.
@@ -184,6 +191,11 @@ struct GraspGeneratorConfig {
   /// parallel to it along the footprint's least-area rectangle, width = the object's extent
   /// across them); 0 disables them.
   double footprint_weight = 1.0;
+  /// Antipodal quality at most of wall grasps (a seen contact facing horizontally, the other
+  /// finger beyond the object's far side where the view proves there is nothing, closing across
+  /// a rim, a wall or a thin part; see wall_grasps.h), times the seen contact's normal cosine; 0
+  /// disables them. Needs the viewpoint (hidden_volume_check) and a support.
+  double wall_weight = 0.6;
   /// m, RMS distance within which a footprint axis's cross-section counts as round (a circle
   /// tangent to the support, e.g. a lying cylinder): its circle then gives the width across
   /// that axis where the single view sees the sides only at grazing angles.
@@ -248,6 +260,9 @@ struct Grasp {
   /// points between the fingers. An unseen side is bounded by the object's extent or its fitted
   /// circle / sphere; such grasps rank below fully supported ones (single_contact_weight).
   int seen_contacts = 0;
+  /// A wall grasp (wall_weight): its unseen side bounded by the view's shadow, approached
+  /// straight down.
+  bool wall = false;
   double score = 0.0;            ///< antipodal x centroid x pca, in [0, 1]
   double antipodal = 0.0;        ///< min |cos| between contact normals and closing axis
   double centroid_weight = 0.0;

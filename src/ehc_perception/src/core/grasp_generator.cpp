@@ -6,6 +6,7 @@
 #include "ehc_control/pose_math.h"
 #include "ehc_perception/point_cloud_layout.h"
 #include "scene_clusters.h"
+#include "wall_grasps.h"
 
 #include <Eigen/Eigenvalues>
 #include <pcl/common/centroid.h>
@@ -297,6 +298,7 @@ struct Candidate {
   double q = 0;         ///< the hypothesis's antipodal quality
   Measurement m;        ///< the contact surfaces between the fingers
   bool single = false;  ///< single-contact hypothesis (width from the object's extent)
+  bool wall = false;    ///< wall grasp (wall_grasps.h: measured there, not refined)
   ExtentHint hint;      ///< completes the object's extent (footprint hypotheses)
 };
 
@@ -1059,6 +1061,7 @@ void GraspGeneratorConfig::validate() const {
   range("max_evaluations", max_evaluations, 1, 1e7);
   range("single_contact_weight", single_contact_weight, 0.0, 1.0);
   range("footprint_weight", footprint_weight, 0.0, 1.0);
+  range("wall_weight", wall_weight, 0.0, 1.0);
   range("round_fit_tolerance", round_fit_tolerance, 0.0, 0.05);
   range("min_contact_points", min_contact_points, 5, 1e6);
   range("nms_distance", nms_distance, 0.0, 1.0);
@@ -1088,7 +1091,8 @@ std::string GraspGeneratorConfig::summary() const {
      << min_contact_points << " points, centroid sigma " << centroid_sigma_deg << " deg, pca power "
      << pca_power << "/" << pca_approach_power << ", refine shift <= " << max_refine_shift
      << " m, depth shift <= " << max_depth_shift << " m (step " << depth_step << " m, margin "
-     << depth_margin << " m), top " << top_k << ", up ["
+     << depth_margin << " m), single-contact / footprint / wall weights " << single_contact_weight << " / "
+     << footprint_weight << " / " << wall_weight << ", top " << top_k << ", up ["
      << up.transpose() << "]";
   return os.str();
 }
@@ -1135,6 +1139,7 @@ GraspGeneratorConfig loadGraspGeneratorConfig(const ConfigNode& n) {
   c.max_evaluations = n.get("max_evaluations", c.max_evaluations);
   c.single_contact_weight = n.get("single_contact_weight", c.single_contact_weight);
   c.footprint_weight = n.get("footprint_weight", c.footprint_weight);
+  c.wall_weight = n.get("wall_weight", c.wall_weight);
   c.round_fit_tolerance = n.get("round_fit_tolerance", c.round_fit_tolerance);
   c.min_contact_points = n.get("min_contact_points", c.min_contact_points);
   c.nms_distance = n.get("nms_distance", c.nms_distance);
@@ -1181,6 +1186,10 @@ struct PreparedObject {
   double noise = 0.0;  ///< m, the filtered cloud's estimated noise (estimateNoise)
   double spacing = 0.0;  ///< m, the filtered cloud's sample spacing (sampleSpacing), at least `leaf`
   HiddenVolume hidden;  ///< behind the view from the camera (disabled without hidden_volume_check)
+  /// Everything behind the view's points (wall grasps' bound; disabled without
+  /// hidden_volume_check, a support or wall_weight).
+  detail::ViewShadow shadow;
+  Eigen::Vector3d eye = Eigen::Vector3d::Zero();  ///< the viewpoint
   /// From the camera to the centroid (unit), zero when the viewpoint is not known (without
   /// hidden_volume_check): approaches are kept within max_approach_tilt_deg of it.
   Eigen::Vector3d view_dir = Eigen::Vector3d::Zero();
@@ -1323,6 +1332,16 @@ void estimateNormalsAndEnvironment(const GraspGeneratorConfig& cfg, const PointL
     po->env_tree.reset(new pcl::search::KdTree<pcl::PointXYZ>(false));
     po->env_tree->setInputCloud(po->env);
   }
+  // The view's shadow over everything seen (the wall grasps' bound): gaps up to the cloud's
+  // angular sample spacing count as seen surface, points within the depth noise as behind.
+  po->eye = viewpoint;
+  const double range = (po->centroid - viewpoint).norm();
+  if (cfg.hidden_volume_check && cfg.wall_weight > 0.0 && po->has_plane && range > 1e-6) {
+    std::vector<Eigen::Vector3d> seen;
+    seen.reserve(po->env->size());
+    for (const auto& p : *po->env) seen.push_back(p.getVector3fMap().cast<double>());
+    po->shadow = detail::ViewShadow(seen, viewpoint, po->spacing / range, 2.0 * po->noise + 0.5 * po->leaf);
+  }
 }
 
 /// Contact seeds: every point of the filtered cloud, or max_seeds of them (shuffled with `seed`).
@@ -1398,6 +1417,8 @@ class GraspSearch {
   void score(Candidate& cd) const;
   /// Non-maximum suppression of `in` (best first): at most `limit`.
   std::vector<Candidate> suppress(const std::vector<Candidate>& in, std::size_t limit) const;
+  /// Wall grasps (wall_grasps.h) within the approach tilt limits, as candidates.
+  void addWallCandidates(std::vector<Candidate>* cands) const;
   /// Refinement: move along the finger breadth axis (x) onto the centroid's projection.
   void refineOntoCentroid(std::vector<Candidate>* kept);
   /// Depth refinement: push along the approach axis while the check passes (see the header).
@@ -1745,8 +1766,39 @@ CheckOutcome GraspSearch::checkAt(const Candidate& cd, const Eigen::Vector3d& c0
   return CheckOutcome::Pass;
 }
 
+void GraspSearch::addWallCandidates(std::vector<Candidate>* cands) const {
+  if (!po_.shadow.enabled()) return;
+  detail::WallInput in;
+  in.points = &obj_p_;
+  in.normals = &obj_n_;
+  in.shadow = &po_.shadow;
+  in.eye = po_.eye;
+  in.plane = po_.plane;
+  in.noise = po_.noise;
+  in.leaf = po_.leaf;
+  for (const detail::WallGrasp& w : detail::wallGrasps(cfg_, in, env_p_.empty() ? obj_p_ : env_p_)) {
+    const Eigen::Vector3d a = w.R.col(2);
+    if (a.dot(-cfg_.up) < cos_tilt_ - 1e-12 || (!po_.view_dir.isZero() && a.dot(po_.view_dir) < cos_tilt_ - 1e-12))
+      continue;
+    Candidate cd;
+    cd.R = w.R;
+    cd.c = w.c;
+    cd.width = w.width;
+    cd.q = cfg_.wall_weight;
+    cd.antipodal = cfg_.wall_weight * w.cos_n;
+    cd.single = cd.wall = true;
+    cd.m.side[0].seen = true;
+    cd.m.side[0].cos_n = w.cos_n;
+    cd.m.side[0].y = -0.5 * w.measured_width;
+    cd.m.side[1].y = 0.5 * w.measured_width;
+    cd.m.width = w.measured_width;
+    cands->push_back(cd);
+  }
+}
+
 void GraspSearch::refineOntoCentroid(std::vector<Candidate>* kept) {
   for (Candidate& cd : *kept) {
+    if (cd.wall) continue;  // measured at its seed; another position is another wall grasp
     const Eigen::Vector3d x = cd.R.col(0);
     const double shift =
         std::max(-cfg_.max_refine_shift, std::min(cfg_.max_refine_shift, x.dot(centre_ - cd.c)));
@@ -1772,6 +1824,7 @@ void GraspSearch::refineDepth(std::vector<Candidate>* kept) {
   const double smax = cfg_.max_depth_shift;
   std::vector<std::pair<double, Candidate>> passed;  // (shift, checked pose), increasing
   for (Candidate& cd : *kept) {
+    if (cd.wall) continue;  // its fingers reach as deep as the view's shadow allowed
     const Eigen::Vector3d a = cd.R.col(2);
     const Eigen::Vector3d base = cd.c;
     gather(base + 0.5 * smax * a, check_radius_ + 0.5 * smax);
@@ -1833,6 +1886,7 @@ Grasp toGrasp(const Candidate& cd) {
   gr.width = cd.width;
   gr.measured_width = cd.m.width;
   gr.seen_contacts = cd.m.seen();
+  gr.wall = cd.wall;
   gr.score = cd.score;
   gr.antipodal = cd.antipodal;
   gr.centroid_weight = cd.wc;
@@ -1862,6 +1916,7 @@ GraspResult GraspGenerator::generate(const PointList& object, const Eigen::Vecto
   search.addFootprintHypotheses(&hyps);
   const std::vector<Pending> pending = search.rankApproaches(&hyps);
   std::vector<Candidate> cands = search.checkCandidates(hyps, pending);
+  search.addWallCandidates(&cands);
   if (cands.empty()) {
     res.failure = search.refusal(&res.reason);
     // Too wide: the margin rule's reason with the object's narrowest footprint, if it breaks it.
