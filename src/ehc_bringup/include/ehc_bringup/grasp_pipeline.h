@@ -235,15 +235,10 @@ class GraspPipeline {
   /// its candidates, to the sequencer.
   void perceiveCloudTarget(double t, const ehc_perception::PointList& points, const Eigen::Isometry3d& T_world_cam,
                            std::size_t object);
-  /// The object clusters of one view (GraspGenerator::segmentScene) as extents (clusterExtent,
-  /// down to the support plane): the target's (the cluster whose centroid is nearest `centre`,
-  /// within the target gate) and the others'.
-  struct ViewExtents {
-    std::optional<ObjectExtent> target;
-    std::vector<ObjectExtent> neighbours;
-  };
-  ViewExtents viewExtents(const ehc_perception::PointList& points, const Eigen::Vector3d& viewpoint,
-                          const Eigen::Vector3d& centre) const;
+  /// Extent (clusterExtent, down to the support plane) of the object cluster of `points` whose
+  /// centroid is nearest `centre`, within the target gate; nullopt if none.
+  std::optional<ObjectExtent> targetClusterExtent(const ehc_perception::PointList& points,
+                                                  const Eigen::Vector3d& viewpoint, const Eigen::Vector3d& centre) const;
   bool excluding_ = false;
   std::vector<std::string> arm_names_;
   PipelineCycle last_;

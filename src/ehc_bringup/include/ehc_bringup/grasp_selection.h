@@ -40,14 +40,6 @@ std::string toString(ApproachDirection d);
 /// Throws std::invalid_argument "[GraspSelection] unknown approach direction '...'".
 ApproachDirection approachDirectionFromString(const std::string& s);
 
-/// An object's extent: a box (world) with its centre and axes in `pose`.
-struct ObjectExtent {
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  Eigen::Vector3d half_extents = Eigen::Vector3d::Zero();  ///< m, >= 0
-  bool valid() const;  ///< finite, a rotation, half extents >= 0 and below 1 m
-  double distance(const Eigen::Vector3d& p) const;  ///< m from p to the box (0 inside)
-};
-
 struct GraspCandidate {
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();  ///< world frame, z = approach
   double width = 0.0;                                       ///< m
@@ -105,15 +97,6 @@ struct GraspSelectionParams {
   /// horizontal forward approach, and a cloud target has no tag fallback. false: such a target
   /// waits for a qualifying candidate (no_grasp when none comes).
   bool cloud_any_approach = true;
-  /// The way in: the hand swept back from the grasp along its approach by way_in_length (m: the
-  /// pre-grasp distance and the hand behind the TCP up to its wrist), a capsule of radius
-  /// way_in_radius (m: half the open hand's breadth), is clear when it keeps way_in_clearance (m:
-  /// at least the hand links' stop distances) from every neighbour (chooseGrasp's `neighbours`).
-  /// A candidate whose way in is clear ranks above every one whose way in is not (the obstacle
-  /// dampers would hold the hand at the neighbour); among each, the usual order. 0 length: off.
-  double way_in_length = 0.25;
-  double way_in_radius = 0.05;
-  double way_in_clearance = 0.03;
   void validate() const;  ///< throws "[GraspSelectionParams] ..."
   /// These parameters for a target without a tag (see the header comment).
   GraspSelectionParams forCloudTarget() const;
@@ -153,20 +136,6 @@ std::optional<GraspChoice> chooseGrasp(const std::vector<GraspCandidate>& candid
                                        const Eigen::Isometry3d& tag_target,
                                        const Eigen::Matrix3d& reference,
                                        const GraspSelectionParams& p);
-/// The same, the candidates whose way in is clear of `neighbours` (wayInClear) first: chosen among
-/// them if one qualifies (the any-approach fallback included), else among all.
-std::optional<GraspChoice> chooseGrasp(const std::vector<GraspCandidate>& candidates,
-                                       ApproachDirection direction,
-                                       const Eigen::Isometry3d& tag_target,
-                                       const Eigen::Matrix3d& reference,
-                                       const GraspSelectionParams& p,
-                                       const std::vector<ObjectExtent>& neighbours);
-
-/// Smallest distance (m) from the way in of a grasp at `grasp` (z = approach): the segment from its
-/// TCP back along -z by `length`, to the neighbours' boxes; +infinity without neighbours.
-double wayInDistance(const Eigen::Isometry3d& grasp, double length, const std::vector<ObjectExtent>& neighbours);
-/// wayInDistance >= way_in_radius + way_in_clearance (always true for way_in_length 0).
-bool wayInClear(const Eigen::Isometry3d& grasp, const GraspSelectionParams& p, const std::vector<ObjectExtent>& neighbours);
 
 /// Tag target turned so that its z axis is `approach` (unit), with its y (closing) axis
 /// horizontal when possible, backed off by `backoff` along the approach.

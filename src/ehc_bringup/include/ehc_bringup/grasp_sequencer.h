@@ -204,6 +204,13 @@ struct ExclusionSphere {
   double radius = 0.0;
 };
 
+/// An object's extent: a box (world) with its centre and axes in `pose`.
+struct ObjectExtent {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  Eigen::Vector3d half_extents = Eigen::Vector3d::Zero();  ///< m, >= 0
+  bool valid() const;  ///< finite, a rotation, half extents >= 0 and below 1 m
+};
+
 /// Spheres that together cover `box` grown by `margin` on every side (the exclusion spheres the
 /// obstacle map takes): a row along its longest axis, each sphere the circumsphere of one slab
 /// of the grown box, the slabs at most half as long as the cross-section's half diagonal (so
@@ -303,10 +310,6 @@ class GraspSequencer {
   /// grasp is locked (then frozen), a later one any time. False (counted) for an unknown index or
   /// an invalid extent.
   bool setObjectExtent(std::size_t index, const ObjectExtent& extent);
-  /// The other objects in the current object's latest view (world extents; e.g. the clusters of
-  /// the cloud besides the target's): its grasp's way in is ranked by them (chooseGrasp). Until
-  /// the grasp is locked; the next object starts without. Invalid extents are dropped (counted).
-  void setNeighbourExtents(const std::vector<ObjectExtent>& neighbours);
   /// Camera intrinsics for TfM (e.g. from camera_info); false (ignored, counted) if invalid
   /// (PinholeCamera::validate). No TfM cycle is counted before the first valid camera.
   bool setCamera(const ehc_control::PinholeCamera& camera);
@@ -410,7 +413,6 @@ class GraspSequencer {
   Eigen::Vector3d locked_object_centre_ = Eigen::Vector3d::Zero();
   /// Every object's extent (setObjectExtent, or its size round its perceived pose).
   std::vector<std::optional<ObjectExtent>> extents_;
-  std::vector<ObjectExtent> neighbours_;  ///< setNeighbourExtents
   /// The current object's extent frozen at the lock (nullopt: unknown, the sphere) and its pose
   /// in the TCP frame when the gripper closed (the object moves with the hand).
   std::optional<ObjectExtent> locked_extent_;

@@ -275,10 +275,8 @@ void GraspPipeline::perceiveCloudTarget(double t, const ehc_perception::PointLis
   if (r.selection.selected()) {
     sequencer_->setObjectPose(object, t, ehc_control::cloudTargetPose(r.selection.centre, T_world_cam.translation(), cfg_.generator.up));
     // Its extent (the obstacle map's exclusion from the descent on): the cluster nearest its centre.
-    // The other clusters: the neighbours its way in is ranked by.
-    const ViewExtents extents = viewExtents(points, T_world_cam.translation(), r.selection.centre);
-    if (extents.target) sequencer_->setObjectExtent(object, *extents.target);
-    sequencer_->setNeighbourExtents(extents.neighbours);
+    if (const auto extent = targetClusterExtent(points, T_world_cam.translation(), r.selection.centre))
+      sequencer_->setObjectExtent(object, *extent);
   } else
     sequencer_->setNoTarget(object, r.selection.detail);
   std::vector<GraspCandidate> candidates;
@@ -288,31 +286,24 @@ void GraspPipeline::perceiveCloudTarget(double t, const ehc_perception::PointLis
   ++counters_.grasp_runs;
 }
 
-GraspPipeline::ViewExtents GraspPipeline::viewExtents(const ehc_perception::PointList& points,
-                                                      const Eigen::Vector3d& viewpoint, const Eigen::Vector3d& centre) const {
+std::optional<ObjectExtent> GraspPipeline::targetClusterExtent(const ehc_perception::PointList& points,
+                                                               const Eigen::Vector3d& viewpoint,
+                                                               const Eigen::Vector3d& centre) const {
   const ehc_perception::SceneSegmentation seg = generator_->segmentScene(points, &viewpoint);
+  const ehc_perception::PointList* best = nullptr;
+  double best_d = cfg_.targeting.target_gate;
+  for (const ehc_perception::PointList& o : seg.objects) {
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    for (const auto& p : o) c += p.cast<double>();
+    const double d = (c / static_cast<double>(std::max<std::size_t>(o.size(), 1)) - centre).norm();
+    if (!o.empty() && d <= best_d) best = &o, best_d = d;
+  }
+  if (!best) return std::nullopt;
   const Eigen::Vector3d up = cfg_.generator.up.normalized();
   std::optional<double> support;
   if (seg.plane_found && std::abs(seg.plane.head<3>().dot(up)) > 1e-3)
     support = -seg.plane.w() / seg.plane.head<3>().dot(up);
-  int best = -1;
-  double best_d = cfg_.targeting.target_gate;
-  for (std::size_t i = 0; i < seg.objects.size(); ++i) {
-    const ehc_perception::PointList& o = seg.objects[i];
-    if (o.empty()) continue;
-    Eigen::Vector3d c = Eigen::Vector3d::Zero();
-    for (const auto& p : o) c += p.cast<double>();
-    const double d = (c / static_cast<double>(o.size()) - centre).norm();
-    if (d <= best_d) best = static_cast<int>(i), best_d = d;
-  }
-  ViewExtents out;
-  for (std::size_t i = 0; i < seg.objects.size(); ++i) {
-    const auto e = clusterExtent(seg.objects[i], viewpoint, up, support);
-    if (!e) continue;
-    if (static_cast<int>(i) == best) out.target = e;
-    else out.neighbours.push_back(*e);
-  }
-  return out;
+  return clusterExtent(*best, viewpoint, up, support);
 }
 
 void GraspPipeline::updateObstacles(double t) {

@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <stdexcept>
 
 namespace ehc_bringup {
@@ -47,40 +46,8 @@ void GraspSelectionParams::validate() const {
         "sideways_turn_deg must be in [0, 60] (0 = straight from the side)");
   check(std::isfinite(sideways_tilt_deg) && sideways_tilt_deg >= 0.0 && sideways_tilt_deg <= 60.0,
         "sideways_tilt_deg must be in [0, 60] (0 = horizontal)");
-  check(std::isfinite(way_in_length) && way_in_length >= 0.0 && way_in_length <= 1.0, "way_in_length must be in [0, 1] m");
-  check(std::isfinite(way_in_radius) && way_in_radius >= 0.0 && way_in_radius <= 0.3, "way_in_radius must be in [0, 0.3] m");
-  check(std::isfinite(way_in_clearance) && way_in_clearance >= 0.0 && way_in_clearance <= 0.2,
-        "way_in_clearance must be in [0, 0.2] m");
   for (double b : {fallback_backoff_forward, fallback_backoff_downward, fallback_backoff_sideways})
     check(std::isfinite(b) && std::abs(b) <= 0.5, "fallback_backoff_* must be finite, |b| <= 0.5 m");
-}
-
-bool ObjectExtent::valid() const {
-  return isValidPose(pose) && half_extents.allFinite() && half_extents.minCoeff() >= 0.0 && half_extents.maxCoeff() < 1.0;
-}
-
-double ObjectExtent::distance(const Eigen::Vector3d& p) const {
-  const Eigen::Vector3d q = (pose.linear().transpose() * (p - pose.translation())).cwiseAbs() - half_extents;
-  return q.cwiseMax(0.0).norm();
-}
-
-double wayInDistance(const Eigen::Isometry3d& grasp, double length, const std::vector<ObjectExtent>& neighbours) {
-  double best = std::numeric_limits<double>::infinity();
-  if (neighbours.empty()) return best;
-  const Eigen::Vector3d p0 = grasp.translation(), back = -grasp.linear().col(2);
-  // Sampled every 5 mm (the distance to a box is 1-Lipschitz along the segment).
-  constexpr double kStep = 0.005;
-  const int n = std::max(1, static_cast<int>(std::ceil(std::max(length, 0.0) / kStep)));
-  for (int i = 0; i <= n; ++i) {
-    const Eigen::Vector3d p = p0 + (length * i / n) * back;
-    for (const ObjectExtent& e : neighbours) best = std::min(best, e.distance(p));
-  }
-  return best;
-}
-
-bool wayInClear(const Eigen::Isometry3d& grasp, const GraspSelectionParams& p, const std::vector<ObjectExtent>& neighbours) {
-  if (p.way_in_length <= 0.0) return true;
-  return wayInDistance(grasp, p.way_in_length, neighbours) >= p.way_in_radius + p.way_in_clearance;
 }
 
 bool isValidPose(const Eigen::Isometry3d& T) {
@@ -290,33 +257,6 @@ std::optional<GraspChoice> chooseGrasp(const std::vector<GraspCandidate>& candid
   }
   best.pose.linear() = closerHalfTurn(best.pose.linear(), reference);
   return best;
-}
-
-std::optional<GraspChoice> chooseGrasp(const std::vector<GraspCandidate>& candidates,
-                                       ApproachDirection direction,
-                                       const Eigen::Isometry3d& tag_target,
-                                       const Eigen::Matrix3d& reference,
-                                       const GraspSelectionParams& p,
-                                       const std::vector<ObjectExtent>& neighbours) {
-  if (neighbours.empty() || p.way_in_length <= 0.0) return chooseGrasp(candidates, direction, tag_target, reference, p);
-  // The clear ones first, as they were given (their indices mapped back); the tag fallback, if
-  // any, only when none of them qualifies (the fallback's way in is not checked).
-  std::vector<GraspCandidate> clear;
-  std::vector<int> index;
-  for (std::size_t i = 0; i < candidates.size(); ++i) {
-    if (!isValidPose(candidates[i].pose) || !wayInClear(candidates[i].pose, p, neighbours)) continue;
-    clear.push_back(candidates[i]);
-    index.push_back(static_cast<int>(i));
-  }
-  if (!clear.empty()) {
-    GraspSelectionParams strict = p;
-    strict.require_candidate = true;
-    if (auto c = chooseGrasp(clear, direction, tag_target, reference, strict)) {
-      if (c->from_candidate) c->candidate_index = index[static_cast<std::size_t>(c->candidate_index)];
-      return c;
-    }
-  }
-  return chooseGrasp(candidates, direction, tag_target, reference, p);
 }
 
 }  // namespace ehc_bringup

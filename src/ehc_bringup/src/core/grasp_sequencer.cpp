@@ -152,9 +152,7 @@ std::string GraspSequencerParams::summary() const {
     << release_timeout << " s, retreat " << retreat_distance << " m back + " << retreat_raise << " m up (tol "
     << retreat_tolerance << " m, " << retreat_timeout << " s)"
     << "\n  selection: gate " << selection.candidate_gate << " m (cloud targets " << selection.cloud_candidate_gate << " m"
-    << (selection.cloud_any_approach ? ", the generator's approach when none as preferred" : "") << "), way in "
-    << selection.way_in_length << " m x " << selection.way_in_radius << " m clear of the neighbours by "
-    << selection.way_in_clearance << " m first, max angle " << selection.max_angle_deg
+    << (selection.cloud_any_approach ? ", the generator's approach when none as preferred" : "") << "), max angle " << selection.max_angle_deg
     << " deg, max width " << selection.max_width << " m, "
     << "sideways turned " << selection.sideways_turn_deg << " deg towards forward and tilted "
     << selection.sideways_tilt_deg << " deg down, "
@@ -203,9 +201,6 @@ GraspSequencerParams loadGraspSequencerParams(const ConfigNode& root) {
   p.selection.candidate_gate = sel.get("candidate_gate", p.selection.candidate_gate);
   p.selection.cloud_candidate_gate = sel.get("cloud_candidate_gate", p.selection.cloud_candidate_gate);
   p.selection.cloud_any_approach = sel.get("cloud_any_approach", p.selection.cloud_any_approach);
-  p.selection.way_in_length = sel.get("way_in_length", p.selection.way_in_length);
-  p.selection.way_in_radius = sel.get("way_in_radius", p.selection.way_in_radius);
-  p.selection.way_in_clearance = sel.get("way_in_clearance", p.selection.way_in_clearance);
   p.selection.max_angle_deg = sel.get("max_angle_deg", p.selection.max_angle_deg);
   p.selection.max_width = sel.get("max_width", p.selection.max_width);
   p.selection.require_candidate = sel.get("require_candidate", p.selection.require_candidate);
@@ -252,15 +247,6 @@ bool GraspSequencer::setObjectExtent(std::size_t index, const ObjectExtent& exte
   if (index == current_ && locked_) return true;  // frozen at the lock
   extents_[index] = extent;
   return true;
-}
-
-void GraspSequencer::setNeighbourExtents(const std::vector<ObjectExtent>& neighbours) {
-  if (locked_) return;
-  neighbours_.clear();
-  for (const ObjectExtent& e : neighbours) {
-    if (e.valid()) neighbours_.push_back(e);
-    else ++rejected_;
-  }
 }
 
 std::optional<ObjectExtent> GraspSequencer::currentExtent() const {
@@ -479,8 +465,7 @@ std::optional<GraspChoice> GraspSequencer::currentChoice(const SequencerInput& i
                                                               : Eigen::Matrix3d(object_pose->linear());
   const GraspObjectSpec& o = params_.objects[current_];
   std::optional<GraspChoice> choice = chooseGrasp(candidates_, o.approach, *object_pose, ref,
-                                                  o.target.fromCloud() ? params_.selection.forCloudTarget() : params_.selection,
-                                                  neighbours_);
+                                                  o.target.fromCloud() ? params_.selection.forCloudTarget() : params_.selection);
   if (choice && choice->from_candidate) choice->candidates_t = candidates_t_;
   return choice;
 }
@@ -853,7 +838,6 @@ void GraspSequencer::advanceRetreat(const SequencerInput& in, double in_phase, S
       ++current_;
       object_pose_t_ = -1.0;
       candidates_.clear();
-      neighbours_.clear();
       startObject(t, out);
     } else {
       enter(GraspPhase::Done, t, out);
@@ -889,6 +873,10 @@ std::vector<ExclusionSphere> GraspSequencer::obstacleExclusions(const SequencerI
     if (carried) zones.push_back({*in.tcp * *centre_in_tcp_, params_.obstacle_exclusion_radius});
   }
   return zones;
+}
+
+bool ObjectExtent::valid() const {
+  return isValidPose(pose) && half_extents.allFinite() && half_extents.minCoeff() >= 0.0 && half_extents.maxCoeff() < 1.0;
 }
 
 std::vector<ExclusionSphere> exclusionSpheres(const ObjectExtent& box, double margin) {
