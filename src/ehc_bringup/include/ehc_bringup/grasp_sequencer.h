@@ -134,7 +134,7 @@ struct GraspSequencerParams {
   /// beyond the object's footprint, up to obstacle_exclusion_support_rise above the support: the
   /// fingers come down beside a low object onto it and the wrist passes over it (the robot's hand
   /// from the fingertips to its wrist link; the stop distances of the wrist links are 2-3 cm).
-  /// 0: no support cap.
+  /// 0: no support cap. See supportCap for the disc's largest radius.
   double obstacle_exclusion_support_reach = 0.20;
   /// m: at least the obstacle map's voxel size (the support's own voxels); a neighbour standing
   /// within the disc is an obstacle above this height.
@@ -209,6 +209,7 @@ struct ObjectExtent {
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
   Eigen::Vector3d half_extents = Eigen::Vector3d::Zero();  ///< m, >= 0
   bool valid() const;  ///< finite, a rotation, half extents >= 0 and below 1 m
+  double distance(const Eigen::Vector3d& p) const;  ///< m from p to the box (0 inside)
 };
 
 /// Spheres that together cover `box` grown by `margin` on every side (the exclusion spheres the
@@ -223,6 +224,8 @@ std::vector<ExclusionSphere> exclusionSpheres(const ObjectExtent& box, double ma
 /// box's footprint (its half diagonal) and rises only `rise` above the support (its centre deep
 /// below it). The fingers of a grasp low on the object come down beside it onto the support; a
 /// neighbour standing on the support within the disc keeps all but its lowest `rise` an obstacle.
+/// At most a 1 m sphere (the obstacle map's largest zone): the disc reaches at most
+/// sqrt(2 x 1 m x rise - rise^2) from the object's axis (0.2 m for a 2 cm rise).
 ExclusionSphere supportCap(const ObjectExtent& box, double reach, double rise);
 
 /// Extent of an object cluster (world points, one view from `viewpoint`) standing on a support

@@ -879,6 +879,11 @@ bool ObjectExtent::valid() const {
   return isValidPose(pose) && half_extents.allFinite() && half_extents.minCoeff() >= 0.0 && half_extents.maxCoeff() < 1.0;
 }
 
+double ObjectExtent::distance(const Eigen::Vector3d& p) const {
+  const Eigen::Vector3d q = (pose.linear().transpose() * (p - pose.translation())).cwiseAbs() - half_extents;
+  return q.cwiseMax(0.0).norm();
+}
+
 std::vector<ExclusionSphere> exclusionSpheres(const ObjectExtent& box, double margin) {
   std::vector<ExclusionSphere> out;
   if (!box.valid() || !std::isfinite(margin) || margin < 0.0) return out;
