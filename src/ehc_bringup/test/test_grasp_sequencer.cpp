@@ -3,6 +3,7 @@
 #include "ehc_common/config_node.h"
 #include "ehc_common/json.h"
 #include "ehc_control/pose_math.h"
+#include "ehc_perception/obstacle_distance_field.h"
 #include "ehc_test/test_seed.h"
 
 #include <gtest/gtest.h>
@@ -877,6 +878,128 @@ TEST(GraspSequencer, TheObjectIsAnObstacleUntilTheDescentAndExcludedWhileTouched
   while (h0.seq.currentObject() == 0 && h0.t < 100) EXPECT_TRUE(h0.step().exclusions.empty());
 }
 
+namespace {
+std::vector<ehc_perception::ExclusionZone> zonesOf(const std::vector<ExclusionSphere>& spheres) {
+  std::vector<ehc_perception::ExclusionZone> z;
+  for (const auto& e : spheres) z.push_back({e.centre, e.radius});
+  return z;
+}
+/// A point of `box` (unit cube coordinates u in [-1, 1]^3 scaled by its half extents + `grow`).
+Eigen::Vector3d boxPoint(const ObjectExtent& box, const Eigen::Vector3d& u, double grow) {
+  return box.pose * (u.cwiseProduct(box.half_extents + Eigen::Vector3d::Constant(grow)));
+}
+}  // namespace
+
+TEST(GraspSequencer, TheExclusionCoversTheObjectAndItsSupportButNotANeighboursNearFace) {
+  // Exp-2's layout: objects 21 cm apart (15 cm along x and y), their near faces ~17 cm from the
+  // target's centre: inside the 0.20 m sphere once excluded round it, outside its extent + margin.
+  const unsigned seed = ehc_test::testSeed("ExclusionExtent");
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0), size(0.04, 0.07), height(0.08, 0.16);
+  const double margin = 0.035, reach = 0.20, rise = 0.02, table = 0.75;
+  for (int trial = 0; trial < 20; ++trial) {
+    SCOPED_TRACE("trial " + std::to_string(trial) + ", seed " + std::to_string(seed));
+    ObjectExtent target;
+    target.half_extents = Eigen::Vector3d(size(rng), size(rng), height(rng)) * 0.5;
+    target.pose = Eigen::Translation3d(1.7 + 0.02 * u(rng), 0.02 * u(rng), table + target.half_extents.z()) *
+                  Eigen::AngleAxisd(M_PI * u(rng), Eigen::Vector3d::UnitZ());
+    std::vector<ExclusionSphere> spheres = exclusionSpheres(target, margin);
+    ASSERT_FALSE(spheres.empty());
+    spheres.push_back(supportCap(target, reach, rise));
+    const auto zones = zonesOf(spheres);
+    for (const auto& z : zones) EXPECT_LE(z.radius, ehc_perception::ExclusionZone::kMaxRadius);
+    // The object grown by the margin: every point excluded.
+    for (int k = 0; k < 200; ++k)
+      EXPECT_TRUE(ehc_perception::ExclusionZone::inAny(zones, boxPoint(target, Eigen::Vector3d(u(rng), u(rng), u(rng)), margin)));
+    // The support under it and round it (reach beyond the footprint; the cap is at most a 1 m
+    // sphere: a disc of sqrt(2 x 1 m x rise - rise^2)), just below its top.
+    const double disc = std::min(reach + std::hypot(target.half_extents.x(), target.half_extents.y()),
+                                 std::sqrt(2.0 * rise - rise * rise));
+    for (int k = 0; k < 50; ++k) {
+      const double a = M_PI * u(rng);
+      const double r = (0.5 + 0.5 * u(rng)) * disc * 0.99;
+      const Eigen::Vector3d p = target.pose.translation() + Eigen::Vector3d(r * std::cos(a), r * std::sin(a), 0.0);
+      EXPECT_TRUE(ehc_perception::ExclusionZone::inAny(zones, Eigen::Vector3d(p.x(), p.y(), table - 0.005)));
+    }
+    // A neighbour 6 x 6 x 12 cm, its centre 15 cm + 15 cm away (any yaw): its faces more than the
+    // rise above the support are obstacles, though its near face lies inside the old sphere.
+    ObjectExtent neighbour;
+    neighbour.half_extents = Eigen::Vector3d(0.03, 0.03, 0.06);
+    const Eigen::Vector3d offset(0.15 * (u(rng) < 0 ? -1 : 1), 0.15 * (u(rng) < 0 ? -1 : 1), 0.0);
+    neighbour.pose = Eigen::Translation3d(target.pose.translation().x() + offset.x(), target.pose.translation().y() + offset.y(),
+                                          table + 0.06) *
+                     Eigen::AngleAxisd(M_PI * u(rng), Eigen::Vector3d::UnitZ());
+    int near_old_sphere = 0;
+    for (int k = 0; k < 400; ++k) {
+      // On its surface: one coordinate at +-1.
+      Eigen::Vector3d c(u(rng), u(rng), u(rng));
+      const int axis = k % 2;  // a side face
+      c(axis) = c(axis) < 0 ? -1.0 : 1.0;
+      const Eigen::Vector3d p = boxPoint(neighbour, c, 0.0);
+      if (p.z() < table + rise + 1e-3) continue;
+      near_old_sphere += (p - target.pose.translation()).norm() < 0.20;
+      EXPECT_FALSE(ehc_perception::ExclusionZone::inAny(zones, p)) << "neighbour point " << p.transpose();
+    }
+    EXPECT_GT(near_old_sphere, 0) << "the neighbour's near face was not inside the old sphere: the test shows nothing";
+  }
+  // Invalid boxes: no spheres.
+  ObjectExtent bad;
+  bad.half_extents = Eigen::Vector3d(std::nan(""), 0.01, 0.01);
+  EXPECT_TRUE(exclusionSpheres(bad, margin).empty());
+}
+
+TEST(GraspSequencer, AKnownSizeExcludesTheObjectNotTheSphereFromTheDescentOn) {
+  GraspSequencerParams p = twoObjects();
+  p.objects[0].size = Eigen::Vector3d(0.06, 0.06, 0.10);
+  p.obstacle_exclusion_radius = 0.20;  // unknown extents only
+  Harness h(p);
+  const Eigen::Vector3d centre(1.5, 0.0, 0.80);  // on a support at 0.75
+  h.perceive = forwardTarget(centre.x(), centre.y(), centre.z());
+  const Eigen::Vector3d neighbour_face(1.5 + 0.12, 0.15 - 0.03, 0.82);  // 0.19 m from the centre
+  int checked = 0;
+  while (h.seq.currentObject() == 0 && !h.seq.done() && h.t < 100) {
+    const SequencerOutput out = h.step();
+    if (h.seq.currentObject() != 0 || h.seq.phase() < GraspPhase::Grasp || h.seq.phase() > GraspPhase::Close) continue;
+    const auto zones = zonesOf(out.exclusions);
+    ASSERT_FALSE(zones.empty());
+    ++checked;
+    for (double z : {0.751, 0.80, 0.849}) {  // the object, bottom to top, and 3 cm round it
+      EXPECT_TRUE(ehc_perception::ExclusionZone::inAny(zones, Eigen::Vector3d(1.5 + 0.06, 0.0, z)));
+      EXPECT_TRUE(ehc_perception::ExclusionZone::inAny(zones, Eigen::Vector3d(1.5, -0.06, z)));
+    }
+    EXPECT_TRUE(ehc_perception::ExclusionZone::inAny(zones, Eigen::Vector3d(1.5, 0.15, 0.745))) << "the support beside it";
+    EXPECT_FALSE(ehc_perception::ExclusionZone::inAny(zones, neighbour_face)) << "a neighbour's near face";
+  }
+  EXPECT_GT(checked, 0);
+}
+
+TEST(GraspSequencer, AClusterSeenFromOneSideIsCompletedBehind) {
+  // A 7 cm cylinder seen from one side: only its near half has points; the extent holds it whole.
+  const unsigned seed = ehc_test::testSeed("ClusterExtent");
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const double r = 0.035, h = 0.12, table = 0.75;
+  for (int trial = 0; trial < 10; ++trial) {
+    const Eigen::Vector3d c(1.7 + 0.05 * u(rng), 0.1 * u(rng), table);
+    const double view_yaw = 0.6 * u(rng);
+    const Eigen::Vector3d cam = c + Eigen::Vector3d(-0.6 * std::cos(view_yaw), -0.6 * std::sin(view_yaw), 0.4);
+    std::vector<Eigen::Vector3f> seen;
+    for (int k = 0; k < 400; ++k) {
+      const double a = M_PI * u(rng);
+      const Eigen::Vector3d p = c + Eigen::Vector3d(r * std::cos(a), r * std::sin(a), 0.01 + (h - 0.01) * 0.5 * (1 + u(rng)));
+      if ((p - c).head<2>().dot((cam - c).head<2>()) > 0.0) seen.push_back(p.cast<float>());
+    }
+    const auto e = clusterExtent(seen, cam, Eigen::Vector3d::UnitZ(), table);
+    ASSERT_TRUE(e) << "trial " << trial << ", seed " << seed;
+    for (int k = 0; k < 100; ++k) {
+      const double a = M_PI * u(rng);
+      const Eigen::Vector3d p = c + Eigen::Vector3d(r * std::cos(a), r * std::sin(a), h * 0.5 * (1 + u(rng)));
+      EXPECT_LT(e->distance(p), 0.004) << "trial " << trial << ", seed " << seed << ": " << p.transpose();
+    }
+  }
+  EXPECT_FALSE(clusterExtent({}, Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ(), std::nullopt));
+}
+
 TEST(GraspSequencer, TheExclusionHasNoGapFromTheDescentToTheEndOfTheRetreatWhateverEndsTheGrasp) {
   // Exp-2: a failed descent of the back object (the time limit in GRASP, the
   // hand stalled at the object) once dropped the exclusion for the one cycle of the failure, so
@@ -1108,6 +1231,31 @@ TEST(GraspSequencerParams, DemoAndTestConfigsLoad) {
 }
 
 // ---------------------------------------------------------------- grasp selection
+
+TEST(GraspSelection, ACloudTargetTakesTheGeneratorsApproachWhenNoneApproachesAsPreferred) {
+  // A flat object: its only candidate comes from above; forward (horizontal +-30 deg) is preferred.
+  const Eigen::Isometry3d target = forwardTarget();
+  const GraspCandidate down{downwardAt(Eigen::Vector3d(1.52, 0.01, 0.78)), 0.04, 0.5};
+  GraspSelectionParams p;
+  const auto c = chooseGrasp({down}, ApproachDirection::Forward, target, target.linear(), p.forCloudTarget());
+  ASSERT_TRUE(c);
+  EXPECT_TRUE(c->from_candidate);
+  EXPECT_EQ(c->candidate_index, 0);
+  EXPECT_NEAR(c->pose.linear().col(2).z(), -1.0, 1e-9) << "kept as the generator proposed it";
+  EXPECT_LT((c->pose.translation() - down.pose.translation()).norm(), 1e-12);
+  // A candidate that approaches as preferred still wins, whatever the score.
+  const GraspCandidate fwd{forwardTarget(1.49), 0.05, 0.2};
+  const auto f = chooseGrasp({down, fwd}, ApproachDirection::Forward, target, target.linear(), p.forCloudTarget());
+  ASSERT_TRUE(f);
+  EXPECT_EQ(f->candidate_index, 1);
+  // Off: no grasp; a tag target is unaffected (the turned tag fallback).
+  p.cloud_any_approach = false;
+  EXPECT_FALSE(chooseGrasp({down}, ApproachDirection::Forward, target, target.linear(), p.forCloudTarget()));
+  p.cloud_any_approach = true;
+  const auto t = chooseGrasp({down}, ApproachDirection::Forward, target, target.linear(), p);
+  ASSERT_TRUE(t);
+  EXPECT_FALSE(t->from_candidate);
+}
 
 TEST(GraspSelection, PrefersTheWantedApproachOverAHigherScore) {
   const Eigen::Isometry3d tag = forwardTarget();

@@ -23,8 +23,9 @@
 // convention (ehc_control::cloudTargetPose: origin at the object's cloud centre, z horizontal from
 // the camera to it): its orientation says nothing of the object's faces and its centre is that of
 // the seen points only, so such a target is chosen with forCloudTarget()'s parameters: no
-// centring on it, no closing axis from it, no fallback (a candidate is required), and the wider
-// cloud_candidate_gate.
+// centring on it, no closing axis from it, no fallback (a candidate is required), the wider
+// cloud_candidate_gate, and (cloud_any_approach) the generator's own approach when none
+// approaches as preferred.
 
 #include <Eigen/Geometry>
 
@@ -50,6 +51,9 @@ struct GraspSelectionParams {
   double max_angle_deg = 30.0;          ///< candidate approach within this of the preferred one
   double max_width = 0.07;              ///< m: gripper aperture
   bool require_candidate = false;       ///< false: fall back to the turned tag target
+  /// No candidate approaches as preferred: take the best one under ApproachDirection::Any, as it
+  /// is (set by forCloudTarget() from cloud_any_approach; not a configuration key).
+  bool any_approach_fallback = false;
   /// Turn a chosen candidate (about its centre, by the smallest rotation) so that its approach
   /// is exactly the wanted one: straight down, along the tag normal, or horizontal sideways.
   /// A horizontal approach also gets a level closing axis (an upright object's side faces are
@@ -86,6 +90,13 @@ struct GraspSelectionParams {
   /// object, and a grasp on a part of it (a handle, a rim) lies farther from it than from a tag's
   /// centre; the candidates come from the target's cluster alone (generateForCloudTarget).
   double cloud_candidate_gate = 0.10;
+  /// A target without a tag: when no candidate approaches as preferred, the best candidate
+  /// approaching as the generator proposes it (any direction it checked: the fingers and palm
+  /// against the cloud, the hidden volume and the support) is taken as it is, not turned. A flat
+  /// object (a banana, a bowl, a box lying down) offers no grasp within max_angle_deg of a
+  /// horizontal forward approach, and a cloud target has no tag fallback. false: such a target
+  /// waits for a qualifying candidate (no_grasp when none comes).
+  bool cloud_any_approach = true;
   void validate() const;  ///< throws "[GraspSelectionParams] ..."
   /// These parameters for a target without a tag (see the header comment).
   GraspSelectionParams forCloudTarget() const;

@@ -105,6 +105,12 @@ struct GraspObjectSpec {
   /// GraspSelectionParams::forCloudTarget(); the rest of the sequence is the same. Set by the
   /// scene's `targets:` (in-process) or the target selector topic (ehc_grasp_sequencer_node).
   ehc_control::TargetSelector target;
+  /// m, the object's bounding box standing upright (x, y across, z up; a cylinder: diameter,
+  /// diameter, height); zero = unknown. A tag object's known size: its exclusion (see
+  /// obstacle_exclusion_margin) is this box upright round the perceived pose, its sides facing
+  /// along the tag's normal, both across half extents the larger of x and y (which side face
+  /// carries the tag is not known). A cloud target's extent comes from its cluster (setObjectExtent).
+  Eigen::Vector3d size = Eigen::Vector3d::Zero();
 };
 
 struct GraspSequencerParams {
@@ -112,10 +118,27 @@ struct GraspSequencerParams {
   double object_time_limit = 30.0;        ///< s, WAIT_TARGET..LIFT per object
   double perception_hold = 1.0;           ///< s: before the lock, an older pose -> WAIT_TARGET
   double search_distance = 0.40;          ///< m: look pose back along the approach (0 = off)
-  /// m: radius of the sphere around the object the obstacle map ignores from GRASP (the descent
-  /// from the pre-grasp) until the retreat ends: the object and the support right under it,
-  /// which the fingers must touch. Until then the object is an obstacle like any other.
+  /// From GRASP (the descent from the pre-grasp) until the retreat ends the obstacle map ignores
+  /// the object and the support right under it, which the fingers must touch; until then the
+  /// object is an obstacle like any other. The ignored region is the object's extent (a tag
+  /// object's `size`, a cloud target's cluster: setObjectExtent) grown by
+  /// obstacle_exclusion_margin, so a neighbour's near face stays an obstacle
+  /// (exclusionSpheres). Only an object whose extent is unknown gets the sphere of
+  /// obstacle_exclusion_radius (m) round its centre.
   double obstacle_exclusion_radius = 0.10;
+  /// m: at least the obstacle map's voxel size plus the largest stop distance of the gripper
+  /// links (robot.obstacle_stop_distances): a finger touching the object keeps out of the
+  /// object's own voxels' stop distance.
+  double obstacle_exclusion_margin = 0.035;
+  /// m: the support under the object is left out too (supportCap), in a disc reaching this far
+  /// beyond the object's footprint, up to obstacle_exclusion_support_rise above the support: the
+  /// fingers come down beside a low object onto it and the wrist passes over it (the robot's hand
+  /// from the fingertips to its wrist link; the stop distances of the wrist links are 2-3 cm).
+  /// 0: no support cap. See supportCap for the disc's largest radius.
+  double obstacle_exclusion_support_reach = 0.20;
+  /// m: at least the obstacle map's voxel size (the support's own voxels); a neighbour standing
+  /// within the disc is an obstacle above this height.
+  double obstacle_exclusion_support_rise = 0.02;
   /// Perceived poses: smoothing, and jumps held until confirmed (TargetPoseFilter, one per object).
   TargetPoseFilterParams pose_filter;
   double pregrasp_distance = 0.10;        ///< m, pre-grasp = grasp backed off along the approach
@@ -180,6 +203,40 @@ struct ExclusionSphere {
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
   double radius = 0.0;
 };
+
+/// An object's extent: a box (world) with its centre and axes in `pose`.
+struct ObjectExtent {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  Eigen::Vector3d half_extents = Eigen::Vector3d::Zero();  ///< m, >= 0
+  bool valid() const;  ///< finite, a rotation, half extents >= 0 and below 1 m
+  double distance(const Eigen::Vector3d& p) const;  ///< m from p to the box (0 inside)
+};
+
+/// Spheres that together cover `box` grown by `margin` on every side (the exclusion spheres the
+/// obstacle map takes): a row along its longest axis, each sphere the circumsphere of one slab
+/// of the grown box, the slabs at most half as long as the cross-section's half diagonal (so
+/// a sphere reaches at most ~3 % beyond the grown box across the row; along it, at its ends, by
+/// the same). Empty for an invalid box.
+std::vector<ExclusionSphere> exclusionSpheres(const ObjectExtent& box, double margin);
+
+/// The sphere that leaves out the support under and round an upright `box` (its axis z = up, its
+/// bottom face on the support): it cuts the support's top in a disc reaching `reach` beyond the
+/// box's footprint (its half diagonal) and rises only `rise` above the support (its centre deep
+/// below it). The fingers of a grasp low on the object come down beside it onto the support; a
+/// neighbour standing on the support within the disc keeps all but its lowest `rise` an obstacle.
+/// At most a 1 m sphere (the obstacle map's largest zone): the disc reaches at most
+/// sqrt(2 x 1 m x rise - rise^2) from the object's axis (0.2 m for a 2 cm rise).
+ExclusionSphere supportCap(const ObjectExtent& box, double reach, double rise);
+
+/// Extent of an object cluster (world points, one view from `viewpoint`) standing on a support
+/// with normal `up`: a box with one axis along `up` from the lowest to the highest point
+/// (`support_height`: down to the support, height along `up` of the support plane, when given),
+/// one along the view's horizontal direction to the points' centroid and one across it. The
+/// view hides the far side: the box reaches back from the nearest point at least as far as the
+/// points spread across the view (a round or square body is as deep as it is wide), farther if
+/// the points do. nullopt for fewer than 3 points.
+std::optional<ObjectExtent> clusterExtent(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3d& viewpoint,
+                                          const Eigen::Vector3d& up, const std::optional<double>& support_height);
 
 struct SequencerOutput {
   std::optional<Eigen::Isometry3d> goal;           ///< TCP goal for the controller (publish it)
@@ -251,6 +308,11 @@ class GraspSequencer {
   /// reason of the object's failure if its time limit fires before a pose arrives. An accepted
   /// pose (setObjectPose) clears it.
   void setNoTarget(std::size_t index, const std::string& why);
+  /// Extent of object `index` (world): the obstacle map's exclusion from GRASP on follows it (see
+  /// obstacle_exclusion_radius). Taken like a perceived pose: for the current object until its
+  /// grasp is locked (then frozen), a later one any time. False (counted) for an unknown index or
+  /// an invalid extent.
+  bool setObjectExtent(std::size_t index, const ObjectExtent& extent);
   /// Camera intrinsics for TfM (e.g. from camera_info); false (ignored, counted) if invalid
   /// (PinholeCamera::validate). No TfM cycle is counted before the first valid camera.
   bool setCamera(const ehc_control::PinholeCamera& camera);
@@ -352,6 +414,14 @@ class GraspSequencer {
   std::optional<GraspChoice> locked_;
   std::optional<GraspChoice> last_choice_;  ///< the current object's last grasp chosen before the lock
   Eigen::Vector3d locked_object_centre_ = Eigen::Vector3d::Zero();
+  /// Every object's extent (setObjectExtent, or its size round its perceived pose).
+  std::vector<std::optional<ObjectExtent>> extents_;
+  /// The current object's extent frozen at the lock (nullopt: unknown, the sphere) and its pose
+  /// in the TCP frame when the gripper closed (the object moves with the hand).
+  std::optional<ObjectExtent> locked_extent_;
+  std::optional<Eigen::Isometry3d> extent_in_tcp_;
+  /// The current object's extent now: setObjectExtent's, else its size round its pose.
+  std::optional<ObjectExtent> currentExtent() const;
   /// Object centre in the TCP frame when the gripper closed (the object moves with the hand).
   std::optional<Eigen::Vector3d> centre_in_tcp_;
   std::optional<Eigen::Isometry3d> hold_goal_;  ///< RELEASE / RETREAT goal

@@ -732,7 +732,7 @@ void writeSafetyTable(std::ostream& f, const GraspExperimentResult& result, cons
       << obstacleCell(s.nearest, false) << " | " << obstacleCell(s.tightest, true) << " | "
       << obstacleCell(s.grasped, false) << " | " << std::setprecision(1) << s.sim_time_s << " |\n";
   f << "\nPerceived distances are those the controller received (ehc_obstacle_node's: octomap of the depth "
-       "clouds, robot points filtered, the grasped object's sphere excluded from the descent to the end of the "
+       "clouds, robot points filtered, the grasped object's extent and its support excluded from the descent to the end of the "
        "retreat); the scene body is the ground-truth body nearest to the perceived obstacle point. The object "
        "being grasped is scene until the grasp is locked; from PRE_GRASP on the hand must come close to it (the "
        "controller still keeps its dampers until GRASP, d_s 10 mm for the fingers), so its pairs are listed "

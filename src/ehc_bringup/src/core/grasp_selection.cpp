@@ -29,6 +29,7 @@ GraspSelectionParams GraspSelectionParams::forCloudTarget() const {
   p.centre_from_tag = false;
   p.closing_axis_from_tag = false;
   p.require_candidate = true;
+  p.any_approach_fallback = cloud_any_approach;
   return p;
 }
 
@@ -227,6 +228,11 @@ std::optional<GraspChoice> chooseGrasp(const std::vector<GraspCandidate>& candid
     const double backoff = fallbackBackoff(direction, p);
     const double past_centre = z.dot(best.pose.translation() - tag_target.translation());
     if (past_centre > -backoff) best.pose.translation() -= (past_centre + backoff) * z;
+  }
+  if (!found && p.any_approach_fallback && direction != ApproachDirection::Any && direction != ApproachDirection::Tag) {
+    GraspSelectionParams any = p;
+    any.any_approach_fallback = false;
+    return chooseGrasp(candidates, ApproachDirection::Any, tag_target, reference, any);
   }
   if (!found) {
     if (p.require_candidate && direction != ApproachDirection::Tag) return std::nullopt;

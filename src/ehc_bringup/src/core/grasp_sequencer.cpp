@@ -73,6 +73,8 @@ void GraspSequencerParams::validate() const {
   for (std::size_t i = 0; i < objects.size(); ++i) {
     check(!objects[i].name.empty(), "objects[" + std::to_string(i) + "].name must not be empty");
     objects[i].target.validate();
+    check(objects[i].size.allFinite() && objects[i].size.minCoeff() >= 0.0 && objects[i].size.maxCoeff() <= 2.0,
+          "objects[" + std::to_string(i) + "].size must be finite, each in [0, 2] m");
     for (std::size_t j = 0; j < i; ++j)
       check(objects[i].name != objects[j].name, "object name '" + objects[i].name + "' appears twice");
   }
@@ -80,6 +82,14 @@ void GraspSequencerParams::validate() const {
   positive(perception_hold, "perception_hold");
   check(std::isfinite(obstacle_exclusion_radius) && obstacle_exclusion_radius >= 0.0 && obstacle_exclusion_radius <= 0.5,
         "obstacle_exclusion_radius must be in [0, 0.5] m");
+  check(std::isfinite(obstacle_exclusion_margin) && obstacle_exclusion_margin >= 0.0 && obstacle_exclusion_margin <= 0.2,
+        "obstacle_exclusion_margin must be in [0, 0.2] m");
+  check(std::isfinite(obstacle_exclusion_support_reach) && obstacle_exclusion_support_reach >= 0.0 &&
+            obstacle_exclusion_support_reach <= 0.5,
+        "obstacle_exclusion_support_reach must be in [0, 0.5] m");
+  check(std::isfinite(obstacle_exclusion_support_rise) && obstacle_exclusion_support_rise > 0.0 &&
+            obstacle_exclusion_support_rise <= 0.1,
+        "obstacle_exclusion_support_rise must be in (0, 0.1] m");
   check(std::isfinite(search_distance) && search_distance >= 0.0 && search_distance <= 2.0,
         "search_distance must be in [0, 2] m");
   pose_filter.validate();
@@ -126,8 +136,9 @@ std::string GraspSequencerParams::summary() const {
   for (const auto& o : objects)
     s << " " << o.name << " (" << toString(o.approach) << (o.target.fromCloud() ? ", " + o.target.summary() : std::string()) << ")";
   s << "\n  limit " << object_time_limit << " s/object, perception hold " << perception_hold
-    << " s, search " << search_distance << " m, obstacle exclusion " << obstacle_exclusion_radius
-    << " m, " << pose_filter.summary() << ", pre-grasp " << pregrasp_distance << " m"
+    << " s, search " << search_distance << " m, obstacle exclusion: the object's extent + "
+    << obstacle_exclusion_margin << " m and its support " << obstacle_exclusion_support_reach << " m round it, "
+    << obstacle_exclusion_support_rise << " m up (extent unknown: " << obstacle_exclusion_radius << " m round its centre), " << pose_filter.summary() << ", pre-grasp " << pregrasp_distance << " m"
     << "\n  pre-grasp from " << pregrasp_switch_distance << " m; tolerances: pre-grasp " << pregrasp_position_tolerance << " m/" << pregrasp_orientation_tolerance_deg
     << " deg (" << pregrasp_lateral_tolerance << " m across the approach), grasp " << grasp_position_tolerance << " m/" << grasp_orientation_tolerance_deg << " deg"
     << " (stalled for " << stall_time << " s: x" << stall_tolerance_factor << "; the gripper closes within "
@@ -140,7 +151,8 @@ std::string GraspSequencerParams::summary() const {
     << ", release timeout "
     << release_timeout << " s, retreat " << retreat_distance << " m back + " << retreat_raise << " m up (tol "
     << retreat_tolerance << " m, " << retreat_timeout << " s)"
-    << "\n  selection: gate " << selection.candidate_gate << " m (cloud targets " << selection.cloud_candidate_gate << " m), max angle " << selection.max_angle_deg
+    << "\n  selection: gate " << selection.candidate_gate << " m (cloud targets " << selection.cloud_candidate_gate << " m"
+    << (selection.cloud_any_approach ? ", the generator's approach when none as preferred" : "") << "), max angle " << selection.max_angle_deg
     << " deg, max width " << selection.max_width << " m, "
     << "sideways turned " << selection.sideways_turn_deg << " deg towards forward and tilted "
     << selection.sideways_tilt_deg << " deg down, "
@@ -160,6 +172,9 @@ GraspSequencerParams loadGraspSequencerParams(const ConfigNode& root) {
   p.perception_hold = s.get("perception_hold", p.perception_hold);
   p.search_distance = s.get("search_distance", p.search_distance);
   p.obstacle_exclusion_radius = s.get("obstacle_exclusion_radius", p.obstacle_exclusion_radius);
+  p.obstacle_exclusion_margin = s.get("obstacle_exclusion_margin", p.obstacle_exclusion_margin);
+  p.obstacle_exclusion_support_reach = s.get("obstacle_exclusion_support_reach", p.obstacle_exclusion_support_reach);
+  p.obstacle_exclusion_support_rise = s.get("obstacle_exclusion_support_rise", p.obstacle_exclusion_support_rise);
   p.pose_filter = loadTargetPoseFilterParams(s);
   p.pregrasp_distance = s.get("pregrasp_distance", p.pregrasp_distance);
   p.pregrasp_switch_distance = s.get("pregrasp_switch_distance", p.pregrasp_switch_distance);
@@ -185,6 +200,7 @@ GraspSequencerParams loadGraspSequencerParams(const ConfigNode& root) {
   const ConfigNode sel = s.childOrEmpty("selection");
   p.selection.candidate_gate = sel.get("candidate_gate", p.selection.candidate_gate);
   p.selection.cloud_candidate_gate = sel.get("cloud_candidate_gate", p.selection.cloud_candidate_gate);
+  p.selection.cloud_any_approach = sel.get("cloud_any_approach", p.selection.cloud_any_approach);
   p.selection.max_angle_deg = sel.get("max_angle_deg", p.selection.max_angle_deg);
   p.selection.max_width = sel.get("max_width", p.selection.max_width);
   p.selection.require_candidate = sel.get("require_candidate", p.selection.require_candidate);
@@ -208,6 +224,7 @@ GraspSequencerParams loadGraspSequencerParams(const ConfigNode& root) {
     } catch (const std::invalid_argument&) {
       o.fail("approach", "must be tag | forward | downward | sideways | any (is '" + a + "')");
     }
+    spec.size = o.getVector("size", Eigen::Vector3d::Zero(), 3);
     p.objects.push_back(spec);
   }
   root.validate(p);
@@ -219,6 +236,42 @@ GraspSequencerParams loadGraspSequencerParams(const ConfigNode& root) {
 GraspSequencer::GraspSequencer(const GraspSequencerParams& params) : params_(params) {
   params_.validate();
   filters_.assign(params_.objects.size(), TargetPoseFilter(params_.pose_filter));
+  extents_.assign(params_.objects.size(), std::nullopt);
+}
+
+bool GraspSequencer::setObjectExtent(std::size_t index, const ObjectExtent& extent) {
+  if (index >= params_.objects.size() || !extent.valid()) {
+    ++rejected_;
+    return false;
+  }
+  if (index == current_ && locked_) return true;  // frozen at the lock
+  extents_[index] = extent;
+  return true;
+}
+
+std::optional<ObjectExtent> GraspSequencer::currentExtent() const {
+  if (current_ >= extents_.size()) return std::nullopt;
+  if (extents_[current_]) return extents_[current_];
+  const Eigen::Vector3d& size = params_.objects[current_].size;
+  const std::optional<Eigen::Isometry3d> pose = currentPose();
+  if (!pose || size.minCoeff() <= 0.0) return std::nullopt;
+  // Known size round the perceived pose (the tag target: origin at the object centre, z into the
+  // tagged face, a face normal): upright, turned so that its sides face along z's horizontal
+  // part (x's when z is vertical: a tag on the top face). Which side face carries the tag is not
+  // known here: both across half extents are the larger.
+  const Eigen::Matrix3d& R = pose->linear();
+  Eigen::Vector3d f(R(0, 2), R(1, 2), 0.0);
+  if (f.norm() < 0.3) f = Eigen::Vector3d(R(0, 0), R(1, 0), 0.0);
+  if (f.norm() < 1e-6) f = Eigen::Vector3d::UnitX();
+  f.normalize();
+  ObjectExtent e;
+  e.pose.linear().col(0) = f;
+  e.pose.linear().col(1) = Eigen::Vector3d::UnitZ().cross(f);
+  e.pose.linear().col(2) = Eigen::Vector3d::UnitZ();
+  e.pose.translation() = pose->translation();
+  const double across = 0.5 * std::max(size.x(), size.y());
+  e.half_extents = Eigen::Vector3d(across, across, 0.5 * size.z());
+  return e;
 }
 
 bool GraspSequencer::setObjectPose(std::size_t index, double t, const Eigen::Isometry3d& pose) {
@@ -326,6 +379,8 @@ void GraspSequencer::startObject(double t, SequencerOutput* out) {
   object_t0_ = t;
   locked_.reset();
   centre_in_tcp_.reset();
+  locked_extent_.reset();
+  extent_in_tcp_.reset();
   hold_goal_.reset();
   centre_sent_ = tsmm_at_d_ = false;
   ctrl_fov_cycles_ = ctrl_cycles_ = 0;
@@ -664,6 +719,7 @@ void GraspSequencer::advanceApproach(const SequencerInput& in, bool fresh, bool 
   const bool tsmm_base_pending = tsmmController(in) && !tsmm_at_d_;
   if (!tsmm_base_pending && within(in, choice->pose, params_.pregrasp_switch_distance, 180.0)) {
     locked_object_centre_ = *objectCentre();  // frozen from here (before locked_ is set)
+    locked_extent_ = currentExtent();
     locked_ = choice;
     out->goal = preGrasp(choice->pose);
     enter(GraspPhase::PreGrasp, t, out,
@@ -709,6 +765,7 @@ void GraspSequencer::advanceGrasp(const SequencerInput& in, SequencerOutput* out
     out->gripper_command = true;
     cur_.close_offset = (in.tcp->translation() - locked_->pose.translation()).norm();
     centre_in_tcp_ = in.tcp->inverse() * locked_object_centre_;  // within() checked the TCP
+    if (locked_extent_) extent_in_tcp_ = in.tcp->inverse() * locked_extent_->pose;
   }
 }
 
@@ -796,12 +853,93 @@ void GraspSequencer::advanceRetreat(const SequencerInput& in, double in_phase, S
 std::vector<ExclusionSphere> GraspSequencer::obstacleExclusions(const SequencerInput& in) const {
   // The object may be touched from the descent to the pre-grasp on, until the hand has left.
   std::vector<ExclusionSphere> zones;
-  if (locked_ && phase_ >= GraspPhase::Grasp && phase_ <= GraspPhase::Retreat && params_.obstacle_exclusion_radius > 0.0) {
+  if (!locked_ || phase_ < GraspPhase::Grasp || phase_ > GraspPhase::Retreat) return zones;
+  const bool carried = centre_in_tcp_ && in.tcp && isValidPose(*in.tcp);
+  if (locked_extent_) {
+    // Where it stood, and once closed where the hand carries it: its extent + the margin.
+    const double margin = params_.obstacle_exclusion_margin;
+    zones = exclusionSpheres(*locked_extent_, margin);
+    if (params_.obstacle_exclusion_support_reach > 0.0)
+      zones.push_back(supportCap(*locked_extent_, params_.obstacle_exclusion_support_reach,
+                                 params_.obstacle_exclusion_support_rise));
+    if (carried && extent_in_tcp_) {
+      ObjectExtent moved = *locked_extent_;
+      moved.pose = *in.tcp * *extent_in_tcp_;
+      const std::vector<ExclusionSphere> more = exclusionSpheres(moved, params_.obstacle_exclusion_margin);
+      zones.insert(zones.end(), more.begin(), more.end());
+    }
+  } else if (params_.obstacle_exclusion_radius > 0.0) {
     zones.push_back({locked_object_centre_, params_.obstacle_exclusion_radius});
-    if (centre_in_tcp_ && in.tcp && isValidPose(*in.tcp))
-      zones.push_back({*in.tcp * *centre_in_tcp_, params_.obstacle_exclusion_radius});
+    if (carried) zones.push_back({*in.tcp * *centre_in_tcp_, params_.obstacle_exclusion_radius});
   }
   return zones;
+}
+
+bool ObjectExtent::valid() const {
+  return isValidPose(pose) && half_extents.allFinite() && half_extents.minCoeff() >= 0.0 && half_extents.maxCoeff() < 1.0;
+}
+
+double ObjectExtent::distance(const Eigen::Vector3d& p) const {
+  const Eigen::Vector3d q = (pose.linear().transpose() * (p - pose.translation())).cwiseAbs() - half_extents;
+  return q.cwiseMax(0.0).norm();
+}
+
+std::vector<ExclusionSphere> exclusionSpheres(const ObjectExtent& box, double margin) {
+  std::vector<ExclusionSphere> out;
+  if (!box.valid() || !std::isfinite(margin) || margin < 0.0) return out;
+  const Eigen::Vector3d h = box.half_extents + Eigen::Vector3d::Constant(margin);
+  int k = 0;  // the longest axis: the row
+  h.maxCoeff(&k);
+  const double across = std::hypot(h((k + 1) % 3), h((k + 2) % 3));  // cross-section's half diagonal
+  // n slabs of half length h_k / n <= across / 2; each sphere the circumsphere of its slab.
+  const int n = std::max(1, static_cast<int>(std::ceil(2.0 * h(k) / std::max(across, 1e-3))));
+  const double half_slab = h(k) / n;
+  const double radius = std::hypot(across, half_slab);
+  const Eigen::Vector3d axis = box.pose.linear().col(k);
+  for (int i = 0; i < n; ++i) {
+    const double along = -h(k) + (2 * i + 1) * half_slab;
+    out.push_back({box.pose.translation() + along * axis, radius});
+  }
+  return out;
+}
+
+ExclusionSphere supportCap(const ObjectExtent& box, double reach, double rise) {
+  const Eigen::Vector3d up = box.pose.linear().col(2);
+  const double disc = std::hypot(box.half_extents.x(), box.half_extents.y()) + std::max(reach, 0.0);
+  const double h = std::max(rise, 1e-3);
+  // R - depth = h (the rise), R^2 - depth^2 = disc^2 (the disc on the support's top).
+  // At most 1 m (the obstacle map's largest zone): a smaller disc, never a higher rise.
+  const double radius = std::min(0.5 * (disc * disc / h + h), 1.0);
+  return {box.pose.translation() - (box.half_extents.z() + radius - h) * up, radius};
+}
+
+std::optional<ObjectExtent> clusterExtent(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3d& viewpoint,
+                                          const Eigen::Vector3d& up_in, const std::optional<double>& support_height) {
+  if (points.size() < 3 || !up_in.allFinite() || up_in.norm() < 1e-9 || !viewpoint.allFinite()) return std::nullopt;
+  const Eigen::Vector3d up = up_in.normalized();
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (const auto& pf : points) centroid += pf.cast<double>();
+  centroid /= static_cast<double>(points.size());
+  Eigen::Vector3d x = centroid - viewpoint;  // the view's direction, across `up`
+  x -= x.dot(up) * up;
+  if (x.norm() < 1e-6) x = up.unitOrthogonal();  // seen from straight above: any
+  x.normalize();
+  Eigen::Matrix3d R;
+  R << x, up.cross(x), up;
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e30), hi = Eigen::Vector3d::Constant(-1e30);
+  for (const auto& pf : points) {
+    const Eigen::Vector3d q = R.transpose() * pf.cast<double>();
+    lo = lo.cwiseMin(q);
+    hi = hi.cwiseMax(q);
+  }
+  hi.x() = std::max(hi.x(), lo.x() + (hi.y() - lo.y()));  // the hidden far side
+  if (support_height && std::isfinite(*support_height)) lo.z() = std::min(lo.z(), *support_height);
+  ObjectExtent e;
+  e.pose.linear() = R;
+  e.pose.translation() = R * (0.5 * (lo + hi));
+  e.half_extents = 0.5 * (hi - lo);
+  if (!e.valid()) return std::nullopt;
+  return e;
 }
 
 // ---------------------------------------------------------------- reporting
