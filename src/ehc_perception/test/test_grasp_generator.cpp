@@ -879,6 +879,17 @@ TEST(GraspContacts, AContactPair45DegOffIsRefusedWithMu05) {
 }
 
 
+/// A randomized wall-grasp test's draws: the printed seed, its stream, uniform [0, 1) draws, and
+/// the default generator.
+struct WallGraspTrials {
+  explicit WallGraspTrials(const char* name) : seed(ehc_test::testSeed(name)), rng(seed) {}
+  double unit() { return std::uniform_real_distribution<double>(0.0, 1.0)(rng); }
+  unsigned seed;
+  std::mt19937 rng;
+  GraspGeneratorConfig cfg;
+  GraspGenerator gen{cfg};
+};
+
 // Random cups 100-160 mm across (wider than the opening), walls 3-6 mm, 40-80 mm high, seen
 // once from a random view under 1.5 mm noise: no wall is seen from both sides, yet there are
 // wall grasps across the rim: the true cup between the fingers of the best of them is the wall
@@ -886,18 +897,14 @@ TEST(GraspContacts, AContactPair45DegOffIsRefusedWithMu05) {
 // between the fingers within the measured width + the noise) or inside a finger. How often a
 // wall grasp is the best grasp is printed.
 TEST(WallGrasps, ARandomCupsRimIsGraspedAcrossItsWallFromOneView) {
-  const unsigned seed = ehc_test::testSeed("WallGrasps random cups");
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
-  const GraspGeneratorConfig cfg;
-  const GraspGenerator gen(cfg);
+  WallGraspTrials t("WallGrasps random cups");
   int best_wall = 0;
   for (int trial = 0; trial < 6; ++trial) {
-    const double r = 0.05 + 0.03 * unit(rng), wall = 0.003 + 0.003 * unit(rng), height = 0.04 + 0.04 * unit(rng);
+    const double r = 0.05 + 0.03 * t.unit(), wall = 0.003 + 0.003 * t.unit(), height = 0.04 + 0.04 * t.unit();
     Surface truth = cupSurface(r, wall, height, 0.002);
-    truth.transform(pose(0.6, 0.0, 0.0, 2 * M_PI * unit(rng)));
-    const Eigen::Vector3d view = randomView(Eigen::Vector3d(0.6, 0.0, 0.5 * height), &rng);
-    const GraspResult res = gen.generate(truth.occludedFrom(view).noisy(kNoise, seed + static_cast<unsigned>(trial)), view);
+    truth.transform(pose(0.6, 0.0, 0.0, 2 * M_PI * t.unit()));
+    const Eigen::Vector3d view = randomView(Eigen::Vector3d(0.6, 0.0, 0.5 * height), &t.rng);
+    const GraspResult res = t.gen.generate(truth.occludedFrom(view).noisy(kNoise, t.seed + static_cast<unsigned>(trial)), view);
     const std::string what = "cup r " + std::to_string(1e3 * r) + " mm, wall " + std::to_string(1e3 * wall) +
                              " mm, height " + std::to_string(1e3 * height) + " mm, view " +
                              std::to_string(view.x()) + " " + std::to_string(view.y()) + " " + std::to_string(view.z());
@@ -906,12 +913,12 @@ TEST(WallGrasps, ARandomCupsRimIsGraspedAcrossItsWallFromOneView) {
     for (const Grasp& g : res.grasps) {
       if (!g.wall) continue;
       if (!first) first = &g;
-      EXPECT_LE(trueWidthBetweenFingers(g, cfg.gripper, truth.points), g.measured_width + kNoise);
-      EXPECT_EQ(pointsInFingers(g, cfg.gripper, truth.points, kNoise), 0);
+      EXPECT_LE(trueWidthBetweenFingers(g, t.cfg.gripper, truth.points), g.measured_width + kNoise);
+      EXPECT_EQ(pointsInFingers(g, t.cfg.gripper, truth.points, kNoise), 0);
     }
     ASSERT_NE(first, nullptr) << res.reason;
     best_wall += res.grasps.front().wall;
-    const double between = trueWidthBetweenFingers(*first, cfg.gripper, truth.points);
+    const double between = trueWidthBetweenFingers(*first, t.cfg.gripper, truth.points);
     std::printf("%s: best grasp %s; best wall grasp measured %.1f mm, true %.1f mm between the fingers\n", what.c_str(),
                 res.grasps.front().wall ? "a wall grasp" : "not a wall grasp", 1e3 * first->measured_width, 1e3 * between);
     EXPECT_LT(between, 3.0 * wall);
@@ -924,29 +931,25 @@ TEST(WallGrasps, ARandomCupsRimIsGraspedAcrossItsWallFromOneView) {
 // within the noise), no true surface point is inside a finger, and a cylinder wider than the
 // opening gets none.
 TEST(WallGrasps, ARandomCylindersWidthIsNeverUnderMeasured) {
-  const unsigned seed = ehc_test::testSeed("WallGrasps random cylinders");
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
-  const GraspGeneratorConfig cfg;
-  const GraspGenerator gen(cfg);
+  WallGraspTrials t("WallGrasps random cylinders");
   int walls = 0;
   for (int trial = 0; trial < 12; ++trial) {
     const Solid solid = trial % 2 == 0 ? Solid::LyingCylinder : Solid::StandingCylinder;
-    const double w = 0.015 + 0.075 * unit(rng);
-    const Surface truth = solidOnSupport(solid, w, 2 * M_PI * unit(rng), 0.002);
-    const Eigen::Vector3d view = randomView(Eigen::Vector3d(0.6, 0.0, 0.03), &rng);
-    const GraspResult res = gen.generate(truth.visibleFrom(view).noisy(kNoise, seed + static_cast<unsigned>(trial)), view);
+    const double w = 0.015 + 0.075 * t.unit();
+    const Surface truth = solidOnSupport(solid, w, 2 * M_PI * t.unit(), 0.002);
+    const Eigen::Vector3d view = randomView(Eigen::Vector3d(0.6, 0.0, 0.03), &t.rng);
+    const GraspResult res = t.gen.generate(truth.visibleFrom(view).noisy(kNoise, t.seed + static_cast<unsigned>(trial)), view);
     const std::string what = std::string(solidName(solid)) + " " + std::to_string(1e3 * w) + " mm";
     SCOPED_TRACE(what);
     for (const Grasp& g : res.grasps) {
       if (!g.wall) continue;
       ++walls;
-      const double between = trueWidthBetweenFingers(g, cfg.gripper, truth.points);
+      const double between = trueWidthBetweenFingers(g, t.cfg.gripper, truth.points);
       std::printf("%s: wall grasp measured %.1f mm, true %.1f mm between the fingers\n", what.c_str(),
                   1e3 * g.measured_width, 1e3 * between);
-      EXPECT_LT(w, cfg.gripper.max_width);
+      EXPECT_LT(w, t.cfg.gripper.max_width);
       EXPECT_LE(between, g.measured_width + kNoise);
-      EXPECT_EQ(pointsInFingers(g, cfg.gripper, truth.points, kNoise), 0);
+      EXPECT_EQ(pointsInFingers(g, t.cfg.gripper, truth.points, kNoise), 0);
     }
   }
   std::printf("%d wall grasps checked\n", walls);
