@@ -15,7 +15,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 #include <random>
 
@@ -123,14 +122,13 @@ INSTANTIATE_TEST_SUITE_P(EveryServo, ClosedLoop,
 // A target metres away, 70-150 deg off the base's heading, with an approach direction turned
 // anywhere around the vertical, from an arm posture left by an earlier target (the ready posture
 // with every joint moved by up to 1 rad): every mode, through update() with the shipped servo
-// (PBVS + MPBS), brings the TCP within far_approach.distance of it in 30 s, and while the TCP is
-// beyond twice that distance no arm joint comes within joint_stop + recovery.pinned_margin of a
-// limit and no stall recovery starts (the far approach carries the arm in its ready posture and
-// the base faces the target; with the TCP's bearing alone a differential base drove past such
-// targets with joint2 pinned, and stalled metres away: 17 of 39 seeds failed so). Arrival itself
-// is not asserted: from within that distance some of these targets still stall a few cm to 0.3 m
-// short with the hand turned far from the target's orientation (the near field; validate.py
-// counts it), on about 1 seed in 10.
+// (PBVS + MPBS), reaches it in 30 s, and while the TCP is beyond twice far_approach.distance no
+// arm joint comes within joint_stop + recovery.pinned_margin of a limit and no stall recovery
+// starts (the far approach carries the arm in its ready posture and the base faces the target;
+// with the TCP's bearing alone a differential base drove past such targets with joint2 pinned,
+// and stalled metres away: 17 of 39 seeds failed so). The base then arrives facing the target
+// with the hand up to 3 rad from the grasp orientation; without recovery.free_stalls the QP
+// settled 0.2-0.3 m short in a limit cycle with every joint free on 6 of 40 seeds.
 TEST(ControlCycle, FarTargetOffTheHeadingIsReachedWithoutPinnedJointsByEveryMode) {
   const unsigned seed = ehc_test::testSeed("ControlCycle far approach");
   RecordProperty("seed", std::to_string(seed));
@@ -175,12 +173,8 @@ TEST(ControlCycle, FarTargetOffTheHeadingIsReachedWithoutPinnedJointsByEveryMode
             far_margin = std::min({far_margin, loop.sim.q[j] - rc.arm_lower[j], rc.arm_upper[j] - loop.sim.q[j]});
         arrived = last.phase == ControlPhase::Arrived;
       }
-      EXPECT_LT(last.position_error, far.distance)
-          << "stalled far: position error " << last.position_error << " m, orientation error "
-          << last.orientation_error << " rad after " << loop.now() << " s";
-      if (!arrived)
-        std::printf("[far approach] trial %d, %s: not arrived in 30 s, %.3f m / %.2f rad short (near field)\n", trial,
-                    toString(mode).c_str(), last.position_error, last.orientation_error);
+      EXPECT_TRUE(arrived) << "position error " << last.position_error << " m, orientation error "
+                           << last.orientation_error << " rad after " << loop.now() << " s";
       EXPECT_FALSE(far_recovery) << "a stall recovery started while the target was far";
       EXPECT_GT(far_margin, pinned) << "an arm joint came to its stop while the target was far";
     }

@@ -66,7 +66,8 @@ std::string ReachRecoveryParams::summary() const {
   if (!enabled) return "reach recovery off";
   std::ostringstream os;
   os << "reach recovery after " << stall_window << " s without progress with a joint within " << pinned_margin
-     << " rad of its stop: IK from " << starts << " starts, at most "
+     << " rad of its stop" << (free_stalls ? " (or near the target with every joint free, no link held at an obstacle)" : "")
+     << ": IK from " << starts << " starts, at most "
      << max_attempts << " per target, " << move_timeout << " s each";
   return os.str();
 }
@@ -90,6 +91,7 @@ ReachRecoveryParams loadReachRecoveryParams(const ehc_common::ConfigNode& n) {
   p.joint_tolerance = n.get("joint_tolerance", p.joint_tolerance);
   p.move_timeout = n.get("move_timeout", p.move_timeout);
   p.max_attempts = n.get("max_attempts", p.max_attempts);
+  p.free_stalls = n.get("free_stalls", p.free_stalls);
   p.placement_bearings = n.get("placement_bearings", p.placement_bearings);
   p.placement_handover_sig = n.get("placement_handover_sig", p.placement_handover_sig);
   p.placement_margin = n.get("placement_margin", p.placement_margin);
@@ -197,7 +199,8 @@ void ReachRecovery::startWatching(double now, double position_error, double orie
   progress_t_ = now;
 }
 
-bool ReachRecovery::stalled(double now, double position_error, double orientation_error, const Eigen::VectorXd& q) {
+bool ReachRecovery::stalled(double now, double position_error, double orientation_error, const Eigen::VectorXd& q,
+                            bool obstacle_held) {
   if (position_error < best_position_ - params_.position_progress ||
       orientation_error < best_orientation_ - params_.orientation_progress) {
     best_position_ = std::min(best_position_, position_error);
@@ -205,11 +208,14 @@ bool ReachRecovery::stalled(double now, double position_error, double orientatio
     progress_t_ = now;
     return false;
   }
-  // Near the target a stall with every joint free is the task's own equilibrium (obstacles,
-  // singularity: not this mechanism's business); far from it the arm unwinds either way.
+  // Far from the target the arm unwinds either way. Near it, a joint pinned; or (free_stalls) the
+  // pose task's own equilibrium with every joint free (see the top of reach_recovery.h), unless
+  // a link is held at an obstacle (a configuration of the target alone would not clear it).
   if (now - progress_t_ < params_.stall_window) return false;
   if (position_error > 2.0 * reach_) return far_attempts_ < params_.max_attempts;
-  return attempts_ < params_.max_attempts && pinnedJoint(model_.config(), q, joint_stop_ + params_.pinned_margin) >= 0;
+  if (attempts_ >= params_.max_attempts) return false;
+  return pinnedJoint(model_.config(), q, joint_stop_ + params_.pinned_margin) >= 0 ||
+         (params_.free_stalls && !obstacle_held);
 }
 
 void ReachRecovery::startPlacement(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q) {
@@ -415,7 +421,7 @@ bool ReachRecovery::atGoal(const Eigen::Vector3d& base_pose, const Eigen::Vector
 
 const Eigen::VectorXd* ReachRecovery::update(double now, const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q,
                                              const Eigen::Isometry3d& tcp, const Eigen::Isometry3d& target,
-                                             const EhcWeight* place) {
+                                             const EhcWeight* place, bool obstacle_held) {
   event_.clear();
   if (!params_.enabled) return nullptr;
   const double position_error = (target.translation() - tcp.translation()).norm();
@@ -432,7 +438,7 @@ const Eigen::VectorXd* ReachRecovery::update(double now, const Eigen::Vector3d& 
   std::ostringstream os;
   switch (state_) {
     case State::Watching:
-      if (!stalled(now, position_error, orientation_error, q)) return nullptr;
+      if (!stalled(now, position_error, orientation_error, q, obstacle_held)) return nullptr;
       far_ = position_error > 2.0 * reach_;
       startPlanning(base_pose, q, far_);
       [[fallthrough]];
