@@ -106,7 +106,11 @@ TEST(ReachRecovery, ANearStallWithEveryJointFreePlansUnlessHeldAtAnObstacle) {
   ASSERT_LT(pinnedJoint(rc, q, qp.joint_stop + qp.recovery.pinned_margin), 0);
   for (int trial = 0; trial < 5; ++trial) {
     SCOPED_TRACE("trial " + std::to_string(trial) + ", seed " + std::to_string(seed));
-    const Eigen::Isometry3d target = tcpOf(model, base, test::randomArm(rc, rng, 0.3));
+    const Eigen::Vector3d ready_tcp = tcpOf(model, base, q).translation();
+    Eigen::Isometry3d target;
+    do  // near: within half a metre of the ready TCP (farther than twice its reach is a far stall)
+      target = tcpOf(model, base, test::randomArm(rc, rng, 0.3));
+    while ((target.translation() - ready_tcp).norm() > 0.5);
     for (int variant = 0; variant < 3; ++variant) {  // free_stalls on; off; on with an obstacle held
       ReachRecoveryParams params = qp.recovery;
       params.free_stalls = variant != 1;
