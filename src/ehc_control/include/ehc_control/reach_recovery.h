@@ -41,6 +41,9 @@
 //            dampers and velocity limits still apply): arm joint_gain (q* - q); base a
 //            pose-stabilising law (differential: the polar law of Astolfi, forwards or
 //            backwards; holonomic: proportional);
+//   finish   a near move at the tolerances of (b*, q*) with the TCP still off the target: once,
+//            the arm's configuration of the target from the base where it stands (IK, base
+//            held), tracked by the arm alone;
 //   resume   within the tolerances of (b*, q*), where the TCP is on the target, or after
 //            move_timeout (a far move: plus its travel at the base's speed limit); the pose
 //            task takes over again. At most max_attempts near and
@@ -177,6 +180,10 @@ class ReachRecovery {
   void start(int k, const Eigen::Isometry3d& target, Eigen::Vector3d* base, Eigen::VectorXd* q) const;
   void reference(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q);
   bool atGoal(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q) const;
+  /// At a near move's goal with the TCP still off the target: the goal becomes the arm's IK
+  /// configuration from the current base (base held), once per move; true then.
+  bool finishArmOnly(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q, double position_error,
+                     double orientation_error);
 
   const WholeBodyModel& model_;
   ReachRecoveryParams params_;
@@ -191,6 +198,7 @@ class ReachRecovery {
   int attempts_ = 0;      ///< near stalls of this target
   int far_attempts_ = 0;  ///< far stalls of this target (their own count: a far unwind is not a near plan)
   bool far_ = false;      ///< the current plan is a far one
+  bool finishing_ = false;  ///< the current near move finishes with the arm alone (finishArmOnly)
   bool place_ = false;    ///< the current plan is a placement (ehc_place)
   std::shared_ptr<const EhcWeighting> placement_map_;
   std::vector<Eigen::Vector3d> place_starts_;  ///< the current placement's IK starts
