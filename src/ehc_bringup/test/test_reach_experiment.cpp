@@ -174,6 +174,9 @@ TEST(ReachExperiment, NoJointLimitTrapsBackToBackEveryMethod) {
   before.base_turn_unwinding = false;
   before.limit_centring_gain = 0.0;
   before.recovery.enabled = false;  // the stall recovery would rescue these targets too
+  before.far_approach.face_target = false;  // and so would the far approach
+  before.far_approach.posture_gain = 0.0;
+  before.far_approach.orientation_release = 0.0;
   std::vector<ReachTrial> trials_before;
   const ReachSummary b = runSet0(s, before, ehc_control::ControlMode::NeoC, sets, &trials_before);
   EXPECT_GE(b.failed, 2);
@@ -201,6 +204,9 @@ TEST(ReachExperiment, WristFlipRemovesTheForearmRollTrapBackToBack) {
   ehc_control::QpControllerParams no_flip = s.ctrl;
   no_flip.wrist_flip.margin = 0.0;
   no_flip.recovery.enabled = false;  // the stall recovery would rescue this target too
+  no_flip.far_approach.face_target = false;  // and so would the far approach
+  no_flip.far_approach.posture_gain = 0.0;
+  no_flip.far_approach.orientation_release = 0.0;
   std::vector<ReachTrial> trials_before;
   const ReachSummary b = runSet0(s, no_flip, ehc_control::ControlMode::Ehc, sets, &trials_before);
   ASSERT_EQ(trials_before.size(), 47u);
@@ -274,6 +280,11 @@ TEST(ReachExperiment, AJointLimitStallIsRecoveredThroughWholeBodyIk) {
   s.sets = {{pose(-0.01073739308, -0.2371418818, 0.698047065, -0.2357319204, -0.4545359977, 0.8384985393, 0.1864073179)},
             {pose(-1.71836345, 0.28998997, 0.5336868357, -0.7470270042, -0.04410559814, -0.3843337259, 0.5406412289)}};
   s.params.noise.enabled = false;
+  // The far approach carries the arm to set 1's target (behind the robot) without the stall;
+  // this test is about the recovery from it, so both runs go without the far approach.
+  s.ctrl.far_approach.face_target = false;
+  s.ctrl.far_approach.posture_gain = 0.0;
+  s.ctrl.far_approach.orientation_release = 0.0;
   for (const bool recovery : {false, true}) {
     s.ctrl.recovery.enabled = recovery;
     std::vector<ReachTrial> trials;

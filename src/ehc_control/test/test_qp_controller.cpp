@@ -493,6 +493,69 @@ TEST(EhcQpController, ManipulabilityFadeStopsNullSpaceDriftAtTheTarget) {
   }
 }
 
+TEST(EhcQpController, FarApproachFacesTheTargetAndCarriesTheArmOnlyWhileFar) {
+  // A target 3.5-5 m away, 60-120 deg to the left of the heading, the TCP ahead of the base
+  // (bearing ~0) and a wrist joint off its ready position, no desired twist: with the far
+  // approach the base turns left towards the target and the wrist is pulled towards ready;
+  // without it (the paper's TCP bearing) neither. Within far_approach.distance of the target the
+  // far approach changes nothing.
+  const unsigned seed = ehc_test::testSeed("EhcQpController far approach");
+  RecordProperty("seed", std::to_string(seed));
+  SCOPED_TRACE("seed " + std::to_string(seed));
+  std::mt19937 rng(seed);
+  auto model = std::make_shared<const WholeBodyModel>(realmanWithoutStopDistances());
+  const auto& rc = model->config();
+  std::uniform_real_distribution<double> side(60.0 * M_PI / 180.0, 120.0 * M_PI / 180.0), dist(3.5, 5.0);
+  const double bearing = side(rng), d = dist(rng);
+  const Eigen::Isometry3d target = test::approachPose(d * std::cos(bearing), d * std::sin(bearing), 0.7, Eigen::Vector3d(0, 0, -1));
+  const Eigen::Vector3d base = Eigen::Vector3d::Zero();
+  Eigen::VectorXd q = rc.arm_ready;  // TCP ahead of the base: its bearing is ~0
+  const int wrist = model->nArm() - 2;
+  q[wrist] += 0.5;                    // off the ready posture
+  const Eigen::Isometry3d tcp = model->fk(base, q, rc.tcp_frame);
+  // No desired twist: the turn and posture come from the cost terms alone (a servo's pull towards
+  // the target would turn the base either way).
+  const Vector6d nu = Vector6d::Zero();
+  QpControllerParams on, off;
+  off.far_approach.face_target = false;
+  off.far_approach.posture_gain = 0.0;
+  off.far_approach.orientation_release = 0.0;
+  ASSERT_TRUE(on.far_approach.face_target && on.far_approach.posture_gain > 0.0);
+  EXPECT_EQ(on.far_approach.fraction(2.0 * on.far_approach.distance + 0.1), 1.0);
+  EXPECT_EQ(on.far_approach.fraction(on.far_approach.distance), 0.0);
+  EXPECT_NEAR(on.far_approach.fraction(1.5 * on.far_approach.distance), 0.5, 1e-12);
+  const int nb = model->nBase();
+  for (ControlMode mode : {ControlMode::NeoC, ControlMode::NeoE, ControlMode::Ehc}) {
+    SCOPED_TRACE(toString(mode));
+    on.mode = off.mode = mode;
+    EhcQpController with(model, on, weighting()), without(model, off, weighting());
+    const ControllerCommand c1 = with.step(base, q, target, nu, {});
+    const ControllerCommand c0 = without.step(base, q, target, nu, {});
+    ASSERT_TRUE(c1.ok && c0.ok) << c1.failure << c0.failure;
+    EXPECT_GT(c1.velocity[nb - 1], 0.2) << "the base does not turn towards the target";
+    EXPECT_GT(c1.velocity[nb - 1], c0.velocity[nb - 1] + 0.1) << c1.velocity.transpose() << " | " << c0.velocity.transpose();
+    EXPECT_LT(c1.velocity[nb + wrist], c0.velocity[nb + wrist] - 0.1) << "the wrist is not pulled towards ready";
+    // Within far_approach.distance of the target: the same command with and without.
+    Eigen::Isometry3d near = tcp;
+    near.translation().x() += 0.5 * on.far_approach.distance;
+    const ControllerCommand n1 = with.step(base, q, near, nu, {});
+    const ControllerCommand n0 = without.step(base, q, near, nu, {});
+    EXPECT_LT((n1.velocity - n0.velocity).norm(), 1e-9);
+  }
+  // Validation: each field is checked and named.
+  for (const char* bad : {"{distance: 0}", "{posture_gain: -1}", "{orientation_release: 1.5}", "{face_target: maybe}"}) {
+    const auto cfg = ConfigNode::loadString(std::string("controller: {far_approach: ") + bad + "}", "far.yaml", "Test");
+    try {
+      loadQpControllerParams(cfg.child("controller"));
+      ADD_FAILURE() << bad << " accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("far.yaml"), std::string::npos) << e.what();
+      const std::string field = std::string(bad).substr(1, std::string(bad).find(':') - 1);
+      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(EhcQpController, TenObstaclePairsClosedLoopReproducesTheRecordedCommands) {
   // Regression record: four targets in a row, ten link-obstacle pairs in every cycle (a point
   // obstacle 0.15-0.24 m from each link origin along a fixed world direction, as in
@@ -515,6 +578,9 @@ TEST(EhcQpController, TenObstaclePairsClosedLoopReproducesTheRecordedCommands) {
   QpControllerParams paper_terms;
   paper_terms.base_turn_unwinding = false;
   paper_terms.limit_centring_gain = 0.0;
+  paper_terms.far_approach.face_target = false;
+  paper_terms.far_approach.posture_gain = 0.0;
+  paper_terms.far_approach.orientation_release = 0.0;
   EhcQpController ctrl(model, paper_terms, weighting());
   test::KinematicSim sim{Eigen::Vector3d::Zero(), rc.arm_ready};
   const std::vector<std::string> links = {"link1", "link2", "link3", "link4", "link5",

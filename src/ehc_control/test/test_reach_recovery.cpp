@@ -1,8 +1,10 @@
 // ReachRecovery's far stalls: an approach that makes no progress farther than twice the ready
 // pose's reach from the target brings the arm back to ready while the base drives to where the
 // ready TCP is over the target, on random targets in every direction (seed printed); far plans
-// have their own attempt count, so the near (joint-limit) recoveries stay available.
+// have their own attempt count, so the near (joint-limit) recoveries stay available. A near stall
+// with every joint free plans too (free_stalls), unless a link is held at an obstacle.
 
+#include "ehc_control/motion_limit.h"
 #include "ehc_control/qp_controller.h"
 #include "ehc_control/reach_recovery.h"
 #include "ehc_test/control_fixtures.h"
@@ -86,6 +88,49 @@ TEST(ReachRecovery, AFarStallWithTheArmAtReadyStartsNothing) {
   const Eigen::Isometry3d target = test::approachPose(5.0, 0.0, 0.7, Eigen::Vector3d(1.0, 0.0, 0.0));
   for (double t = 0.0; t < 3.0 * qp.recovery.stall_window; t += kDt)
     EXPECT_EQ(rec.update(t, base, q, tcpOf(model, base, q), target), nullptr) << "t " << t;
+}
+
+// A near stall with every joint free (the pose task's own equilibrium; a far approach left the
+// QP in such limit cycles 0.2-0.3 m short): with free_stalls a near plan starts after the stall
+// window and its configuration has the TCP on the target; without it, or with a link held at an
+// obstacle, nothing starts. Targets: the TCP of random arm postures (inside the stops, so whole-
+// body IK reaches them) seen from the ready posture; seed printed.
+TEST(ReachRecovery, ANearStallWithEveryJointFreePlansUnlessHeldAtAnObstacle) {
+  const WholeBodyModel model(test::realmanConfig());
+  const RobotConfig& rc = model.config();
+  const QpControllerParams qp;
+  const unsigned seed = ehc_test::testSeed("ReachRecovery free stalls");
+  std::mt19937 rng(seed);
+  const Eigen::Vector3d base = Eigen::Vector3d::Zero();
+  const Eigen::VectorXd q = rc.arm_ready;  // every joint free
+  ASSERT_LT(pinnedJoint(rc, q, qp.joint_stop + qp.recovery.pinned_margin), 0);
+  for (int trial = 0; trial < 5; ++trial) {
+    SCOPED_TRACE("trial " + std::to_string(trial) + ", seed " + std::to_string(seed));
+    const Eigen::Vector3d ready_tcp = tcpOf(model, base, q).translation();
+    Eigen::Isometry3d target;
+    do  // near: within half a metre of the ready TCP (farther than twice its reach is a far stall)
+      target = tcpOf(model, base, test::randomArm(rc, rng, 0.3));
+    while ((target.translation() - ready_tcp).norm() > 0.5);
+    for (int variant = 0; variant < 3; ++variant) {  // free_stalls on; off; on with an obstacle held
+      ReachRecoveryParams params = qp.recovery;
+      params.free_stalls = variant != 1;
+      const bool held = variant == 2;
+      ReachRecovery rec(model, params, qp.joint_stop, qp.joint_influence);
+      const Eigen::VectorXd* ref = nullptr;
+      double t = 0.0;
+      for (; t < 2.0 * params.stall_window && !ref; t += kDt)
+        ref = rec.update(t, base, q, tcpOf(model, base, q), target, nullptr, held);
+      if (variant != 0) {
+        EXPECT_EQ(ref, nullptr) << "variant " << variant << ": " << rec.event();
+        continue;
+      }
+      ASSERT_NE(ref, nullptr) << "no plan after a free stall";
+      EXPECT_GE(t, params.stall_window);
+      EXPECT_EQ(rec.attempts(), 1) << rec.event();
+      const Eigen::Isometry3d goal = tcpOf(model, rec.goalBase(), rec.goalArm());
+      EXPECT_LT((goal.translation() - target.translation()).norm(), 0.01) << rec.event();
+    }
+  }
 }
 
 // Placement (ehc_place): for a new target the recovery plans at once from starts ranked by the

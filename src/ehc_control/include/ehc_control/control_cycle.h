@@ -166,6 +166,8 @@ class ControlCycle {
   std::unique_ptr<ReachRecovery> recovery_;
   std::unique_ptr<ControllerSupervisor> supervisor_;
   std::unique_ptr<MotionLimitMonitor> limits_;
+  /// The last cycle's motion limit was an obstacle (a link held at its stop distance): not a free stall.
+  bool obstacle_held_ = false;
   std::unique_ptr<MpbsServo> mpbs_;
   std::unique_ptr<TargetTracker> tracker_;
   Eigen::Isometry3d tcp_T_camera_ = Eigen::Isometry3d::Identity();

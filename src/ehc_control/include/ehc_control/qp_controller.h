@@ -10,8 +10,9 @@
 //        A_in x <= b_in                      (joint-position and obstacle velocity dampers)
 //        x- <= x <= x+                       (velocity limits, slack bound)
 //   Q = blkdiag(w_base I, w_arm I, 1/max(|e|, e_min) I_6)
-//   C = [0 .. -k_eps b (w_z column); -k_m J_m + k_p (q - q_ready) + dV_lim/dq; 0]
-//   b: TCP bearing atan2(y_e, x_e) in the base frame, on the 2 pi branch nearest the winding of
+//   C = [0 .. -k_eps b (w_z column); -k_m J_m + (k_p + f k_p,far) (q - q_ready) + dV_lim/dq; 0]
+//   b: bearing in the base frame of TCP + f (target - TCP), f the far fraction (the TCP's near
+//      the target, the target's far from it; FarApproachParams), on the 2 pi branch nearest the winding of
 //      the arm's yaw joint (q_yaw - q_yaw,ready), so that turning towards the TCP unwinds it;
 //      with the TCP over the shoulder (> 90 deg from the yaw joint's direction) on the previous
 //      cycle's branch (no 2 pi flips from noise at the branch border)
@@ -44,6 +45,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <map>
 #include <memory>
 #include <string>
@@ -62,6 +64,33 @@ std::string toString(ControlMode m);
 /// The modes whose base weight is sig(omega) (ehc, ehc_place): they need an EhcWeighting.
 inline bool usesWeighting(ControlMode m) { return m == ControlMode::Ehc || m == ControlMode::EhcPlace; }
 ControlMode controlModeFromString(const std::string& s);  ///< throws std::invalid_argument
+
+/// The far approach (every mode; section `far_approach`): while the TCP is farther than
+/// `distance` from the target, a far fraction f = clamp(|e_p| / distance - 1, 0, 1) (0 within
+/// `distance`, 1 beyond twice it) leads the base and carries the arm:
+///  - face_target: the turn term's bearing is that of TCP + f (target - TCP): the target's while
+///    far, the TCP's (paper, NEO) within `distance`. The TCP bearing says where to go only while
+///    the arm reaches towards the target; a folded or pinned arm holds the TCP near the base's
+///    axis, and a differential base then drives past a target lying metres to its side.
+///  - posture_gain: k_p + f posture_gain pulls the arm towards its ready posture, so that it is
+///    carried comfortably while the base drives instead of stretching towards the target (the
+///    base cannot keep pace with the TCP task far away) into joint stops it later arrives from.
+/// The ramp is in the TCP's distance, not sig(omega): omega, measured along e from the arm base,
+/// stays ~0 when the TCP has passed a target that lies behind or below it.
+struct FarApproachParams {
+  double distance = 1.0;       ///< m: the far fraction is 0 within this TCP-target distance, 1 beyond twice it
+  bool face_target = true;     ///< the turn term faces the target while far (false: the TCP always)
+  double posture_gain = 0.05;  ///< added to posture_gain times the far fraction; 0 = off
+  /// The TCP orientation rows of the task are weighed by 1 - f orientation_release: 0 keeps the
+  /// servo's orientation (MPBS: looking at the target) while far, 1 leaves it to the posture.
+  double orientation_release = 0.8;
+  /// The far fraction for a TCP-target distance (m).
+  double fraction(double position_error) const {
+    return std::clamp(position_error / distance - 1.0, 0.0, 1.0);
+  }
+  void validate() const;       ///< throws "[FarApproachParams] ..."
+  std::string summary() const;
+};
 
 struct QpControllerParams {
   ControlMode mode = ControlMode::Ehc;
@@ -91,6 +120,8 @@ struct QpControllerParams {
   /// so that joints leave the damper zone while the task (or the base) allows it, instead of
   /// being pinned there by their damper. 0 = off.
   double limit_centring_gain = 0.1;
+  /// Section `far_approach`: how the robot travels while the target is metres away (FarApproach).
+  FarApproachParams far_approach;
   /// Section `wrist_flip`: the joint-limit escape above the QP (WristFlip, wrist_flip.h): a
   /// spherical-wrist roll joint nearing its limit moves to the other wrist branch (same TCP
   /// pose) while the base and the other joints keep the TCP position task.
@@ -257,11 +288,13 @@ class EhcQpController {
                        const Eigen::Isometry3d& target, const EhcWeight* weight, ControllerCommand* out) const;
   /// The mode's base weight and held groups (tsmm stage switch), and the arrival phase.
   HeldGroups applyMode(const Vector6d& e, const Eigen::Isometry3d& target, double e_floor, ControllerCommand* out);
-  /// The turn term's TCP bearing in the base frame (unwound, see base_turn_unwinding).
-  double turnBearing(const Eigen::VectorXd& q);
+  /// The turn term's bearing in the base frame: of the TCP, led towards the target far from it
+  /// (far_approach.face_target; `target_in_base`: the target position in the base frame, `far`
+  /// the far fraction), unwound (base_turn_unwinding).
+  double turnBearing(const Eigen::VectorXd& q, const Eigen::Vector3d& target_in_base, double far);
   /// Cost diagonal h and linear term c of [qd; delta].
-  void buildCost(const Eigen::VectorXd& q, double e_floor, const ControllerCommand& out,
-                 const Eigen::VectorXd* reference);
+  void buildCost(const Eigen::VectorXd& q, const Eigen::Vector3d& target_in_base, double e_floor,
+                 const ControllerCommand& out, const Eigen::VectorXd* reference);
   /// Velocity and slack bounds, the held variables, the joint dampers as tightened bounds.
   std::string buildBounds(const Eigen::VectorXd& q, const HeldGroups& held, ControllerCommand* out);
   /// Obstacle damper rows (nearest pairs first, parallel rows merged).
@@ -269,7 +302,9 @@ class EhcQpController {
   /// WristFlip: prescribes the wrist triple's rates (held) when a flip runs; true then.
   bool applyWristFlip(const Eigen::VectorXd& q, const HeldGroups& held, bool may_run, ControllerCommand* out);
   /// The free DOFs, the task rows over them and the QP's cost G, g (slack eliminated).
-  void buildTaskAndCost(const Vector6d& nu_e, bool release_orientation);
+  /// `orientation_scale` weighs the orientation rows (1: the task; 0: released to the slack,
+  /// tsmm base stage and wrist flip; between: the far approach).
+  void buildTaskAndCost(const Vector6d& nu_e, double orientation_scale);
   /// The QP's inequality rows C, d (bounds, slack bounds, obstacle dampers); returns their count.
   int buildInequalities();
   /// The command from the QP solution: held values, slack, bounds check and clamp.

@@ -14,7 +14,15 @@
 // ReachRecovery watches the approach and, when it stalls with a joint pinned, looks further:
 //   detect   no progress (position_progress, orientation_progress) for stall_window s, not
 //            arrived, and an arm joint within pinned_margin of its joint stop or the target
-//            farther than twice the ready pose's reach (the base is not bringing the arm there);
+//            farther than twice the ready pose's reach (the base is not bringing the arm there),
+//            or (free_stalls) near the target with every joint free and no link held at an
+//            obstacle: the pose task's own equilibrium. Traces (far approach, targets 70-150 deg
+//            off the heading, RealMan): the base arrives facing the target with the hand 2.3-3
+//            rad from the grasp orientation; the QP then settles 0.2-0.3 m short in a limit
+//            cycle of period 4 cycles (base yaw rate +-0.4 rad/s, the wrist +-1.3 rad/s, every
+//            joint 0.9 rad or more from its limit), the 1/|e| slack weight low with the
+//            orientation error large, the manipulability and turn terms holding the arm. The
+//            plan below puts the base on the target's other side;
 //   plan     far from the target (beyond twice the ready pose's reach) the arm unwinds to its
 //            ready posture while the base drives to where the ready TCP is over the target
 //            (readyOver; traces: far stalls came from a base turned to rotate the hand, the
@@ -33,6 +41,9 @@
 //            dampers and velocity limits still apply): arm joint_gain (q* - q); base a
 //            pose-stabilising law (differential: the polar law of Astolfi, forwards or
 //            backwards; holonomic: proportional);
+//   finish   a near move at the tolerances of (b*, q*) with the TCP still off the target: once,
+//            the arm's configuration of the target from the base where it stands (IK, base
+//            held), tracked by the arm alone;
 //   resume   within the tolerances of (b*, q*), where the TCP is on the target, or after
 //            move_timeout (a far move: plus its travel at the base's speed limit); the pose
 //            task takes over again. At most max_attempts near and
@@ -91,6 +102,8 @@ struct ReachRecoveryParams {
   double joint_tolerance = 0.1;                      ///< rad
   double move_timeout = 10.0;                        ///< s
   int max_attempts = 2;                              ///< per target
+  /// Near stalls with every joint free (and no link held at an obstacle) plan too.
+  bool free_stalls = true;
   /// Placement (ehc_place): bearings around the target of the candidate base poses.
   int placement_bearings = 16;
   /// Placement: the move hands over to the pose task once sig(omega) reaches this (1: only at its goal).
@@ -115,10 +128,11 @@ class ReachRecovery {
   /// Per control cycle at time `now` (s), before the QP: the state, the TCP pose and the target.
   /// Returns the whole-body reference velocity while moving (size nDof), else nullptr.
   /// `place`: this cycle's EHC weight in mode ehc_place (a new target starts a placement, see
-  /// the top of this file; needs setPlacementMap()), nullptr otherwise.
+  /// the top of this file; needs setPlacementMap()), nullptr otherwise. `obstacle_held`: a
+  /// link is held at its obstacle stop distance (MotionLimit::Obstacle): not a free stall.
   const Eigen::VectorXd* update(double now, const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q,
                                 const Eigen::Isometry3d& tcp, const Eigen::Isometry3d& target,
-                                const EhcWeight* place = nullptr);
+                                const EhcWeight* place = nullptr, bool obstacle_held = false);
   /// A new approach: forgets the progress history and the attempts.
   void reset();
   /// The reachability map and its r_td threshold (the EHC weighting) of the placements.
@@ -147,7 +161,8 @@ class ReachRecovery {
 
  private:
   void startWatching(double now, double position_error, double orientation_error);
-  bool stalled(double now, double position_error, double orientation_error, const Eigen::VectorXd& q);
+  bool stalled(double now, double position_error, double orientation_error, const Eigen::VectorXd& q,
+               bool obstacle_held);
   void startPlanning(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q, bool far);
   /// The base pose `radius` from the target at `angle` (seen from the target), facing so that
   /// the ready pose's TCP points at the target.
@@ -165,6 +180,10 @@ class ReachRecovery {
   void start(int k, const Eigen::Isometry3d& target, Eigen::Vector3d* base, Eigen::VectorXd* q) const;
   void reference(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q);
   bool atGoal(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q) const;
+  /// At a near move's goal with the TCP still off the target: the goal becomes the arm's IK
+  /// configuration from the current base (base held), once per move; true then.
+  bool finishArmOnly(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q, double position_error,
+                     double orientation_error);
 
   const WholeBodyModel& model_;
   ReachRecoveryParams params_;
@@ -179,6 +198,7 @@ class ReachRecovery {
   int attempts_ = 0;      ///< near stalls of this target
   int far_attempts_ = 0;  ///< far stalls of this target (their own count: a far unwind is not a near plan)
   bool far_ = false;      ///< the current plan is a far one
+  bool finishing_ = false;  ///< the current near move finishes with the arm alone (finishArmOnly)
   bool place_ = false;    ///< the current plan is a placement (ehc_place)
   std::shared_ptr<const EhcWeighting> placement_map_;
   std::vector<Eigen::Vector3d> place_starts_;  ///< the current placement's IK starts

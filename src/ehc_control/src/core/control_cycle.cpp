@@ -250,6 +250,7 @@ void ControlCycle::reportMotionLimit(double now, const Vector6d* slack, double m
   c.target_in_fov = out->status.target_in_fov;
   try {
     out->status.motion_limit = limits_->update(c);
+    obstacle_held_ = out->status.motion_limit.limit == MotionLimit::Obstacle;
   } catch (const std::exception& e) {  // core errors: reported, never thrown out of a cycle
     out->status.motion_limit = MotionLimitReport{};
     if (out->status.reason.empty()) out->status.reason = std::string("motion limit: ") + e.what();
@@ -281,7 +282,8 @@ ControllerCommand ControlCycle::step(double now) {
   // A joint-limit stall, or in ehc_place a new target's placement: the recovery's whole-body
   // reference replaces the servo (ReachRecovery).
   const bool place = controller_->params().mode == ControlMode::EhcPlace && w;
-  const Eigen::VectorXd* reference = recovery_->update(now, base, q, tcp, target, place ? &*w : nullptr);
+  const Eigen::VectorXd* reference =
+      recovery_->update(now, base, q, tcp, target, place ? &*w : nullptr, obstacle_held_);
   auto withEvent = [this](ControllerCommand c) {
     if (!recovery_->event().empty()) c.event += (c.event.empty() ? "" : "; ") + recovery_->event();
     c.recovering = recovery_->state() == ReachRecovery::State::Moving && !recovery_->placing();  // not a placement

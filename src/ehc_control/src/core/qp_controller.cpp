@@ -41,6 +41,20 @@ ControlMode controlModeFromString(const std::string& s) {
   return ehc_common::enumValue(kControlModeNames, s, "EhcQpController", "mode");
 }
 
+void FarApproachParams::validate() const {
+  requireRange("FarApproachParams", "distance", distance, 0.05, 100.0);
+  requireRange("FarApproachParams", "posture_gain", posture_gain, 0.0, 100.0);
+  requireRange("FarApproachParams", "orientation_release", orientation_release, 0.0, 1.0);
+}
+
+std::string FarApproachParams::summary() const {
+  std::ostringstream os;
+  os << "far approach (TCP beyond " << distance << " m, fully beyond " << 2.0 * distance << " m): "
+     << (face_target ? "base faces the target" : "base faces the TCP") << ", arm posture gain +" << posture_gain
+     << ", orientation rows weighed " << 1.0 - orientation_release << " when far";
+  return os.str();
+}
+
 void QpControllerParams::validate() const {
   requireRange(kOwner, "arm_weight", arm_weight, 1e-6, 1e3);
   requireRange(kOwner, "ehc_base_weight_min", ehc_base_weight_min, 1e-6, 1e4);
@@ -54,6 +68,7 @@ void QpControllerParams::validate() const {
   requireRange(kOwner, "manipulability_gain", manipulability_gain, 0.0, 100.0);
   requireRange(kOwner, "manipulability_fade_distance", manipulability_fade_distance, 0.0, 5.0);
   requireRange(kOwner, "posture_gain", posture_gain, 0.0, 100.0);
+  far_approach.validate();
   requireRange(kOwner, "limit_centring_gain", limit_centring_gain, 0.0, 100.0);
   wrist_flip.validate();
   recovery.validate();
@@ -92,7 +107,7 @@ std::string QpControllerParams::summary() const {
      << ", k_eps " << base_turn_gain << (base_turn_unwinding ? " (unwound)" : "") << ", k_m " << manipulability_gain
      << (manipulability_fade_distance > 0.0 ? " (fading within " + std::to_string(manipulability_fade_distance) + " m)" : std::string())
      << ", k_p "
-     << posture_gain << ", limit centring " << limit_centring_gain << "; " << wrist_flip.summary() << "; " << recovery.summary() << "\n"
+     << posture_gain << ", limit centring " << limit_centring_gain << "; " << far_approach.summary() << "; " << wrist_flip.summary() << "; " << recovery.summary() << "\n"
      << "  joint dampers: influence " << joint_influence << " rad, stop " << joint_stop
      << " rad, gain " << joint_damper_gain << "; obstacle dampers: d_i " << obstacle_influence
      << " m, d_s " << obstacle_stop << " m";
@@ -125,6 +140,13 @@ QpControllerParams loadQpControllerParams(const ehc_common::ConfigNode& n) {
   p.manipulability_gain = n.get("manipulability_gain", p.manipulability_gain);
   p.manipulability_fade_distance = n.get("manipulability_fade_distance", p.manipulability_fade_distance);
   p.posture_gain = n.get("posture_gain", p.posture_gain);
+  {
+    const ehc_common::ConfigNode far = n.childOrEmpty("far_approach");
+    p.far_approach.distance = far.get("distance", p.far_approach.distance);
+    p.far_approach.face_target = far.get("face_target", p.far_approach.face_target);
+    p.far_approach.posture_gain = far.get("posture_gain", p.far_approach.posture_gain);
+    p.far_approach.orientation_release = far.get("orientation_release", p.far_approach.orientation_release);
+  }
   p.limit_centring_gain = n.get("limit_centring_gain", p.limit_centring_gain);
   {
     const ehc_common::ConfigNode flip = n.childOrEmpty("wrist_flip");
@@ -354,7 +376,7 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
   const HeldGroups held = applyMode(e, target, e_floor, &out);
 
   // --- cost, bounds and joint dampers, obstacle dampers, wrist flip
-  buildCost(q, e_floor, out, reference);
+  buildCost(q, ws_->kinematics.baseTransform().inverse() * target.translation(), e_floor, out, reference);
   std::string failure = buildBounds(q, held, &out);
   if (!failure.empty()) return fail(out, failure);
   failure = buildObstacleRows(obstacles, &out);
@@ -362,8 +384,11 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
   const bool flip = applyWristFlip(q, held, reference == nullptr, &out);
 
   // --- the QP in the rates alone (see buildTaskAndCost), solved through the QpSolver interface
-  if (reference) buildTaskAndCost(ws_->J * *reference, held.arm);
-  else buildTaskAndCost(nu_e, held.arm || flip);
+  if (reference) buildTaskAndCost(ws_->J * *reference, held.arm ? 0.0 : 1.0);
+  else
+    buildTaskAndCost(nu_e, held.arm || flip ? 0.0
+                                            : 1.0 - params_.far_approach.orientation_release *
+                                                        params_.far_approach.fraction(out.position_error));
   const int rows = buildInequalities();
   Workspace& s = *ws_;
   const int nf = static_cast<int>(s.free.size());
@@ -450,11 +475,13 @@ EhcQpController::HeldGroups EhcQpController::applyMode(const Vector6d& e, const 
   return held;
 }
 
-double EhcQpController::turnBearing(const Eigen::VectorXd& q) {
+double EhcQpController::turnBearing(const Eigen::VectorXd& q, const Eigen::Vector3d& target_in_base, double far) {
   const Workspace& s = *ws_;
   const RobotConfig& rc = model_->config();
-  const Eigen::Vector3d tcp_in_base = s.kinematics.linkPoseInBase(s.tcp_link).translation();
-  double bearing = std::atan2(tcp_in_base.y(), tcp_in_base.x());
+  Eigen::Vector3d towards = s.kinematics.linkPoseInBase(s.tcp_link).translation();
+  // Far from the target the base faces the target's way, not the TCP's (FarApproachParams).
+  if (params_.far_approach.face_target) towards += far * (target_in_base - towards);
+  double bearing = std::atan2(towards.y(), towards.x());
   if (params_.base_turn_unwinding && yaw_joint_ >= 0) {
     // The branch of the yaw joint's winding, while the TCP lies on the side the yaw joint
     // points to. Reaching over the shoulder (the TCP more than 90 deg from that direction)
@@ -471,8 +498,8 @@ double EhcQpController::turnBearing(const Eigen::VectorXd& q) {
   return bearing;
 }
 
-void EhcQpController::buildCost(const Eigen::VectorXd& q, double e_floor, const ControllerCommand& out,
-                                const Eigen::VectorXd* reference) {
+void EhcQpController::buildCost(const Eigen::VectorXd& q, const Eigen::Vector3d& target_in_base, double e_floor,
+                                const ControllerCommand& out, const Eigen::VectorXd* reference) {
   const RobotConfig& rc = model_->config();
   const int nb = model_->nBase(), na = model_->nArm(), nx = model_->nDof() + 6;
   Workspace& s = *ws_;
@@ -487,12 +514,14 @@ void EhcQpController::buildCost(const Eigen::VectorXd& q, double e_floor, const 
     c.head(nb + na) = -h.head(nb + na).cwiseProduct(*reference);
     return;
   }
-  const double bearing = turnBearing(q);
+  const double far = params_.far_approach.fraction(out.position_error);
+  const double bearing = turnBearing(q, target_in_base, far);
   c[nb - 1] = -params_.base_turn_gain * bearing;
   const double fade = params_.manipulability_fade_distance > 0.0
                           ? std::min(1.0, out.position_error / params_.manipulability_fade_distance)
                           : 1.0;
-  c.segment(nb, na) = -params_.manipulability_gain * fade * s.Jm + params_.posture_gain * (q - rc.arm_ready);
+  const double posture = params_.posture_gain + far * params_.far_approach.posture_gain;
+  c.segment(nb, na) = -params_.manipulability_gain * fade * s.Jm + posture * (q - rc.arm_ready);
   if (params_.limit_centring_gain > 0.0)
     JointLimitCentring{params_.limit_centring_gain, params_.joint_influence, params_.joint_stop}
         .addGradient(q, rc.arm_lower, rc.arm_upper, c.segment(nb, na));
@@ -617,7 +646,7 @@ bool EhcQpController::applyWristFlip(const Eigen::VectorXd& q, const HeldGroups&
   return flip;
 }
 
-void EhcQpController::buildTaskAndCost(const Vector6d& nu_e, bool release_orientation) {
+void EhcQpController::buildTaskAndCost(const Vector6d& nu_e, double orientation_scale) {
   const int nd = model_->nDof();
   Workspace& s = *ws_;
   const Matrix6Xd& J = s.J;
@@ -641,7 +670,8 @@ void EhcQpController::buildTaskAndCost(const Vector6d& nu_e, bool release_orient
   for (int r = 0; r < 6; ++r) {
     // The tsmm base stage only brings the TCP to the target position (orientation comes with
     // the arm stage), and so does a wrist flip: their orientation rows are left to the slack.
-    s.task_released[r] = release_orientation && r >= 3;
+    const double scale = r >= 3 ? orientation_scale : 1.0;
+    s.task_released[r] = scale <= 0.0;
     double br = s.task_released[r] ? 0.0 : nu_e[r];
     if (!s.task_released[r])
       for (int k = 0; k < nd; ++k) {
@@ -650,7 +680,8 @@ void EhcQpController::buildTaskAndCost(const Vector6d& nu_e, bool release_orient
         else
           s.task(r, k) = J(r, k);
       }
-    s.task_rhs[r] = br;
+    s.task.row(r) *= scale;
+    s.task_rhs[r] = scale * br;
   }
   if (s.G.rows() < nd) s.G.resize(nd, nd);
   if (s.g.size() < nd) s.g.resize(nd);
