@@ -204,6 +204,53 @@ TEST(GraspGenerator, BadCloudsGiveNoGraspAndAClearReason) {
   EXPECT_FALSE(gen.generateFromScene(all_nan, kView).reason.empty());
 }
 
+// A view over a table's edge that shows more floor than table top (random table height, object
+// place and yaw; seed printed): with the target's place given, the support is the table under
+// it, not the larger floor, so the table's edge is no object; the target is found on the table;
+// a place with no plane within max_object_extent under it has no object at all.
+TEST(GraspGenerator, TheSupportIsThePlaneUnderTheTargetNotTheLargestOne) {
+  std::mt19937 rng(ehc_test::testSeed("GraspGenerator.TheSupportIsThePlaneUnderTheTarget"));
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const GraspGenerator gen{GraspGeneratorConfig()};
+  for (int trial = 0; trial < 5; ++trial) {
+    const double table_z = 0.6 + 0.2 * unit(rng);
+    Surface scene = tableSurface(0.9, 0.0, 1.0, 1.0, 0.0, 0.01);  // floor: the larger plane
+    scene.append(tableSurface(1.1, 0.0, 0.6, 0.6, table_z, 0.01));
+    Surface edge = boxSurface(Eigen::Vector3d(0.005, 0.6, 0.04), 0.005);  // the top's front face
+    edge.transform(pose(0.8, 0.0, table_z - 0.02, 0.0));
+    scene.append(edge);
+    const Eigen::Vector3d place(0.95 + 0.2 * unit(rng), -0.2 + 0.4 * unit(rng), table_z + 0.04);
+    Surface box = boxSurface(Eigen::Vector3d(0.05, 0.05, 0.08), 0.004);
+    box.transform(pose(place.x(), place.y(), place.z(), 2.0 * M_PI * unit(rng)));
+    scene.append(box);
+    const PointList cloud = scene.noisy(0.001, static_cast<unsigned>(trial));
+    const Eigen::Vector3d view(0.3, 0.0, table_z + 0.5);
+    SCOPED_TRACE("table at " + std::to_string(table_z) + " m, object at " + std::to_string(place.x()) + ", " +
+                 std::to_string(place.y()));
+
+    const SceneSegmentation largest = gen.segmentScene(cloud, &view);
+    ASSERT_TRUE(largest.plane_found);
+    EXPECT_NEAR(-largest.plane[3], 0.0, 0.01) << "the floor is the larger plane of this view";
+
+    const SceneSegmentation seg = gen.segmentScene(cloud, &view, &place);
+    ASSERT_TRUE(seg.plane_found) << seg.reason;
+    // The object's place is 4 cm above the table (the plane's height taken there: a plane fitted
+    // within plane_distance may tilt a little).
+    EXPECT_NEAR(seg.plane.head<3>().dot(place) + seg.plane[3], place.z() - table_z, gen.config().plane_distance);
+    ASSERT_FALSE(seg.objects.empty()) << seg.reason;
+    for (const PointList& o : seg.objects)
+      for (const auto& p : o) EXPECT_GT(p.z(), table_z) << "a point of the table's edge is an object";
+    const Eigen::Vector3d above_edge(0.82, 0.0, table_z + 0.03);
+    for (const PointList& o : gen.segmentScene(cloud, &view, &above_edge).objects)
+      for (const auto& p : o) EXPECT_GT(p.z(), table_z);
+
+    const Eigen::Vector3d in_the_air(place.x(), place.y(), table_z + 1.0);
+    const SceneSegmentation none = gen.segmentScene(cloud, &view, &in_the_air);
+    EXPECT_TRUE(none.objects.empty());
+    EXPECT_NE(none.reason.find("no support plane under the target"), std::string::npos) << none.reason;
+  }
+}
+
 TEST(GraspGenerator, SceneWithTableIsSegmentedAndGraspsAvoidTheTable) {
   const double table_z = 0.70;
   Surface scene = tableSurface(0.7, 0.0, 0.6, 0.8, table_z, 0.005);

@@ -289,7 +289,7 @@ void GraspPipeline::perceiveCloudTarget(double t, const ehc_perception::PointLis
 std::optional<ObjectExtent> GraspPipeline::targetClusterExtent(const ehc_perception::PointList& points,
                                                                const Eigen::Vector3d& viewpoint,
                                                                const Eigen::Vector3d& centre) const {
-  const ehc_perception::SceneSegmentation seg = generator_->segmentScene(points, &viewpoint);
+  const ehc_perception::SceneSegmentation seg = generator_->segmentScene(points, &viewpoint, &centre);
   const ehc_perception::PointList* best = nullptr;
   double best_d = cfg_.targeting.target_gate;
   for (const ehc_perception::PointList& o : seg.objects) {

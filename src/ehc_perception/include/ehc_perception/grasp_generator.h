@@ -311,8 +311,12 @@ class GraspGenerator {
   /// Removes the support plane (RANSAC, normal within plane_max_tilt_deg of up) and clusters
   /// the rest: connected within cluster_tolerance (with `viewpoint`, grown with the range by
   /// cluster_spacing_factor), parts whose footprints on the support overlap merged (see
-  /// footprint_merge_gap). Without a plane, the whole finite cloud is clustered.
-  SceneSegmentation segmentScene(const PointList& scene, const Eigen::Vector3d* viewpoint = nullptr) const;
+  /// footprint_merge_gap). Without a plane, the whole finite cloud is clustered. With `near`
+  /// (where the target is), the plane is the one under it (at most max_object_extent below),
+  /// not a larger one farther down (the floor seen past a table's edge); where the view has
+  /// planes but none under it, no object ("no support plane under the target").
+  SceneSegmentation segmentScene(const PointList& scene, const Eigen::Vector3d* viewpoint = nullptr,
+                                 const Eigen::Vector3d* near = nullptr) const;
 
   /// segmentScene + generate per object (the other objects are collision geometry), merged
   /// best first. With `near`, only the object whose centroid is closest to it is used.

@@ -11,6 +11,7 @@
 #include <Eigen/Eigenvalues>
 #include <pcl/common/centroid.h>
 #include <pcl/features/normal_3d.h>
+#include <pcl/filters/extract_indices.h>
 #include <pcl/filters/voxel_grid.h>
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
@@ -1952,7 +1953,58 @@ GraspResult GraspGenerator::generate(const PointList& object, const Eigen::Vecto
 
 // ------------------------------------------------------------------------------ scenes
 
-SceneSegmentation GraspGenerator::segmentScene(const PointList& scene, const Eigen::Vector3d* viewpoint) const {
+namespace {
+
+/// The support plane of a scene (normal within plane_max_tilt_deg of up, at least
+/// min_plane_fraction of the points): the largest such plane; with `near` (where the target
+/// is), the plane under it: planes are taken out largest first, at most kMaxSupportPlanes,
+/// until one lies at most max_object_extent below `near`. A view over a table's edge can show
+/// more floor than table top, and the floor is not what the target stands on: above it, the
+/// table's edge would be an object.
+constexpr int kMaxSupportPlanes = 3;
+enum class SupportSearch { Found, NoPlane, NoneUnderTarget };
+SupportSearch findSupportPlane(const Cloud::Ptr& cloud, const GraspGeneratorConfig& cfg, const Eigen::Vector3d* near,
+                      Eigen::Vector4d* plane) {
+  Cloud::Ptr rest = cloud;
+  for (int k = 0; k < kMaxSupportPlanes && rest->size() >= 3; ++k) {
+    pcl::ModelCoefficients coeffs;
+    pcl::PointIndices inliers;
+    pcl::SACSegmentation<pcl::PointXYZ> sac;
+    sac.setOptimizeCoefficients(true);
+    sac.setModelType(pcl::SACMODEL_PERPENDICULAR_PLANE);
+    sac.setMethodType(pcl::SAC_RANSAC);
+    sac.setAxis(cfg.up.cast<float>());
+    sac.setEpsAngle(cfg.plane_max_tilt_deg * kDeg);
+    sac.setDistanceThreshold(cfg.plane_distance);
+    sac.setMaxIterations(500);
+    sac.setInputCloud(rest);
+    sac.segment(inliers, coeffs);
+    if (coeffs.values.size() != 4 ||
+        static_cast<double>(inliers.indices.size()) < cfg.min_plane_fraction * static_cast<double>(cloud->size()))
+      return k == 0 ? SupportSearch::NoPlane : SupportSearch::NoneUnderTarget;
+    Eigen::Vector4d pl(coeffs.values[0], coeffs.values[1], coeffs.values[2], coeffs.values[3]);
+    pl /= pl.head<3>().norm();
+    if (pl.head<3>().dot(cfg.up) < 0) pl = -pl;
+    const double height = near ? pl.head<3>().dot(*near) + pl[3] : 0.0;
+    if (!near || (height >= -cfg.plane_distance && height <= cfg.max_object_extent)) {
+      *plane = pl;
+      return SupportSearch::Found;
+    }
+    pcl::ExtractIndices<pcl::PointXYZ> extract;
+    extract.setInputCloud(rest);
+    extract.setIndices(pcl::PointIndices::Ptr(new pcl::PointIndices(inliers)));
+    extract.setNegative(true);
+    Cloud::Ptr next(new Cloud);
+    extract.filter(*next);
+    rest = next;
+  }
+  return cloud->size() < 3 ? SupportSearch::NoPlane : SupportSearch::NoneUnderTarget;
+}
+
+}  // namespace
+
+SceneSegmentation GraspGenerator::segmentScene(const PointList& scene, const Eigen::Vector3d* viewpoint,
+                                               const Eigen::Vector3d* near) const {
   const GraspGeneratorConfig& cfg = config_;
   SceneSegmentation seg;
   int finite = 0;
@@ -1963,32 +2015,19 @@ SceneSegmentation GraspGenerator::segmentScene(const PointList& scene, const Eig
     return seg;
   }
   Cloud::Ptr cloud = voxelFilter(raw, cfg.voxel_size);
-
-  pcl::ModelCoefficients coeffs;
-  pcl::PointIndices inliers;
-  if (cloud->size() >= 3) {
-    pcl::SACSegmentation<pcl::PointXYZ> sac;
-    sac.setOptimizeCoefficients(true);
-    sac.setModelType(pcl::SACMODEL_PERPENDICULAR_PLANE);
-    sac.setMethodType(pcl::SAC_RANSAC);
-    sac.setAxis(cfg.up.cast<float>());
-    sac.setEpsAngle(cfg.plane_max_tilt_deg * kDeg);
-    sac.setDistanceThreshold(cfg.plane_distance);
-    sac.setMaxIterations(500);
-    sac.setInputCloud(cloud);
-    sac.segment(inliers, coeffs);
-  }
   Cloud::Ptr above(new Cloud);
-  if (coeffs.values.size() == 4 &&
-      static_cast<double>(inliers.indices.size()) >= cfg.min_plane_fraction * cloud->size()) {
-    Eigen::Vector4d pl(coeffs.values[0], coeffs.values[1], coeffs.values[2], coeffs.values[3]);
-    pl /= pl.head<3>().norm();
-    if (pl.head<3>().dot(cfg.up) < 0) pl = -pl;
+  Eigen::Vector4d pl;
+  const SupportSearch support = findSupportPlane(cloud, cfg, near, &pl);
+  if (support == SupportSearch::Found) {
     seg.plane_found = true;
     seg.plane = pl;
     for (const auto& p : *cloud)
       if (pl.head<3>().dot(p.getVector3fMap().cast<double>()) + pl[3] > 1.5 * cfg.plane_distance)
         above->push_back(p);
+  } else if (support == SupportSearch::NoneUnderTarget) {
+    seg.reason = "no support plane under the target";
+    seg.failure = GraspFailure::NoObject;
+    return seg;
   } else {
     *above = *cloud;
   }
@@ -2013,7 +2052,7 @@ SceneSegmentation GraspGenerator::segmentScene(const PointList& scene, const Eig
 GraspResult GraspGenerator::generateFromScene(const PointList& scene,
                                               const Eigen::Vector3d& viewpoint,
                                               const Eigen::Vector3d* near) const {
-  const SceneSegmentation seg = segmentScene(scene, &viewpoint);
+  const SceneSegmentation seg = segmentScene(scene, &viewpoint, near && near->allFinite() ? near : nullptr);
   GraspResult res;
   res.input_points = static_cast<int>(scene.size());
   res.support_plane_found = seg.plane_found;
@@ -2136,8 +2175,10 @@ CloudTargetResult generateForCloudTarget(const GraspGenerator& generator, const 
     return out;
   }
   const auto budget = static_cast<std::size_t>(targeting.max_input_points);
+  // A target nearest a point stands on the plane under that point.
+  const Eigen::Vector3d* under = selector.kind == ehc_control::TargetSelectorKind::Nearest ? &selector.point : nullptr;
   const SceneSegmentation seg =
-      generator.segmentScene(scene.size() > budget ? budgetPoints(scene, budget) : scene, &viewpoint);
+      generator.segmentScene(scene.size() > budget ? budgetPoints(scene, budget) : scene, &viewpoint, under);
   std::vector<Eigen::Vector3d> centres;
   for (const PointList& o : seg.objects) {
     Eigen::Vector3d c = Eigen::Vector3d::Zero();
