@@ -29,10 +29,15 @@ Eigen::Isometry3d tcpOf(const WholeBodyModel& m, const Eigen::Vector3d& base, co
 
 }  // namespace
 
-TEST(ReachRecovery, AFarStallDrivesTheBaseToTheTargetWithTheArmAtReady) {
-  const WholeBodyModel model(test::realmanConfig());
+/// The shipped RealMan, its model and the default controller parameters.
+class ReachRecoveryOnRealman : public ::testing::Test {
+ protected:
+  const WholeBodyModel model{test::realmanConfig()};
   const RobotConfig& rc = model.config();
   const QpControllerParams qp;
+};
+
+TEST_F(ReachRecoveryOnRealman, AFarStallDrivesTheBaseToTheTargetWithTheArmAtReady) {
   const unsigned seed = ehc_test::testSeed("ReachRecovery far stalls");
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> angle(-M_PI, M_PI), dist(3.0, 7.0), height(0.3, 1.0);
@@ -79,9 +84,7 @@ TEST(ReachRecovery, AFarStallDrivesTheBaseToTheTargetWithTheArmAtReady) {
   }
 }
 
-TEST(ReachRecovery, AFarStallWithTheArmAtReadyStartsNothing) {
-  const WholeBodyModel model(test::realmanConfig());
-  const QpControllerParams qp;
+TEST_F(ReachRecoveryOnRealman, AFarStallWithTheArmAtReadyStartsNothing) {
   ReachRecovery rec(model, qp.recovery, qp.joint_stop, qp.joint_influence);
   const Eigen::Vector3d base = Eigen::Vector3d::Zero();
   const Eigen::VectorXd q = model.config().arm_ready;
@@ -95,10 +98,7 @@ TEST(ReachRecovery, AFarStallWithTheArmAtReadyStartsNothing) {
 // window and its configuration has the TCP on the target; without it, or with a link held at an
 // obstacle, nothing starts. Targets: the TCP of random arm postures (inside the stops, so whole-
 // body IK reaches them) seen from the ready posture; seed printed.
-TEST(ReachRecovery, ANearStallWithEveryJointFreePlansUnlessHeldAtAnObstacle) {
-  const WholeBodyModel model(test::realmanConfig());
-  const RobotConfig& rc = model.config();
-  const QpControllerParams qp;
+TEST_F(ReachRecoveryOnRealman, ANearStallWithEveryJointFreePlansUnlessHeldAtAnObstacle) {
   const unsigned seed = ehc_test::testSeed("ReachRecovery free stalls");
   std::mt19937 rng(seed);
   const Eigen::Vector3d base = Eigen::Vector3d::Zero();
@@ -140,10 +140,7 @@ TEST(ReachRecovery, ANearStallWithEveryJointFreePlansUnlessHeldAtAnObstacle) {
 // the arm cannot take with it at an r_td pose gets a pose outside), the chosen configuration has the TCP on the
 // target, and the move there ends at that configuration. Random targets from every direction
 // around random bases, admitted as Exp-1 admits them (whole-body IK inside the joint stops; seed printed).
-TEST(ReachRecovery, APlacementPutsTheTargetWhereTheMapSaysTheArmReachesIt) {
-  const WholeBodyModel model(test::realmanConfig());
-  const RobotConfig& rc = model.config();
-  const QpControllerParams qp;
+TEST_F(ReachRecoveryOnRealman, APlacementPutsTheTargetWhereTheMapSaysTheArmReachesIt) {
   const auto map = std::make_shared<const ReachabilityMap>(ReachabilityMap::load(rc.reachability_map_path));
   const auto weighting = std::make_shared<const EhcWeighting>(map, EhcWeightingParams{});
   const unsigned seed = ehc_test::testSeed("ReachRecovery placement");
@@ -218,10 +215,7 @@ TEST(ReachRecovery, APlacementPutsTheTargetWhereTheMapSaysTheArmReachesIt) {
 }
 
 // Placement hands over to the pose task once sig(omega) reaches placement_handover_sig.
-TEST(ReachRecovery, APlacementHandsOverWhenSigReachesTheHandOverLevel) {
-  const WholeBodyModel model(test::realmanConfig());
-  const RobotConfig& rc = model.config();
-  const QpControllerParams qp;
+TEST_F(ReachRecoveryOnRealman, APlacementHandsOverWhenSigReachesTheHandOverLevel) {
   const auto map = std::make_shared<const ReachabilityMap>(ReachabilityMap::load(rc.reachability_map_path));
   ReachRecovery rec(model, qp.recovery, qp.joint_stop, qp.joint_influence);
   rec.setPlacementMap(std::make_shared<const EhcWeighting>(map, EhcWeightingParams{}));
