@@ -116,6 +116,15 @@ struct LibraryRun {
   ehc_sim::SimConfig sim;
   ehc_perception::GraspGenerator generator;
   ehc_perception::GraspTargetingParams targeting;
+  /// Writes <dir>/<csv_name> and <dir>/summary.md and says so on stderr (`views` rows).
+  void write(const std::string& csv_name, const std::string& csv_text, const std::string& summary,
+             std::size_t views) const {
+    std::ofstream csv(dir + "/" + csv_name), md(dir + "/summary.md");
+    csv << csv_text;
+    md << summary;
+    if (!csv || !md) throw std::invalid_argument("cannot write to '" + dir + "'");
+    std::cerr << "ehc_object_library: " << views << " views -> " << dir << "/" << csv_name << ", summary.md\n";
+  }
 };
 
 LibraryRun loadLibraryRun(const ehc_common::CommandLine& cli, int argc, char** argv, std::string* split, int* views,
@@ -146,8 +155,6 @@ int judge(int argc, char** argv) {
   p.judge.samples = static_cast<int>(cli.integer("samples", p.judge.samples, 1, 1000000));
   p.judge.max_approach_tilt_deg = p.judge.max_view_angle_deg = run.generator.config().max_approach_tilt_deg;
   p.validate();
-  const std::string& dir = run.dir;
-  const std::string& command = run.command;
   std::cerr << "ehc_object_library judge: seed " << p.seed << ", split " << p.split << ", " << p.views
             << " views per object, mu " << p.judge.friction_coefficient << "\n";
   const auto rows = ehc_bringup::judgeLibrary(
@@ -159,11 +166,7 @@ int judge(int argc, char** argv) {
                                               : "best " + ehc_bringup::toString(j.best.verdict))
                   << ", top 5 valid " << j.top5_valid << "\n";
       });
-  std::ofstream csv(dir + "/views.csv"), md(dir + "/summary.md");
-  csv << ehc_bringup::judgedViewsCsv(rows);
-  md << ehc_bringup::judgedViewsSummary(rows, command);
-  if (!csv || !md) throw std::invalid_argument("cannot write to '" + dir + "'");
-  std::cerr << "ehc_object_library: " << rows.size() << " views -> " << dir << "/views.csv, summary.md\n";
+  run.write("views.csv", ehc_bringup::judgedViewsCsv(rows), ehc_bringup::judgedViewsSummary(rows, run.command), rows.size());
   return 0;
 }
 
@@ -179,8 +182,6 @@ int segment(int argc, char** argv) {
   for (std::string k; std::getline(kinds, k, ',');)
     if (!k.empty()) p.kinds.push_back(k);
   p.validate();
-  const std::string& dir = run.dir;
-  const std::string& command = run.command;
   std::cerr << "ehc_object_library segment: seed " << p.seed << ", split " << p.split << ", " << p.views << " views\n";
   const auto views = ehc_bringup::checkSegmentation(
       run.lib, run.sim, run.generator, run.targeting, p, [](const ehc_bringup::SegmentedView& v, int done, int total) {
@@ -188,11 +189,8 @@ int segment(int argc, char** argv) {
         for (const auto& o : v.objects) std::cerr << " " << o.object << " " << ehc_bringup::toString(o.outcome);
         std::cerr << "\n";
       });
-  std::ofstream csv(dir + "/segment.csv"), md(dir + "/summary.md");
-  csv << ehc_bringup::segmentationCsv(views);
-  md << ehc_bringup::segmentationSummary(views, command);
-  if (!csv || !md) throw std::invalid_argument("cannot write to '" + dir + "'");
-  std::cerr << "ehc_object_library: " << views.size() << " views -> " << dir << "/segment.csv, summary.md\n";
+  run.write("segment.csv", ehc_bringup::segmentationCsv(views), ehc_bringup::segmentationSummary(views, run.command),
+            views.size());
   return 0;
 }
 }  // namespace
