@@ -542,6 +542,36 @@ TEST(GraspSequencer, ATargetNeverSeenIsSearchedFromTheNearestSeenObject) {
   EXPECT_FALSE(off.last_goal);
 }
 
+TEST(GraspSequencer, ACloudTargetIsSearchedFromAboveAtTheSearchElevation) {
+  GraspSequencerParams p;
+  GraspObjectSpec spec{"tool", ApproachDirection::Forward, {}};
+  spec.target.kind = ehc_control::TargetSelectorKind::Nearest;
+  spec.target.point = Eigen::Vector3d(1.8, 0.4, 0.76);
+  p.objects = {spec};
+  for (double elevation : {0.0, 30.0, 45.0, 70.0}) {
+    p.search_elevation_deg = elevation;
+    Harness h(p);
+    h.follow = false;
+    h.run(0.3);
+    ASSERT_EQ(h.seq.phase(), GraspPhase::WaitTarget);
+    ASSERT_TRUE(h.last_goal) << "a nearest target never seen is searched at its point";
+    // The view axis: horizontal from the TCP towards the point, tilted down by the elevation;
+    // the look pose is search_distance back along it, so the camera looks at the point.
+    const Eigen::Vector3d level = Eigen::Vector3d(1.8 - h.tcp.translation().x(), 0.4 - h.tcp.translation().y(), 0.0).normalized();
+    const double e = elevation * M_PI / 180.0;
+    const Eigen::Vector3d axis = std::cos(e) * level - std::sin(e) * Eigen::Vector3d::UnitZ();
+    EXPECT_TRUE(h.last_goal->linear().col(2).isApprox(axis, 1e-9)) << elevation << " deg: " << h.last_goal->linear().col(2).transpose();
+    EXPECT_TRUE(h.last_goal->translation().isApprox(spec.target.point - p.search_distance * axis, 1e-9)) << elevation << " deg";
+    EXPECT_NEAR(h.last_goal->translation().z() - spec.target.point.z(), p.search_distance * std::sin(e), 1e-9)
+        << "the camera is distance x sin(elevation) above the point";
+    EXPECT_TRUE(isValidPose(*h.last_goal));
+  }
+  p.search_elevation_deg = 85.0;
+  expectInvalid([&] { p.validate(); }, "search_elevation_deg");
+  p.search_elevation_deg = std::nan("");
+  expectInvalid([&] { p.validate(); }, "search_elevation_deg");
+}
+
 TEST(GraspSequencer, LockedGraspKeepsTheGoalWithoutPerception) {
   Harness h(twoObjects());
   h.seq.setObjectPose(0, h.t, forwardTarget());

@@ -288,6 +288,56 @@ TEST(GraspGenerator, SceneWithTableIsSegmentedAndGraspsAvoidTheTable) {
   EXPECT_TRUE(has0 && has1);
 }
 
+TEST(GraspGenerator, ACloudTargetsGraspsComeFromTheClusterItWasFoundIn) {
+  const double table_z = 0.70;
+  Surface scene = tableSurface(0.7, 0.0, 0.6, 0.8, table_z, 0.005);
+  Surface box = boxSurface(Eigen::Vector3d(0.05, 0.12, 0.10), 0.003);
+  box.transform(pose(0.65, 0.15, table_z + 0.05, 0.4));
+  Surface cyl = cylinderSurface(0.03, 0.0, 0.12, 0.003, false, true);
+  cyl.transform(pose(0.75, -0.15, table_z, 0.0));
+  scene.append(box);
+  scene.append(cyl);
+  const Eigen::Isometry3d camera = lookAt(Eigen::Vector3d(0.2, 0.0, 1.3), Eigen::Vector3d(0.7, 0.0, table_z));
+  const PointList cloud = scene.visibleFrom(camera.translation()).noisy(0.001, 6);
+  const GraspGenerator gen{GraspGeneratorConfig()};
+  const GraspTargetingParams targeting;
+  ehc_control::TargetSelector nearest;
+  nearest.kind = ehc_control::TargetSelectorKind::Nearest;
+  ehc_control::TargetSelector left;
+  left.kind = ehc_control::TargetSelectorKind::KthFromLeft;
+  const Eigen::Vector3d cyl_at(0.75, -0.15, table_z + 0.06), box_at(0.65, 0.15, table_z + 0.05);
+  nearest.point = cyl_at;
+  struct Case {
+    const ehc_control::TargetSelector* selector;
+    const Eigen::Vector3d* tracked;
+    Eigen::Vector3d truth;
+  };
+  for (const Case& c : {Case{&nearest, nullptr, cyl_at}, Case{&left, nullptr, box_at}, Case{&left, &cyl_at, cyl_at}}) {
+    const CloudTargetResult r = generateForCloudTarget(gen, cloud, camera, *c.selector, c.tracked, targeting);
+    ASSERT_TRUE(r.selection.selected()) << r.selection.detail;
+    EXPECT_LT((r.selection.centre - c.truth).head<2>().norm(), 0.04) << r.selection.detail;
+    ASSERT_GE(r.object, 0);
+    ASSERT_LT(static_cast<std::size_t>(r.object), r.segmentation.objects.size());
+    EXPECT_EQ(r.segmentation.objects.size(), 2u);
+    EXPECT_TRUE(r.segmentation.plane_found);
+    // The centre is its cluster's centroid, and every grasp is on that cluster.
+    EXPECT_LT((r.segmentation.centroid(static_cast<std::size_t>(r.object)) - r.selection.centre).norm(), 1e-6);
+    ASSERT_FALSE(r.grasps.grasps.empty()) << r.grasps.reason;
+    for (const Grasp& g : r.grasps.grasps) EXPECT_EQ(g.object, r.object);
+  }
+  // Tracked where nothing is: no target, and no grasps from elsewhere.
+  const Eigen::Vector3d nowhere(0.70, 0.0, table_z + 0.5);
+  const CloudTargetResult gone = generateForCloudTarget(gen, cloud, camera, left, &nowhere, targeting);
+  EXPECT_FALSE(gone.selection.selected());
+  EXPECT_NE(gone.selection.detail.find("not in the view"), std::string::npos) << gone.selection.detail;
+  EXPECT_TRUE(gone.grasps.grasps.empty());
+  // A non-finite tracked pose is no pose: the selector chooses.
+  const Eigen::Vector3d nan(std::nan(""), 0.0, 0.0);
+  const CloudTargetResult chosen = generateForCloudTarget(gen, cloud, camera, nearest, &nan, targeting);
+  ASSERT_TRUE(chosen.selection.selected()) << chosen.selection.detail;
+  EXPECT_LT((chosen.selection.centre - cyl_at).head<2>().norm(), 0.04);
+}
+
 TEST(GraspGenerator, IsDeterministic) {
   Surface s = cylinderSurface(0.03, 0.0, 0.12, 0.003, false, true);
   const PointList cloud = s.noisy(0.0015, 7);
@@ -560,22 +610,18 @@ struct Cluster {
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero(), lo = Eigen::Vector3d::Zero(), hi = Eigen::Vector3d::Zero();
 };
 Cluster nearestCluster(const SceneSegmentation& seg, const Box& box) {
-  Cluster best;
-  double best_d = 1e9;
-  for (const PointList& o : seg.objects) {
-    Cluster c;
-    c.lo.setConstant(1e9);
-    c.hi.setConstant(-1e9);
-    for (const auto& p : o) {
-      c.centroid += p.cast<double>() / static_cast<double>(o.size());
-      const Eigen::Vector3d q = box.pose.inverse() * p.cast<double>();
-      c.lo = c.lo.cwiseMin(q);
-      c.hi = c.hi.cwiseMax(q);
-    }
-    const double d = (c.centroid - box.pose.translation()).norm();
-    if (d < best_d) best_d = d, best = c;
+  Cluster c;
+  const int o = seg.nearestObject(box.pose.translation());
+  if (o < 0) return c;
+  c.centroid = seg.centroid(static_cast<std::size_t>(o));
+  c.lo.setConstant(1e9);
+  c.hi.setConstant(-1e9);
+  for (const auto& p : seg.objects[static_cast<std::size_t>(o)]) {
+    const Eigen::Vector3d q = box.pose.inverse() * p.cast<double>();
+    c.lo = c.lo.cwiseMin(q);
+    c.hi = c.hi.cwiseMax(q);
   }
-  return best;
+  return c;
 }
 
 TEST(GraspBudget, AFullResolutionFrameReadWithinTheBudgetKeepsItsGeometry) {

@@ -118,6 +118,11 @@ struct GraspSequencerParams {
   double object_time_limit = 30.0;        ///< s, WAIT_TARGET..LIFT per object
   double perception_hold = 1.0;           ///< s: before the lock, an older pose -> WAIT_TARGET
   double search_distance = 0.40;          ///< m: look pose back along the approach (0 = off)
+  /// deg below the horizon that a target without a tag is looked at from (its look pose is
+  /// search_distance back along a view tilted down this much; a tag target's keeps its approach).
+  /// From a level view a box in front of a 28 mm tool hid it ("no object in view"); from above,
+  /// objects behind others are seen, and the view shows their tops, where top-down grasps go.
+  double search_elevation_deg = 45.0;
   /// From GRASP (the descent from the pre-grasp) until the retreat ends the obstacle map ignores
   /// the object and the support right under it, which the fingers must touch; until then the
   /// object is an obstacle like any other. The ignored region is the object's extent (a tag

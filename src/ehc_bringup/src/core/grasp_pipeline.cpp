@@ -274,8 +274,8 @@ void GraspPipeline::perceiveCloudTarget(double t, const ehc_perception::PointLis
       cfg_.targeting);
   if (r.selection.selected()) {
     sequencer_->setObjectPose(object, t, ehc_control::cloudTargetPose(r.selection.centre, T_world_cam.translation(), cfg_.generator.up));
-    // Its extent (the obstacle map's exclusion from the descent on): the cluster nearest its centre.
-    if (const auto extent = targetClusterExtent(points, T_world_cam.translation(), r.selection.centre))
+    // Its extent (the obstacle map's exclusion from the descent on): its cluster's.
+    if (const auto extent = targetClusterExtent(r, T_world_cam.translation()))
       sequencer_->setObjectExtent(object, *extent);
   } else
     sequencer_->setNoTarget(object, r.selection.detail);
@@ -286,24 +286,17 @@ void GraspPipeline::perceiveCloudTarget(double t, const ehc_perception::PointLis
   ++counters_.grasp_runs;
 }
 
-std::optional<ObjectExtent> GraspPipeline::targetClusterExtent(const ehc_perception::PointList& points,
-                                                               const Eigen::Vector3d& viewpoint,
-                                                               const Eigen::Vector3d& centre) const {
-  const ehc_perception::SceneSegmentation seg = generator_->segmentScene(points, &viewpoint, &centre);
-  const ehc_perception::PointList* best = nullptr;
-  double best_d = cfg_.targeting.target_gate;
-  for (const ehc_perception::PointList& o : seg.objects) {
-    Eigen::Vector3d c = Eigen::Vector3d::Zero();
-    for (const auto& p : o) c += p.cast<double>();
-    const double d = (c / static_cast<double>(std::max<std::size_t>(o.size(), 1)) - centre).norm();
-    if (!o.empty() && d <= best_d) best = &o, best_d = d;
-  }
-  if (!best) return std::nullopt;
+std::optional<ObjectExtent> GraspPipeline::targetClusterExtent(const ehc_perception::CloudTargetResult& r,
+                                                               const Eigen::Vector3d& viewpoint) const {
+  const ehc_perception::SceneSegmentation& seg = r.segmentation;
+  if (r.object < 0 || static_cast<std::size_t>(r.object) >= seg.objects.size() ||
+      seg.objects[static_cast<std::size_t>(r.object)].empty())
+    return std::nullopt;
   const Eigen::Vector3d up = cfg_.generator.up.normalized();
   std::optional<double> support;
   if (seg.plane_found && std::abs(seg.plane.head<3>().dot(up)) > 1e-3)
     support = -seg.plane.w() / seg.plane.head<3>().dot(up);
-  return clusterExtent(*best, viewpoint, up, support);
+  return clusterExtent(seg.objects[static_cast<std::size_t>(r.object)], viewpoint, up, support);
 }
 
 void GraspPipeline::updateObstacles(double t) {

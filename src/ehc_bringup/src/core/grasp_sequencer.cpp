@@ -58,6 +58,21 @@ Eigen::Isometry3d lookPose(Eigen::Isometry3d pose, double distance) {
   pose.translation() -= distance * pose.linear().col(2);
   return pose;
 }
+
+/// A cloud target's look pose: its pose (ehc_control::cloudTargetPose, z horizontal from the
+/// viewpoint) turned about its horizontal y axis so that z points `elevation_deg` below the
+/// horizon, then backed off `distance` along it: the camera looks down on the object from
+/// distance x sin(elevation) above it.
+Eigen::Isometry3d cloudLookPose(Eigen::Isometry3d pose, double distance, double elevation_deg) {
+  const Eigen::Vector3d z = pose.linear().col(2);
+  Eigen::Vector3d level(z.x(), z.y(), 0.0);
+  if (level.norm() > 1e-6) {
+    const double e = elevation_deg * M_PI / 180.0;
+    const Eigen::Vector3d down = std::cos(e) * level.normalized() - std::sin(e) * Eigen::Vector3d::UnitZ();
+    pose.linear() = Eigen::Quaterniond::FromTwoVectors(z, down).toRotationMatrix() * pose.linear();
+  }
+  return lookPose(pose, distance);
+}
 }  // namespace
 
 // ---------------------------------------------------------------- parameters
@@ -92,6 +107,8 @@ void GraspSequencerParams::validate() const {
         "obstacle_exclusion_support_rise must be in (0, 0.1] m");
   check(std::isfinite(search_distance) && search_distance >= 0.0 && search_distance <= 2.0,
         "search_distance must be in [0, 2] m");
+  check(std::isfinite(search_elevation_deg) && search_elevation_deg >= 0.0 && search_elevation_deg <= 80.0,
+        "search_elevation_deg must be in [0, 80] deg");
   pose_filter.validate();
   check(std::isfinite(pregrasp_distance) && pregrasp_distance >= 0.0 && pregrasp_distance <= 0.5,
         "pregrasp_distance must be in [0, 0.5] m");
@@ -136,7 +153,8 @@ std::string GraspSequencerParams::summary() const {
   for (const auto& o : objects)
     s << " " << o.name << " (" << toString(o.approach) << (o.target.fromCloud() ? ", " + o.target.summary() : std::string()) << ")";
   s << "\n  limit " << object_time_limit << " s/object, perception hold " << perception_hold
-    << " s, search " << search_distance << " m, obstacle exclusion: the object's extent + "
+    << " s, search " << search_distance << " m (a cloud target from " << search_elevation_deg
+    << " deg above), obstacle exclusion: the object's extent + "
     << obstacle_exclusion_margin << " m and its support " << obstacle_exclusion_support_reach << " m round it, "
     << obstacle_exclusion_support_rise << " m up (extent unknown: " << obstacle_exclusion_radius << " m round its centre), " << pose_filter.summary() << ", pre-grasp " << pregrasp_distance << " m"
     << "\n  pre-grasp from " << pregrasp_switch_distance << " m; tolerances: pre-grasp " << pregrasp_position_tolerance << " m/" << pregrasp_orientation_tolerance_deg
@@ -171,6 +189,7 @@ GraspSequencerParams loadGraspSequencerParams(const ConfigNode& root) {
   p.object_time_limit = s.get("object_time_limit", p.object_time_limit);
   p.perception_hold = s.get("perception_hold", p.perception_hold);
   p.search_distance = s.get("search_distance", p.search_distance);
+  p.search_elevation_deg = s.get("search_elevation_deg", p.search_elevation_deg);
   p.obstacle_exclusion_radius = s.get("obstacle_exclusion_radius", p.obstacle_exclusion_radius);
   p.obstacle_exclusion_margin = s.get("obstacle_exclusion_margin", p.obstacle_exclusion_margin);
   p.obstacle_exclusion_support_reach = s.get("obstacle_exclusion_support_reach", p.obstacle_exclusion_support_reach);
@@ -665,11 +684,13 @@ void GraspSequencer::advanceWaitTarget(const SequencerInput& in, bool fresh, Seq
     const std::optional<Eigen::Isometry3d>& seen = filters_[current_].pose();  // now or before this object
     const ehc_control::TargetSelector& target = params_.objects[current_].target;
     if (seen && params_.search_distance > 0.0) {
-      out->goal = lookPose(*seen, params_.search_distance);
+      out->goal = target.fromCloud() ? cloudLookPose(*seen, params_.search_distance, params_.search_elevation_deg)
+                                     : lookPose(*seen, params_.search_distance);
     } else if (target.kind == ehc_control::TargetSelectorKind::Nearest && params_.search_distance > 0.0 && in.tcp &&
                isValidPose(*in.tcp)) {
       // Never seen, but where to look is known: a look pose at the point, from the TCP's side.
-      out->goal = lookPose(ehc_control::cloudTargetPose(target.point, in.tcp->translation()), params_.search_distance);
+      out->goal = cloudLookPose(ehc_control::cloudTargetPose(target.point, in.tcp->translation()),
+                                params_.search_distance, params_.search_elevation_deg);
     } else if (params_.search_distance > 0.0 && in.tcp && isValidPose(*in.tcp)) {
       // Never seen, but other objects of the list were: a look pose at the one nearest the TCP,
       // from the TCP's side. The objects share a scene, and a target too small to find in the
@@ -685,7 +706,7 @@ void GraspSequencer::advanceWaitTarget(const SequencerInput& in, bool fresh, Seq
     if (params_.objects[current_].target.fromCloud() && params_.search_distance > 0.0) {
       // A cloud target seen but no grasp from this view: a closer look (a view that shows its
       // graspable parts), held until a grasp qualifies or the time limit fails it (no_grasp).
-      out->goal = lookPose(*currentPose(), params_.search_distance);
+      out->goal = cloudLookPose(*currentPose(), params_.search_distance, params_.search_elevation_deg);
     }
     return;
   }

@@ -293,6 +293,10 @@ struct SceneSegmentation {
   PointList obstacles;                              ///< every point above the plane
   std::string reason;
   GraspFailure failure = GraspFailure::None;
+  /// The mean of objects[i]'s points.
+  Eigen::Vector3d centroid(std::size_t i) const;
+  /// The index of the object whose centroid is nearest `p`; -1 when there is none.
+  int nearestObject(const Eigen::Vector3d& p) const;
 };
 
 class GraspGenerator {
@@ -318,10 +322,13 @@ class GraspGenerator {
   SceneSegmentation segmentScene(const PointList& scene, const Eigen::Vector3d* viewpoint = nullptr,
                                  const Eigen::Vector3d* near = nullptr) const;
 
-  /// segmentScene + generate per object (the other objects are collision geometry), merged
-  /// best first. With `near`, only the object whose centroid is closest to it is used.
+  /// segmentScene + generateFromSegmentation.
   GraspResult generateFromScene(const PointList& scene, const Eigen::Vector3d& viewpoint,
                                 const Eigen::Vector3d* near = nullptr) const;
+  /// generate per object of a segmented scene (the other objects are collision geometry), merged
+  /// best first. With `near`, only the object whose centroid is closest to it is used.
+  GraspResult generateFromSegmentation(const SceneSegmentation& seg, const Eigen::Vector3d& viewpoint,
+                                       const Eigen::Vector3d* near = nullptr) const;
 
   const GraspGeneratorConfig& config() const { return config_; }
 
@@ -365,12 +372,17 @@ struct CloudTargetResult {
   /// no target (no object, too few, ambiguous, the tracked object gone).
   ehc_control::TargetSelection selection;
   GraspResult grasps;  ///< generateForTarget on the target (empty without one)
+  /// The cloud's segmentation (within the point budget) the target was found in and its grasps
+  /// generated from; `object` is the target's cluster in it (-1 without a target).
+  SceneSegmentation segmentation;
+  int object = -1;
 };
-/// With `tracked` (the target's pose so far, e.g. the sequencer's filtered pose): generateForTarget
-/// near it, the target's centre the nearest object's (within target_gate). Without: the cloud
-/// (within the point budget) is segmented, the selector picks among the objects' centroids as
-/// seen from `camera` (ehc_control::selectTarget, up = the generator's), then generateForTarget
-/// on the chosen one. What ehc_grasp_node and the in-process pipeline do for a cloud target.
+/// The cloud (within the point budget) is segmented once. With `tracked` (the target's pose so
+/// far, e.g. the sequencer's filtered pose): on the support under it, the target is the object
+/// nearest it (within target_gate). Without: the selector picks among the objects' centroids as
+/// seen from `camera` (ehc_control::selectTarget, up = the generator's; a `nearest` target on the
+/// support under its point). Then the grasps of that object as generateForTarget makes them.
+/// What ehc_grasp_node and the in-process pipeline do for a cloud target.
 CloudTargetResult generateForCloudTarget(const GraspGenerator& generator, const PointList& scene,
                                          const Eigen::Isometry3d& camera, const ehc_control::TargetSelector& selector,
                                          const Eigen::Vector3d* tracked, const GraspTargetingParams& targeting);

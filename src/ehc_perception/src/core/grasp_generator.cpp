@@ -3,6 +3,7 @@
 
 #include "ehc_common/config_node.h"
 #include "ehc_common/enum_names.h"
+#include "ehc_common/text_format.h"
 #include "ehc_control/pose_math.h"
 #include "ehc_perception/point_cloud_layout.h"
 #include "scene_clusters.h"
@@ -2049,12 +2050,35 @@ SceneSegmentation GraspGenerator::segmentScene(const PointList& scene, const Eig
   return seg;
 }
 
+Eigen::Vector3d SceneSegmentation::centroid(std::size_t i) const {
+  const PointList& o = objects.at(i);
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  for (const auto& p : o) c += p.cast<double>();
+  return o.empty() ? c : Eigen::Vector3d(c / static_cast<double>(o.size()));
+}
+
+int SceneSegmentation::nearestObject(const Eigen::Vector3d& p) const {
+  int best = -1;
+  double best_d = std::numeric_limits<double>::max();
+  for (std::size_t o = 0; o < objects.size(); ++o) {
+    const double d = (centroid(o) - p).norm();
+    if (d < best_d) best_d = d, best = static_cast<int>(o);
+  }
+  return best;
+}
+
 GraspResult GraspGenerator::generateFromScene(const PointList& scene,
                                               const Eigen::Vector3d& viewpoint,
                                               const Eigen::Vector3d* near) const {
-  const SceneSegmentation seg = segmentScene(scene, &viewpoint, near && near->allFinite() ? near : nullptr);
-  GraspResult res;
+  if (near && !near->allFinite()) near = nullptr;
+  GraspResult res = generateFromSegmentation(segmentScene(scene, &viewpoint, near), viewpoint, near);
   res.input_points = static_cast<int>(scene.size());
+  return res;
+}
+
+GraspResult GraspGenerator::generateFromSegmentation(const SceneSegmentation& seg, const Eigen::Vector3d& viewpoint,
+                                                     const Eigen::Vector3d* near) const {
+  GraspResult res;
   res.support_plane_found = seg.plane_found;
   res.support_plane = seg.plane;
   if (seg.objects.empty()) {
@@ -2064,18 +2088,7 @@ GraspResult GraspGenerator::generateFromScene(const PointList& scene,
   }
   std::vector<int> which;
   if (near && near->allFinite()) {
-    double best = std::numeric_limits<double>::max();
-    int bi = 0;
-    for (std::size_t o = 0; o < seg.objects.size(); ++o) {
-      Eigen::Vector3d c = Eigen::Vector3d::Zero();
-      for (const auto& p : seg.objects[o]) c += p.cast<double>();
-      c /= static_cast<double>(seg.objects[o].size());
-      if ((c - *near).norm() < best) {
-        best = (c - *near).norm();
-        bi = static_cast<int>(o);
-      }
-    }
-    which.push_back(bi);
+    which.push_back(seg.nearestObject(*near));
   } else {
     for (std::size_t o = 0; o < seg.objects.size(); ++o) which.push_back(static_cast<int>(o));
   }
@@ -2131,23 +2144,41 @@ GraspTargetingParams loadGraspTargetingParams(const ConfigNode& n) {
   return p;
 }
 
-GraspResult generateForTarget(const GraspGenerator& generator, const PointList& scene,
-                              const Eigen::Vector3d& viewpoint, const Eigen::Vector3d* target,
-                              const GraspTargetingParams& targeting) {
-  // The point budget first (a no-op on a cloud the node read within it).
-  const auto budget = static_cast<std::size_t>(targeting.max_input_points);
-  const PointList budgeted = scene.size() > budget ? budgetPoints(scene, budget) : PointList();
-  GraspResult res = generator.generateFromScene(scene.size() > budget ? budgeted : scene, viewpoint, target);
-  res.input_points = static_cast<int>(scene.size());
-  res.budget_points = static_cast<int>(std::min(scene.size(), budget));
+namespace {
+/// generateForTarget's grasps from `seg`, the segmentation of `scene` within the point budget.
+GraspResult targetGrasps(const GraspGenerator& generator, const SceneSegmentation& seg, std::size_t scene_points,
+                         const Eigen::Vector3d& viewpoint, const Eigen::Vector3d* target,
+                         const GraspTargetingParams& targeting) {
+  GraspResult res = generator.generateFromSegmentation(seg, viewpoint, target);
+  res.input_points = static_cast<int>(scene_points);
+  res.budget_points = static_cast<int>(std::min(scene_points, static_cast<std::size_t>(targeting.max_input_points)));
   const double gate = targeting.target_gate;
   if (target && !res.centroids.empty() && (res.centroids.front() - *target).norm() > gate) {
     res.failure = GraspFailure::TargetTooFar;
-    res.reason = "nearest object is " + std::to_string((res.centroids.front() - *target).norm()) +
-                 " m from the target (gate " + std::to_string(gate) + " m)";
+    res.reason = "nearest object is " + ehc_common::fixedDecimals((res.centroids.front() - *target).norm(), 3) +
+                 " m from the target (gate " + ehc_common::fixedDecimals(gate, 3) + " m)";
     res.grasps.clear();
   }
   return res;
+}
+
+/// segmentScene of `scene` within the point budget (budgetPoints; a no-op on a cloud the node read
+/// within it).
+SceneSegmentation segmentWithinBudget(const GraspGenerator& generator, const PointList& scene,
+                                      const Eigen::Vector3d& viewpoint, const Eigen::Vector3d* near,
+                                      const GraspTargetingParams& targeting) {
+  const auto budget = static_cast<std::size_t>(targeting.max_input_points);
+  if (near && !near->allFinite()) near = nullptr;
+  return generator.segmentScene(scene.size() > budget ? budgetPoints(scene, budget) : scene, &viewpoint, near);
+}
+}  // namespace
+
+GraspResult generateForTarget(const GraspGenerator& generator, const PointList& scene,
+                              const Eigen::Vector3d& viewpoint, const Eigen::Vector3d* target,
+                              const GraspTargetingParams& targeting) {
+  if (target && !target->allFinite()) target = nullptr;
+  return targetGrasps(generator, segmentWithinBudget(generator, scene, viewpoint, target, targeting), scene.size(),
+                      viewpoint, target, targeting);
 }
 
 }  // namespace ehc_perception
@@ -2160,31 +2191,29 @@ CloudTargetResult generateForCloudTarget(const GraspGenerator& generator, const 
   using ehc_control::TargetSelectionStatus;
   CloudTargetResult out;
   const Eigen::Vector3d viewpoint = camera.translation();
+  if (tracked && !tracked->allFinite()) tracked = nullptr;
+  // A tracked target stands on the plane under it; a target nearest a point, under that point.
+  const Eigen::Vector3d* under =
+      tracked ? tracked : selector.kind == ehc_control::TargetSelectorKind::Nearest ? &selector.point : nullptr;
+  out.segmentation = segmentWithinBudget(generator, scene, viewpoint, under, targeting);
+  const SceneSegmentation& seg = out.segmentation;
   if (tracked) {
-    out.grasps = generateForTarget(generator, scene, viewpoint, tracked, targeting);
+    out.grasps = targetGrasps(generator, seg, scene.size(), viewpoint, tracked, targeting);
     if (out.grasps.centroids.empty() || out.grasps.failure == GraspFailure::TargetTooFar) {
       out.selection.status = TargetSelectionStatus::NoObject;
       out.selection.detail = selector.summary() + ": the tracked object is not in the view (" + out.grasps.reason + ")";
       out.grasps.grasps.clear();
       return out;
     }
+    out.object = seg.nearestObject(*tracked);
     out.selection.status = TargetSelectionStatus::Selected;
-    out.selection.index = out.grasps.grasps.empty() ? 0 : out.grasps.grasps.front().object;
+    out.selection.index = out.object;
     out.selection.centre = out.grasps.centroids.front();
     out.selection.detail = selector.summary() + ": tracked";
     return out;
   }
-  const auto budget = static_cast<std::size_t>(targeting.max_input_points);
-  // A target nearest a point stands on the plane under that point.
-  const Eigen::Vector3d* under = selector.kind == ehc_control::TargetSelectorKind::Nearest ? &selector.point : nullptr;
-  const SceneSegmentation seg =
-      generator.segmentScene(scene.size() > budget ? budgetPoints(scene, budget) : scene, &viewpoint, under);
   std::vector<Eigen::Vector3d> centres;
-  for (const PointList& o : seg.objects) {
-    Eigen::Vector3d c = Eigen::Vector3d::Zero();
-    for (const auto& p : o) c += p.cast<double>();
-    centres.push_back(c / static_cast<double>(o.size()));
-  }
+  for (std::size_t o = 0; o < seg.objects.size(); ++o) centres.push_back(seg.centroid(o));
   out.selection = ehc_control::selectTarget(selector, centres, camera, generator.config().up);
   if (!out.selection.selected()) {
     if (!seg.reason.empty()) out.selection.detail += " (" + seg.reason + ")";
@@ -2192,7 +2221,8 @@ CloudTargetResult generateForCloudTarget(const GraspGenerator& generator, const 
     out.grasps.failure = GraspFailure::NoObject;
     return out;
   }
-  out.grasps = generateForTarget(generator, scene, viewpoint, &out.selection.centre, targeting);
+  out.object = out.selection.index;
+  out.grasps = targetGrasps(generator, seg, scene.size(), viewpoint, &out.selection.centre, targeting);
   return out;
 }
 
