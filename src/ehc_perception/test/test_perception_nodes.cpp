@@ -3,7 +3,9 @@
 // cloud in the camera frame, and the robot state; it checks /ehc/target_pose,
 // /ehc/grasp_candidates and /ehc/obstacles against the known geometry, that a NaN robot
 // state stops the obstacle output, and that malformed clouds are rejected without harm.
+#include "ehc_msgs/CloudTarget.h"
 #include "ehc_msgs/GraspCandidates.h"
+#include "ehc_msgs/TargetSelector.h"
 #include "ehc_msgs/ObstacleArray.h"
 #include "ehc_common/config_node.h"
 #include "ehc_control/pinhole_camera.h"
@@ -522,6 +524,71 @@ TEST_F(GraspNodeLockstep, EveryCloudIsAcknowledgedOnceWhateverCameOfIt) {
       << "no reason logged for the cloud without a camera pose";
   for (const std::string& w : warnings_)  // the targets were taken first (ehc_common::PollPassBarrier)
     EXPECT_EQ(w.find("poll thread"), std::string::npos) << w;
+}
+
+// A target without a tag (grasp_node_cloud_target.test): the node, given a `nearest` selector
+// on its selector_topic, finds the cylinder in the scene cloud and publishes its pose and the
+// box of its cluster, which the grasp sequencer's obstacle exclusion follows.
+class GraspNodeCloudTarget : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    cloud_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("/camera/depth/points", 1);
+    selector_pub_ = nh_.advertise<ehc_msgs::TargetSelector>("/ehc/sequencer/target_selector", 1, true);  // latched
+    target_sub_ = nh_.subscribe("/ehc/perception/cloud_target", 5, &GraspNodeCloudTarget::onTarget, this);
+    geometry_msgs::TransformStamped tf = tf2::eigenToTransform(worldFromCamera());
+    tf.header.frame_id = "odom";
+    tf.child_frame_id = kCamFrame;
+    tf.header.stamp = ros::Time::now();
+    static_tf_.sendTransform(tf);
+    cloud_ = xyzCloud<float>(sceneInCamera());
+  }
+  void select(const Eigen::Vector3d& point) {
+    ehc_msgs::TargetSelector m;
+    m.header.frame_id = "odom";
+    m.header.stamp = ros::Time::now();
+    m.select = "nearest";
+    m.point.x = point.x(), m.point.y = point.y(), m.point.z = point.z();
+    m.k = 1;
+    selector_pub_.publish(m);
+  }
+  /// Publishes the cloud at 20 Hz until `done()` or the wall-clock deadline.
+  bool spinUntil(const std::function<bool()>& done, double seconds) {
+    const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(seconds);
+    ros::WallRate rate(20.0);
+    while (ros::ok() && ros::WallTime::now() < end && !done()) {
+      cloud_.header.stamp = ros::Time::now();
+      cloud_pub_.publish(cloud_);
+      ros::spinOnce();
+      rate.sleep();
+    }
+    return done();
+  }
+  void onTarget(const ehc_msgs::CloudTarget& m) { targets_.push_back(m); }
+
+  ros::NodeHandle nh_;
+  tf2_ros::StaticTransformBroadcaster static_tf_;
+  ros::Publisher cloud_pub_, selector_pub_;
+  ros::Subscriber target_sub_;
+  sensor_msgs::PointCloud2 cloud_;
+  std::vector<ehc_msgs::CloudTarget> targets_;
+};
+
+TEST_F(GraspNodeCloudTarget, TheTargetComesWithItsClustersBox) {
+  select(Eigen::Vector3d(0.32, 0.02, kTableZ + 0.05));  // near the cylinder (r 3 cm, 12 cm tall, at (0.3, 0))
+  ASSERT_TRUE(spinUntil([&] { return !targets_.empty(); }, 40.0)) << "no cloud target published";
+  const ehc_msgs::CloudTarget& m = targets_.back();
+  EXPECT_EQ(m.header.frame_id, "odom");
+  EXPECT_LT(std::hypot(m.pose.position.x - 0.3, m.pose.position.y), 0.02);
+  // The box: upright, down to the table, about the cylinder's size (the view from straight above
+  // shows its top and little of its side; the box is as deep as it is wide).
+  EXPECT_LT(std::hypot(m.extent_pose.position.x - 0.3, m.extent_pose.position.y), 0.02);
+  EXPECT_NEAR(m.extent_pose.position.z, kTableZ + 0.06, 0.01);
+  EXPECT_NEAR(m.half_extents.z, 0.06, 0.01);
+  EXPECT_NEAR(m.half_extents.x, 0.03, 0.01);
+  EXPECT_NEAR(m.half_extents.y, 0.03, 0.01);
+  const Eigen::Quaterniond q(m.extent_pose.orientation.w, m.extent_pose.orientation.x, m.extent_pose.orientation.y,
+                             m.extent_pose.orientation.z);
+  EXPECT_NEAR(std::abs((q.toRotationMatrix().col(2)).z()), 1.0, 1e-6) << "the box's third axis is up";
 }
 
 int main(int argc, char** argv) {

@@ -235,10 +235,6 @@ class GraspPipeline {
   /// its candidates, to the sequencer.
   void perceiveCloudTarget(double t, const ehc_perception::PointList& points, const Eigen::Isometry3d& T_world_cam,
                            std::size_t object);
-  /// Extent (clusterExtent, down to the support plane) of the target's cluster in the
-  /// segmentation it was found in; nullopt without one.
-  std::optional<ObjectExtent> targetClusterExtent(const ehc_perception::CloudTargetResult& r,
-                                                  const Eigen::Vector3d& viewpoint) const;
   bool excluding_ = false;
   std::vector<std::string> arm_names_;
   PipelineCycle last_;

@@ -27,6 +27,8 @@
 // cloud_candidate_gate, and (cloud_any_approach) the generator's own approach when none
 // approaches as preferred.
 
+#include "ehc_control/pose_math.h"
+
 #include <Eigen/Geometry>
 
 #include <optional>
@@ -142,7 +144,6 @@ std::optional<GraspChoice> chooseGrasp(const std::vector<GraspCandidate>& candid
 Eigen::Isometry3d turnedTagGrasp(const Eigen::Isometry3d& tag_target, const Eigen::Vector3d& approach,
                                  double backoff);
 
-/// True if every entry is finite and R is a rotation (orthonormal, det +1, within 1e-6).
-bool isValidPose(const Eigen::Isometry3d& T);
+using ehc_control::isValidPose;
 
 }  // namespace ehc_bringup

@@ -78,6 +78,7 @@
 #include "ehc_control/pinhole_camera.h"
 #include "ehc_control/target_selector.h"
 #include "ehc_control/target_tracker.h"
+#include "ehc_perception/object_extent.h"
 
 #include <Eigen/Geometry>
 
@@ -209,13 +210,8 @@ struct ExclusionSphere {
   double radius = 0.0;
 };
 
-/// An object's extent: a box (world) with its centre and axes in `pose`.
-struct ObjectExtent {
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  Eigen::Vector3d half_extents = Eigen::Vector3d::Zero();  ///< m, >= 0
-  bool valid() const;  ///< finite, a rotation, half extents >= 0 and below 1 m
-  double distance(const Eigen::Vector3d& p) const;  ///< m from p to the box (0 inside)
-};
+using ehc_perception::ObjectExtent;
+using ehc_perception::clusterExtent;
 
 /// Spheres that together cover `box` grown by `margin` on every side (the exclusion spheres the
 /// obstacle map takes): a row along its longest axis, each sphere the circumsphere of one slab
@@ -232,16 +228,6 @@ std::vector<ExclusionSphere> exclusionSpheres(const ObjectExtent& box, double ma
 /// At most a 1 m sphere (the obstacle map's largest zone): the disc reaches at most
 /// sqrt(2 x 1 m x rise - rise^2) from the object's axis (0.2 m for a 2 cm rise).
 ExclusionSphere supportCap(const ObjectExtent& box, double reach, double rise);
-
-/// Extent of an object cluster (world points, one view from `viewpoint`) standing on a support
-/// with normal `up`: a box with one axis along `up` from the lowest to the highest point
-/// (`support_height`: down to the support, height along `up` of the support plane, when given),
-/// one along the view's horizontal direction to the points' centroid and one across it. The
-/// view hides the far side: the box reaches back from the nearest point at least as far as the
-/// points spread across the view (a round or square body is as deep as it is wide), farther if
-/// the points do. nullopt for fewer than 3 points.
-std::optional<ObjectExtent> clusterExtent(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3d& viewpoint,
-                                          const Eigen::Vector3d& up, const std::optional<double>& support_height);
 
 struct SequencerOutput {
   std::optional<Eigen::Isometry3d> goal;           ///< TCP goal for the controller (publish it)

@@ -275,7 +275,7 @@ void GraspPipeline::perceiveCloudTarget(double t, const ehc_perception::PointLis
   if (r.selection.selected()) {
     sequencer_->setObjectPose(object, t, ehc_control::cloudTargetPose(r.selection.centre, T_world_cam.translation(), cfg_.generator.up));
     // Its extent (the obstacle map's exclusion from the descent on): its cluster's.
-    if (const auto extent = targetClusterExtent(r, T_world_cam.translation()))
+    if (const auto extent = ehc_perception::cloudTargetExtent(r, T_world_cam.translation(), cfg_.generator.up))
       sequencer_->setObjectExtent(object, *extent);
   } else
     sequencer_->setNoTarget(object, r.selection.detail);
@@ -284,19 +284,6 @@ void GraspPipeline::perceiveCloudTarget(double t, const ehc_perception::PointLis
   sequencer_->setGraspCandidates(t, candidates);
   recordView(t, object, candidates, r.grasps, r.selection.status);
   ++counters_.grasp_runs;
-}
-
-std::optional<ObjectExtent> GraspPipeline::targetClusterExtent(const ehc_perception::CloudTargetResult& r,
-                                                               const Eigen::Vector3d& viewpoint) const {
-  const ehc_perception::SceneSegmentation& seg = r.segmentation;
-  if (r.object < 0 || static_cast<std::size_t>(r.object) >= seg.objects.size() ||
-      seg.objects[static_cast<std::size_t>(r.object)].empty())
-    return std::nullopt;
-  const Eigen::Vector3d up = cfg_.generator.up.normalized();
-  std::optional<double> support;
-  if (seg.plane_found && std::abs(seg.plane.head<3>().dot(up)) > 1e-3)
-    support = -seg.plane.w() / seg.plane.head<3>().dot(up);
-  return clusterExtent(seg.objects[static_cast<std::size_t>(r.object)], viewpoint, up, support);
 }
 
 void GraspPipeline::updateObstacles(double t) {

@@ -50,13 +50,6 @@ void GraspSelectionParams::validate() const {
     check(std::isfinite(b) && std::abs(b) <= 0.5, "fallback_backoff_* must be finite, |b| <= 0.5 m");
 }
 
-bool isValidPose(const Eigen::Isometry3d& T) {
-  if (!T.matrix().allFinite()) return false;
-  const Eigen::Matrix3d R = T.linear();
-  return (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() < 1e-6 &&
-         std::abs(R.determinant() - 1.0) < 1e-6;
-}
-
 namespace {
 /// |approach . up| below this (approach within ~64 deg of horizontal, e.g. a tilted side
 /// grasp): the closing axis is levelled and the wrist camera side (TCP +x) put up.

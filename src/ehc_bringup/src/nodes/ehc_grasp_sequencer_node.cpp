@@ -26,6 +26,7 @@
 #include "ehc_bringup/grasp_sequencer.h"
 #include "ehc_bringup/grasp_sequencer_node_config.h"
 #include "ehc_bringup/grasp_trace.h"
+#include "ehc_msgs/CloudTarget.h"
 #include "ehc_msgs/ControllerStatus.h"
 #include "ehc_msgs/GraspCandidates.h"
 #include "ehc_msgs/ObstacleExclusion.h"
@@ -166,9 +167,7 @@ class SequencerNode {
     current_target_pub_ = nh.advertise<ehc_msgs::TargetSelector>(node_.current_target_topic, 1, true);  // latched
     if (!node_.target_selector_topic.empty())
       subs_.push_back(inputs_nh.subscribe(node_.target_selector_topic, 10, &SequencerNode::onSelector, this, fast));
-    subs_.push_back(inputs_nh.subscribe<geometry_msgs::PoseStamped>(
-        node_.cloud_target_topic, 5, [this](const geometry_msgs::PoseStamped::ConstPtr& m) { onCloudTarget(*m); },
-        ros::VoidConstPtr(), fast));
+    subs_.push_back(inputs_nh.subscribe(node_.cloud_target_topic, 5, &SequencerNode::onCloudTarget, this, fast));
     if (!node_.exclusion_topic.empty())
       exclusion_pub_ = nh.advertise<ehc_msgs::ObstacleExclusion>(node_.exclusion_topic, 10);
     subs_.push_back(inputs_nh.subscribe(node_.sim_status_topic, 10, &SequencerNode::onSimStatus, this, fast));
@@ -212,11 +211,20 @@ class SequencerNode {
       return true;
     });
   }
-  void onCloudTarget(const geometry_msgs::PoseStamped& m) {  // the current object's, if it is a cloud target
+  /// The current object's pose and extent, if it is a cloud target.
+  void onCloudTarget(const ehc_msgs::CloudTarget& m) {
     if (!m.header.frame_id.empty() && m.header.frame_id != node_.world_frame) return;
-    inbox_.add(m.header.stamp, kCloudTarget, [this, pose = toEigen(m.pose), t = m.header.stamp.toSec()] {
+    ehc_bringup::ObjectExtent extent;
+    extent.pose = toEigen(m.extent_pose);
+    extent.half_extents = Eigen::Vector3d(m.half_extents.x, m.half_extents.y, m.half_extents.z);
+    const bool has_extent = extent.half_extents.norm() > 0.0;
+    inbox_.add(m.header.stamp, kCloudTarget, [this, pose = toEigen(m.pose), extent, has_extent, t = m.header.stamp.toSec()] {
       const std::size_t i = seq_->currentObject();
-      if (i < seq_->params().objects.size() && seq_->params().objects[i].target.fromCloud()) seq_->setObjectPose(i, t, pose);
+      if (i >= seq_->params().objects.size() || !seq_->params().objects[i].target.fromCloud()) return true;
+      if (!seq_->setObjectPose(i, t, pose))
+        ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "[ehc_grasp_sequencer_node] rejected a non-finite / invalid cloud target pose");
+      else if (has_extent && !seq_->setObjectExtent(i, extent))
+        ROS_ERROR_STREAM_THROTTLE(kLogThrottle, "[ehc_grasp_sequencer_node] rejected an invalid cloud target extent");
       return true;
     });
   }

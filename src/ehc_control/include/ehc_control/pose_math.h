@@ -22,6 +22,10 @@ constexpr double kQuaternionNormTolerance = 1e-3;
 /// The validity rule above.
 bool isRotationQuaternion(const Eigen::Quaterniond& q);
 
+/// True if every entry of T is finite and its rotation part is a rotation (orthonormal, det +1,
+/// within 1e-6).
+bool isValidPose(const Eigen::Isometry3d& T);
+
 /// Yaw (rad, (-pi, pi]) of the rotation `q` about the world z axis: the z angle of its
 /// z-y-x Euler angles, atan2(2 (w z + x y), 1 - 2 (y^2 + z^2)). NaN unless isRotationQuaternion(q).
 double yawFromQuaternion(const Eigen::Quaterniond& q);

@@ -20,4 +20,11 @@ Eigen::Matrix3d rotationFromQuaternion(const Eigen::Quaterniond& q) {
   return q.normalized().toRotationMatrix();
 }
 
+bool isValidPose(const Eigen::Isometry3d& T) {
+  if (!T.matrix().allFinite()) return false;
+  const Eigen::Matrix3d R = T.linear();
+  return (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() < 1e-6 &&
+         std::abs(R.determinant() - 1.0) < 1e-6;
+}
+
 }  // namespace ehc_control

@@ -99,11 +99,13 @@
 // All geometry is in the cloud's frame; `up` (config) is the gravity-up direction there.
 
 #include "ehc_control/target_selector.h"
+#include "ehc_perception/object_extent.h"
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -386,6 +388,10 @@ struct CloudTargetResult {
 CloudTargetResult generateForCloudTarget(const GraspGenerator& generator, const PointList& scene,
                                          const Eigen::Isometry3d& camera, const ehc_control::TargetSelector& selector,
                                          const Eigen::Vector3d* tracked, const GraspTargetingParams& targeting);
+/// The extent of a cloud target's cluster (clusterExtent from `viewpoint`, down to the support plane
+/// of its segmentation); nullopt without a target.
+std::optional<ObjectExtent> cloudTargetExtent(const CloudTargetResult& r, const Eigen::Vector3d& viewpoint,
+                                              const Eigen::Vector3d& up);
 
 /// PCD files (PCL). loadPcd reads x, y, z of any point type; throws std::invalid_argument
 /// "[PointCloudIO] cannot read '<path>' ..." on a missing or malformed file.

@@ -2226,4 +2226,16 @@ CloudTargetResult generateForCloudTarget(const GraspGenerator& generator, const 
   return out;
 }
 
+std::optional<ObjectExtent> cloudTargetExtent(const CloudTargetResult& r, const Eigen::Vector3d& viewpoint,
+                                              const Eigen::Vector3d& up_in) {
+  const SceneSegmentation& seg = r.segmentation;
+  if (!r.selection.selected() || r.object < 0 || static_cast<std::size_t>(r.object) >= seg.objects.size() ||
+      !up_in.allFinite() || up_in.norm() < 1e-9)
+    return std::nullopt;
+  const Eigen::Vector3d up = up_in.normalized();
+  std::optional<double> support;
+  if (seg.plane_found && std::abs(seg.plane.head<3>().dot(up)) > 1e-3) support = -seg.plane.w() / seg.plane.head<3>().dot(up);
+  return clusterExtent(seg.objects[static_cast<std::size_t>(r.object)], viewpoint, up, support);
+}
+
 }  // namespace ehc_perception

@@ -35,6 +35,7 @@
 // What became of the clouds (processed, over the budget, rate-limited, stale, no camera pose,
 // malformed, failed: ehc_perception::FrameCounts) is logged at most every 10 s while clouds are
 // dropped (and at the first cloud over the point budget).
+#include "ehc_msgs/CloudTarget.h"
 #include "ehc_msgs/GraspCandidates.h"
 #include "ehc_msgs/TargetSelector.h"
 #include "ehc_control/target_selector_msg.h"
@@ -88,7 +89,7 @@ class GraspNode {
           &target_queue_);
       opts.transport_hints = fast;
       selector_sub_ = nh.subscribe(opts);
-      cloud_target_pub_ = nh.advertise<geometry_msgs::PoseStamped>(cfg_.cloud_target_topic, 5);
+      cloud_target_pub_ = nh.advertise<ehc_msgs::CloudTarget>(cfg_.cloud_target_topic, 5);
     }
   }
 
@@ -195,11 +196,18 @@ class GraspNode {
       ROS_WARN_STREAM_THROTTLE(kLogThrottle, "ehc_grasp_node: no target: " << r.selection.detail);
       return r.grasps;
     }
-    geometry_msgs::PoseStamped p;
-    p.header.frame_id = cfg_.world_frame;
-    p.header.stamp = stamp;
-    p.pose = ros_conv::toPose(ehc_control::cloudTargetPose(r.selection.centre, T_world_cam.translation(), gen_.config().up));
-    cloud_target_pub_.publish(p);
+    ehc_msgs::CloudTarget m;
+    m.header.frame_id = cfg_.world_frame;
+    m.header.stamp = stamp;
+    m.pose = ros_conv::toPose(ehc_control::cloudTargetPose(r.selection.centre, T_world_cam.translation(), gen_.config().up));
+    m.extent_pose = m.pose;  // no extent: half extents 0
+    if (const auto extent = cloudTargetExtent(r, T_world_cam.translation(), gen_.config().up)) {
+      m.extent_pose = ros_conv::toPose(extent->pose);
+      m.half_extents.x = extent->half_extents.x();
+      m.half_extents.y = extent->half_extents.y();
+      m.half_extents.z = extent->half_extents.z();
+    }
+    cloud_target_pub_.publish(m);
     return r.grasps;
   }
 
