@@ -20,6 +20,7 @@ namespace {
 [[noreturn]] void fail(const std::string& what) { throw std::invalid_argument("[ObjectLibrary] " + what); }
 
 constexpr int kSides = 48;  ///< segments around a surface of revolution
+constexpr int kWallSectors = 16;  ///< convex parts around a cup's or bowl's wall (sweptSectors)
 
 // ------------------------------------------------------------------------ closed primitives
 /// A closed surface of revolution about z: `profile` (r, z) runs from a point on the axis to a
@@ -47,6 +48,52 @@ TriangleMesh lathe(const std::vector<Eigen::Vector2d>& profile, int sides = kSid
       if (a != c && c != d && a != d) m.triangles.emplace_back(a, c, d);
     }
   return m;
+}
+
+/// Flips every triangle when the mesh's signed volume is negative (its triangles faced inwards).
+void faceOutwards(TriangleMesh* m) {
+  double six_v = 0.0;
+  for (const auto& t : m->triangles)
+    six_v += m->vertices[static_cast<std::size_t>(t[0])].dot(
+        m->vertices[static_cast<std::size_t>(t[1])].cross(m->vertices[static_cast<std::size_t>(t[2])]));
+  if (six_v < 0.0)
+    for (auto& t : m->triangles) std::swap(t[1], t[2]);
+}
+
+/// A wall of revolution about z as convex parts: the convex profile polygon `quad` (r, z; r > 0)
+/// swept over `sectors` equal sectors, each a closed part of its own with kSides / sectors facets
+/// (the outside as a lathe of kSides sides has it). Why parts: the simulator collides a mesh as the
+/// convex hulls of its connected parts (SimWorld), and a cup or bowl of one part collides as a
+/// solid that no finger can enter. A sector's hull is its exact shape but for its inner arc, whose
+/// chord it fills by at most r (1 - cos(pi / sectors)). Each sector reaches kOverlap (rad) into its
+/// neighbours and the whole wall is turned by `turn` (rad), so that no two parts (nor a lathe's
+/// rings) share a vertex: shared vertices would weld the parts into one again (loadObjectMesh).
+TriangleMesh sweptSectors(const std::vector<Eigen::Vector2d>& quad, int sectors, double turn) {
+  constexpr double kOverlap = 1e-3;
+  const int steps = std::max(1, kSides / sectors);
+  const std::size_t n = quad.size();
+  TriangleMesh all;
+  for (int j = 0; j < sectors; ++j) {
+    const double a0 = 2.0 * M_PI * j / sectors + turn - kOverlap, a1 = 2.0 * M_PI * (j + 1) / sectors + turn + kOverlap;
+    TriangleMesh m;
+    for (int k = 0; k <= steps; ++k) {
+      const double a = a0 + (a1 - a0) * k / steps;
+      for (const auto& q : quad) m.vertices.emplace_back(q.x() * std::cos(a), q.x() * std::sin(a), q.y());
+    }
+    auto at = [&](int k, std::size_t i) { return k * static_cast<int>(n) + static_cast<int>(i % n); };
+    for (int k = 0; k < steps; ++k)
+      for (std::size_t i = 0; i < n; ++i) {
+        m.triangles.emplace_back(at(k, i), at(k + 1, i), at(k + 1, i + 1));
+        m.triangles.emplace_back(at(k, i), at(k + 1, i + 1), at(k, i + 1));
+      }
+    for (std::size_t i = 1; i + 1 < n; ++i) {  // the end caps
+      m.triangles.emplace_back(at(0, 0), at(0, i + 1), at(0, i));
+      m.triangles.emplace_back(at(steps, 0), at(steps, i), at(steps, i + 1));
+    }
+    faceOutwards(&m);
+    all.append(m);
+  }
+  return all;
 }
 
 TriangleMesh transformed(TriangleMesh m, const Eigen::Affine3d& T) {
@@ -135,7 +182,9 @@ double param(const std::map<std::string, double>& p, const std::string& key) {
 namespace {
 TriangleMesh mugMesh(const std::map<std::string, double>& p) {
   const double R = param(p, "radius"), H = param(p, "height"), w = param(p, "wall");
-  TriangleMesh m = lathe({{0, 0}, {R, 0}, {R, H}, {R - w, H}, {R - w, 0.008}, {0, 0.008}});
+  // The base a disc, the wall convex sectors on it (sweptSectors: the inside stays open).
+  TriangleMesh m = lathe({{0, 0}, {R, 0}, {R, 0.008}, {0, 0.008}});
+  m.append(sweptSectors({{R - w, 0.008}, {R, 0.008}, {R, H}, {R - w, H}}, kWallSectors, 0.5 * M_PI / kSides));
   // The handle: a chain of short cylinders on a half ellipse on the +y side, its ends inside the
   // wall (so that the parts overlap) and each part convex, the hole between them open.
   const double r = param(p, "handle_thickness"), reach = param(p, "handle_reach"), span = param(p, "handle_span") * H;
@@ -166,7 +215,18 @@ TriangleMesh bowlMesh(const std::map<std::string, double>& p) {
     out.emplace_back(rb - w + (R - rb) * std::sin(a), std::max(w, H * (1.0 - std::cos(a)) + w * std::cos(a)));
   }
   out.emplace_back(0.0, w);
-  return lathe(out);
+  // The base a disc, each band of the wall (between two steps of the profile) convex sectors on
+  // it (sweptSectors: the inside stays open), the bands turned apart so that none shares a vertex.
+  const std::size_t rows = steps + 1;  // out[1..rows]: outside, bottom to top; then the inside, top to bottom
+  TriangleMesh m = lathe({out[0], out[1], out[2 * rows], out[2 * rows + 1]});
+  for (std::size_t s = 0; s < static_cast<std::size_t>(steps); ++s) {
+    const Eigen::Vector2d& o0 = out[1 + s];
+    const Eigen::Vector2d& o1 = out[2 + s];
+    const Eigen::Vector2d& i1 = out[2 * rows - 1 - s];
+    const Eigen::Vector2d& i0 = out[2 * rows - s];
+    m.append(sweptSectors({i0, o0, o1, i1}, kWallSectors, (0.5 + 0.1 * static_cast<double>(s)) * M_PI / kSides));
+  }
+  return m;
 }
 
 TriangleMesh bottleMesh(const std::map<std::string, double>& p) {
