@@ -3,6 +3,7 @@
 
 #include "ehc_control/whole_body_model.h"
 #include "ehc_test/control_fixtures.h"
+#include "ehc_test/test_seed.h"
 
 #include <gtest/gtest.h>
 
@@ -544,4 +545,38 @@ TEST(WholeBodyModel, InverseKinematicsFindsReachablePosesAndRejectsUnreachableOn
   Eigen::Isometry3d high = Eigen::Isometry3d::Identity();
   high.translation() << 1.0, 0.0, 3.0;
   EXPECT_FALSE(model.inverseKinematics(high, 1, 20));
+}
+
+TEST(WholeBodyModel, ArmInverseKinematicsHoldsTheBase) {
+  // From a start near a pose FK produced, the arm alone reaches it with the base held where it
+  // is; a target beyond the arm's reach from that base is not reached (the whole body would).
+  const WholeBodyModel model(realmanConfig());
+  const unsigned seed = ehc_test::testSeed("arm IK with the base held");
+  std::mt19937 rng(seed);
+  int found = 0;
+  for (int k = 0; k < 20; ++k) {
+    const Eigen::VectorXd q = randomArm(model.config(), rng, 0.3);
+    const Eigen::Vector3d base = randomBase(rng);
+    const Eigen::Isometry3d T = model.fk(base, q, "ee_link");
+    Eigen::VectorXd start = q;
+    for (int i = 0; i < start.size(); ++i) start[i] += std::uniform_real_distribution<double>(-0.2, 0.2)(rng);
+    Eigen::VectorXd qs;
+    if (model.armInverseKinematicsFrom(T, base, start, &qs, 0.05)) {
+      ++found;
+      const Eigen::Isometry3d S = model.fk(base, qs, "ee_link");
+      EXPECT_LT((S.translation() - T.translation()).norm(), 1e-3);
+      EXPECT_TRUE(((qs - model.config().arm_lower).array() >= 0.05 - 1e-9).all());
+      EXPECT_TRUE(((model.config().arm_upper - qs).array() >= 0.05 - 1e-9).all());
+    }
+  }
+  EXPECT_GE(found, 16);
+  const Eigen::Vector3d base(0.0, 0.0, 0.0);
+  Eigen::Isometry3d far = model.fk(base, model.config().arm_ready, "ee_link");
+  far.translation().x() += 2.0;  // the ready TCP 2 m ahead
+  Eigen::VectorXd qs;
+  EXPECT_FALSE(model.armInverseKinematicsFrom(far, base, model.config().arm_ready, &qs));
+  EXPECT_TRUE(model.inverseKinematics(far, 1, 20));
+  EXPECT_NE(ehc_test::errorOf([&] { model.armInverseKinematicsFrom(far, base, model.config().arm_ready, &qs, 0.0, 0); })
+                .find("iterations"),
+            std::string::npos);
 }

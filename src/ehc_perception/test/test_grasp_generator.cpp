@@ -251,8 +251,10 @@ TEST(GraspGenerator, TheSupportIsThePlaneUnderTheTargetNotTheLargestOne) {
   }
 }
 
-TEST(GraspGenerator, SceneWithTableIsSegmentedAndGraspsAvoidTheTable) {
-  const double table_z = 0.70;
+namespace {
+/// A table top at `table_z` with a 5 x 12 x 10 cm box standing at (0.65, 0.15) and a cylinder
+/// (r 3 cm, 12 cm tall) at (0.75, -0.15).
+Surface boxAndCylinderOnATable(double table_z) {
   Surface scene = tableSurface(0.7, 0.0, 0.6, 0.8, table_z, 0.005);
   Surface box = boxSurface(Eigen::Vector3d(0.05, 0.12, 0.10), 0.003);
   box.transform(pose(0.65, 0.15, table_z + 0.05, 0.4));
@@ -260,6 +262,13 @@ TEST(GraspGenerator, SceneWithTableIsSegmentedAndGraspsAvoidTheTable) {
   cyl.transform(pose(0.75, -0.15, table_z, 0.0));
   scene.append(box);
   scene.append(cyl);
+  return scene;
+}
+}  // namespace
+
+TEST(GraspGenerator, SceneWithTableIsSegmentedAndGraspsAvoidTheTable) {
+  const double table_z = 0.70;
+  Surface scene = boxAndCylinderOnATable(table_z);
   const PointList cloud = scene.noisy(0.001, 6);
   const Eigen::Vector3d view(0.2, 0.0, 1.3);
   const GraspGenerator gen{GraspGeneratorConfig()};
@@ -290,13 +299,7 @@ TEST(GraspGenerator, SceneWithTableIsSegmentedAndGraspsAvoidTheTable) {
 
 TEST(GraspGenerator, ACloudTargetsGraspsComeFromTheClusterItWasFoundIn) {
   const double table_z = 0.70;
-  Surface scene = tableSurface(0.7, 0.0, 0.6, 0.8, table_z, 0.005);
-  Surface box = boxSurface(Eigen::Vector3d(0.05, 0.12, 0.10), 0.003);
-  box.transform(pose(0.65, 0.15, table_z + 0.05, 0.4));
-  Surface cyl = cylinderSurface(0.03, 0.0, 0.12, 0.003, false, true);
-  cyl.transform(pose(0.75, -0.15, table_z, 0.0));
-  scene.append(box);
-  scene.append(cyl);
+  Surface scene = boxAndCylinderOnATable(table_z);
   const Eigen::Isometry3d camera = lookAt(Eigen::Vector3d(0.2, 0.0, 1.3), Eigen::Vector3d(0.7, 0.0, table_z));
   const PointList cloud = scene.visibleFrom(camera.translation()).noisy(0.001, 6);
   const GraspGenerator gen{GraspGeneratorConfig()};

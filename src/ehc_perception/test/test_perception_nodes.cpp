@@ -52,6 +52,15 @@ Eigen::Isometry3d worldFromCamera() {
   return T;
 }
 
+/// worldFromCamera() as the transform odom -> the camera's frame at `stamp`.
+geometry_msgs::TransformStamped cameraPoseAt(const ros::Time& stamp) {
+  geometry_msgs::TransformStamped tf = tf2::eigenToTransform(worldFromCamera());
+  tf.header.frame_id = "odom";
+  tf.child_frame_id = kCamFrame;
+  tf.header.stamp = stamp;
+  return tf;
+}
+
 const Eigen::Isometry3d kTagInCamera = facingTag(0.0, 0.0, 0.5, 0.2, -0.1, 0.3);
 const double kTableZ = 0.58;
 
@@ -140,11 +149,7 @@ class PerceptionNodes : public ::testing::Test {
     grasp_sub_ = nh_.subscribe("/ehc/grasp_candidates", 5, &PerceptionNodes::onGrasps, this);
     obst_sub_ = nh_.subscribe("/ehc/obstacles", 50, &PerceptionNodes::onObstacles, this);
 
-    geometry_msgs::TransformStamped tf = tf2::eigenToTransform(worldFromCamera());
-    tf.header.frame_id = "odom";
-    tf.child_frame_id = kCamFrame;
-    tf.header.stamp = ros::Time::now();
-    static_tf_.sendTransform(tf);
+    static_tf_.sendTransform(cameraPoseAt(ros::Time::now()));
 
     // Image (rgb8) with tag 0 of 4 cm (its size in config/perception/tag_node.yaml).
     const vpImage<unsigned char> gray = TagImageRenderer(cam_).render({{0, 0.04, kTagInCamera}});
@@ -262,10 +267,8 @@ TEST_F(PerceptionNodes, TagNodeWaitsForTheCameraPoseOfALateImage) {
     ros::WallDuration(0.01).sleep();
   }
   for (const auto& m : targets_) EXPECT_NE(m.header.stamp, stamp) << "a target without a camera pose";
-  geometry_msgs::TransformStamped tf = tf2::eigenToTransform(worldFromCamera());
-  tf.header.frame_id = "odom";
+  geometry_msgs::TransformStamped tf = cameraPoseAt(stamp);
   tf.child_frame_id = late_frame;
-  tf.header.stamp = stamp;
   tf2_ros::TransformBroadcaster broadcaster;
   const ros::WallTime t1 = ros::WallTime::now();
   bool got = false;
@@ -460,13 +463,7 @@ class GraspNodeLockstep : public ::testing::Test {
     setClock(t);
     cloud_.header.stamp = t;
     cloud_pub_.publish(cloud_);
-    if (with_pose) {
-      geometry_msgs::TransformStamped tf = tf2::eigenToTransform(worldFromCamera());
-      tf.header.frame_id = "odom";
-      tf.header.stamp = t;
-      tf.child_frame_id = kCamFrame;
-      tf_.sendTransform(tf);
-    }
+    if (with_pose) tf_.sendTransform(cameraPoseAt(t));
     return spinUntil([&] { return acks_.count(t) > 0; }, 30.0);
   }
 
@@ -535,11 +532,7 @@ class GraspNodeCloudTarget : public ::testing::Test {
     cloud_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("/camera/depth/points", 1);
     selector_pub_ = nh_.advertise<ehc_msgs::TargetSelector>("/ehc/sequencer/target_selector", 1, true);  // latched
     target_sub_ = nh_.subscribe("/ehc/perception/cloud_target", 5, &GraspNodeCloudTarget::onTarget, this);
-    geometry_msgs::TransformStamped tf = tf2::eigenToTransform(worldFromCamera());
-    tf.header.frame_id = "odom";
-    tf.child_frame_id = kCamFrame;
-    tf.header.stamp = ros::Time::now();
-    static_tf_.sendTransform(tf);
+    static_tf_.sendTransform(cameraPoseAt(ros::Time::now()));
     cloud_ = xyzCloud<float>(sceneInCamera());
   }
   void select(const Eigen::Vector3d& point) {

@@ -17,7 +17,8 @@
 //                                object centre is also the object's pose (the tag node's part)
 //   ObstacleMonitor              ehc_obstacle_node (insert rate, exclusions, distances at its
 //                                publish rate)
-//   GraspSequencer               ehc_grasp_sequencer_node
+//   GraspSequencer               ehc_grasp_sequencer_node; its grasp choice judged by GraspReach
+//                                against the support plane of the grasp generator's views
 //   ControlCycle                 ehc_controller_node
 //
 // One cycle at sim time t (= world time + 1 s, as ehc_sim_node's clock): sensors due at t ->
@@ -27,6 +28,7 @@
 // no transport latency here (the ROS path delivers an image's pose a few ms of wall time later,
 // usually before the next state): see the ROS-agreement notes in the experiment's table.
 
+#include "ehc_bringup/grasp_reach.h"
 #include "ehc_bringup/grasp_sequencer.h"
 #include "ehc_control/control_cycle.h"
 #include "ehc_perception/grasp_generator.h"
@@ -225,6 +227,10 @@ class GraspPipeline {
   std::unique_ptr<ehc_perception::TagDetector> detector_;
   std::unique_ptr<ehc_perception::GraspGenerator> generator_;
   std::unique_ptr<ehc_perception::ObstacleMonitor> monitor_;
+  /// The sequencer's reachability judgement (sequencer.reach.enabled), its support from the
+  /// grasp generator's support plane in each cloud (observeSupport).
+  std::unique_ptr<GraspReach> reach_;
+  void observeSupport(const ehc_perception::PointList& points, const ehc_perception::GraspResult& r);
   struct Clocks;
   std::unique_ptr<Clocks> clocks_;
   std::optional<Eigen::Vector3d> grasp_target_;  ///< the sequencer's object pose (grasp node target)

@@ -31,6 +31,7 @@
 
 #include <Eigen/Geometry>
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -99,6 +100,9 @@ struct GraspSelectionParams {
   /// horizontal forward approach, and a cloud target has no tag fallback. false: such a target
   /// waits for a qualifying candidate (no_grasp when none comes).
   bool cloud_any_approach = true;
+  /// With a reachability judgement (chooseGrasp's `reachable`): the best-scored qualifying
+  /// candidates judged per choice, [0, 50]; the first reachable one is chosen. 0: none judged.
+  int reach_checks = 6;
   void validate() const;  ///< throws "[GraspSelectionParams] ..."
   /// These parameters for a target without a tag (see the header comment).
   GraspSelectionParams forCloudTarget() const;
@@ -113,7 +117,13 @@ struct GraspChoice {
   /// s, time stamp of the candidate set it was chosen from (GraspSequencer::setGraspCandidates;
   /// the view its grasp came from); -1: not from a candidate set.
   double candidates_t = -1.0;
+  /// The reachability judgement's verdict on this grasp (nullopt: not judged).
+  std::optional<bool> reachable;
 };
+
+/// Whether the robot can reach a grasp (TCP pose, world), e.g. GraspReach::reachable of it and its
+/// pre-grasp.
+using GraspReachable = std::function<bool(const Eigen::Isometry3d& grasp)>;
 
 /// Unit approach direction wanted for `direction` given the tag target; nullopt for Any
 /// (the tag target's z for Tag, levelled for Forward into a side face, world -z for Downward). Sideways has one direction
@@ -133,11 +143,17 @@ bool candidateQualifies(const GraspCandidate& c, ApproachDirection direction,
 /// and nothing qualifies, or a non-finite tag target). A parallel-jaw grasp is symmetric about
 /// its approach axis: the candidate or its half-turn about z, whichever is closer to
 /// `reference` (e.g. the current TCP orientation), is returned.
+/// With `reachable` (and reach_checks > 0), reachability comes before score: the qualifying
+/// candidates are judged as chosen (turned, centred), best score first, at most reach_checks of
+/// them, and the first reachable one wins; when none is, a reachable one of the generator's own
+/// approach (any_approach_fallback); else the best-scored one as before (GraspChoice::reachable
+/// false). The tag fallback is not judged.
 std::optional<GraspChoice> chooseGrasp(const std::vector<GraspCandidate>& candidates,
                                        ApproachDirection direction,
                                        const Eigen::Isometry3d& tag_target,
                                        const Eigen::Matrix3d& reference,
-                                       const GraspSelectionParams& p);
+                                       const GraspSelectionParams& p,
+                                       const GraspReachable& reachable = {});
 
 /// Tag target turned so that its z axis is `approach` (unit), with its y (closing) axis
 /// horizontal when possible, backed off by `backoff` along the approach.

@@ -71,6 +71,7 @@
 // Cycles without a camera pose are not counted. The controller's own in-FOV flag (/ehc/status)
 // is reported as controller_tfm (from the first pose until the gripper closes).
 
+#include "ehc_bringup/grasp_reach.h"
 #include "ehc_bringup/grasp_selection.h"
 #include "ehc_bringup/target_pose_filter.h"
 #include "ehc_control/gripper_state.h"
@@ -184,6 +185,9 @@ struct GraspSequencerParams {
   double retreat_tolerance = 0.04;        ///< m
   double retreat_timeout = 4.0;           ///< s
   GraspSelectionParams selection;
+  /// The reachability judgement (GraspReach) that whoever runs the sequencer builds and sets
+  /// (setReachability); `reach:` of the sequencer section.
+  GraspReachParams reach;
   void validate() const;                  ///< throws "[GraspSequencerParams] ..."
   std::string summary() const;
 };
@@ -311,6 +315,11 @@ class GraspSequencer {
   /// (GraspResult::stall_body); e.g. the simulator's scene. None: the point is reported.
   using ObstacleNamer = std::function<std::string(const Eigen::Vector3d&)>;
   void setObstacleNamer(ObstacleNamer namer) { namer_ = std::move(namer); }
+  /// Whether the robot can reach a grasp and its pre-grasp (TCP poses, world), e.g.
+  /// GraspReach::reachable with the robot's model and the support perceived: the grasp choice
+  /// prefers reachable candidates (chooseGrasp). None (the default): the choice by score alone.
+  using Reachability = std::function<bool(const Eigen::Isometry3d& grasp, const Eigen::Isometry3d& pre_grasp)>;
+  void setReachability(Reachability reachable) { reachable_ = std::move(reachable); }
 
   /// One cycle. Throws "[GraspSequencer] ..." for a non-finite or decreasing time.
   SequencerOutput update(const SequencerInput& in);
@@ -434,6 +443,7 @@ class GraspSequencer {
   std::vector<GraspResult> results_;
   long rejected_ = 0;
   ObstacleNamer namer_;
+  Reachability reachable_;
   /// The stall's cause when the object's time limit fires in the current phase (see above).
   void recordStall(const SequencerInput& in);
   /// The current object's pose came within perception_hold of `t`.

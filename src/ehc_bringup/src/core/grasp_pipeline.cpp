@@ -178,6 +178,14 @@ GraspPipeline::GraspPipeline(const GraspPipelineConfig& cfg, unsigned seed) : cf
   sequencer_ = std::make_unique<GraspSequencer>(cfg_.sequencer);
   if (!sequencer_->setCamera(intrinsics)) throw std::invalid_argument("[GraspPipeline] invalid camera intrinsics");
   sequencer_->setObstacleNamer([this](const Eigen::Vector3d& p) { return nearestSceneBody(*world_, p); });
+  if (cfg_.sequencer.reach.enabled) {
+    // The grasps the robot can reach beside the support the grasp generator finds (perceive).
+    const ehc_control::QpControllerParams& qp = cycle_->controller().params();
+    reach_ = std::make_unique<GraspReach>(
+        cycle_->model(), cfg_.sequencer.reach, [&qp](const std::string& link) { return qp.obstacleStop(link); }, qp.joint_stop);
+    sequencer_->setReachability(
+        [this](const Eigen::Isometry3d& grasp, const Eigen::Isometry3d& pre) { return reach_->reachable(grasp, pre); });
+  }
   detector_ = std::make_unique<ehc_perception::TagDetector>(cfg_.detector, intrinsics);
   generator_ = std::make_unique<ehc_perception::GraspGenerator>(cfg_.generator);
   if (cfg_.obstacles) monitor_ = std::make_unique<ehc_perception::ObstacleMonitor>(robot, cfg_.map, cfg_.monitor);
@@ -252,6 +260,7 @@ void GraspPipeline::perceive(double t) {
     const bool fresh = grasp_target_ && t - grasp_target_t_ <= cfg_.targeting.target_timeout;
     const ehc_perception::GraspResult res = ehc_perception::generateForTarget(
         *generator_, points, T_world_cam.translation(), fresh ? &*grasp_target_ : nullptr, cfg_.targeting);
+    observeSupport(points, res);
     std::vector<GraspCandidate> candidates;
     for (const auto& g : res.grasps) candidates.push_back({g.pose, g.width, g.score});
     sequencer_->setGraspCandidates(t, candidates);
@@ -279,11 +288,17 @@ void GraspPipeline::perceiveCloudTarget(double t, const ehc_perception::PointLis
       sequencer_->setObjectExtent(object, *extent);
   } else
     sequencer_->setNoTarget(object, r.selection.detail);
+  observeSupport(points, r.grasps);
   std::vector<GraspCandidate> candidates;
   for (const auto& g : r.grasps.grasps) candidates.push_back({g.pose, g.width, g.score});
   sequencer_->setGraspCandidates(t, candidates);
   recordView(t, object, candidates, r.grasps, r.selection.status);
   ++counters_.grasp_runs;
+}
+
+void GraspPipeline::observeSupport(const ehc_perception::PointList& points, const ehc_perception::GraspResult& r) {
+  if (!reach_ || !r.support_plane_found) return;
+  if (const auto seen = supportFromPoints(points, r.support_plane)) reach_->observeSupport(*seen);
 }
 
 void GraspPipeline::updateObstacles(double t) {

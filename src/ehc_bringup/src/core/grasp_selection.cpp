@@ -46,6 +46,7 @@ void GraspSelectionParams::validate() const {
         "sideways_turn_deg must be in [0, 60] (0 = straight from the side)");
   check(std::isfinite(sideways_tilt_deg) && sideways_tilt_deg >= 0.0 && sideways_tilt_deg <= 60.0,
         "sideways_tilt_deg must be in [0, 60] (0 = horizontal)");
+  check(reach_checks >= 0 && reach_checks <= 50, "reach_checks must be in [0, 50] (0 = no reachability judgement)");
   for (double b : {fallback_backoff_forward, fallback_backoff_downward, fallback_backoff_sideways})
     check(std::isfinite(b) && std::abs(b) <= 0.5, "fallback_backoff_* must be finite, |b| <= 0.5 m");
 }
@@ -150,27 +151,20 @@ double fallbackBackoff(ApproachDirection direction, const GraspSelectionParams& 
 }
 }  // namespace
 
-std::optional<GraspChoice> chooseGrasp(const std::vector<GraspCandidate>& candidates,
-                                       ApproachDirection direction,
-                                       const Eigen::Isometry3d& tag_target,
-                                       const Eigen::Matrix3d& reference,
-                                       const GraspSelectionParams& p) {
-  if (!isValidPose(tag_target)) return std::nullopt;
+namespace {
+/// Candidate `i` as chosen: turned onto the wanted approach, closing along a tag target axis,
+/// centred on the tag target, no deeper than the tag fallback (as the parameters say), then
+/// the half-turn closer to `reference`.
+GraspChoice fromCandidate(const std::vector<GraspCandidate>& candidates, std::size_t i, ApproachDirection direction,
+                          const Eigen::Isometry3d& tag_target, const Eigen::Matrix3d& reference,
+                          const GraspSelectionParams& p) {
   GraspChoice best;
-  bool found = false;
-  for (std::size_t i = 0; i < candidates.size(); ++i) {
-    const GraspCandidate& c = candidates[i];
-    if (!candidateQualifies(c, direction, tag_target, p)) continue;
-    if (!found || c.score > best.score) {
-      best.pose = c.pose;
-      best.score = c.score;
-      best.from_candidate = true;
-      best.candidate_index = static_cast<int>(i);
-      best.width = c.width;
-      found = true;
-    }
-  }
-  if (found && p.align_approach) {
+  best.pose = candidates[i].pose;
+  best.score = candidates[i].score;
+  best.from_candidate = true;
+  best.candidate_index = static_cast<int>(i);
+  best.width = candidates[i].width;
+  if (p.align_approach) {
     const Eigen::Vector3d z = best.pose.linear().col(2);
     if (auto want = wantedApproach(direction, tag_target, p, z)) {
       Eigen::Matrix3d R = Eigen::Quaterniond::FromTwoVectors(z, *want).toRotationMatrix() * best.pose.linear();
@@ -187,7 +181,7 @@ std::optional<GraspChoice> chooseGrasp(const std::vector<GraspCandidate>& candid
       best.pose.linear() = Eigen::Quaterniond(R).normalized().toRotationMatrix();
     }
   }
-  if (found && p.closing_axis_from_tag) {
+  if (p.closing_axis_from_tag) {
     // The tag target's axis (its frame is the object's: face normals for a box) nearest the
     // candidate's closing axis, within the plane across the approach.
     const Eigen::Matrix3d R = best.pose.linear();
@@ -208,48 +202,85 @@ std::optional<GraspChoice> chooseGrasp(const std::vector<GraspCandidate>& candid
     best.pose.linear().col(1) = y;
     best.pose.linear().col(0) = y.cross(z);
   }
-  if (found && p.centre_from_tag) {
+  if (p.centre_from_tag) {
     // Across the approach, the tag target's centre; along it, the candidate's depth.
     const Eigen::Vector3d z = best.pose.linear().col(2);
     const Eigen::Vector3d d = tag_target.translation() - best.pose.translation();
     best.pose.translation() += d - d.dot(z) * z;
   }
-  if (found && p.align_approach &&
-      (direction == ApproachDirection::Downward || direction == ApproachDirection::Sideways)) {
+  if (p.align_approach && (direction == ApproachDirection::Downward || direction == ApproachDirection::Sideways)) {
     // No deeper along the turned approach than the tag fallback (see align_approach).
     const Eigen::Vector3d z = best.pose.linear().col(2);
     const double backoff = fallbackBackoff(direction, p);
     const double past_centre = z.dot(best.pose.translation() - tag_target.translation());
     if (past_centre > -backoff) best.pose.translation() -= (past_centre + backoff) * z;
   }
-  if (!found && p.any_approach_fallback && direction != ApproachDirection::Any && direction != ApproachDirection::Tag) {
-    GraspSelectionParams any = p;
-    any.any_approach_fallback = false;
-    return chooseGrasp(candidates, ApproachDirection::Any, tag_target, reference, any);
+  best.pose.linear() = closerHalfTurn(best.pose.linear(), reference);
+  return best;
+}
+
+/// The tag target turned to the preferred approach and backed off (no qualifying candidate).
+GraspChoice tagFallback(ApproachDirection direction, const Eigen::Isometry3d& tag_target, const Eigen::Matrix3d& reference,
+                        const GraspSelectionParams& p) {
+  GraspChoice best;
+  const double backoff = fallbackBackoff(direction, p);
+  Eigen::Vector3d approach = tag_target.linear().col(2);
+  if (direction == ApproachDirection::Downward || direction == ApproachDirection::Sideways ||
+      direction == ApproachDirection::Forward) {
+    // Sideways: the side facing the reference orientation's approach better; forward: levelled.
+    approach = *wantedApproach(direction, tag_target, p, reference.col(2));
   }
-  if (!found) {
-    if (p.require_candidate && direction != ApproachDirection::Tag) return std::nullopt;
-    const double backoff = fallbackBackoff(direction, p);
-    Eigen::Vector3d approach = tag_target.linear().col(2);
-    if (direction == ApproachDirection::Downward || direction == ApproachDirection::Sideways ||
-        direction == ApproachDirection::Forward) {
-      // Sideways: the side facing the reference orientation's approach better; forward: levelled.
-      approach = *wantedApproach(direction, tag_target, p, reference.col(2));
-    }
-    if (direction == ApproachDirection::Tag || direction == ApproachDirection::Any ||
-        approach.dot(tag_target.linear().col(2)) > 1.0 - 1e-12) {
-      best.pose = tag_target;
-      best.pose.translation() -= backoff * tag_target.linear().col(2);
-    } else {
-      best.pose = turnedTagGrasp(tag_target, approach, backoff);
-    }
-    best.from_candidate = false;
-    best.score = 0.0;
-    best.candidate_index = -1;
-    best.width = 0.0;
+  if (direction == ApproachDirection::Tag || direction == ApproachDirection::Any ||
+      approach.dot(tag_target.linear().col(2)) > 1.0 - 1e-12) {
+    best.pose = tag_target;
+    best.pose.translation() -= backoff * tag_target.linear().col(2);
+  } else {
+    best.pose = turnedTagGrasp(tag_target, approach, backoff);
   }
   best.pose.linear() = closerHalfTurn(best.pose.linear(), reference);
   return best;
+}
+}  // namespace
+
+std::optional<GraspChoice> chooseGrasp(const std::vector<GraspCandidate>& candidates,
+                                       ApproachDirection direction,
+                                       const Eigen::Isometry3d& tag_target,
+                                       const Eigen::Matrix3d& reference,
+                                       const GraspSelectionParams& p,
+                                       const GraspReachable& reachable) {
+  if (!isValidPose(tag_target)) return std::nullopt;
+  std::vector<std::size_t> order;  // qualifying, best score first (ties: the first given)
+  for (std::size_t i = 0; i < candidates.size(); ++i)
+    if (candidateQualifies(candidates[i], direction, tag_target, p)) order.push_back(i);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return candidates[a].score > candidates[b].score; });
+  const bool judge = reachable && p.reach_checks > 0;
+  const bool any_fallback =
+      p.any_approach_fallback && direction != ApproachDirection::Any && direction != ApproachDirection::Tag;
+  GraspSelectionParams any = p;
+  any.any_approach_fallback = false;
+  if (order.empty()) {
+    if (any_fallback) return chooseGrasp(candidates, ApproachDirection::Any, tag_target, reference, any, reachable);
+    if (p.require_candidate && direction != ApproachDirection::Tag) return std::nullopt;
+    return tagFallback(direction, tag_target, reference, p);
+  }
+  GraspChoice first = fromCandidate(candidates, order[0], direction, tag_target, reference, p);
+  if (!judge) return first;
+  const std::size_t checks = std::min(order.size(), static_cast<std::size_t>(p.reach_checks));
+  for (std::size_t k = 0; k < checks; ++k) {
+    GraspChoice c = k == 0 ? first : fromCandidate(candidates, order[k], direction, tag_target, reference, p);
+    if (reachable(c.pose)) {
+      c.reachable = true;
+      return c;
+    }
+  }
+  // None of the preferred approach reachable: a reachable one of the generator's own approach.
+  if (any_fallback) {
+    const auto alt = chooseGrasp(candidates, ApproachDirection::Any, tag_target, reference, any, reachable);
+    if (alt && alt->reachable.value_or(false)) return alt;
+  }
+  first.reachable = false;
+  return first;
 }
 
 }  // namespace ehc_bringup

@@ -145,6 +145,7 @@ void GraspSequencerParams::validate() const {
   positive(retreat_tolerance, "retreat_tolerance");
   positive(retreat_timeout, "retreat_timeout");
   selection.validate();
+  reach.validate();
 }
 
 std::string GraspSequencerParams::summary() const {
@@ -179,7 +180,9 @@ std::string GraspSequencerParams::summary() const {
     << (selection.closing_axis_from_tag ? "closing along a tag target axis, " : "")
     << (selection.require_candidate ? "candidate required" : "tag fallback") << " (backoff forward "
     << selection.fallback_backoff_forward << ", downward " << selection.fallback_backoff_downward
-    << ", sideways " << selection.fallback_backoff_sideways << " m)";
+    << ", sideways " << selection.fallback_backoff_sideways << " m), reachability: the best "
+    << selection.reach_checks << " judged per choice"
+    << "\n  " << reach.summary();
   return s.str();
 }
 
@@ -231,6 +234,8 @@ GraspSequencerParams loadGraspSequencerParams(const ConfigNode& root) {
   p.selection.fallback_backoff_forward = sel.get("fallback_backoff_forward", p.selection.fallback_backoff_forward);
   p.selection.fallback_backoff_downward = sel.get("fallback_backoff_downward", p.selection.fallback_backoff_downward);
   p.selection.fallback_backoff_sideways = sel.get("fallback_backoff_sideways", p.selection.fallback_backoff_sideways);
+  p.selection.reach_checks = sel.get("reach_checks", p.selection.reach_checks);
+  p.reach = loadGraspReachParams(s.childOrEmpty("reach"));
 
   if (!root.has("objects")) root.fail("objects", "is required: a list of {name, approach}");
   for (std::size_t i = 0; i < root.listSize("objects"); ++i) {
@@ -483,8 +488,11 @@ std::optional<GraspChoice> GraspSequencer::currentChoice(const SequencerInput& i
   const Eigen::Matrix3d ref = (in.tcp && isValidPose(*in.tcp)) ? Eigen::Matrix3d(in.tcp->linear())
                                                               : Eigen::Matrix3d(object_pose->linear());
   const GraspObjectSpec& o = params_.objects[current_];
+  GraspReachable reachable;
+  if (reachable_) reachable = [this](const Eigen::Isometry3d& g) { return reachable_(g, preGrasp(g)); };
   std::optional<GraspChoice> choice = chooseGrasp(candidates_, o.approach, *object_pose, ref,
-                                                  o.target.fromCloud() ? params_.selection.forCloudTarget() : params_.selection);
+                                                  o.target.fromCloud() ? params_.selection.forCloudTarget() : params_.selection,
+                                                  reachable);
   if (choice && choice->from_candidate) choice->candidates_t = candidates_t_;
   return choice;
 }
@@ -744,7 +752,8 @@ void GraspSequencer::advanceApproach(const SequencerInput& in, bool fresh, bool 
     locked_ = choice;
     out->goal = preGrasp(choice->pose);
     enter(GraspPhase::PreGrasp, t, out,
-          std::string("grasp locked: ") + (choice->from_candidate ? "perception candidate" : "tag fallback"));
+          std::string("grasp locked: ") + (choice->from_candidate ? "perception candidate" : "tag fallback") +
+              (choice->reachable ? (*choice->reachable ? ", reachable" : ", judged unreachable (none reachable)") : ""));
   }
 }
 

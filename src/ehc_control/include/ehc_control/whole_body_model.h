@@ -138,6 +138,13 @@ class WholeBodyModel {
                              const Eigen::VectorXd& q_start, Eigen::Vector3d* base_out,
                              Eigen::VectorXd* q_out, double limit_margin = 0.0) const;
 
+  /// The same with the base held at `base` (x, y, yaw): the arm's configuration near `q_start`
+  /// (clamped into the shrunk ranges) whose TCP reaches `target`, if the solver converges
+  /// within `iterations` Newton-Raphson steps (>= 1).
+  bool armInverseKinematicsFrom(const Eigen::Isometry3d& target, const Eigen::Vector3d& base,
+                                const Eigen::VectorXd& q_start, Eigen::VectorXd* q_out,
+                                double limit_margin = 0.0, int iterations = 500) const;
+
   /// Throws unless q has nArm finite entries / base pose is finite.
   void checkArm(const Eigen::VectorXd& q) const;
   static void checkBase(const Eigen::Vector3d& base_pose);

@@ -556,6 +556,7 @@ void WholeBodyModel::manipulabilityGradientFromJacobian(const Matrix6Xd& J, Eige
 struct WholeBodyModel::IkProblem {
   KDL::Chain chain;
   unsigned n = 0;
+  unsigned nb = 3;  ///< virtual base joints in the chain (0: the base held)
   KDL::JntArray lo, hi;
   KDL::Frame goal;
   Eigen::Isometry3d target;
@@ -563,40 +564,57 @@ struct WholeBodyModel::IkProblem {
   std::unique_ptr<KDL::ChainIkSolverVel_pinv> ikv;
   std::unique_ptr<KDL::ChainIkSolverPos_NR_JL> ik;
 
-  IkProblem(const WholeBodyModel& m, const Eigen::Isometry3d& T, double limit_margin) : target(T) {
+  /// `held_base`: the base stays at that pose (x, y, yaw) and the arm alone solves; nullptr: the
+  /// virtual planar base joints x, y, yaw are free.
+  IkProblem(const WholeBodyModel& m, const Eigen::Isometry3d& T, double limit_margin,
+            const Eigen::Vector3d* held_base = nullptr, unsigned iterations = 500)
+      : target(T) {
     const RobotConfig& cfg = m.cfg_;
     if (!T.matrix().allFinite()) fail("inverseKinematics: target is not finite");
     if (!(limit_margin >= 0.0) || ((cfg.arm_upper - cfg.arm_lower).array() <= 2.0 * limit_margin).any())
       fail("inverseKinematics: limit margin must be >= 0 and leave every joint a range");
-    chain.addSegment(KDL::Segment(KDL::Joint("virtual_x", KDL::Joint::TransX)));
-    chain.addSegment(KDL::Segment(KDL::Joint("virtual_y", KDL::Joint::TransY)));
-    chain.addSegment(KDL::Segment(KDL::Joint("virtual_yaw", KDL::Joint::RotZ)));
+    if (held_base) {
+      nb = 0;
+      const Eigen::Isometry3d B = baseTransform(*held_base);
+      KDL::Frame f;
+      for (int r = 0; r < 3; ++r) {
+        f.p[r] = B.translation()[r];
+        for (int c = 0; c < 3; ++c) f.M(r, c) = B.linear()(r, c);
+      }
+      chain.addSegment(KDL::Segment(KDL::Joint(KDL::Joint::None), f));
+    } else {
+      chain.addSegment(KDL::Segment(KDL::Joint("virtual_x", KDL::Joint::TransX)));
+      chain.addSegment(KDL::Segment(KDL::Joint("virtual_y", KDL::Joint::TransY)));
+      chain.addSegment(KDL::Segment(KDL::Joint("virtual_yaw", KDL::Joint::RotZ)));
+    }
     chain.addChain(m.impl_->tcp->chain);
     n = chain.getNrOfJoints();
     lo.resize(n);
     hi.resize(n);
     const Eigen::Vector3d t = T.translation();
-    for (unsigned i = 0; i < 2; ++i) {
-      lo(i) = t[static_cast<int>(i)] - 3.0;
-      hi(i) = t[static_cast<int>(i)] + 3.0;
+    if (nb == 3) {
+      for (unsigned i = 0; i < 2; ++i) {
+        lo(i) = t[static_cast<int>(i)] - 3.0;
+        hi(i) = t[static_cast<int>(i)] + 3.0;
+      }
+      lo(2) = -4.0 * M_PI;
+      hi(2) = 4.0 * M_PI;
     }
-    lo(2) = -4.0 * M_PI;
-    hi(2) = 4.0 * M_PI;
     for (int i = 0; i < m.nArm(); ++i) {
-      lo(3 + static_cast<unsigned>(i)) = cfg.arm_lower[i] + limit_margin;
-      hi(3 + static_cast<unsigned>(i)) = cfg.arm_upper[i] - limit_margin;
+      lo(nb + static_cast<unsigned>(i)) = cfg.arm_lower[i] + limit_margin;
+      hi(nb + static_cast<unsigned>(i)) = cfg.arm_upper[i] - limit_margin;
     }
     fk = std::make_unique<KDL::ChainFkSolverPos_recursive>(chain);
     ikv = std::make_unique<KDL::ChainIkSolverVel_pinv>(chain);
-    ik = std::make_unique<KDL::ChainIkSolverPos_NR_JL>(chain, lo, hi, *fk, *ikv, 500, 1e-6);
+    ik = std::make_unique<KDL::ChainIkSolverPos_NR_JL>(chain, lo, hi, *fk, *ikv, iterations, 1e-6);
     for (int r = 0; r < 3; ++r) {
       goal.p[r] = t[r];
       for (int c = 0; c < 3; ++c) goal.M(r, c) = T.linear()(r, c);
     }
   }
 
-  /// One Newton-Raphson solve from q0 = [x, y, yaw, q_arm]; true when the TCP reaches the
-  /// target within 1 mm / 0.5 deg with every arm joint inside its (shrunk) range.
+  /// One Newton-Raphson solve from q0 = [x, y, yaw, q_arm] (the base held: q_arm); true when the
+  /// TCP reaches the target within 1 mm / 0.5 deg with every arm joint inside its (shrunk) range.
   bool solve(const KDL::JntArray& q0, Eigen::Vector3d* base_out, Eigen::VectorXd* q_out) const {
     KDL::JntArray qs(n);
     if (ik->CartToJnt(q0, goal, qs) < 0) return false;
@@ -605,12 +623,12 @@ struct WholeBodyModel::IkProblem {
     const Eigen::Isometry3d T = toEigen(f);
     const Eigen::AngleAxisd d(Eigen::Matrix3d(T.linear().transpose() * target.linear()));
     if ((T.translation() - target.translation()).norm() > 1e-3 || std::abs(d.angle()) > 0.5 * M_PI / 180.0) return false;
-    for (unsigned i = 3; i < n; ++i)
+    for (unsigned i = nb; i < n; ++i)
       if (qs(i) < lo(i) - 1e-9 || qs(i) > hi(i) + 1e-9) return false;
-    if (base_out) *base_out = Eigen::Vector3d(qs(0), qs(1), std::remainder(qs(2), 2.0 * M_PI));
+    if (base_out && nb == 3) *base_out = Eigen::Vector3d(qs(0), qs(1), std::remainder(qs(2), 2.0 * M_PI));
     if (q_out) {
-      q_out->resize(static_cast<Eigen::Index>(n - 3));
-      for (unsigned i = 3; i < n; ++i) (*q_out)[static_cast<Eigen::Index>(i - 3)] = qs(i);
+      q_out->resize(static_cast<Eigen::Index>(n - nb));
+      for (unsigned i = nb; i < n; ++i) (*q_out)[static_cast<Eigen::Index>(i - nb)] = qs(i);
     }
     return true;
   }
@@ -648,6 +666,18 @@ bool WholeBodyModel::inverseKinematicsFrom(const Eigen::Isometry3d& target, cons
   for (unsigned i = 3; i < p.n; ++i)
     q0(i) = std::clamp(q_start[static_cast<Eigen::Index>(i - 3)], p.lo(i), p.hi(i));
   return p.solve(q0, base_out, q_out);
+}
+
+bool WholeBodyModel::armInverseKinematicsFrom(const Eigen::Isometry3d& target, const Eigen::Vector3d& base,
+                                              const Eigen::VectorXd& q_start, Eigen::VectorXd* q_out,
+                                              double limit_margin, int iterations) const {
+  checkBase(base);
+  checkArm(q_start);
+  if (iterations < 1) fail("armInverseKinematicsFrom: iterations must be >= 1");
+  const IkProblem p(*this, target, limit_margin, &base, static_cast<unsigned>(iterations));
+  KDL::JntArray q0(p.n);
+  for (unsigned i = 0; i < p.n; ++i) q0(i) = std::clamp(q_start[static_cast<Eigen::Index>(i)], p.lo(i), p.hi(i));
+  return p.solve(q0, nullptr, q_out);
 }
 
 }  // namespace ehc_control

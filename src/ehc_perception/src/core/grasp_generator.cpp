@@ -763,11 +763,8 @@ struct Footprint {
 /// whole set along every direction are those of these points (k trimmed: k + 1 layers).
 std::vector<Eigen::Vector2d> convexLayers(std::vector<Eigen::Vector2d> pts, std::size_t layers) {
   std::vector<Eigen::Vector2d> out;
-  auto cross = [](const Eigen::Vector2d& o, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
-    return (a - o).x() * (b - o).y() - (a - o).y() * (b - o).x();
-  };
   for (std::size_t l = 0; l < layers && pts.size() > 2; ++l) {
-    const std::vector<Eigen::Vector2d> hull = detail::convexHull2d(pts);  // strict hull vertices
+    const std::vector<Eigen::Vector2d> hull = convexHull2d(pts);  // strict hull vertices
     // The layer: every point on the hull's boundary (ties along an edge included).
     std::vector<Eigen::Vector2d> rest;
     for (const Eigen::Vector2d& p : pts) {
@@ -775,7 +772,7 @@ std::vector<Eigen::Vector2d> convexLayers(std::vector<Eigen::Vector2d> pts, std:
       for (std::size_t e = 0; e < hull.size() && !on; ++e) {
         const Eigen::Vector2d& a = hull[e];
         const Eigen::Vector2d& b = hull[(e + 1) % hull.size()];
-        on = std::abs(cross(a, b, p)) <= 1e-12 * std::max(1.0, (b - a).squaredNorm()) &&
+        on = std::abs(cross2d(a, b, p)) <= 1e-12 * std::max(1.0, (b - a).squaredNorm()) &&
              (p - a).dot(b - a) >= -1e-12 && (p - b).dot(a - b) >= -1e-12;
       }
       (on ? out : rest).push_back(p);

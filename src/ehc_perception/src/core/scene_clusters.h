@@ -14,6 +14,7 @@
 //    stays below the distance between neighbouring objects, whose footprints never overlap.
 // 3. Parts of at least min_cluster_points points, largest first, at most max_objects.
 
+#include "ehc_perception/convex_polygon.h"
 #include "ehc_perception/grasp_generator.h"
 
 #include <pcl/point_cloud.h>
@@ -36,10 +37,6 @@ std::vector<std::vector<int>> clusterObjects(const pcl::PointCloud<pcl::PointXYZ
 /// than two points.
 double angularPitch(const pcl::PointCloud<pcl::PointXYZ>& cloud, const Eigen::Vector3d& viewpoint);
 
-/// 2D convex hull (counter-clockwise, no repeated end; a point or a segment for degenerate input).
-std::vector<Eigen::Vector2d> convexHull2d(std::vector<Eigen::Vector2d> pts);
-/// Distance between two convex polygons (convexHull2d), 0 when they overlap.
-double hullDistance(const std::vector<Eigen::Vector2d>& a, const std::vector<Eigen::Vector2d>& b);
 
 }  // namespace detail
 }  // namespace ehc_perception

@@ -5,9 +5,9 @@
 // (config/objects/library.yaml) lists every object with its parameters, bounding box, mass
 // (density x solid volume), friction, mesh file and split (tuning or validation); the meshes
 // themselves are written from it by `ehc_object_library meshes` (the build runs it) and are not
-// kept in the repository. Shapes are unions of closed parts (a mug: its body and a handle made of
-// short cylinders; bars: overlapping boxes), so the simulator's convex hulls of parts (SimWorld)
-// are close to the shape. ROS-free.
+// kept in the repository. Shapes are unions of closed parts (a mug: a base disc, a wall of convex
+// sectors and a handle made of short cylinders; bars: overlapping boxes), so the simulator's
+// convex hulls of parts (SimWorld) are close to the shape. ROS-free.
 
 #include "ehc_sim/scene_config.h"
 #include "ehc_sim/triangle_mesh.h"

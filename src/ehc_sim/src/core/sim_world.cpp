@@ -76,8 +76,8 @@ std::unique_ptr<btBoxShape> boxShape(const Eigen::Vector3d& half_extents) {
 /// rests on a plane on its convex hull, so resting poses on the table are exact; a part that is
 /// convex (a box, a bar, a cylinder, a handle segment, a blob) collides exactly, and the library's
 /// objects are unions of such parts (a mug's handle is a chain of short cylinders, so the hole
-/// stays open). Only the concavity of a single part is filled (a mug's inside, a banana's inner
-/// curve). Bullet's convex decomposition (HACD, libbullet-extras) was not used: it needs tuning
+/// stays open; a cup's or bowl's wall is a ring of convex sectors on a base disc, so its inside
+/// does). Only the concavity of a single part is filled (a banana's inner curve). Bullet's convex decomposition (HACD, libbullet-extras) was not used: it needs tuning
 /// per mesh and seconds per object at load. The hulls' 1 mm collision margin lies outside the
 /// triangles (a mesh object rests 1 mm above the table; its depth comes from the triangles).
 void makeShapes(const BodyConfig& body, std::vector<std::unique_ptr<btCollisionShape>>* shapes) {

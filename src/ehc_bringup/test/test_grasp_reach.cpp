@@ -1,0 +1,262 @@
+// GraspReach and the grasp choice that uses it: the support's footprint from a cloud, the
+// distance of a link box to it, the reachability of a grasp beside a table on every shipped
+// robot (near the edge yes, in the middle of a wide table no, without a support yes), and
+// chooseGrasp: an unreachable higher-scored candidate loses to a reachable one (fixed and
+// randomized cases, seed printed); bad parameters are rejected.
+
+#include "ehc_bringup/grasp_reach.h"
+#include "ehc_bringup/grasp_selection.h"
+#include "ehc_common/config_node.h"
+#include "ehc_control/qp_controller.h"
+#include "ehc_control/robot_config.h"
+#include "ehc_test/errors.h"
+#include "ehc_test/test_seed.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <random>
+
+using namespace ehc_bringup;
+using ehc_test::errorOf;
+
+namespace {
+
+/// A table top (world): centre, size (x, y), height; its footprint counter-clockwise.
+SupportSurface table(const Eigen::Vector2d& centre, const Eigen::Vector2d& size, double height) {
+  SupportSurface s;
+  s.height = height;
+  const Eigen::Vector2d h = 0.5 * size;
+  s.footprint = {centre + Eigen::Vector2d(-h.x(), -h.y()), centre + Eigen::Vector2d(h.x(), -h.y()),
+                 centre + Eigen::Vector2d(h.x(), h.y()), centre + Eigen::Vector2d(-h.x(), h.y())};
+  return s;
+}
+
+/// TCP pose with approach (z) `z` at `p`, the closing axis (y) horizontal.
+Eigen::Isometry3d graspAt(const Eigen::Vector3d& p, const Eigen::Vector3d& z) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  const Eigen::Vector3d a = z.normalized();
+  Eigen::Vector3d y = a.cross(Eigen::Vector3d::UnitZ());
+  if (y.norm() < 1e-6) y = Eigen::Vector3d::UnitY();
+  y.normalize();
+  T.linear().col(0) = y.cross(a);
+  T.linear().col(1) = y;
+  T.linear().col(2) = a;
+  T.translation() = p;
+  return T;
+}
+
+Eigen::Isometry3d preGraspOf(const Eigen::Isometry3d& g) {
+  Eigen::Isometry3d T = g;
+  T.translation() -= 0.10 * g.linear().col(2);
+  return T;
+}
+
+/// One robot's model and its controller's stop distances and joint stop (config/control/controller.yaml).
+struct Robot {
+  ehc_control::RobotConfig rc;
+  std::unique_ptr<ehc_control::WholeBodyModel> model;
+  ehc_control::QpControllerParams ctrl;
+  explicit Robot(const std::string& name) : rc(ehc_control::loadRobotConfig(ehc_control::resolveRobotFile(name))) {
+    model = std::make_unique<ehc_control::WholeBodyModel>(rc);
+    const auto cfg = ehc_common::ConfigNode::loadFile(ehc_control::configDirectory() + "/control/controller.yaml", "test");
+    ctrl = ehc_control::loadQpControllerParams(cfg.child("controller"));
+    for (const auto& kv : rc.obstacle_stop_distances) ctrl.obstacle_stop_links.insert(kv);
+  }
+  GraspReach reach(const GraspReachParams& p = {}) const {
+    const ehc_control::QpControllerParams& c = ctrl;
+    return GraspReach(*model, p, [&c](const std::string& l) { return c.obstacleStop(l); }, ctrl.joint_stop);
+  }
+};
+
+}  // namespace
+
+TEST(SupportSurface, FootprintOfTheSupportPlanesPointsInARandomCloud) {
+  const unsigned seed = ehc_test::testSeed("support footprint");
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const Eigen::Vector2d c(1.5 + 0.5 * u(rng), 0.3 * u(rng)), size(0.5 + 0.3 * (u(rng) + 1.0), 0.6 + 0.4 * (u(rng) + 1.0));
+  const double h = 0.7 + 0.05 * u(rng);
+  std::vector<Eigen::Vector3f> cloud;
+  for (int i = 0; i < 4000; ++i)  // the top, 2 mm noise
+    cloud.emplace_back(Eigen::Vector3d(c.x() + 0.5 * size.x() * u(rng), c.y() + 0.5 * size.y() * u(rng), h + 0.002 * u(rng)).cast<float>());
+  for (int i = 0; i < 1000; ++i)  // an object on it and the floor beside it: not the support
+    cloud.emplace_back(Eigen::Vector3d(c.x() + 0.05 * u(rng), c.y() + 0.05 * u(rng), h + 0.03 + 0.1 * (u(rng) + 1.0)).cast<float>());
+  for (int i = 0; i < 1000; ++i)
+    cloud.emplace_back(Eigen::Vector3d(c.x() + 2.0 * u(rng), c.y() + 2.0 * u(rng), 0.0).cast<float>());
+  const auto s = supportFromPoints(cloud, Eigen::Vector4d(0, 0, 1, -h));
+  ASSERT_TRUE(s);
+  EXPECT_TRUE(s->valid());
+  EXPECT_NEAR(s->height, h, 0.002);
+  const SupportSurface truth = table(c, size, h);
+  for (const Eigen::Vector2d& corner : s->footprint)  // every corner on or inside the true top
+    EXPECT_LT(supportDistance(truth, Eigen::Vector3d(corner.x(), corner.y(), h), Eigen::Vector3d::Zero()), 1e-6);
+  for (const Eigen::Vector2d& corner : truth.footprint)  // and the true corners within 5 cm of it
+    EXPECT_LT(supportDistance(*s, Eigen::Vector3d(corner.x(), corner.y(), h), Eigen::Vector3d::Zero()), 0.05);
+  // A second view of the other half merges into one footprint; one at another height replaces it.
+  const SupportSurface other = table(c + Eigen::Vector2d(0.5 * size.x(), 0.0), size, h + 0.01);
+  const SupportSurface merged = mergedSupport(*s, other);
+  const double hm = merged.height;
+  EXPECT_LT(supportDistance(merged, Eigen::Vector3d(c.x() - 0.45 * size.x(), c.y(), hm), Eigen::Vector3d::Zero()), 1e-6);
+  EXPECT_LT(supportDistance(merged, Eigen::Vector3d(c.x() + 0.95 * size.x(), c.y(), hm), Eigen::Vector3d::Zero()), 1e-6);
+  const SupportSurface shelf = table(c, size, h + 0.3);
+  EXPECT_NEAR(mergedSupport(*s, shelf).height, h + 0.3, 1e-12);
+  EXPECT_FALSE(supportFromPoints(cloud, Eigen::Vector4d(1, 0, 0, 0))) << "a vertical plane is no support";
+}
+
+TEST(SupportSurface, DistanceOfABoxToTheTop) {
+  const SupportSurface s = table(Eigen::Vector2d(1.9, 0.0), Eigen::Vector2d(0.8, 1.2), 0.75);
+  const Eigen::Vector3d half(0.05, 0.05, 0.05);
+  EXPECT_NEAR(supportDistance(s, Eigen::Vector3d(1.9, 0.0, 0.85), half), 0.05, 1e-12) << "above the top";
+  EXPECT_NEAR(supportDistance(s, Eigen::Vector3d(1.9, 0.0, 0.60), half), 0.10, 1e-12) << "under the top";
+  EXPECT_NEAR(supportDistance(s, Eigen::Vector3d(1.9, 0.0, 0.75), half), 0.0, 1e-12) << "through it";
+  const double r = half.head<2>().norm();
+  EXPECT_NEAR(supportDistance(s, Eigen::Vector3d(1.5 - r - 0.03, 0.0, 0.75), half), 0.03, 1e-12) << "beside the edge";
+  EXPECT_NEAR(supportDistance(s, Eigen::Vector3d(1.5 - r - 0.03, 0.0, 0.75 + 0.05 + 0.04), half), 0.05, 1e-12);
+}
+
+TEST(GraspReach, RejectsBadParameters) {
+  const auto bad = [](auto change) {
+    GraspReachParams p;
+    change(p);
+    return errorOf([&] { p.validate(); });
+  };
+  EXPECT_NE(bad([](GraspReachParams& p) { p.bearings = 2; }).find("[GraspReachParams] bearings"), std::string::npos);
+  EXPECT_NE(bad([](GraspReachParams& p) { p.ik_attempts = 0; }).find("ik_attempts"), std::string::npos);
+  EXPECT_NE(bad([](GraspReachParams& p) { p.bearings = 73; }).find("bearings"), std::string::npos);
+  EXPECT_NE(bad([](GraspReachParams& p) { p.clearance = -0.01; }).find("clearance"), std::string::npos);
+  EXPECT_NE(bad([](GraspReachParams& p) { p.clearance = std::nan(""); }).find("clearance"), std::string::npos);
+  EXPECT_NE(bad([](GraspReachParams& p) { p.grasp_support_exclusion = 2.0; }).find("grasp_support_exclusion"), std::string::npos);
+  EXPECT_EQ(bad([](GraspReachParams&) {}), "");
+  GraspSelectionParams sel;
+  sel.reach_checks = -1;
+  EXPECT_NE(errorOf([&] { sel.validate(); }).find("reach_checks"), std::string::npos);
+  sel.reach_checks = 51;
+  EXPECT_NE(errorOf([&] { sel.validate(); }).find("reach_checks"), std::string::npos);
+
+  const Robot robot("realman_rm65_water2");
+  const auto stop = [](const std::string&) { return 0.05; };
+  EXPECT_NE(errorOf([&] { GraspReach(*robot.model, GraspReachParams{}, stop, std::nan("")); }).find("[GraspReach] joint_stop"),
+            std::string::npos);
+  EXPECT_NE(errorOf([&] { GraspReach(*robot.model, GraspReachParams{}, stop, 10.0); }).find("[GraspReach] joint_stop"),
+            std::string::npos);
+  EXPECT_NE(errorOf([&] { GraspReach(*robot.model, GraspReachParams{}, [](const std::string&) { return -1.0; }, 0.1); })
+                .find("[GraspReach] stop distance"),
+            std::string::npos);
+  GraspReach reach = robot.reach();
+  SupportSurface flat = table(Eigen::Vector2d(1.9, 0.0), Eigen::Vector2d(0.8, 0.0), 0.75);
+  EXPECT_NE(errorOf([&] { reach.setSupport(flat); }).find("[GraspReach] invalid support"), std::string::npos);
+}
+
+class GraspReachRobots : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(GraspReachRobots, ReadyPoseBesideATableYesInTheMiddleOfAWideTableNo) {
+  // The TCP pose of the ready posture with the base at the origin, a table 25 cm below it
+  // whose near edge lies 5 cm beyond it (away from the robot): the robot stands where the
+  // ready posture puts it, reachable on every robot. The same grasp in the
+  // middle of a 3 m table (1.5 m from every edge): the base cannot stand under the top, and no
+  // robot's arm reaches 1.5 m; without a support every grasp is reachable.
+  const Robot robot(GetParam());
+  GraspReach reach = robot.reach();
+  const Eigen::Isometry3d g = robot.model->fk(Eigen::Vector3d::Zero(), robot.rc.arm_ready, robot.rc.tcp_frame);
+  const Eigen::Isometry3d pre = preGraspOf(g);
+  const double h = g.translation().z() - 0.25;
+  const Eigen::Vector2d beyond = g.translation().head<2>() + Eigen::Vector2d(0.05 + 0.4, 0.0);
+  reach.setSupport(table(beyond, Eigen::Vector2d(0.8, 1.2), h));
+  const GraspReachVerdict v = reach.judge(g, pre);
+  EXPECT_TRUE(v.reachable) << v.reason;
+  reach.setSupport(table(g.translation().head<2>(), Eigen::Vector2d(3.0, 3.0), h));
+  const GraspReachVerdict w = reach.judge(g, pre);
+  EXPECT_FALSE(w.reachable);
+  EXPECT_FALSE(w.reason.empty());
+  reach.setSupport(std::nullopt);
+  EXPECT_TRUE(reach.reachable(g, pre));
+}
+
+INSTANTIATE_TEST_SUITE_P(EveryRobot, GraspReachRobots, ::testing::ValuesIn(ehc_control::robotNames()),
+                         [](const ::testing::TestParamInfo<std::string>& i) { return i.param; });
+
+TEST(GraspReach, OfTwoQualifyingCandidatesTheUnreachableHigherScoredOneLoses) {
+  // The demo's table (near edge 1.5 m), the object 35 cm in from the edge: from above the
+  // RealMan's shoulder and elbow would have to reach over the top within their stop distances;
+  // from the side (horizontal, from the robot) the hand reaches farther.
+  const Robot robot("realman_rm65_water2");
+  GraspReach reach = robot.reach();
+  reach.setSupport(table(Eigen::Vector2d(1.9, 0.0), Eigen::Vector2d(0.8, 1.2), 0.75));
+  const Eigen::Vector3d centre(1.85, 0.0, 0.82);
+  const GraspCandidate top{graspAt(centre, -Eigen::Vector3d::UnitZ()), 0.05, 0.9};
+  const GraspCandidate side{graspAt(centre, Eigen::Vector3d::UnitX()), 0.05, 0.5};
+  const GraspReachVerdict vt = reach.judge(top.pose, preGraspOf(top.pose));
+  const GraspReachVerdict vs = reach.judge(side.pose, preGraspOf(side.pose));
+  EXPECT_FALSE(vt.reachable) << "from above";
+  EXPECT_TRUE(vs.reachable) << vs.reason;
+  std::cout << "from above: " << vt.reason << std::endl;
+  GraspSelectionParams p;
+  p.centre_from_tag = p.closing_axis_from_tag = false;
+  const Eigen::Isometry3d tag = graspAt(centre, Eigen::Vector3d::UnitX());
+  const GraspReachable judge = [&](const Eigen::Isometry3d& g) { return reach.reachable(g, preGraspOf(g)); };
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto c = chooseGrasp({top, side}, ApproachDirection::Any, tag, tag.linear(), p, judge);
+  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  ASSERT_TRUE(c);
+  EXPECT_EQ(c->candidate_index, 1) << "the reachable one";
+  EXPECT_EQ(c->reachable, std::optional<bool>(true));
+  const long judged = reach.judgements();
+  const auto again = chooseGrasp({top, side}, ApproachDirection::Any, tag, tag.linear(), p, judge);
+  EXPECT_EQ(reach.judgements(), judged) << "the verdicts are kept";
+  std::cout << "first choice of two candidates: " << ms << " ms (" << judged << " judgements)" << std::endl;
+  // Without the judgement, or with the top one the only candidate: by score, as before.
+  EXPECT_EQ(chooseGrasp({top, side}, ApproachDirection::Any, tag, tag.linear(), p)->candidate_index, 0);
+  const auto only = chooseGrasp({top}, ApproachDirection::Any, tag, tag.linear(), p, judge);
+  ASSERT_TRUE(only);
+  EXPECT_EQ(only->candidate_index, 0);
+  EXPECT_EQ(only->reachable, std::optional<bool>(false));
+  // Without a support (none perceived yet) every grasp is reachable: the score wins.
+  reach.setSupport(std::nullopt);
+  const auto unknown = chooseGrasp({top, side}, ApproachDirection::Any, tag, tag.linear(), p, judge);
+  ASSERT_TRUE(unknown);
+  EXPECT_EQ(unknown->candidate_index, 0);
+  EXPECT_EQ(unknown->reachable, std::optional<bool>(true));
+}
+
+TEST(GraspSelection, ReachabilityComesBeforeScoreRandomized) {
+  // Random candidate sets round a tag target and a random verdict per candidate: the choice is
+  // the best-scored reachable one among the reach_checks best-scored qualifying ones, else the
+  // best-scored one (reachable false).
+  const unsigned seed = ehc_test::testSeed("reachability before score");
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const Eigen::Isometry3d tag = graspAt(Eigen::Vector3d(1.8, 0.1, 0.8), Eigen::Vector3d::UnitX());
+  for (int trial = 0; trial < 200; ++trial) {
+    GraspSelectionParams p;
+    p.reach_checks = 1 + static_cast<int>(u(rng) * 8);
+    std::vector<GraspCandidate> cands;
+    std::vector<bool> ok;
+    const int n = 1 + static_cast<int>(u(rng) * 10);
+    for (int i = 0; i < n; ++i) {
+      const Eigen::Vector3d z = Eigen::Vector3d(1.0, 0.3 * (u(rng) - 0.5), 0.3 * (u(rng) - 0.5)).normalized();
+      cands.push_back({graspAt(tag.translation() + 0.02 * Eigen::Vector3d(u(rng), u(rng), u(rng)), z), 0.05, u(rng)});
+      ok.push_back(u(rng) < 0.4);
+    }
+    // The grasps are judged best score first (the contract): the k-th question is the k-th
+    // best candidate's, and its verdict is ok[] of that candidate.
+    std::vector<std::size_t> order(cands.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return cands[a].score > cands[b].score; });
+    std::size_t asked = 0;
+    const GraspReachable judge = [&](const Eigen::Isometry3d&) { return static_cast<bool>(ok[order[asked++]]); };
+    const auto c = chooseGrasp(cands, ApproachDirection::Forward, tag, tag.linear(), p, judge);
+    ASSERT_TRUE(c);
+    int expect = static_cast<int>(order[0]);
+    bool reachable = false;
+    for (std::size_t k = 0; k < order.size() && static_cast<int>(k) < p.reach_checks; ++k)
+      if (ok[order[k]]) {
+        expect = static_cast<int>(order[k]);
+        reachable = true;
+        break;
+      }
+    EXPECT_EQ(c->candidate_index, expect) << "trial " << trial;
+    EXPECT_EQ(c->reachable, std::optional<bool>(reachable)) << "trial " << trial;
+    EXPECT_LE(asked, static_cast<std::size_t>(p.reach_checks)) << "at most reach_checks judged";
+  }
+}
