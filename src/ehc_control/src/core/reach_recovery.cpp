@@ -35,6 +35,45 @@ double unicycleTravel(const Eigen::Vector3d& from, const Eigen::Vector3d& to, bo
   const double line = std::atan2(d.y(), d.x());
   return d.norm() + kTurnTravel * (std::abs(wrap(line - from.z())) + std::abs(wrap(to.z() - line)));
 }
+
+/// One step of ReachRecovery::solve over (x, y, yaw, q): damped least squares onto the pose error
+/// `e` (bounded, for far starts) plus the joint-limit gradient `g` in the task's null space
+/// (bounded), with J the whole-body TCP Jacobian. An arm joint at its bound (`lo`, `hi`) that the
+/// step would push beyond it is clamped: its column leaves J (and its entry g), and the step is
+/// solved again, until no clamped joint's step points outwards (an active set). Clamping after
+/// the step instead loses that joint's share of the task each iteration, and at a target that
+/// needs the joint at its bound the iteration stalls short of it.
+Eigen::VectorXd clampedStep(const Eigen::MatrixXd& J, const Vector6d& e, const Eigen::VectorXd& g,
+                            const Eigen::VectorXd& qa, const Eigen::VectorXd& lo, const Eigen::VectorXd& hi) {
+  const int n = static_cast<int>(J.cols()), na = static_cast<int>(qa.size());
+  constexpr double kAtBound = 1e-9;  // rad
+  Eigen::MatrixXd Jf = J;
+  Eigen::VectorXd gf = g;
+  Eigen::VectorXd step;
+  for (int pass = 0; pass <= na; ++pass) {
+    const Eigen::MatrixXd Jp = Jf.completeOrthogonalDecomposition().pseudoInverse();
+    Eigen::VectorXd centre = (Eigen::MatrixXd::Identity(n, n) - Jp * Jf) * gf;
+    const double largest = centre.cwiseAbs().maxCoeff();
+    if (largest > 0.05) centre *= 0.05 / largest;
+    Eigen::VectorXd task =
+        Jf.transpose() * (Jf * Jf.transpose() + 1e-4 * Eigen::Matrix<double, 6, 6>::Identity()).ldlt().solve(e);
+    const double task_largest = task.cwiseAbs().maxCoeff();
+    if (task_largest > 0.2) task *= 0.2 / task_largest;
+    step = task + centre;
+    bool clamped = false;
+    for (int i = 0; i < na; ++i) {
+      const int k = n - na + i;
+      if (Jf.col(k).isZero() && gf[k] == 0.0) continue;  // clamped already (or a column without effect)
+      if ((qa[i] >= hi[i] - kAtBound && step[k] > 0.0) || (qa[i] <= lo[i] + kAtBound && step[k] < 0.0)) {
+        Jf.col(k).setZero();
+        gf[k] = 0.0;
+        clamped = true;
+      }
+    }
+    if (!clamped) break;
+  }
+  return step;
+}
 }  // namespace
 
 void ReachRecoveryParams::validate() const {
@@ -279,9 +318,13 @@ bool ReachRecovery::solve(const Eigen::Isometry3d& target, Eigen::Vector3d* base
   // Whole-body IK over (x, y, yaw, q) with joint-limit avoidance by gradient projection: each
   // step is a damped least-squares step onto the target plus, in the task's null space, a step
   // of every joint within joint_influence of its nearer limit away from it, so that the base
-  // moves to let the arm centre its joints. Joints stay within joint_stop of their limits.
-  // (KDL's solver with limits clamps a joint at its bound and stalls there, which is where a
-  // stalled approach starts from.) Success: the TCP on the target within 1 mm / 0.5 deg.
+  // moves to let the arm centre its joints. Joints stay within joint_stop of their limits; a
+  // joint at its bound that the step would push beyond it leaves the step (clampedStep), so the
+  // others solve what it cannot. (KDL's solver with limits clamps a joint at its bound and
+  // stalls there, which is where a stalled approach starts from; so did this solver before its
+  // clamped joints left the step: at a target whose configurations all have a joint at its stop
+  // no start converged, not even the stalled configuration 1-2 cm from it.) Success: the TCP on
+  // the target within 1 mm / 0.5 deg.
   const RobotConfig& rc = model_.config();
   const int na = model_.nArm(), n = 3 + na;
   const Eigen::VectorXd lo = rc.arm_lower + Eigen::VectorXd::Constant(na, joint_stop_);
@@ -312,15 +355,7 @@ bool ReachRecovery::solve(const Eigen::Isometry3d& target, Eigen::Vector3d* base
     if (fixed_base) J.leftCols<3>().setZero();  // the arm alone: the base stays where it stands
     J.block(0, 3, 3, na) = world_T_base.linear() * Ja.topRows<3>();
     J.block(3, 3, 3, na) = world_T_base.linear() * Ja.bottomRows<3>();
-    const Eigen::MatrixXd Jp = J.completeOrthogonalDecomposition().pseudoInverse();
-    Eigen::VectorXd centre = (Eigen::MatrixXd::Identity(n, n) - Jp * J) * g;
-    const double largest = centre.cwiseAbs().maxCoeff();
-    if (largest > 0.05) centre *= 0.05 / largest;
-    // Damped least squares onto the target (the step bounded, for far starts).
-    Eigen::VectorXd task = J.transpose() * (J * J.transpose() + 1e-4 * Eigen::Matrix<double, 6, 6>::Identity()).ldlt().solve(e);
-    const double task_largest = task.cwiseAbs().maxCoeff();
-    if (task_largest > 0.2) task *= 0.2 / task_largest;
-    const Eigen::VectorXd step = task + centre;
+    const Eigen::VectorXd step = clampedStep(J, e, g, qa, lo, hi);
     b += step.head<3>();
     qa = (qa + step.tail(na)).cwiseMax(lo).cwiseMin(hi);
   }
