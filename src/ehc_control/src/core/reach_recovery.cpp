@@ -314,7 +314,7 @@ void ReachRecovery::start(int k, const Eigen::Isometry3d& target, Eigen::Vector3
 }
 
 bool ReachRecovery::solve(const Eigen::Isometry3d& target, Eigen::Vector3d* base, Eigen::VectorXd* q,
-                          bool fixed_base) const {
+                          BaseMotion motion) const {
   // Whole-body IK over (x, y, yaw, q) with joint-limit avoidance by gradient projection: each
   // step is a damped least-squares step onto the target plus, in the task's null space, a step
   // of every joint within joint_influence of its nearer limit away from it, so that the base
@@ -333,6 +333,11 @@ bool ReachRecovery::solve(const Eigen::Isometry3d& target, Eigen::Vector3d* base
   Eigen::VectorXd qa = q->cwiseMax(lo).cwiseMin(hi);
   Eigen::MatrixXd J(6, n);
   Eigen::VectorXd g(n);
+  // The base's translation per unit of its first two variables: free (x, y), along its heading
+  // at the start (the second variable unused), or held (neither, nor the yaw).
+  Eigen::Matrix2d along = Eigen::Matrix2d::Identity();
+  if (motion == BaseMotion::Straight) along << std::cos(b.z()), 0.0, std::sin(b.z()), 0.0;
+  if (motion == BaseMotion::Held) along.setZero();
   for (int it = 0; it < 150; ++it) {
     const Eigen::Isometry3d world_T_base = WholeBodyModel::baseTransform(b);
     const Eigen::Isometry3d tcp = world_T_base * model_.linkPoseInBase(qa, rc.tcp_frame);
@@ -346,17 +351,18 @@ bool ReachRecovery::solve(const Eigen::Isometry3d& target, Eigen::Vector3d* base
     if (e.head<3>().norm() < 1e-4 && e.tail<3>().norm() < 1e-4 && g.isZero()) break;
     const Matrix6Xd Ja = model_.armJacobian(qa, rc.tcp_frame);
     J.setZero();
-    J(0, 0) = 1.0;
-    J(1, 1) = 1.0;
-    const Eigen::Vector3d r = tcp.translation() - world_T_base.translation();
-    J(0, 2) = -r.y();
-    J(1, 2) = r.x();
-    J(5, 2) = 1.0;
-    if (fixed_base) J.leftCols<3>().setZero();  // the arm alone: the base stays where it stands
+    J.topLeftCorner<2, 2>() = along;
+    if (motion != BaseMotion::Held) {  // held: the arm alone, the base stays where it stands
+      const Eigen::Vector3d r = tcp.translation() - world_T_base.translation();
+      J(0, 2) = -r.y();
+      J(1, 2) = r.x();
+      J(5, 2) = 1.0;
+    }
     J.block(0, 3, 3, na) = world_T_base.linear() * Ja.topRows<3>();
     J.block(3, 3, 3, na) = world_T_base.linear() * Ja.bottomRows<3>();
     const Eigen::VectorXd step = clampedStep(J, e, g, qa, lo, hi);
-    b += step.head<3>();
+    b.head<2>() += along * step.head<2>();
+    b.z() += step[2];
     qa = (qa + step.tail(na)).cwiseMax(lo).cwiseMin(hi);
   }
   const Eigen::Isometry3d tcp = WholeBodyModel::baseTransform(b) * model_.linkPoseInBase(qa, rc.tcp_frame);
@@ -376,7 +382,9 @@ void ReachRecovery::plan(const Eigen::Isometry3d& target) {
     q = q0;
     // A placement's first round solves with the base at the ranked pose (the map's R is that
     // pose's); the starts beyond it, from the best poses again, with the base free.
-    if (!solve(target, &b, &q, place_ && next_start_ < static_cast<int>(place_starts_.size()))) continue;
+    if (!solve(target, &b, &q,
+               place_ && next_start_ < static_cast<int>(place_starts_.size()) ? BaseMotion::Held : BaseMotion::Free))
+      continue;
     ++solutions_;
     q = widestTurn(q);
     const double m = margin(q);
@@ -427,6 +435,8 @@ void ReachRecovery::reference(const Eigen::Vector3d& base_pose, const Eigen::Vec
     reference_[2] = params_.heading_gain * wrap(goal_base_.z() - yaw);
   } else if (rho < params_.position_tolerance) {  // on the spot: turn to the goal heading
     reference_[1] = params_.heading_gain * wrap(goal_base_.z() - yaw);
+    // A finish's goal lies along the heading (BaseMotion::Straight): driven straight there.
+    if (finishing_ && finish_base_) reference_[0] = params_.base_gain * (std::cos(yaw) * d.x() + std::sin(yaw) * d.y());
   } else {
     // Polar law (Astolfi): alpha = bearing of the goal, beta = goal heading beyond it; a goal
     // behind the base is approached backwards (the same law with the base's rear as its front).
@@ -449,29 +459,40 @@ void ReachRecovery::reference(const Eigen::Vector3d& base_pose, const Eigen::Vec
   reference_ *= scale;
 }
 
-bool ReachRecovery::finishArmOnly(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q, double position_error,
-                                  double orientation_error) {
+bool ReachRecovery::finish(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q, double position_error,
+                           double orientation_error) {
   // A near move ends within its tolerances of (b*, q*), the TCP up to a few cm off the target;
   // from there the pose task went back into a stop (traces, RealMan `any`: 1.2-5 cm short again,
   // twice per target). Once per move: the arm's own configuration of the target from the base
   // where it stands (a differential base's last centimetres sideways need manoeuvres), tracked
-  // by the arm alone, the base's goal its pose.
+  // by the arm alone, the base's goal its pose. At a target whose configurations all have a
+  // joint at its stop (traces, RealMan `any`: a base 2-5 cm off its goal left no arm-only
+  // configuration) the base moves too, as it can without manoeuvres: a differential base
+  // straight along its heading while turning, a holonomic one freely.
   if (far_ || place_ || finishing_) return false;
   if (position_error < params_.position_progress && orientation_error < params_.orientation_progress) return false;
   Eigen::Vector3d b = base_pose;
   Eigen::VectorXd qs = q;
-  if (!solve(target_, &b, &qs, true)) return false;
+  finish_base_ = false;
+  if (!solve(target_, &b, &qs, BaseMotion::Held)) {
+    b = base_pose;
+    qs = q;
+    if (!solve(target_, &b, &qs, model_.nBase() == 3 ? BaseMotion::Free : BaseMotion::Straight)) return false;
+    finish_base_ = true;
+  }
   finishing_ = true;
-  goal_base_ = base_pose;
+  goal_base_ = finish_base_ ? b : base_pose;
   goal_q_ = widestTurn(qs);
   goal_margin_ = margin(goal_q_);
   return true;
 }
 
-bool ReachRecovery::atGoal(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q) const {
-  return (goal_base_.head<2>() - base_pose.head<2>()).norm() < params_.position_tolerance &&
-         std::abs(wrap(goal_base_.z() - base_pose.z())) < params_.yaw_tolerance &&
-         (goal_q_ - q).cwiseAbs().maxCoeff() < params_.joint_tolerance;
+bool ReachRecovery::atGoal(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q, double scale) const {
+  // An arm-only finish's base is where it stood: its joints alone say whether it is done.
+  const bool base_done = (finishing_ && !finish_base_) ||
+                         ((goal_base_.head<2>() - base_pose.head<2>()).norm() < scale * params_.position_tolerance &&
+                          std::abs(wrap(goal_base_.z() - base_pose.z())) < scale * params_.yaw_tolerance);
+  return base_done && (goal_q_ - q).cwiseAbs().maxCoeff() < scale * params_.joint_tolerance;
 }
 
 const Eigen::VectorXd* ReachRecovery::update(double now, const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q,
@@ -545,15 +566,16 @@ const Eigen::VectorXd* ReachRecovery::update(double now, const Eigen::Vector3d& 
         startWatching(now, position_error, orientation_error);
         return nullptr;
       }
-      // The arm-only finish ends with the TCP on the target or every joint within a tenth of
-      // joint_tolerance of its configuration.
+      // The finish ends with the TCP on the target or within a tenth of the tolerances of its
+      // configuration (its base too, when it moves the base).
       const bool at_goal = finishing_ ? (position_error < params_.position_progress &&
                                          orientation_error < params_.orientation_progress) ||
-                                            (goal_q_ - q).cwiseAbs().maxCoeff() < 0.1 * params_.joint_tolerance
+                                            atGoal(base_pose, q, 0.1)
                                       : atGoal(base_pose, q);
-      if (at_goal && finishArmOnly(base_pose, q, position_error, orientation_error)) {
+      if (at_goal && finish(base_pose, q, position_error, orientation_error)) {
         event_ = "recovery configuration reached with the TCP " + std::to_string(position_error * 100.0) +
-                 " cm off: the arm alone to the target from this base";
+                 (finish_base_ ? " cm off: the arm and the base (straight along its heading, or holonomic) to the target"
+                               : " cm off: the arm alone to the target from this base");
         move_t_ = now;
         move_limit_ = params_.move_timeout;
       } else if (at_goal || now - move_t_ > move_limit_) {
