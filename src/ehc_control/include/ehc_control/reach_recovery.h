@@ -12,7 +12,11 @@
 // inside the joint stops can be reached with wide joint margins: the base can stand elsewhere.
 //
 // ReachRecovery watches the approach and, when it stalls with a joint pinned, looks further:
-//   detect   no progress (position_progress, orientation_progress) for stall_window s, not
+//   detect   no progress (position_progress, orientation_progress; with a joint pinned near
+//            the target also pinned_progress_fraction of the error: traces, RealMan `any`, two
+//            joints at their stops, the base turning, the error crept from 20 to 7 cm over 11 s,
+//            its time constant ~10 s against the servo's 0.7 s, above 5 mm per 2 s until the
+//            time limit was near) for stall_window s, not
 //            arrived, and an arm joint within pinned_margin of its joint stop or the target
 //            farther than twice the ready pose's reach (the base is not bringing the arm there),
 //            or (free_stalls) near the target with every joint free and no link held at an
@@ -94,6 +98,9 @@ struct ReachRecoveryParams {
   double stall_window = 2.0;                         ///< s without progress
   double position_progress = 0.005;                  ///< m: a smaller drop of the error is no progress
   double orientation_progress = 1.0 * M_PI / 180.0;  ///< rad
+  /// Near the target with a joint pinned, a drop smaller than this fraction of the error is no
+  /// progress either (a creep into the trap's equilibrium; 0 = the absolute thresholds alone).
+  double pinned_progress_fraction = 0.25;
   double pinned_margin = 0.05;                       ///< rad beyond the joint stop: a joint this close is pinned
   int starts = 24;                                   ///< IK starts per plan
   int starts_per_cycle = 2;                          ///< IK solves per control cycle while planning

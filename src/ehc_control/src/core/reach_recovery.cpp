@@ -81,6 +81,7 @@ void ReachRecoveryParams::validate() const {
   requireRange(kOwner, "stall_window", stall_window, 0.01, 1000.0);
   requireRange(kOwner, "position_progress", position_progress, 1e-5, 1.0);
   requireRange(kOwner, "orientation_progress", orientation_progress, 1e-5, 1.0);
+  requireRange(kOwner, "pinned_progress_fraction", pinned_progress_fraction, 0.0, 0.9);
   requireRange(kOwner, "pinned_margin", pinned_margin, 0.0, 1.0);
   requireRange(kOwner, "starts", starts, 1, 1000);
   requireRange(kOwner, "starts_per_cycle", starts_per_cycle, 1, 1000);
@@ -104,7 +105,9 @@ void ReachRecoveryParams::validate() const {
 std::string ReachRecoveryParams::summary() const {
   if (!enabled) return "reach recovery off";
   std::ostringstream os;
-  os << "reach recovery after " << stall_window << " s without progress with a joint within " << pinned_margin
+  os << "reach recovery after " << stall_window << " s without progress (" << position_progress << " m, "
+     << orientation_progress * 180.0 / M_PI << " deg; with a joint pinned near the target also "
+     << pinned_progress_fraction << " of the error) with a joint within " << pinned_margin
      << " rad of its stop" << (free_stalls ? " (or near the target with every joint free, no link held at an obstacle)" : "")
      << ": IK from " << starts << " starts, at most "
      << max_attempts << " per target, " << move_timeout << " s each";
@@ -118,6 +121,7 @@ ReachRecoveryParams loadReachRecoveryParams(const ehc_common::ConfigNode& n) {
   p.position_progress = n.get("position_progress", p.position_progress);
   p.orientation_progress = n.get("orientation_progress_deg", p.orientation_progress * 180.0 / M_PI) * M_PI / 180.0;
   p.pinned_margin = n.get("pinned_margin", p.pinned_margin);
+  p.pinned_progress_fraction = n.get("pinned_progress_fraction", p.pinned_progress_fraction);
   p.starts = n.get("starts", p.starts);
   p.starts_per_cycle = n.get("starts_per_cycle", p.starts_per_cycle);
   p.travel_weight = n.get("travel_weight", p.travel_weight);
@@ -240,8 +244,12 @@ void ReachRecovery::startWatching(double now, double position_error, double orie
 
 bool ReachRecovery::stalled(double now, double position_error, double orientation_error, const Eigen::VectorXd& q,
                             bool obstacle_held) {
-  if (position_error < best_position_ - params_.position_progress ||
-      orientation_error < best_orientation_ - params_.orientation_progress) {
+  // Near the target with a joint pinned, progress is also a fall by a fraction of the error: an
+  // approach creeping into the trap's equilibrium keeps above the absolute thresholds for long.
+  const bool pinned = pinnedJoint(model_.config(), q, joint_stop_ + params_.pinned_margin) >= 0;
+  const double fraction = pinned && position_error <= 2.0 * reach_ ? params_.pinned_progress_fraction : 0.0;
+  if (position_error < best_position_ - std::max(params_.position_progress, fraction * best_position_) ||
+      orientation_error < best_orientation_ - std::max(params_.orientation_progress, fraction * best_orientation_)) {
     best_position_ = std::min(best_position_, position_error);
     best_orientation_ = std::min(best_orientation_, orientation_error);
     progress_t_ = now;
@@ -253,8 +261,7 @@ bool ReachRecovery::stalled(double now, double position_error, double orientatio
   if (now - progress_t_ < params_.stall_window) return false;
   if (position_error > 2.0 * reach_) return far_attempts_ < params_.max_attempts;
   if (attempts_ >= params_.max_attempts) return false;
-  return pinnedJoint(model_.config(), q, joint_stop_ + params_.pinned_margin) >= 0 ||
-         (params_.free_stalls && !obstacle_held);
+  return pinned || (params_.free_stalls && !obstacle_held);
 }
 
 void ReachRecovery::startPlacement(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q) {
