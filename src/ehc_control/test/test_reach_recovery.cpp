@@ -337,3 +337,47 @@ TEST(ReachRecoveryEdgeTargets, AStallAtAnEdgeTargetPlansTheConfigurationNextToIt
     }
   }
 }
+
+// A near approach creeping into a joint-limit trap's equilibrium: a joint at its stop and the TCP
+// falling towards the target by more than position_progress per stall window but by far less than
+// pinned_progress_fraction of the error (traced: 20 -> 7 cm over 11 s). With the fraction a plan
+// starts after the stall window; with the absolute thresholds alone (fraction 0) none starts
+// while the creep goes on. Random pinned joints, distances and creep rates (seed printed).
+TEST_F(ReachRecoveryOnRealman, ACreepWithAJointPinnedIsAStall) {
+  const unsigned seed = ehc_test::testSeed("ReachRecovery creep");
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> distance(0.08, 0.15), rate(0.003, 0.006), unit(-1.0, 1.0);
+  std::uniform_int_distribution<int> joint(0, rc.nArm() - 1);
+  const Eigen::Vector3d base = Eigen::Vector3d::Zero();
+  for (int trial = 0; trial < 5; ++trial) {
+    SCOPED_TRACE("trial " + std::to_string(trial) + ", seed " + std::to_string(seed));
+    Eigen::VectorXd q = rc.arm_ready;
+    const int pinned = joint(rng);
+    q[pinned] = unit(rng) > 0.0 ? rc.arm_upper[pinned] - qp.joint_stop : rc.arm_lower[pinned] + qp.joint_stop;
+    ASSERT_GE(pinnedJoint(rc, q, qp.joint_stop + qp.recovery.pinned_margin), 0);
+    const Eigen::Isometry3d tcp0 = tcpOf(model, base, q);
+    const Eigen::Vector3d direction = Eigen::Vector3d(unit(rng), unit(rng), unit(rng)).normalized();
+    Eigen::Isometry3d target = tcp0;
+    target.translation() += distance(rng) * direction;
+    const double speed = rate(rng);  // m/s: 6-12 mm per stall window, above position_progress
+    ASSERT_GT(speed * qp.recovery.stall_window, qp.recovery.position_progress);
+    for (const double fraction : {qp.recovery.pinned_progress_fraction, 0.0}) {
+      ReachRecoveryParams params = qp.recovery;
+      params.pinned_progress_fraction = fraction;
+      ReachRecovery rec(model, params, qp.joint_stop, qp.joint_influence);
+      double started = -1.0;
+      for (double t = 0.0; t < 3.0 * params.stall_window && started < 0.0; t += kDt) {
+        Eigen::Isometry3d tcp = tcp0;  // the creep: the TCP towards the target, the joint at its stop
+        tcp.translation() += speed * t * direction;
+        rec.update(t, base, q, tcp, target);
+        if (rec.state() != ReachRecovery::State::Watching) started = t;
+      }
+      if (fraction > 0.0) {
+        EXPECT_GE(started, params.stall_window) << "a plan before the stall window";
+        EXPECT_LT(started, params.stall_window + 0.1) << "no plan after the stall window of a creep";
+      } else {
+        EXPECT_LT(started, 0.0) << "the absolute thresholds alone saw a stall at t " << started;
+      }
+    }
+  }
+}
