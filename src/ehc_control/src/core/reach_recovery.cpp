@@ -327,11 +327,10 @@ bool ReachRecovery::solve(const Eigen::Isometry3d& target, Eigen::Vector3d* base
   // of every joint within joint_influence of its nearer limit away from it, so that the base
   // moves to let the arm centre its joints. Joints stay within joint_stop of their limits; a
   // joint at its bound that the step would push beyond it leaves the step (clampedStep), so the
-  // others solve what it cannot. (KDL's solver with limits clamps a joint at its bound and
-  // stalls there, which is where a stalled approach starts from; so did this solver before its
-  // clamped joints left the step: at a target whose configurations all have a joint at its stop
-  // no start converged, not even the stalled configuration 1-2 cm from it.) Success: the TCP on
-  // the target within 1 mm / 0.5 deg.
+  // others solve what it cannot. (Clamping after the step, as KDL's solver with limits does,
+  // stalls at the bound, which is where a stalled approach starts from: at a target whose
+  // configurations all have a joint at its stop no start would converge, not even the stalled
+  // configuration 1-2 cm from it.) Success: the TCP on the target within 1 mm / 0.5 deg.
   const RobotConfig& rc = model_.config();
   const int na = model_.nArm(), n = 3 + na;
   const Eigen::VectorXd lo = rc.arm_lower + Eigen::VectorXd::Constant(na, joint_stop_);
