@@ -12,7 +12,11 @@
 // inside the joint stops can be reached with wide joint margins: the base can stand elsewhere.
 //
 // ReachRecovery watches the approach and, when it stalls with a joint pinned, looks further:
-//   detect   no progress (position_progress, orientation_progress) for stall_window s, not
+//   detect   no progress (position_progress, orientation_progress; with a joint pinned near
+//            the target also pinned_progress_fraction of the error: traces, RealMan `any`, two
+//            joints at their stops, the base turning, the error crept from 20 to 7 cm over 11 s,
+//            its time constant ~10 s against the servo's 0.7 s, above 5 mm per 2 s until the
+//            time limit was near) for stall_window s, not
 //            arrived, and an arm joint within pinned_margin of its joint stop or the target
 //            farther than twice the ready pose's reach (the base is not bringing the arm there),
 //            or (free_stalls) near the target with every joint free and no link held at an
@@ -34,7 +38,9 @@
 //            whose range spans more than a turn at its widest equivalent, widestTurn). Any
 //            solution will do, even one near a stop: it is a configuration of the target
 //            itself inside the stops, which the stalled pose task was not finding;
-//            when no start converges, WholeBodyModel::inverseKinematics from 30 random seeds
+//            (IK steps leave out a joint at its bound that they would push beyond it, so that
+//            a target whose configurations all have a joint at its stop converges from the
+//            stalled configuration next to it); when no start converges, WholeBodyModel::inverseKinematics from 30 random seeds
 //            (the check that admits Exp-1's targets; one longer cycle, once per stall);
 //   move     a whole-body reference velocity towards that configuration (b*, q*), tracked
 //            through the QP (EhcQpController::step's `reference`: joint dampers, obstacle
@@ -43,7 +49,11 @@
 //            backwards; holonomic: proportional);
 //   finish   a near move at the tolerances of (b*, q*) with the TCP still off the target: once,
 //            the arm's configuration of the target from the base where it stands (IK, base
-//            held), tracked by the arm alone;
+//            held), tracked by the arm alone; where there is none (a target whose every
+//            configuration has a joint at its stop: a base a few cm off b* leaves the arm
+//            none), the whole-body one with the base moving as it can without manoeuvres
+//            (differential: straight along its heading while turning; holonomic: freely),
+//            until the TCP is on the target or within a tenth of the tolerances of it;
 //   resume   within the tolerances of (b*, q*), where the TCP is on the target, or after
 //            move_timeout (a far move: plus its travel at the base's speed limit); the pose
 //            task takes over again. At most max_attempts near and
@@ -88,6 +98,9 @@ struct ReachRecoveryParams {
   double stall_window = 2.0;                         ///< s without progress
   double position_progress = 0.005;                  ///< m: a smaller drop of the error is no progress
   double orientation_progress = 1.0 * M_PI / 180.0;  ///< rad
+  /// Near the target with a joint pinned, a drop smaller than this fraction of the error is no
+  /// progress either (a creep into the trap's equilibrium; 0 = the absolute thresholds alone).
+  double pinned_progress_fraction = 0.25;
   double pinned_margin = 0.05;                       ///< rad beyond the joint stop: a joint this close is pinned
   int starts = 24;                                   ///< IK starts per plan
   int starts_per_cycle = 2;                          ///< IK solves per control cycle while planning
@@ -173,17 +186,23 @@ class ReachRecovery {
   /// over the target (facing it as the ready TCP's bearing says).
   Eigen::Vector3d readyOver(const Eigen::Isometry3d& target, const Eigen::Vector3d& base) const;
   void plan(const Eigen::Isometry3d& target);
+  /// How the base may move in solve(): freely (x, y, yaw); held (the arm alone); straight along
+  /// its heading at the start while turning (what a differential base does without manoeuvres).
+  enum class BaseMotion { Free, Held, Straight };
   /// Whole-body IK of `target` from (base, q) with joint-limit avoidance (see the .cpp); true
   /// and the solution in (base, q) when it converges.
-  /// `fixed_base`: the arm alone (the base stays at `base`).
-  bool solve(const Eigen::Isometry3d& target, Eigen::Vector3d* base, Eigen::VectorXd* q, bool fixed_base = false) const;
+  bool solve(const Eigen::Isometry3d& target, Eigen::Vector3d* base, Eigen::VectorXd* q,
+             BaseMotion motion = BaseMotion::Free) const;
   void start(int k, const Eigen::Isometry3d& target, Eigen::Vector3d* base, Eigen::VectorXd* q) const;
   void reference(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q);
-  bool atGoal(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q) const;
+  /// Within `scale` x the tolerances of (b*, q*) (an arm-only finish: its joints alone).
+  bool atGoal(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q, double scale = 1.0) const;
   /// At a near move's goal with the TCP still off the target: the goal becomes the arm's IK
-  /// configuration from the current base (base held), once per move; true then.
-  bool finishArmOnly(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q, double position_error,
-                     double orientation_error);
+  /// configuration from the current base (base held), or where there is none, the whole-body
+  /// one with the base moving as it can without manoeuvres (BaseMotion::Straight for a
+  /// differential base, Free for a holonomic one); once per move; true then.
+  bool finish(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q, double position_error,
+              double orientation_error);
 
   const WholeBodyModel& model_;
   ReachRecoveryParams params_;
@@ -198,7 +217,8 @@ class ReachRecovery {
   int attempts_ = 0;      ///< near stalls of this target
   int far_attempts_ = 0;  ///< far stalls of this target (their own count: a far unwind is not a near plan)
   bool far_ = false;      ///< the current plan is a far one
-  bool finishing_ = false;  ///< the current near move finishes with the arm alone (finishArmOnly)
+  bool finishing_ = false;  ///< the current near move finishes from where it stands (finish)
+  bool finish_base_ = false;  ///< ... with the base moving too
   bool place_ = false;    ///< the current plan is a placement (ehc_place)
   std::shared_ptr<const EhcWeighting> placement_map_;
   std::vector<Eigen::Vector3d> place_starts_;  ///< the current placement's IK starts

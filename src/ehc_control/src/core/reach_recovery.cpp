@@ -35,6 +35,45 @@ double unicycleTravel(const Eigen::Vector3d& from, const Eigen::Vector3d& to, bo
   const double line = std::atan2(d.y(), d.x());
   return d.norm() + kTurnTravel * (std::abs(wrap(line - from.z())) + std::abs(wrap(to.z() - line)));
 }
+
+/// One step of ReachRecovery::solve over (x, y, yaw, q): damped least squares onto the pose error
+/// `e` (bounded, for far starts) plus the joint-limit gradient `g` in the task's null space
+/// (bounded), with J the whole-body TCP Jacobian. An arm joint at its bound (`lo`, `hi`) that the
+/// step would push beyond it is clamped: its column leaves J (and its entry g), and the step is
+/// solved again, until no clamped joint's step points outwards (an active set). Clamping after
+/// the step instead loses that joint's share of the task each iteration, and at a target that
+/// needs the joint at its bound the iteration stalls short of it.
+Eigen::VectorXd clampedStep(const Eigen::MatrixXd& J, const Vector6d& e, const Eigen::VectorXd& g,
+                            const Eigen::VectorXd& qa, const Eigen::VectorXd& lo, const Eigen::VectorXd& hi) {
+  const int n = static_cast<int>(J.cols()), na = static_cast<int>(qa.size());
+  constexpr double kAtBound = 1e-9;  // rad
+  Eigen::MatrixXd Jf = J;
+  Eigen::VectorXd gf = g;
+  Eigen::VectorXd step;
+  for (int pass = 0; pass <= na; ++pass) {
+    const Eigen::MatrixXd Jp = Jf.completeOrthogonalDecomposition().pseudoInverse();
+    Eigen::VectorXd centre = (Eigen::MatrixXd::Identity(n, n) - Jp * Jf) * gf;
+    const double largest = centre.cwiseAbs().maxCoeff();
+    if (largest > 0.05) centre *= 0.05 / largest;
+    Eigen::VectorXd task =
+        Jf.transpose() * (Jf * Jf.transpose() + 1e-4 * Eigen::Matrix<double, 6, 6>::Identity()).ldlt().solve(e);
+    const double task_largest = task.cwiseAbs().maxCoeff();
+    if (task_largest > 0.2) task *= 0.2 / task_largest;
+    step = task + centre;
+    bool clamped = false;
+    for (int i = 0; i < na; ++i) {
+      const int k = n - na + i;
+      if (Jf.col(k).isZero() && gf[k] == 0.0) continue;  // clamped already (or a column without effect)
+      if ((qa[i] >= hi[i] - kAtBound && step[k] > 0.0) || (qa[i] <= lo[i] + kAtBound && step[k] < 0.0)) {
+        Jf.col(k).setZero();
+        gf[k] = 0.0;
+        clamped = true;
+      }
+    }
+    if (!clamped) break;
+  }
+  return step;
+}
 }  // namespace
 
 void ReachRecoveryParams::validate() const {
@@ -42,6 +81,7 @@ void ReachRecoveryParams::validate() const {
   requireRange(kOwner, "stall_window", stall_window, 0.01, 1000.0);
   requireRange(kOwner, "position_progress", position_progress, 1e-5, 1.0);
   requireRange(kOwner, "orientation_progress", orientation_progress, 1e-5, 1.0);
+  requireRange(kOwner, "pinned_progress_fraction", pinned_progress_fraction, 0.0, 0.9);
   requireRange(kOwner, "pinned_margin", pinned_margin, 0.0, 1.0);
   requireRange(kOwner, "starts", starts, 1, 1000);
   requireRange(kOwner, "starts_per_cycle", starts_per_cycle, 1, 1000);
@@ -65,7 +105,9 @@ void ReachRecoveryParams::validate() const {
 std::string ReachRecoveryParams::summary() const {
   if (!enabled) return "reach recovery off";
   std::ostringstream os;
-  os << "reach recovery after " << stall_window << " s without progress with a joint within " << pinned_margin
+  os << "reach recovery after " << stall_window << " s without progress (" << position_progress << " m, "
+     << orientation_progress * 180.0 / M_PI << " deg; with a joint pinned near the target also "
+     << pinned_progress_fraction << " of the error) with a joint within " << pinned_margin
      << " rad of its stop" << (free_stalls ? " (or near the target with every joint free, no link held at an obstacle)" : "")
      << ": IK from " << starts << " starts, at most "
      << max_attempts << " per target, " << move_timeout << " s each";
@@ -79,6 +121,7 @@ ReachRecoveryParams loadReachRecoveryParams(const ehc_common::ConfigNode& n) {
   p.position_progress = n.get("position_progress", p.position_progress);
   p.orientation_progress = n.get("orientation_progress_deg", p.orientation_progress * 180.0 / M_PI) * M_PI / 180.0;
   p.pinned_margin = n.get("pinned_margin", p.pinned_margin);
+  p.pinned_progress_fraction = n.get("pinned_progress_fraction", p.pinned_progress_fraction);
   p.starts = n.get("starts", p.starts);
   p.starts_per_cycle = n.get("starts_per_cycle", p.starts_per_cycle);
   p.travel_weight = n.get("travel_weight", p.travel_weight);
@@ -201,8 +244,12 @@ void ReachRecovery::startWatching(double now, double position_error, double orie
 
 bool ReachRecovery::stalled(double now, double position_error, double orientation_error, const Eigen::VectorXd& q,
                             bool obstacle_held) {
-  if (position_error < best_position_ - params_.position_progress ||
-      orientation_error < best_orientation_ - params_.orientation_progress) {
+  // Near the target with a joint pinned, progress is also a fall by a fraction of the error: an
+  // approach creeping into the trap's equilibrium keeps above the absolute thresholds for long.
+  const bool pinned = pinnedJoint(model_.config(), q, joint_stop_ + params_.pinned_margin) >= 0;
+  const double fraction = pinned && position_error <= 2.0 * reach_ ? params_.pinned_progress_fraction : 0.0;
+  if (position_error < best_position_ - std::max(params_.position_progress, fraction * best_position_) ||
+      orientation_error < best_orientation_ - std::max(params_.orientation_progress, fraction * best_orientation_)) {
     best_position_ = std::min(best_position_, position_error);
     best_orientation_ = std::min(best_orientation_, orientation_error);
     progress_t_ = now;
@@ -214,8 +261,7 @@ bool ReachRecovery::stalled(double now, double position_error, double orientatio
   if (now - progress_t_ < params_.stall_window) return false;
   if (position_error > 2.0 * reach_) return far_attempts_ < params_.max_attempts;
   if (attempts_ >= params_.max_attempts) return false;
-  return pinnedJoint(model_.config(), q, joint_stop_ + params_.pinned_margin) >= 0 ||
-         (params_.free_stalls && !obstacle_held);
+  return pinned || (params_.free_stalls && !obstacle_held);
 }
 
 void ReachRecovery::startPlacement(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q) {
@@ -275,13 +321,16 @@ void ReachRecovery::start(int k, const Eigen::Isometry3d& target, Eigen::Vector3
 }
 
 bool ReachRecovery::solve(const Eigen::Isometry3d& target, Eigen::Vector3d* base, Eigen::VectorXd* q,
-                          bool fixed_base) const {
+                          BaseMotion motion) const {
   // Whole-body IK over (x, y, yaw, q) with joint-limit avoidance by gradient projection: each
   // step is a damped least-squares step onto the target plus, in the task's null space, a step
   // of every joint within joint_influence of its nearer limit away from it, so that the base
-  // moves to let the arm centre its joints. Joints stay within joint_stop of their limits.
-  // (KDL's solver with limits clamps a joint at its bound and stalls there, which is where a
-  // stalled approach starts from.) Success: the TCP on the target within 1 mm / 0.5 deg.
+  // moves to let the arm centre its joints. Joints stay within joint_stop of their limits; a
+  // joint at its bound that the step would push beyond it leaves the step (clampedStep), so the
+  // others solve what it cannot. (Clamping after the step, as KDL's solver with limits does,
+  // stalls at the bound, which is where a stalled approach starts from: at a target whose
+  // configurations all have a joint at its stop no start would converge, not even the stalled
+  // configuration 1-2 cm from it.) Success: the TCP on the target within 1 mm / 0.5 deg.
   const RobotConfig& rc = model_.config();
   const int na = model_.nArm(), n = 3 + na;
   const Eigen::VectorXd lo = rc.arm_lower + Eigen::VectorXd::Constant(na, joint_stop_);
@@ -290,6 +339,11 @@ bool ReachRecovery::solve(const Eigen::Isometry3d& target, Eigen::Vector3d* base
   Eigen::VectorXd qa = q->cwiseMax(lo).cwiseMin(hi);
   Eigen::MatrixXd J(6, n);
   Eigen::VectorXd g(n);
+  // The base's translation per unit of its first two variables: free (x, y), along its heading
+  // at the start (the second variable unused), or held (neither, nor the yaw).
+  Eigen::Matrix2d along = Eigen::Matrix2d::Identity();
+  if (motion == BaseMotion::Straight) along << std::cos(b.z()), 0.0, std::sin(b.z()), 0.0;
+  if (motion == BaseMotion::Held) along.setZero();
   for (int it = 0; it < 150; ++it) {
     const Eigen::Isometry3d world_T_base = WholeBodyModel::baseTransform(b);
     const Eigen::Isometry3d tcp = world_T_base * model_.linkPoseInBase(qa, rc.tcp_frame);
@@ -303,25 +357,18 @@ bool ReachRecovery::solve(const Eigen::Isometry3d& target, Eigen::Vector3d* base
     if (e.head<3>().norm() < 1e-4 && e.tail<3>().norm() < 1e-4 && g.isZero()) break;
     const Matrix6Xd Ja = model_.armJacobian(qa, rc.tcp_frame);
     J.setZero();
-    J(0, 0) = 1.0;
-    J(1, 1) = 1.0;
-    const Eigen::Vector3d r = tcp.translation() - world_T_base.translation();
-    J(0, 2) = -r.y();
-    J(1, 2) = r.x();
-    J(5, 2) = 1.0;
-    if (fixed_base) J.leftCols<3>().setZero();  // the arm alone: the base stays where it stands
+    J.topLeftCorner<2, 2>() = along;
+    if (motion != BaseMotion::Held) {  // held: the arm alone, the base stays where it stands
+      const Eigen::Vector3d r = tcp.translation() - world_T_base.translation();
+      J(0, 2) = -r.y();
+      J(1, 2) = r.x();
+      J(5, 2) = 1.0;
+    }
     J.block(0, 3, 3, na) = world_T_base.linear() * Ja.topRows<3>();
     J.block(3, 3, 3, na) = world_T_base.linear() * Ja.bottomRows<3>();
-    const Eigen::MatrixXd Jp = J.completeOrthogonalDecomposition().pseudoInverse();
-    Eigen::VectorXd centre = (Eigen::MatrixXd::Identity(n, n) - Jp * J) * g;
-    const double largest = centre.cwiseAbs().maxCoeff();
-    if (largest > 0.05) centre *= 0.05 / largest;
-    // Damped least squares onto the target (the step bounded, for far starts).
-    Eigen::VectorXd task = J.transpose() * (J * J.transpose() + 1e-4 * Eigen::Matrix<double, 6, 6>::Identity()).ldlt().solve(e);
-    const double task_largest = task.cwiseAbs().maxCoeff();
-    if (task_largest > 0.2) task *= 0.2 / task_largest;
-    const Eigen::VectorXd step = task + centre;
-    b += step.head<3>();
+    const Eigen::VectorXd step = clampedStep(J, e, g, qa, lo, hi);
+    b.head<2>() += along * step.head<2>();
+    b.z() += step[2];
     qa = (qa + step.tail(na)).cwiseMax(lo).cwiseMin(hi);
   }
   const Eigen::Isometry3d tcp = WholeBodyModel::baseTransform(b) * model_.linkPoseInBase(qa, rc.tcp_frame);
@@ -341,7 +388,9 @@ void ReachRecovery::plan(const Eigen::Isometry3d& target) {
     q = q0;
     // A placement's first round solves with the base at the ranked pose (the map's R is that
     // pose's); the starts beyond it, from the best poses again, with the base free.
-    if (!solve(target, &b, &q, place_ && next_start_ < static_cast<int>(place_starts_.size()))) continue;
+    if (!solve(target, &b, &q,
+               place_ && next_start_ < static_cast<int>(place_starts_.size()) ? BaseMotion::Held : BaseMotion::Free))
+      continue;
     ++solutions_;
     q = widestTurn(q);
     const double m = margin(q);
@@ -392,6 +441,8 @@ void ReachRecovery::reference(const Eigen::Vector3d& base_pose, const Eigen::Vec
     reference_[2] = params_.heading_gain * wrap(goal_base_.z() - yaw);
   } else if (rho < params_.position_tolerance) {  // on the spot: turn to the goal heading
     reference_[1] = params_.heading_gain * wrap(goal_base_.z() - yaw);
+    // A finish's goal lies along the heading (BaseMotion::Straight): driven straight there.
+    if (finishing_ && finish_base_) reference_[0] = params_.base_gain * (std::cos(yaw) * d.x() + std::sin(yaw) * d.y());
   } else {
     // Polar law (Astolfi): alpha = bearing of the goal, beta = goal heading beyond it; a goal
     // behind the base is approached backwards (the same law with the base's rear as its front).
@@ -414,29 +465,40 @@ void ReachRecovery::reference(const Eigen::Vector3d& base_pose, const Eigen::Vec
   reference_ *= scale;
 }
 
-bool ReachRecovery::finishArmOnly(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q, double position_error,
-                                  double orientation_error) {
+bool ReachRecovery::finish(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q, double position_error,
+                           double orientation_error) {
   // A near move ends within its tolerances of (b*, q*), the TCP up to a few cm off the target;
   // from there the pose task went back into a stop (traces, RealMan `any`: 1.2-5 cm short again,
   // twice per target). Once per move: the arm's own configuration of the target from the base
   // where it stands (a differential base's last centimetres sideways need manoeuvres), tracked
-  // by the arm alone, the base's goal its pose.
+  // by the arm alone, the base's goal its pose. At a target whose configurations all have a
+  // joint at its stop (traces, RealMan `any`: a base 2-5 cm off its goal left no arm-only
+  // configuration) the base moves too, as it can without manoeuvres: a differential base
+  // straight along its heading while turning, a holonomic one freely.
   if (far_ || place_ || finishing_) return false;
   if (position_error < params_.position_progress && orientation_error < params_.orientation_progress) return false;
   Eigen::Vector3d b = base_pose;
   Eigen::VectorXd qs = q;
-  if (!solve(target_, &b, &qs, true)) return false;
+  finish_base_ = false;
+  if (!solve(target_, &b, &qs, BaseMotion::Held)) {
+    b = base_pose;
+    qs = q;
+    if (!solve(target_, &b, &qs, model_.nBase() == 3 ? BaseMotion::Free : BaseMotion::Straight)) return false;
+    finish_base_ = true;
+  }
   finishing_ = true;
-  goal_base_ = base_pose;
+  goal_base_ = finish_base_ ? b : base_pose;
   goal_q_ = widestTurn(qs);
   goal_margin_ = margin(goal_q_);
   return true;
 }
 
-bool ReachRecovery::atGoal(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q) const {
-  return (goal_base_.head<2>() - base_pose.head<2>()).norm() < params_.position_tolerance &&
-         std::abs(wrap(goal_base_.z() - base_pose.z())) < params_.yaw_tolerance &&
-         (goal_q_ - q).cwiseAbs().maxCoeff() < params_.joint_tolerance;
+bool ReachRecovery::atGoal(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q, double scale) const {
+  // An arm-only finish's base is where it stood: its joints alone say whether it is done.
+  const bool base_done = (finishing_ && !finish_base_) ||
+                         ((goal_base_.head<2>() - base_pose.head<2>()).norm() < scale * params_.position_tolerance &&
+                          std::abs(wrap(goal_base_.z() - base_pose.z())) < scale * params_.yaw_tolerance);
+  return base_done && (goal_q_ - q).cwiseAbs().maxCoeff() < scale * params_.joint_tolerance;
 }
 
 const Eigen::VectorXd* ReachRecovery::update(double now, const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q,
@@ -510,15 +572,16 @@ const Eigen::VectorXd* ReachRecovery::update(double now, const Eigen::Vector3d& 
         startWatching(now, position_error, orientation_error);
         return nullptr;
       }
-      // The arm-only finish ends with the TCP on the target or every joint within a tenth of
-      // joint_tolerance of its configuration.
+      // The finish ends with the TCP on the target or within a tenth of the tolerances of its
+      // configuration (its base too, when it moves the base).
       const bool at_goal = finishing_ ? (position_error < params_.position_progress &&
                                          orientation_error < params_.orientation_progress) ||
-                                            (goal_q_ - q).cwiseAbs().maxCoeff() < 0.1 * params_.joint_tolerance
+                                            atGoal(base_pose, q, 0.1)
                                       : atGoal(base_pose, q);
-      if (at_goal && finishArmOnly(base_pose, q, position_error, orientation_error)) {
+      if (at_goal && finish(base_pose, q, position_error, orientation_error)) {
         event_ = "recovery configuration reached with the TCP " + std::to_string(position_error * 100.0) +
-                 " cm off: the arm alone to the target from this base";
+                 (finish_base_ ? " cm off: the arm and the base (straight along its heading, or holonomic) to the target"
+                               : " cm off: the arm alone to the target from this base");
         move_t_ = now;
         move_limit_ = params_.move_timeout;
       } else if (at_goal || now - move_t_ > move_limit_) {
