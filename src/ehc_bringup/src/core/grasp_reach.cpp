@@ -247,6 +247,16 @@ GraspReachVerdict GraspReach::judge(const Eigen::Isometry3d& grasp, const Eigen:
       }
       if (settle(grasp, b, q_pre, &v)) return v;
     }
+  // No placement's arm reaches it: the whole body from each (the base free to move to where the
+  // arm reaches the pre-grasp's orientation, e.g. a top-down grasp the ready posture's bearing
+  // does not suit), the base where it ends kept clear of the support.
+  for (const Eigen::Vector3d& b : bases) {
+    Eigen::Vector3d b_pre;
+    Eigen::VectorXd q_pre;
+    if (!model_.inverseKinematicsFrom(pre_grasp, b, seeds_.front(), &b_pre, &q_pre, joint_stop_)) continue;
+    if (blocked(b_pre, q_pre, true, Eigen::Vector2d::Zero(), 0.0)) continue;
+    if (settle(grasp, b_pre, q_pre, &v)) return v;
+  }
   return v;
 }
 

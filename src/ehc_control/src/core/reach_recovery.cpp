@@ -1,6 +1,7 @@
 #include "ehc_control/reach_recovery.h"
 
 #include "ehc_common/config_node.h"
+#include "ehc_common/text_format.h"
 #include "ehc_control/motion_limit.h"
 #include "ehc_control/qp_controller.h"
 
@@ -567,7 +568,7 @@ const Eigen::VectorXd* ReachRecovery::update(double now, const Eigen::Vector3d& 
     case State::Moving:
       if (place_ && place && place->sig >= params_.placement_handover_sig) {
         event_ += (event_.empty() ? "" : "; ") + std::string("placement: handing over to the pose task at sig ") +
-                  std::to_string(place->sig);
+                  ehc_common::fixedDecimals(place->sig, 2);
         place_ = false;
         startWatching(now, position_error, orientation_error);
         return nullptr;
@@ -579,7 +580,7 @@ const Eigen::VectorXd* ReachRecovery::update(double now, const Eigen::Vector3d& 
                                             atGoal(base_pose, q, 0.1)
                                       : atGoal(base_pose, q);
       if (at_goal && finish(base_pose, q, position_error, orientation_error)) {
-        event_ = "recovery configuration reached with the TCP " + std::to_string(position_error * 100.0) +
+        event_ = "recovery configuration reached with the TCP " + ehc_common::fixedDecimals(position_error * 100.0, 1) +
                  (finish_base_ ? " cm off: the arm and the base (straight along its heading, or holonomic) to the target"
                                : " cm off: the arm alone to the target from this base");
         move_t_ = now;
