@@ -22,8 +22,10 @@
 // arm's reach (sampled farthest TCP distance) of it; those where the links that do not move
 // with the arm keep their stop distance from the support. The ik_attempts whose arm base is
 // nearest the ready TCP's distance from the arm base are tried, each with the arm IK from the
-// ready posture and from 3 fixed random configurations. A differential base reaches any of
-// them (the judgement is kinematic; the controller drives there).
+// ready posture and from 3 fixed random configurations; when none reaches the pre-grasp, the
+// whole body's IK from each placement (the base free, where it ends kept clear of the support:
+// a top-down grasp near the support's edge wants another bearing than the ready posture's). A
+// differential base reaches any of them (the judgement is kinematic; the controller drives there).
 // Verdicts are kept per grasp pose (within 5 mm and 2 deg) until the support changes: the
 // choice runs whenever candidates or the object's pose update.
 
