@@ -1,6 +1,7 @@
 #include "ehc_bringup/grasp_reach.h"
 
 #include "ehc_common/config_node.h"
+#include "ehc_control/reach_recovery.h"
 #include "ehc_perception/convex_polygon.h"
 
 #include <algorithm>
@@ -146,7 +147,7 @@ GraspReach::GraspReach(const WholeBodyModel& model, const GraspReachParams& para
     links_.push_back(std::move(l));
   }
   const Eigen::Vector3d tcp = model_.linkPoseInBase(rc.arm_ready, rc.tcp_frame).translation();
-  ready_bearing_ = std::atan2(tcp.y(), tcp.x());
+  ready_bearing_ = ehc_control::readyTcpBearing(model_);
   arm_base_ = model_.linkPoseInBase(rc.arm_ready, rc.arm_base_frame).translation();
   ready_distance_ = (tcp - arm_base_).norm();
   // The arm's reach: the farthest sampled TCP from the arm base (deterministic sample).
@@ -214,9 +215,8 @@ std::vector<Eigen::Vector3d> GraspReach::placements(const Eigen::Vector3d& targe
   const Eigen::VectorXd& ready = model_.config().arm_ready;
   for (int i = 0; i < params_.bearings; ++i) {
     const double a = 2.0 * M_PI * i / params_.bearings;
-    const double yaw = std::remainder(a + M_PI - ready_bearing_, 2.0 * M_PI);
     for (double d = 0.0;; d += kDistanceStep) {
-      const Eigen::Vector3d base(target.x() + d * std::cos(a), target.y() + d * std::sin(a), yaw);
+      const Eigen::Vector3d base = ehc_control::placementFacing(target.head<2>(), a, d, ready_bearing_);
       const double arm = (WholeBodyModel::baseTransform(base) * arm_base_ - target).norm();
       if (arm > reach_) break;
       if (!blocked(base, ready, true, Eigen::Vector2d::Zero(), 0.0)) out.push_back({base, std::abs(arm - ready_distance_)});

@@ -129,6 +129,13 @@ struct ReachRecoveryParams {
 /// Section `recovery` of the controller section (defaults for absent keys).
 ReachRecoveryParams loadReachRecoveryParams(const ehc_common::ConfigNode& node);
 
+/// The bearing (rad) of the ready posture's TCP in the base frame.
+double readyTcpBearing(const WholeBodyModel& model);
+/// The base pose (x, y, yaw) `radius` from `target` at `angle` (world, seen from the target),
+/// turned so that the ready posture's TCP, at `ready_bearing` in the base frame, points at the
+/// target: the placements of ReachRecovery and of the grasp choice's reach check.
+Eigen::Vector3d placementFacing(const Eigen::Vector2d& target, double angle, double radius, double ready_bearing);
+
 class ReachRecovery {
  public:
   enum class State { Watching, Planning, Moving };
@@ -177,9 +184,6 @@ class ReachRecovery {
   bool stalled(double now, double position_error, double orientation_error, const Eigen::VectorXd& q,
                bool obstacle_held);
   void startPlanning(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q, bool far);
-  /// The base pose `radius` from the target at `angle` (seen from the target), facing so that
-  /// the ready pose's TCP points at the target.
-  Eigen::Vector3d placement(const Eigen::Vector2d& target, double angle, double radius) const;
   /// A placement plan for target_ (ehc_place): startPlanning from the ranked placement starts.
   void startPlacement(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q);
   /// The base pose, on the line from `base` to the target, at which the ready pose's TCP is

@@ -150,7 +150,7 @@ ReachRecovery::ReachRecovery(const WholeBodyModel& model, const ReachRecoveryPar
   const RobotConfig& rc = model_.config();
   const Eigen::Vector3d tcp = model_.linkPoseInBase(rc.arm_ready, rc.tcp_frame).translation();
   reach_ = std::max(0.2, tcp.head<2>().norm());
-  ready_bearing_ = std::atan2(tcp.y(), tcp.x());
+  ready_bearing_ = readyTcpBearing(model_);
   T_base_arm_ready_ = model_.linkPoseInBase(rc.arm_ready, rc.arm_base_frame);
   vmax_ = rc.velocityLimits();
   reference_ = Eigen::VectorXd::Zero(model_.nDof());
@@ -205,7 +205,7 @@ std::vector<Eigen::Vector3d> ReachRecovery::placementStarts(const Eigen::Isometr
     for (double r : kPlacementRadii)
       for (double dyaw : kPlacementYaws) {
         Candidate c;
-        c.base = placement(t, a, r * place_reach_);
+        c.base = placementFacing(t, a, r * place_reach_, ready_bearing_);
         c.base.z() = wrap(c.base.z() + dyaw);
         c.reach = placementReachability(target, c.base);
         c.travel = unicycleTravel(base_pose, c.base, model_.nBase() == 3);
@@ -286,10 +286,16 @@ void ReachRecovery::startPlanning(const Eigen::Vector3d& base_pose, const Eigen:
   ++(far ? far_attempts_ : attempts_);
 }
 
-Eigen::Vector3d ReachRecovery::placement(const Eigen::Vector2d& target, double angle, double radius) const {
+double readyTcpBearing(const WholeBodyModel& model) {
+  const RobotConfig& rc = model.config();
+  const Eigen::Vector3d tcp = model.linkPoseInBase(rc.arm_ready, rc.tcp_frame).translation();
+  return std::atan2(tcp.y(), tcp.x());
+}
+
+Eigen::Vector3d placementFacing(const Eigen::Vector2d& target, double angle, double radius, double ready_bearing) {
   Eigen::Vector3d out;
   out.head<2>() = target + radius * Eigen::Vector2d(std::cos(angle), std::sin(angle));
-  out.z() = wrap(angle + M_PI - ready_bearing_);
+  out.z() = wrap(angle + M_PI - ready_bearing);
   return out;
 }
 
@@ -297,7 +303,7 @@ Eigen::Vector3d ReachRecovery::readyOver(const Eigen::Isometry3d& target, const 
   const Eigen::Vector2d t = target.translation().head<2>();
   const Eigen::Vector2d away = base.head<2>() - t;
   const double angle = away.norm() > 1e-9 ? std::atan2(away.y(), away.x()) : base.z() + ready_bearing_ + M_PI;
-  return placement(t, angle, reach_);
+  return placementFacing(t, angle, reach_, ready_bearing_);
 }
 
 void ReachRecovery::start(int k, const Eigen::Isometry3d& target, Eigen::Vector3d* base, Eigen::VectorXd* q) const {
@@ -318,7 +324,7 @@ void ReachRecovery::start(int k, const Eigen::Isometry3d& target, Eigen::Vector3
   const Eigen::Vector2d to_robot = plan_base_.head<2>() - t;
   const double robot_side = to_robot.norm() > 1e-6 ? std::atan2(to_robot.y(), to_robot.x()) : plan_base_.z() + M_PI;
   const double a = robot_side + M_PI * (kPlacementOffsets[i % kOffsets] + (second ? 0.125 : 0.0));
-  *base = placement(t, a, (second ? 0.7 : 1.0) * reach_);
+  *base = placementFacing(t, a, (second ? 0.7 : 1.0) * reach_, ready_bearing_);
 }
 
 bool ReachRecovery::solve(const Eigen::Isometry3d& target, Eigen::Vector3d* base, Eigen::VectorXd* q,
