@@ -2,13 +2,17 @@
 // distance of a link box to it, the reachability of a grasp beside a table on every shipped
 // robot (near the edge yes, in the middle of a wide table no, without a support yes), and
 // chooseGrasp: an unreachable higher-scored candidate loses to a reachable one (fixed and
-// randomized cases, seed printed); bad parameters are rejected.
+// randomized cases, seed printed); the configurations checked against an obstacle map (the
+// object left out during the descent, a neighbour at the pre-grasp blocking, a kept verdict
+// checked again as the map grows); bad parameters are rejected.
 
 #include "ehc_bringup/grasp_reach.h"
 #include "ehc_bringup/grasp_selection.h"
 #include "ehc_common/config_node.h"
 #include "ehc_control/qp_controller.h"
+#include "ehc_control/robot_collision_model.h"
 #include "ehc_control/robot_config.h"
+#include "ehc_perception/obstacle_distance_field.h"
 #include "ehc_test/errors.h"
 #include "ehc_test/test_seed.h"
 
@@ -259,4 +263,55 @@ TEST(GraspSelection, ReachabilityComesBeforeScoreRandomized) {
     EXPECT_EQ(c->reachable, std::optional<bool>(reachable)) << "trial " << trial;
     EXPECT_LE(asked, static_cast<std::size_t>(p.reach_checks)) << "at most reach_checks judged";
   }
+}
+
+TEST_P(GraspReachRobots, ObstacleMapBlocksThePreGraspNotTheObjectDuringTheDescent) {
+  // The ready-pose grasp beside a table (reachable), judged against an obstacle map (the
+  // controller's ObstacleDistanceField): an object standing at the grasp blocks nothing while the
+  // descent leaves it out (the sequencer's exclusion), everything when it does not; a neighbour
+  // where the open fingers are at the pre-grasp blocks every placement; one 0.8 m aside, none.
+  // A kept verdict is checked against the map again: the neighbour added later un-reaches it.
+  const Robot robot(GetParam());
+  GraspReach reach = robot.reach();
+  const Eigen::Isometry3d g = robot.model->fk(Eigen::Vector3d::Zero(), robot.rc.arm_ready, robot.rc.tcp_frame);
+  const Eigen::Isometry3d pre = preGraspOf(g);
+  const double h = g.translation().z() - 0.25;
+  reach.setSupport(table(g.translation().head<2>() + Eigen::Vector2d(0.45, 0.0), Eigen::Vector2d(0.8, 1.2), h));
+  const ehc_control::RobotCollisionModel collision(robot.model->calibratedUrdfXml(), robot.rc.arm_joints,
+                                                   robot.rc.checked_links);
+  ehc_perception::ObstacleDistanceField field(ehc_perception::ObstacleMapConfig{}, collision);
+  std::vector<ehc_perception::ExclusionZone> descent_zones;
+  reach.setMapDistances([&](const Eigen::Vector3d& base, const Eigen::VectorXd& q, bool descent) {
+    std::vector<std::pair<std::string, double>> out;
+    const auto zones = descent ? descent_zones : std::vector<ehc_perception::ExclusionZone>{};
+    for (const auto& d : field.distances(field.linkPoses(*robot.model, base, q), zones)) out.emplace_back(d.link, d.distance);
+    return out;
+  });
+  ASSERT_TRUE(reach.reachable(g, pre)) << reach.judge(g, pre).reason;
+  EXPECT_EQ(reach.judgements(), 1);
+  // The object: a 10 cm cube round the grasp (the open fingers inside it; 4 cm from the
+  // fingertips at the pre-grasp, 10 cm back).
+  const Eigen::Vector3d c = g.translation();
+  field.addOccupiedBox(c - Eigen::Vector3d::Constant(0.05), c + Eigen::Vector3d::Constant(0.05));
+  const GraspReachVerdict unexcluded = reach.judge(g, pre);
+  EXPECT_FALSE(unexcluded.reachable);
+  EXPECT_NE(unexcluded.reason.find("from an obstacle"), std::string::npos) << unexcluded.reason;
+  descent_zones = {{c, 0.1}};
+  const GraspReachVerdict excluded = reach.judge(g, pre);
+  EXPECT_TRUE(excluded.reachable) << excluded.reason;
+  EXPECT_EQ(excluded.q_pre.size(), robot.rc.nArm());
+  // A neighbour 0.8 m aside: still reachable.
+  const Eigen::Vector3d aside = c + Eigen::Vector3d(0.0, 0.8, 0.0);
+  field.addOccupiedBox(aside - Eigen::Vector3d::Constant(0.03), aside + Eigen::Vector3d::Constant(0.03));
+  EXPECT_TRUE(reach.judge(g, pre).reachable);
+  EXPECT_TRUE(reach.reachable(g, pre)) << "kept, still clear";
+  EXPECT_EQ(reach.judgements(), 1);
+  // A neighbour where the open fingers are at the pre-grasp (whatever the placement, the TCP is there).
+  const Eigen::Vector3d p = pre.translation();
+  field.addOccupiedBox(p - Eigen::Vector3d::Constant(0.05), p + Eigen::Vector3d::Constant(0.05));
+  const GraspReachVerdict blocked = reach.judge(g, pre);
+  EXPECT_FALSE(blocked.reachable);
+  EXPECT_NE(blocked.reason.find("at the pre-grasp"), std::string::npos) << blocked.reason;
+  EXPECT_FALSE(reach.reachable(g, pre)) << "the kept verdict is checked against the grown map";
+  EXPECT_EQ(reach.judgements(), 2);
 }

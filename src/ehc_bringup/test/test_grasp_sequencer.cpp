@@ -860,9 +860,10 @@ TEST(GraspSequencer, TheObjectIsAnObstacleUntilTheDescentAndExcludedWhileTouched
   p.obstacle_exclusion_radius = 0.12;
   Harness h(p);
   EXPECT_FALSE(h.seq.objectCentre());
+  EXPECT_TRUE(h.seq.plannedExclusions(GraspPhase::Grasp).empty()) << "no pose yet: nothing planned";
   const Eigen::Vector3d centre(1.5, 0.0, 0.76);
   h.perceive = forwardTarget(centre.x(), centre.y(), centre.z());
-  int before_grasp = 0, checked = 0;
+  int before_grasp = 0, checked = 0, planned = 0;
   double carried_z_max = -1.0;
   bool seen_lift = false;
   while (h.seq.currentObject() == 0 && !h.seq.done() && h.t < 100) {
@@ -874,11 +875,26 @@ TEST(GraspSequencer, TheObjectIsAnObstacleUntilTheDescentAndExcludedWhileTouched
       break;
     }
     if (ph < GraspPhase::Grasp) {
-      // Approach and pre-grasp: the object is an obstacle like any other.
+      // Approach and pre-grasp: the object is an obstacle like any other; the descent's
+      // exclusion is planned where it is perceived (GraspReach's map check).
       EXPECT_TRUE(out.exclusions.empty()) << toString(ph);
+      EXPECT_TRUE(h.seq.plannedExclusions(GraspPhase::PreGrasp).empty());
+      const auto descent = h.seq.plannedExclusions(GraspPhase::Grasp);
+      if (h.seq.objectCentre()) {
+        ASSERT_EQ(descent.size(), 1u) << toString(ph);
+        EXPECT_LT((descent[0].centre - centre).norm(), 1e-9);
+        EXPECT_DOUBLE_EQ(descent[0].radius, 0.12);
+        ++planned;
+      }
       ++before_grasp;
       continue;
     }
+    if (ph == GraspPhase::Grasp) {
+      const auto descent = h.seq.plannedExclusions(GraspPhase::Grasp);
+      ASSERT_EQ(descent.size(), out.exclusions.size());
+      EXPECT_EQ(descent[0].centre, out.exclusions[0].centre) << "the planned zones are the ones given";
+    }
+    EXPECT_TRUE(h.seq.plannedExclusions(GraspPhase::Lift).empty()) << "planned: before the close only";
     ASSERT_FALSE(out.exclusions.empty()) << toString(ph);
     ++checked;
     EXPECT_LT((out.exclusions[0].centre - centre).norm(), 1e-9) << "where it was perceived";
@@ -895,6 +911,7 @@ TEST(GraspSequencer, TheObjectIsAnObstacleUntilTheDescentAndExcludedWhileTouched
     }
   }
   EXPECT_GT(before_grasp, 0);
+  EXPECT_GT(planned, 0);
   EXPECT_GT(checked, 0);
   EXPECT_TRUE(seen_lift);
   // The harness TCP jumps to the lift goal: the carried sphere rises by the lift height.

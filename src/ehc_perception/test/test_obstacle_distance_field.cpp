@@ -187,6 +187,42 @@ TEST(ObstacleDistanceField, ExclusionZonesHideTheObjectButNotItsSurroundings) {
   EXPECT_EQ(p.field.exclusionZones(), before);
 }
 
+TEST(ObstacleDistanceField, PlannedQueriesTakeTheirOwnZonesAndLeaveTheFieldsUntouched) {
+  // distances(poses, zones) answers as the field with those zones set would, and changes
+  // neither the field's zones nor its next seeded query. Random blocks, zones and link poses.
+  std::mt19937 rng(ehc_test::testSeed("ObstacleDistanceField planned queries"));
+  std::uniform_real_distribution<double> u(-0.4, 0.4), r(0.0, 0.15), yaw(-M_PI, M_PI);
+  for (int trial = 0; trial < 20; ++trial) {
+    Probe p, q;  // q: the same map with the zones set on it
+    for (int b = 0; b < 6; ++b) {
+      const Eigen::Vector3d lo(u(rng), u(rng), u(rng)), size(r(rng), r(rng), r(rng));
+      p.field.addOccupiedBox(lo, lo + size);
+      q.field.addOccupiedBox(lo, lo + size);
+    }
+    const std::vector<ExclusionZone> own = {{Eigen::Vector3d(u(rng), u(rng), u(rng)), r(rng)}};
+    const std::vector<ExclusionZone> planned = {{Eigen::Vector3d(u(rng), u(rng), u(rng)), r(rng)},
+                                                {Eigen::Vector3d(u(rng), u(rng), u(rng)), r(rng)}};
+    p.field.setExclusionZones(own);
+    q.field.setExclusionZones(planned);
+    std::vector<Eigen::Isometry3d> poses;
+    for (std::size_t l = 0; l < p.robot.links().size(); ++l) poses.push_back(pose(u(rng), u(rng), u(rng), yaw(rng)));
+    const auto before = p.field.distances(poses);
+    const auto planned_ds = p.field.distances(poses, planned);
+    const auto want = q.field.distances(poses);
+    ASSERT_EQ(planned_ds.size(), want.size()) << "trial " << trial;
+    for (std::size_t i = 0; i < want.size(); ++i) {
+      EXPECT_EQ(planned_ds[i].link, want[i].link);
+      EXPECT_DOUBLE_EQ(planned_ds[i].distance, want[i].distance) << "trial " << trial << " " << want[i].link;
+    }
+    EXPECT_EQ(p.field.exclusionZones(), own);
+    const auto after = p.field.distances(poses);
+    ASSERT_EQ(after.size(), before.size());
+    for (std::size_t i = 0; i < after.size(); ++i) EXPECT_DOUBLE_EQ(after[i].distance, before[i].distance);
+  }
+  Probe p;
+  EXPECT_THROW(p.field.distances(p.place("ball", pose(0, 0, 0, 0)), {{Eigen::Vector3d::Zero(), 2.0}}), std::invalid_argument);
+}
+
 TEST(ObstacleDistanceField, CloudsMarkObstaclesAndRaysClearFreeSpace) {
   Probe p;
   // A wall facing the sensor at (0, 0, 0.4), spanning +-0.3 m around it, scaled by `grow`.

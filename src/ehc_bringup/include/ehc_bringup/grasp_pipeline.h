@@ -231,6 +231,11 @@ class GraspPipeline {
   /// grasp generator's support plane in each cloud (observeSupport).
   std::unique_ptr<GraspReach> reach_;
   void observeSupport(const ehc_perception::PointList& points, const ehc_perception::GraspResult& r);
+  /// GraspReach's view of the obstacle map: the checked links' distances with the robot at
+  /// (base, q), the map with the exclusions the sequencer plans before (`descent` false) or
+  /// during the descent.
+  std::vector<std::pair<std::string, double>> plannedMapDistances(const Eigen::Vector3d& base, const Eigen::VectorXd& q,
+                                                                  bool descent) const;
   struct Clocks;
   std::unique_ptr<Clocks> clocks_;
   std::optional<Eigen::Vector3d> grasp_target_;  ///< the sequencer's object pose (grasp node target)

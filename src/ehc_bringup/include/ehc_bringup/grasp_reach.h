@@ -26,8 +26,15 @@
 // whole body's IK from each placement (the base free, where it ends kept clear of the support:
 // a top-down grasp near the support's edge wants another bearing than the ready posture's). A
 // differential base reaches any of them (the judgement is kinematic; the controller drives there).
+// With the obstacle map (setMapDistances: the map the controller's dampers read), the pre-grasp's
+// configuration, the grasp's and the one halfway down the descent must also keep every checked
+// link at its stop distance from the map's obstacles: the neighbours beside the target, and the
+// target itself where the map still holds it (before the descent). The controller stops a link
+// there and the approach stalls; another candidate or another placement may pass.
 // Verdicts are kept per grasp pose (within 5 mm and 2 deg) until the support changes: the
-// choice runs whenever candidates or the object's pose update.
+// choice runs whenever candidates or the object's pose update. The map grows while the robot
+// drives: a kept reachable verdict's configurations are checked against it again at every call
+// (a few distance queries), and the grasp judged anew when one is blocked.
 
 #include "ehc_control/robot_collision_model.h"
 #include "ehc_control/whole_body_model.h"
@@ -88,6 +95,7 @@ double supportDistance(const SupportSurface& support, const Eigen::Vector3d& cen
 struct GraspReachVerdict {
   bool reachable = false;
   Eigen::Vector3d base = Eigen::Vector3d::Zero();  ///< the placement that reaches it (reachable)
+  Eigen::VectorXd q_pre, q_grasp;  ///< the arm at the pre-grasp and at the grasp (reachable)
   std::string reason;  ///< the last placement's failure (unreachable), e.g. "link4 0.012 m from the support at the pre-grasp"
 };
 
@@ -99,6 +107,15 @@ class GraspReach {
   GraspReach(const ehc_control::WholeBodyModel& model, const GraspReachParams& params,
              const std::function<double(const std::string&)>& stop_distance, double joint_stop);
   ~GraspReach();
+
+  /// The checked links' distances (m) to the obstacle map with the robot at (base, q), the map
+  /// as the controller sees it before the descent (`descent` false) or during it (true: the
+  /// target and the support round it left out, GraspSequencer::plannedExclusions): (link,
+  /// distance) pairs; a link without an obstacle within the map's influence left out.
+  using MapDistances = std::function<std::vector<std::pair<std::string, double>>(
+      const Eigen::Vector3d& base, const Eigen::VectorXd& q, bool descent)>;
+  /// The obstacle map the configurations are checked against (none: the support only).
+  void setMapDistances(MapDistances distances) { map_ = std::move(distances); }
 
   /// The support the grasps stand on; a new one forgets the verdicts.
   void setSupport(const std::optional<SupportSurface>& support);
@@ -129,6 +146,14 @@ class GraspReach {
   std::optional<std::pair<std::string, double>> blocked(const Eigen::Vector3d& base, const Eigen::VectorXd& q,
                                                         bool base_links_only, const Eigen::Vector2d& excluded,
                                                         double exclusion) const;
+  /// The link of links_ nearest the obstacle map closer than its stop (name and distance), if
+  /// any (see setMapDistances); nullopt without a map.
+  std::optional<std::pair<std::string, double>> mapBlocked(const Eigen::Vector3d& base, const Eigen::VectorXd& q,
+                                                           bool descent) const;
+  /// mapBlocked at the pre-grasp, halfway down the descent and at the grasp of a verdict;
+  /// the reason when one is blocked (empty: clear).
+  std::string descentBlocked(const Eigen::Vector3d& base, const Eigen::VectorXd& q_pre,
+                             const Eigen::VectorXd& q_grasp) const;
   /// The rest of judge() with the pre-grasp solved at (base, q_pre): its clearance, the grasp
   /// from it (the arm alone) and its clearance; true and `v` filled when reachable, else
   /// v->reason set.
@@ -147,9 +172,10 @@ class GraspReach {
   std::vector<Eigen::VectorXd> seeds_;  ///< arm IK seeds: the ready posture, then fixed random ones
   double reach_ = 1.0;  ///< m: the farthest TCP distance from the arm base (sampled)
   std::optional<SupportSurface> support_;
+  MapDistances map_;
   struct Kept {
     Eigen::Isometry3d grasp;
-    bool reachable;
+    GraspReachVerdict verdict;
   };
   std::vector<Kept> kept_;
   long judgements_ = 0;

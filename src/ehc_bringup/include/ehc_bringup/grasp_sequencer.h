@@ -320,6 +320,12 @@ class GraspSequencer {
   /// prefers reachable candidates (chooseGrasp). None (the default): the choice by score alone.
   using Reachability = std::function<bool(const Eigen::Isometry3d& grasp, const Eigen::Isometry3d& pre_grasp)>;
   void setReachability(Reachability reachable) { reachable_ = std::move(reachable); }
+  /// The obstacle-map exclusions the current object will have in `phase` (before the gripper
+  /// closes: up to CLOSE), as it is perceived now (its extent, else its pose): the zones
+  /// SequencerOutput::exclusions then carries, for checking a planned configuration against the
+  /// map as the controller will see it (GraspReach). Empty in a phase without exclusions or
+  /// before the object has a pose.
+  std::vector<ExclusionSphere> plannedExclusions(GraspPhase phase) const;
 
   /// One cycle. Throws "[GraspSequencer] ..." for a non-finite or decreasing time.
   SequencerOutput update(const SequencerInput& in);
@@ -368,6 +374,11 @@ class GraspSequencer {
   void advanceRetreat(const SequencerInput& in, double in_phase, SequencerOutput* out);
   /// SequencerOutput::exclusions for the phase reached this cycle (every cycle, whatever ended it).
   std::vector<ExclusionSphere> obstacleExclusions(const SequencerInput& in) const;
+  /// Whether the object is left out of the obstacle map in phase `p`.
+  static bool excludesObject(GraspPhase p);
+  /// The exclusion of an object standing with `extent` (else a sphere round `centre`).
+  std::vector<ExclusionSphere> standingExclusions(const std::optional<ObjectExtent>& extent,
+                                                  const Eigen::Vector3d& centre) const;
   void enter(GraspPhase p, double t, SequencerOutput* out, const std::string& why = "");
   void finishObject(double t, bool success, const std::string& reason, const SequencerInput& in,
                     SequencerOutput* out);

@@ -189,6 +189,9 @@ GraspPipeline::GraspPipeline(const GraspPipelineConfig& cfg, unsigned seed) : cf
   detector_ = std::make_unique<ehc_perception::TagDetector>(cfg_.detector, intrinsics);
   generator_ = std::make_unique<ehc_perception::GraspGenerator>(cfg_.generator);
   if (cfg_.obstacles) monitor_ = std::make_unique<ehc_perception::ObstacleMonitor>(robot, cfg_.map, cfg_.monitor);
+  if (reach_ && monitor_) reach_->setMapDistances([this](const Eigen::Vector3d& base, const Eigen::VectorXd& q, bool descent) {
+    return plannedMapDistances(base, q, descent);
+  });
   const bool perceive_tags = !cfg_.tag_targets.empty();
   clocks_ = std::make_unique<Clocks>(Clocks{ehc_sim::StreamClock(perceive_tags ? cfg_.sim.camera.image_rate : 0.0),
                                             ehc_sim::StreamClock(cfg_.sim.camera.cloud_rate),
@@ -299,6 +302,18 @@ void GraspPipeline::perceiveCloudTarget(double t, const ehc_perception::PointLis
 void GraspPipeline::observeSupport(const ehc_perception::PointList& points, const ehc_perception::GraspResult& r) {
   if (!reach_ || !r.support_plane_found) return;
   if (const auto seen = supportFromPoints(points, r.support_plane)) reach_->observeSupport(*seen);
+}
+
+std::vector<std::pair<std::string, double>> GraspPipeline::plannedMapDistances(const Eigen::Vector3d& base,
+                                                                               const Eigen::VectorXd& q, bool descent) const {
+  // The map with the zones the sequencer will give it in that phase (as the object is seen now).
+  std::vector<ehc_perception::ExclusionZone> zones;
+  for (const auto& z : sequencer_->plannedExclusions(descent ? GraspPhase::Grasp : GraspPhase::PreGrasp))
+    zones.push_back({z.centre, z.radius});
+  const ehc_perception::ObstacleDistanceField& field = monitor_->field();
+  std::vector<std::pair<std::string, double>> out;
+  for (const auto& d : field.distances(field.linkPoses(monitor_->model(), base, q), zones)) out.emplace_back(d.link, d.distance);
+  return out;
 }
 
 void GraspPipeline::updateObstacles(double t) {

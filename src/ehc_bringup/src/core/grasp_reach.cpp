@@ -279,24 +279,67 @@ bool GraspReach::settle(const Eigen::Isometry3d& grasp, const Eigen::Vector3d& b
     v->reason = why.str();
     return false;
   }
+  const std::string map = descentBlocked(base, q_pre, q_grasp);
+  if (!map.empty()) {
+    v->reason = map;
+    return false;
+  }
   v->reachable = true;
   v->base = base;
+  v->q_pre = q_pre;
+  v->q_grasp = q_grasp;
   v->reason.clear();
   return true;
 }
 
+std::optional<std::pair<std::string, double>> GraspReach::mapBlocked(const Eigen::Vector3d& base, const Eigen::VectorXd& q,
+                                                                     bool descent) const {
+  if (!map_) return std::nullopt;
+  std::optional<std::pair<std::string, double>> worst;
+  for (const auto& [name, d] : map_(base, q, descent)) {
+    const auto l = std::find_if(links_.begin(), links_.end(), [&](const Link& k) { return k.name == name; });
+    if (l == links_.end() || d >= l->stop) continue;
+    if (!worst || d - l->stop < worst->second) worst = std::make_pair(name, d);
+  }
+  return worst;
+}
+
+std::string GraspReach::descentBlocked(const Eigen::Vector3d& base, const Eigen::VectorXd& q_pre,
+                                       const Eigen::VectorXd& q_grasp) const {
+  struct Check {
+    Eigen::VectorXd q;
+    bool descent;
+    const char* where;
+  };
+  const Check checks[] = {{q_pre, false, "the pre-grasp"},
+                          {0.5 * (q_pre + q_grasp), true, "halfway down"},
+                          {q_grasp, true, "the grasp"}};
+  for (const Check& c : checks)
+    if (const auto hit = mapBlocked(base, c.q, c.descent)) {
+      std::ostringstream why;
+      why << std::fixed << std::setprecision(3) << hit->first << " " << hit->second << " m from an obstacle at "
+          << c.where;
+      return why.str();
+    }
+  return "";
+}
+
 bool GraspReach::reachable(const Eigen::Isometry3d& grasp, const Eigen::Isometry3d& pre_grasp) {
   if (!params_.enabled || !support_) return true;
-  for (const Kept& k : kept_) {
-    const Eigen::AngleAxisd d(Eigen::Matrix3d(k.grasp.linear().transpose() * grasp.linear()));
-    if ((k.grasp.translation() - grasp.translation()).norm() <= 0.005 && std::abs(d.angle()) <= 2.0 * M_PI / 180.0)
-      return k.reachable;
+  for (auto k = kept_.begin(); k != kept_.end(); ++k) {
+    const Eigen::AngleAxisd d(Eigen::Matrix3d(k->grasp.linear().transpose() * grasp.linear()));
+    if ((k->grasp.translation() - grasp.translation()).norm() > 0.005 || std::abs(d.angle()) > 2.0 * M_PI / 180.0)
+      continue;
+    const GraspReachVerdict& v = k->verdict;
+    if (!v.reachable || descentBlocked(v.base, v.q_pre, v.q_grasp).empty()) return v.reachable;
+    kept_.erase(k);  // the map grew into its configurations: judged anew
+    break;
   }
   ++judgements_;
-  const bool r = judge(grasp, pre_grasp).reachable;
+  const GraspReachVerdict v = judge(grasp, pre_grasp);
   if (kept_.size() >= 256) kept_.clear();
-  kept_.push_back({grasp, r});
-  return r;
+  kept_.push_back({grasp, v});
+  return v.reachable;
 }
 
 }  // namespace ehc_bringup

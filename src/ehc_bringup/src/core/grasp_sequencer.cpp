@@ -880,29 +880,46 @@ void GraspSequencer::advanceRetreat(const SequencerInput& in, double in_phase, S
   }
 }
 
-std::vector<ExclusionSphere> GraspSequencer::obstacleExclusions(const SequencerInput& in) const {
-  // The object may be touched from the descent to the pre-grasp on, until the hand has left.
+bool GraspSequencer::excludesObject(GraspPhase p) {
+  // The object may be touched from the descent on (GRASP) until the hand has left it (RETREAT).
+  return p >= GraspPhase::Grasp && p <= GraspPhase::Retreat;
+}
+
+std::vector<ExclusionSphere> GraspSequencer::standingExclusions(const std::optional<ObjectExtent>& extent,
+                                                                const Eigen::Vector3d& centre) const {
   std::vector<ExclusionSphere> zones;
-  if (!locked_ || phase_ < GraspPhase::Grasp || phase_ > GraspPhase::Retreat) return zones;
-  const bool carried = centre_in_tcp_ && in.tcp && isValidPose(*in.tcp);
-  if (locked_extent_) {
-    // Where it stood, and once closed where the hand carries it: its extent + the margin.
-    const double margin = params_.obstacle_exclusion_margin;
-    zones = exclusionSpheres(*locked_extent_, margin);
+  if (extent) {
+    zones = exclusionSpheres(*extent, params_.obstacle_exclusion_margin);
     if (params_.obstacle_exclusion_support_reach > 0.0)
-      zones.push_back(supportCap(*locked_extent_, params_.obstacle_exclusion_support_reach,
-                                 params_.obstacle_exclusion_support_rise));
-    if (carried && extent_in_tcp_) {
-      ObjectExtent moved = *locked_extent_;
-      moved.pose = *in.tcp * *extent_in_tcp_;
-      const std::vector<ExclusionSphere> more = exclusionSpheres(moved, params_.obstacle_exclusion_margin);
-      zones.insert(zones.end(), more.begin(), more.end());
-    }
+      zones.push_back(supportCap(*extent, params_.obstacle_exclusion_support_reach, params_.obstacle_exclusion_support_rise));
   } else if (params_.obstacle_exclusion_radius > 0.0) {
-    zones.push_back({locked_object_centre_, params_.obstacle_exclusion_radius});
-    if (carried) zones.push_back({*in.tcp * *centre_in_tcp_, params_.obstacle_exclusion_radius});
+    zones.push_back({centre, params_.obstacle_exclusion_radius});
   }
   return zones;
+}
+
+std::vector<ExclusionSphere> GraspSequencer::obstacleExclusions(const SequencerInput& in) const {
+  if (!locked_ || !excludesObject(phase_)) return {};
+  // Where it stood, and once closed where the hand carries it: its extent + the margin.
+  std::vector<ExclusionSphere> zones = standingExclusions(locked_extent_, locked_object_centre_);
+  if (!centre_in_tcp_ || !in.tcp || !isValidPose(*in.tcp)) return zones;
+  if (locked_extent_ && extent_in_tcp_) {
+    ObjectExtent moved = *locked_extent_;
+    moved.pose = *in.tcp * *extent_in_tcp_;
+    const std::vector<ExclusionSphere> more = exclusionSpheres(moved, params_.obstacle_exclusion_margin);
+    zones.insert(zones.end(), more.begin(), more.end());
+  } else if (!locked_extent_ && params_.obstacle_exclusion_radius > 0.0) {
+    zones.push_back({*in.tcp * *centre_in_tcp_, params_.obstacle_exclusion_radius});
+  }
+  return zones;
+}
+
+std::vector<ExclusionSphere> GraspSequencer::plannedExclusions(GraspPhase phase) const {
+  if (!excludesObject(phase) || phase > GraspPhase::Close) return {};
+  if (locked_) return standingExclusions(locked_extent_, locked_object_centre_);
+  const std::optional<Eigen::Vector3d> centre = objectCentre();
+  if (!centre) return {};
+  return standingExclusions(currentExtent(), *centre);
 }
 
 std::vector<ExclusionSphere> exclusionSpheres(const ObjectExtent& box, double margin) {

@@ -73,6 +73,8 @@ struct ExclusionZone {
   bool operator==(const ExclusionZone& o) const { return centre == o.centre && radius == o.radius; }
 };
 
+struct OcTreeExclusion;  // octree_shape_distance.h
+
 class ObstacleDistanceField {
  public:
   /// `robot`: built with config.links (its links() are the ones the field checks, in order).
@@ -107,6 +109,11 @@ class ObstacleDistanceField {
   /// in range are omitted), ignoring occupied voxels inside the exclusion zones.
   /// `link_poses`: world poses in robot().links() order.
   std::vector<LinkObstacleDistance> distances(const std::vector<Eigen::Isometry3d>& link_poses) const;
+  /// The same with `zones` instead of the field's exclusion zones, for a configuration other than
+  /// the robot's own (a planned one): neither the field's zones nor the seeds its queries keep
+  /// for the next cycle are read or changed. Throws std::invalid_argument as setExclusionZones.
+  std::vector<LinkObstacleDistance> distances(const std::vector<Eigen::Isometry3d>& link_poses,
+                                              const std::vector<ExclusionZone>& zones) const;
   /// World poses of robot().links() from the whole-body model (which holds the finger joints
   /// at 0), a finger link moved by robot().fingerOffset(link, finger_opening).
   /// `finger_opening` (m per finger): default std::nullopt = each finger at its upper limit,
@@ -130,6 +137,10 @@ class ObstacleDistanceField {
   ehc_control::RobotCollisionModel robot_;
   std::vector<ExclusionZone> zones_;
   std::unique_ptr<Impl> impl_;
+  /// The distance loop of both distances(): `excluding` nullptr = no zones; `seeded_queries`:
+  /// start from and update the per-shape seeds (the robot's own configuration only).
+  std::vector<LinkObstacleDistance> query(const std::vector<Eigen::Isometry3d>& link_poses,
+                                          const OcTreeExclusion* excluding, bool seeded_queries) const;
 };
 
 }  // namespace ehc_perception

@@ -304,6 +304,26 @@ std::size_t ObstacleDistanceField::occupiedLeafCount() const {
 
 std::vector<LinkObstacleDistance> ObstacleDistanceField::distances(
     const std::vector<Eigen::Isometry3d>& link_poses) const {
+  const std::vector<ExclusionZone>& zones = impl_->activeZones(zones_);
+  const OcTreeExclusion exclusion{*impl_->tree, zones, [this]() -> const fcl::OcTree<double>& { return impl_->filteredTree(); }};
+  return query(link_poses, zones.empty() ? nullptr : &exclusion, true);
+}
+
+std::vector<LinkObstacleDistance> ObstacleDistanceField::distances(const std::vector<Eigen::Isometry3d>& link_poses,
+                                                                   const std::vector<ExclusionZone>& zones) const {
+  for (const ExclusionZone& z : zones)
+    if (!z.centre.allFinite() || !std::isfinite(z.radius) || z.radius < 0.0 || z.radius > ExclusionZone::kMaxRadius)
+      fail("exclusion zone: non-finite centre or radius outside [0, " + std::to_string(ExclusionZone::kMaxRadius) + "] m");
+  std::shared_ptr<fcl::OcTree<double>> filtered;  // FCL's fallbacks only: built when first asked
+  const OcTreeExclusion exclusion{*impl_->tree, zones, [&]() -> const fcl::OcTree<double>& {
+                                    if (!filtered) filtered = std::make_shared<fcl::OcTree<double>>(copyWithoutZones(*impl_->tree, zones));
+                                    return *filtered;
+                                  }};
+  return query(link_poses, zones.empty() ? nullptr : &exclusion, false);
+}
+
+std::vector<LinkObstacleDistance> ObstacleDistanceField::query(const std::vector<Eigen::Isometry3d>& link_poses,
+                                                               const OcTreeExclusion* excluding, bool seeded_queries) const {
   if (link_poses.size() != robot_.links().size())
     fail("expected " + std::to_string(robot_.links().size()) + " link poses, got " +
          std::to_string(link_poses.size()));
@@ -314,9 +334,8 @@ std::vector<LinkObstacleDistance> ObstacleDistanceField::distances(
   fcl::DistanceRequest<double> req;
   req.enable_nearest_points = true;
   req.enable_signed_distance = true;
-  const std::vector<ExclusionZone>& zones = impl_->activeZones(zones_);
-  const OcTreeExclusion exclusion{*impl_->tree, zones, [this]() -> const fcl::OcTree<double>& { return impl_->filteredTree(); }};
-  const OcTreeExclusion* excluding = zones.empty() ? nullptr : &exclusion;
+  static const std::vector<ExclusionZone> kNone;
+  const std::vector<ExclusionZone>& zones = excluding ? excluding->zones : kNone;
   for (std::size_t i = 0; i < impl_->shapes.size(); ++i) {
     const std::size_t li = impl_->shapes[i].link;
     const ehc_control::RobotLinkGeometry& link = robot_.links()[li];
@@ -332,7 +351,7 @@ std::vector<LinkObstacleDistance> ObstacleDistanceField::distances(
     // still: just above the distance to the voxel the last query found (seedBound).
     const double start = found[li] ? std::min(best[li].distance, config_.influence_distance)
                                    : config_.influence_distance;
-    const double seeded = std::min(start, impl_->seedBound(i, zones, tf) + kSeedMargin);
+    const double seeded = seeded_queries ? std::min(start, impl_->seedBound(i, zones, tf) + kSeedMargin) : start;
     res.min_distance = seeded;
     octreeShapeDistance(*impl_->fcl_tree, *impl_->geoms[i], tf, req, &res, excluding);
     if (!(res.min_distance < seeded) && seeded < start) {  // GJK's tolerance: ask again unseeded
@@ -341,7 +360,7 @@ std::vector<LinkObstacleDistance> ObstacleDistanceField::distances(
       octreeShapeDistance(*impl_->fcl_tree, *impl_->geoms[i], tf, req, &res, excluding);
     }
     if (!(res.min_distance < start)) {
-      impl_->last_voxel[i].reset();
+      if (seeded_queries) impl_->last_voxel[i].reset();
       continue;
     }
     LinkObstacleDistance d;
@@ -353,8 +372,10 @@ std::vector<LinkObstacleDistance> ObstacleDistanceField::distances(
     if (d.distance <= 0.0 || nrm.norm() < 1e-9) nrm = Ts.translation() - d.obstacle_point;
     if (nrm.norm() < 1e-9) nrm = Eigen::Vector3d::UnitZ();
     d.normal = nrm.normalized();
-    if (d.distance > 0.0) impl_->rememberVoxel(i, d.obstacle_point, d.normal);
-    else impl_->last_voxel[i].reset();
+    if (seeded_queries) {
+      if (d.distance > 0.0) impl_->rememberVoxel(i, d.obstacle_point, d.normal);
+      else impl_->last_voxel[i].reset();
+    }
     best[li] = d;
     found[li] = true;
   }
