@@ -14,7 +14,7 @@ JOBS ?= 2
 CATKIN := catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCMAKE_BUILD_TYPE=Release -j$(JOBS)
 
 .PHONY: all deps build demo test bench experiments clean
-.PHONY: results validate sweep
+.PHONY: results validate sweep everyday
 
 all: build
 
@@ -36,6 +36,10 @@ bench: build
 
 experiments: build
 	ROBOT="$(ROBOT)" src/ehc_bringup/scripts/experiments.sh
+
+# Exp-2 on the object library, both halves (TUNING_SEEDS=a VALIDATION_SEEDS=b,c,d: rerun; default fresh, printed).
+everyday: build
+	JOBS=$(JOBS) ROBOT="$(ROBOT)" src/ehc_bringup/scripts/everyday.sh
 
 # SEED=123: rerun a validation; default a fresh random seed (printed first).
 validate: build

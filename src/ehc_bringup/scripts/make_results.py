@@ -1,10 +1,13 @@
 #!/usr/bin/python3
 """docs/RESULTS.md from the result folders (`make results`; the end of `make experiments`).
 
-  make_results.py [--results DIR] [--experiments DIR] [--bench DIR] [--demo DIR] [--sweep DIR] [--out FILE]
+  make_results.py [--results DIR] [--experiments DIR] [--bench DIR] [--demo DIR] [--sweep DIR]
+                  [--everyday DIR] [--out FILE]
       Reads DIR/experiments/{exp1,exp2,exp3} (ehc_experiment reach / grasp / poses, written by
-      experiments.sh), DIR/bench (bench.sh), DIR/demo (demo.sh) and DIR/sweep (sweep.py: the
-      verdict of each paper claim), DIR = results/ by default, and writes FILE (docs/RESULTS.md). A folder that is not there is listed as "not run". The
+      experiments.sh), DIR/everyday/{tuning,validation}/seed_<N> (everyday.sh: Exp-2 on the object
+      library), DIR/bench (bench.sh), DIR/demo (demo.sh) and DIR/sweep (sweep.py: the verdict of
+      each paper claim), DIR = results/ by default, and writes FILE (docs/RESULTS.md). A folder
+      that is not there is listed as "not run". The
       demo folder and every DIR/demo_<robot> (demo.sh with ROBOT=<name>) make one row each of
       the per-robot demo table.
       Every table comes with the command that made it, the code version, the machine, the date
@@ -651,6 +654,74 @@ def verdict_section(folder, meta):
     return out
 
 
+# ------------------------------------------------------------------------------ everyday objects
+EVERYDAY_BAR = 90.0  # % of the objects with a valid grasp in view, grasped and lifted (validation half)
+EVERYDAY_HALVES = ("tuning", "validation")
+
+
+def everyday_rows(folder, half):
+    """The trials.csv rows of every seed_<N> run of one half; the set key made unique per run."""
+    runs = sorted(d for d in os.listdir(os.path.join(folder, half)) if d.startswith("seed_"))
+    rows, seeds = [], []
+    for d in runs:
+        path = os.path.join(folder, half, d, "trials.csv")
+        mine = read_csv(path, ["method", "set", "object", "success", "valid_exists", "attempted", "cause",
+                               "failed_phase", "stall_cause", "stall_link", "stall_body"])
+        for r in mine:
+            for k in ("success", "valid_exists", "attempted"):
+                r["_" + k] = number(r, k, path, int)
+            r["set"] = "%s/%s" % (d, r["set"])
+        seeds.append(d[len("seed_"):])
+        rows += mine
+    return rows, seeds
+
+
+def everyday_miss(r):
+    """A miss's class: the cause, the stall's link and body, the phase."""
+    text = r["cause"] or "?"
+    if r["stall_cause"]:
+        body = r["stall_body"] + (" (the target)" if r["stall_body"] == r["object"] else "")
+        text += " (%s%s)" % (r["stall_cause"], ": %s at %s" % (r["stall_link"], body) if r["stall_link"] else "")
+    return text + (" in " + r["failed_phase"] if r["failed_phase"] else "")
+
+
+def everyday_section(folder, meta):
+    out = ["## Everyday objects: Exp-2 on the object library (bar: %g %% on the validation half)" % EVERYDAY_BAR, ""]
+    halves = [h for h in EVERYDAY_HALVES if os.path.isdir(os.path.join(folder, h))]
+    if not halves:
+        raise ResultsError("%s: neither a tuning nor a validation folder" % rel(folder))
+    data = {h: everyday_rows(folder, h) for h in halves}
+    seeds = "; ".join("%s half: %s" % (h, ", ".join(data[h][1]) or "none") for h in halves)
+    out += provenance(meta, "everyday", folder, seeds + " (run seed = seed*1000 + set*10; the tuning half and the "
+                      "seeds used while developing are for tuning, the validation half's seeds are drawn fresh)")
+    out += ["", "| Half | Method | Sets | Objects | Valid grasp in view | Grasped and lifted where one exists (%) [95 % CI] "
+            "| Grasps attempted where none exists | bar (validation) |", "|---|---|---|---|---|---|---|---|"]
+    misses = {}
+    for h in halves:
+        rows = data[h][0]
+        for m in sorted({r["method"] for r in rows}):
+            mine = [r for r in rows if r["method"] == m]
+            valid = [r for r in mine if r["_valid_exists"]]
+            ok = bootstrap(*zip(*per_set(mine, lambda r: (r["_success"] * r["_valid_exists"], r["_valid_exists"]))),
+                           scale=100.0) if valid else (None, None)
+            n_ok = sum(r["_success"] for r in valid)
+            none = sum(1 for r in mine if not r["_valid_exists"] and r["_attempted"])
+            bar = "-" if h != "validation" else ("met" if ok[1] and ok[1][0] >= EVERYDAY_BAR else
+                                                 "met by the mean only" if ok[0] is not None and ok[0] >= EVERYDAY_BAR
+                                                 else "not met")
+            out.append("| %s | %s | %d | %d | %d | %s (%d/%d) | %d | %s |" % (
+                h, m, len({r["set"] for r in mine}), len(mine), len(valid), fmt_ci(ok[0], ok[1], 1), n_ok, len(valid),
+                none, bar))
+            for r in valid:
+                if not r["_success"]:
+                    misses.setdefault((h, m), {}).setdefault(everyday_miss(r), 0)
+                    misses[(h, m)][everyday_miss(r)] += 1
+    for (h, m), counts in sorted(misses.items()):
+        text = "; ".join("%s: %d" % (k, n) for k, n in sorted(counts.items(), key=lambda kv: (-kv[1], kv[0])))
+        out += ["", "Misses where a valid grasp was in view, %s half, %s: %s." % (h, m, text)]
+    return out
+
+
 # ------------------------------------------------------------------------------ report
 def sources(args):
     exp = args.experiments or os.path.join(args.results, "experiments")
@@ -659,6 +730,8 @@ def sources(args):
         ("Exp-1", os.path.join(exp, "exp1"), exp, exp1_section, "make experiments"),
         ("Exp-2", os.path.join(exp, "exp2"), exp, exp2_section, "make experiments"),
         ("Exp-3", os.path.join(exp, "exp3"), exp, exp3_section, "make experiments"),
+        ("Everyday objects", args.everyday or os.path.join(args.results, "everyday"), None, everyday_section,
+         "make everyday"),
         ("Benchmarks", args.bench or os.path.join(args.results, "bench"), None, bench_section, "make bench"),
         ("Demo", args.demo or os.path.join(args.results, "demo"), None, demo_section, "make demo"),
     ]
@@ -693,6 +766,7 @@ def main_report(argv):
     ap.add_argument("--bench", help="the bench folder [RESULTS/bench]")
     ap.add_argument("--demo", help="the demo folder [RESULTS/demo]")
     ap.add_argument("--sweep", help="the sweep folder, for the verdicts [RESULTS/sweep]")
+    ap.add_argument("--everyday", help="the everyday objects folder [RESULTS/everyday]")
     ap.add_argument("--out", default=os.path.join(ROOT, "docs", "RESULTS.md"), help="report file [docs/RESULTS.md]")
     args = ap.parse_args(argv)
     try:

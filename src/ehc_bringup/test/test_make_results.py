@@ -71,6 +71,9 @@ def test_every_table_has_its_provenance_and_the_papers_figures(tmp_path):
                       "- date: 2026-11-27 05:", "- seeds: "):
             assert field in body, "%s: no '%s'" % (title, field)
         header = table_rows(body)[0]
+        if title.startswith("Everyday"):  # the paper has no such figure: the bar instead
+            assert any(h.startswith("bar") for h in header), header
+            continue
         assert any(h.startswith("paper") for h in header), "%s: no paper column in %s" % (title, header)
     # Each experiment names the ehc_experiment run that made it and its seeds.
     assert "ehc_experiment reach" in secs[next(s for s in secs if s.startswith("Exp-1"))]
@@ -105,7 +108,35 @@ def test_a_missing_folder_is_reported_as_not_run(tmp_path):
     assert "| Benchmarks | `%s` | not run (`make bench`) |" % (tmp_path / "nothing_here") in text
     assert not any(t.startswith("Benchmarks") for t in sections(text))
     text = generate(tmp_path, tmp_path / "no_results_at_all")
-    assert text.count("not run") == 6  # experiments 1-3, bench, demo, sweep (verdicts)
+    assert text.count("not run") == 7  # experiments 1-3, everyday, bench, demo, sweep (verdicts)
+
+
+def test_everyday_objects_report_both_halves_with_the_bar_and_the_misses(tmp_path):
+    secs = sections(generate(tmp_path))
+    body = secs[next(s for s in secs if s.startswith("Everyday"))]
+    assert "- seeds: tuning half: 7; validation half: 7" in body
+    assert "ehc_experiment grasp" in body and "--library <half>" in body
+    rows = {r[0]: r for r in table_rows(body)[1:]}
+    assert set(rows) == {"tuning", "validation"}
+    # The fixture's trials: 6 objects per half, all with a valid grasp in view, 1 grasped each.
+    for half in ("tuning", "validation"):
+        assert rows[half][2:5] == ["2", "6", "6"], rows[half]
+        assert rows[half][5].startswith("16.7 [") and rows[half][5].endswith("(1/6)"), rows[half]
+        assert rows[half][6] == "0"
+    assert rows["validation"][7] == "not met" and rows["tuning"][7] == "-"
+    assert "Misses where a valid grasp was in view, validation half, ehc: " in body
+    assert "(obstacle: left_finger_link at mug_02 (the target)) in PRE_GRASP: 1" in body  # its own points
+    assert "(obstacle: right_finger_link at mug_02) in PRE_GRASP: 1" in body  # a neighbour
+    # A half's folder alone is reported; a run without trials.csv is an error naming it.
+    results = tmp_path / "results"
+    shutil.copytree(FIXTURE, results)
+    shutil.rmtree(results / "everyday" / "tuning")
+    secs = sections(generate(tmp_path, results))
+    body = secs[next(s for s in secs if s.startswith("Everyday"))]
+    assert [r[0] for r in table_rows(body)[1:]] == ["validation"]
+    os.remove(results / "everyday" / "validation" / "seed_7" / "trials.csv")
+    code, log = run("--results", str(results), "--out", str(tmp_path / "R.md"))
+    assert code == 2 and "everyday/validation/seed_7/trials.csv: cannot read" in log, log
 
 
 def test_a_demo_run_gets_its_table(tmp_path):
