@@ -1728,3 +1728,48 @@ TEST(TargetPoseFilter, RandomGlitchesNeverMoveThePoseAndRealMovesAreFollowed) {
   EXPECT_GT(glitches, 300);
   EXPECT_GT(moves, 200);
 }
+
+TEST(GraspSequencer, AGraspJudgedUnreachableIsLockedOnlyAfterTheWaitAReachableOneAtOnce) {
+  // Two candidates, the better-scored one never reachable. Without a reachable one the approach
+  // goes on for unreachable_lock_wait within the switch distance, then locks the best-scored
+  // (judged unreachable); when the other turns reachable during the wait (a newer view), it is
+  // locked at once.
+  GraspSequencerParams p = twoObjects();
+  p.selection.centre_from_tag = p.selection.closing_axis_from_tag = false;
+  p.unreachable_lock_wait = 2.0;
+  for (const bool appears : {false, true}) {
+    SCOPED_TRACE(appears ? "a reachable one appears" : "none reachable");
+    Harness h(p);
+    h.perceive = forwardTarget();
+    const GraspCandidate best{forwardTarget(), 0.05, 0.9}, other{forwardTarget(1.5, 0.02), 0.05, 0.5};
+    double reachable_from = 1e9, t_approach = -1.0;
+    h.seq.setReachability([&](const Eigen::Isometry3d& g, const Eigen::Isometry3d&) {
+      return h.t >= reachable_from && std::abs(g.translation().y() - 0.02) < 1e-6;
+    });
+    while (h.seq.phase() != GraspPhase::PreGrasp && h.t < 10.0) {
+      h.seq.setGraspCandidates(h.t, {best, other});
+      h.step();
+      if (h.seq.phase() == GraspPhase::Approach && t_approach < 0.0) {
+        t_approach = h.t;
+        if (appears) reachable_from = t_approach + 1.0;
+      }
+    }
+    ASSERT_EQ(h.seq.phase(), GraspPhase::PreGrasp);
+    ASSERT_TRUE(h.seq.lockedGrasp());
+    const double waited = h.t - t_approach;
+    if (appears) {
+      EXPECT_NEAR(h.seq.lockedGrasp()->pose.translation().y(), 0.02, 1e-9) << "the reachable one";
+      EXPECT_EQ(h.seq.lockedGrasp()->reachable, std::optional<bool>(true));
+      EXPECT_NEAR(waited, 1.0, 0.03) << "locked as soon as it was reachable";
+    } else {
+      EXPECT_NEAR(h.seq.lockedGrasp()->pose.translation().y(), 0.0, 1e-9) << "the best-scored one";
+      EXPECT_EQ(h.seq.lockedGrasp()->reachable, std::optional<bool>(false));
+      EXPECT_GE(waited, 2.0 - 1e-9);
+      EXPECT_LE(waited, 2.05);
+      EXPECT_TRUE(hasEvent(h.events, "none reachable after 2.0 s"));
+    }
+  }
+  GraspSequencerParams bad = twoObjects();
+  bad.unreachable_lock_wait = -1.0;
+  expectInvalid([&] { bad.validate(); }, "unreachable_lock_wait");
+}

@@ -102,7 +102,7 @@ struct GraspSelectionParams {
   bool cloud_any_approach = true;
   /// With a reachability judgement (chooseGrasp's `reachable`): the best-scored qualifying
   /// candidates judged per choice, [0, 50]; the first reachable one is chosen. 0: none judged.
-  int reach_checks = 6;
+  int reach_checks = 10;
   void validate() const;  ///< throws "[GraspSelectionParams] ..."
   /// These parameters for a target without a tag (see the header comment).
   GraspSelectionParams forCloudTarget() const;

@@ -150,6 +150,12 @@ struct GraspSequencerParams {
   TargetPoseFilterParams pose_filter;
   double pregrasp_distance = 0.10;        ///< m, pre-grasp = grasp backed off along the approach
   double pregrasp_switch_distance = 0.25;  ///< m: APPROACH -> PRE_GRASP (TCP to grasp position)
+  /// s in [0, 60]: with a reachability judgement (setReachability), a grasp judged unreachable
+  /// (none of the candidates reachable) is locked only after this long within the switch
+  /// distance; until then the approach goes on and the views (a new view every grasp run) may
+  /// bring a reachable candidate, which is locked at once. A robot already near the object
+  /// (the next object of a scene) otherwise locked the first view's choice within ~1 s.
+  double unreachable_lock_wait = 3.0;
   double pregrasp_position_tolerance = 0.015;     ///< m
   /// m: and the TCP within this of the approach axis through the pre-grasp, so that the straight
   /// move to the grasp brings the fingers in along the axis. A TCP that entered the position
@@ -439,6 +445,8 @@ class GraspSequencer {
   Eigen::Vector3d last_approach_ = Eigen::Vector3d::UnitX();
   bool centre_sent_ = false;  ///< this cycle's goal is the object centre (tsmm base stage)
   bool tsmm_at_d_ = false;    ///< tsmm: the arm stage began with the centre as the goal (base stopped at d)
+  /// Since when the choice within the switch distance has been judged unreachable (< 0: not).
+  double unreachable_since_ = -1.0;
   // bookkeeping
   GraspResult cur_;
   // TfM windows (see the header comment), one tracker each: until the arm takes over (tfm),

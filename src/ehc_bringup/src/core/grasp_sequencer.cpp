@@ -113,6 +113,8 @@ void GraspSequencerParams::validate() const {
   check(std::isfinite(pregrasp_distance) && pregrasp_distance >= 0.0 && pregrasp_distance <= 0.5,
         "pregrasp_distance must be in [0, 0.5] m");
   positive(pregrasp_switch_distance, "pregrasp_switch_distance");
+  check(std::isfinite(unreachable_lock_wait) && unreachable_lock_wait >= 0.0 && unreachable_lock_wait <= 60.0,
+        "unreachable_lock_wait must be in [0, 60] s");
   check(std::isfinite(stall_time) && stall_time >= 0.0 && stall_time <= 30.0, "stall_time must be in [0, 30] s");
   check(std::isfinite(stall_tolerance_factor) && stall_tolerance_factor >= 1.0 && stall_tolerance_factor <= 10.0,
         "stall_tolerance_factor must be in [1, 10]");
@@ -158,7 +160,8 @@ std::string GraspSequencerParams::summary() const {
     << " deg above), obstacle exclusion: the object's extent + "
     << obstacle_exclusion_margin << " m and its support " << obstacle_exclusion_support_reach << " m round it, "
     << obstacle_exclusion_support_rise << " m up (extent unknown: " << obstacle_exclusion_radius << " m round its centre), " << pose_filter.summary() << ", pre-grasp " << pregrasp_distance << " m"
-    << "\n  pre-grasp from " << pregrasp_switch_distance << " m; tolerances: pre-grasp " << pregrasp_position_tolerance << " m/" << pregrasp_orientation_tolerance_deg
+    << "\n  pre-grasp from " << pregrasp_switch_distance << " m (a grasp judged unreachable locked after "
+    << unreachable_lock_wait << " s there); tolerances: pre-grasp " << pregrasp_position_tolerance << " m/" << pregrasp_orientation_tolerance_deg
     << " deg (" << pregrasp_lateral_tolerance << " m across the approach), grasp " << grasp_position_tolerance << " m/" << grasp_orientation_tolerance_deg << " deg"
     << " (stalled for " << stall_time << " s: x" << stall_tolerance_factor << "; the gripper closes within "
     << max_close_offset << " m)"
@@ -200,6 +203,7 @@ GraspSequencerParams loadGraspSequencerParams(const ConfigNode& root) {
   p.pose_filter = loadTargetPoseFilterParams(s);
   p.pregrasp_distance = s.get("pregrasp_distance", p.pregrasp_distance);
   p.pregrasp_switch_distance = s.get("pregrasp_switch_distance", p.pregrasp_switch_distance);
+  p.unreachable_lock_wait = s.get("unreachable_lock_wait", p.unreachable_lock_wait);
   p.stall_time = s.get("stall_time", p.stall_time);
   p.stall_tolerance_factor = s.get("stall_tolerance_factor", p.stall_tolerance_factor);
   p.max_close_offset = s.get("max_close_offset", p.max_close_offset);
@@ -407,6 +411,7 @@ void GraspSequencer::startObject(double t, SequencerOutput* out) {
   extent_in_tcp_.reset();
   hold_goal_.reset();
   centre_sent_ = tsmm_at_d_ = false;
+  unreachable_since_ = -1.0;
   ctrl_fov_cycles_ = ctrl_cycles_ = 0;
   for (ehc_control::TargetTracker* t : tfmWindows()) t->reset();
   was_distant_ = false;
@@ -747,13 +752,18 @@ void GraspSequencer::advanceApproach(const SequencerInput& in, bool fresh, bool 
   out->goal = approachGoal(in, choice->pose);
   const bool tsmm_base_pending = tsmmController(in) && !tsmm_at_d_;
   if (!tsmm_base_pending && within(in, choice->pose, params_.pregrasp_switch_distance, 180.0)) {
+    // Judged unreachable: the views go on for unreachable_lock_wait, a reachable one locks at once.
+    const bool unreachable = choice->reachable && !*choice->reachable;
+    if (!unreachable) unreachable_since_ = -1.0;
+    else if (unreachable_since_ < 0.0) unreachable_since_ = t;
+    if (unreachable && t - unreachable_since_ < params_.unreachable_lock_wait) return;
     locked_object_centre_ = *objectCentre();  // frozen from here (before locked_ is set)
     locked_extent_ = currentExtent();
     locked_ = choice;
     out->goal = preGrasp(choice->pose);
     enter(GraspPhase::PreGrasp, t, out,
           std::string("grasp locked: ") + (choice->from_candidate ? "perception candidate" : "tag fallback") +
-              (choice->reachable ? (*choice->reachable ? ", reachable" : ", judged unreachable (none reachable)") : ""));
+              (choice->reachable ? (*choice->reachable ? ", reachable" : ", judged unreachable (none reachable after " + num(params_.unreachable_lock_wait, 1) + " s)") : ""));
   }
 }
 
