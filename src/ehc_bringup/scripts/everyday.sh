@@ -9,13 +9,8 @@
 #   METHOD [ehc] (or all), JOBS [2], ROBOT [realman_rm65_water2], TUNING_SEEDS [one fresh seed],
 #   VALIDATION_SEEDS [three fresh seeds] (comma-separated; fresh seeds are drawn and printed first,
 #   so a run reproduces with the seeds it printed). Progress and ETA on stderr.
-set -eo pipefail
-export PATH="/usr/bin:/bin:$PATH"
-cd "$(dirname "$0")/../../.." || exit 2
-EHC_DEVEL="${EHC_DEVEL:-devel}"
-[ -f "$EHC_DEVEL/setup.bash" ] || { echo "everyday.sh: $EHC_DEVEL/setup.bash not found: build first" >&2; exit 2; }
-# shellcheck disable=SC1090,SC1091
-source "$EHC_DEVEL/setup.bash"
+# shellcheck source=devel_env.sh
+source "$(dirname "$0")/devel_env.sh" everyday.sh
 OUT="${OUT:-results/everyday}"
 SETS="${SETS:-5}"
 METHOD="${METHOD:-ehc}"

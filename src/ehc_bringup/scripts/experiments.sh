@@ -10,13 +10,8 @@
 #   JOBS [2] (parallel runs of Exp-2/3), EXP1_SETS [10], EXP1_POINTS [50], SETS [15] (Exp-2/3),
 #   PER_SET [5] (Exp-3 grasps per approach per set), ROBOT [realman_rm65_water2] (every protocol;
 #   make experiments ROBOT=kuka_iiwa14_kmr). Progress and ETA on stderr.
-set -eo pipefail
-export PATH="/usr/bin:/bin:$PATH"
-cd "$(dirname "$0")/../../.." || exit 2
-EHC_DEVEL="${EHC_DEVEL:-devel}"
-[ -f "$EHC_DEVEL/setup.bash" ] || { echo "experiments.sh: $EHC_DEVEL/setup.bash not found: build first" >&2; exit 2; }
-# shellcheck disable=SC1090,SC1091
-source "$EHC_DEVEL/setup.bash"
+# shellcheck source=devel_env.sh
+source "$(dirname "$0")/devel_env.sh" experiments.sh
 OUT="${OUT:-results/experiments}"
 SEED="${SEED:-1}"
 JOBS="${JOBS:-2}"

@@ -73,6 +73,23 @@ struct Robot {
   }
 };
 
+/// The ready posture's TCP pose with the base at the origin, its pre-grasp, and a table top 25 cm
+/// below it whose near edge lies 5 cm beyond it (away from the robot): the robot stands where
+/// the ready posture puts it, so the grasp is reachable on every robot.
+struct ReadyGrasp {
+  Eigen::Isometry3d grasp, pre;
+  double height;  ///< of the table top
+  SupportSurface table_top;
+};
+ReadyGrasp readyGrasp(const Robot& robot) {
+  ReadyGrasp r;
+  r.grasp = robot.model->fk(Eigen::Vector3d::Zero(), robot.rc.arm_ready, robot.rc.tcp_frame);
+  r.pre = preGraspOf(r.grasp);
+  r.height = r.grasp.translation().z() - 0.25;
+  r.table_top = table(r.grasp.translation().head<2>() + Eigen::Vector2d(0.05 + 0.4, 0.0), Eigen::Vector2d(0.8, 1.2), r.height);
+  return r;
+}
+
 }  // namespace
 
 TEST(SupportSurface, FootprintOfTheSupportPlanesPointsInARandomCloud) {
@@ -155,18 +172,13 @@ TEST(GraspReach, RejectsBadParameters) {
 class GraspReachRobots : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(GraspReachRobots, ReadyPoseBesideATableYesInTheMiddleOfAWideTableNo) {
-  // The TCP pose of the ready posture with the base at the origin, a table 25 cm below it
-  // whose near edge lies 5 cm beyond it (away from the robot): the robot stands where the
-  // ready posture puts it, reachable on every robot. The same grasp in the
+  // The ready-pose grasp beside a table (readyGrasp): reachable on every robot. The same grasp in the
   // middle of a 3 m table (1.5 m from every edge): the base cannot stand under the top, and no
   // robot's arm reaches 1.5 m; without a support every grasp is reachable.
   const Robot robot(GetParam());
   GraspReach reach = robot.reach();
-  const Eigen::Isometry3d g = robot.model->fk(Eigen::Vector3d::Zero(), robot.rc.arm_ready, robot.rc.tcp_frame);
-  const Eigen::Isometry3d pre = preGraspOf(g);
-  const double h = g.translation().z() - 0.25;
-  const Eigen::Vector2d beyond = g.translation().head<2>() + Eigen::Vector2d(0.05 + 0.4, 0.0);
-  reach.setSupport(table(beyond, Eigen::Vector2d(0.8, 1.2), h));
+  const auto [g, pre, h, top] = readyGrasp(robot);
+  reach.setSupport(top);
   const GraspReachVerdict v = reach.judge(g, pre);
   EXPECT_TRUE(v.reachable) << v.reason;
   reach.setSupport(table(g.translation().head<2>(), Eigen::Vector2d(3.0, 3.0), h));
@@ -207,6 +219,8 @@ TEST(GraspReach, OfTwoQualifyingCandidatesTheUnreachableHigherScoredOneLoses) {
   EXPECT_EQ(c->reachable, std::optional<bool>(true));
   const long judged = reach.judgements();
   const auto again = chooseGrasp({top, side}, ApproachDirection::Any, tag, tag.linear(), p, judge);
+  ASSERT_TRUE(again);
+  EXPECT_EQ(again->candidate_index, 1) << "the same choice";
   EXPECT_EQ(reach.judgements(), judged) << "the verdicts are kept";
   std::cout << "first choice of two candidates: " << ms << " ms (" << judged << " judgements)" << std::endl;
   // Without the judgement, or with the top one the only candidate: by score, as before.
@@ -273,10 +287,8 @@ TEST_P(GraspReachRobots, ObstacleMapBlocksThePreGraspNotTheObjectDuringTheDescen
   // A kept verdict is checked against the map again: the neighbour added later un-reaches it.
   const Robot robot(GetParam());
   GraspReach reach = robot.reach();
-  const Eigen::Isometry3d g = robot.model->fk(Eigen::Vector3d::Zero(), robot.rc.arm_ready, robot.rc.tcp_frame);
-  const Eigen::Isometry3d pre = preGraspOf(g);
-  const double h = g.translation().z() - 0.25;
-  reach.setSupport(table(g.translation().head<2>() + Eigen::Vector2d(0.45, 0.0), Eigen::Vector2d(0.8, 1.2), h));
+  const auto [g, pre, h, top] = readyGrasp(robot);
+  reach.setSupport(top);
   const ehc_control::RobotCollisionModel collision(robot.model->calibratedUrdfXml(), robot.rc.arm_joints,
                                                    robot.rc.checked_links);
   ehc_perception::ObstacleDistanceField field(ehc_perception::ObstacleMapConfig{}, collision);
