@@ -327,3 +327,24 @@ TEST_P(GraspReachRobots, ObstacleMapBlocksThePreGraspNotTheObjectDuringTheDescen
   EXPECT_FALSE(reach.reachable(g, pre)) << "the kept verdict is checked against the grown map";
   EXPECT_EQ(reach.judgements(), 2);
 }
+
+TEST_P(GraspReachRobots, OnlyPlacementsOnTheRobotsSideOfTheSupportCount) {
+  // The ready-pose grasp beside a table: reachable with the robot where the ready posture puts
+  // it; with the robot beyond the table's far side every placement that reaches it lies across
+  // the table (the controller does not drive round it): unreachable, and a kept verdict follows.
+  const Robot robot(GetParam());
+  GraspReach reach = robot.reach();
+  const auto [g, pre, h, top] = readyGrasp(robot);
+  reach.setSupport(top);
+  reach.setRobotBase(Eigen::Vector3d::Zero());
+  ASSERT_TRUE(reach.reachable(g, pre)) << reach.judge(g, pre).reason;
+  const Eigen::Vector3d beyond(g.translation().x() + 0.45 + 0.4 + 0.8, g.translation().y(), M_PI);
+  reach.setRobotBase(beyond);
+  const GraspReachVerdict v = reach.judge(g, pre);
+  EXPECT_FALSE(v.reachable);
+  std::cout << GetParam() << " from beyond the table: " << v.reason << std::endl;
+  EXPECT_FALSE(reach.reachable(g, pre)) << "the kept verdict's placement is across the table";
+  EXPECT_EQ(reach.judgements(), 2);
+  reach.setRobotBase(std::nullopt);
+  EXPECT_TRUE(reach.judge(g, pre).reachable) << "without the robot's pose: any placement";
+}

@@ -25,7 +25,11 @@
 // ready posture and from 3 fixed random configurations; when none reaches the pre-grasp, the
 // whole body's IK from each placement (the base free, where it ends kept clear of the support:
 // a top-down grasp near the support's edge wants another bearing than the ready posture's). A
-// differential base reaches any of them (the judgement is kinematic; the controller drives there).
+// differential base reaches any of them (the judgement is kinematic; the controller drives there)
+// as long as the way there does not cross the support: the controller is reactive and does not
+// drive round a table. With the robot's base pose (setRobotBase), only placements whose
+// straight line from the robot's base keeps off the support's footprint are tried (a grasp
+// from the far side of a table is unreachable for a robot on its near side).
 // With the obstacle map (setMapDistances: the map the controller's dampers read), the pre-grasp's
 // configuration, the grasp's and the one halfway down the descent must also keep every checked
 // link at its stop distance from the map's obstacles: the neighbours beside the target, and the
@@ -117,6 +121,10 @@ class GraspReach {
   /// The obstacle map the configurations are checked against (none: the support only).
   void setMapDistances(MapDistances distances) { map_ = std::move(distances); }
 
+  /// Where the robot's base is now (x, y, yaw; world): placements are tried only where the way
+  /// from it keeps off the support (see the top of this file). nullopt (the default): any.
+  void setRobotBase(const std::optional<Eigen::Vector3d>& base) { robot_base_ = base; }
+
   /// The support the grasps stand on; a new one forgets the verdicts.
   void setSupport(const std::optional<SupportSurface>& support);
   const std::optional<SupportSurface>& support() const { return support_; }
@@ -172,7 +180,12 @@ class GraspReach {
   std::vector<Eigen::VectorXd> seeds_;  ///< arm IK seeds: the ready posture, then fixed random ones
   double reach_ = 1.0;  ///< m: the farthest TCP distance from the arm base (sampled)
   std::optional<SupportSurface> support_;
+  /// Whether the straight way from the robot's base to `placement` keeps off the support's
+  /// footprint (true without a robot base or a support).
+  bool onTheWay(const Eigen::Vector3d& placement) const;
+
   MapDistances map_;
+  std::optional<Eigen::Vector3d> robot_base_;
   struct Kept {
     Eigen::Isometry3d grasp;
     GraspReachVerdict verdict;

@@ -359,6 +359,7 @@ const PipelineCycle& GraspPipeline::step() {
   }
 
   // Sequencer (ehc_grasp_sequencer_node on the status of t): goal etc. for the next cycle.
+  if (reach_) reach_->setRobotBase(odometryPose());  // its grasp choice: placements on the robot's side
   {
     StageTimer timer(timing_, &counters_.wall_sequencer);
     SequencerInput in;

@@ -219,7 +219,8 @@ std::vector<Eigen::Vector3d> GraspReach::placements(const Eigen::Vector3d& targe
       const Eigen::Vector3d base = ehc_control::placementFacing(target.head<2>(), a, d, ready_bearing_);
       const double arm = (WholeBodyModel::baseTransform(base) * arm_base_ - target).norm();
       if (arm > reach_) break;
-      if (!blocked(base, ready, true, Eigen::Vector2d::Zero(), 0.0)) out.push_back({base, std::abs(arm - ready_distance_)});
+      if (onTheWay(base) && !blocked(base, ready, true, Eigen::Vector2d::Zero(), 0.0))
+        out.push_back({base, std::abs(arm - ready_distance_)});
     }
   }
   // The arm base at the ready TCP's distance from the target first (the IK starts at the ready posture).
@@ -236,7 +237,7 @@ GraspReachVerdict GraspReach::judge(const Eigen::Isometry3d& grasp, const Eigen:
     return v;
   }
   const std::vector<Eigen::Vector3d> bases = placements(pre_grasp.translation());
-  if (bases.empty()) v.reason = "no base placement within the arm's reach beside the support";
+  if (bases.empty()) v.reason = "no base placement within the arm's reach beside the support on the robot's side";
   // The reason kept: the last configuration found and why it fails, else the missing IK solution.
   for (const Eigen::Vector3d& b : bases)
     for (const Eigen::VectorXd& seed : seeds_) {
@@ -254,7 +255,7 @@ GraspReachVerdict GraspReach::judge(const Eigen::Isometry3d& grasp, const Eigen:
     Eigen::Vector3d b_pre;
     Eigen::VectorXd q_pre;
     if (!model_.inverseKinematicsFrom(pre_grasp, b, seeds_.front(), &b_pre, &q_pre, joint_stop_)) continue;
-    if (blocked(b_pre, q_pre, true, Eigen::Vector2d::Zero(), 0.0)) continue;
+    if (!onTheWay(b_pre) || blocked(b_pre, q_pre, true, Eigen::Vector2d::Zero(), 0.0)) continue;
     if (settle(grasp, b_pre, q_pre, &v)) return v;
   }
   return v;
@@ -304,6 +305,11 @@ std::optional<std::pair<std::string, double>> GraspReach::mapBlocked(const Eigen
   return worst;
 }
 
+bool GraspReach::onTheWay(const Eigen::Vector3d& placement) const {
+  if (!robot_base_ || !support_) return true;
+  return ehc_perception::hullDistance(support_->footprint, {robot_base_->head<2>(), placement.head<2>()}) > 0.0;
+}
+
 std::string GraspReach::descentBlocked(const Eigen::Vector3d& base, const Eigen::VectorXd& q_pre,
                                        const Eigen::VectorXd& q_grasp) const {
   struct Check {
@@ -331,8 +337,8 @@ bool GraspReach::reachable(const Eigen::Isometry3d& grasp, const Eigen::Isometry
     if ((k->grasp.translation() - grasp.translation()).norm() > 0.005 || std::abs(d.angle()) > 2.0 * M_PI / 180.0)
       continue;
     const GraspReachVerdict& v = k->verdict;
-    if (!v.reachable || descentBlocked(v.base, v.q_pre, v.q_grasp).empty()) return v.reachable;
-    kept_.erase(k);  // the map grew into its configurations: judged anew
+    if (!v.reachable || (onTheWay(v.base) && descentBlocked(v.base, v.q_pre, v.q_grasp).empty())) return v.reachable;
+    kept_.erase(k);  // the map grew into its configurations, or the robot is across the support: judged anew
     break;
   }
   ++judgements_;
