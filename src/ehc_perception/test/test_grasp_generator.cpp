@@ -1119,7 +1119,7 @@ TEST(GraspWidths, ATargetRunningOutOfTheFrameKeepsOnlyGraspsWithBothContactsSeen
   selector.kind = ehc_control::TargetSelectorKind::Nearest;
   const double noise = 0.0015, table_z = 0.75;
   int cut_views = 0, cut_grasps = 0, whole_grasps = 0;
-  for (int trial = 0; trial < 8; ++trial) {
+  for (int trial = 0; trial < 16; ++trial) {
     const Eigen::Vector3d size(0.03 + 0.02 * unit(rng), 0.12 + 0.04 * unit(rng), 0.12 + 0.04 * unit(rng));
     const double yaw = 2 * M_PI * unit(rng);
     const BoxOnTable b = boxOnTable(size, yaw, table_z);
