@@ -1050,3 +1050,106 @@ TEST(WallGrasps, ARandomCylindersWidthIsNeverUnderMeasured) {
   }
   std::printf("%d wall grasps checked\n", walls);
 }
+
+namespace {
+
+/// A box standing on a table (top at `table_z`) at (0.7, 0), turned by `yaw`: its pose and size,
+/// the depth camera's boxes (table and box) and the box's true surface.
+struct BoxOnTable {
+  Box box;
+  std::vector<Box> scene;
+  Surface truth;
+};
+BoxOnTable boxOnTable(const Eigen::Vector3d& size, double yaw, double table_z) {
+  BoxOnTable b;
+  b.box.pose = pose(0.7, 0.0, table_z + 0.5 * size.z(), yaw);
+  b.box.size = size;
+  Box table;
+  table.pose = pose(0.7, 0.0, table_z - 0.02, 0.0);
+  table.size = Eigen::Vector3d(0.8, 1.2, 0.04);
+  b.scene = {table, b.box};
+  b.truth = boxSurface(size, 0.002, true);
+  b.truth.transform(b.box.pose);
+  return b;
+}
+
+/// Whether `box` runs out of the frame of depthCameraCloud's camera (`width` x `height` pixels) at
+/// `cam`: a pixel on the frame's edge sees it (in front of everything else in `scene`).
+bool outOfFrame(const Box& box, const std::vector<Box>& scene, const Eigen::Isometry3d& cam, int width, int height) {
+  const double f = 615.0 * width / 640.0;
+  const Eigen::Vector3d o = cam.translation();
+  for (int v = 0; v < height; ++v)
+    for (int u = 0; u < width; ++u) {
+      if (u > 0 && u < width - 1 && v > 0 && v < height - 1) continue;
+      const Eigen::Vector3d d = (cam.linear() * Eigen::Vector3d((u - 0.5 * width) / f, (v - 0.5 * height) / f, 1.0)).normalized();
+      const double t = rayBox(o, d, box);
+      bool first = std::isfinite(t);
+      for (const Box& b : scene) first = first && rayBox(o, d, b) >= t - 1e-9;
+      if (first) return true;
+    }
+  return false;
+}
+
+/// A camera `dist` m from `at`, `el_deg` above the horizontal, from azimuth `az` (world), looking
+/// at `at` + `aim` (its optical frame).
+Eigen::Isometry3d cameraAt(const Eigen::Vector3d& at, double dist, double el_deg, double az, const Eigen::Vector3d& aim) {
+  const double el = el_deg * kDeg;
+  const Eigen::Vector3d eye = at + dist * Eigen::Vector3d(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
+  return lookAt(eye, at + aim);
+}
+
+}  // namespace
+
+// A thin box (30-50 mm thick, 120-160 mm wide and high) standing on a table under 1.5 mm depth
+// noise, its large face towards an 80 x 60 depth camera 0.3 m away (within 50 deg; the hand
+// camera's close views) aimed 60-90 mm beside it, so that it runs out of the frame: the extent
+// the view shows is short of the box, and every grasp for the tracked target has both contacts
+// seen, measured within 2 mm + the noise of the true box between its fingers. The view's
+// centroid lies near the large face: normals oriented away from it turned part of the face
+// inwards (contact pairs 3-5 mm apart on one face); they face the camera. Aimed at the box (a
+// 160 x 120 camera 0.4 m away), its grasps are kept.
+TEST(GraspWidths, ATargetRunningOutOfTheFrameKeepsOnlyGraspsWithBothContactsSeen) {
+  const unsigned seed = ehc_test::testSeed("GraspWidths target out of the frame");
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const GraspGeneratorConfig cfg;
+  const GraspGenerator gen(cfg);
+  const GraspTargetingParams targeting;
+  ehc_control::TargetSelector selector;
+  selector.kind = ehc_control::TargetSelectorKind::Nearest;
+  const double noise = 0.0015, table_z = 0.75;
+  int cut_views = 0, cut_grasps = 0, whole_grasps = 0;
+  for (int trial = 0; trial < 16; ++trial) {
+    const Eigen::Vector3d size(0.03 + 0.02 * unit(rng), 0.12 + 0.04 * unit(rng), 0.12 + 0.04 * unit(rng));
+    const double yaw = 2 * M_PI * unit(rng);
+    const BoxOnTable b = boxOnTable(size, yaw, table_z);
+    const Eigen::Vector3d centre = b.box.pose.translation();
+    const double az = yaw + (unit(rng) < 0.5 ? 0.0 : M_PI) + (100 * unit(rng) - 50) * kDeg, el = 25 + 20 * unit(rng);
+    const double off = 0.06 + 0.03 * unit(rng), turn = 2 * M_PI * unit(rng);
+    const Eigen::Vector3d aside = off * Eigen::Vector3d(-std::sin(az) * std::cos(turn), std::cos(az) * std::cos(turn), std::sin(turn));
+    selector.point = centre;
+    const std::string what = "box " + std::to_string(1e3 * size.x()) + " mm thick, trial " + std::to_string(trial);
+    SCOPED_TRACE(what);
+    const Eigen::Isometry3d cut_cam = cameraAt(centre, 0.3, el, az, aside);
+    const PointList cut = depthCameraCloud(80, 60, cut_cam, b.scene, noise, seed + static_cast<unsigned>(trial));
+    const CloudTargetResult r = generateForCloudTarget(gen, cut, cut_cam, selector, &centre, targeting);
+    if (outOfFrame(b.box, b.scene, cut_cam, 80, 60)) {
+      ++cut_views;
+      for (const Grasp& g : r.grasps.grasps) {
+        ++cut_grasps;
+        const double between = trueWidthBetweenFingers(g, cfg.gripper, b.truth.points);
+        std::printf("%s, cut: measured %.1f mm, true %.1f mm, %d contacts seen\n", what.c_str(), 1e3 * g.measured_width,
+                    1e3 * between, g.seen_contacts);
+        EXPECT_EQ(g.seen_contacts, 2);
+        EXPECT_NEAR(g.measured_width, between, 0.002 + noise);
+      }
+      if (r.grasps.grasps.empty()) std::printf("%s, cut: %s\n", what.c_str(), r.grasps.reason.c_str());
+    }
+    const Eigen::Isometry3d cam = cameraAt(centre, 0.4, el, az, Eigen::Vector3d::Zero());
+    const PointList whole = depthCameraCloud(160, 120, cam, b.scene, noise, seed + static_cast<unsigned>(trial));
+    whole_grasps += static_cast<int>(generateForCloudTarget(gen, whole, cam, selector, &centre, targeting).grasps.grasps.size());
+  }
+  std::printf("%d views cut by the frame (%d grasps), %d grasps of whole targets\n", cut_views, cut_grasps, whole_grasps);
+  EXPECT_GT(cut_views, 0);
+  EXPECT_GT(whole_grasps, 0);
+}

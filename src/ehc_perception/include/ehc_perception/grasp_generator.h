@@ -48,7 +48,7 @@
 //
 // Measured width (robust estimates, not extreme points): each side of the object between the
 // fingers is its contact surface fitted by least squares: the object's points in the fingers'
-// slab whose estimated normal (oriented outwards from the object's centre) lies within the
+// slab whose estimated normal (oriented outwards, see below) lies within the
 // friction cone (atan(friction_coefficient)) of the closing axis, near that side's trimmed
 // extreme (4 x the cloud's noise + 2 voxels), at least min_contact_points of them, fitted with
 // y = a + b x + c x^2 + d z + e z^2 over the finger's breadth (x) and length (z) and refitted
@@ -59,8 +59,18 @@
 // round_fit_tolerance beyond the cloud's noise and whose points cover an arc of 60 deg), else
 // by the trimmed extreme of the points between the fingers and, for single-contact and
 // footprint hypotheses, of the object's extent (its points and their projections onto the
-// support). Grasps with an unseen side rank below seen ones (antipodal quality at most
-// single_contact_weight). The cloud's noise is estimated from the normals' plane fits.
+// support); the last samples of a surface that runs on under a finger or past it (each within
+// two sample spacings and the noise of the one before; a bar lying along the closing axis) bound
+// the side where they end. Grasps with an unseen side rank below seen ones (antipodal quality at
+// most single_contact_weight). The cloud's noise is estimated from the normals' plane fits.
+//
+// Outward normals: away from the object's centroid (convex objects); with the viewpoint known
+// (hidden_volume_check) and a single view (at most a quarter of the points more than the hidden
+// volume's margin behind the nearest point along their ray), towards the camera, where every
+// surface a view shows faces, except within 15 deg of perpendicular to the ray (grazing: the
+// centroid decides). One view of a box shows mostly one face and its centroid lies near that
+// face, which the centroid alone turned partly inwards (a "contact pair" 3-5 mm apart on one
+// face); a part of a non-convex object facing the rest (one bar of a cross) faces the centroid.
 //
 // Margin rule (gripper.clearance): a grasp needs  measured width + 2 x clearance <= max_width.
 // With the 70 mm gripper and clearance 0.5 mm, objects measured up to 69 mm are grasped.
@@ -384,7 +394,11 @@ struct CloudTargetResult {
 /// nearest it (within target_gate). Without: the selector picks among the objects' centroids as
 /// seen from `camera` (ehc_control::selectTarget, up = the generator's; a `nearest` target on the
 /// support under its point). Then the grasps of that object as generateForTarget makes them.
-/// What ehc_grasp_node and the in-process pipeline do for a cloud target.
+/// A target that runs out of the camera's frame (a point of its cluster within 1.5 pixel pitches
+/// of the edge of the frame the scene's points span, in `camera`'s optical frame) keeps only the
+/// grasps with both contacts seen: the object's extent, the last samples and the view's shadow
+/// that bound an unseen side stop at the frame, the object does not (failure HiddenVolume when
+/// none is left). What ehc_grasp_node and the in-process pipeline do for a cloud target.
 CloudTargetResult generateForCloudTarget(const GraspGenerator& generator, const PointList& scene,
                                          const Eigen::Isometry3d& camera, const ehc_control::TargetSelector& selector,
                                          const Eigen::Vector3d* tracked, const GraspTargetingParams& targeting);

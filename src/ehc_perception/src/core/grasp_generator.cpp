@@ -59,6 +59,12 @@ constexpr ehc_common::EnumNames<GraspFailure, 13> kFailureNames = {{
 constexpr double kDeg = M_PI / 180.0;
 /// An upright round body's fitted circle is at most this much wider than its seen footprint.
 constexpr double kRoundFootprintRatio = 1.25;
+/// A cloud with more of its points hidden behind others along the camera's rays is seen from
+/// several sides (HiddenVolume::singleView).
+constexpr double kMaxBehindFraction = 0.25;
+/// deg: a single view's normal within this of perpendicular to its ray is seen at a grazing
+/// angle, where the noise decides which way it faces (orientNormals).
+constexpr double kGrazingDeg = 15.0;
 
 using Cloud = pcl::PointCloud<pcl::PointXYZ>;
 using Normals = pcl::PointCloud<pcl::Normal>;
@@ -324,7 +330,10 @@ double supportedQuality(double q, const Measurement& m, double single_weight, bo
 /// behind the entering surface in its bin and in the four bins around it (the shadow eroded by
 /// a bin: a finger beside a surface seen at a grazing angle is not in it), and not less than
 /// `margin` in front of a leaving surface there (inside the object). Disabled (nothing hidden)
-/// without a camera.
+/// without a camera. `normals` are oriented outwards (orientNormals). A single view (a depth
+/// image) has no point behind another along a ray: singleView() if at most kMaxBehindFraction of
+/// the points are more than `margin` behind the nearest point of their bin (a grazing surface's
+/// samples may be; a cloud seen from several sides shows its far side behind its near one).
 class HiddenVolume {
  public:
   HiddenVolume() = default;
@@ -351,19 +360,32 @@ class HiddenVolume {
     nv_ = static_cast<int>((v1 - v0_) / res_) + 1;
     entry_.assign(static_cast<std::size_t>(nu_ * nv_), std::numeric_limits<float>::infinity());
     exit_.assign(entry_.size(), -std::numeric_limits<float>::infinity());
+    std::vector<float> front(entry_.size(), std::numeric_limits<float>::infinity());
     for (std::size_t i = 0; i < cloud.size(); ++i) {
       const Eigen::Vector3d p = cloud[i].getVector3fMap().cast<double>();
-      Eigen::Vector3d n = normals[i].getNormalVector3fMap().cast<double>();
+      const Eigen::Vector3d n = normals[i].getNormalVector3fMap().cast<double>();
       int k = 0;
       double r = 0;
-      if (!n.allFinite() || n.norm() < 0.5 || !bin(p, 0, 0, &k, &r)) continue;
-      if (n.dot(p - centroid) < 0) n = -n;  // outwards, as the contact fits assume
+      if (!bin(p, 0, 0, &k, &r)) continue;
+      front[static_cast<std::size_t>(k)] = std::min(front[static_cast<std::size_t>(k)], static_cast<float>(r));
+      if (!n.allFinite() || n.norm() < 0.5) continue;
       float& e = n.dot(eye - p) > 0 ? entry_[static_cast<std::size_t>(k)] : exit_[static_cast<std::size_t>(k)];
       e = n.dot(eye - p) > 0 ? std::min(e, static_cast<float>(r)) : std::max(e, static_cast<float>(r));
     }
+    std::size_t behind = 0, binned = 0;
+    for (const auto& pf : cloud) {
+      int k = 0;
+      double r = 0;
+      if (!bin(pf.getVector3fMap().cast<double>(), 0, 0, &k, &r)) continue;
+      ++binned;
+      behind += r > front[static_cast<std::size_t>(k)] + margin_;
+    }
+    single_view_ = static_cast<double>(behind) <= kMaxBehindFraction * static_cast<double>(binned);
     enabled_ = true;
   }
   bool enabled() const { return enabled_; }
+  /// The cloud is one view from the camera (see the class comment); false when disabled.
+  bool singleView() const { return enabled_ && single_view_; }
   bool hidden(const Eigen::Vector3d& q) const {
     if (!enabled_) return false;
     static const int du[5] = {0, 1, -1, 0, 0}, dv[5] = {0, 0, 0, 1, -1};
@@ -400,7 +422,7 @@ class HiddenVolume {
     return true;
   }
 
-  bool enabled_ = false;
+  bool enabled_ = false, single_view_ = false;
   Eigen::Vector3d eye_ = Eigen::Vector3d::Zero(), fwd_ = Eigen::Vector3d::UnitZ(), e1_ = Eigen::Vector3d::UnitX(),
                   e2_ = Eigen::Vector3d::UnitY();
   double res_ = 1.0, u0_ = 0, v0_ = 0, margin_ = 0;
@@ -433,6 +455,8 @@ class GripperCheck {
   GripperCheck(const GraspGeneratorConfig& cfg, const Eigen::Vector4d& plane, bool has_plane, double noise,
                double leaf, double spacing, const HiddenVolume& hidden)
       : cfg_(cfg), g_(cfg.gripper), plane_(plane), has_plane_(has_plane), noise_(noise), hidden_(hidden), leaf_(leaf),
+        gap_(2.0 * std::max(spacing, leaf) + 2.0 * noise),
+        density_(std::pow(cfg.voxel_size / std::max(spacing, cfg.voxel_size), 2)),
         min_between_(std::max(std::min(3, cfg.min_points_between_fingers),
                               static_cast<int>(std::lround(cfg.min_points_between_fingers *
                                                            std::pow(cfg.voxel_size / std::max(spacing, cfg.voxel_size), 2))))),
@@ -533,7 +557,14 @@ class GripperCheck {
   /// The two sides: fitted where the view shows them (ContactSurfaceFit), else bounded by
   /// the fitted completion, or by the trimmed extremes of the points between the fingers and
   /// the object's extent. Friction if the view shows a side outside the friction cone.
-  CheckOutcome measure(const Prepared& pr, double lo, double hi, Measurement* m) const;
+  CheckOutcome measure(const Prepared& pr, double lo, double hi, int k, Measurement* m) const;
+  /// Where the points under the fingers (ys_, out to the fingers' outer faces) running on from
+  /// `bound` towards side s (+1: +y) end: each within gap_ of the one before (two samples apart
+  /// and the noise), the k most extreme of them dropped as noise (k at the voxel grid's density;
+  /// a sparser cloud's sample stands for more surface: k x density_). A side bounded by the
+  /// last samples between the fingers is not there if the surface runs on past the opening's
+  /// edge (a bar lying along the closing axis): its last samples lie under a finger or beyond.
+  double continued(double bound, int s, int k) const;
   /// The object's extent along y for unseen sides (single-contact and footprint hypotheses):
   /// the object rests on the support, so the unseen volume below each seen point, down to the
   /// support, may be object too (single views miss the lower far side). Its extent along y is
@@ -559,10 +590,12 @@ class GripperCheck {
   double noise_;
   const HiddenVolume& hidden_;
   double leaf_;
+  double gap_;       ///< m, the largest gap between samples of one surface (see continued)
+  double density_;   ///< the cloud's density over the voxel grid's, at most 1 (see the constructor)
   int min_between_;  ///< object points needed between the fingers (see the constructor)
   ContactSurfaceFit fit_;
   std::vector<double> ys_, inner_, palm_;
-  mutable std::vector<double> ext_;
+  mutable std::vector<double> ext_, run_;
   std::vector<Eigen::Vector3d> slab_;
   std::vector<double> slab_ny_;
 };
@@ -601,7 +634,18 @@ void GripperCheck::extentOf(const Prepared& pr) const {
   pr.use_extent = true;
 }
 
-CheckOutcome GripperCheck::measure(const Prepared& pr, double lo, double hi, Measurement* m) const {
+double GripperCheck::continued(double bound, int s, int k) const {
+  run_.clear();
+  for (double y : ys_)
+    if (s * (y - bound) > 0.0) run_.push_back(s * (y - bound));
+  std::sort(run_.begin(), run_.end());
+  std::size_t n = 0;
+  for (double prev = 0.0; n < run_.size() && run_[n] - prev <= gap_; ++n) prev = run_[n];
+  const auto kk = static_cast<std::size_t>(std::max(0L, std::lround(k * density_)));
+  return n > kk ? bound + s * run_[n - 1 - kk] : bound;
+}
+
+CheckOutcome GripperCheck::measure(const Prepared& pr, double lo, double hi, int k, Measurement* m) const {
   for (int i = 0; i < 2; ++i) {
     const int s = i == 0 ? -1 : 1;
     ContactSide& side = m->side[i];
@@ -614,9 +658,10 @@ CheckOutcome GripperCheck::measure(const Prepared& pr, double lo, double hi, Mea
     if (side.slips) return CheckOutcome::Friction;
     if (pr.extent_pending) extentOf(pr);
     // Bounded by the last samples of the surfaces running up to it (a top face's far edge):
-    // their trimmed extreme, short of the true side by up to one sample spacing.
-    side.y = s > 0 ? hi : lo;
-    if (pr.use_extent) side.y = s > 0 ? std::max(hi, pr.ext_max) : std::min(lo, pr.ext_min);
+    // their trimmed extreme, short of the true side by up to one sample spacing; where they
+    // run on past the opening's edge, their end under or beyond the finger (continued).
+    side.y = continued(s > 0 ? hi : lo, s, k);
+    if (pr.use_extent) side.y = s > 0 ? std::max(side.y, pr.ext_max) : std::min(side.y, pr.ext_min);
   }
   m->width = m->side[1].y - m->side[0].y;
   // Two sides closer than the noise can tell apart are one surface's noise.
@@ -666,7 +711,7 @@ CheckOutcome GripperCheck::evaluate(const Prepared& pr, double cphi, double sphi
   std::nth_element(inner_.begin(), inner_.end() - 1 - kk, inner_.end());
   const double hi = inner_[inner_.size() - 1 - static_cast<std::size_t>(k)];
   surfaceInSlab(pr, cphi, sphi);
-  const CheckOutcome measured = measure(pr, lo, hi, m);
+  const CheckOutcome measured = measure(pr, lo, hi, k, m);
   if (measured != CheckOutcome::Pass) return measured;
   const double ymin = m->side[0].y, ymax = m->side[1].y;
   const double w = ymax - ymin + 2.0 * g_.clearance;
@@ -1300,8 +1345,29 @@ bool describeObject(const GraspGeneratorConfig& cfg, const Eigen::Vector4d* supp
   return true;
 }
 
-/// Normals (sign-free use: antipodality is tested with |n . y|) and the collision environment
-/// (the object, plus `collision_cloud` if given, voxel-filtered together).
+/// Turns the object's normals outwards. Away from the centroid (a convex object's outside);
+/// with `eye` (a single view from it), towards the camera: every surface a view shows faces it,
+/// whatever the shape (the centroid of one view of a box lies near its most seen face, whose
+/// normals it would turn either way; a part of a non-convex object facing the rest faces the
+/// centroid), except within kGrazingDeg of perpendicular to the ray, where the centroid decides.
+void orientNormals(const Eigen::Vector3d& centroid, const Eigen::Vector3d* eye, PreparedObject* po) {
+  const double grazing = std::sin(kGrazingDeg * kDeg);
+  for (std::size_t i = 0; i < po->cloud->size(); ++i) {
+    auto n = (*po->normals)[i].getNormalVector3fMap();
+    if (!n.allFinite()) continue;
+    const Eigen::Vector3d p = pt(*po->cloud, static_cast<int>(i)), nd = n.cast<double>();
+    bool flip = nd.dot(p - centroid) < 0.0;
+    if (eye && (*eye - p).norm() > 1e-9) {
+      const double towards = nd.dot((*eye - p).normalized());
+      if (std::abs(towards) >= grazing * nd.norm()) flip = towards < 0.0;
+    }
+    if (flip) n = -n;
+  }
+}
+
+/// Normals, oriented outwards (orientNormals: towards the camera when the viewpoint is known,
+/// hidden_volume_check, and the cloud is a single view), and the collision environment (the
+/// object, plus `collision_cloud` if given, voxel-filtered together).
 void estimateNormalsAndEnvironment(const GraspGeneratorConfig& cfg, const PointList* collision_cloud,
                                    const Eigen::Vector3d& viewpoint, PreparedObject* po) {
   // Unsorted radius results: the neighbourhoods here are large and their order is irrelevant.
@@ -1318,8 +1384,15 @@ void estimateNormalsAndEnvironment(const GraspGeneratorConfig& cfg, const PointL
   po->noise = estimateNoise(*po->normals, radius);
   if (cfg.hidden_volume_check && (po->centroid - viewpoint).norm() > 1e-6)
     po->view_dir = (po->centroid - viewpoint).normalized();
-  if (cfg.hidden_volume_check)
-    po->hidden = HiddenVolume(*po->cloud, *po->normals, po->centroid, viewpoint, po->leaf, 3.0 * po->noise + 2.0 * po->leaf);
+  orientNormals(po->centroid, nullptr, po);
+  if (cfg.hidden_volume_check) {
+    const double margin = 3.0 * po->noise + 2.0 * po->leaf;
+    po->hidden = HiddenVolume(*po->cloud, *po->normals, po->centroid, viewpoint, po->leaf, margin);
+    if (po->hidden.singleView()) {
+      orientNormals(po->centroid, &viewpoint, po);
+      po->hidden = HiddenVolume(*po->cloud, *po->normals, po->centroid, viewpoint, po->leaf, margin);
+    }
+  }
 
   // Collision environment (the object, plus other geometry if given).
   po->env = po->cloud;
@@ -1391,8 +1464,7 @@ class GraspSearch {
       const Eigen::Vector3d p = pt(*po.cloud, static_cast<int>(i));
       const Eigen::Vector3d n = (*po.normals)[i].getNormalVector3fMap().cast<double>();
       obj_p_.push_back(p);
-      obj_n_.push_back(!n.allFinite() || n.norm() < 0.5 ? Eigen::Vector3d::Zero()
-                                                         : n.dot(p - po.centroid) >= 0.0 ? n : Eigen::Vector3d(-n));
+      obj_n_.push_back(!n.allFinite() || n.norm() < 0.5 ? Eigen::Vector3d::Zero() : n);  // outwards (orientNormals)
     }
     if (po.env != po.cloud)
       for (std::size_t i = 0; i < po.env->size(); ++i) env_p_.push_back(pt(*po.env, static_cast<int>(i)));
@@ -1500,8 +1572,7 @@ std::vector<Hyp> GraspSearch::contactHypotheses(const std::vector<int>& seeds, b
     if (cfg_.single_contact_weight > 0.0) {
       // Renormalised in double: the float normal's unit length is only float-accurate,
       // and this axis becomes a column of the grasp rotation.
-      const Eigen::Vector3d n_out =
-          (ni.dot(pi - po_.centroid) >= 0 ? ni : Eigen::Vector3d(-ni)).normalized();
+      const Eigen::Vector3d n_out = ni.normalized();  // outwards (orientNormals)
       hyps.push_back({n_out, pi - n_out * (0.5 * g_.max_width - g_.clearance), {}, {},
                       cfg_.single_contact_weight, true, {}});
     }
@@ -1744,8 +1815,8 @@ void GraspSearch::gather(const Eigen::Vector3d& centre, double radius) {
   const double r2 = radius * radius;
   nbrs_.clear();
   surf_.clear();
-  // The object's points (with their normals, oriented outwards from the object's centre: convex
-  // objects; a cloud of one view or of several), and the environment's when it is more.
+  // The object's points (with their outward normals, orientNormals), and the environment's when
+  // it is more.
   for (std::size_t e = 0; e < obj_p_.size(); ++e) {
     if ((obj_p_[e] - centre).squaredNorm() > r2) continue;
     if (env_p_.empty()) nbrs_.push_back(obj_p_[e]);
@@ -2168,6 +2239,48 @@ SceneSegmentation segmentWithinBudget(const GraspGenerator& generator, const Poi
   if (near && !near->allFinite()) near = nullptr;
   return generator.segmentScene(scene.size() > budget ? budgetPoints(scene, budget) : scene, &viewpoint, near);
 }
+/// Whether `object` runs out of the camera's frame: the frame is the angular extent of the scene's
+/// points in the camera (optical frame, z forward; at most `budget` of them, evenly strided), and
+/// an object point within 1.5 of its pixel pitches (the frame's area over its points) of an edge
+/// is cut there. The object's extent beyond it is not in the cloud.
+bool cutByFrame(const PointList& scene, const PointList& object, const Eigen::Isometry3d& camera, std::size_t budget) {
+  const Eigen::Isometry3d to_cam = camera.inverse();
+  double u0 = std::numeric_limits<double>::max(), v0 = u0, u1 = -u0, v1 = -u0;
+  std::size_t n = 0;
+  const std::size_t step = std::max<std::size_t>(1, (scene.size() + budget - 1) / std::max<std::size_t>(1, budget));
+  for (std::size_t i = 0; i < scene.size(); i += step) {
+    const Eigen::Vector3d q = to_cam * scene[i].cast<double>();
+    if (!q.allFinite() || q.z() <= 1e-6) continue;
+    u0 = std::min(u0, q.x() / q.z()), u1 = std::max(u1, q.x() / q.z());
+    v0 = std::min(v0, q.y() / q.z()), v1 = std::max(v1, q.y() / q.z());
+    ++n;
+  }
+  if (n < 4 || !(u1 > u0) || !(v1 > v0)) return false;
+  const double tol = 1.5 * std::sqrt((u1 - u0) * (v1 - v0) / static_cast<double>(n));
+  for (const Eigen::Vector3f& p : object) {
+    const Eigen::Vector3d q = to_cam * p.cast<double>();
+    if (!q.allFinite() || q.z() <= 1e-6) continue;
+    const double u = q.x() / q.z(), v = q.y() / q.z();
+    if (u < u0 + tol || u > u1 - tol || v < v0 + tol || v > v1 - tol) return true;
+  }
+  return false;
+}
+
+/// A target cut by the frame (cutByFrame): its unseen sides' bounds (the object's extent, the
+/// last samples, the view's shadow) may lie short of the object, which runs on out of the view;
+/// only grasps whose two contacts the view shows measure it. The others are dropped.
+void keepMeasuredIfCut(const PointList& scene, const SceneSegmentation& seg, int object, const Eigen::Isometry3d& camera,
+                       const GraspTargetingParams& targeting, GraspResult* res) {
+  if (res->grasps.empty() || object < 0 || static_cast<std::size_t>(object) >= seg.objects.size() ||
+      !cutByFrame(scene, seg.objects[static_cast<std::size_t>(object)], camera,
+                  static_cast<std::size_t>(targeting.max_input_points)))
+    return;
+  res->grasps.erase(std::remove_if(res->grasps.begin(), res->grasps.end(), [](const Grasp& g) { return g.seen_contacts < 2; }),
+                    res->grasps.end());
+  if (!res->grasps.empty()) return;
+  res->failure = GraspFailure::HiddenVolume;
+  res->reason = "the target runs out of the camera's frame and no grasp has both contacts seen";
+}
 }  // namespace
 
 GraspResult generateForTarget(const GraspGenerator& generator, const PointList& scene,
@@ -2203,6 +2316,7 @@ CloudTargetResult generateForCloudTarget(const GraspGenerator& generator, const 
       return out;
     }
     out.object = seg.nearestObject(*tracked);
+    keepMeasuredIfCut(scene, seg, out.object, camera, targeting, &out.grasps);
     out.selection.status = TargetSelectionStatus::Selected;
     out.selection.index = out.object;
     out.selection.centre = out.grasps.centroids.front();
@@ -2220,6 +2334,7 @@ CloudTargetResult generateForCloudTarget(const GraspGenerator& generator, const 
   }
   out.object = out.selection.index;
   out.grasps = targetGrasps(generator, seg, scene.size(), viewpoint, &out.selection.centre, targeting);
+  keepMeasuredIfCut(scene, seg, out.object, camera, targeting, &out.grasps);
   return out;
 }
 
