@@ -19,7 +19,8 @@
 //                grasp candidates update; the controller's MPBS watches the object centre), so
 //                the hand arrives from the approach side instead of cutting across the object;
 //                base + arm drive. Ends when the TCP is within pregrasp_switch_distance of the
-//                grasp position. tsmm (paper, section IV-D: "the robot first moves to a position
+//                grasp position (a choice judged unreachable: unreachable_lock_wait later, unless
+//                a reachable one comes first). tsmm (paper, section IV-D: "the robot first moves to a position
 //                d away from the target object's position, measured from the end-effector"):
 //                until the tsmm base stage has stopped the goal is the object centre itself
 //                (with the grasp's orientation, which the base stage does not servo), so the
