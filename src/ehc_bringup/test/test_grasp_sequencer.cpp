@@ -1730,16 +1730,21 @@ TEST(TargetPoseFilter, RandomGlitchesNeverMoveThePoseAndRealMovesAreFollowed) {
 }
 
 TEST(GraspSequencer, AGraspJudgedUnreachableIsLockedOnlyAfterTheWaitAReachableOneAtOnce) {
-  // Two candidates, the better-scored one never reachable. Without a reachable one the approach
-  // goes on for unreachable_lock_wait within the switch distance, then locks the best-scored
-  // (judged unreachable); when the other turns reachable during the wait (a newer view), it is
-  // locked at once.
+  // A cloud target, two candidates, the better-scored one never reachable. Without a reachable
+  // one the approach goes on for unreachable_lock_wait within the switch distance, then locks the
+  // best-scored (judged unreachable); when the other turns reachable during the wait (a newer
+  // view), it is locked at once. A tag target locks at once.
   GraspSequencerParams p = twoObjects();
   p.selection.centre_from_tag = p.selection.closing_axis_from_tag = false;
   p.unreachable_lock_wait = 2.0;
-  for (const bool appears : {false, true}) {
-    SCOPED_TRACE(appears ? "a reachable one appears" : "none reachable");
-    Harness h(p);
+  p.objects[0].target.kind = ehc_control::TargetSelectorKind::Nearest;  // a cloud target
+  p.objects[0].target.point = forwardTarget().translation();
+  for (const int scenario : {0, 1, 2}) {
+    const bool appears = scenario == 1, tag = scenario == 2;
+    SCOPED_TRACE(tag ? "a tag target" : appears ? "a reachable one appears" : "none reachable");
+    GraspSequencerParams q = p;
+    if (tag) q.objects[0].target = ehc_control::TargetSelector{};
+    Harness h(q);
     h.perceive = forwardTarget();
     const GraspCandidate best{forwardTarget(), 0.05, 0.9}, other{forwardTarget(1.5, 0.02), 0.05, 0.5};
     double reachable_from = 1e9, t_approach = -1.0;
@@ -1757,7 +1762,10 @@ TEST(GraspSequencer, AGraspJudgedUnreachableIsLockedOnlyAfterTheWaitAReachableOn
     ASSERT_EQ(h.seq.phase(), GraspPhase::PreGrasp);
     ASSERT_TRUE(h.seq.lockedGrasp());
     const double waited = h.t - t_approach;
-    if (appears) {
+    if (tag) {
+      EXPECT_NEAR(h.seq.lockedGrasp()->pose.translation().y(), 0.0, 1e-9) << "the best-scored one";
+      EXPECT_LT(waited, 0.05) << "a tag target locks at once, as over ROS";
+    } else if (appears) {
       EXPECT_NEAR(h.seq.lockedGrasp()->pose.translation().y(), 0.02, 1e-9) << "the reachable one";
       EXPECT_EQ(h.seq.lockedGrasp()->reachable, std::optional<bool>(true));
       EXPECT_NEAR(waited, 1.0, 0.03) << "locked as soon as it was reachable";

@@ -752,8 +752,10 @@ void GraspSequencer::advanceApproach(const SequencerInput& in, bool fresh, bool 
   out->goal = approachGoal(in, choice->pose);
   const bool tsmm_base_pending = tsmmController(in) && !tsmm_at_d_;
   if (!tsmm_base_pending && within(in, choice->pose, params_.pregrasp_switch_distance, 180.0)) {
-    // Judged unreachable: the views go on for unreachable_lock_wait, a reachable one locks at once.
-    const bool unreachable = choice->reachable && !*choice->reachable;
+    // A cloud target's choice judged unreachable: the views go on for unreachable_lock_wait, a
+    // reachable one locks at once. A tag target locks at once, as over ROS (no judgement there).
+    const bool unreachable =
+        params_.objects[current_].target.fromCloud() && choice->reachable && !*choice->reachable;
     if (!unreachable) unreachable_since_ = -1.0;
     else if (unreachable_since_ < 0.0) unreachable_since_ = t;
     if (unreachable && t - unreachable_since_ < params_.unreachable_lock_wait) return;

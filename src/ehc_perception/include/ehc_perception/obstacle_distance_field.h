@@ -111,7 +111,8 @@ class ObstacleDistanceField {
   std::vector<LinkObstacleDistance> distances(const std::vector<Eigen::Isometry3d>& link_poses) const;
   /// The same with `zones` instead of the field's exclusion zones, for a configuration other than
   /// the robot's own (a planned one): neither the field's zones nor the seeds its queries keep
-  /// for the next cycle are read or changed. Throws std::invalid_argument as setExclusionZones.
+  /// for the next cycle are read or changed, and a penetration reads <= 0 without its depth
+  /// (unsigned distance). Throws std::invalid_argument as setExclusionZones.
   std::vector<LinkObstacleDistance> distances(const std::vector<Eigen::Isometry3d>& link_poses,
                                               const std::vector<ExclusionZone>& zones) const;
   /// World poses of robot().links() from the whole-body model (which holds the finger joints

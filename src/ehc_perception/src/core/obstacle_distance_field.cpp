@@ -333,7 +333,10 @@ std::vector<LinkObstacleDistance> ObstacleDistanceField::query(const std::vector
 
   fcl::DistanceRequest<double> req;
   req.enable_nearest_points = true;
-  req.enable_signed_distance = true;
+  // The robot's own configuration: a penetration's depth (FCL's collision query). A planned one
+  // may lie deep in the map, where that query can disagree with GJK (FCL asserts): unsigned, a
+  // penetration then reads <= 0, all a planning check needs.
+  req.enable_signed_distance = seeded_queries;
   static const std::vector<ExclusionZone> kNone;
   const std::vector<ExclusionZone>& zones = excluding ? excluding->zones : kNone;
   for (std::size_t i = 0; i < impl_->shapes.size(); ++i) {
