@@ -328,6 +328,45 @@ TEST_P(GraspReachRobots, ObstacleMapBlocksThePreGraspNotTheObjectDuringTheDescen
   EXPECT_EQ(reach.judgements(), 2);
 }
 
+TEST_P(GraspReachRobots, AKeptVerdictIsCheckedAgainstTheMapOnlyWhenItsRevisionMoves) {
+  // With the map's revision (the obstacle field's), a kept reachable verdict costs no distance
+  // query while the map is unchanged; once the revision moves its three configurations are
+  // checked again: a neighbour 0.8 m aside keeps it, one at the pre-grasp un-reaches it.
+  const Robot robot(GetParam());
+  GraspReach reach = robot.reach();
+  const auto [g, pre, h, top] = readyGrasp(robot);
+  reach.setSupport(top);
+  const ehc_control::RobotCollisionModel collision(robot.model->calibratedUrdfXml(), robot.rc.arm_joints,
+                                                   robot.rc.checked_links);
+  ehc_perception::ObstacleDistanceField field(ehc_perception::ObstacleMapConfig{}, collision);
+  int queries = 0;
+  reach.setMapDistances(
+      [&](const Eigen::Vector3d& base, const Eigen::VectorXd& q, bool) {
+        ++queries;
+        std::vector<std::pair<std::string, double>> out;
+        for (const auto& d : field.distances(field.linkPoses(*robot.model, base, q), {}))
+          out.emplace_back(d.link, d.distance);
+        return out;
+      },
+      [&] { return field.revision(); });
+  ASSERT_TRUE(reach.reachable(g, pre)) << reach.judge(g, pre).reason;
+  const int judged = queries;
+  EXPECT_GE(judged, 3) << "the judgement checks the pre-grasp, halfway down and the grasp";
+  for (int i = 0; i < 5; ++i) EXPECT_TRUE(reach.reachable(g, pre));
+  EXPECT_EQ(queries, judged) << "the map unchanged: the kept verdict stands without a query";
+  const Eigen::Vector3d aside = g.translation() + Eigen::Vector3d(0.0, 0.8, 0.0);
+  field.addOccupiedBox(aside - Eigen::Vector3d::Constant(0.03), aside + Eigen::Vector3d::Constant(0.03));
+  EXPECT_TRUE(reach.reachable(g, pre));
+  EXPECT_EQ(queries, judged + 3) << "the map moved: checked again";
+  EXPECT_TRUE(reach.reachable(g, pre));
+  EXPECT_EQ(queries, judged + 3);
+  EXPECT_EQ(reach.judgements(), 1);
+  const Eigen::Vector3d p = pre.translation();
+  field.addOccupiedBox(p - Eigen::Vector3d::Constant(0.05), p + Eigen::Vector3d::Constant(0.05));
+  EXPECT_FALSE(reach.reachable(g, pre)) << "the kept verdict is checked against the grown map";
+  EXPECT_EQ(reach.judgements(), 2);
+}
+
 TEST_P(GraspReachRobots, OnlyPlacementsOnTheRobotsSideOfTheSupportCount) {
   // The ready-pose grasp beside a table: reachable with the robot where the ready posture puts
   // it; with the robot beyond the table's far side every placement that reaches it lies across

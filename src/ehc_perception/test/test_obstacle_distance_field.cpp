@@ -238,8 +238,14 @@ TEST(ObstacleDistanceField, CloudsMarkObstaclesAndRaysClearFreeSpace) {
     return w;
   };
   const Eigen::Vector3d origin(0.0, 0.0, 0.4);
+  const std::uint64_t empty = p.field.revision();
+  p.field.setExclusionZones({{Eigen::Vector3d(1.0, 0.0, 0.4), 0.1}});
+  p.field.insertCloud({Eigen::Vector3f(1.0f, 0.0f, std::nanf(""))}, origin);  // nothing kept
+  EXPECT_EQ(p.field.revision(), empty) << "zones and a cloud without a kept point leave the map as it was";
+  p.field.setExclusionZones({});
   const auto st = p.field.insertCloud(wall(1.01, 1.0), origin);
   EXPECT_EQ(st.inserted, st.input);
+  EXPECT_GT(p.field.revision(), empty);
   EXPECT_EQ(p.field.cell(Eigen::Vector3d(1.01, 0.0, 0.4)), ObstacleDistanceField::Cell::Occupied);
   EXPECT_EQ(p.field.cell(Eigen::Vector3d(0.5, 0.0, 0.4)), ObstacleDistanceField::Cell::Free);
   EXPECT_EQ(p.field.cell(Eigen::Vector3d(1.5, 0.0, 0.4)), ObstacleDistanceField::Cell::Unknown);
@@ -258,7 +264,9 @@ TEST(ObstacleDistanceField, CloudsMarkObstaclesAndRaysClearFreeSpace) {
   ASSERT_NE(p.find(ds, "ball"), nullptr);
   EXPECT_NEAR(p.find(ds, "ball")->distance, 1.50 - 1.30 - 0.05, 0.01 + 1e-4);
 
+  const std::uint64_t walls = p.field.revision();
   p.field.clear();
+  EXPECT_GT(p.field.revision(), walls);
   EXPECT_EQ(p.field.occupiedLeafCount(), 0u);
   EXPECT_TRUE(p.field.distances(p.place("ball", pose(1.30, 0.0, 0.4, 0))).empty());
 }

@@ -236,6 +236,17 @@ class GraspPipeline {
   /// during the descent.
   std::vector<std::pair<std::string, double>> plannedMapDistances(const Eigen::Vector3d& base, const Eigen::VectorXd& q,
                                                                   bool descent) const;
+  /// Its revision: changes with the map's (ObstacleDistanceField::revision) and whenever the
+  /// planned exclusions move.
+  std::uint64_t plannedMapRevision();
+  struct PlannedMapKey {
+    std::uint64_t map = 0;
+    std::vector<ehc_perception::ExclusionZone> zones;  ///< before, then during the descent
+  };
+  PlannedMapKey planned_key_;
+  std::uint64_t planned_revision_ = 0;
+  /// The exclusion zones the sequencer plans before (`descent` false) or during the descent.
+  std::vector<ehc_perception::ExclusionZone> plannedZones(bool descent) const;
   struct Clocks;
   std::unique_ptr<Clocks> clocks_;
   std::optional<Eigen::Vector3d> grasp_target_;  ///< the sequencer's object pose (grasp node target)

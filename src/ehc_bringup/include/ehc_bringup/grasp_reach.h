@@ -37,14 +37,16 @@
 // there and the approach stalls; another candidate or another placement may pass.
 // Verdicts are kept per grasp pose (within 5 mm and 2 deg) until the support changes: the
 // choice runs whenever candidates or the object's pose update. The map grows while the robot
-// drives: a kept reachable verdict's configurations are checked against it again at every call
-// (a few distance queries), and the grasp judged anew when one is blocked.
+// drives: a kept reachable verdict's configurations are checked against it again (a few distance
+// queries) when the map's revision (setMapDistances) has changed since they were last found
+// clear, or at every call without one, and the grasp judged anew when one is blocked.
 
 #include "ehc_control/robot_collision_model.h"
 #include "ehc_control/whole_body_model.h"
 
 #include <Eigen/Geometry>
 
+#include <cstdint>
 #include <functional>
 #include <optional>
 #include <string>
@@ -118,8 +120,15 @@ class GraspReach {
   /// distance) pairs; a link without an obstacle within the map's influence left out.
   using MapDistances = std::function<std::vector<std::pair<std::string, double>>(
       const Eigen::Vector3d& base, const Eigen::VectorXd& q, bool descent)>;
-  /// The obstacle map the configurations are checked against (none: the support only).
-  void setMapDistances(MapDistances distances) { map_ = std::move(distances); }
+  /// A number that changes whenever what `distances` reads does (the map or its planned
+  /// exclusions): a kept verdict is checked again only when it has changed.
+  using MapRevision = std::function<std::uint64_t()>;
+  /// The obstacle map the configurations are checked against (none: the support only), and its
+  /// revision (none: kept verdicts are checked at every call).
+  void setMapDistances(MapDistances distances, MapRevision revision = {}) {
+    map_ = std::move(distances);
+    map_revision_ = std::move(revision);
+  }
 
   /// Where the robot's base is now (x, y, yaw; world): placements are tried only where the way
   /// from it keeps off the support (see the top of this file). nullopt (the default): any.
@@ -185,10 +194,12 @@ class GraspReach {
   bool onTheWay(const Eigen::Vector3d& placement) const;
 
   MapDistances map_;
+  MapRevision map_revision_;
   std::optional<Eigen::Vector3d> robot_base_;
   struct Kept {
     Eigen::Isometry3d grasp;
     GraspReachVerdict verdict;
+    std::optional<std::uint64_t> clear_at;  ///< the map revision its configurations were found clear at
   };
   std::vector<Kept> kept_;
   long judgements_ = 0;

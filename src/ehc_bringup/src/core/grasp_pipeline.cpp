@@ -189,9 +189,12 @@ GraspPipeline::GraspPipeline(const GraspPipelineConfig& cfg, unsigned seed) : cf
   detector_ = std::make_unique<ehc_perception::TagDetector>(cfg_.detector, intrinsics);
   generator_ = std::make_unique<ehc_perception::GraspGenerator>(cfg_.generator);
   if (cfg_.obstacles) monitor_ = std::make_unique<ehc_perception::ObstacleMonitor>(robot, cfg_.map, cfg_.monitor);
-  if (reach_ && monitor_) reach_->setMapDistances([this](const Eigen::Vector3d& base, const Eigen::VectorXd& q, bool descent) {
-    return plannedMapDistances(base, q, descent);
-  });
+  if (reach_ && monitor_)
+    reach_->setMapDistances(
+        [this](const Eigen::Vector3d& base, const Eigen::VectorXd& q, bool descent) {
+          return plannedMapDistances(base, q, descent);
+        },
+        [this] { return plannedMapRevision(); });
   const bool perceive_tags = !cfg_.tag_targets.empty();
   clocks_ = std::make_unique<Clocks>(Clocks{ehc_sim::StreamClock(perceive_tags ? cfg_.sim.camera.image_rate : 0.0),
                                             ehc_sim::StreamClock(cfg_.sim.camera.cloud_rate),
@@ -307,13 +310,29 @@ void GraspPipeline::observeSupport(const ehc_perception::PointList& points, cons
 std::vector<std::pair<std::string, double>> GraspPipeline::plannedMapDistances(const Eigen::Vector3d& base,
                                                                                const Eigen::VectorXd& q, bool descent) const {
   // The map with the zones the sequencer will give it in that phase (as the object is seen now).
+  const ehc_perception::ObstacleDistanceField& field = monitor_->field();
+  std::vector<std::pair<std::string, double>> out;
+  for (const auto& d : field.distances(field.linkPoses(monitor_->model(), base, q), plannedZones(descent)))
+    out.emplace_back(d.link, d.distance);
+  return out;
+}
+
+std::vector<ehc_perception::ExclusionZone> GraspPipeline::plannedZones(bool descent) const {
   std::vector<ehc_perception::ExclusionZone> zones;
   for (const auto& z : sequencer_->plannedExclusions(descent ? GraspPhase::Grasp : GraspPhase::PreGrasp))
     zones.push_back({z.centre, z.radius});
-  const ehc_perception::ObstacleDistanceField& field = monitor_->field();
-  std::vector<std::pair<std::string, double>> out;
-  for (const auto& d : field.distances(field.linkPoses(monitor_->model(), base, q), zones)) out.emplace_back(d.link, d.distance);
-  return out;
+  return zones;
+}
+
+std::uint64_t GraspPipeline::plannedMapRevision() {
+  PlannedMapKey key{monitor_->field().revision(), plannedZones(false)};
+  const std::vector<ehc_perception::ExclusionZone> descent = plannedZones(true);
+  key.zones.insert(key.zones.end(), descent.begin(), descent.end());
+  if (key.map != planned_key_.map || key.zones != planned_key_.zones) {
+    planned_key_ = std::move(key);
+    ++planned_revision_;
+  }
+  return planned_revision_;
 }
 
 void GraspPipeline::updateObstacles(double t) {

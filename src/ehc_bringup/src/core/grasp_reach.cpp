@@ -332,19 +332,26 @@ std::string GraspReach::descentBlocked(const Eigen::Vector3d& base, const Eigen:
 
 bool GraspReach::reachable(const Eigen::Isometry3d& grasp, const Eigen::Isometry3d& pre_grasp) {
   if (!params_.enabled || !support_) return true;
+  const std::optional<std::uint64_t> revision =
+      map_revision_ ? std::optional<std::uint64_t>(map_revision_()) : std::nullopt;
   for (auto k = kept_.begin(); k != kept_.end(); ++k) {
     const Eigen::AngleAxisd d(Eigen::Matrix3d(k->grasp.linear().transpose() * grasp.linear()));
     if ((k->grasp.translation() - grasp.translation()).norm() > 0.005 || std::abs(d.angle()) > 2.0 * M_PI / 180.0)
       continue;
     const GraspReachVerdict& v = k->verdict;
-    if (!v.reachable || (onTheWay(v.base) && descentBlocked(v.base, v.q_pre, v.q_grasp).empty())) return v.reachable;
+    if (!v.reachable) return false;
+    if (onTheWay(v.base) &&
+        ((revision && k->clear_at == revision) || descentBlocked(v.base, v.q_pre, v.q_grasp).empty())) {
+      k->clear_at = revision;
+      return true;
+    }
     kept_.erase(k);  // the map grew into its configurations, or the robot is across the support: judged anew
     break;
   }
   ++judgements_;
   const GraspReachVerdict v = judge(grasp, pre_grasp);
   if (kept_.size() >= 256) kept_.clear();
-  kept_.push_back({grasp, v});
+  kept_.push_back({grasp, v, v.reachable ? revision : std::nullopt});
   return v.reachable;
 }
 

@@ -14,6 +14,7 @@
 
 #include <Eigen/Geometry>
 
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
@@ -95,6 +96,9 @@ class ObstacleDistanceField {
   /// tests).
   void addOccupiedBox(const Eigen::Vector3d& min, const Eigen::Vector3d& max);
   void clear();
+  /// Counts the map's changes (insertCloud with points kept, addOccupiedBox, clear): equal
+  /// revisions, the same map (the exclusion zones are not part of it).
+  std::uint64_t revision() const;
 
   enum class Cell { Unknown, Free, Occupied };
   Cell cell(const Eigen::Vector3d& p) const;

@@ -99,6 +99,11 @@ struct ObstacleDistanceField::Impl {
   std::vector<ExclusionZone> active_zones;
   bool zones_taken = false;  ///< active_zones were taken at least once
   bool map_changed = true;   ///< since active_zones were taken
+  std::uint64_t revision = 0;  ///< counts the map's changes (ObstacleDistanceField::revision)
+  void changed() {
+    map_changed = true;
+    ++revision;
+  }
   std::shared_ptr<fcl::OcTree<double>> filtered_tree;  ///< built from active_zones when first asked
   bool filtered_stale = true;
 
@@ -136,7 +141,7 @@ struct ObstacleDistanceField::Impl {
     // FCL reads the occupancy threshold from the tree at construction.
     fcl_tree = std::make_shared<fcl::OcTree<double>>(
         std::static_pointer_cast<const octomap::OcTree>(tree));
-    map_changed = true;
+    changed();
   }
 
   /// An upper bound on the distance of shape `i` (posed at `tf`) to the obstacles of `octree`:
@@ -267,7 +272,7 @@ ObstacleDistanceField::InsertStats ObstacleDistanceField::insertCloud(
   }
   st.inserted = static_cast<int>(pc.size());
   if (!pc.size()) return st;
-  impl_->map_changed = true;
+  impl_->changed();
   impl_->tree->insertPointCloud(
       pc, octomap::point3d(static_cast<float>(origin.x()), static_cast<float>(origin.y()),
                            static_cast<float>(origin.z())),
@@ -286,8 +291,10 @@ void ObstacleDistanceField::addOccupiedBox(const Eigen::Vector3d& lo, const Eige
         impl_->tree->updateNode(static_cast<float>(x), static_cast<float>(y),
                                 static_cast<float>(z), true, /*lazy_eval=*/true);
   impl_->tree->updateInnerOccupancy();
-  impl_->map_changed = true;
+  impl_->changed();
 }
+
+std::uint64_t ObstacleDistanceField::revision() const { return impl_->revision; }
 
 ObstacleDistanceField::Cell ObstacleDistanceField::cell(const Eigen::Vector3d& p) const {
   const octomap::OcTreeNode* n = impl_->tree->search(p.x(), p.y(), p.z());
