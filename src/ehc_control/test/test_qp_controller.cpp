@@ -216,6 +216,46 @@ TEST(EhcQpController, LinkHeldAtItsStopDistanceByTheTaskStaysNearItUnderActuatio
   EXPECT_LT(recovery.rms, 0.7 * damper.rms);
 }
 
+TEST(EhcQpController, ALinkFoundDeepInsideItsStopDistanceBacksOutInsteadOfStopping) {
+  // A wall first seen 3-8 cm inside the arm base's d_s (a table's face the camera had not looked
+  // at). Only the base moves that link, and the recovery gain asks 20/s x the depth, more than
+  // the base's 0.5 m/s: the demand is capped at obstacle_recovery_share of what the base can do,
+  // the QP stays feasible every cycle and the base backs the link out to d_s. Randomized depth,
+  // wall direction and target beyond the wall (the task pulls the robot into it).
+  const unsigned seed = ehc_test::testSeed("deep inside d_s");
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> depth_of(0.03, 0.08), bearing_of(-0.6, 0.6);
+  auto model = std::make_shared<const WholeBodyModel>(realmanWithoutStopDistances());
+  const QpControllerParams p;
+  const double ds = p.obstacle_stop;
+  for (int trial = 0; trial < 5; ++trial) {
+    EhcQpController ctrl(model, p, weighting());
+    test::KinematicSim sim{Eigen::Vector3d::Zero(), model->config().arm_ready};
+    const double depth = depth_of(rng), bearing = bearing_of(rng);
+    const Eigen::Vector3d into(std::cos(bearing), std::sin(bearing), 0.0);  // from the link to the wall
+    const Eigen::Vector3d start = model->fk(sim.base, sim.q, "arm_base_link").translation();
+    const double wall = start.dot(into) + ds - depth;  // the plane into . x = wall
+    ASSERT_GT(depth * p.obstacle_recovery_gain, model->config().velocityLimits()[0]) << "the uncapped demand exceeds the base";
+    const Eigen::Isometry3d target = approachPose(1.2 * into.x(), 1.2 * into.y(), 0.8, Eigen::Vector3d(into.x(), into.y(), -0.3));
+    double d = 0.0;
+    for (int k = 0; k < 300; ++k) {
+      ObstaclePair o;
+      o.link = "arm_base_link";
+      o.link_point = model->fk(sim.base, sim.q, o.link).translation();
+      o.normal = -into;
+      o.distance = d = wall - o.link_point.dot(into);
+      o.obstacle_point = o.link_point + o.distance * into;
+      const Eigen::Isometry3d tcp = model->fk(sim.base, sim.q, model->config().tcp_frame);
+      const ControllerCommand c = ctrl.step(sim.base, sim.q, target, proportionalPoseServo(tcp, target, PoseServoParams{}), {o});
+      ASSERT_EQ(c.qp_status, QpStatus::Ok) << "seed " << seed << " trial " << trial << " depth " << depth << " cycle " << k
+                                           << ": " << c.failure;
+      sim.step(*model, c.velocity, 0.01);
+    }
+    EXPECT_GT(d, ds - 0.003) << "seed " << seed << " trial " << trial << ": backed out to d_s (depth " << depth << " m)";
+    EXPECT_LT(d, ds + 0.05) << "and held there by the task";
+  }
+}
+
 TEST(EhcQpController, BadInputGivesZeroCommandAndQpFailed) {
   auto model = std::make_shared<const WholeBodyModel>(realmanWithoutStopDistances());
   EhcQpController ctrl(model, QpControllerParams{}, weighting());

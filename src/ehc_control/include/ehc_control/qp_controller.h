@@ -153,6 +153,12 @@ struct QpControllerParams {
   /// inside it by a few mm (a random walk pulled back at the recovery rate: its spread falls
   /// with the square root of the rate). 0 = the damper alone.
   double obstacle_recovery_gain = 20.0;
+  /// (0, 1]: a pair's demanded opening rate (recovery or damper) is at most this share of the
+  /// fastest its DOFs can open it within their velocity bounds. A link found deep inside d_s
+  /// (an obstacle first seen there: a table's face the camera had not looked at) asked more
+  /// than the robot can do: the QP was infeasible, the command zero, and so the next cycle's,
+  /// for good. The share below 1 leaves the other rows and the task room.
+  double obstacle_recovery_share = 0.5;
   /// At most this many obstacle damper rows per QP: of the pairs within obstacle_influence,
   /// the nearest (smallest distance - d_s) are kept, the rest dropped for this cycle. Bounds
   /// the build (one link Jacobian per row) and the solve whatever the obstacle node sends.

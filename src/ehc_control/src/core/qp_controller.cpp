@@ -88,6 +88,7 @@ void QpControllerParams::validate() const {
   }
   requireRange(kOwner, "obstacle_damper_gain", obstacle_damper_gain, 1e-3, 100.0);
   requireRange(kOwner, "obstacle_recovery_gain", obstacle_recovery_gain, 0.0, 100.0);
+  requireRange(kOwner, "obstacle_recovery_share", obstacle_recovery_share, 1e-3, 1.0);
   requireRange(kOwner, "max_obstacle_rows", max_obstacle_rows, 0, 1000);
   requireRange(kOwner, "max_qp_iterations", max_qp_iterations, 1, 100000);
   const std::vector<std::string> solvers = qpSolverNames();
@@ -112,7 +113,8 @@ std::string QpControllerParams::summary() const {
      << " rad, gain " << joint_damper_gain << "; obstacle dampers: d_i " << obstacle_influence
      << " m, d_s " << obstacle_stop << " m";
   for (const auto& [link, d] : obstacle_stop_links) os << " (" << link << " " << d << " m)";
-  os << ", gain " << obstacle_damper_gain << ", recovery inside d_s " << obstacle_recovery_gain << " 1/s, at most " << max_obstacle_rows << " rows (nearest first)"
+  os << ", gain " << obstacle_damper_gain << ", recovery inside d_s " << obstacle_recovery_gain << " 1/s (at most "
+     << obstacle_recovery_share << " of the fastest opening), at most " << max_obstacle_rows << " rows (nearest first)"
      << "; QP " << qp_solver << ", at most " << max_qp_iterations << " iterations"
      << "; tsmm switch " << tsmm_switch_distance << " m; arrival " << arrival_position << " m / "
      << arrival_orientation * 180.0 / M_PI << " deg";
@@ -165,6 +167,7 @@ QpControllerParams loadQpControllerParams(const ehc_common::ConfigNode& n) {
     n.fail("obstacle_stop_links", "names robot links: move it to the robot's robot.yaml as robot.obstacle_stop_distances");
   p.obstacle_damper_gain = n.get("obstacle_damper_gain", p.obstacle_damper_gain);
   p.obstacle_recovery_gain = n.get("obstacle_recovery_gain", p.obstacle_recovery_gain);
+  p.obstacle_recovery_share = n.get("obstacle_recovery_share", p.obstacle_recovery_share);
   p.max_obstacle_rows = n.get("max_obstacle_rows", p.max_obstacle_rows);
   p.max_qp_iterations = n.get("max_qp_iterations", p.max_qp_iterations);
   p.qp_solver = n.get("qp_solver", p.qp_solver);
@@ -606,6 +609,11 @@ std::string EhcQpController::buildObstacleRows(const std::vector<ObstaclePair>& 
     double b = params_.obstacle_damper_gain * (o.distance - ds) / (di - ds);
     // Inside d_s: out at least at the recovery rate (QpControllerParams::obstacle_recovery_gain).
     if (o.distance < ds) b = std::min(b, params_.obstacle_recovery_gain * (o.distance - ds));
+    if (b < 0.0) {  // an opening demanded: at most its share of the fastest within the bounds
+      double fastest = 0.0;  // max of -a.qd over lb <= qd <= ub
+      for (int i = 0; i < nd; ++i) fastest += std::max(-a[i] * s.lb[i], -a[i] * s.ub[i]);
+      b = std::max(b, -params_.obstacle_recovery_share * std::max(fastest, 0.0));
+    }
     const double norm = a.norm();
     ++out->obstacle_rows;
     if (norm < 1e-9) continue;  // the link point cannot move along n: nothing to constrain
