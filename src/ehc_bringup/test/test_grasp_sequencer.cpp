@@ -625,6 +625,15 @@ TEST(GraspSequencer, TimeLimitWithTheTargetSeenButNoGraspIsNoGraspNotTargetNotSe
   EXPECT_EQ(toString(unseen.seq.results()[0].cause), "not_seen");
   EXPECT_EQ(unseen.seq.results()[0].stallCause(), "target_not_seen");
   EXPECT_EQ(unseen.seq.results()[0].reason.find("no grasp chosen"), std::string::npos);
+  EXPECT_EQ(unseen.seq.results()[0].reason.find("controller stopped"), std::string::npos) << "it was tracking";
+
+  // The controller's QP failing all along (the robot held still): the reason says so.
+  Harness stopped(twoObjects());
+  stopped.controller_phase = "QP_FAILED";
+  stopped.run(30.2);
+  ASSERT_EQ(stopped.seq.results().size(), 1u);
+  EXPECT_NE(stopped.seq.results()[0].reason.find("the controller stopped: QP_FAILED"), std::string::npos)
+      << stopped.seq.results()[0].reason;
 }
 
 TEST(GraspSequencer, TimeLimitWhileApproachingAConfiguredLimit) {

@@ -53,6 +53,15 @@ std::string toString(GraspCause c) { return ehc_common::enumName(kGraspCauseName
 namespace {
 std::string num(double v, int precision = 3) { return ehc_common::fixedDecimals(v, precision); }
 
+/// Whether /ehc/status's phase is one that zeroes the command (a stall then is the controller's,
+/// not what the motion limit names: an infeasible QP held the robot still for good).
+bool controllerStopped(const std::string& phase) {
+  using ehc_control::ControlPhase;
+  for (ControlPhase p : {ControlPhase::Stopped, ControlPhase::TargetLost, ControlPhase::QpFailed, ControlPhase::ObstaclesStale})
+    if (phase == ehc_control::toString(p)) return true;
+  return false;
+}
+
 /// The look pose `distance` back from `pose` along its approach (z) axis: where the camera sees it.
 Eigen::Isometry3d lookPose(Eigen::Isometry3d pose, double distance) {
   pose.translation() -= distance * pose.linear().col(2);
@@ -615,6 +624,7 @@ SequencerOutput GraspSequencer::update(const SequencerInput& in) {
     s << "; stall: " << cur_.stallCause();
     const std::string detail = cur_.stallDetail();
     if (!detail.empty()) s << " (" << detail << ")";
+    if (controllerStopped(in.controller_phase)) s << "; the controller stopped: " << in.controller_phase;
     finishObject(t, false, s.str(), in, &out);
   } else {
     advance(in, &out);
