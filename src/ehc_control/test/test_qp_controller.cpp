@@ -276,24 +276,40 @@ TEST(EhcQpController, BadInputGivesZeroCommandAndQpFailed) {
   }
 }
 
-TEST(EhcQpController, InfeasibleConstraintsGiveZeroCommandAndQpFailed) {
+TEST(EhcQpController, PairsThatCannotAllOpenAreHeldAndATrulyInfeasibleProblemStops) {
   auto model = std::make_shared<const WholeBodyModel>(realmanWithoutStopDistances());
   EhcQpController ctrl(model, QpControllerParams{}, weighting());
   const Eigen::VectorXd q = model->config().arm_ready;
   const Eigen::Vector3d p = model->fk(Eigen::Vector3d::Zero(), q, "ee_link").translation();
-  // The TCP is inside two obstacles pushing it in opposite directions faster than allowed.
+  const Eigen::Isometry3d target = approachPose(1, 0, 0.8, Eigen::Vector3d(0, 0, -1));
+  // The hand inside two obstacles pushing it out in opposite directions (a finger each side of
+  // an object): both cannot open, so both are held: feasible, and the command approaches
+  // neither (its point's velocity along the normals is zero).
   ObstaclePair a, b;
   a.link = b.link = "ee_link";
   a.link_point = b.link_point = p;
   a.normal = Eigen::Vector3d::UnitX();
   b.normal = -Eigen::Vector3d::UnitX();
   a.distance = b.distance = -0.5;
-  const ControllerCommand c = ctrl.step(Eigen::Vector3d::Zero(), q, approachPose(1, 0, 0.8, Eigen::Vector3d(0, 0, -1)),
-                                        Vector6d::Zero(), {a, b});
+  const ControllerCommand held = ctrl.step(Eigen::Vector3d::Zero(), q, target, Vector6d::Constant(0.1), {a, b});
+  ASSERT_TRUE(held.ok) << held.failure;
+  EXPECT_TRUE(held.obstacles_held);
+  EXPECT_EQ(held.obstacle_rows, 2);
+  KinematicState state;
+  model->updateKinematics(Eigen::Vector3d::Zero(), q, &state);
+  Matrix6Xd J;
+  model->pointJacobian(state, model->linkIndex("ee_link"), p, &J);
+  EXPECT_NEAR((J.topRows<3>() * held.velocity).x(), 0.0, 1e-6) << "neither pair approached";
+  // One pair alone can open: not held.
+  const ControllerCommand one = ctrl.step(Eigen::Vector3d::Zero(), q, target, Vector6d::Constant(0.1), {a});
+  ASSERT_TRUE(one.ok) << one.failure;
+  EXPECT_FALSE(one.obstacles_held);
+  // A task twist beyond the slack bound and the robot's rates: no command follows it, held or
+  // not: zero command and QP_FAILED.
+  const ControllerCommand c = ctrl.step(Eigen::Vector3d::Zero(), q, target, Vector6d::Constant(1000.0), {a, b});
   EXPECT_FALSE(c.ok);
   EXPECT_EQ(c.qp_status, QpStatus::Failed);
   EXPECT_TRUE(c.velocity.isZero(0.0));
-  EXPECT_EQ(c.obstacle_rows, 2);
 }
 
 // A solve that does not finish within max_qp_iterations active-set steps (vpQuadProg would

@@ -213,6 +213,9 @@ struct ControllerCommand : QpStepFigures {
   int joint_damper_rows = 0;
   bool wrist_flip = false;                      ///< the arm's wrist rates were prescribed (WristFlip)
   bool recovering = false;                      ///< a stall recovery's reference was tracked (ControlCycle)
+  /// Infeasible with the pairs inside d_s opening (two of them on opposite sides of the hand,
+  /// or one against a joint damper): solved again with those pairs held, none approaching.
+  bool obstacles_held = false;
   std::string event;                            ///< log-worthy, e.g. a wrist flip started; else ""
 };
 
@@ -313,6 +316,10 @@ class EhcQpController {
   void buildTaskAndCost(const Vector6d& nu_e, double orientation_scale);
   /// The QP's inequality rows C, d (bounds, slack bounds, obstacle dampers); returns their count.
   int buildInequalities();
+  /// Builds the inequalities and solves; when infeasible with obstacle rows demanding an opening,
+  /// holds those rows (no approach: the zero command is feasible for them) and solves again
+  /// (out->obstacles_held). Throws std::invalid_argument for a cost that is not positive definite.
+  QpSolveResult solveQp(ControllerCommand* out);
   /// The command from the QP solution: held values, slack, bounds check and clamp.
   std::string assembleCommand(ControllerCommand* out);
 

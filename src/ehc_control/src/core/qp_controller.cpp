@@ -392,20 +392,14 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
     buildTaskAndCost(nu_e, held.arm || flip ? 0.0
                                             : 1.0 - params_.far_approach.orientation_release *
                                                         params_.far_approach.fraction(out.position_error));
-  const int rows = buildInequalities();
-  Workspace& s = *ws_;
-  const int nf = static_cast<int>(s.free.size());
   QpSolveResult solved = QpSolveResult::Infeasible;
   try {
-    const QpProblemView problem(s.G.topLeftCorner(nf, nf), s.g.head(nf), s.no_rows.leftCols(nf), s.no_rhs,
-                                s.C.topLeftCorner(rows, nf), s.d.head(rows));
-    solved = s.qp->solve(problem, &s.x_free, params_.max_qp_iterations);
+    solved = solveQp(&out);
   } catch (const std::invalid_argument& ex) {  // a cost that is not positive definite (not finite)
     out.solve_time_us = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count();
     return fail(out, std::string("QP: ") + ex.what());
   }
   out.solve_time_us = std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count();
-  out.qp_iterations = s.qp->iterations();
   if (solved == QpSolveResult::IterationLimit)
     return fail(out, "QP iteration limit (" + std::to_string(params_.max_qp_iterations) +
                          " active-set iterations, degenerate constraints)");
@@ -413,6 +407,34 @@ ControllerCommand EhcQpController::step(const Eigen::Vector3d& base_pose, const 
   failure = assembleCommand(&out);
   if (!failure.empty()) return fail(out, failure);
   return out;
+}
+
+QpSolveResult EhcQpController::solveQp(ControllerCommand* out) {
+  Workspace& s = *ws_;
+  const int nf = static_cast<int>(s.free.size());
+  auto solve = [&] {
+    const int rows = buildInequalities();
+    const QpProblemView problem(s.G.topLeftCorner(nf, nf), s.g.head(nf), s.no_rows.leftCols(nf), s.no_rhs,
+                                s.C.topLeftCorner(rows, nf), s.d.head(rows));
+    const QpSolveResult r = s.qp->solve(problem, &s.x_free, params_.max_qp_iterations);
+    out->qp_iterations += s.qp->iterations();
+    return r;
+  };
+  out->qp_iterations = 0;
+  const QpSolveResult first = solve();
+  if (first != QpSolveResult::Infeasible) return first;
+  // Pairs inside d_s that cannot all open at once (a finger each side of an obstacle, a link
+  // pushed against a joint damper): holding them (d_dot >= 0) keeps the robot from going deeper
+  // and lets the task move it along and out; a zero command every cycle would hold it there for good.
+  bool opening = false;
+  for (int r = 0; r < s.n_rows; ++r)
+    if (s.row_b[static_cast<std::size_t>(r)] < 0.0) {
+      s.row_b[static_cast<std::size_t>(r)] = 0.0;
+      opening = true;
+    }
+  if (!opening) return first;
+  out->obstacles_held = true;
+  return solve();
 }
 
 Eigen::Isometry3d EhcQpController::updateKinematics(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q,
