@@ -194,8 +194,11 @@ inline Surface bottleSurface(double r_body, double body_len, double shoulder_len
 
 /// A cup standing on z = 0, its axis along z: an open cylindrical body (outer radius r, wall
 /// `wall` thick, `height` high: outer and inner mantle, the rim's annulus on top, the inner
-/// bottom `wall` above the support).
-inline Surface cupSurface(double r, double wall, double height, double step) {
+/// bottom `wall` above the support). `flare` > 0 makes it a bowl: every point's distance from
+/// the axis scaled by (r - flare (1 - sin a)) / r at z = height (1 - cos a) (a quarter ellipse
+/// from the base's outer radius r - flare up to the rim, vertical there, as the object library's
+/// bowls), the mantles' normals tilted to match.
+inline Surface cupSurface(double r, double wall, double height, double step, double flare = 0.0) {
   Surface s = cylinderSurface(r, 0.0, height, step, false, false);
   Surface inner = cylinderSurface(r - wall, wall, height, step, true, false);
   for (auto& n : inner.normals) n = -n;  // facing the axis (the bottom up)
@@ -206,6 +209,20 @@ inline Surface cupSurface(double r, double wall, double height, double step) {
       const double a = 2 * M_PI * i / na;
       s.add(Eigen::Vector3d(rr * std::cos(a), rr * std::sin(a), height), Eigen::Vector3d::UnitZ());
     }
+  if (flare == 0.0) return s;
+  for (std::size_t i = 0; i < s.points.size(); ++i) {
+    Eigen::Vector3f& p = s.points[i];
+    Eigen::Vector3f& n = s.normals[i];
+    const double c = std::clamp(1.0 - p.z() / height, 0.0, 1.0), sin_a = std::sqrt(1.0 - c * c);
+    const double rho = std::hypot(p.x(), p.y()), k = (r - flare * (1.0 - sin_a)) / r;
+    if (std::abs(n.z()) < 0.5 && rho > 0.0) {  // a mantle: d(k rho) / dz = rho flare c / (r height sin a)
+      const double outward = (n.x() * p.x() + n.y() * p.y()) / rho;
+      n.z() = static_cast<float>(-outward * rho * flare * c / (r * height * std::max(sin_a, 0.1)));
+      n.normalize();
+    }
+    p.x() = static_cast<float>(k * p.x());
+    p.y() = static_cast<float>(k * p.y());
+  }
   return s;
 }
 

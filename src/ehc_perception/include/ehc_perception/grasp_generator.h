@@ -97,8 +97,10 @@
 // horizontally, the other beyond the object's far side at the nearest position where neither
 // the finger nor its path in may lie behind a seen point along the camera's rays: the width is
 // bounded by what the view proves, never assumed (a bowl's rim, whose wall a view never shows
-// from both sides, is grasped across the wall and the shadow behind it). One contact is seen:
-// they rank with the single-contact hypotheses.
+// from both sides, is grasped across the wall and the shadow behind it). Centred on the wall's
+// middle where the view shows its top between the fingers (as near as the opening allows), so
+// that the symmetric close reaches both faces together. One contact is seen: they rank with the
+// single-contact hypotheses.
 //
 // No grasp: the failure is what refused the best-ranked pose that held enough of the object
 // (too wide, friction, collides, hidden volume), the reason counts every check's refusals; an

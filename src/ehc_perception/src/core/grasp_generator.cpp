@@ -1859,8 +1859,8 @@ void GraspSearch::addWallCandidates(std::vector<Candidate>* cands) const {
     cd.single = cd.wall = true;
     cd.m.side[0].seen = true;
     cd.m.side[0].cos_n = w.cos_n;
-    cd.m.side[0].y = -0.5 * w.measured_width;
-    cd.m.side[1].y = 0.5 * w.measured_width;
+    cd.m.side[0].y = w.contact_y;
+    cd.m.side[1].y = w.contact_y + w.measured_width;
     cd.m.width = w.measured_width;
     cands->push_back(cd);
   }

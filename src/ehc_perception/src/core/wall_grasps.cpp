@@ -125,6 +125,16 @@ class WallSearch {
   /// its points (the outermost after dropping one as noise, *y_in) and the median of their
   /// normals' cosines with -y (*cos_n); false with fewer than 3 such points.
   bool seenContact(double* y_in, double* cos_n);
+  /// The middle of the wall's seen thickness between the fingers: from the seen contact y_in to
+  /// the object's farthest point between the fingers short of the free bound y_free, if the top
+  /// of what the view shows of the object there is at most band_ above the fingers (the rim's
+  /// top seen from above: the wall's far edge seen, not where the view ends on a face that goes
+  /// on up); else NaN.
+  double seenMiddle(double y_in, double y_free) const;
+  /// Whether the grasp centred at yc (the seen contact at y_in, the far finger's bound at yo)
+  /// passes the open fingers' (1: no, try farther), the palm's and the hidden volume's checks
+  /// (2: no; 0: yes).
+  int placementRefused(double y_in, double yo, double yc) const;
 
   const GraspGeneratorConfig& cfg_;
   const GripperGeometry& g_;
@@ -138,6 +148,7 @@ class WallSearch {
   std::vector<Eigen::Vector3d> near_;  ///< collision points around the seed, (y, x, z)
   std::vector<double> finger_ys_;      ///< y of those in the fingers' footprint and path, sorted
   std::vector<std::pair<double, double>> contact_;  ///< (ly, cos) of the seen contact's points
+  std::vector<std::pair<double, double>> strip_;  ///< (ly, lz) of the object's points above the fingertips
 };
 
 void WallSearch::gather() {
@@ -154,13 +165,14 @@ void WallSearch::gather() {
     if (std::abs(l.y()) <= 0.5 * g_.finger_breadth && l.z() >= z0_ - sweep_) finger_ys_.push_back(l.x());
   std::sort(finger_ys_.begin(), finger_ys_.end());
   contact_.clear();
+  strip_.clear();
   const auto& pts = *in_.points;
   for (std::size_t j = 0; j < pts.size(); ++j) {
     const Eigen::Vector3d d = pts[j] - p_;
-    const double ly = y_.dot(d);
-    if (std::abs(ly) > band_ || std::abs(x_.dot(d)) > 0.5 * g_.finger_breadth) continue;
-    const double lz = a_.dot(d);
-    if (lz < z0_ || lz > z1_) continue;
+    const double ly = y_.dot(d), lz = a_.dot(d);
+    if (std::abs(x_.dot(d)) > 0.5 * g_.finger_breadth || lz > z1_ || std::abs(ly) > g_.max_width) continue;
+    strip_.emplace_back(ly, lz);
+    if (std::abs(ly) > band_ || lz < z0_) continue;
     const double c = -facing(j).dot(y_);
     if (c >= cos_cone_) contact_.emplace_back(ly, c);
   }
@@ -199,6 +211,34 @@ bool WallSearch::seenContact(double* y_in, double* cos_n) {
   return true;
 }
 
+double WallSearch::seenMiddle(double y_in, double y_free) const {
+  const std::pair<double, double>* far = nullptr;
+  double top = std::numeric_limits<double>::infinity();
+  for (const auto& l : strip_) {
+    if (l.first < y_in - band_ || l.first >= y_free) continue;
+    top = std::min(top, l.second);
+    if (l.first >= y_in && (!far || l.first > far->first)) far = &l;
+  }
+  if (!far || top < z0_ - band_) return std::numeric_limits<double>::quiet_NaN();
+  return 0.5 * (y_in + far->first);
+}
+
+int WallSearch::placementRefused(double y_in, double yo, double yc) const {
+  const double c = g_.clearance, t = g_.finger_thickness, W = g_.max_width;
+  // The fingers come in fully open, centred on yc: both free there too.
+  if (fingerCount(yc - 0.5 * W - t, yc - 0.5 * W) > 0 || fingerCount(yc + 0.5 * W, yc + 0.5 * W + t) > 0 ||
+      !outerFingerFree(yc + 0.5 * W))
+    return 1;
+  // The palm and its path, then the hidden volume at the seen side's finger and the palm (its
+  // face as wide as the opening reaching both sides from yc).
+  const double w = 2.0 * std::max(yo - yc, yc - (y_in - c));
+  if (countIn(yc - 0.5 * g_.palm_width, yc + 0.5 * g_.palm_width, 0.5 * g_.palm_breadth, z0_ - g_.palm_height - sweep_,
+              z0_) > k_ ||
+      seenSideHidden(y_in - c - 0.5 * t, yc, w) || seenSideHidden(yc - 0.5 * W - 0.5 * t, yc, w))
+    return 2;
+  return 0;
+}
+
 bool WallSearch::at(std::size_t i, WallGrasp* out) {
   p_ = (*in_.points)[i];
   const Eigen::Vector3d n = facing(i);
@@ -229,24 +269,25 @@ bool WallSearch::at(std::size_t i, WallGrasp* out) {
   // it or its path (a seen point there contradicts the bound; none is tolerated as noise), none
   // of it behind a seen point.
   const double step = 0.001;
-  for (double yo = y_in + c + std::max(step, 2.0 * in_.noise); yo <= y_in + g_.max_width - c + 1e-9; yo += step) {
+  // The centre: the middle of the wall's seen thickness where its far edge is seen (the fingers
+  // then reach it together: a centre nearer one side pushes the object before the other
+  // touches), within the opening; else the middle between the seen contact and the bound.
+  for (double yo = y_in + c + std::max(step, 2.0 * in_.noise); yo <= y_in + W - c + 1e-9; yo += step) {
     if (fingerCount(yo - c, yo + t) > 0 || !outerFingerFree(yo)) continue;
-    const double w = yo - (y_in - c), yc = 0.5 * (yo + y_in - c);
-    // The fingers come in fully open, centred on yc: both free there too.
-    if (fingerCount(yc - 0.5 * W - t, yc - 0.5 * W) > 0 || fingerCount(yc + 0.5 * W, yc + 0.5 * W + t) > 0 ||
-        !outerFingerFree(yc + 0.5 * W))
-      continue;
-    // The palm and its path, then the hidden volume at the seen side's finger and the palm.
-    if (countIn(yc - 0.5 * g_.palm_width, yc + 0.5 * g_.palm_width, 0.5 * g_.palm_breadth,
-                z0_ - g_.palm_height - sweep_, z0_) > k_ ||
-        seenSideHidden(y_in - c - 0.5 * t, yc, w) || seenSideHidden(yc - 0.5 * W - 0.5 * t, yc, w))
-      return false;
+    const double bound_middle = 0.5 * (yo + y_in - c), seen = seenMiddle(y_in, yo - c);
+    // Fully open, the fingers reach the bound only from a centre at most half the opening short
+    // of it: a wall whose bound lies farther is grasped as near its middle as that allows.
+    const double yc = std::isfinite(seen) ? std::min(bound_middle, std::max(seen, yo - 0.5 * W)) : bound_middle;
+    const int refused = placementRefused(y_in, yo, yc);
+    if (refused == 1) continue;
+    if (refused == 2) return false;
     out->R.col(1) = y_;
     out->R.col(2) = a_;
     out->R.col(0) = y_.cross(a_);
     out->c = p_ + y_ * yc;
-    out->width = w;
-    out->measured_width = w - 2.0 * c;
+    out->measured_width = yo - c - y_in;
+    out->width = out->measured_width + 2.0 * c;
+    out->contact_y = y_in - yc;
     out->cos_n = cos_n;
     return true;
   }

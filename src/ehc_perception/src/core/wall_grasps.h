@@ -14,6 +14,16 @@
 // rim widens with the depth below it (depth / tan(elevation)), so a finger reaching 15 mm below
 // the rim closes across the wall plus 10-30 mm of shadow, well inside the opening.
 //
+// The centre: the fingers close symmetrically about it, so a centre nearer one face than the
+// other pushes the object with one finger before the other touches (a rim grasp centred midway
+// between the seen contact and the bound sits 5-15 mm off the wall: the bowl slides away from
+// the closing fingers). Where the view shows the wall's top between the fingers (a rim seen from
+// above; within the noise band above them), the wall's far face is where that top ends: the grasp
+// is centred on the middle of the seen thickness, from the seen contact to the object's farthest
+// point between the fingers short of the bound, or as near it as the opening allows with the far
+// finger at its bound (fully open, the fingers reach at most half the opening from the centre).
+// Elsewhere (a face whose top the view does not show there) it stays midway to the bound.
+//
 // Hypotheses: every seen point whose normal (turned towards the camera: the side the view shows)
 // is within the friction cone of the horizontal, closing horizontally into the surface,
 // approached straight down, the grasp's closing line at the point's height. The seen contact is
@@ -72,6 +82,7 @@ struct WallGrasp {
   Eigen::Vector3d c = Eigen::Vector3d::Zero();      ///< grasp centre
   double width = 0.0;           ///< opening: measured width + 2 x clearance
   double measured_width = 0.0;  ///< seen contact to the nearest position the view proves free
+  double contact_y = 0.0;       ///< the seen contact along the closing axis from c (< 0)
   double cos_n = 0.0;           ///< the seen contact's normal against the closing axis
 };
 
