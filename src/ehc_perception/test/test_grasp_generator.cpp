@@ -1001,6 +1001,10 @@ struct WallGraspTrials {
 // wall grasp is the best grasp is printed.
 TEST(WallGrasps, ARandomCupsRimIsGraspedAcrossItsWallFromOneView) {
   WallGraspTrials t("WallGrasps random cups");
+  // Every grasp kept (not the top 10): other grasps on the rim may outrank the wall grasps, and
+  // the claim is that wall grasps exist and are right, not that they rank first.
+  t.cfg.top_k = 200;
+  t.gen = GraspGenerator(t.cfg);
   int best_wall = 0;
   for (int trial = 0; trial < 6; ++trial) {
     const double r = 0.05 + 0.03 * t.unit(), wall = 0.003 + 0.003 * t.unit(), height = 0.04 + 0.04 * t.unit();
