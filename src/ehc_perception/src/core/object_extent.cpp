@@ -17,6 +17,22 @@ double ObjectExtent::distance(const Eigen::Vector3d& p) const {
   return q.cwiseMax(0.0).norm();
 }
 
+ObjectExtent boundingExtent(const ObjectExtent& a, const ObjectExtent& b) {
+  const Eigen::Matrix3d& R = b.pose.linear();
+  Eigen::Vector3d lo = -b.half_extents, hi = b.half_extents;  // in b's frame
+  for (int k = 0; k < 8; ++k) {
+    const Eigen::Vector3d u((k & 1) ? 1.0 : -1.0, (k & 2) ? 1.0 : -1.0, (k & 4) ? 1.0 : -1.0);
+    const Eigen::Vector3d q = R.transpose() * (a.pose * u.cwiseProduct(a.half_extents) - b.pose.translation());
+    lo = lo.cwiseMin(q);
+    hi = hi.cwiseMax(q);
+  }
+  ObjectExtent e;
+  e.pose.linear() = R;
+  e.pose.translation() = b.pose * (0.5 * (lo + hi));
+  e.half_extents = 0.5 * (hi - lo);
+  return e;
+}
+
 std::optional<ObjectExtent> clusterExtent(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3d& viewpoint,
                                           const Eigen::Vector3d& up_in, const std::optional<double>& support_height) {
   if (points.size() < 3 || !up_in.allFinite() || up_in.norm() < 1e-9 || !viewpoint.allFinite()) return std::nullopt;
