@@ -1057,42 +1057,36 @@ ObjectExtent uprightBox(const Eigen::Vector3d& centre, const Eigen::Vector3d& ha
 }
 }  // namespace
 
-TEST(GraspSequencer, TheBoundingExtentHoldsBothBoxesInTheSecondsFrame) {
-  const unsigned seed = ehc_test::testSeed("BoundingExtent");
+TEST(GraspSequencer, ABoxHoldsAnotherWhoseCornersAreWithinTheTolerance) {
+  const unsigned seed = ehc_test::testSeed("ExtentHolds");
   std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-1.0, 1.0), half(0.01, 0.08);
-  for (int trial = 0; trial < 50; ++trial) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0), half(0.02, 0.08), tol(0.0, 0.04);
+  int held = 0, not_held = 0;
+  for (int trial = 0; trial < 200; ++trial) {
     SCOPED_TRACE("trial " + std::to_string(trial) + ", seed " + std::to_string(seed));
-    const ObjectExtent a = uprightBox(Eigen::Vector3d(1.7 + 0.05 * u(rng), 0.05 * u(rng), 0.8 + 0.02 * u(rng)),
-                                      Eigen::Vector3d(half(rng), half(rng), half(rng)), M_PI * u(rng));
-    const ObjectExtent b = uprightBox(a.pose.translation() + 0.05 * Eigen::Vector3d(u(rng), u(rng), u(rng)),
-                                      Eigen::Vector3d(half(rng), half(rng), half(rng)), M_PI * u(rng));
-    const ObjectExtent both = ehc_perception::boundingExtent(a, b);
-    ASSERT_TRUE(both.valid());
-    EXPECT_TRUE(both.pose.linear().isApprox(b.pose.linear(), 1e-12)) << "b's axes";
-    for (const ObjectExtent* box : {&a, &b})
-      for (int k = 0; k < 100; ++k)
-        EXPECT_LT(both.distance(boxPoint(*box, Eigen::Vector3d(u(rng), u(rng), u(rng)), 0.0)), 1e-9);
-    // Tight: each face of the box touches a corner of a or b (no slack beyond them).
-    for (int axis = 0; axis < 3; ++axis)
-      for (double side : {-1.0, 1.0}) {
-        double reach = -1e9;
-        for (const ObjectExtent* box : {&a, &b})
-          for (int k = 0; k < 8; ++k) {
-            const Eigen::Vector3d c((k & 1) ? 1.0 : -1.0, (k & 2) ? 1.0 : -1.0, (k & 4) ? 1.0 : -1.0);
-            const Eigen::Vector3d q = both.pose.inverse() * boxPoint(*box, c, 0.0);
-            reach = std::max(reach, side * q(axis));
-          }
-        EXPECT_NEAR(reach, both.half_extents(axis), 1e-9) << "axis " << axis << " side " << side;
-      }
-    // A box inside b: b itself.
-    ObjectExtent inner = b;
+    const ObjectExtent a = uprightBox(Eigen::Vector3d(1.7, 0.0, 0.8), Eigen::Vector3d(half(rng), half(rng), half(rng)),
+                                      M_PI * u(rng));
+    const ObjectExtent b = uprightBox(a.pose.translation() + 0.06 * Eigen::Vector3d(u(rng), u(rng), u(rng)),
+                                      Eigen::Vector3d(half(rng), half(rng), half(rng)) * 0.5, M_PI * u(rng));
+    const double t = tol(rng);
+    // The answer from the corners' coordinates in a's frame.
+    bool inside = true;
+    for (int k = 0; k < 8; ++k) {
+      const Eigen::Vector3d c((k & 1) ? 1.0 : -1.0, (k & 2) ? 1.0 : -1.0, (k & 4) ? 1.0 : -1.0);
+      const Eigen::Vector3d q = a.pose.inverse() * boxPoint(b, c, 0.0);
+      inside &= (q.cwiseAbs() - a.half_extents).cwiseMax(0.0).norm() <= t;
+    }
+    EXPECT_EQ(a.holds(b, t), inside);
+    (inside ? held : not_held) += 1;
+    EXPECT_TRUE(a.holds(a, 1e-9)) << "itself (rounding: 1e-9)";
+    ObjectExtent inner = a;
     inner.half_extents *= 0.5;
-    inner.pose.translation() += b.pose.linear() * (0.4 * b.half_extents.cwiseProduct(Eigen::Vector3d(u(rng), u(rng), u(rng))));
-    const ObjectExtent same = ehc_perception::boundingExtent(inner, b);
-    EXPECT_TRUE(same.pose.isApprox(b.pose, 1e-12));
-    EXPECT_TRUE(same.half_extents.isApprox(b.half_extents, 1e-12));
+    inner.pose.translation() += a.pose.linear() * (0.5 * a.half_extents.cwiseProduct(Eigen::Vector3d(u(rng), u(rng), u(rng))));
+    EXPECT_TRUE(a.holds(inner, 1e-9));
+    EXPECT_FALSE(inner.holds(a, 0.0)) << "the larger one";
   }
+  EXPECT_GT(held, 10);
+  EXPECT_GT(not_held, 10);
 }
 
 TEST(GraspSequencer, APartialViewOfTheObjectKeepsItsWholeExtentAMovedOneReplacesIt) {
@@ -1117,15 +1111,13 @@ TEST(GraspSequencer, APartialViewOfTheObjectKeepsItsWholeExtentAMovedOneReplaces
     h.step();  // a pose: the descent's exclusion is planned
     ASSERT_TRUE(h.seq.setObjectExtent(0, whole));
     // The close view: the part of the box on one side of a cut across its long axis (40-70 %
-    // of it), in a view's frame turned by up to 30 deg (the box round that part).
+    // of it), its box in a view's frame turned by up to 10 deg.
     const double keep = 0.4 + 0.3 * unit(rng);
     const double sign = u(rng) < 0.0 ? -1.0 : 1.0;
-    ObjectExtent part_in_whole = whole;
-    part_in_whole.half_extents.y() = keep * half.y();
-    part_in_whole.pose.translation() += sign * (1.0 - keep) * half.y() * whole.pose.linear().col(1);
-    const double turn = (M_PI / 6.0) * u(rng);
-    const ObjectExtent part = ehc_perception::boundingExtent(
-        part_in_whole, uprightBox(part_in_whole.pose.translation(), Eigen::Vector3d::Zero(), yaw + turn));
+    ObjectExtent part = whole;
+    part.half_extents.y() = keep * half.y();
+    part.pose.translation() += sign * (1.0 - keep) * half.y() * whole.pose.linear().col(1);
+    part.pose.linear() = Eigen::Matrix3d(Eigen::AngleAxisd(yaw + (M_PI / 18.0) * u(rng), Eigen::Vector3d::UnitZ()));
     ASSERT_TRUE(h.seq.setObjectExtent(0, part));
     h.step();
     const auto zones = zonesOf(h.seq.plannedExclusions(GraspPhase::Grasp));
@@ -1146,6 +1138,15 @@ TEST(GraspSequencer, APartialViewOfTheObjectKeepsItsWholeExtentAMovedOneReplaces
     EXPECT_FALSE(ehc_perception::ExclusionZone::inAny(after, Eigen::Vector3d(centre.x(), centre.y(), table + 1.8 * half.z())))
         << "the top of where it stood before: an obstacle again";
     EXPECT_TRUE(ehc_perception::ExclusionZone::inAny(after, Eigen::Vector3d(moved.x(), moved.y(), table + 1.8 * half.z())));
+    // A box beyond the margin of the kept one (a whole view of it from elsewhere): it replaces it.
+    const ObjectExtent wider = uprightBox(moved, half + Eigen::Vector3d(0.0, p.obstacle_exclusion_margin + 0.20, 0.0), yaw);
+    ASSERT_TRUE(h.seq.setObjectExtent(0, wider));
+    h.step();
+    const Eigen::Vector3d end = wider.pose * Eigen::Vector3d(0.0, wider.half_extents.y() - 0.005, 0.5 * half.z());
+    EXPECT_TRUE(ehc_perception::ExclusionZone::inAny(zonesOf(h.seq.plannedExclusions(GraspPhase::Grasp)), end))
+        << "the wider box's end";
+    EXPECT_FALSE(ehc_perception::ExclusionZone::inAny(zonesOf(exclusionSpheres(uprightBox(moved, half, yaw), p.obstacle_exclusion_margin)), end))
+        << "the kept box held that end: the check shows nothing";
   }
   EXPECT_GT(uncovered_by_the_part, 0) << "the part's own exclusion held the whole object: the test shows nothing";
 }

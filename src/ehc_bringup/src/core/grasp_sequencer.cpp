@@ -273,15 +273,10 @@ bool GraspSequencer::setObjectExtent(std::size_t index, const ObjectExtent& exte
     return false;
   }
   if (index == current_ && locked_) return true;  // frozen at the lock
-  // A view may show a part of the object only (a close view cuts it at the image's edge): while
-  // the views' boxes stand on one another (either's centre inside the other), the one kept is
-  // the box round them all; a box apart from the one kept (the object moved, another cluster)
-  // replaces it.
-  std::optional<ObjectExtent>& kept = extents_[index];
-  const bool same = kept && (kept->distance(extent.pose.translation()) <= 0.0 ||
-                             extent.distance(kept->pose.translation()) <= 0.0);
-  const ObjectExtent both = same ? ehc_perception::boundingExtent(*kept, extent) : extent;
-  kept = both.valid() ? both : extent;
+  // A view may show a part of the object only (a close view cuts it at the image's edge): a box
+  // the one kept holds (within the margin the exclusion grows it by) leaves it; another replaces it.
+  if (extents_[index] && extents_[index]->holds(extent, params_.obstacle_exclusion_margin)) return true;
+  extents_[index] = extent;
   return true;
 }
 

@@ -18,12 +18,9 @@ struct ObjectExtent {
   Eigen::Vector3d half_extents = Eigen::Vector3d::Zero();  ///< m, >= 0
   bool valid() const;  ///< finite, a rotation, half extents >= 0 and below 1 m
   double distance(const Eigen::Vector3d& p) const;  ///< m from p to the box (0 inside)
+  /// Whether every corner of `other` lies within `tolerance` (m) of this box.
+  bool holds(const ObjectExtent& other, double tolerance) const;
 };
-
-/// The box round `a` and `b`: in b's frame (its axes and centre moved), bounding every corner
-/// of both. b itself when a lies within it; an upright a and b give an upright box (boxes turned
-/// about the vertical against each other: their corners, so a little more than their union).
-ObjectExtent boundingExtent(const ObjectExtent& a, const ObjectExtent& b);
 
 /// Extent of an object cluster (world points, one view from `viewpoint`) standing on a support
 /// with normal `up`: a box with one axis along `up` from the lowest to the highest point

@@ -17,20 +17,12 @@ double ObjectExtent::distance(const Eigen::Vector3d& p) const {
   return q.cwiseMax(0.0).norm();
 }
 
-ObjectExtent boundingExtent(const ObjectExtent& a, const ObjectExtent& b) {
-  const Eigen::Matrix3d& R = b.pose.linear();
-  Eigen::Vector3d lo = -b.half_extents, hi = b.half_extents;  // in b's frame
+bool ObjectExtent::holds(const ObjectExtent& other, double tolerance) const {
   for (int k = 0; k < 8; ++k) {
     const Eigen::Vector3d u((k & 1) ? 1.0 : -1.0, (k & 2) ? 1.0 : -1.0, (k & 4) ? 1.0 : -1.0);
-    const Eigen::Vector3d q = R.transpose() * (a.pose * u.cwiseProduct(a.half_extents) - b.pose.translation());
-    lo = lo.cwiseMin(q);
-    hi = hi.cwiseMax(q);
+    if (distance(other.pose * u.cwiseProduct(other.half_extents)) > tolerance) return false;
   }
-  ObjectExtent e;
-  e.pose.linear() = R;
-  e.pose.translation() = b.pose * (0.5 * (lo + hi));
-  e.half_extents = 0.5 * (hi - lo);
-  return e;
+  return true;
 }
 
 std::optional<ObjectExtent> clusterExtent(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3d& viewpoint,
