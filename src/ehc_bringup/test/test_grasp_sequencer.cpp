@@ -1056,6 +1056,110 @@ TEST(GraspSequencer, AClusterSeenFromOneSideIsCompletedBehind) {
   EXPECT_FALSE(clusterExtent({}, Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ(), std::nullopt));
 }
 
+namespace {
+/// An upright box: centre, half extents, yaw.
+ObjectExtent uprightBox(const Eigen::Vector3d& centre, const Eigen::Vector3d& half, double yaw) {
+  ObjectExtent e;
+  e.pose = Eigen::Translation3d(centre) * Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ());
+  e.half_extents = half;
+  return e;
+}
+}  // namespace
+
+TEST(GraspSequencer, ABoxHoldsAnotherWhoseCornersAreWithinTheTolerance) {
+  const unsigned seed = ehc_test::testSeed("ExtentHolds");
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0), half(0.02, 0.08), tol(0.0, 0.04);
+  int held = 0, not_held = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    SCOPED_TRACE("trial " + std::to_string(trial) + ", seed " + std::to_string(seed));
+    const ObjectExtent a = uprightBox(Eigen::Vector3d(1.7, 0.0, 0.8), Eigen::Vector3d(half(rng), half(rng), half(rng)),
+                                      M_PI * u(rng));
+    const ObjectExtent b = uprightBox(a.pose.translation() + 0.06 * Eigen::Vector3d(u(rng), u(rng), u(rng)),
+                                      Eigen::Vector3d(half(rng), half(rng), half(rng)) * 0.5, M_PI * u(rng));
+    const double t = tol(rng);
+    // The answer from the corners' coordinates in a's frame.
+    bool inside = true;
+    for (int k = 0; k < 8; ++k) {
+      const Eigen::Vector3d c((k & 1) ? 1.0 : -1.0, (k & 2) ? 1.0 : -1.0, (k & 4) ? 1.0 : -1.0);
+      const Eigen::Vector3d q = a.pose.inverse() * boxPoint(b, c, 0.0);
+      inside &= (q.cwiseAbs() - a.half_extents).cwiseMax(0.0).norm() <= t;
+    }
+    EXPECT_EQ(a.holds(b, t), inside);
+    (inside ? held : not_held) += 1;
+    EXPECT_TRUE(a.holds(a, 1e-9)) << "itself (rounding: 1e-9)";
+    ObjectExtent inner = a;
+    inner.half_extents *= 0.5;
+    inner.pose.translation() += a.pose.linear() * (0.5 * a.half_extents.cwiseProduct(Eigen::Vector3d(u(rng), u(rng), u(rng))));
+    EXPECT_TRUE(a.holds(inner, 1e-9));
+    EXPECT_FALSE(inner.holds(a, 0.0)) << "the larger one";
+  }
+  EXPECT_GT(held, 10);
+  EXPECT_GT(not_held, 10);
+}
+
+TEST(GraspSequencer, APartialViewOfTheObjectKeepsItsWholeExtentAMovedOneReplacesIt) {
+  // Exp-2: a close view cut the target at the image's edge; its cluster box, 4 cm off the
+  // object's centre, replaced the whole one seen before and the descent's exclusion left the
+  // object's far end in the map: a finger stalled at the target 3 cm from the grasp.
+  const unsigned seed = ehc_test::testSeed("PartialExtent");
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0), unit(0.0, 1.0);
+  const double table = 0.75;
+  int uncovered_by_the_part = 0;
+  for (int trial = 0; trial < 20; ++trial) {
+    SCOPED_TRACE("trial " + std::to_string(trial) + ", seed " + std::to_string(seed));
+    GraspSequencerParams p = twoObjects();
+    Harness h(p);
+    h.follow = false;  // no lock (it freezes the extent): the TCP stays away
+    const Eigen::Vector3d half(0.02 + 0.02 * unit(rng), 0.04 + 0.04 * unit(rng), 0.04 + 0.04 * unit(rng));
+    const double yaw = M_PI * u(rng);
+    const Eigen::Vector3d centre(1.7 + 0.05 * u(rng), 0.1 * u(rng), table + half.z());
+    const ObjectExtent whole = uprightBox(centre, half, yaw);
+    h.perceive = forwardTarget(centre.x(), centre.y(), centre.z());
+    h.step();  // a pose: the descent's exclusion is planned
+    ASSERT_TRUE(h.seq.setObjectExtent(0, whole));
+    // The close view: the part of the box on one side of a cut across its long axis (40-70 %
+    // of it), its box in a view's frame turned by up to 10 deg.
+    const double keep = 0.4 + 0.3 * unit(rng);
+    const double sign = u(rng) < 0.0 ? -1.0 : 1.0;
+    ObjectExtent part = whole;
+    part.half_extents.y() = keep * half.y();
+    part.pose.translation() += sign * (1.0 - keep) * half.y() * whole.pose.linear().col(1);
+    part.pose.linear() = Eigen::Matrix3d(Eigen::AngleAxisd(yaw + (M_PI / 18.0) * u(rng), Eigen::Vector3d::UnitZ()));
+    ASSERT_TRUE(h.seq.setObjectExtent(0, part));
+    h.step();
+    const auto zones = zonesOf(h.seq.plannedExclusions(GraspPhase::Grasp));
+    std::vector<ExclusionSphere> part_only = exclusionSpheres(part, p.obstacle_exclusion_margin);
+    const auto part_zones = zonesOf(part_only);
+    for (int k = 0; k < 300; ++k) {
+      const Eigen::Vector3d q = boxPoint(whole, Eigen::Vector3d(u(rng), u(rng), 0.2 + 0.8 * unit(rng)), 0.0);
+      EXPECT_TRUE(ehc_perception::ExclusionZone::inAny(zones, q)) << "a point of the object: " << q.transpose();
+      uncovered_by_the_part += !ehc_perception::ExclusionZone::inAny(part_zones, q);
+    }
+    // Moved 25 cm (pushed; another cluster): the new box replaces the kept one.
+    const Eigen::Vector3d moved = centre + Eigen::Vector3d(0.0, 0.25, 0.0);
+    ASSERT_TRUE(h.seq.setObjectExtent(0, uprightBox(moved, half, yaw)));
+    h.perceive = forwardTarget(moved.x(), moved.y(), moved.z());
+    h.step();
+    ASSERT_LT(h.seq.phase(), GraspPhase::PreGrasp);
+    const auto after = zonesOf(h.seq.plannedExclusions(GraspPhase::Grasp));
+    EXPECT_FALSE(ehc_perception::ExclusionZone::inAny(after, Eigen::Vector3d(centre.x(), centre.y(), table + 1.8 * half.z())))
+        << "the top of where it stood before: an obstacle again";
+    EXPECT_TRUE(ehc_perception::ExclusionZone::inAny(after, Eigen::Vector3d(moved.x(), moved.y(), table + 1.8 * half.z())));
+    // A box beyond the margin of the kept one (a whole view of it from elsewhere): it replaces it.
+    const ObjectExtent wider = uprightBox(moved, half + Eigen::Vector3d(0.0, p.obstacle_exclusion_margin + 0.20, 0.0), yaw);
+    ASSERT_TRUE(h.seq.setObjectExtent(0, wider));
+    h.step();
+    const Eigen::Vector3d end = wider.pose * Eigen::Vector3d(0.0, wider.half_extents.y() - 0.005, 0.5 * half.z());
+    EXPECT_TRUE(ehc_perception::ExclusionZone::inAny(zonesOf(h.seq.plannedExclusions(GraspPhase::Grasp)), end))
+        << "the wider box's end";
+    EXPECT_FALSE(ehc_perception::ExclusionZone::inAny(zonesOf(exclusionSpheres(uprightBox(moved, half, yaw), p.obstacle_exclusion_margin)), end))
+        << "the kept box held that end: the check shows nothing";
+  }
+  EXPECT_GT(uncovered_by_the_part, 0) << "the part's own exclusion held the whole object: the test shows nothing";
+}
+
 TEST(GraspSequencer, TheExclusionHasNoGapFromTheDescentToTheEndOfTheRetreatWhateverEndsTheGrasp) {
   // Exp-2: a failed descent of the back object (the time limit in GRASP, the
   // hand stalled at the object) once dropped the exclusion for the one cycle of the failure, so

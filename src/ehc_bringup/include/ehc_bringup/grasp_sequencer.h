@@ -313,8 +313,10 @@ class GraspSequencer {
   void setNoTarget(std::size_t index, const std::string& why);
   /// Extent of object `index` (world): the obstacle map's exclusion from GRASP on follows it (see
   /// obstacle_exclusion_radius). Taken like a perceived pose: for the current object until its
-  /// grasp is locked (then frozen), a later one any time. False (counted) for an unknown index or
-  /// an invalid extent.
+  /// grasp is locked (then frozen), a later one any time. One view may show a part of the object
+  /// only (a close view cuts it at the image's edge): an extent within obstacle_exclusion_margin
+  /// of the one kept (ObjectExtent::holds) leaves it; any other replaces it (a whole view, the
+  /// object moved). False (counted) for an unknown index or an invalid extent.
   bool setObjectExtent(std::size_t index, const ObjectExtent& extent);
   /// Camera intrinsics for TfM (e.g. from camera_info); false (ignored, counted) if invalid
   /// (PinholeCamera::validate). No TfM cycle is counted before the first valid camera.

@@ -282,6 +282,9 @@ bool GraspSequencer::setObjectExtent(std::size_t index, const ObjectExtent& exte
     return false;
   }
   if (index == current_ && locked_) return true;  // frozen at the lock
+  // A view may show a part of the object only (a close view cuts it at the image's edge): a box
+  // the one kept holds (within the margin the exclusion grows it by) leaves it; another replaces it.
+  if (extents_[index] && extents_[index]->holds(extent, params_.obstacle_exclusion_margin)) return true;
   extents_[index] = extent;
   return true;
 }

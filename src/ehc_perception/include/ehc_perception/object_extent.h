@@ -18,6 +18,8 @@ struct ObjectExtent {
   Eigen::Vector3d half_extents = Eigen::Vector3d::Zero();  ///< m, >= 0
   bool valid() const;  ///< finite, a rotation, half extents >= 0 and below 1 m
   double distance(const Eigen::Vector3d& p) const;  ///< m from p to the box (0 inside)
+  /// Whether every corner of `other` lies within `tolerance` (m) of this box.
+  bool holds(const ObjectExtent& other, double tolerance) const;
 };
 
 /// Extent of an object cluster (world points, one view from `viewpoint`) standing on a support

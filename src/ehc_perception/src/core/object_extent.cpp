@@ -17,6 +17,14 @@ double ObjectExtent::distance(const Eigen::Vector3d& p) const {
   return q.cwiseMax(0.0).norm();
 }
 
+bool ObjectExtent::holds(const ObjectExtent& other, double tolerance) const {
+  for (int k = 0; k < 8; ++k) {
+    const Eigen::Vector3d u((k & 1) ? 1.0 : -1.0, (k & 2) ? 1.0 : -1.0, (k & 4) ? 1.0 : -1.0);
+    if (distance(other.pose * u.cwiseProduct(other.half_extents)) > tolerance) return false;
+  }
+  return true;
+}
+
 std::optional<ObjectExtent> clusterExtent(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3d& viewpoint,
                                           const Eigen::Vector3d& up_in, const std::optional<double>& support_height) {
   if (points.size() < 3 || !up_in.allFinite() || up_in.norm() < 1e-9 || !viewpoint.allFinite()) return std::nullopt;
