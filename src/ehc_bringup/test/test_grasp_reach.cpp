@@ -1,6 +1,7 @@
 // GraspReach and the grasp choice that uses it: the support's footprint from a cloud, the
 // distance of a link box to it, the reachability of a grasp beside a table on every shipped
-// robot (near the edge yes, in the middle of a wide table no, without a support yes), and
+// robot (near the edge yes, in the middle of a wide table no, without a support yes; the kept
+// verdict's configurations on the pre-grasp and the grasp), and
 // chooseGrasp: an unreachable higher-scored candidate loses to a reachable one (fixed and
 // randomized cases, seed printed); the configurations checked against an obstacle map (the
 // object left out during the descent, a neighbour at the pre-grasp blocking, a kept verdict
@@ -181,6 +182,21 @@ TEST_P(GraspReachRobots, ReadyPoseBesideATableYesInTheMiddleOfAWideTableNo) {
   reach.setSupport(top);
   const GraspReachVerdict v = reach.judge(g, pre);
   EXPECT_TRUE(v.reachable) << v.reason;
+  // The kept verdict: its configurations put the TCP on the pre-grasp and on the grasp (the
+  // controller's stall recovery takes them for the targets they reach).
+  EXPECT_EQ(reach.keptVerdict(g), nullptr);
+  ASSERT_TRUE(reach.reachable(g, pre));
+  const GraspReachVerdict* kept = reach.keptVerdict(g);
+  ASSERT_NE(kept, nullptr);
+  const auto tcpError = [&](const Eigen::VectorXd& q, const Eigen::Isometry3d& T) {
+    const Eigen::Isometry3d tcp = robot.model->fk(kept->base, q, robot.rc.tcp_frame);
+    return (tcp.translation() - T.translation()).norm() + Eigen::AngleAxisd(tcp.linear().transpose() * T.linear()).angle();
+  };
+  EXPECT_LT(tcpError(kept->q_pre, pre), 0.005);
+  EXPECT_LT(tcpError(kept->q_grasp, g), 0.005);
+  Eigen::Isometry3d elsewhere = g;
+  elsewhere.translation().z() += 0.01;
+  EXPECT_EQ(reach.keptVerdict(elsewhere), nullptr);
   reach.setSupport(table(g.translation().head<2>(), Eigen::Vector2d(3.0, 3.0), h));
   const GraspReachVerdict w = reach.judge(g, pre);
   EXPECT_FALSE(w.reachable);

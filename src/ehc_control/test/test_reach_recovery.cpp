@@ -2,7 +2,8 @@
 // pose's reach from the target brings the arm back to ready while the base drives to where the
 // ready TCP is over the target, on random targets in every direction (seed printed); far plans
 // have their own attempt count, so the near (joint-limit) recoveries stay available. A near stall
-// with every joint free plans too (free_stalls), unless a link is held at an obstacle.
+// with every joint free plans too (free_stalls), unless a link is held at an obstacle; with a
+// given plan of the target (setGivenPlans) any near stall moves to it.
 
 #include "ehc_control/motion_limit.h"
 #include "ehc_control/qp_controller.h"
@@ -379,5 +380,68 @@ TEST_F(ReachRecoveryOnRealman, ACreepWithAJointPinnedIsAStall) {
         EXPECT_LT(started, 0.0) << "the absolute thresholds alone saw a stall at t " << started;
       }
     }
+  }
+}
+
+// A given plan (setGivenPlans; e.g. the grasp choice's configuration beside a table): a near stall
+// with a link held at an obstacle starts nothing on its own, but with a given plan of the target
+// it moves there, and the closed loop on the reference ends at that base pose and arm
+// configuration; a plan of another target changes nothing. The RealMan on a differential and on
+// a holonomic base; random plans (inside the joint stops), the robot stalled with its base 0.3 m
+// beside the plan's; seed printed. A malformed plan is rejected.
+TEST(ReachRecoveryGivenPlans, AStallHeldAtAnObstacleMovesToTheTargetsGivenPlan) {
+  const unsigned seed = ehc_test::testSeed("ReachRecovery given plans");
+  std::mt19937 rng(seed);
+  const QpControllerParams qp;
+  for (const BaseType type : {BaseType::Differential, BaseType::Holonomic}) {
+    const WholeBodyModel model{test::realmanConfig(type)};
+    const RobotConfig& rc = model.config();
+    for (int trial = 0; trial < 4; ++trial) {
+      SCOPED_TRACE(toString(type) + " trial " + std::to_string(trial) + ", seed " + std::to_string(seed));
+      ReachRecovery::GivenPlan plan;
+      plan.base = test::randomBase(rng);
+      plan.q = test::randomArm(rc, rng, 0.3);
+      const Eigen::Isometry3d target = tcpOf(model, plan.base, plan.q);
+      ReachRecovery::GivenPlan other = plan;
+      other.q = test::randomArm(rc, rng, 0.3);
+      test::KinematicSim sim;
+      const double side = plan.base.z() + M_PI / 2.0;
+      sim.base = plan.base + Eigen::Vector3d(0.3 * std::cos(side), 0.3 * std::sin(side), 0.0);
+      sim.q = plan.q;  // near the target: a far stall unwinds the arm instead
+      for (const bool given : {false, true}) {
+        ReachRecovery rec(model, qp.recovery, qp.joint_stop, qp.joint_influence);
+        if (given) rec.setGivenPlans({other, plan});
+        else if ((tcpOf(model, other.base, other.q).translation() - target.translation()).norm() > 0.01)
+          rec.setGivenPlans({other});
+        const Eigen::VectorXd* ref = nullptr;
+        double t = 0.0;
+        for (; t < 2.0 * qp.recovery.stall_window && !ref; t += kDt)
+          ref = rec.update(t, sim.base, sim.q, tcpOf(model, sim.base, sim.q), target, nullptr, true);
+        if (!given) {
+          EXPECT_EQ(ref, nullptr) << "held at an obstacle without a plan of the target: " << rec.event();
+          continue;
+        }
+        ASSERT_NE(ref, nullptr) << "no move after the stall window";
+        EXPECT_NE(rec.event().find("the given plan's base"), std::string::npos) << rec.event();
+        EXPECT_TRUE(rec.goalArm().isApprox(plan.q));
+        EXPECT_TRUE(rec.goalBase().isApprox(plan.base));
+        const double start = t;
+        while (ref && t < start + 60.0) {
+          sim.step(model, *ref, kDt);
+          t += kDt;
+          ref = rec.update(t, sim.base, sim.q, tcpOf(model, sim.base, sim.q), target, nullptr, true);
+        }
+        EXPECT_EQ(ref, nullptr) << "the move did not end";
+        const Eigen::Isometry3d tcp = tcpOf(model, sim.base, sim.q);
+        EXPECT_LT((tcp.translation() - target.translation()).norm(), qp.recovery.position_tolerance + 0.05)
+            << rec.event() << "; base " << sim.base.transpose() << " plan " << plan.base.transpose();
+      }
+    }
+    ReachRecovery rec(model, qp.recovery, qp.joint_stop, qp.joint_influence);
+    ReachRecovery::GivenPlan bad;
+    bad.q = Eigen::VectorXd::Zero(rc.nArm() - 1);
+    EXPECT_THROW(rec.setGivenPlans({bad}), std::invalid_argument);
+    bad.q = Eigen::VectorXd::Constant(rc.nArm(), std::nan(""));
+    EXPECT_THROW(rec.setGivenPlans({bad}), std::invalid_argument);
   }
 }

@@ -236,6 +236,10 @@ class GraspPipeline {
   /// during the descent.
   std::vector<std::pair<std::string, double>> plannedMapDistances(const Eigen::Vector3d& base, const Eigen::VectorXd& q,
                                                                   bool descent) const;
+  /// The locked grasp's pre-grasp and grasp configurations at its placement from GraspReach's
+  /// verdict while the sequencer is in PRE_GRASP or GRASP, for the controller's stall recovery
+  /// (ControlCycle::setGivenPlans); empty otherwise.
+  std::vector<ehc_control::ReachRecovery::GivenPlan> lockedGraspPlans() const;
   /// Its revision: changes with the map's (ObstacleDistanceField::revision) and whenever the
   /// planned exclusions move.
   std::uint64_t plannedMapRevision();

@@ -25,8 +25,10 @@
 // ready posture and from 3 fixed random configurations; when none reaches the pre-grasp, the
 // whole body's IK from each placement (the base free, where it ends kept clear of the support:
 // a top-down grasp near the support's edge wants another bearing than the ready posture's). A
-// differential base reaches any of them (the judgement is kinematic; the controller drives there)
-// as long as the way there does not cross the support: the controller is reactive and does not
+// differential base reaches any of them (the judgement is kinematic; the controller's approach
+// may end elsewhere, at the support's edge beside the placement, and then its stall recovery
+// moves to the kept verdict's configuration: keptVerdict, ControlCycle::setGivenPlans) as long
+// as the way there does not cross the support: the controller is reactive and does not
 // drive round a table. With the robot's base pose (setRobotBase), only placements whose
 // straight line from the robot's base keeps off the support's footprint are tried (a grasp
 // from the far side of a table is unreachable for a robot on its near side).
@@ -145,6 +147,10 @@ class GraspReach {
   GraspReachVerdict judge(const Eigen::Isometry3d& grasp, const Eigen::Isometry3d& pre_grasp) const;
   /// judge()'s verdict, kept per grasp pose (see the top of this file).
   bool reachable(const Eigen::Isometry3d& grasp, const Eigen::Isometry3d& pre_grasp);
+  /// The verdict kept for a grasp pose (within 5 mm and 2 deg; see the top of this file), if any:
+  /// its placement and configurations, e.g. for the controller to move to when the approach
+  /// stalls (ReachRecovery::setGivenPlans). Valid until the next call of a non-const member.
+  const GraspReachVerdict* keptVerdict(const Eigen::Isometry3d& grasp) const;
   /// Verdicts computed (judge() calls through reachable(); not the ones kept).
   long judgements() const { return judgements_; }
   const GraspReachParams& params() const { return params_; }

@@ -307,6 +307,18 @@ void GraspPipeline::observeSupport(const ehc_perception::PointList& points, cons
   if (const auto seen = supportFromPoints(points, r.support_plane)) reach_->observeSupport(*seen);
 }
 
+std::vector<ehc_control::ReachRecovery::GivenPlan> GraspPipeline::lockedGraspPlans() const {
+  // The locked grasp's placement and configurations from its reachability verdict, while the
+  // controller approaches it: where a stall at its pre-grasp or grasp recovers to.
+  const GraspPhase phase = sequencer_->phase();
+  const std::optional<GraspChoice>& choice = sequencer_->lastChoice();
+  if ((phase != GraspPhase::PreGrasp && phase != GraspPhase::Grasp) || !choice || !choice->reachable.value_or(false))
+    return {};
+  const GraspReachVerdict* v = reach_->keptVerdict(choice->pose);
+  if (!v || !v->reachable) return {};
+  return {{v->base, v->q_pre}, {v->base, v->q_grasp}};
+}
+
 std::vector<std::pair<std::string, double>> GraspPipeline::plannedMapDistances(const Eigen::Vector3d& base,
                                                                                const Eigen::VectorXd& q, bool descent) const {
   // The map with the zones the sequencer will give it in that phase (as the object is seen now).
@@ -414,6 +426,7 @@ const PipelineCycle& GraspPipeline::step() {
     if (s.gripper_command) world_->commandGripper(*s.gripper_command);
     last_.events = s.events;
     last_.phase = sequencer_->phase();
+    if (reach_) cycle_->setGivenPlans(lockedGraspPlans());
   }
 
   // Simulator step with the controller's command.

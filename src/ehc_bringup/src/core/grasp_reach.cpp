@@ -330,14 +330,26 @@ std::string GraspReach::descentBlocked(const Eigen::Vector3d& base, const Eigen:
   return "";
 }
 
+namespace {
+/// Whether two grasp poses share a kept verdict (within 5 mm and 2 deg).
+bool sameGrasp(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+  const Eigen::AngleAxisd d(Eigen::Matrix3d(a.linear().transpose() * b.linear()));
+  return (a.translation() - b.translation()).norm() <= 0.005 && std::abs(d.angle()) <= 2.0 * M_PI / 180.0;
+}
+}  // namespace
+
+const GraspReachVerdict* GraspReach::keptVerdict(const Eigen::Isometry3d& grasp) const {
+  for (const Kept& k : kept_)
+    if (sameGrasp(k.grasp, grasp)) return &k.verdict;
+  return nullptr;
+}
+
 bool GraspReach::reachable(const Eigen::Isometry3d& grasp, const Eigen::Isometry3d& pre_grasp) {
   if (!params_.enabled || !support_) return true;
   const std::optional<std::uint64_t> revision =
       map_revision_ ? std::optional<std::uint64_t>(map_revision_()) : std::nullopt;
   for (auto k = kept_.begin(); k != kept_.end(); ++k) {
-    const Eigen::AngleAxisd d(Eigen::Matrix3d(k->grasp.linear().transpose() * grasp.linear()));
-    if ((k->grasp.translation() - grasp.translation()).norm() > 0.005 || std::abs(d.angle()) > 2.0 * M_PI / 180.0)
-      continue;
+    if (!sameGrasp(k->grasp, grasp)) continue;
     const GraspReachVerdict& v = k->verdict;
     if (!v.reachable) return false;
     if (onTheWay(v.base) &&

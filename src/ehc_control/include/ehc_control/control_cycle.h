@@ -112,6 +112,10 @@ class ControlCycle {
   std::string setWatchedCentre(double t, const Eigen::Vector3d& centre);
   /// Link-obstacle pairs (world); used while younger than watchdog.obstacle_timeout.
   std::string setObstacles(double t, const std::vector<ObstaclePair>& obstacles);
+  /// Whole-body configurations planned clear of the obstacles for the targets to come (e.g. a
+  /// grasp's pre-grasp and grasp): a stall at a target one of them reaches moves there
+  /// (ReachRecovery::setGivenPlans, which throws for a malformed plan); empty: none.
+  void setGivenPlans(std::vector<ReachRecovery::GivenPlan> plans) { recovery_->setGivenPlans(std::move(plans)); }
 
   /// One control cycle at time `now`. With a clock (setClock), the cycle's duration and the
   /// watchdog are checked again at the clock's time after the QP solve: a cycle longer than

@@ -20,7 +20,8 @@
 //            arrived, and an arm joint within pinned_margin of its joint stop or the target
 //            farther than twice the ready pose's reach (the base is not bringing the arm there),
 //            or (free_stalls) near the target with every joint free and no link held at an
-//            obstacle: the pose task's own equilibrium. Traces (far approach, targets 70-150 deg
+//            obstacle: the pose task's own equilibrium, or with a given plan of the target
+//            (setGivenPlans) any near stall, also one with a link held at an obstacle. Traces (far approach, targets 70-150 deg
 //            off the heading, RealMan): the base arrives facing the target with the hand 2.3-3
 //            rad from the grasp orientation; the QP then settles 0.2-0.3 m short in a limit
 //            cycle of period 4 cycles (base yaw rate +-0.4 rad/s, the wrist +-1.3 rad/s, every
@@ -31,7 +32,12 @@
 //            ready posture while the base drives to where the ready TCP is over the target
 //            (readyOver; traces: far stalls came from a base turned to rotate the hand, the
 //            arm in its dampers' zone, unable to absorb the turn back; from ready the base
-//            turns and drives at once); near it, whole-body IK (WholeBodyModel::inverseKinematicsFrom) from `starts` starts, a few
+//            turns and drives at once); near it with a given plan of the target
+//            (setGivenPlans: a configuration planned clear of the obstacles, e.g. the grasp
+//            choice's reach check beside a table), that plan (traces, Exp-2 back-slot objects: a
+//            differential base arrives at the table edge 30 cm beside the placement the grasp
+//            needs, a link held at the table, and no reactive step shifts it sideways); else
+//            near it, whole-body IK (WholeBodyModel::inverseKinematicsFrom) from `starts` starts, a few
 //            per cycle: the current configuration, the current base with the ready posture,
 //            then base placements around the target, the ready TCP over it; the solution with
 //            the best min(margin, joint_influence) - travel_weight x travel is taken (a joint
@@ -164,6 +170,17 @@ class ReachRecovery {
   std::vector<Eigen::Vector3d> placementStarts(const Eigen::Isometry3d& target, const Eigen::Vector3d& base_pose) const;
   /// True while a placement (not a stall recovery) is planned or moved to.
   bool placing() const { return place_ && state_ != State::Watching; }
+  /// A whole-body configuration (base pose x, y, yaw; arm) known to keep every link clear of
+  /// the obstacles, e.g. the one a grasp's reachability check planned for its pre-grasp.
+  struct GivenPlan {
+    Eigen::Vector3d base = Eigen::Vector3d::Zero();
+    Eigen::VectorXd q;
+  };
+  /// Given plans (none: the default): a near stall at a target one of them reaches (its TCP
+  /// within 1 cm and 2 deg of it), also one with a link held at an obstacle, moves to that
+  /// configuration instead of planning (see the top of this file). Throws
+  /// "[ReachRecovery] ..." for a plan whose arm has the wrong size or is not finite.
+  void setGivenPlans(std::vector<GivenPlan> plans);
 
   State state() const { return state_; }
   int attempts() const { return attempts_; }
@@ -184,6 +201,8 @@ class ReachRecovery {
   bool stalled(double now, double position_error, double orientation_error, const Eigen::VectorXd& q,
                bool obstacle_held);
   void startPlanning(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q, bool far);
+  /// The given plan that reaches `target` (setGivenPlans), if any.
+  const GivenPlan* givenPlan(const Eigen::Isometry3d& target) const;
   /// A placement plan for target_ (ehc_place): startPlanning from the ranked placement starts.
   void startPlacement(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q);
   /// The base pose, on the line from `base` to the target, at which the ready pose's TCP is
@@ -224,6 +243,8 @@ class ReachRecovery {
   bool finishing_ = false;  ///< the current near move finishes from where it stands (finish)
   bool finish_base_ = false;  ///< ... with the base moving too
   bool place_ = false;    ///< the current plan is a placement (ehc_place)
+  bool given_ = false;    ///< the current plan is a given one (setGivenPlans)
+  std::vector<GivenPlan> given_plans_;
   std::shared_ptr<const EhcWeighting> placement_map_;
   std::vector<Eigen::Vector3d> place_starts_;  ///< the current placement's IK starts
   double goal_reach_ = 0.0;                    ///< the map's R of the target at the chosen placement

@@ -262,7 +262,24 @@ bool ReachRecovery::stalled(double now, double position_error, double orientatio
   if (now - progress_t_ < params_.stall_window) return false;
   if (position_error > 2.0 * reach_) return far_attempts_ < params_.max_attempts;
   if (attempts_ >= params_.max_attempts) return false;
-  return pinned || (params_.free_stalls && !obstacle_held);
+  return pinned || (params_.free_stalls && !obstacle_held) || givenPlan(target_) != nullptr;
+}
+
+void ReachRecovery::setGivenPlans(std::vector<GivenPlan> plans) {
+  for (const GivenPlan& p : plans)
+    if (p.q.size() != model_.config().nArm() || !p.q.allFinite() || !p.base.allFinite())
+      throw std::invalid_argument("[ReachRecovery] a given plan needs a finite base pose and arm configuration");
+  given_plans_ = std::move(plans);
+}
+
+const ReachRecovery::GivenPlan* ReachRecovery::givenPlan(const Eigen::Isometry3d& target) const {
+  for (const GivenPlan& p : given_plans_) {
+    const Eigen::Isometry3d tcp = model_.fk(p.base, p.q, model_.config().tcp_frame);
+    if ((tcp.translation() - target.translation()).norm() <= 0.01 &&
+        Eigen::AngleAxisd(Eigen::Matrix3d(tcp.linear().transpose() * target.linear())).angle() <= 2.0 * M_PI / 180.0)
+      return &p;
+  }
+  return nullptr;
 }
 
 void ReachRecovery::startPlacement(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q) {
@@ -277,6 +294,7 @@ void ReachRecovery::startPlacement(const Eigen::Vector3d& base_pose, const Eigen
 void ReachRecovery::startPlanning(const Eigen::Vector3d& base_pose, const Eigen::VectorXd& q, bool far) {
   state_ = State::Planning;
   finishing_ = false;
+  given_ = false;
   plan_base_ = base_pose;
   plan_q_ = q;
   plan_margin_ = margin(q);
@@ -530,6 +548,13 @@ const Eigen::VectorXd* ReachRecovery::update(double now, const Eigen::Vector3d& 
       if (!stalled(now, position_error, orientation_error, q, obstacle_held)) return nullptr;
       far_ = position_error > 2.0 * reach_;
       startPlanning(base_pose, q, far_);
+      if (const GivenPlan* p = far_ ? nullptr : givenPlan(target_)) {
+        given_ = have_goal_ = true;
+        goal_base_ = p->base;
+        goal_q_ = p->q;
+        goal_margin_ = margin(goal_q_);
+        next_start_ = params_.starts;
+      }
       [[fallthrough]];
     case State::Planning:
       if (far_) {  // far: the arm back to ready while the base drives to the target
@@ -560,13 +585,13 @@ const Eigen::VectorXd* ReachRecovery::update(double now, const Eigen::Vector3d& 
       move_t_ = now;
       // A far move's time also covers the travel at the base's speed limit.
       move_limit_ = params_.move_timeout +
-                    (far_ || place_ ? (goal_base_.head<2>() - plan_base_.head<2>()).norm() / vmax_[0] : 0.0);
+                    (far_ || place_ || given_ ? (goal_base_.head<2>() - plan_base_.head<2>()).norm() / vmax_[0] : 0.0);
       if (place_)
         os << "placement: moving to base (" << goal_base_.x() << ", " << goal_base_.y() << ", " << goal_base_.z()
            << ") where the map gives the target R " << goal_reach_ << ", margin " << goal_margin_ << " rad";
       else
       os << "stall " << position_error * 100.0 << " cm short, smallest joint margin " << plan_margin_
-         << " rad: moving to base (" << goal_base_.x() << ", " << goal_base_.y() << ", " << goal_base_.z()
+         << " rad: moving to " << (given_ ? "the given plan's " : "") << "base (" << goal_base_.x() << ", " << goal_base_.y() << ", " << goal_base_.z()
          << ") with margin " << goal_margin_ << " rad (" << (far_ ? "far attempt " : "attempt ")
          << (far_ ? far_attempts_ : attempts_) << ")";
       event_ = os.str();
