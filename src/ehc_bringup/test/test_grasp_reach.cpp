@@ -20,6 +20,7 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <functional>
 #include <random>
 
 using namespace ehc_bringup;
@@ -90,6 +91,27 @@ ReadyGrasp readyGrasp(const Robot& robot) {
   r.table_top = table(r.grasp.translation().head<2>() + Eigen::Vector2d(0.05 + 0.4, 0.0), Eigen::Vector2d(0.8, 1.2), r.height);
   return r;
 }
+
+/// An obstacle field for a robot's checked links (the controller's map, empty) and GraspReach's
+/// view of it: the links' distances with `zones(descent)` left out, each call counted in `queries`.
+struct MapView {
+  ehc_control::RobotCollisionModel collision;
+  ehc_perception::ObstacleDistanceField field;
+  int queries = 0;
+  explicit MapView(const Robot& robot)
+      : collision(robot.model->calibratedUrdfXml(), robot.rc.arm_joints, robot.rc.checked_links),
+        field(ehc_perception::ObstacleMapConfig{}, collision) {}
+  GraspReach::MapDistances distances(const Robot& robot,
+                                     std::function<std::vector<ehc_perception::ExclusionZone>(bool)> zones) {
+    return [this, &robot, zones](const Eigen::Vector3d& base, const Eigen::VectorXd& q, bool descent) {
+      ++queries;
+      std::vector<std::pair<std::string, double>> out;
+      for (const auto& d : field.distances(field.linkPoses(*robot.model, base, q), zones(descent)))
+        out.emplace_back(d.link, d.distance);
+      return out;
+    };
+  }
+};
 
 }  // namespace
 
@@ -305,16 +327,12 @@ TEST_P(GraspReachRobots, ObstacleMapBlocksThePreGraspNotTheObjectDuringTheDescen
   GraspReach reach = robot.reach();
   const auto [g, pre, h, top] = readyGrasp(robot);
   reach.setSupport(top);
-  const ehc_control::RobotCollisionModel collision(robot.model->calibratedUrdfXml(), robot.rc.arm_joints,
-                                                   robot.rc.checked_links);
-  ehc_perception::ObstacleDistanceField field(ehc_perception::ObstacleMapConfig{}, collision);
+  MapView map(robot);
+  ehc_perception::ObstacleDistanceField& field = map.field;
   std::vector<ehc_perception::ExclusionZone> descent_zones;
-  reach.setMapDistances([&](const Eigen::Vector3d& base, const Eigen::VectorXd& q, bool descent) {
-    std::vector<std::pair<std::string, double>> out;
-    const auto zones = descent ? descent_zones : std::vector<ehc_perception::ExclusionZone>{};
-    for (const auto& d : field.distances(field.linkPoses(*robot.model, base, q), zones)) out.emplace_back(d.link, d.distance);
-    return out;
-  });
+  reach.setMapDistances(map.distances(robot, [&](bool descent) {
+    return descent ? descent_zones : std::vector<ehc_perception::ExclusionZone>{};
+  }));
   ASSERT_TRUE(reach.reachable(g, pre)) << reach.judge(g, pre).reason;
   EXPECT_EQ(reach.judgements(), 1);
   // The object: a 10 cm cube round the grasp (the open fingers inside it; 4 cm from the
@@ -352,19 +370,11 @@ TEST_P(GraspReachRobots, AKeptVerdictIsCheckedAgainstTheMapOnlyWhenItsRevisionMo
   GraspReach reach = robot.reach();
   const auto [g, pre, h, top] = readyGrasp(robot);
   reach.setSupport(top);
-  const ehc_control::RobotCollisionModel collision(robot.model->calibratedUrdfXml(), robot.rc.arm_joints,
-                                                   robot.rc.checked_links);
-  ehc_perception::ObstacleDistanceField field(ehc_perception::ObstacleMapConfig{}, collision);
-  int queries = 0;
-  reach.setMapDistances(
-      [&](const Eigen::Vector3d& base, const Eigen::VectorXd& q, bool) {
-        ++queries;
-        std::vector<std::pair<std::string, double>> out;
-        for (const auto& d : field.distances(field.linkPoses(*robot.model, base, q), {}))
-          out.emplace_back(d.link, d.distance);
-        return out;
-      },
-      [&] { return field.revision(); });
+  MapView map(robot);
+  ehc_perception::ObstacleDistanceField& field = map.field;
+  const int& queries = map.queries;
+  reach.setMapDistances(map.distances(robot, [](bool) { return std::vector<ehc_perception::ExclusionZone>{}; }),
+                        [&] { return field.revision(); });
   ASSERT_TRUE(reach.reachable(g, pre)) << reach.judge(g, pre).reason;
   const int judged = queries;
   EXPECT_GE(judged, 3) << "the judgement checks the pre-grasp, halfway down and the grasp";
