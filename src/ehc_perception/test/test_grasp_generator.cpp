@@ -1139,8 +1139,12 @@ BoxOnTable boxOnTable(const Eigen::Vector3d& size, double yaw, double table_z) {
 }
 
 /// Whether `box` runs out of the frame of depthCameraCloud's camera (`width` x `height` pixels) at
-/// `cam`: a pixel on the frame's edge sees it (in front of everything else in `scene`).
-bool outOfFrame(const Box& box, const std::vector<Box>& scene, const Eigen::Isometry3d& cam, int width, int height) {
+/// `cam`: a pixel on the frame's edge sees it (in front of everything else in `scene`) higher
+/// than `above_z` (world). Below it (the support plane's points to the segmentation, its
+/// plane_distance) the object's cluster ends anyway: a box whose bottom millimetres alone run
+/// out of the frame is seen whole.
+bool outOfFrame(const Box& box, const std::vector<Box>& scene, const Eigen::Isometry3d& cam, int width, int height,
+                double above_z) {
   const double f = 615.0 * width / 640.0;
   const Eigen::Vector3d o = cam.translation();
   for (int v = 0; v < height; ++v)
@@ -1148,7 +1152,7 @@ bool outOfFrame(const Box& box, const std::vector<Box>& scene, const Eigen::Isom
       if (u > 0 && u < width - 1 && v > 0 && v < height - 1) continue;
       const Eigen::Vector3d d = (cam.linear() * Eigen::Vector3d((u - 0.5 * width) / f, (v - 0.5 * height) / f, 1.0)).normalized();
       const double t = rayBox(o, d, box);
-      bool first = std::isfinite(t);
+      bool first = std::isfinite(t) && (o + t * d).z() > above_z;
       for (const Box& b : scene) first = first && rayBox(o, d, b) >= t - 1e-9;
       if (first) return true;
     }
@@ -1198,7 +1202,7 @@ TEST(GraspWidths, ATargetRunningOutOfTheFrameKeepsOnlyGraspsWithBothContactsSeen
     const Eigen::Isometry3d cut_cam = cameraAt(centre, 0.3, el, az, aside);
     const PointList cut = depthCameraCloud(80, 60, cut_cam, b.scene, noise, seed + static_cast<unsigned>(trial));
     const CloudTargetResult r = generateForCloudTarget(gen, cut, cut_cam, selector, &centre, targeting);
-    if (outOfFrame(b.box, b.scene, cut_cam, 80, 60)) {
+    if (outOfFrame(b.box, b.scene, cut_cam, 80, 60, table_z + cfg.plane_distance)) {
       ++cut_views;
       for (const Grasp& g : r.grasps.grasps) {
         ++cut_grasps;
