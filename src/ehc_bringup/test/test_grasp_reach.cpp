@@ -113,6 +113,19 @@ struct MapView {
   }
 };
 
+/// A robot standing where its ready posture reaches the ready grasp, GraspReach with that grasp's
+/// table top as its support, and an empty obstacle map (MapView): the obstacle map tests' setting.
+struct ReachBesideTable {
+  Robot robot;
+  GraspReach reach;
+  ReadyGrasp ready;
+  MapView map;
+  explicit ReachBesideTable(const std::string& name)
+      : robot(name), reach(robot.reach()), ready(readyGrasp(robot)), map(robot) {
+    reach.setSupport(ready.table_top);
+  }
+};
+
 }  // namespace
 
 TEST(SupportSurface, FootprintOfTheSupportPlanesPointsInARandomCloud) {
@@ -323,11 +336,11 @@ TEST_P(GraspReachRobots, ObstacleMapBlocksThePreGraspNotTheObjectDuringTheDescen
   // descent leaves it out (the sequencer's exclusion), everything when it does not; a neighbour
   // where the open fingers are at the pre-grasp blocks every placement; one 0.8 m aside, none.
   // A kept verdict is checked against the map again: the neighbour added later un-reaches it.
-  const Robot robot(GetParam());
-  GraspReach reach = robot.reach();
-  const auto [g, pre, h, top] = readyGrasp(robot);
-  reach.setSupport(top);
-  MapView map(robot);
+  ReachBesideTable s(GetParam());
+  const Robot& robot = s.robot;
+  GraspReach& reach = s.reach;
+  const Eigen::Isometry3d &g = s.ready.grasp, &pre = s.ready.pre;
+  MapView& map = s.map;
   ehc_perception::ObstacleDistanceField& field = map.field;
   std::vector<ehc_perception::ExclusionZone> descent_zones;
   reach.setMapDistances(map.distances(robot, [&](bool descent) {
@@ -366,11 +379,11 @@ TEST_P(GraspReachRobots, AKeptVerdictIsCheckedAgainstTheMapOnlyWhenItsRevisionMo
   // With the map's revision (the obstacle field's), a kept reachable verdict costs no distance
   // query while the map is unchanged; once the revision moves its three configurations are
   // checked again: a neighbour 0.8 m aside keeps it, one at the pre-grasp un-reaches it.
-  const Robot robot(GetParam());
-  GraspReach reach = robot.reach();
-  const auto [g, pre, h, top] = readyGrasp(robot);
-  reach.setSupport(top);
-  MapView map(robot);
+  ReachBesideTable s(GetParam());
+  const Robot& robot = s.robot;
+  GraspReach& reach = s.reach;
+  const Eigen::Isometry3d &g = s.ready.grasp, &pre = s.ready.pre;
+  MapView& map = s.map;
   ehc_perception::ObstacleDistanceField& field = map.field;
   const int& queries = map.queries;
   reach.setMapDistances(map.distances(robot, [](bool) { return std::vector<ehc_perception::ExclusionZone>{}; }),

@@ -40,6 +40,7 @@
 #include <Eigen/Core>
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -236,10 +237,18 @@ class GraspPipeline {
   /// during the descent.
   std::vector<std::pair<std::string, double>> plannedMapDistances(const Eigen::Vector3d& base, const Eigen::VectorXd& q,
                                                                   bool descent) const;
-  /// The locked grasp's pre-grasp and grasp configurations at its placement from GraspReach's
-  /// verdict while the sequencer is in PRE_GRASP or GRASP, for the controller's stall recovery
-  /// (ControlCycle::setGivenPlans); empty otherwise.
-  std::vector<ehc_control::ReachRecovery::GivenPlan> lockedGraspPlans() const;
+  /// Hands the controller's stall recovery (ControlCycle::setGivenPlans) the locked grasp's
+  /// pre-grasp and grasp configurations at its placement from GraspReach's verdict while the
+  /// sequencer is in PRE_GRASP or GRASP, none otherwise; only when the lock, the locked pose or
+  /// GraspReach's kept verdicts (GraspReach::keptRevision) have changed since the last time.
+  void updateGivenPlans();
+  struct GivenPlansKey {
+    bool locked = false;
+    Eigen::Matrix4d pose = Eigen::Matrix4d::Zero();  ///< the locked grasp's (locked)
+    std::uint64_t kept = 0;                          ///< GraspReach::keptRevision
+    bool operator==(const GivenPlansKey& o) const { return locked == o.locked && pose == o.pose && kept == o.kept; }
+  };
+  std::optional<GivenPlansKey> given_key_;
   /// Its revision: changes with the map's (ObstacleDistanceField::revision) and whenever the
   /// planned exclusions move.
   std::uint64_t plannedMapRevision();

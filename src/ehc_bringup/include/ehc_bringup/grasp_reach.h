@@ -151,6 +151,9 @@ class GraspReach {
   /// its placement and configurations, e.g. for the controller to move to when the approach
   /// stalls (ReachRecovery::setGivenPlans). Valid until the next call of a non-const member.
   const GraspReachVerdict* keptVerdict(const Eigen::Isometry3d& grasp) const;
+  /// A number that changes whenever a kept verdict is added, dropped or forgotten: what
+  /// keptVerdict returns for a pose stays the same while it does not.
+  std::uint64_t keptRevision() const { return kept_revision_; }
   /// Verdicts computed (judge() calls through reachable(); not the ones kept).
   long judgements() const { return judgements_; }
   const GraspReachParams& params() const { return params_; }
@@ -208,6 +211,7 @@ class GraspReach {
     std::optional<std::uint64_t> clear_at;  ///< the map revision its configurations were found clear at
   };
   std::vector<Kept> kept_;
+  std::uint64_t kept_revision_ = 0;
   long judgements_ = 0;
   mutable ehc_control::KinematicState state_;
 };

@@ -307,16 +307,19 @@ void GraspPipeline::observeSupport(const ehc_perception::PointList& points, cons
   if (const auto seen = supportFromPoints(points, r.support_plane)) reach_->observeSupport(*seen);
 }
 
-std::vector<ehc_control::ReachRecovery::GivenPlan> GraspPipeline::lockedGraspPlans() const {
+void GraspPipeline::updateGivenPlans() {
   // The locked grasp's placement and configurations from its reachability verdict, while the
   // controller approaches it: where a stall at its pre-grasp or grasp recovers to.
   const GraspPhase phase = sequencer_->phase();
   const std::optional<GraspChoice>& choice = sequencer_->lastChoice();
-  if ((phase != GraspPhase::PreGrasp && phase != GraspPhase::Grasp) || !choice || !choice->reachable.value_or(false))
-    return {};
-  const GraspReachVerdict* v = reach_->keptVerdict(choice->pose);
-  if (!v || !v->reachable) return {};
-  return {{v->base, v->q_pre}, {v->base, v->q_grasp}};
+  const bool locked =
+      (phase == GraspPhase::PreGrasp || phase == GraspPhase::Grasp) && choice && choice->reachable.value_or(false);
+  const GivenPlansKey key{locked, locked ? choice->pose.matrix() : Eigen::Matrix4d::Zero(), reach_->keptRevision()};
+  if (given_key_ && *given_key_ == key) return;
+  given_key_ = key;
+  const GraspReachVerdict* v = locked ? reach_->keptVerdict(choice->pose) : nullptr;
+  if (v && v->reachable) cycle_->setGivenPlans({{v->base, v->q_pre}, {v->base, v->q_grasp}});
+  else cycle_->setGivenPlans({});
 }
 
 std::vector<std::pair<std::string, double>> GraspPipeline::plannedMapDistances(const Eigen::Vector3d& base,
@@ -426,7 +429,7 @@ const PipelineCycle& GraspPipeline::step() {
     if (s.gripper_command) world_->commandGripper(*s.gripper_command);
     last_.events = s.events;
     last_.phase = sequencer_->phase();
-    if (reach_) cycle_->setGivenPlans(lockedGraspPlans());
+    if (reach_) updateGivenPlans();
   }
 
   // Simulator step with the controller's command.

@@ -175,6 +175,7 @@ void GraspReach::setSupport(const std::optional<SupportSurface>& support) {
   if (support && !support->valid()) throw std::invalid_argument("[GraspReach] invalid support surface");
   support_ = support;
   kept_.clear();
+  ++kept_revision_;
 }
 
 bool GraspReach::observeSupport(const SupportSurface& seen) {
@@ -364,6 +365,7 @@ bool GraspReach::reachable(const Eigen::Isometry3d& grasp, const Eigen::Isometry
   const GraspReachVerdict v = judge(grasp, pre_grasp);
   if (kept_.size() >= 256) kept_.clear();
   kept_.push_back({grasp, v, v.reachable ? revision : std::nullopt});
+  ++kept_revision_;  // also counts an erase above
   return v.reachable;
 }
 
