@@ -5,7 +5,8 @@
 // chooseGrasp: an unreachable higher-scored candidate loses to a reachable one (fixed and
 // randomized cases, seed printed); the configurations checked against an obstacle map (the
 // object left out during the descent, a neighbour at the pre-grasp blocking, a kept verdict
-// checked again as the map grows); bad parameters are rejected.
+// checked again as the map grows); the way to a placement does not cut a corner of the
+// support (randomized, seed printed); bad parameters are rejected.
 
 #include "ehc_bringup/grasp_reach.h"
 #include "ehc_bringup/grasp_selection.h"
@@ -170,6 +171,36 @@ TEST(SupportSurface, DistanceOfABoxToTheTop) {
   const double r = half.head<2>().norm();
   EXPECT_NEAR(supportDistance(s, Eigen::Vector3d(1.5 - r - 0.03, 0.0, 0.75), half), 0.03, 1e-12) << "beside the edge";
   EXPECT_NEAR(supportDistance(s, Eigen::Vector3d(1.5 - r - 0.03, 0.0, 0.75 + 0.05 + 0.04), half), 0.05, 1e-12);
+}
+
+TEST(SupportSurface, AWayKeepsItsEndsClearanceUpToTheCorridorItDoesNotCutACorner) {
+  // Random rectangles (size, rotation, place). A way tangent to a corner, c outside it, between
+  // points beside its two adjacent sides (0.2-0.6 m out): refused while the corridor and the
+  // ends' clearance exceed c by more than the outline tolerance (2 cm), taken with a corridor
+  // below c. A way parallel to a side, both ends equally far out: taken, whatever the corridor
+  // (also 1 cm off parallel). Ends inside, or a way across the top: refused.
+  const unsigned seed = ehc_test::testSeed("way round a corner");
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int trial = 0; trial < 200; ++trial) {
+    const double L = 0.4 + u(rng), W = 0.4 + u(rng), a = 2.0 * M_PI * u(rng);
+    const Eigen::Rotation2Dd R(a);
+    const Eigen::Vector2d o(3.0 * u(rng) - 1.5, 3.0 * u(rng) - 1.5);
+    const auto world = [&](double x, double y) { return Eigen::Vector2d(o + R * Eigen::Vector2d(x, y)); };
+    const std::vector<Eigen::Vector2d> fp = {world(0, 0), world(L, 0), world(L, W), world(0, W)};
+    const double c = 0.005 + 0.045 * u(rng), corridor = 0.2 + 0.3 * u(rng);
+    const double k1 = 0.3 + 0.5 * u(rng), k2 = 0.3 + 0.5 * u(rng);
+    // Tangent at P, c out along the corner's diagonal; the ends beside the sides x = 0 and y = 0.
+    const Eigen::Vector2d P = -c * Eigen::Vector2d(1, 1).normalized(), t = Eigen::Vector2d(1, -1).normalized();
+    const Eigen::Vector2d from = world((P - k1 * t).x(), (P - k1 * t).y()), to = world((P + k2 * t).x(), (P + k2 * t).y());
+    EXPECT_FALSE(wayKeepsClear(fp, from, to, corridor)) << "seed " << seed << " trial " << trial << ": cuts the corner";
+    EXPECT_TRUE(wayKeepsClear(fp, from, to, 0.5 * c)) << "seed " << seed << " trial " << trial << ": corridor below c";
+    const double d = 0.05 + 0.55 * u(rng), x1 = L * u(rng), x2 = L * u(rng);
+    EXPECT_TRUE(wayKeepsClear(fp, world(x1, -d), world(x2, -d), corridor)) << "seed " << seed << " trial " << trial;
+    EXPECT_TRUE(wayKeepsClear(fp, world(x1, -d), world(x2, -d - 0.01), corridor)) << "seed " << seed << " trial " << trial;
+    EXPECT_FALSE(wayKeepsClear(fp, world(0.5 * L, 0.5 * W), world(x2, -d), corridor)) << "an end on the top";
+    EXPECT_FALSE(wayKeepsClear(fp, world(0.5 * L, -d), world(0.5 * L, W + d), 0.0)) << "across the top";
+  }
 }
 
 TEST(GraspReach, RejectsBadParameters) {

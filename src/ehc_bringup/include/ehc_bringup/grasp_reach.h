@@ -30,8 +30,11 @@
 // moves to the kept verdict's configuration: keptVerdict, ControlCycle::setGivenPlans) as long
 // as the way there does not cross the support: the controller is reactive and does not
 // drive round a table. With the robot's base pose (setRobotBase), only placements whose
-// straight line from the robot's base keeps off the support's footprint are tried (a grasp
-// from the far side of a table is unreachable for a robot on its near side).
+// straight way from the robot's base keeps off the support's footprint are tried (a grasp
+// from the far side of a table is unreachable for a robot on its near side), and by as much as
+// its ends do, up to the base's corridor (wayKeepsClear): the base sweeps its own radius plus
+// its stop distance, and a way that grazes a corner of the footprint takes it into the legs
+// standing under that corner (or into a corner the views have not shown yet).
 // With the obstacle map (setMapDistances: the map the controller's dampers read), the pre-grasp's
 // configuration, the grasp's and the one halfway down the descent must also keep every checked
 // link at its stop distance from the map's obstacles: the neighbours beside the target, and the
@@ -98,6 +101,13 @@ SupportSurface mergedSupport(const std::optional<SupportSurface>& previous, cons
 /// Distance (m) of an axis-aligned box (centre, half extents; its horizontal part taken as the
 /// circle round its horizontal rectangle) to the support's footprint at the support's height.
 double supportDistance(const SupportSurface& support, const Eigen::Vector3d& centre, const Eigen::Vector3d& half_extents);
+
+/// Whether the straight way from `from` to `to` keeps off a footprint (convex polygon) by at
+/// least the clearance it has at its ends, or `corridor` (m) where both ends have more, less
+/// 2 cm (the outline of a seen footprint wanders by about that): it does not cut a corner.
+/// An end on or inside the footprint: false.
+bool wayKeepsClear(const std::vector<Eigen::Vector2d>& footprint, const Eigen::Vector2d& from, const Eigen::Vector2d& to,
+                   double corridor);
 
 /// What GraspReach found for one grasp.
 struct GraspReachVerdict {
@@ -197,6 +207,9 @@ class GraspReach {
   double ready_distance_ = 0.5;  ///< m: the ready TCP's distance from the arm base
   std::vector<Eigen::VectorXd> seeds_;  ///< arm IK seeds: the ready posture, then fixed random ones
   double reach_ = 1.0;  ///< m: the farthest TCP distance from the arm base (sampled)
+  /// m: the base's corridor, the farthest horizontal reach of the links that do not move with
+  /// the arm from the base's origin plus their stop distance
+  double corridor_ = 0.0;
   std::optional<SupportSurface> support_;
   /// Whether the straight way from the robot's base to `placement` keeps off the support's
   /// footprint (true without a robot base or a support).

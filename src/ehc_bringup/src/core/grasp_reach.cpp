@@ -114,6 +114,17 @@ SupportSurface mergedSupport(const std::optional<SupportSurface>& previous, cons
   return s;
 }
 
+bool wayKeepsClear(const std::vector<Eigen::Vector2d>& footprint, const Eigen::Vector2d& from, const Eigen::Vector2d& to,
+                   double corridor) {
+  const double ends = std::min({ehc_perception::hullDistance(footprint, {from}),
+                                ehc_perception::hullDistance(footprint, {to}), std::max(corridor, 0.0)});
+  // A seen footprint's outline is the hull of noisy points: along an edge it wanders by about a
+  // centimetre, which a way parallel to it must not fail on.
+  constexpr double kOutlineTolerance = 0.02;
+  const double way = ehc_perception::hullDistance(footprint, {from, to});
+  return way > 0.0 && way >= ends - kOutlineTolerance;
+}
+
 double supportDistance(const SupportSurface& support, const Eigen::Vector3d& centre, const Eigen::Vector3d& half_extents) {
   const double dxy = std::max(0.0, ehc_perception::hullDistance(support.footprint, {centre.head<2>()}) - half_extents.head<2>().norm());
   const double lo = centre.z() - half_extents.z(), hi = centre.z() + half_extents.z();
@@ -145,6 +156,16 @@ GraspReach::GraspReach(const WholeBodyModel& model, const GraspReachParams& para
     l.stop = stop + params_.clearance;
     l.moves = !model_.linkPoseInBase(q0, g.name).isApprox(model_.linkPoseInBase(q1, g.name), 1e-9);
     links_.push_back(std::move(l));
+  }
+  model_.updateKinematics(Eigen::Vector3d::Zero(), rc.arm_ready, &state_);
+  for (const Link& l : links_) {
+    if (l.moves) continue;
+    const Eigen::Isometry3d T = state_.linkPose(l.index) * l.finger;
+    for (const CollisionShape& s : l.shapes) {
+      const Eigen::Isometry3d W = T * s.origin;
+      corridor_ = std::max(corridor_, W.translation().head<2>().norm() +
+                                          shapeHalfExtents(s, W.linear()).head<2>().norm() + l.stop);
+    }
   }
   const Eigen::Vector3d tcp = model_.linkPoseInBase(rc.arm_ready, rc.tcp_frame).translation();
   ready_bearing_ = ehc_control::readyTcpBearing(model_);
@@ -308,7 +329,7 @@ std::optional<std::pair<std::string, double>> GraspReach::mapBlocked(const Eigen
 
 bool GraspReach::onTheWay(const Eigen::Vector3d& placement) const {
   if (!robot_base_ || !support_) return true;
-  return ehc_perception::hullDistance(support_->footprint, {robot_base_->head<2>(), placement.head<2>()}) > 0.0;
+  return wayKeepsClear(support_->footprint, robot_base_->head<2>(), placement.head<2>(), corridor_);
 }
 
 std::string GraspReach::descentBlocked(const Eigen::Vector3d& base, const Eigen::VectorXd& q_pre,
