@@ -504,6 +504,67 @@ TEST(OctreeShapeDistance, EqualsFclDistanceBitForBit) {
   EXPECT_GT(found, queries / 10);  // queries near the maps
 }
 
+TEST(OctreeShapeDistance, AShapeTouchingAVoxelIsAtDistanceAboutZeroAndNeverAborts) {
+  // Boxes, cylinders (on an end face) and spheres put against an occupied voxel's face, within
+  // +-1 um of touching, some turned a little: a signed query answers within 1 mm of 0 (FCL's
+  // own signed query asserts its collision query finds a contact; with GJK's tolerance it can
+  // find a negative distance and no contact, and the process aborted).
+  const unsigned seed = ehc_test::testSeed("OctreeShapeDistance touching");
+  RandomQueries r(seed);
+  fcl::DistanceRequest<double> req;
+  req.enable_nearest_points = true;
+  req.enable_signed_distance = true;
+  for (int map = 0; map < 4; ++map) {
+    // Voxels 1 m apart: a shape against one touches no other.
+    const auto tree = std::make_shared<octomap::OcTree>(r.in(0.01, 0.05));
+    for (int i = 0; i < 8; ++i) tree->updateNode(octomap::point3d(i + r.in(-0.1, 0.1), r.in(-0.1, 0.1), r.in(0.0, 0.5)), true);
+    tree->updateInnerOccupancy();
+    const fcl::OcTree<double> octree(std::static_pointer_cast<const octomap::OcTree>(tree));
+    std::vector<Eigen::Vector3d> voxels;
+    for (auto it = tree->begin_leafs(); it != tree->end_leafs(); ++it)
+      if (tree->isNodeOccupied(*it)) voxels.emplace_back(it.getX(), it.getY(), it.getZ());
+    ASSERT_EQ(voxels.size(), 8u);
+    const double half = 0.5 * tree->getResolution();
+    for (int q = 0; q < 300; ++q) {
+      SCOPED_TRACE("seed " + std::to_string(seed) + " map " + std::to_string(map) + " query " + std::to_string(q));
+      const Eigen::Vector3d c = voxels[static_cast<std::size_t>(r.in(0.0, 1.0) * (voxels.size() - 1))];
+      const int axis = static_cast<int>(r.in(0.0, 2.999));
+      const double sign = r.in(-1.0, 1.0) < 0.0 ? -1.0 : 1.0;
+      Eigen::Vector3d n = Eigen::Vector3d::Zero();
+      n[axis] = sign;
+      const double gap = r.in(-1e-6, 1e-6), turn = q % 2 ? r.in(-0.02, 0.02) : 0.0;
+      std::shared_ptr<fcl::CollisionGeometry<double>> g;
+      double along = 0.0;  // the shape's half size along n
+      switch (q % 3) {
+        case 0: {
+          const double h = r.in(0.01, 0.1);
+          g = std::make_shared<fcl::Box<double>>(2 * h, 2 * h, 2 * h);
+          along = h;
+          break;
+        }
+        case 1: {
+          const double len = r.in(0.02, 0.3);
+          g = std::make_shared<fcl::Cylinder<double>>(r.in(0.01, 0.06), len);
+          along = 0.5 * len;
+          break;
+        }
+        default: along = r.in(0.01, 0.1); g = std::make_shared<fcl::Sphere<double>>(along); break;
+      }
+      g->computeLocalAABB();
+      fcl::Transform3<double> tf = fcl::Transform3<double>::Identity();
+      // The cylinder's axis (its z) along n, then turned a little about a perpendicular axis.
+      tf.linear() = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), n).toRotationMatrix() *
+                    Eigen::AngleAxisd(turn, Eigen::Vector3d::UnitX()).toRotationMatrix();
+      tf.translation() = c + (half + along + gap) * n;
+      fcl::DistanceResult<double> res;
+      res.min_distance = 0.05;
+      octreeShapeDistance(octree, *g, tf, req, &res);
+      EXPECT_LT(std::abs(res.min_distance), 1e-3) << "voxel " << c.transpose() << " n " << n.transpose();
+      if (::testing::Test::HasFailure()) return;
+    }
+  }
+}
+
 TEST(OctreeShapeDistance, ExclusionZonesGiveTheAnswerOnTheCopyWithoutThem) {
   const unsigned seed = ehc_test::testSeed("OctreeShapeDistance exclusion zones");
   RandomQueries r(seed);

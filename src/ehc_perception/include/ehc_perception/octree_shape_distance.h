@@ -16,9 +16,12 @@
 // is split into the blocks the copy would hold. On a map OctoMap keeps pruned (every map built
 // by point-cloud insertion) this is the copy's answer, bit for bit (tested).
 //
-// Other geometry types go to fcl::distance unchanged, and so does a penetration when a signed
-// distance is asked (FCL then answers with a collision query's deepest contact). The one home of
-// the obstacle field's distance query (ObstacleDistanceField::distances).
+// Other geometry types go to fcl::distance (unsigned). A penetration when a signed distance is
+// asked is answered as fcl::distance answers it for an octree, with a collision query's deepest
+// contact, but made here: FCL asserts that query finds a contact, and a shape touching a voxel
+// within GJK's tolerance (a negative distance, no collision) aborted the process; that is
+// touching, distance 0. The one home of the obstacle field's distance query
+// (ObstacleDistanceField::distances).
 
 #include "ehc_perception/obstacle_distance_field.h"  // ExclusionZone
 

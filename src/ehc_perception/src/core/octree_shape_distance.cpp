@@ -6,12 +6,14 @@
 #include <fcl/geometry/shape/utility.h>
 #include <fcl/math/bv/utility.h>
 #include <fcl/narrowphase/detail/gjk_solver_libccd.h>
+#include <fcl/narrowphase/collision.h>
 #include <fcl/narrowphase/distance.h>
 
 #include <octomap/OcTree.h>
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 namespace ehc_perception {
@@ -222,15 +224,41 @@ std::shared_ptr<const octomap::OcTree> copyWithoutZones(const octomap::OcTree& t
   return copy;
 }
 
+namespace {
+/// A penetration's signed distance as fcl::distance answers it for an octree (its workaround for
+/// non-primitive shapes: the deepest contact of a collision query), without its assertion that
+/// the collision query finds one. libfcl 0.7 is built with assertions, and a shape touching a
+/// voxel within GJK's tolerance can have a negative distance and no collision: the process
+/// aborted. No contact: touching (0); the distance query's nearest points stay.
+void penetration(const fcl::OcTree<double>& tree, const fcl::CollisionGeometry<double>& g,
+                 const fcl::Transform3<double>& tf, const fcl::DistanceRequest<double>& request,
+                 fcl::DistanceResult<double>* result) {
+  fcl::CollisionRequest<double> creq;
+  creq.enable_contact = true;
+  fcl::CollisionResult<double> cres;
+  fcl::detail::GJKSolver_libccd<double> solver;  // as fcl::distance sets up the solver it collides with
+  solver.distance_tolerance = request.distance_tolerance;
+  fcl::collide(&tree, fcl::Transform3<double>::Identity(), &g, tf, &solver, creq, cres);
+  std::size_t index = cres.numContacts();
+  double depth = std::numeric_limits<double>::min();  // as FCL: a contact of depth 0 is no penetration
+  for (std::size_t i = 0; i < cres.numContacts(); ++i)
+    if (depth < cres.getContact(i).penetration_depth) {
+      depth = cres.getContact(i).penetration_depth;
+      index = i;
+    }
+  if (index == cres.numContacts()) {
+    result->min_distance = 0.0;
+    return;
+  }
+  result->min_distance = -depth;
+  if (request.enable_nearest_points) result->nearest_points[0] = result->nearest_points[1] = cres.getContact(index).pos;
+}
+}  // namespace
+
 void octreeShapeDistance(const fcl::OcTree<double>& tree, const fcl::CollisionGeometry<double>& g,
                          const fcl::Transform3<double>& tf, const fcl::DistanceRequest<double>& request,
                          fcl::DistanceResult<double>* result, const OcTreeExclusion* exclusion) {
-  const fcl::DistanceResult<double> start = *result;
-  auto fclDistance = [&] {
-    *result = start;
-    const fcl::OcTree<double>& t = exclusion ? exclusion->filtered() : tree;
-    fcl::distance(&t, fcl::Transform3<double>::Identity(), &g, tf, request, *result);
-  };
+  const fcl::OcTree<double>& map = exclusion ? exclusion->filtered() : tree;
   switch (g.getNodeType()) {
     case fcl::GEOM_BOX:
       PrunedOcTreeDistance(tree, static_cast<const fcl::Box<double>&>(g), tf, request, result, exclusion).run();
@@ -241,11 +269,17 @@ void octreeShapeDistance(const fcl::OcTree<double>& tree, const fcl::CollisionGe
     case fcl::GEOM_SPHERE:
       PrunedOcTreeDistance(tree, static_cast<const fcl::Sphere<double>&>(g), tf, request, result, exclusion).run();
       break;
-    default: fclDistance(); return;
+    default: {
+      fcl::DistanceRequest<double> unsigned_request = request;
+      unsigned_request.enable_signed_distance = false;
+      fcl::distance(&map, fcl::Transform3<double>::Identity(), &g, tf, unsigned_request, *result);
+      if (request.enable_signed_distance && result->min_distance <= 0.0) penetration(map, g, tf, request, result);
+      return;
+    }
   }
-  // A penetration with a signed distance asked: fcl::distance then replaces the GJK answer by the
-  // deepest contact of a collision query; it is rare, so it is asked of FCL from the start.
-  if (request.enable_signed_distance && result->min_distance < 0.0) fclDistance();
+  // A penetration with a signed distance asked: the deepest contact of a collision query, as
+  // fcl::distance answers it (rare).
+  if (request.enable_signed_distance && result->min_distance < 0.0) penetration(map, g, tf, request, result);
 }
 
 }  // namespace ehc_perception
