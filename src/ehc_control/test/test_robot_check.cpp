@@ -173,6 +173,31 @@ TEST(RobotCheck, FingerJointsMissingOrUnequal) {
   }
 }
 
+TEST(RobotCheck, FingerPadsApartWhenClosedOrOnOneSide) {
+  {
+    // The joint off the centre line, the finger reaching outward from it: the pads stay 10 mm
+    // apart when closed.
+    RobotCopy c;
+    ehc_test::replaceInFile(c.urdf(), "<child link=\"left_finger_link\"/>\n    <origin xyz=\"0 0 0.08\"",
+                            "<child link=\"left_finger_link\"/>\n    <origin xyz=\"0 0.005 0.08\"");
+    expectOnlyProblem(c.check(), "fingers", {"left_finger_link", "pad lies 0.0050 m from the TCP"});
+  }
+  {
+    // The left finger's box reaching inward: across the closing axis when closed.
+    RobotCopy c;
+    ehc_test::replaceInFile(c.urdf(), "<origin xyz=\"0 0.005 0.025\" rpy=\"0 0 0\"/>\n      <geometry>",
+                            "<origin xyz=\"0 -0.002 0.025\" rpy=\"0 0 0\"/>\n      <geometry>");
+    expectOnlyProblem(c.check(), "fingers", {"left_finger_link", "reaches across the TCP's closing axis"});
+  }
+  {
+    // The pads beyond the TCP: the fingers end 5 mm short of its depth.
+    RobotCopy c;
+    ehc_test::replaceInFile(c.urdf(), "<child link=\"left_finger_link\"/>\n    <origin xyz=\"0 0 0.08\"",
+                            "<child link=\"left_finger_link\"/>\n    <origin xyz=\"0 0 0.055\"");
+    expectOnlyProblem(c.check(), "fingers", {"left_finger_link", "must reach the TCP's depth"});
+  }
+}
+
 TEST(RobotCheck, AMeshCollisionShape) {
   RobotCopy c;
   ehc_test::replaceInFile(c.urdf(), "<geometry><cylinder radius=\"0.07\" length=\"0.15\"/></geometry>",

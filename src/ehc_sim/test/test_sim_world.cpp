@@ -1,6 +1,7 @@
 // SimWorld: Bullet robot bodies follow the integrated joint state; base motion; robot-world and
 // self collisions reported; gripper grasp at the object centre succeeds after a 10 cm lift and
-// one 10 cm off fails; determinism per seed; bad inputs rejected.
+// one 10 cm off fails; a thin wall between the fingers is held; determinism per seed; bad
+// inputs rejected.
 
 #include "ehc_sim/sim_world.h"
 
@@ -42,19 +43,19 @@ Eigen::VectorXd tcpVelocity(const SimWorld& w, const Eigen::Vector3d& v) {
   return cmd;
 }
 
-/// A scene with one 5 x 5 x 10 cm box held up by a pedestal so that its centre is at `centre`
-/// with the box's y axis along the gripper's closing axis.
-SceneConfig graspScene(const Eigen::Vector3d& centre, double yaw) {
+/// A scene with one 5 x `width` x 10 cm box held up by a pedestal so that its centre is at
+/// `centre` with the box's y axis (`width`) along the gripper's closing axis.
+SceneConfig graspScene(const Eigen::Vector3d& centre, double yaw, double width = 0.04) {
   char buf[1024];
   std::snprintf(buf, sizeof(buf), R"(
 scene:
   name: grasp
   objects:
-    - {name: box, shape: box, size: [0.05, 0.04, 0.10], position: [%f, %f, %f], rpy: [0, 0, %f], mass: 0.1}
+    - {name: box, shape: box, size: [0.05, %f, 0.10], position: [%f, %f, %f], rpy: [0, 0, %f], mass: 0.1}
   obstacles:
     - {name: pedestal, shape: box, size: [0.06, 0.06, %f], position: [%f, %f, %f], rpy: [0, 0, %f]}
 )",
-                centre.x(), centre.y(), centre.z(), yaw, centre.z() - 0.05, centre.x(), centre.y(),
+                width, centre.x(), centre.y(), centre.z(), yaw, centre.z() - 0.05, centre.x(), centre.y(),
                 0.5 * (centre.z() - 0.05), yaw);
   return loadSceneConfigString(buf, "grasp_scene");
 }
@@ -189,8 +190,9 @@ TEST(SimWorld, GraspAtTheObjectCentreSucceedsAfterLift) {
     if (offset == 0.0) {
       ASSERT_EQ(w.gripper().state(), GripperState::Holding);
       EXPECT_EQ(w.gripper().heldObject(), 0);
-      EXPECT_GT(w.gripper().opening(), 0.005);  // stopped on the 4 cm box: ~(0.04-0.01)/2
-      EXPECT_LT(w.gripper().opening(), 0.020);
+      // Stopped on the 4 cm box: the pads 2 x opening apart, within the contact tolerance.
+      EXPECT_GE(w.gripper().opening(), 0.019);  // one cycle's travel into the box at most
+      EXPECT_LE(w.gripper().opening(), 0.020 + simConfig(false).gripper.contact_tolerance);
     } else {
       ASSERT_EQ(w.gripper().state(), GripperState::ClosedEmpty);
       EXPECT_EQ(w.gripper().graspFailures(), 1);
@@ -218,6 +220,29 @@ TEST(SimWorld, GraspAtTheObjectCentreSucceedsAfterLift) {
       EXPECT_EQ(w.gripper().graspSuccesses(), 0);
       EXPECT_LT((after - before).norm(), 0.005) << "the object stays where it was";
     }
+  }
+}
+
+// A 5 mm wall (the thinnest box a scene takes; a mug's wall or handle, a bowl's rim) between the
+// fingers, centred or off the TCP by its half thickness: the pads close until both touch it, and
+// it is held (pads that stop short of each other close around such a wall on nothing).
+TEST(SimWorld, TheFingersCloseOnAThinWall) {
+  SimWorld probe(simConfig(false), robotConfig(), emptyScene());
+  probe.setRobotState(Eigen::Vector3d::Zero(), forwardPose());
+  const Eigen::Isometry3d tcp = probe.linkPose("ee_link");
+  const Eigen::Vector3d closing = tcp.linear().col(1);
+  const double yaw = std::atan2(closing.y(), closing.x()) - M_PI / 2;
+  const double tolerance = simConfig(false).gripper.contact_tolerance, wall = 0.005;
+  for (double shift : {0.0, 0.5 * wall, -0.5 * wall}) {
+    SCOPED_TRACE("shift " + std::to_string(shift));
+    SimWorld w(simConfig(false), robotConfig(), graspScene(tcp.translation() + shift * closing, yaw, wall));
+    w.setRobotState(Eigen::Vector3d::Zero(), forwardPose());
+    for (int i = 0; i < 10; ++i) w.step(zeroCmd(w));  // settle
+    w.commandGripper(true);
+    for (int i = 0; i < 150 && w.gripper().state() == GripperState::Closing; ++i) w.step(zeroCmd(w));
+    ASSERT_EQ(w.gripper().state(), GripperState::Holding);
+    EXPECT_EQ(w.gripper().heldObject(), 0);
+    EXPECT_LE(w.gripper().opening(), std::abs(shift) + 0.5 * wall + tolerance + 1e-9);
   }
 }
 

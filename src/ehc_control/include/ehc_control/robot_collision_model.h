@@ -33,6 +33,8 @@ struct CollisionShape {
   bool contains(const Eigen::Vector3d& p_link, double padding) const;
   /// Radius of a sphere around the shape origin that encloses the shape.
   double boundingRadius() const;
+  /// Half edges of the box around the shape, in the shape's frame (its origin at the centre).
+  Eigen::Vector3d halfExtents() const;
 };
 
 /// A link with collision geometry.

@@ -203,6 +203,53 @@ void checkHand(const RobotConfig& rc, const std::string& xml, const urdf::ModelI
     r.ok("fingers", names + ": 0 .. " + num(fingers.front().upper, 4) + " m each, on the hand");
 }
 
+/// The fingers' pads, each finger's geometry's face towards the TCP along its closing axis (the
+/// TCP's y), lie on the TCP when closed (opening 0), one finger on each side, and reach the TCP's
+/// depth: the pads are 2 x opening apart about the TCP, as the grasp generator places a grasp's
+/// contacts (pads that stay apart when closed close around a thinner wall or handle on nothing).
+void checkFingerPads(const RobotConfig& rc, const std::string& xml, const WholeBodyModel& model, Report& r) {
+  std::unique_ptr<RobotCollisionModel> collision;
+  try {
+    collision = std::make_unique<RobotCollisionModel>(xml, rc.arm_joints);
+  } catch (const std::exception&) {
+    return;  // reported by checkHand
+  }
+  if (collision->fingers().size() != 2) return;  // reported by checkHand
+  const Eigen::Isometry3d tcp_inv = model.linkPoseInBase(rc.arm_ready, rc.tcp_frame).inverse();
+  const std::size_t mark = r.size();
+  std::vector<double> pads;
+  for (const FingerJoint& f : collision->fingers()) {
+    const auto link = std::find_if(collision->links().begin(), collision->links().end(),
+                                   [&](const RobotLinkGeometry& l) { return l.name == f.child_link; });
+    if (link == collision->links().end()) continue;  // no geometry: nothing to touch with
+    const Eigen::Isometry3d finger = tcp_inv * model.linkPoseInBase(rc.arm_ready, f.child_link);
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e9), hi = -lo;  // extent in the TCP frame
+    for (const CollisionShape& shape : link->shapes)
+      for (int c = 0; c < 8; ++c) {
+        const Eigen::Vector3d corner(c & 1 ? 1 : -1, c & 2 ? 1 : -1, c & 4 ? 1 : -1);
+        const Eigen::Vector3d p = finger * shape.origin * shape.halfExtents().cwiseProduct(corner);
+        lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+      }
+    const double pad = lo.y() >= -1e-4 ? lo.y() : hi.y() <= 1e-4 ? hi.y() : NAN;
+    if (std::isnan(pad))
+      r.problem("fingers", "finger '" + f.child_link + "' reaches across the TCP's closing axis (y " + num(lo.y(), 4) +
+                               " .. " + num(hi.y(), 4) + " m in the TCP frame) when closed: one finger on each side");
+    else if (std::abs(pad) > 1e-4)
+      r.problem("fingers", "finger '" + f.child_link + "': its pad lies " + num(std::abs(pad), 4) +
+                               " m from the TCP when closed; the pads must touch there (2 x opening apart), or a "
+                               "thinner wall or handle between them is closed on without being held");
+    else
+      pads.push_back(lo.y() >= -1e-4 ? 1.0 : -1.0);
+    if (lo.z() > 0.0 || hi.z() < 0.0)
+      r.problem("fingers", "finger '" + f.child_link + "' spans " + num(lo.z(), 4) + " .. " + num(hi.z(), 4) +
+                               " m along the approach axis: its pad must reach the TCP's depth (0)");
+  }
+  if (pads.size() == 2 && pads[0] == pads[1])
+    r.problem("fingers", "both fingers' pads lie on the same side of the TCP's closing axis");
+  if (!r.problemsSince(mark))
+    r.ok("fingers", "the pads touch at the TCP when closed (2 x opening apart)");
+}
+
 /// Where a corner of the view region lands in the image, or why it does not.
 std::string cornerProblem(const PinholeCamera& cam, const Eigen::Vector3d& p_cam, const RobotCheckParams& p) {
   if (p_cam.z() <= cam.min_depth) return "behind the camera";
@@ -330,6 +377,7 @@ std::vector<RobotCheckLine> checkRobot(const std::string& robot_file, const Robo
     if (!r.problemsSince(0)) r.problem("kinematic model", e.what());
     return r.take();
   }
+  checkFingerPads(rc, xml, *model, r);
   checkCameraView(rc, *model, params, r);
   checkMap(rc, *model, r);
   return r.take();

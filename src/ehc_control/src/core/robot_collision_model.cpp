@@ -83,6 +83,18 @@ double CollisionShape::boundingRadius() const {
   return 0.0;
 }
 
+Eigen::Vector3d CollisionShape::halfExtents() const {
+  switch (type) {
+    case Type::Box:
+      return 0.5 * size;
+    case Type::Cylinder:
+      return Eigen::Vector3d(size[0], size[0], 0.5 * size[1]);
+    case Type::Sphere:
+      return Eigen::Vector3d::Constant(size[0]);
+  }
+  return Eigen::Vector3d::Zero();
+}
+
 Eigen::Isometry3d FingerJoint::offset(double opening) const {
   return Eigen::Isometry3d(Eigen::Translation3d(axis * opening));
 }
