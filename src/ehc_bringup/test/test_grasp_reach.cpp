@@ -319,6 +319,33 @@ TEST(GraspReach, OfTwoQualifyingCandidatesTheUnreachableHigherScoredOneLoses) {
   EXPECT_EQ(unknown->reachable, std::optional<bool>(true));
 }
 
+TEST(GraspReach, ARimInTheTablesMiddleIsReachedTiltedTowardsTheRobotNotStraightDown) {
+  // The demo's table (0.75 m high, near edge 1.5 m) and a bowl's rim 4 cm above its top at the
+  // side of a bowl in the middle and at the back slot (27 and 43 cm in from the edge): the
+  // RealMan's shoulder is mounted below the top, so straight down the wrist would have to reach
+  // past the edge farther than the arm is long; the same wall grasp tilted 45 deg about its
+  // closing axis (GraspGeneratorConfig::wall_tilt_deg), the wrist back towards the robot, is
+  // reached from the robot's side.
+  const Robot robot("realman_rm65_water2");
+  GraspReach reach = robot.reach();
+  reach.setSupport(table(Eigen::Vector2d(1.9, 0.0), Eigen::Vector2d(0.8, 1.2), 0.75));
+  reach.setRobotBase(Eigen::Vector3d::Zero());
+  const double tilt = 45.0 * M_PI / 180.0;
+  for (const double x : {1.77, 1.93}) {
+    SCOPED_TRACE("rim at x " + std::to_string(x));
+    const Eigen::Vector3d rim(x, 0.06, 0.79);
+    const Eigen::Isometry3d down = graspAt(rim, -Eigen::Vector3d::UnitZ());
+    const Eigen::Isometry3d tilted = graspAt(rim, Eigen::Vector3d(std::sin(tilt), 0.0, -std::cos(tilt)));
+    EXPECT_NEAR(std::abs(down.linear().col(1).dot(tilted.linear().col(1))), 1.0, 1e-9) << "one closing axis";
+    const GraspReachVerdict vd = reach.judge(down, preGraspOf(down));
+    const GraspReachVerdict vt = reach.judge(tilted, preGraspOf(tilted));
+    EXPECT_FALSE(vd.reachable) << "straight down";
+    EXPECT_TRUE(vt.reachable) << vt.reason;
+    std::cout << "rim at x " << x << ": straight down: " << vd.reason << "; tilted: base " << vt.base.transpose()
+              << std::endl;
+  }
+}
+
 TEST(GraspSelection, ReachabilityComesBeforeScoreRandomized) {
   // Random candidate sets round a tag target and a random verdict per candidate: the choice is
   // the best-scored reachable one among the reach_checks best-scored qualifying ones, else the

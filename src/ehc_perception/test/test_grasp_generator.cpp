@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -1085,6 +1086,57 @@ TEST(WallGrasps, AThinWallsRimGraspIsCentredOnTheWallNotOnTheShadow) {
   }
   std::printf("%d wall grasps checked, those centred on the wall at most %.1f mm off\n", checked, 1e3 * worst);
   EXPECT_GT(checked, 0);
+}
+
+// Random cups and bowls (rims 100-160 mm across) seen once from a random view under 1.5 mm
+// noise: besides the straight-down wall grasps there are wall grasps approached wall_tilt_deg
+// from straight down about their closing axis (the closing axis horizontal, the approach's
+// horizontal part away from the camera: the hand from the viewer's side), and each passes the
+// straight-down ones' checks (the true cup between the fingers within the measured width +
+// the noise, nothing of it inside a finger); with wall_tilt_deg 0 every wall grasp is
+// approached straight down. An arm mounted below the table's top reaches the rims of a bowl in
+// the middle of the table only with such a tilt (test_grasp_reach).
+TEST(WallGrasps, ARimIsAlsoGraspedWithTheApproachTiltedTowardsTheViewer) {
+  WallGraspTrials t("WallGrasps tilted towards the viewer");
+  t.cfg.top_k = 200;
+  const Eigen::Vector3d up = t.cfg.up.normalized();
+  int tilted_total = 0;
+  for (int trial = 0; trial < 6; ++trial) {
+    const double r = 0.05 + 0.03 * t.unit(), wall = 0.003 + 0.003 * t.unit(), height = 0.04 + 0.04 * t.unit();
+    const double flare = trial % 2 == 0 ? 0.0 : (0.4 + 0.15 * t.unit()) * r;
+    Surface truth = cupSurface(r, wall, height, 0.002, flare);
+    truth.transform(pose(0.6, 0.0, 0.0, 2 * M_PI * t.unit()));
+    const Eigen::Vector3d view = randomView(Eigen::Vector3d(0.6, 0.0, 0.5 * height), &t.rng);
+    const PointList seen = truth.occludedFrom(view).noisy(kNoise, t.seed + static_cast<unsigned>(trial));
+    SCOPED_TRACE("r " + std::to_string(1e3 * r) + " mm, wall " + std::to_string(1e3 * wall) + " mm, flare " +
+                 std::to_string(1e3 * flare) + " mm, view " + std::to_string(view.x()) + " " +
+                 std::to_string(view.y()) + " " + std::to_string(view.z()));
+    int tilted = 0, straight = 0;
+    for (const Grasp& g : GraspGenerator(t.cfg).generate(seen, view).grasps) {
+      if (!g.wall) continue;
+      const Eigen::Vector3d a = g.pose.linear().col(2), y = g.pose.linear().col(1);
+      const double tilt = std::acos(std::clamp(-a.dot(up), -1.0, 1.0)) / kDeg;
+      EXPECT_NEAR(y.dot(up), 0.0, 1e-9);
+      if (tilt < 0.01) {
+        ++straight;
+        continue;
+      }
+      ++tilted;
+      EXPECT_NEAR(tilt, t.cfg.wall_tilt_deg, 0.01);
+      const Eigen::Vector3d from_view = g.pose.translation() - view;
+      EXPECT_GE((a - a.dot(up) * up).dot(from_view - from_view.dot(up) * up), 0.0);
+      EXPECT_LE(trueWidthBetweenFingers(g, t.cfg.gripper, truth.points), g.measured_width + kNoise);
+      EXPECT_EQ(pointsInFingers(g, t.cfg.gripper, truth.points, kNoise), 0);
+    }
+    std::printf("trial %d: %d straight-down and %d tilted wall grasps\n", trial, straight, tilted);
+    EXPECT_GT(tilted, 0);
+    tilted_total += tilted;
+    GraspGeneratorConfig down = t.cfg;
+    down.wall_tilt_deg = 0.0;
+    for (const Grasp& g : GraspGenerator(down).generate(seen, view).grasps)
+      if (g.wall) EXPECT_GT(-g.pose.linear().col(2).dot(up), std::cos(0.01 * kDeg));
+  }
+  EXPECT_GT(tilted_total, 0);
 }
 
 // Random lying and standing cylinders 15-90 mm across seen once under 1.5 mm noise: every wall

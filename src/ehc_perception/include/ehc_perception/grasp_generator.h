@@ -100,7 +100,10 @@
 // from both sides, is grasped across the wall and the shadow behind it). Centred on the wall's
 // middle where the view shows its top between the fingers (as near as the opening allows), so
 // that the symmetric close reaches both faces together. One contact is seen: they rank with the
-// single-contact hypotheses.
+// single-contact hypotheses. Each is approached straight down and, with wall_tilt_deg, also
+// tilted about its closing axis towards the viewpoint's side: the fingers stay on the wall's two
+// faces and the wrist comes back towards the robot (an arm mounted below the support's top
+// reaches no straight-down rim grasp a quarter of a metre or more beyond the support's edge).
 //
 // No grasp: the failure is what refused the best-ranked pose that held enough of the object
 // (too wide, friction, collides, hidden volume), the reason counts every check's refusals; an
@@ -210,6 +213,10 @@ struct GraspGeneratorConfig {
   /// a rim, a wall or a thin part; see wall_grasps.h), times the seen contact's normal cosine; 0
   /// disables them. Needs the viewpoint (hidden_volume_check) and a support.
   double wall_weight = 0.6;
+  /// deg in [0, 80]: wall grasps also with the approach turned by this from straight down about
+  /// the closing axis, its horizontal part away from the viewpoint (the hand from the camera's
+  /// side; checked as the straight-down ones are, in the tilted frame); 0: straight down only.
+  double wall_tilt_deg = 45.0;
   /// m, RMS distance within which a footprint axis's cross-section counts as round (a circle
   /// tangent to the support, e.g. a lying cylinder): its circle then gives the width across
   /// that axis where the single view sees the sides only at grazing angles.
@@ -275,7 +282,7 @@ struct Grasp {
   /// circle / sphere; such grasps rank below fully supported ones (single_contact_weight).
   int seen_contacts = 0;
   /// A wall grasp (wall_weight): its unseen side bounded by the view's shadow, approached
-  /// straight down.
+  /// straight down or tilted about the closing axis (wall_tilt_deg).
   bool wall = false;
   double score = 0.0;            ///< antipodal x centroid x pca, in [0, 1]
   double antipodal = 0.0;        ///< min |cos| between contact normals and closing axis

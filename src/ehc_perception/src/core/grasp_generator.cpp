@@ -1106,6 +1106,7 @@ void GraspGeneratorConfig::validate() const {
   range("single_contact_weight", single_contact_weight, 0.0, 1.0);
   range("footprint_weight", footprint_weight, 0.0, 1.0);
   range("wall_weight", wall_weight, 0.0, 1.0);
+  range("wall_tilt_deg", wall_tilt_deg, 0.0, 80.0);
   range("round_fit_tolerance", round_fit_tolerance, 0.0, 0.05);
   range("min_contact_points", min_contact_points, 5, 1e6);
   range("nms_distance", nms_distance, 0.0, 1.0);
@@ -1136,7 +1137,7 @@ std::string GraspGeneratorConfig::summary() const {
      << pca_power << "/" << pca_approach_power << ", refine shift <= " << max_refine_shift
      << " m, depth shift <= " << max_depth_shift << " m (step " << depth_step << " m, margin "
      << depth_margin << " m), single-contact / footprint / wall weights " << single_contact_weight << " / "
-     << footprint_weight << " / " << wall_weight << ", top " << top_k << ", up ["
+     << footprint_weight << " / " << wall_weight << " (walls also tilted " << wall_tilt_deg << " deg), top " << top_k << ", up ["
      << up.transpose() << "]";
   return os.str();
 }
@@ -1184,6 +1185,7 @@ GraspGeneratorConfig loadGraspGeneratorConfig(const ConfigNode& n) {
   c.single_contact_weight = n.get("single_contact_weight", c.single_contact_weight);
   c.footprint_weight = n.get("footprint_weight", c.footprint_weight);
   c.wall_weight = n.get("wall_weight", c.wall_weight);
+  c.wall_tilt_deg = n.get("wall_tilt_deg", c.wall_tilt_deg);
   c.round_fit_tolerance = n.get("round_fit_tolerance", c.round_fit_tolerance);
   c.min_contact_points = n.get("min_contact_points", c.min_contact_points);
   c.nms_distance = n.get("nms_distance", c.nms_distance);

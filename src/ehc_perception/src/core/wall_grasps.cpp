@@ -81,8 +81,9 @@ bool ViewShadow::mayBeSolid(const Eigen::Vector3d& q) const {
 
 namespace {
 
-/// The search at one seed point: grasp frame (y closing into the seen surface, z = a straight
-/// down, x = y x z) and the points around it in that frame, (y, x, z) from the seed.
+/// The search at one seed point: grasp frame (y closing into the seen surface, z = a: straight
+/// down or tilted about y, x = y x z) and the points around it in that frame, (y, x, z) from the
+/// seed.
 class WallSearch {
  public:
   WallSearch(const GraspGeneratorConfig& cfg, const WallInput& in, const std::vector<Eigen::Vector3d>& collision)
@@ -98,10 +99,17 @@ class WallSearch {
     if (n.isZero()) return n;
     return n.dot(in_.eye - (*in_.points)[i]) >= 0.0 ? n : Eigen::Vector3d(-n);
   }
-  bool at(std::size_t i, WallGrasp* out);
+  /// The wall grasp at point i approached `tilt` (rad) from straight down about its closing
+  /// axis, the approach's horizontal part away from the eye, if any.
+  bool at(std::size_t i, double tilt, WallGrasp* out);
 
  private:
   Eigen::Vector3d world(double ly, double lx, double lz) const { return p_ + y_ * ly + x_ * lx + a_ * lz; }
+  /// m: the lowest fingertip edge's height above the support.
+  double tipClearance() const {
+    const double h = up_.dot(world(0.0, 0.0, z1_)) + in_.plane[3];
+    return h - std::abs(up_.dot(x_)) * 0.5 * g_.finger_breadth;
+  }
   void gather();
   /// Collision points in the box ly in [y0, y1], |lx| <= hx, lz in [za, zb].
   int countIn(double y0, double y1, double hx, double za, double zb) const {
@@ -239,28 +247,33 @@ int WallSearch::placementRefused(double y_in, double yo, double yc) const {
   return 0;
 }
 
-bool WallSearch::at(std::size_t i, WallGrasp* out) {
+bool WallSearch::at(std::size_t i, double tilt, WallGrasp* out) {
   p_ = (*in_.points)[i];
   const Eigen::Vector3d n = facing(i);
   const Eigen::Vector3d nh = n - n.dot(up_) * up_;
   if (n.isZero() || nh.norm() < cos_cone_) return false;
-  // The fingertips stay support_clearance above the support (the approach is straight down).
-  if (up_.dot(p_) + in_.plane[3] - z1_ < cfg_.support_clearance) return false;
   y_ = -nh.normalized();
-  a_ = -up_;
+  // Tilted about y: the approach's horizontal part across the wall, away from the eye.
+  Eigen::Vector3d side = up_.cross(y_);
+  if (side.dot(p_ - in_.eye) < 0.0) side = -side;
+  a_ = -std::cos(tilt) * up_ + std::sin(tilt) * side;
   x_ = y_.cross(a_);
+  // The fingertips stay support_clearance above the support.
+  if (tipClearance() < cfg_.support_clearance) return false;
   double y_in = 0.0, cos_n = 0.0;
   if (!seenContact(&y_in, &cos_n)) return false;
   // The closing line at least 3 x the noise + half a voxel below the seen surface's top there
-  // (a seed at the rim's edge would close on its noise above the rim).
-  double top = 0.0;
+  // (a seed at the rim's edge would close on its noise above the rim), in height: moved along
+  // the approach, tilted or not, until it is.
+  double top = 0.0;  ///< height above the seed
+  const double up_x = up_.dot(x_), up_a = up_.dot(a_);
   for (const Eigen::Vector3d& l : near_)
     if (std::abs(l.y()) <= 0.5 * g_.finger_breadth && l.x() >= y_in - band_ && l.x() <= y_in + 2.0 * band_)
-      top = std::min(top, l.z());
+      top = std::max(top, up_x * l.y() + up_a * l.z());
   const double below = 3.0 * in_.noise + 0.5 * in_.leaf;
-  if (top > -below) {
-    p_ += a_ * (below + top);
-    if (up_.dot(p_) + in_.plane[3] - z1_ < cfg_.support_clearance || !seenContact(&y_in, &cos_n)) return false;
+  if (top < below) {
+    p_ += a_ * ((below - top) / -up_a);
+    if (tipClearance() < cfg_.support_clearance || !seenContact(&y_in, &cos_n)) return false;
   }
   const double c = g_.clearance, t = g_.finger_thickness, W = g_.max_width;
   // The seen-side finger and its path: nothing beyond the contact surface's noise.
@@ -311,10 +324,13 @@ std::vector<WallGrasp> wallGrasps(const GraspGeneratorConfig& cfg, const WallInp
   // Evenly strided down to a quarter of max_seeds (deterministic).
   const std::size_t most = static_cast<std::size_t>(std::max(1, cfg.max_seeds / 4));
   const std::size_t stride = std::max<std::size_t>(1, (seeds.size() + most - 1) / most);
-  for (std::size_t s = 0; s < seeds.size(); s += stride) {
-    WallGrasp w;
-    if (search.at(seeds[s], &w)) out.push_back(w);
-  }
+  std::vector<double> tilts{0.0};
+  if (cfg.wall_tilt_deg > 0.0) tilts.push_back(cfg.wall_tilt_deg * M_PI / 180.0);
+  for (std::size_t s = 0; s < seeds.size(); s += stride)
+    for (double tilt : tilts) {
+      WallGrasp w;
+      if (search.at(seeds[s], tilt, &w)) out.push_back(w);
+    }
   return out;
 }
 

@@ -26,7 +26,10 @@
 //
 // Hypotheses: every seen point whose normal (turned towards the camera: the side the view shows)
 // is within the friction cone of the horizontal, closing horizontally into the surface,
-// approached straight down, the grasp's closing line at the point's height. The seen contact is
+// approached straight down and, with wall_tilt_deg, tilted by that about the closing axis (the
+// approach's horizontal part along the wall, away from the camera: the hand comes from the
+// robot's side, its wrist nearer the robot), the grasp's closing line at the point's height.
+// Every check below is made in the grasp's frame, tilted or not ("above": back along the approach). The seen contact is
 // the median of the seen points around it facing the finger (within the friction cone); the
 // unseen side's normal is not known (a wall's two faces are about parallel): such grasps rank
 // as grasps with one seen contact (GraspGeneratorConfig::wall_weight x the seen normal's cosine).
