@@ -992,6 +992,30 @@ struct WallGraspTrials {
   std::mt19937 rng;
   GraspGeneratorConfig cfg;
   GraspGenerator gen{cfg};
+  /// A random cup: rim radius r 50-80 mm, its wall `wall_min` + `wall_span` x U thick, 40-80 mm
+  /// high, on odd trials flared at the rim by 40-55 % of r; turned at random about its axis at
+  /// (0.6, 0, 0); and a random view of its middle.
+  struct Cup {
+    double r = 0.0, wall = 0.0, height = 0.0, flare = 0.0;
+    Surface truth;
+    Eigen::Vector3d view = Eigen::Vector3d::Zero();
+    std::string what() const {
+      return "r " + std::to_string(1e3 * r) + " mm, wall " + std::to_string(1e3 * wall) + " mm, height " +
+             std::to_string(1e3 * height) + " mm, flare " + std::to_string(1e3 * flare) + " mm, view " +
+             std::to_string(view.x()) + " " + std::to_string(view.y()) + " " + std::to_string(view.z());
+    }
+  };
+  Cup cup(int trial, double wall_min, double wall_span) {
+    Cup c;
+    c.r = 0.05 + 0.03 * unit();
+    c.wall = wall_min + wall_span * unit();
+    c.height = 0.04 + 0.04 * unit();
+    c.flare = trial % 2 == 0 ? 0.0 : (0.4 + 0.15 * unit()) * c.r;
+    c.truth = cupSurface(c.r, c.wall, c.height, 0.002, c.flare);
+    c.truth.transform(pose(0.6, 0.0, 0.0, 2 * M_PI * unit()));
+    c.view = randomView(Eigen::Vector3d(0.6, 0.0, 0.5 * c.height), &rng);
+    return c;
+  }
 };
 
 // Random cups 100-160 mm across (wider than the opening), walls 3-6 mm, 40-80 mm high, seen
@@ -1050,16 +1074,11 @@ TEST(WallGrasps, AThinWallsRimGraspIsCentredOnTheWallNotOnTheShadow) {
   int checked = 0;
   double worst = 0.0;
   for (int trial = 0; trial < 8; ++trial) {
-    const double r = 0.05 + 0.03 * t.unit(), wall = 0.0025 + 0.0035 * t.unit(), height = 0.04 + 0.04 * t.unit();
-    const double flare = trial % 2 == 0 ? 0.0 : (0.4 + 0.15 * t.unit()) * r;
-    Surface truth = cupSurface(r, wall, height, 0.002, flare);
-    truth.transform(pose(0.6, 0.0, 0.0, 2 * M_PI * t.unit()));
-    const Eigen::Vector3d view = randomView(Eigen::Vector3d(0.6, 0.0, 0.5 * height), &t.rng);
+    const WallGraspTrials::Cup cup = t.cup(trial, 0.0025, 0.0035);
+    const Surface& truth = cup.truth;
     const GraspResult res =
-        t.gen.generate(truth.occludedFrom(view).noisy(kNoise, t.seed + static_cast<unsigned>(trial)), view);
-    const std::string what = "r " + std::to_string(1e3 * r) + " mm, wall " + std::to_string(1e3 * wall) +
-                             " mm, height " + std::to_string(1e3 * height) + " mm, flare " +
-                             std::to_string(1e3 * flare) + " mm";
+        t.gen.generate(truth.occludedFrom(cup.view).noisy(kNoise, t.seed + static_cast<unsigned>(trial)), cup.view);
+    const std::string what = cup.what();
     SCOPED_TRACE(what);
     int walls = 0, centred = 0;
     for (const Grasp& g : res.grasps) {
@@ -1102,15 +1121,11 @@ TEST(WallGrasps, ARimIsAlsoGraspedWithTheApproachTiltedTowardsTheViewer) {
   const Eigen::Vector3d up = t.cfg.up.normalized();
   int tilted_total = 0;
   for (int trial = 0; trial < 6; ++trial) {
-    const double r = 0.05 + 0.03 * t.unit(), wall = 0.003 + 0.003 * t.unit(), height = 0.04 + 0.04 * t.unit();
-    const double flare = trial % 2 == 0 ? 0.0 : (0.4 + 0.15 * t.unit()) * r;
-    Surface truth = cupSurface(r, wall, height, 0.002, flare);
-    truth.transform(pose(0.6, 0.0, 0.0, 2 * M_PI * t.unit()));
-    const Eigen::Vector3d view = randomView(Eigen::Vector3d(0.6, 0.0, 0.5 * height), &t.rng);
+    const WallGraspTrials::Cup cup = t.cup(trial, 0.003, 0.003);
+    const Surface& truth = cup.truth;
+    const Eigen::Vector3d& view = cup.view;
     const PointList seen = truth.occludedFrom(view).noisy(kNoise, t.seed + static_cast<unsigned>(trial));
-    SCOPED_TRACE("r " + std::to_string(1e3 * r) + " mm, wall " + std::to_string(1e3 * wall) + " mm, flare " +
-                 std::to_string(1e3 * flare) + " mm, view " + std::to_string(view.x()) + " " +
-                 std::to_string(view.y()) + " " + std::to_string(view.z()));
+    SCOPED_TRACE(cup.what());
     int tilted = 0, straight = 0;
     for (const Grasp& g : GraspGenerator(t.cfg).generate(seen, view).grasps) {
       if (!g.wall) continue;
