@@ -97,8 +97,9 @@ TEST(EhcKinematicsCli, CheckPrintsOneOkLinePerCheckAndExits0) {
   std::istringstream lines(r.out);
   int n = 0;
   for (std::string line; std::getline(lines, line); ++n) EXPECT_EQ(line.rfind("ok ", 0), 0u) << line;
-  EXPECT_EQ(n, 8) << r.out;
+  EXPECT_EQ(n, 9) << r.out;
   EXPECT_NE(r.out.find("ok camera view:"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("ok fingers: the pads touch at the TCP when closed"), std::string::npos) << r.out;
 }
 
 TEST(EhcKinematicsCli, CheckExits1WithOneLinePerProblem) {
