@@ -395,10 +395,8 @@ TEST_P(GraspReachRobots, ObstacleMapBlocksThePreGraspNotTheObjectDuringTheDescen
   // where the open fingers are at the pre-grasp blocks every placement; one 0.8 m aside, none.
   // A kept verdict is checked against the map again: the neighbour added later un-reaches it.
   ReachBesideTable s(GetParam());
-  const Robot& robot = s.robot;
-  GraspReach& reach = s.reach;
-  const Eigen::Isometry3d &g = s.ready.grasp, &pre = s.ready.pre;
-  MapView& map = s.map;
+  auto& [robot, reach, ready, map] = s;
+  const Eigen::Isometry3d &g = ready.grasp, &pre = ready.pre;
   ehc_perception::ObstacleDistanceField& field = map.field;
   std::vector<ehc_perception::ExclusionZone> descent_zones;
   reach.setMapDistances(map.distances(robot, [&](bool descent) {
@@ -438,10 +436,8 @@ TEST_P(GraspReachRobots, AKeptVerdictIsCheckedAgainstTheMapOnlyWhenItsRevisionMo
   // query while the map is unchanged; once the revision moves its three configurations are
   // checked again: a neighbour 0.8 m aside keeps it, one at the pre-grasp un-reaches it.
   ReachBesideTable s(GetParam());
-  const Robot& robot = s.robot;
-  GraspReach& reach = s.reach;
-  const Eigen::Isometry3d &g = s.ready.grasp, &pre = s.ready.pre;
-  MapView& map = s.map;
+  auto& [robot, reach, ready, map] = s;
+  const Eigen::Isometry3d &g = ready.grasp, &pre = ready.pre;
   ehc_perception::ObstacleDistanceField& field = map.field;
   const int& queries = map.queries;
   reach.setMapDistances(map.distances(robot, [](bool) { return std::vector<ehc_perception::ExclusionZone>{}; }),

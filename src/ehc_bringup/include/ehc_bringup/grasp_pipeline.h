@@ -246,7 +246,7 @@ class GraspPipeline {
     bool locked = false;
     Eigen::Matrix4d pose = Eigen::Matrix4d::Zero();  ///< the locked grasp's (locked)
     std::uint64_t kept = 0;                          ///< GraspReach::keptRevision
-    bool operator==(const GivenPlansKey& o) const { return locked == o.locked && pose == o.pose && kept == o.kept; }
+    bool same(const GivenPlansKey& o) const;
   };
   std::optional<GivenPlansKey> given_key_;
   /// Its revision: changes with the map's (ObstacleDistanceField::revision) and whenever the

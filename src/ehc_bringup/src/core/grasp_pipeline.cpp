@@ -307,6 +307,10 @@ void GraspPipeline::observeSupport(const ehc_perception::PointList& points, cons
   if (const auto seen = supportFromPoints(points, r.support_plane)) reach_->observeSupport(*seen);
 }
 
+bool GraspPipeline::GivenPlansKey::same(const GivenPlansKey& o) const {
+  return locked == o.locked && pose == o.pose && kept == o.kept;
+}
+
 void GraspPipeline::updateGivenPlans() {
   // The locked grasp's placement and configurations from its reachability verdict, while the
   // controller approaches it: where a stall at its pre-grasp or grasp recovers to.
@@ -315,7 +319,7 @@ void GraspPipeline::updateGivenPlans() {
   const bool locked =
       (phase == GraspPhase::PreGrasp || phase == GraspPhase::Grasp) && choice && choice->reachable.value_or(false);
   const GivenPlansKey key{locked, locked ? choice->pose.matrix() : Eigen::Matrix4d::Zero(), reach_->keptRevision()};
-  if (given_key_ && *given_key_ == key) return;
+  if (given_key_ && given_key_->same(key)) return;
   given_key_ = key;
   const GraspReachVerdict* v = locked ? reach_->keptVerdict(choice->pose) : nullptr;
   if (v && v->reachable) cycle_->setGivenPlans({{v->base, v->q_pre}, {v->base, v->q_grasp}});

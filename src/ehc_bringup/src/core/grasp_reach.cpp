@@ -60,14 +60,14 @@ namespace {
 Eigen::Vector3d shapeHalfExtents(const CollisionShape& s, const Eigen::Matrix3d& R) {
   Eigen::Vector3d h = Eigen::Vector3d::Zero();
   switch (s.type) {
-    case CollisionShape::Type::Box: h = R.cwiseAbs() * (0.5 * s.size); break;
+    case CollisionShape::Type::Box: h = R.cwiseAbs() * s.halfExtents(); break;
     case CollisionShape::Type::Cylinder: {
       const Eigen::Vector3d a = R.col(2);
       for (int k = 0; k < 3; ++k)
         h[k] = std::abs(a[k]) * 0.5 * s.size.y() + s.size.x() * std::sqrt(std::max(0.0, 1.0 - a[k] * a[k]));
       break;
     }
-    case CollisionShape::Type::Sphere: h = Eigen::Vector3d::Constant(s.size.x()); break;
+    case CollisionShape::Type::Sphere: h = s.halfExtents(); break;
   }
   return h;
 }

@@ -245,6 +245,7 @@ class ReachRecovery {
   bool place_ = false;    ///< the current plan is a placement (ehc_place)
   bool given_ = false;    ///< the current plan is a given one (setGivenPlans)
   std::vector<GivenPlan> given_plans_;
+  std::vector<Eigen::Isometry3d> given_tcp_;  ///< each given plan's TCP pose (setGivenPlans)
   std::shared_ptr<const EhcWeighting> placement_map_;
   std::vector<Eigen::Vector3d> place_starts_;  ///< the current placement's IK starts
   double goal_reach_ = 0.0;                    ///< the map's R of the target at the chosen placement

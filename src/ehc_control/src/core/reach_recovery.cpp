@@ -270,14 +270,16 @@ void ReachRecovery::setGivenPlans(std::vector<GivenPlan> plans) {
     if (p.q.size() != model_.config().nArm() || !p.q.allFinite() || !p.base.allFinite())
       throw std::invalid_argument("[ReachRecovery] a given plan needs a finite base pose and arm configuration");
   given_plans_ = std::move(plans);
+  given_tcp_.clear();
+  for (const GivenPlan& p : given_plans_) given_tcp_.push_back(model_.fk(p.base, p.q, model_.config().tcp_frame));
 }
 
 const ReachRecovery::GivenPlan* ReachRecovery::givenPlan(const Eigen::Isometry3d& target) const {
-  for (const GivenPlan& p : given_plans_) {
-    const Eigen::Isometry3d tcp = model_.fk(p.base, p.q, model_.config().tcp_frame);
+  for (std::size_t i = 0; i < given_plans_.size(); ++i) {
+    const Eigen::Isometry3d& tcp = given_tcp_[i];
     if ((tcp.translation() - target.translation()).norm() <= 0.01 &&
         Eigen::AngleAxisd(Eigen::Matrix3d(tcp.linear().transpose() * target.linear())).angle() <= 2.0 * M_PI / 180.0)
-      return &p;
+      return &given_plans_[i];
   }
   return nullptr;
 }

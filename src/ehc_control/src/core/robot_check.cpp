@@ -163,11 +163,13 @@ void checkJointLimits(const RobotConfig& rc, const urdf::ModelInterface& urdf, c
 }
 
 /// The camera and the gripper hang below the last arm joint; two finger joints of one travel.
-void checkHand(const RobotConfig& rc, const std::string& xml, const urdf::ModelInterface& urdf, Report& r) {
+/// Returns the robot's collision model (checkFingerPads reads it), nullptr where there is none.
+std::unique_ptr<RobotCollisionModel> checkHand(const RobotConfig& rc, const std::string& xml,
+                                               const urdf::ModelInterface& urdf, Report& r) {
   // An arm joint the URDF lacks is reported by the arm chain check (and would make the URDF's
   // joint of that name an unexplained movable joint here).
   for (const std::string& name : rc.arm_joints)
-    if (!urdf.getJoint(name)) return;
+    if (!urdf.getJoint(name)) return nullptr;
   const urdf::JointConstSharedPtr last = urdf.getJoint(rc.arm_joints.back());
   const std::string hand = last->child_link_name;
   if (urdf.getLink(rc.camera_frame) && !hangsBelow(urdf, rc.camera_frame, hand))
@@ -180,7 +182,7 @@ void checkHand(const RobotConfig& rc, const std::string& xml, const urdf::ModelI
     collision = std::make_unique<RobotCollisionModel>(xml, rc.arm_joints);
   } catch (const std::exception& e) {
     r.problem("collision geometry", e.what());
-    return;
+    return nullptr;
   }
   const auto& fingers = collision->fingers();
   std::string names;
@@ -189,7 +191,7 @@ void checkHand(const RobotConfig& rc, const std::string& xml, const urdf::ModelI
     r.problem("fingers", "the gripper needs exactly two prismatic finger joints (found " + std::to_string(fingers.size()) +
                              (names.empty() ? "" : ": " + names) + "); the simulator drives them and the obstacle "
                              "field poses them open");
-    return;
+    return collision;
   }
   const std::size_t mark = r.size();
   for (const FingerJoint& f : fingers) {
@@ -201,20 +203,16 @@ void checkHand(const RobotConfig& rc, const std::string& xml, const urdf::ModelI
   }
   if (!r.problemsSince(mark))
     r.ok("fingers", names + ": 0 .. " + num(fingers.front().upper, 4) + " m each, on the hand");
+  return collision;
 }
 
 /// The fingers' pads, each finger's geometry's face towards the TCP along its closing axis (the
 /// TCP's y), lie on the TCP when closed (opening 0), one finger on each side, and reach the TCP's
 /// depth: the pads are 2 x opening apart about the TCP, as the grasp generator places a grasp's
 /// contacts (pads that stay apart when closed close around a thinner wall or handle on nothing).
-void checkFingerPads(const RobotConfig& rc, const std::string& xml, const WholeBodyModel& model, Report& r) {
-  std::unique_ptr<RobotCollisionModel> collision;
-  try {
-    collision = std::make_unique<RobotCollisionModel>(xml, rc.arm_joints);
-  } catch (const std::exception&) {
-    return;  // reported by checkHand
-  }
-  if (collision->fingers().size() != 2) return;  // reported by checkHand
+void checkFingerPads(const RobotConfig& rc, const RobotCollisionModel* collision, const WholeBodyModel& model,
+                     Report& r) {
+  if (!collision || collision->fingers().size() != 2) return;  // reported by checkHand
   const Eigen::Isometry3d tcp_inv = model.linkPoseInBase(rc.arm_ready, rc.tcp_frame).inverse();
   const std::size_t mark = r.size();
   std::vector<double> pads;
@@ -368,7 +366,7 @@ std::vector<RobotCheckLine> checkRobot(const std::string& robot_file, const Robo
   checkFrames(rc, *urdf, r);
   checkArmChain(rc, *urdf, r);
   checkJointLimits(rc, *urdf, params, r);
-  checkHand(rc, xml, *urdf, r);
+  const std::unique_ptr<RobotCollisionModel> collision = checkHand(rc, xml, *urdf, r);
   std::unique_ptr<WholeBodyModel> model;
   try {
     model = std::make_unique<WholeBodyModel>(rc);
@@ -377,7 +375,7 @@ std::vector<RobotCheckLine> checkRobot(const std::string& robot_file, const Robo
     if (!r.problemsSince(0)) r.problem("kinematic model", e.what());
     return r.take();
   }
-  checkFingerPads(rc, xml, *model, r);
+  checkFingerPads(rc, collision.get(), *model, r);
   checkCameraView(rc, *model, params, r);
   checkMap(rc, *model, r);
   return r.take();

@@ -311,11 +311,13 @@ void SimWorld::build() {
       std::unique_ptr<btCollisionShape> child;
       switch (s.type) {
         case ehc_control::CollisionShape::Type::Box:
-          child = boxShape(0.5 * s.size);
+          child = boxShape(s.halfExtents());
           break;
-        case ehc_control::CollisionShape::Type::Cylinder:
-          child = std::make_unique<btCylinderShapeZ>(btVector3(s.size.x(), s.size.x(), 0.5 * s.size.y()));
+        case ehc_control::CollisionShape::Type::Cylinder: {
+          const Eigen::Vector3d h = s.halfExtents();
+          child = std::make_unique<btCylinderShapeZ>(btVector3(h.x(), h.y(), h.z()));
           break;
+        }
         case ehc_control::CollisionShape::Type::Sphere:
           child = std::make_unique<btSphereShape>(s.size.x());
           break;
