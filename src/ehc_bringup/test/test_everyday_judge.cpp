@@ -6,6 +6,7 @@
 // the summary equal to the counts over the rows.
 
 #include "ehc_bringup/grasp_experiment.h"
+#include "ehc_perception/convex_polygon.h"
 #include "ehc_sim/sim_world.h"
 
 #include "ehc_common/json.h"
@@ -78,7 +79,7 @@ std::map<std::string, JudgeCounts> countRows(const std::string& csv) {
   std::istringstream in(csv);
   std::string line;
   std::getline(in, line);
-  EXPECT_NE(line.find(",cause,judge_view,valid_exists,attempted,attempt_valid,grasp_verdict,candidate_verdict,judge_reason,"
+  EXPECT_NE(line.find(",cause,judge_view,valid_exists,valid_reachable_exists,attempted,attempt_valid,grasp_verdict,candidate_verdict,judge_reason,"
                       "target_selection,generator_failure,generator_reason"),
             std::string::npos)
       << line;
@@ -91,7 +92,7 @@ std::map<std::string, JudgeCounts> countRows(const std::string& csv) {
       rest = rest.substr(0, rest.rfind(','));
     }
     std::vector<std::string> tail;
-    for (int k = 0; k < 7; ++k) {
+    for (int k = 0; k < 8; ++k) {  // judge_view .. judge_reason
       const std::size_t c = rest.rfind(',');
       tail.insert(tail.begin(), rest.substr(c + 1));
       rest = rest.substr(0, c);
@@ -101,7 +102,9 @@ std::map<std::string, JudgeCounts> countRows(const std::string& csv) {
     for (std::string f; head.size() < 7 && std::getline(h, f, ',');) head.push_back(f);
     if (tail[0].empty()) continue;  // not judged
     JudgeCounts& c = out[head[0]];
-    const bool success = head[6] == "1", exists = tail[1] == "1", attempted = tail[2] == "1", valid = tail[3] == "1";
+    const bool success = head[6] == "1", exists = tail[1] == "1", attempted = tail[3] == "1", valid = tail[4] == "1";
+    EXPECT_TRUE(exists || tail[2].empty()) << "reach is judged only where a valid grasp exists: " << line;
+    const bool reachable = tail[2] == "1";
     ++c.objects;
     c.attempted += attempted;
     c.attempted_invalid += attempted && !valid;
@@ -109,12 +112,15 @@ std::map<std::string, JudgeCounts> countRows(const std::string& csv) {
     c.grasped_where_exists += exists && success;
     c.attempted_where_none += !exists && attempted;
     c.grasped_where_none += !exists && success;
+    c.reach_judged += !tail[2].empty();
+    c.reachable_exists += reachable;
+    c.grasped_where_reachable += reachable && success;
     EXPECT_FALSE(valid && !attempted) << line;
-    EXPECT_EQ(tail[6].rfind("attempted_where_none", 0) == 0, !exists && attempted && !success) << line;
+    EXPECT_EQ(tail[7].rfind("attempted_where_none", 0) == 0, !exists && attempted && !success) << line;
     // The generator's failure and the selection are names of their enums.
     EXPECT_NO_THROW(ehc_perception::graspFailureFromString(generator[1])) << line;
     EXPECT_FALSE(generator[0].empty()) << line;
-    if (exists && !success && tail[6] == "no_grasp_chosen") {
+    if (exists && !success && tail[7] == "no_grasp_chosen") {
       const bool unselected = generator[0] != "selected" && generator[0] != "not_cloud_target";
       ++c.no_grasp_failures[unselected ? "no_target:" + generator[0] : generator[1]];
     }
@@ -136,6 +142,9 @@ void expectSummaryMatchesRows(const std::string& dir, const GraspExperimentResul
     EXPECT_EQ(j["objects"], c.objects) << method;
     EXPECT_EQ(j["valid_exists"], c.valid_exists) << method;
     EXPECT_EQ(j["grasped_where_exists"], c.grasped_where_exists) << method;
+    EXPECT_EQ(j["reach_judged"], c.reach_judged) << method;
+    EXPECT_EQ(j["reachable_exists"], c.reachable_exists) << method;
+    EXPECT_EQ(j["grasped_where_reachable"], c.grasped_where_reachable) << method;
     EXPECT_EQ(j["attempted"], c.attempted) << method;
     EXPECT_EQ(j["attempted_invalid"], c.attempted_invalid) << method;
     EXPECT_EQ(j["attempted_where_none"], c.attempted_where_none) << method;
@@ -235,7 +244,67 @@ TEST(EverydayJudge, AttemptsAreJudgedAgainstTheTrueMesh) {
   const ehc_test::TempDir dir("ehc_everyday_judge");
   writeGraspResults(dir.path, params, r, "");
   expectSummaryMatchesRows(dir.path, r);
-  EXPECT_NE(ehc_test::readText(dir.path + "/table.md").find("| ehc | 5 | 3 | 1 (33.3 %) | 1 | 3 (2) | 0 |"), std::string::npos);
+  EXPECT_NE(ehc_test::readText(dir.path + "/table.md").find("| ehc | 5 | 3 | 1 (33.3 %) | 0 | 0 (0.0 %) | 1 | 3 (2) | 0 |"), std::string::npos);
+}
+
+TEST(EverydayJudge, TheRobotsReachSplitsTheObjectsWithAValidGrasp) {
+  // With a reach test: a valid chosen grasp the robot reaches makes a reachable one exist without
+  // a search; one it does not reach sends the search on to the other valid grasps, which finds
+  // one where the test accepts a tilted approach and none where it accepts nothing; where no
+  // valid grasp exists, reach is not judged.
+  const ehc_sim::SceneConfig scene = tableScene();
+  const ehc_sim::TriangleMesh box = ehc_sim::boxSurface({0.05, 0.05, 0.10});
+  GraspJudgeParams p;
+  p.accept_checks = 25;
+  const GraspAttemptRecord rec = record(0.10, topDown({1.7, 0.0, 0.82}));
+  int calls = 0;
+  const AttemptJudgement any = judgeAttempt(rec, box, scene, kGripper, p, 1, [&](const Eigen::Isometry3d&) { return ++calls > 0; });
+  EXPECT_TRUE(any.reach_judged && any.reachable_exists);
+  EXPECT_EQ(calls, 1) << "the chosen grasp, valid and reached: no search";
+  const auto tilted = [](const Eigen::Isometry3d& g) { return g.linear().col(2).z() > -0.9; };
+  const AttemptJudgement leaning = judgeAttempt(rec, box, scene, kGripper, p, 1, tilted);
+  EXPECT_TRUE(leaning.reach_judged && leaning.reachable_exists);
+  const AttemptJudgement out = judgeAttempt(rec, box, scene, kGripper, p, 1, [](const Eigen::Isometry3d&) { return false; });
+  EXPECT_TRUE(out.reach_judged && out.valid_exists);
+  EXPECT_FALSE(out.reachable_exists);
+  EXPECT_EQ(out.reach_refused, p.accept_checks);
+  EXPECT_FALSE(judgeAttempt(rec, box, scene, kGripper, p, 1).reach_judged) << "no reach test";
+  const AttemptJudgement none = judgeAttempt(rec, ehc_sim::boxSurface({0.10, 0.10, 0.10}), scene, kGripper, p, 1, tilted);
+  EXPECT_FALSE(none.valid_exists || none.reach_judged || none.reachable_exists);
+  // The counts: objects with a valid grasp, those with a reachable one, those grasped.
+  JudgeCounts c;
+  for (const GraspTrial& t : {trial("ehc", true, any), trial("ehc", false, leaning), trial("ehc", true, out),
+                              trial("ehc", false, none)})
+    c.add(t);
+  EXPECT_EQ(c.valid_exists, 3);
+  EXPECT_EQ(c.reach_judged, 3);
+  EXPECT_EQ(c.reachable_exists, 2);
+  EXPECT_EQ(c.grasped_where_reachable, 1);
+}
+
+TEST(EverydayJudge, TheTableTopUnderAPointIsItsSupport) {
+  ehc_sim::SceneConfig scene = tableScene();
+  ehc_sim::TableConfig turned;
+  turned.center = Eigen::Vector2d(-2.0, 1.0);
+  turned.size = Eigen::Vector2d(0.6, 1.0);
+  turned.yaw = 0.5;
+  turned.height = 0.9;
+  scene.tables.push_back(turned);
+  const auto top = tableTopUnder(scene, Eigen::Vector2d(1.9, 0.5));
+  ASSERT_TRUE(top);
+  EXPECT_DOUBLE_EQ(top->height, kTable);
+  ASSERT_EQ(top->footprint.size(), 4u);
+  EXPECT_TRUE(top->footprint[0].isApprox(Eigen::Vector2d(1.5, -0.6)));
+  EXPECT_TRUE(top->footprint[2].isApprox(Eigen::Vector2d(2.3, 0.6)));
+  // The turned table: its corners 0.3 and 0.5 m from its centre along its own axes.
+  const Eigen::Vector2d inside = turned.center + Eigen::Rotation2Dd(0.5) * Eigen::Vector2d(0.25, 0.45);
+  const auto t2 = tableTopUnder(scene, inside);
+  ASSERT_TRUE(t2);
+  EXPECT_DOUBLE_EQ(t2->height, 0.9);
+  EXPECT_TRUE(t2->valid());
+  EXPECT_TRUE(t2->footprint[2].isApprox(turned.center + Eigen::Rotation2Dd(0.5) * Eigen::Vector2d(0.3, 0.5)));
+  EXPECT_GT(ehc_perception::polygonArea(t2->footprint), 0.0) << "counter-clockwise";
+  EXPECT_FALSE(tableTopUnder(scene, turned.center + Eigen::Rotation2Dd(0.5) * Eigen::Vector2d(0.35, 0.0))) << "the floor";
 }
 
 TEST(EverydayJudge, OneEverydaySetIsJudgedObjectByObject) {
@@ -266,6 +335,10 @@ TEST(EverydayJudge, OneEverydaySetIsJudgedObjectByObject) {
     }
     if (t.success) {
       EXPECT_TRUE(j.valid_exists || j.reason(t.success) == "grasped_where_none");
+    }
+    EXPECT_EQ(j.reach_judged, j.valid_exists) << "the run's robot judges reach where a valid grasp exists";
+    if (t.success && j.valid_exists) {
+      EXPECT_TRUE(j.reachable_exists) << "grasped: the robot reached a valid grasp";
     }
   }
   const ehc_test::TempDir dir("ehc_everyday_set");

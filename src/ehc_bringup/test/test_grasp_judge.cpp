@@ -4,6 +4,7 @@
 
 #include "ehc_bringup/grasp_judge.h"
 
+#include "ehc_test/errors.h"
 #include "ehc_test/test_seed.h"
 
 #include <gtest/gtest.h>
@@ -245,6 +246,47 @@ TEST(GraspJudge, AValidGraspExistsOnlyWhereOneFits) {
   std::printf("standing box: valid after %d candidates; 100 mm cube: %d judged; flat plate: %d judged, mostly %s; "
               "lying rod: valid after %d\n",
               e1.candidates, e3.candidates, e4.candidates, toString(e4.commonest()).c_str(), e5.candidates);
+}
+
+TEST(GraspJudge, TheExistenceSearchTakesOnlyGraspsItsAcceptanceTestAccepts) {
+  // An acceptance test (e.g. the robot's reach) narrows the search: a random box that fits the
+  // opening, only approaches tilted at least `tilt` from straight down towards a random side
+  // (within 45 deg of its azimuth) accepted, then none; the search puts at most accept_checks
+  // valid grasps to the test.
+  const unsigned seed = ehc_test::testSeed("GraspJudge acceptance test");
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  GraspJudgeParams p;
+  p.samples = 300;
+  p.accept_checks = 200 + static_cast<int>(100 * u(rng));
+  const Eigen::Vector3d size(0.03 + 0.03 * u(rng), 0.03 + 0.03 * u(rng), 0.06 + 0.08 * u(rng));
+  const GraspJudge box(ehc_sim::boxSurface(size), onTable(0, 0, 0.5 * size.z()), kTable, {}, p, Eigen::Vector3d(1, 0, -1));
+  const double tilt = (30.0 + 30.0 * u(rng)) * M_PI / 180.0, azimuth = 2.0 * M_PI * u(rng);
+  const Eigen::Vector3d side(std::cos(azimuth), std::sin(azimuth), 0.0);
+  int calls = 0;
+  const auto tilted = [&](const Eigen::Isometry3d& g) {
+    ++calls;
+    EXPECT_EQ(box.judge(g).verdict, GraspVerdict::Valid) << "only valid grasps are put to the test";
+    const Eigen::Vector3d z = g.linear().col(2);
+    return -z.z() <= std::cos(tilt) && z.head<2>().normalized().dot(side.head<2>()) >= std::cos(M_PI / 4.0);
+  };
+  const ehc_bringup::GraspExistence found = box.findValidGrasp(seed, tilted);
+  std::printf("seed %u: box %.3f x %.3f x %.3f, tilt >= %.0f deg towards azimuth %.0f deg: %d tested, %d refused\n", seed,
+              size.x(), size.y(), size.z(), tilt * 180.0 / M_PI, azimuth * 180.0 / M_PI, calls, found.refused);
+  ASSERT_TRUE(found.exists);
+  EXPECT_EQ(box.judge(found.grasp).verdict, GraspVerdict::Valid);
+  const Eigen::Vector3d z = found.grasp.linear().col(2);
+  EXPECT_LE(-z.z(), std::cos(tilt) + 1e-9);
+  EXPECT_GE(z.head<2>().normalized().dot(side.head<2>()), std::cos(M_PI / 4.0) - 1e-9);
+  EXPECT_EQ(found.refused, calls - 1);
+  EXPECT_TRUE(box.findValidGrasp(seed).exists) << "without a test: the first valid grasp";
+  calls = 0;
+  const ehc_bringup::GraspExistence none = box.findValidGrasp(seed, [&](const Eigen::Isometry3d& g) { return tilted(g) && false; });
+  EXPECT_FALSE(none.exists);
+  EXPECT_EQ(none.refused, p.accept_checks);
+  EXPECT_EQ(calls, p.accept_checks);
+  p.accept_checks = 0;
+  EXPECT_NE(ehc_test::errorOf([&] { p.validate(); }).find("accept_checks"), std::string::npos);
 }
 
 TEST(GraspJudge, LibraryViewsAreTheSameInASplitAndInAll) {

@@ -10,6 +10,7 @@
 
 #include "ehc_bringup/grasp_reach.h"
 #include "ehc_bringup/grasp_selection.h"
+#include "ehc_bringup/grasp_sequencer.h"
 #include "ehc_common/config_node.h"
 #include "ehc_control/qp_controller.h"
 #include "ehc_control/robot_collision_model.h"
@@ -53,11 +54,8 @@ Eigen::Isometry3d graspAt(const Eigen::Vector3d& p, const Eigen::Vector3d& z) {
   return T;
 }
 
-Eigen::Isometry3d preGraspOf(const Eigen::Isometry3d& g) {
-  Eigen::Isometry3d T = g;
-  T.translation() -= 0.10 * g.linear().col(2);
-  return T;
-}
+/// The pre-grasp 10 cm back along the approach (the sequencer's default pregrasp_distance).
+Eigen::Isometry3d preGraspOf(const Eigen::Isometry3d& g) { return backedOff(g, 0.10); }
 
 /// One robot's model and its controller's stop distances and joint stop (config/control/controller.yaml).
 struct Robot {

@@ -118,12 +118,16 @@ def test_everyday_objects_report_both_halves_with_the_bar_and_the_misses(tmp_pat
     assert "ehc_experiment grasp" in body and "--library <half>" in body
     rows = {r[0]: r for r in table_rows(body)[1:]}
     assert set(rows) == {"tuning", "validation"}
-    # The fixture's trials: 6 objects per half, all with a valid grasp in view, 1 grasped each.
+    # The fixture's trials: 6 objects per half, all with a valid grasp in view, 1 grasped each;
+    # in the validation half 4 of them with one the robot reaches (the grasped one among them),
+    # the tuning half's run written before that column.
     for half in ("tuning", "validation"):
         assert rows[half][2:5] == ["2", "6", "6"], rows[half]
         assert rows[half][5].startswith("16.7 [") and rows[half][5].endswith("(1/6)"), rows[half]
-        assert rows[half][6] == "0"
-    assert rows["validation"][7] == "not met" and rows["tuning"][7] == "-"
+        assert rows[half][7] == "0"
+    assert rows["validation"][6].startswith("25.0 [") and rows["validation"][6].endswith("(1/4)"), rows["validation"]
+    assert rows["tuning"][6] == "-"
+    assert rows["validation"][8] == "not met" and rows["tuning"][8] == "-"
     assert "Misses where a valid grasp was in view, validation half, ehc: " in body
     assert "(obstacle: left_finger_link at mug_02 (the target)) in PRE_GRASP: 1" in body  # its own points
     assert "(obstacle: right_finger_link at mug_02) in PRE_GRASP: 1" in body  # a neighbour

@@ -112,6 +112,13 @@ struct AttemptJudgement {
   /// (GraspJudge::findValidGrasp, run only when it is not) finds one.
   bool valid_exists = false;
   GraspVerdict search_verdict = GraspVerdict::Valid;  ///< none exists: the search's commonest verdict
+  /// With a reach test (judgeAttempt's `reachable`) and a valid grasp in the view: whether one of
+  /// the valid grasps is one the robot reaches (the chosen grasp, else the existence search with
+  /// the reach test as its acceptance: GraspJudge::findValidGrasp). A miss where none is reachable
+  /// is the robot's workspace, not the grasp's or the approach's.
+  bool reach_judged = false;
+  bool reachable_exists = false;
+  int reach_refused = 0;  ///< valid grasps the search found out of reach
   /// Grasps the search judged (0: no closing line through the mesh fits the opening; 0 also
   /// when it did not search).
   int search_candidates = 0;
@@ -134,8 +141,15 @@ struct AttemptJudgement {
 /// Judges `record` (world frame, ground truth) against `mesh` (the object's surface in its body
 /// frame) standing on the top of `scene`'s table under it (the floor if none); the existence
 /// search seeded with `seed`. Not judged (judged false) when the record has no view at all.
+/// `reachable` (optional): whether the robot reaches a grasp (TCP pose, world; e.g.
+/// GraspReach::judge of it and its pre-grasp), for AttemptJudgement::reachable_exists.
 AttemptJudgement judgeAttempt(const GraspAttemptRecord& record, const ehc_sim::TriangleMesh& mesh, const ehc_sim::SceneConfig& scene,
-                              const ehc_perception::GripperGeometry& gripper, const GraspJudgeParams& params, unsigned seed);
+                              const ehc_perception::GripperGeometry& gripper, const GraspJudgeParams& params, unsigned seed,
+                              const std::function<bool(const Eigen::Isometry3d&)>& reachable = {});
+
+/// The top of `scene`'s table under `xy` (world) as a support surface (its height and its
+/// footprint's corners), the highest if several; nullopt on the floor.
+std::optional<SupportSurface> tableTopUnder(const ehc_sim::SceneConfig& scene, const Eigen::Vector2d& xy);
 
 /// One grasp (one row of trials.csv).
 struct GraspTrial {
@@ -189,6 +203,9 @@ struct JudgeCounts {
   int attempted_invalid = 0;     ///< ... judged invalid
   int attempted_where_none = 0;  ///< a grasp attempted where no valid grasp exists in the view
   int grasped_where_none = 0;    ///< lifted although no valid grasp exists (the judge is stricter)
+  /// Of the objects with a valid grasp in view, those judged for reach (AttemptJudgement::
+  /// reach_judged), those where a valid grasp is one the robot reaches, and those grasped.
+  int reach_judged = 0, reachable_exists = 0, grasped_where_reachable = 0;
   /// Judged grasps per outcome (AttemptJudgement::reason), and the misses where a valid grasp
   /// exists and none was chosen per the generator's failure in the judged view (toString of
   /// GraspFailure; "no_target:<selection>" when a cloud target was not selected there).

@@ -71,6 +71,9 @@ struct GraspJudgeParams {
   double max_view_angle_deg = 95.0;    ///< approach vs the view direction (when one is given)
   int samples = 2000;                  ///< existence: surface points drawn
   int approach_steps = 12;             ///< existence: approaches around each closing axis
+  /// existence with an acceptance test (findValidGrasp's `accept`, e.g. the robot's reach): at
+  /// most this many valid grasps are tested, then the search ends without one
+  int accept_checks = 100;
   void validate() const;               ///< throws std::invalid_argument "[GraspJudge] ..."
 };
 
@@ -92,6 +95,7 @@ struct GraspExistence {
   int candidates = 0;  ///< grasps judged (the search stops at the first valid one)
   Eigen::Isometry3d grasp = Eigen::Isometry3d::Identity();  ///< the valid grasp found
   std::map<GraspVerdict, int> verdicts;  ///< of the candidates judged
+  int refused = 0;  ///< valid grasps the acceptance test refused (findValidGrasp's `accept`)
   GraspVerdict commonest() const;         ///< the commonest invalid verdict (Valid if none)
 };
 
@@ -110,8 +114,10 @@ class GraspJudge {
   /// The grasp (grasp frame in the world) judged as the header says.
   GraspJudgement judge(const Eigen::Isometry3d& grasp) const;
   /// Candidates sampled from the mesh with `seed` (same seed, same candidates), judged until one
-  /// is valid.
-  GraspExistence findValidGrasp(unsigned seed) const;
+  /// is valid and, with `accept`, accepted by it (e.g. a grasp the robot reaches: the other
+  /// approaches round a refused grasp's closing axis are judged next); at most
+  /// params.accept_checks valid grasps are put to `accept`.
+  GraspExistence findValidGrasp(unsigned seed, const std::function<bool(const Eigen::Isometry3d&)>& accept = {}) const;
 
   /// The opening at which the closing fingers stop: the object's extent along the closing axis
   /// within the fingers' slab (finger breadth x finger length), from rays cast from each finger's
@@ -129,8 +135,10 @@ class GraspJudge {
   GraspVerdict closingLine(const Eigen::Isometry3d& grasp, GraspJudgement* out) const;
   GraspVerdict sweep(const Eigen::Isometry3d& grasp) const;
   /// Existence: the candidates of surface point `p` closing along `y` (the outward side of p);
-  /// true when one is valid (then in `ex`).
-  bool tryAxis(const Eigen::Vector3d& p, const Eigen::Vector3d& y, double phase, GraspExistence* ex) const;
+  /// true when the search ends: one is valid and accepted (then in `ex`), or the acceptance
+  /// checks are used up.
+  bool tryAxis(const Eigen::Vector3d& p, const Eigen::Vector3d& y, double phase,
+               const std::function<bool(const Eigen::Isometry3d&)>& accept, GraspExistence* ex) const;
 
   struct Impl;
   std::unique_ptr<Impl> impl_;

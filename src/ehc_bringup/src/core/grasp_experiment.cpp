@@ -230,21 +230,25 @@ std::string AttemptJudgement::reason(bool success) const {
   return "none_exists:" + (search_candidates > 0 ? toString(search_verdict) : std::string("wider_than_opening"));
 }
 
-namespace {
-
-/// Height of the table top under `xy` (world), the highest if several; 0 (the floor) if none.
-double tableHeightUnder(const ehc_sim::SceneConfig& scene, const Eigen::Vector2d& xy) {
-  double h = 0.0;
+std::optional<SupportSurface> tableTopUnder(const ehc_sim::SceneConfig& scene, const Eigen::Vector2d& xy) {
+  const ehc_sim::TableConfig* top = nullptr;
   for (const ehc_sim::TableConfig& t : scene.tables) {
     const Eigen::Vector2d local = Eigen::Rotation2Dd(-t.yaw) * (xy - t.center);
-    if (std::abs(local.x()) <= 0.5 * t.size.x() && std::abs(local.y()) <= 0.5 * t.size.y()) h = std::max(h, t.height);
+    if (std::abs(local.x()) <= 0.5 * t.size.x() && std::abs(local.y()) <= 0.5 * t.size.y() && (!top || t.height > top->height))
+      top = &t;
   }
-  return h;
+  if (!top) return std::nullopt;
+  SupportSurface s;
+  s.height = top->height;
+  const Eigen::Rotation2Dd R(top->yaw);
+  for (const Eigen::Vector2d& corner : {Eigen::Vector2d(-1, -1), Eigen::Vector2d(1, -1), Eigen::Vector2d(1, 1), Eigen::Vector2d(-1, 1)})
+    s.footprint.push_back(top->center + R * (0.5 * corner.cwiseProduct(top->size)));
+  return s;
 }
-}  // namespace
 
 AttemptJudgement judgeAttempt(const GraspAttemptRecord& record, const ehc_sim::TriangleMesh& mesh, const ehc_sim::SceneConfig& scene,
-                              const ehc_perception::GripperGeometry& gripper, const GraspJudgeParams& params, unsigned seed) {
+                              const ehc_perception::GripperGeometry& gripper, const GraspJudgeParams& params, unsigned seed,
+                              const std::function<bool(const Eigen::Isometry3d&)>& reachable) {
   AttemptJudgement j;
   const ObjectViewRecord* view = nullptr;
   if (record.chosen && record.grasp_view.t >= 0.0) view = &record.grasp_view, j.view = "grasp";
@@ -258,7 +262,8 @@ AttemptJudgement judgeAttempt(const GraspAttemptRecord& record, const ehc_sim::T
   j.chosen = record.chosen;
   j.attempted = record.locked;
   const Eigen::Isometry3d object = record.chosen ? record.T_world_object_at_choice : view->T_world_object;
-  const GraspJudge judge(mesh, object, tableHeightUnder(scene, object.translation().head<2>()), gripper, params,
+  const std::optional<SupportSurface> top = tableTopUnder(scene, object.translation().head<2>());
+  const GraspJudge judge(mesh, object, top ? top->height : 0.0, gripper, params,
                          view->T_world_object.translation() - view->T_world_cam.translation());
   if (record.chosen) j.verdict = judge.judge(record.grasp.pose).verdict;
   j.has_candidate = record.candidate.has_value();
@@ -269,6 +274,15 @@ AttemptJudgement judgeAttempt(const GraspAttemptRecord& record, const ehc_sim::T
     j.valid_exists = e.exists;
     j.search_verdict = e.exists ? GraspVerdict::Valid : e.commonest();
     j.search_candidates = e.candidates;
+  }
+  if (j.valid_exists && reachable) {
+    j.reach_judged = true;
+    j.reachable_exists = j.chosen && j.verdict == GraspVerdict::Valid && reachable(record.grasp.pose);
+    if (!j.reachable_exists) {
+      const GraspExistence e = judge.findValidGrasp(seed, reachable);
+      j.reachable_exists = e.exists;
+      j.reach_refused = e.refused;
+    }
   }
   return j;
 }
@@ -291,6 +305,9 @@ void JudgeCounts::add(const GraspTrial& t) {
   if (j.valid_exists) {
     ++valid_exists;
     grasped_where_exists += t.success;
+    reach_judged += j.reach_judged;
+    reachable_exists += j.reachable_exists;
+    grasped_where_reachable += j.reachable_exists && t.success;
   } else {
     attempted_where_none += j.attempted;
     grasped_where_none += t.success;
@@ -300,17 +317,32 @@ void JudgeCounts::add(const GraspTrial& t) {
 namespace {
 
 /// Every object's attempt of a finished run judged (trials in sequencer order, as the scene's
-/// objects): the run seed and the object's index seed its existence search.
+/// objects): the run seed and the object's index seed its existence search. The reach test:
+/// GraspReach (the sequencer's reach parameters, the controller's stop distances) with the true
+/// top of the table under the object as its support and the robot's start as its base (the
+/// ways to the placements from the robot's side), the grasp or its half-turn about the approach
+/// (a parallel-jaw grasp is symmetric) with its pre-grasp; the obstacle map is not consulted.
 void judgeTrials(const GraspPipelineConfig& cfg, const GraspPipeline& pipe, unsigned run_seed, std::vector<GraspTrial>* trials) {
   GraspJudgeParams params;  // mu 0.5
   params.pregrasp_distance = cfg.sequencer.pregrasp_distance;
   params.max_approach_tilt_deg = params.max_view_angle_deg = cfg.generator.max_approach_tilt_deg;
+  const ehc_control::QpControllerParams& qp = pipe.cycle().controller().params();
+  GraspReach reach(pipe.cycle().model(), cfg.sequencer.reach, [&qp](const std::string& link) { return qp.obstacleStop(link); },
+                   qp.joint_stop);
+  reach.setRobotBase(cfg.scene.robot_start);
+  const auto reachable = [&](const Eigen::Isometry3d& grasp) {
+    for (const Eigen::Isometry3d& g : {grasp, Eigen::Isometry3d(grasp * Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitZ()))})
+      if (reach.judge(g, backedOff(g, cfg.sequencer.pregrasp_distance)).reachable) return true;
+    return false;
+  };
   const std::vector<GraspAttemptRecord>& records = pipe.attempts();
   for (std::size_t i = 0; i < trials->size() && i < records.size() && i < cfg.scene.objects.size(); ++i) {
     std::seed_seq seq{run_seed, static_cast<unsigned>(i)};
     std::mt19937 rng(seq);
     const ehc_sim::TriangleMesh& mesh = pipe.world().bodySurface(pipe.world().objectBodyIndex(static_cast<int>(i)));
-    (*trials)[i].judge = judgeAttempt(records[i], mesh, cfg.scene, cfg.generator.gripper, params, static_cast<unsigned>(rng()));
+    reach.setSupport(tableTopUnder(cfg.scene, cfg.scene.objects[i].position.head<2>()));
+    (*trials)[i].judge = judgeAttempt(records[i], mesh, cfg.scene, cfg.generator.gripper, params, static_cast<unsigned>(rng()),
+                                      reachable);
   }
 }
 
@@ -606,6 +638,9 @@ ehc_common::Json graspSummaryJsonValue(const GraspMethodSummary& s) {
                   {"valid_exists", c.valid_exists},
                   {"grasped_where_exists", c.grasped_where_exists},
                   {"grasped_where_exists_rate", c.valid_exists ? jsonNumber(100.0 * c.grasped_where_exists / c.valid_exists) : ehc_common::Json()},
+                  {"reach_judged", c.reach_judged},
+                  {"reachable_exists", c.reachable_exists},
+                  {"grasped_where_reachable", c.grasped_where_reachable},
                   {"attempted", c.attempted},
                   {"attempted_invalid", c.attempted_invalid},
                   {"attempted_where_none", c.attempted_where_none},
@@ -696,14 +731,18 @@ void writeJudgeTable(std::ostream& f, const GraspExperimentResult& result) {
        "line inside the opening, friction cone mu 0.5, fingers and palm swept in). A valid grasp exists where the grasp the "
        "sequencer chose is valid or the search on the mesh finds one, from the camera pose of the view the grasp came from "
        "(without one: the last view with the object in the image). Bar: grasped and lifted >= 90 % where one exists, no "
-       "grasp attempted where none exists.\n\n"
-    << "| Method | objects | a valid grasp exists | grasped and lifted among them | attempted where none exists "
-       "| attempted (judged invalid) | lifted where none exists |\n|---|---|---|---|---|---|---|\n";
+       "grasp attempted where none exists. Reachable: one of the valid grasps is one the robot reaches from its side of the "
+       "table with every link clear of the top (GraspReach on the true table top; neighbours not considered).\n\n"
+    << "| Method | objects | a valid grasp exists | grasped and lifted among them | ... a reachable one | grasped and "
+       "lifted among those | attempted where none exists | attempted (judged invalid) | lifted where none exists |\n"
+       "|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& s : result.summaries) {
     const JudgeCounts& c = s.judge;
     f << "| " << s.method << " | " << c.objects << " | " << c.valid_exists << " | " << c.grasped_where_exists << " ("
-      << std::setprecision(1) << percent(c.grasped_where_exists, c.valid_exists) << " %) | " << c.attempted_where_none
-      << " | " << c.attempted << " (" << c.attempted_invalid << ") | " << c.grasped_where_none << " |\n";
+      << std::setprecision(1) << percent(c.grasped_where_exists, c.valid_exists) << " %) | " << c.reachable_exists
+      << " | " << c.grasped_where_reachable << " (" << percent(c.grasped_where_reachable, c.reachable_exists) << " %) | "
+      << c.attempted_where_none << " | " << c.attempted << " (" << c.attempted_invalid << ") | " << c.grasped_where_none
+      << " |\n";
   }
 }
 
@@ -768,7 +807,7 @@ void writeTrialsCsv(const std::string& dir, const GraspExperimentResult& result)
        "min_obstacle_phase,min_margin_m,min_margin_link,min_margin_body,min_margin_phase,min_grasped_object_m,"
        "min_grasped_object_link,min_grasped_object_phase,lock_centre_in_grasp_x_m,lock_centre_in_grasp_y_m,"
        "lock_centre_in_grasp_z_m,close_centre_in_tcp_x_m,close_centre_in_tcp_y_m,close_centre_in_tcp_z_m,"
-       "lock_closing_axis_error_deg,cause,judge_view,valid_exists,attempted,attempt_valid,grasp_verdict,candidate_verdict,judge_reason,"
+       "lock_closing_axis_error_deg,cause,judge_view,valid_exists,valid_reachable_exists,attempted,attempt_valid,grasp_verdict,candidate_verdict,judge_reason,"
        "target_selection,generator_failure,generator_reason\n";
   for (const auto& t : result.trials) {
     f << t.method << "," << t.set << "," << t.index << "," << t.seed << "," << t.object << "," << t.approach << ","
@@ -786,12 +825,13 @@ void writeTrialsCsv(const std::string& dir, const GraspExperimentResult& result)
     f << "," << t.cause;
     const AttemptJudgement& j = t.judge;
     if (j.judged)
-      f << "," << j.view << "," << j.valid_exists << "," << j.attempted << "," << j.attemptValid() << ","
+      f << "," << j.view << "," << j.valid_exists << "," << (j.reach_judged ? (j.reachable_exists ? "1" : "0") : "") << ","
+        << j.attempted << "," << j.attemptValid() << ","
         << (j.chosen ? toString(j.verdict) : "") << "," << (j.has_candidate ? toString(j.candidate_verdict) : "") << ","
         << j.reason(t.success) << "," << ehc_control::toString(j.target) << ","
         << ehc_perception::toString(j.generator_failure) << "," << ehc_common::csvField(j.generator_reason);
     else
-      f << ",,,,,,,,,,";
+      f << ",,,,,,,,,,,";
     f << "\n";
   }
 }

@@ -78,6 +78,7 @@ void GraspJudgeParams::validate() const {
   if (!(max_view_angle_deg > 0.0 && max_view_angle_deg <= 180.0)) fail("max_view_angle_deg must be in (0, 180]");
   if (samples < 1 || samples > 1000000) fail("samples must be in [1, 1e6]");
   if (approach_steps < 1 || approach_steps > 360) fail("approach_steps must be in [1, 360]");
+  if (accept_checks < 1 || accept_checks > 100000) fail("accept_checks must be in [1, 1e5]");
 }
 
 GraspVerdict GraspExistence::commonest() const {
@@ -240,7 +241,8 @@ GraspJudgement GraspJudge::judge(const Eigen::Isometry3d& grasp) const {
   return out;
 }
 
-bool GraspJudge::tryAxis(const Eigen::Vector3d& p, const Eigen::Vector3d& y, double phase, GraspExistence* ex) const {
+bool GraspJudge::tryAxis(const Eigen::Vector3d& p, const Eigen::Vector3d& y, double phase,
+                         const std::function<bool(const Eigen::Isometry3d&)>& accept, GraspExistence* ex) const {
   // The opposite side: where the ray from p into the object along -y leaves it, within the opening.
   Eigen::Vector3d q, nq;
   const Eigen::Vector3d inside = p - 1e-6 * y;
@@ -266,16 +268,18 @@ bool GraspJudge::tryAxis(const Eigen::Vector3d& p, const Eigen::Vector3d& y, dou
     const GraspJudgement j = judge(grasp);
     ++ex->candidates;
     ++ex->verdicts[j.verdict];
-    if (j.valid()) {
+    if (!j.valid()) continue;
+    if (!accept || accept(grasp)) {
       ex->exists = true;
       ex->grasp = grasp;
       return true;
     }
+    if (++ex->refused >= params_.accept_checks) return true;
   }
   return false;
 }
 
-GraspExistence GraspJudge::findValidGrasp(unsigned seed) const {
+GraspExistence GraspJudge::findValidGrasp(unsigned seed, const std::function<bool(const Eigen::Isometry3d&)>& accept) const {
   const Impl& m = *impl_;
   GraspExistence ex;
   std::mt19937 rng(seed);
@@ -295,9 +299,9 @@ GraspExistence GraspJudge::findValidGrasp(unsigned seed) const {
     if (n.isZero()) continue;
     const Eigen::Vector3d p = m.T_world_object * local;
     // The point's normal, and its horizontal part (closing parallel to the table).
-    if (tryAxis(p, n, phase, &ex)) return ex;
+    if (tryAxis(p, n, phase, accept, &ex)) return ex;
     const Eigen::Vector3d level(n.x(), n.y(), 0.0);
-    if (level.norm() > 0.1 && std::abs(n.z()) > 1e-6 && tryAxis(p, level.normalized(), phase, &ex)) return ex;
+    if (level.norm() > 0.1 && std::abs(n.z()) > 1e-6 && tryAxis(p, level.normalized(), phase, accept, &ex)) return ex;
   }
   return ex;
 }

@@ -35,6 +35,11 @@ constexpr ehc_common::EnumNames<GraspPhase, 10> kGraspPhaseNames = {{{GraspPhase
 
 std::string toString(GraspPhase p) { return ehc_common::enumName(kGraspPhaseNames, p, "GraspSequencer"); }
 
+Eigen::Isometry3d backedOff(Eigen::Isometry3d pose, double distance) {
+  pose.translation() -= distance * pose.linear().col(2);
+  return pose;
+}
+
 namespace {
 constexpr ehc_common::EnumNames<GraspCause, 8> kGraspCauseNames = {{
     {GraspCause::None, "none"},
@@ -62,12 +67,6 @@ bool controllerStopped(const std::string& phase) {
   return false;
 }
 
-/// The look pose `distance` back from `pose` along its approach (z) axis: where the camera sees it.
-Eigen::Isometry3d lookPose(Eigen::Isometry3d pose, double distance) {
-  pose.translation() -= distance * pose.linear().col(2);
-  return pose;
-}
-
 /// A cloud target's look pose: its pose (ehc_control::cloudTargetPose, z horizontal from the
 /// viewpoint) turned about its horizontal y axis so that z points `elevation_deg` below the
 /// horizon, then backed off `distance` along it: the camera looks down on the object from
@@ -80,7 +79,7 @@ Eigen::Isometry3d cloudLookPose(Eigen::Isometry3d pose, double distance, double 
     const Eigen::Vector3d down = std::cos(e) * level.normalized() - std::sin(e) * Eigen::Vector3d::UnitZ();
     pose.linear() = Eigen::Quaterniond::FromTwoVectors(z, down).toRotationMatrix() * pose.linear();
   }
-  return lookPose(pose, distance);
+  return backedOff(pose, distance);
 }
 }  // namespace
 
@@ -473,9 +472,7 @@ bool GraspSequencer::nearEnoughWhenStalled(const SequencerInput& in, const Eigen
 }
 
 Eigen::Isometry3d GraspSequencer::preGrasp(const Eigen::Isometry3d& grasp) const {
-  Eigen::Isometry3d T = grasp;
-  T.translation() -= params_.pregrasp_distance * grasp.linear().col(2);
-  return T;
+  return backedOff(grasp, params_.pregrasp_distance);
 }
 
 Eigen::Isometry3d GraspSequencer::approachGoal(const SequencerInput& in, const Eigen::Isometry3d& grasp) {
@@ -711,7 +708,7 @@ void GraspSequencer::advanceWaitTarget(const SequencerInput& in, bool fresh, Seq
     const ehc_control::TargetSelector& target = params_.objects[current_].target;
     if (seen && params_.search_distance > 0.0) {
       out->goal = target.fromCloud() ? cloudLookPose(*seen, params_.search_distance, params_.search_elevation_deg)
-                                     : lookPose(*seen, params_.search_distance);
+                                     : backedOff(*seen, params_.search_distance);
     } else if (target.kind == ehc_control::TargetSelectorKind::Nearest && params_.search_distance > 0.0 && in.tcp &&
                isValidPose(*in.tcp)) {
       // Never seen, but where to look is known: a look pose at the point, from the TCP's side.
@@ -723,7 +720,7 @@ void GraspSequencer::advanceWaitTarget(const SequencerInput& in, bool fresh, Seq
       // image from afar (a tag at ~2 px per cell) is found on the way there; without a goal the
       // robot waited where it could not see it until the time limit.
       if (const auto near = nearestSeenObject(in.tcp->translation()))
-        out->goal = lookPose(ehc_control::cloudTargetPose(*near, in.tcp->translation()), params_.search_distance);
+        out->goal = backedOff(ehc_control::cloudTargetPose(*near, in.tcp->translation()), params_.search_distance);
     }
     return;
   }
