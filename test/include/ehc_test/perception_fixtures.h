@@ -170,6 +170,37 @@ inline Surface sphereSurface(double r, double step) {
   return s;
 }
 
+/// A bent tube (a banana without its tapering ends): radius r round a centre line that is an arc
+/// of `bend` m radius in the local x-y plane, `length` m long along it, its middle at the origin
+/// with the tangent along x and the arc bending towards +y; end caps closed.
+inline Surface bentTubeSurface(double r, double bend, double length, double step) {
+  Surface s;
+  const double half = 0.5 * length / bend;  // rad of arc each side of the middle
+  const int nu = std::max(2, static_cast<int>(std::round(length / step)));
+  const int na = std::max(8, static_cast<int>(std::round(2 * M_PI * r / step)));
+  const auto centre = [&](double t) { return Eigen::Vector3d(bend * std::sin(t), bend * (1.0 - std::cos(t)), 0.0); };
+  for (int k = 0; k <= nu; ++k) {
+    const double t = -half + 2.0 * half * k / nu;
+    const Eigen::Vector3d c = centre(t), tangent(std::cos(t), std::sin(t), 0.0), inward(-std::sin(t), std::cos(t), 0.0);
+    for (int i = 0; i < na; ++i) {
+      const double a = 2 * M_PI * i / na;
+      const Eigen::Vector3d n = std::cos(a) * inward + std::sin(a) * Eigen::Vector3d::UnitZ();
+      s.add(c + r * n, n);
+    }
+    if (k == 0 || k == nu) {  // the caps
+      const Eigen::Vector3d out = k == 0 ? Eigen::Vector3d(-tangent) : tangent;
+      for (double rr = 0; rr < r - 1e-9; rr += step) {
+        const int m = std::max(1, static_cast<int>(std::round(2 * M_PI * rr / step)));
+        for (int i = 0; i < m; ++i) {
+          const double a = 2 * M_PI * i / m;
+          s.add(c + rr * (std::cos(a) * inward + std::sin(a) * Eigen::Vector3d::UnitZ()), out);
+        }
+      }
+    }
+  }
+  return s;
+}
+
 /// A bottle along its local z: body (r_body, length body_len), conical shoulder, neck.
 inline Surface bottleSurface(double r_body, double body_len, double shoulder_len, double r_neck,
                              double neck_len, double step) {

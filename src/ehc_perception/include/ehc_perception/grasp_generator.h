@@ -40,7 +40,9 @@
 // angles (no antipodal pair there, the seeds' normals tilted up). The object's extent across a
 // closing axis counts the unseen volume below the seen points down to the support, and round
 // sections are completed by a fitted circle (round_fit_tolerance): a cylinder lying across the
-// axis (circle resting on the support) or standing (circular footprint of its mantle; the points
+// axis (circle resting on the support; the section within a finger's breadth of the object's
+// middle along its length, where the fingers close, so that a bent body such as a banana is not
+// smeared into no circle at all) or standing (circular footprint of its mantle; the points
 // inside the circle by more than the tolerance, a narrower section such as a bottle's shoulder,
 // are left out of its fit, and a circle more than 1.25 x the seen footprint's longer side is an
 // arc of something else, e.g. a banana's bent side); an upright round object's circle bounds

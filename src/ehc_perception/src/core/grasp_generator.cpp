@@ -921,7 +921,9 @@ double arcSpan(const std::vector<Eigen::Vector2d>& q, const Eigen::Vector2d& c, 
 /// Round cross-sections, completed by their circle where the single view shows them only in
 /// part (the far side and grazing sides unseen). Lying: the section across closing axis `y`
 /// (points projected along `along`, only those whose normal is across `along`, so end caps do
-/// not fill it) is a circle resting on the support. Upright (`along` = the support normal):
+/// not fill it, and, with `half_length` > 0, only those within it of `ref` along `along`: the
+/// section where the fingers close, not smeared by a bent body's curve, e.g. a banana's) is a
+/// circle resting on the support. Upright (`along` = the support normal):
 /// the footprint of the points whose normal is parallel to the support (the mantle) is a
 /// circle. Valid if the circle fits (fitCircle), the points on it cover an arc of at least 60
 /// deg (arcSpan: a chord of one radius; a few points on a short arc fit any circle), the seen
@@ -929,7 +931,7 @@ double arcSpan(const std::vector<Eigen::Vector2d>& q, const Eigen::Vector2d& c, 
 /// circle's extremes along y, at the height of its centre (lying) or of `ref` (upright).
 ExtentHint roundCrossSection(const Cloud& cloud, const Normals& normals, const Eigen::Vector4d& plane,
                              const Eigen::Vector3d& y, const Eigen::Vector3d& along,
-                             const Eigen::Vector3d& ref, double tolerance) {
+                             const Eigen::Vector3d& ref, double tolerance, double half_length = 0.0) {
   ExtentHint hint;
   const Eigen::Vector3d n = plane.head<3>();
   const bool upright = std::abs(along.dot(n)) > 0.9;
@@ -940,6 +942,7 @@ ExtentHint roundCrossSection(const Cloud& cloud, const Normals& normals, const E
     const Eigen::Vector3d nv = normals[i].getNormalVector3fMap().cast<double>();
     if (!nv.allFinite() || nv.norm() < 0.5 || std::abs(nv.dot(along)) > 0.7) continue;
     const Eigen::Vector3d p = cloud[i].getVector3fMap().cast<double>();
+    if (!upright && half_length > 0.0 && std::abs(along.dot(p - ref)) > half_length) continue;
     q.emplace_back(y.dot(p), upright ? v2.dot(p) : n.dot(p) + plane[3]);
     lo = std::min(lo, q.back().x());
     hi = std::max(hi, q.back().x());
@@ -1645,7 +1648,7 @@ void GraspSearch::addFootprintHypotheses(std::vector<Hyp>* hyps) {
     // A round cross-section across this axis (a cylinder lying along the other axis, seen
     // from one side down to grazing angles) is completed by its circle likewise.
     ExtentHint hint = roundCrossSection(cloud, normals, plane, footprint.axis[a], footprint.axis[1 - a],
-                                        po_.centroid, tol);
+                                        po_.centroid, tol, cfg_.gripper.finger_breadth);
     if (!hint.valid && upright.valid) {
       const Eigen::Vector3d c = 0.5 * (upright.a + upright.b);
       const double r = 0.5 * (upright.b - upright.a).norm();
