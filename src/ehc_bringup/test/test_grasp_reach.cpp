@@ -10,7 +10,6 @@
 
 #include "ehc_bringup/grasp_reach.h"
 #include "ehc_bringup/grasp_selection.h"
-#include "ehc_bringup/grasp_sequencer.h"
 #include "ehc_common/config_node.h"
 #include "ehc_control/qp_controller.h"
 #include "ehc_control/robot_collision_model.h"

@@ -145,7 +145,7 @@ struct AttemptJudgement {
 /// GraspReach::judge of it and its pre-grasp), for AttemptJudgement::reachable_exists.
 AttemptJudgement judgeAttempt(const GraspAttemptRecord& record, const ehc_sim::TriangleMesh& mesh, const ehc_sim::SceneConfig& scene,
                               const ehc_perception::GripperGeometry& gripper, const GraspJudgeParams& params, unsigned seed,
-                              const std::function<bool(const Eigen::Isometry3d&)>& reachable = {});
+                              const GraspReachable& reachable = {});
 
 /// The top of `scene`'s table under `xy` (world) as a support surface (its height and its
 /// footprint's corners), the highest if several; nullopt on the floor.

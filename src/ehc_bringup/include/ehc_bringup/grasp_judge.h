@@ -90,6 +90,9 @@ struct GraspJudgement {
   std::array<Eigen::Vector3d, 2> contact = {{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()}};  ///< world
 };
 
+/// An acceptance test of a valid grasp (grasp frame in the world), e.g. the robot's reach.
+using GraspAcceptance = std::function<bool(const Eigen::Isometry3d& grasp)>;
+
 struct GraspExistence {
   bool exists = false;
   int candidates = 0;  ///< grasps judged (the search stops at the first valid one)
@@ -117,7 +120,7 @@ class GraspJudge {
   /// is valid and, with `accept`, accepted by it (e.g. a grasp the robot reaches: the other
   /// approaches round a refused grasp's closing axis are judged next); at most
   /// params.accept_checks valid grasps are put to `accept`.
-  GraspExistence findValidGrasp(unsigned seed, const std::function<bool(const Eigen::Isometry3d&)>& accept = {}) const;
+  GraspExistence findValidGrasp(unsigned seed, const GraspAcceptance& accept = {}) const;
 
   /// The opening at which the closing fingers stop: the object's extent along the closing axis
   /// within the fingers' slab (finger breadth x finger length), from rays cast from each finger's
@@ -137,8 +140,8 @@ class GraspJudge {
   /// Existence: the candidates of surface point `p` closing along `y` (the outward side of p);
   /// true when the search ends: one is valid and accepted (then in `ex`), or the acceptance
   /// checks are used up.
-  bool tryAxis(const Eigen::Vector3d& p, const Eigen::Vector3d& y, double phase,
-               const std::function<bool(const Eigen::Isometry3d&)>& accept, GraspExistence* ex) const;
+  bool tryAxis(const Eigen::Vector3d& p, const Eigen::Vector3d& y, double phase, const GraspAcceptance& accept,
+               GraspExistence* ex) const;
 
   struct Impl;
   std::unique_ptr<Impl> impl_;

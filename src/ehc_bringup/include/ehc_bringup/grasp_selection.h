@@ -160,6 +160,13 @@ std::optional<GraspChoice> chooseGrasp(const std::vector<GraspCandidate>& candid
 Eigen::Isometry3d turnedTagGrasp(const Eigen::Isometry3d& tag_target, const Eigen::Vector3d& approach,
                                  double backoff);
 
+/// `pose` moved `distance` back along its z (approach) axis: a grasp's pre-grasp, a target's
+/// look pose, the tag fallback's grasp.
+Eigen::Isometry3d backedOff(Eigen::Isometry3d pose, double distance);
+
+/// A parallel-jaw grasp's orientation turned by pi about its approach (z) axis: the same grasp.
+Eigen::Matrix3d halfTurned(const Eigen::Matrix3d& R);
+
 using ehc_control::isValidPose;
 
 }  // namespace ehc_bringup

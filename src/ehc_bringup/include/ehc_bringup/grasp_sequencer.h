@@ -99,9 +99,6 @@ namespace ehc_bringup {
 enum class GraspPhase { WaitTarget, Approach, PreGrasp, Grasp, Close, Lift, Place, Release, Retreat, Done };
 std::string toString(GraspPhase p);
 
-/// `pose` moved `distance` back along its z (approach) axis: a grasp's pre-grasp, a target's look pose.
-Eigen::Isometry3d backedOff(Eigen::Isometry3d pose, double distance);
-
 struct GraspObjectSpec {
   std::string name;
   ApproachDirection approach = ApproachDirection::Forward;

@@ -248,7 +248,7 @@ std::optional<SupportSurface> tableTopUnder(const ehc_sim::SceneConfig& scene, c
 
 AttemptJudgement judgeAttempt(const GraspAttemptRecord& record, const ehc_sim::TriangleMesh& mesh, const ehc_sim::SceneConfig& scene,
                               const ehc_perception::GripperGeometry& gripper, const GraspJudgeParams& params, unsigned seed,
-                              const std::function<bool(const Eigen::Isometry3d&)>& reachable) {
+                              const GraspReachable& reachable) {
   AttemptJudgement j;
   const ObjectViewRecord* view = nullptr;
   if (record.chosen && record.grasp_view.t >= 0.0) view = &record.grasp_view, j.view = "grasp";
@@ -269,21 +269,20 @@ AttemptJudgement judgeAttempt(const GraspAttemptRecord& record, const ehc_sim::T
   j.has_candidate = record.candidate.has_value();
   if (j.has_candidate) j.candidate_verdict = judge.judge(record.candidate->pose).verdict;
   j.valid_exists = j.chosen && j.verdict == GraspVerdict::Valid;
-  if (!j.valid_exists) {
-    const GraspExistence e = judge.findValidGrasp(seed);
-    j.valid_exists = e.exists;
-    j.search_verdict = e.exists ? GraspVerdict::Valid : e.commonest();
-    j.search_candidates = e.candidates;
-  }
-  if (j.valid_exists && reachable) {
-    j.reach_judged = true;
-    j.reachable_exists = j.chosen && j.verdict == GraspVerdict::Valid && reachable(record.grasp.pose);
-    if (!j.reachable_exists) {
-      const GraspExistence e = judge.findValidGrasp(seed, reachable);
-      j.reachable_exists = e.exists;
-      j.reach_refused = e.refused;
+  j.reachable_exists = j.valid_exists && reachable && reachable(record.grasp.pose);
+  // One search answers both: the first valid grasp it meets (accepted or refused by the reach
+  // test) is the one the plain search stops at.
+  if (!j.valid_exists || (reachable && !j.reachable_exists)) {
+    const GraspExistence e = judge.findValidGrasp(seed, reachable);
+    if (!j.valid_exists) {
+      j.valid_exists = e.exists || e.refused > 0;
+      j.search_verdict = j.valid_exists ? GraspVerdict::Valid : e.commonest();
+      j.search_candidates = e.candidates;
     }
+    j.reachable_exists = reachable && e.exists;
+    j.reach_refused = e.refused;
   }
+  j.reach_judged = j.valid_exists && reachable;
   return j;
 }
 
@@ -331,7 +330,9 @@ void judgeTrials(const GraspPipelineConfig& cfg, const GraspPipeline& pipe, unsi
                    qp.joint_stop);
   reach.setRobotBase(cfg.scene.robot_start);
   const auto reachable = [&](const Eigen::Isometry3d& grasp) {
-    for (const Eigen::Isometry3d& g : {grasp, Eigen::Isometry3d(grasp * Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitZ()))})
+    Eigen::Isometry3d turned = grasp;
+    turned.linear() = halfTurned(grasp.linear());
+    for (const Eigen::Isometry3d& g : {grasp, turned})
       if (reach.judge(g, backedOff(g, cfg.sequencer.pregrasp_distance)).reachable) return true;
     return false;
   };

@@ -241,8 +241,8 @@ GraspJudgement GraspJudge::judge(const Eigen::Isometry3d& grasp) const {
   return out;
 }
 
-bool GraspJudge::tryAxis(const Eigen::Vector3d& p, const Eigen::Vector3d& y, double phase,
-                         const std::function<bool(const Eigen::Isometry3d&)>& accept, GraspExistence* ex) const {
+bool GraspJudge::tryAxis(const Eigen::Vector3d& p, const Eigen::Vector3d& y, double phase, const GraspAcceptance& accept,
+                         GraspExistence* ex) const {
   // The opposite side: where the ray from p into the object along -y leaves it, within the opening.
   Eigen::Vector3d q, nq;
   const Eigen::Vector3d inside = p - 1e-6 * y;
@@ -279,7 +279,7 @@ bool GraspJudge::tryAxis(const Eigen::Vector3d& p, const Eigen::Vector3d& y, dou
   return false;
 }
 
-GraspExistence GraspJudge::findValidGrasp(unsigned seed, const std::function<bool(const Eigen::Isometry3d&)>& accept) const {
+GraspExistence GraspJudge::findValidGrasp(unsigned seed, const GraspAcceptance& accept) const {
   const Impl& m = *impl_;
   GraspExistence ex;
   std::mt19937 rng(seed);

@@ -129,8 +129,17 @@ Eigen::Isometry3d turnedTagGrasp(const Eigen::Isometry3d& tag_target, const Eige
   T.linear().col(0) = x;
   T.linear().col(1) = y;
   T.linear().col(2) = z;
-  T.translation() = tag_target.translation() - backoff * z;
-  return T;
+  T.translation() = tag_target.translation();
+  return backedOff(T, backoff);
+}
+
+Eigen::Isometry3d backedOff(Eigen::Isometry3d pose, double distance) {
+  pose.translation() -= distance * pose.linear().col(2);
+  return pose;
+}
+
+Eigen::Matrix3d halfTurned(const Eigen::Matrix3d& R) {
+  return R * Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitZ()).toRotationMatrix();
 }
 
 namespace {
@@ -139,7 +148,7 @@ namespace {
 /// camera and the gripper body (on the TCP's +x side) stay clear of the support surface;
 /// otherwise the one closer to `reference` (less wrist motion).
 Eigen::Matrix3d closerHalfTurn(const Eigen::Matrix3d& R, const Eigen::Matrix3d& reference) {
-  const Eigen::Matrix3d flipped = R * Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const Eigen::Matrix3d flipped = halfTurned(R);
   if (std::abs(R.col(2).z()) < kShallow) return R.col(0).z() >= 0.0 ? R : flipped;
   return ehc_control::rotationAngle(flipped, reference) < ehc_control::rotationAngle(R, reference) ? flipped : R;
 }
@@ -232,8 +241,7 @@ GraspChoice tagFallback(ApproachDirection direction, const Eigen::Isometry3d& ta
   }
   if (direction == ApproachDirection::Tag || direction == ApproachDirection::Any ||
       approach.dot(tag_target.linear().col(2)) > 1.0 - 1e-12) {
-    best.pose = tag_target;
-    best.pose.translation() -= backoff * tag_target.linear().col(2);
+    best.pose = backedOff(tag_target, backoff);
   } else {
     best.pose = turnedTagGrasp(tag_target, approach, backoff);
   }

@@ -35,11 +35,6 @@ constexpr ehc_common::EnumNames<GraspPhase, 10> kGraspPhaseNames = {{{GraspPhase
 
 std::string toString(GraspPhase p) { return ehc_common::enumName(kGraspPhaseNames, p, "GraspSequencer"); }
 
-Eigen::Isometry3d backedOff(Eigen::Isometry3d pose, double distance) {
-  pose.translation() -= distance * pose.linear().col(2);
-  return pose;
-}
-
 namespace {
 constexpr ehc_common::EnumNames<GraspCause, 8> kGraspCauseNames = {{
     {GraspCause::None, "none"},

@@ -29,10 +29,11 @@
 // approached straight down and, with wall_tilt_deg, tilted by that about the closing axis (the
 // approach's horizontal part along the wall, away from the camera: the hand comes from the
 // robot's side, its wrist nearer the robot), the grasp's closing line at the point's height.
-// Every check below is made in the grasp's frame, tilted or not ("above": back along the approach). The seen contact is
-// the median of the seen points around it facing the finger (within the friction cone); the
-// unseen side's normal is not known (a wall's two faces are about parallel): such grasps rank
-// as grasps with one seen contact (GraspGeneratorConfig::wall_weight x the seen normal's cosine).
+// Every check below is made in the grasp's frame, tilted or not ("above": back along the
+// approach). The seen contact is the median of the seen points around it facing the finger
+// (within the friction cone); the unseen side's normal is not known (a wall's two faces are
+// about parallel): such grasps rank as grasps with one seen contact
+// (GraspGeneratorConfig::wall_weight x the seen normal's cosine).
 // Checked: fingers (and the outer one's path from approach_standoff above) and the palm against
 // the cloud and the other objects' points, the fingers against the support, the seen-side finger
 // and the palm against the hidden volume.
