@@ -1844,33 +1844,46 @@ TEST(TargetPoseFilter, RandomGlitchesNeverMoveThePoseAndRealMovesAreFollowed) {
 
 TEST(GraspSequencer, AGraspJudgedUnreachableIsLockedOnlyAfterTheWaitAReachableOneAtOnce) {
   // A cloud target, two candidates, the better-scored one never reachable. Without a reachable
-  // one the approach goes on for unreachable_lock_wait within the switch distance, then locks the
-  // best-scored (judged unreachable); when the other turns reachable during the wait (a newer
-  // view), it is locked at once. A tag target locks at once.
+  // one the TCP goes to the look pose (search_distance back, from above: the camera keeps the
+  // object in view), stays there for unreachable_lock_wait, then goes to the best-scored one's
+  // pre-grasp and locks it (judged unreachable); when the other turns reachable during the
+  // wait (a newer view), it is locked at once. The view lost during the wait (WAIT_TARGET): the
+  // wait starts anew once the object is seen again. A tag target locks at once.
   GraspSequencerParams p = twoObjects();
   p.selection.centre_from_tag = p.selection.closing_axis_from_tag = false;
   p.unreachable_lock_wait = 2.0;
   p.objects[0].target.kind = ehc_control::TargetSelectorKind::Nearest;  // a cloud target
   p.objects[0].target.point = forwardTarget().translation();
-  for (const int scenario : {0, 1, 2}) {
-    const bool appears = scenario == 1, tag = scenario == 2;
-    SCOPED_TRACE(tag ? "a tag target" : appears ? "a reachable one appears" : "none reachable");
+  enum Scenario { NoneReachable, Appears, Tag, LostDuringTheWait };
+  for (const Scenario scenario : {NoneReachable, Appears, Tag, LostDuringTheWait}) {
+    const bool appears = scenario == Appears, tag = scenario == Tag, lost = scenario == LostDuringTheWait;
+    SCOPED_TRACE(tag ? "a tag target" : appears ? "a reachable one appears" : lost ? "the view lost during the wait" : "none reachable");
     GraspSequencerParams q = p;
     if (tag) q.objects[0].target = ehc_control::TargetSelector{};
     Harness h(q);
     h.perceive = forwardTarget();
     const GraspCandidate best{forwardTarget(), 0.05, 0.9}, other{forwardTarget(1.5, 0.02), 0.05, 0.5};
-    double reachable_from = 1e9, t_approach = -1.0;
+    double reachable_from = 1e9, t_approach = -1.0, t_seen_again = -1.0;
+    int looking = 0;  // cycles with the goal at the look pose
     h.seq.setReachability([&](const Eigen::Isometry3d& g, const Eigen::Isometry3d&) {
       return h.t >= reachable_from && std::abs(g.translation().y() - 0.02) < 1e-6;
     });
-    while (h.seq.phase() != GraspPhase::PreGrasp && h.t < 10.0) {
+    while (h.seq.phase() != GraspPhase::PreGrasp && h.t < 12.0) {
+      if (lost && t_approach >= 0.0 && h.t >= t_approach + 1.0 && h.t < t_approach + 3.0) h.perceive.reset();
+      else if (lost && !h.perceive) {
+        h.perceive = forwardTarget();
+        t_seen_again = h.t;
+      }
       h.seq.setGraspCandidates(h.t, {best, other});
       h.step();
       if (h.seq.phase() == GraspPhase::Approach && t_approach < 0.0) {
         t_approach = h.t;
         if (appears) reachable_from = t_approach + 1.0;
       }
+      const Eigen::Vector3d to_object = forwardTarget().translation() - h.tcp.translation();
+      if (h.seq.phase() == GraspPhase::Approach && std::abs(to_object.norm() - q.search_distance) < 1e-6 &&
+          to_object.normalized().dot(h.tcp.linear().col(2)) > 0.999 && to_object.z() < -0.1)
+        ++looking;
     }
     ASSERT_EQ(h.seq.phase(), GraspPhase::PreGrasp);
     ASSERT_TRUE(h.seq.lockedGrasp());
@@ -1878,16 +1891,21 @@ TEST(GraspSequencer, AGraspJudgedUnreachableIsLockedOnlyAfterTheWaitAReachableOn
     if (tag) {
       EXPECT_NEAR(h.seq.lockedGrasp()->pose.translation().y(), 0.0, 1e-9) << "the best-scored one";
       EXPECT_LT(waited, 0.05) << "a tag target locks at once, as over ROS";
+      EXPECT_EQ(looking, 0);
     } else if (appears) {
       EXPECT_NEAR(h.seq.lockedGrasp()->pose.translation().y(), 0.02, 1e-9) << "the reachable one";
       EXPECT_EQ(h.seq.lockedGrasp()->reachable, std::optional<bool>(true));
       EXPECT_NEAR(waited, 1.0, 0.03) << "locked as soon as it was reachable";
+      EXPECT_GE(looking, 95) << "looked at it until then";
     } else {
       EXPECT_NEAR(h.seq.lockedGrasp()->pose.translation().y(), 0.0, 1e-9) << "the best-scored one";
       EXPECT_EQ(h.seq.lockedGrasp()->reachable, std::optional<bool>(false));
-      EXPECT_GE(waited, 2.0 - 1e-9);
-      EXPECT_LE(waited, 2.05);
       EXPECT_TRUE(hasEvent(h.events, "none reachable after 2.0 s"));
+      EXPECT_GE(looking, 195) << "looked at it for the wait";
+      const double since = lost ? h.t - t_seen_again : waited;
+      EXPECT_GE(since, 2.0);
+      EXPECT_LE(since, 2.1);
+      if (lost) EXPECT_TRUE(hasEvent(h.events, "APPROACH -> WAIT_TARGET"));
     }
   }
   GraspSequencerParams bad = twoObjects();

@@ -19,8 +19,10 @@
 //                grasp candidates update; the controller's MPBS watches the object centre), so
 //                the hand arrives from the approach side instead of cutting across the object;
 //                base + arm drive. Ends when the TCP is within pregrasp_switch_distance of the
-//                grasp position (a cloud target's choice judged unreachable: unreachable_lock_wait
-//                later, unless a reachable one comes first). tsmm (paper, section IV-D: "the robot first moves to a position
+//                grasp position. A cloud target's choice judged unreachable: the goal is the
+//                look pose at it instead (the hand camera keeps it in view while new views
+//                come), unreachable_lock_wait from when the TCP is there, then that choice's
+//                pre-grasp; a reachable one at any time is approached at once. tsmm (paper, section IV-D: "the robot first moves to a position
 //                d away from the target object's position, measured from the end-effector"):
 //                until the tsmm base stage has stopped the goal is the object centre itself
 //                (with the grasp's orientation, which the base stage does not servo), so the
@@ -151,12 +153,17 @@ struct GraspSequencerParams {
   TargetPoseFilterParams pose_filter;
   double pregrasp_distance = 0.10;        ///< m, pre-grasp = grasp backed off along the approach
   double pregrasp_switch_distance = 0.25;  ///< m: APPROACH -> PRE_GRASP (TCP to grasp position)
-  /// s in [0, 60]: with a reachability judgement (setReachability), a cloud target's grasp
-  /// judged unreachable (none of the candidates reachable) is locked only after this long within
-  /// the switch distance; until then the approach goes on and the views (a new view every grasp
-  /// run) may bring a reachable candidate, which is locked at once. A robot already near the
-  /// object (the next object of a scene) otherwise locked the first view's choice within ~1 s.
-  /// A tag target locks at once, as the ROS sequencer node (no reachability judgement) does.
+  /// s in [0, 60]: with a reachability judgement (setReachability), while a cloud target's
+  /// grasp is judged unreachable (none of the candidates reachable) the APPROACH goal is the
+  /// look pose at it (search_distance, search_elevation_deg; none with search_distance 0 or
+  /// under tsmm), for this long from when the TCP is within the switch distance of it (or of
+  /// the grasp); then the unreachable grasp's pre-grasp, locked within the switch distance. The
+  /// views meanwhile (a new view every grasp run) may bring a reachable candidate, approached and
+  /// locked at once. The view lost meanwhile (WAIT_TARGET), the wait starts anew. Driving the
+  /// arm towards a pre-grasp it cannot reach turned the hand camera away: the object ran out of
+  /// its frame and no reachable candidate came. A robot already near the object (the next object
+  /// of a scene) otherwise locked the first view's choice within ~1 s. A tag target locks at
+  /// once, as the ROS sequencer node (no reachability judgement) does.
   double unreachable_lock_wait = 3.0;
   double pregrasp_position_tolerance = 0.015;     ///< m
   /// m: and the TCP within this of the approach axis through the pre-grasp, so that the straight

@@ -737,6 +737,7 @@ void GraspSequencer::advanceWaitTarget(const SequencerInput& in, bool fresh, Seq
 void GraspSequencer::advanceApproach(const SequencerInput& in, bool fresh, bool centre_was_sent, SequencerOutput* out) {
   const double t = in.t;
   if (!fresh) {  // perception lost: search again
+    unreachable_since_ = -1.0;  // the views after it count anew
     enter(GraspPhase::WaitTarget, t, out, "object pose older than " + num(params_.perception_hold, 1) + " s");
     return;
   }
@@ -755,14 +756,27 @@ void GraspSequencer::advanceApproach(const SequencerInput& in, bool fresh, bool 
   if (centre_was_sent && in.controller_phase == ehc_control::toString(ehc_control::ControlPhase::TsmmArm))
     tsmm_at_d_ = true;
   out->goal = approachGoal(in, choice->pose);
+  // A cloud target's choice judged unreachable: a look pose (search_distance back, from above)
+  // for unreachable_lock_wait from when the TCP is there, the views going on, a reachable one
+  // leaving it at once; then the unreachable choice's pre-grasp. Driving the arm towards a
+  // pre-grasp it cannot reach turned the hand camera away, the object ran out of its frame and
+  // the views stopped. The wait also starts where the TCP comes within the switch distance of
+  // the grasp. A tag target locks at once, as over ROS (no judgement there); tsmm's stages keep
+  // their goals (the paper's baseline).
+  const bool unreachable = params_.objects[current_].target.fromCloud() && choice->reachable && !*choice->reachable;
+  if (!unreachable) unreachable_since_ = -1.0;
+  const bool looking = unreachable && params_.search_distance > 0.0 && !tsmmController(in) &&
+                       (unreachable_since_ < 0.0 || t - unreachable_since_ < params_.unreachable_lock_wait);
+  if (looking) {
+    out->goal = cloudLookPose(*currentPose(), params_.search_distance, params_.search_elevation_deg);
+    if (unreachable_since_ < 0.0 && (within(in, *out->goal, params_.pregrasp_switch_distance, 180.0) ||
+                                     within(in, choice->pose, params_.pregrasp_switch_distance, 180.0)))
+      unreachable_since_ = t;
+    return;
+  }
   const bool tsmm_base_pending = tsmmController(in) && !tsmm_at_d_;
   if (!tsmm_base_pending && within(in, choice->pose, params_.pregrasp_switch_distance, 180.0)) {
-    // A cloud target's choice judged unreachable: the views go on for unreachable_lock_wait, a
-    // reachable one locks at once. A tag target locks at once, as over ROS (no judgement there).
-    const bool unreachable =
-        params_.objects[current_].target.fromCloud() && choice->reachable && !*choice->reachable;
-    if (!unreachable) unreachable_since_ = -1.0;
-    else if (unreachable_since_ < 0.0) unreachable_since_ = t;
+    if (unreachable && unreachable_since_ < 0.0) unreachable_since_ = t;  // no look pose (search_distance 0, tsmm)
     if (unreachable && t - unreachable_since_ < params_.unreachable_lock_wait) return;
     locked_object_centre_ = *objectCentre();  // frozen from here (before locked_ is set)
     locked_extent_ = currentExtent();
