@@ -831,8 +831,6 @@ TEST(GraspWidths, A66mmCylinderUnder2mmNoiseIsMeasured66mm) {
   }
 }
 
-// A 90 mm ball gives no grasp, the reason too wide, from all round and from one view (one
-// view shows less than half of it: its sphere measures it).
 // Random bent tubes (banana-like: 28-44 mm across, bent round 0.12-0.30 m, 0.14-0.22 m long)
 // lying on the support at a random yaw, seen once from a random side 30-60 deg above the
 // support, 0.45-0.6 m away, under 1.5 mm noise. The round cross-section where the fingers close
@@ -857,8 +855,9 @@ TEST(GraspParts, ALyingBentTubeIsGraspedAcrossItsRoundSection) {
     const double r = 0.014 + 0.008 * unit(rng), bend = 0.12 + 0.18 * unit(rng), length = 0.14 + 0.08 * unit(rng);
     const double yaw = 2 * M_PI * unit(rng), az = 2 * M_PI * unit(rng), el = (30 + 30 * unit(rng)) * kDeg;
     const double dist = 0.45 + 0.15 * unit(rng);
+    const Eigen::Isometry3d T = pose(0.6, 0.0, r, yaw);
     Surface tube = bentTubeSurface(r, bend, length, 0.002);
-    tube.transform(pose(0.6, 0.0, r, yaw));
+    tube.transform(T);
     const Eigen::Vector3d centre(0.6, 0.0, r);
     const Eigen::Vector3d view = centre + dist * Eigen::Vector3d(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
     const GraspResult res = gen.generate(tube.occludedFrom(view).noisy(0.0015, seed + static_cast<unsigned>(v)), view);
@@ -877,10 +876,10 @@ TEST(GraspParts, ALyingBentTubeIsGraspedAcrossItsRoundSection) {
     Eigen::Vector3d tangent = Eigen::Vector3d::UnitX();
     for (int k = -100; k <= 100; ++k) {
       const double t = 0.5 * length / bend * k / 100.0;
-      const Eigen::Vector3d c = pose(0.6, 0.0, r, yaw) * Eigen::Vector3d(bend * std::sin(t), bend * (1.0 - std::cos(t)), 0.0);
+      const Eigen::Vector3d c = T * Eigen::Vector3d(bend * std::sin(t), bend * (1.0 - std::cos(t)), 0.0);
       if ((c - best.pose.translation()).norm() < nearest) {
         nearest = (c - best.pose.translation()).norm();
-        tangent = pose(0.6, 0.0, r, yaw).linear() * Eigen::Vector3d(std::cos(t), std::sin(t), 0.0);
+        tangent = T.linear() * Eigen::Vector3d(std::cos(t), std::sin(t), 0.0);
       }
     }
     const bool is_across = std::abs(best.pose.linear().col(1).dot(tangent)) < std::sin(30 * kDeg);
@@ -897,6 +896,8 @@ TEST(GraspParts, ALyingBentTubeIsGraspedAcrossItsRoundSection) {
   EXPECT_LE(errors[errors.size() / 2], 0.006) << "median width error";
 }
 
+// A 90 mm ball gives no grasp, the reason too wide, from all round and from one view (one
+// view shows less than half of it: its sphere measures it).
 TEST(GraspWidths, A90mmBallIsTooWide) {
   Surface ball = sphereSurface(0.045, 0.003);
   ball.transform(pose(0.6, 0.0, 0.045, 0.0));
@@ -1212,8 +1213,9 @@ TEST(WallGrasps, ARimIsAlsoGraspedWithTheApproachTiltedTowardsTheViewer) {
     tilted_total += tilted;
     GraspGeneratorConfig down = t.cfg;
     down.wall_tilt_deg = 0.0;
-    for (const Grasp& g : GraspGenerator(down).generate(seen, view).grasps)
+    for (const Grasp& g : GraspGenerator(down).generate(seen, view).grasps) {
       if (g.wall) EXPECT_GT(-g.pose.linear().col(2).dot(up), std::cos(0.01 * kDeg));
+    }
   }
   EXPECT_GT(tilted_total, 0);
 }

@@ -755,29 +755,25 @@ void GraspSequencer::advanceApproach(const SequencerInput& in, bool fresh, bool 
   // stage of the search pose was still on (the arm alone then stalled 1-3 cm short).
   if (centre_was_sent && in.controller_phase == ehc_control::toString(ehc_control::ControlPhase::TsmmArm))
     tsmm_at_d_ = true;
-  out->goal = approachGoal(in, choice->pose);
   // A cloud target's choice judged unreachable: a look pose (search_distance back, from above)
-  // for unreachable_lock_wait from when the TCP is there, the views going on, a reachable one
-  // leaving it at once; then the unreachable choice's pre-grasp. Driving the arm towards a
-  // pre-grasp it cannot reach turned the hand camera away, the object ran out of its frame and
-  // the views stopped. The wait also starts where the TCP comes within the switch distance of
-  // the grasp. A tag target locks at once, as over ROS (no judgement there); tsmm's stages keep
-  // their goals (the paper's baseline).
+  // for unreachable_lock_wait from when the TCP is there (or within the switch distance of the
+  // grasp), the views going on, a reachable one leaving it at once; then the unreachable
+  // choice's pre-grasp. Driving the arm towards a pre-grasp it cannot reach turned the hand
+  // camera away, the object ran out of its frame and the views stopped. Without a look pose
+  // (search_distance 0, tsmm's stages keeping their goals: the paper's baseline) the wait runs
+  // within the switch distance. A tag target locks at once, as over ROS (no judgement there).
+  const bool tsmm = tsmmController(in);
   const bool unreachable = params_.objects[current_].target.fromCloud() && choice->reachable && !*choice->reachable;
+  std::optional<Eigen::Isometry3d> look;
+  if (unreachable && params_.search_distance > 0.0 && !tsmm)
+    look = cloudLookPose(*currentPose(), params_.search_distance, params_.search_elevation_deg);
+  const bool near_grasp = !(tsmm && !tsmm_at_d_) && within(in, choice->pose, params_.pregrasp_switch_distance, 180.0);
   if (!unreachable) unreachable_since_ = -1.0;
-  const bool looking = unreachable && params_.search_distance > 0.0 && !tsmmController(in) &&
-                       (unreachable_since_ < 0.0 || t - unreachable_since_ < params_.unreachable_lock_wait);
-  if (looking) {
-    out->goal = cloudLookPose(*currentPose(), params_.search_distance, params_.search_elevation_deg);
-    if (unreachable_since_ < 0.0 && (within(in, *out->goal, params_.pregrasp_switch_distance, 180.0) ||
-                                     within(in, choice->pose, params_.pregrasp_switch_distance, 180.0)))
-      unreachable_since_ = t;
-    return;
-  }
-  const bool tsmm_base_pending = tsmmController(in) && !tsmm_at_d_;
-  if (!tsmm_base_pending && within(in, choice->pose, params_.pregrasp_switch_distance, 180.0)) {
-    if (unreachable && unreachable_since_ < 0.0) unreachable_since_ = t;  // no look pose (search_distance 0, tsmm)
-    if (unreachable && t - unreachable_since_ < params_.unreachable_lock_wait) return;
+  else if (unreachable_since_ < 0.0 && (near_grasp || (look && within(in, *look, params_.pregrasp_switch_distance, 180.0))))
+    unreachable_since_ = t;
+  const bool waiting = unreachable && (unreachable_since_ < 0.0 || t - unreachable_since_ < params_.unreachable_lock_wait);
+  out->goal = look && waiting ? *look : approachGoal(in, choice->pose);
+  if (near_grasp && !waiting) {
     locked_object_centre_ = *objectCentre();  // frozen from here (before locked_ is set)
     locked_extent_ = currentExtent();
     locked_ = choice;
