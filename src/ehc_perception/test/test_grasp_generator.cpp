@@ -1214,7 +1214,9 @@ TEST(WallGrasps, ARimIsAlsoGraspedWithTheApproachTiltedTowardsTheViewer) {
     GraspGeneratorConfig down = t.cfg;
     down.wall_tilt_deg = 0.0;
     for (const Grasp& g : GraspGenerator(down).generate(seen, view).grasps) {
-      if (g.wall) EXPECT_GT(-g.pose.linear().col(2).dot(up), std::cos(0.01 * kDeg));
+      if (g.wall) {
+        EXPECT_GT(-g.pose.linear().col(2).dot(up), std::cos(0.01 * kDeg));
+      }
     }
   }
   EXPECT_GT(tilted_total, 0);
