@@ -156,6 +156,8 @@ class WallSearch {
   std::vector<Eigen::Vector3d> near_;  ///< collision points around the seed, (y, x, z)
   std::vector<double> finger_ys_;      ///< y of those in the fingers' footprint and path, sorted
   std::vector<std::pair<double, double>> contact_;  ///< (ly, cos) of the seen contact's points
+  /// (ly, cos) of the object's points in the fingers' reach, any distance from the seed
+  std::vector<std::pair<double, double>> reach_;
   std::vector<std::pair<double, double>> strip_;  ///< (ly, lz) of the object's points above the fingertips
 };
 
@@ -173,6 +175,7 @@ void WallSearch::gather() {
     if (std::abs(l.y()) <= 0.5 * g_.finger_breadth && l.z() >= z0_ - sweep_) finger_ys_.push_back(l.x());
   std::sort(finger_ys_.begin(), finger_ys_.end());
   contact_.clear();
+  reach_.clear();
   strip_.clear();
   const auto& pts = *in_.points;
   for (std::size_t j = 0; j < pts.size(); ++j) {
@@ -180,8 +183,10 @@ void WallSearch::gather() {
     const double ly = y_.dot(d), lz = a_.dot(d);
     if (std::abs(x_.dot(d)) > 0.5 * g_.finger_breadth || lz > z1_ || std::abs(ly) > g_.max_width) continue;
     strip_.emplace_back(ly, lz);
-    if (std::abs(ly) > band_ || lz < z0_) continue;
+    if (lz < z0_) continue;
     const double c = -facing(j).dot(y_);
+    reach_.emplace_back(ly, c);
+    if (std::abs(ly) > band_) continue;
     if (c >= cos_cone_) contact_.emplace_back(ly, c);
   }
 }
@@ -276,8 +281,17 @@ bool WallSearch::at(std::size_t i, double tilt, WallGrasp* out) {
     if (tipClearance() < cfg_.support_clearance || !seenContact(&y_in, &cos_n)) return false;
   }
   const double c = g_.clearance, t = g_.finger_thickness, W = g_.max_width;
-  // The seen-side finger and its path: nothing beyond the contact surface's noise.
+  // The seen-side finger and its path: nothing beyond the contact surface's noise. In the finger
+  // itself, no seen surface facing away from it beyond its inner face, and none facing it more
+  // than the noise beyond that face: the noise tolerance above is for the contact surface by the
+  // seed, and a finger tilted along a cup's curved rim reaches 30-40 mm along it, where the
+  // wall's face (its normal turned out of the friction cone), top and back face come 1.6-3.5 mm
+  // into its far corner.
   if (fingerCount(y_in - c - t, y_in - 3.0 * in_.noise - 0.5 * in_.leaf) > k_) return false;
+  const auto inside = [&](const std::pair<double, double>& l) {
+    return l.first >= y_in - c - t && l.first < y_in - c - (l.second > 0.0 ? in_.noise : 0.0);
+  };
+  if (std::count_if(reach_.begin(), reach_.end(), inside) > k_) return false;
   // The other finger at the nearest position the view proves free (1 mm steps): no point seen in
   // it or its path (a seen point there contradicts the bound; none is tolerated as noise), none
   // of it behind a seen point.

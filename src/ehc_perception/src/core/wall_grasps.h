@@ -34,7 +34,9 @@
 // (within the friction cone); the unseen side's normal is not known (a wall's two faces are
 // about parallel): such grasps rank as grasps with one seen contact
 // (GraspGeneratorConfig::wall_weight x the seen normal's cosine).
-// Checked: fingers (and the outer one's path from approach_standoff above) and the palm against
+// Checked: no seen surface in the seen-side finger beyond its inner face (facing the finger:
+// by more than the noise; a tilted finger's far corner on a curved rim); fingers (and the outer
+// one's path from approach_standoff above) and the palm against
 // the cloud and the other objects' points, the fingers against the support, the seen-side finger
 // and the palm against the hidden volume.
 
