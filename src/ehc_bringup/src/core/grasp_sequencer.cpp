@@ -755,19 +755,18 @@ void GraspSequencer::advanceApproach(const SequencerInput& in, bool fresh, bool 
   // stage of the search pose was still on (the arm alone then stalled 1-3 cm short).
   if (centre_was_sent && in.controller_phase == ehc_control::toString(ehc_control::ControlPhase::TsmmArm))
     tsmm_at_d_ = true;
-  // A cloud target's choice judged unreachable: a look pose (search_distance back, from above)
-  // for unreachable_lock_wait from when the TCP is there (or within the switch distance of the
-  // grasp), the views going on, a reachable one leaving it at once; then the unreachable
-  // choice's pre-grasp. Driving the arm towards a pre-grasp it cannot reach turned the hand
-  // camera away, the object ran out of its frame and the views stopped. Without a look pose
-  // (search_distance 0, tsmm's stages keeping their goals: the paper's baseline) the wait runs
-  // within the switch distance. A tag target locks at once, as over ROS (no judgement there).
+  // A cloud target's choice judged unreachable: the look pose for unreachable_lock_wait from
+  // when the TCP is there or near the grasp, then the choice's pre-grasp (why: the header's
+  // unreachable_lock_wait). Without a look pose (search_distance 0, or tsmm, whose stages keep
+  // their goals) the wait runs within the switch distance. A tag target locks at once, as over
+  // ROS (no judgement there).
   const bool tsmm = tsmmController(in);
   const bool unreachable = params_.objects[current_].target.fromCloud() && choice->reachable && !*choice->reachable;
   std::optional<Eigen::Isometry3d> look;
   if (unreachable && params_.search_distance > 0.0 && !tsmm)
     look = cloudLookPose(*currentPose(), params_.search_distance, params_.search_elevation_deg);
-  const bool near_grasp = !(tsmm && !tsmm_at_d_) && within(in, choice->pose, params_.pregrasp_switch_distance, 180.0);
+  const bool tsmm_base_pending = tsmm && !tsmm_at_d_;
+  const bool near_grasp = !tsmm_base_pending && within(in, choice->pose, params_.pregrasp_switch_distance, 180.0);
   if (!unreachable) unreachable_since_ = -1.0;
   else if (unreachable_since_ < 0.0 && (near_grasp || (look && within(in, *look, params_.pregrasp_switch_distance, 180.0))))
     unreachable_since_ = t;

@@ -155,8 +155,8 @@ class WallSearch {
   Eigen::Vector3d p_, x_, y_, a_;
   std::vector<Eigen::Vector3d> near_;  ///< collision points around the seed, (y, x, z)
   std::vector<double> finger_ys_;      ///< y of those in the fingers' footprint and path, sorted
-  std::vector<std::pair<double, double>> contact_;  ///< (ly, cos) of the seen contact's points
-  /// (ly, cos) of the object's points in the fingers' reach, any distance from the seed
+  /// (ly, cos) of the object's points in the fingers' reach, any distance from the seed (the
+  /// seen contact's: within band_ of it, cos within the friction cone)
   std::vector<std::pair<double, double>> reach_;
   std::vector<std::pair<double, double>> strip_;  ///< (ly, lz) of the object's points above the fingertips
 };
@@ -174,7 +174,6 @@ void WallSearch::gather() {
   for (const Eigen::Vector3d& l : near_)
     if (std::abs(l.y()) <= 0.5 * g_.finger_breadth && l.z() >= z0_ - sweep_) finger_ys_.push_back(l.x());
   std::sort(finger_ys_.begin(), finger_ys_.end());
-  contact_.clear();
   reach_.clear();
   strip_.clear();
   const auto& pts = *in_.points;
@@ -183,11 +182,7 @@ void WallSearch::gather() {
     const double ly = y_.dot(d), lz = a_.dot(d);
     if (std::abs(x_.dot(d)) > 0.5 * g_.finger_breadth || lz > z1_ || std::abs(ly) > g_.max_width) continue;
     strip_.emplace_back(ly, lz);
-    if (lz < z0_) continue;
-    const double c = -facing(j).dot(y_);
-    reach_.emplace_back(ly, c);
-    if (std::abs(ly) > band_) continue;
-    if (c >= cos_cone_) contact_.emplace_back(ly, c);
+    if (lz >= z0_) reach_.emplace_back(ly, -facing(j).dot(y_));
   }
 }
 
@@ -214,9 +209,10 @@ bool WallSearch::seenSideHidden(double ym, double yc, double w) const {
 
 bool WallSearch::seenContact(double* y_in, double* cos_n) {
   gather();
-  if (contact_.size() < 3) return false;
   std::vector<double> ys, cs;
-  for (const auto& yc : contact_) ys.push_back(yc.first), cs.push_back(yc.second);
+  for (const auto& l : reach_)
+    if (std::abs(l.first) <= band_ && l.second >= cos_cone_) ys.push_back(l.first), cs.push_back(l.second);
+  if (ys.size() < 3) return false;
   std::sort(ys.begin(), ys.end());
   std::nth_element(cs.begin(), cs.begin() + static_cast<long>(cs.size() / 2), cs.end());
   *y_in = ys[ys.size() >= 5 ? 1 : 0];
